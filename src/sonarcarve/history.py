@@ -1,0 +1,130 @@
+"""The sonar history: a fixed-capacity ring buffer of arcs (paper, sections 5-A and 5-B).
+
+Each row is the paper's 6-tuple ``(x, y, r, θ, θ1, θ2)`` plus the reading's time, sensor, beam
+width and id (its 0-based position in the input stream). ``θ1, θ2`` here are the arc's *full
+beam* ``θ ∓ φ/2``; each method keeps its own per-row state (a carved interval, ATM
+intersections) in arrays of the same capacity, indexed by the same slot, so that several methods
+can share one history without interfering (section 5-A).
+
+Memory is fixed by the capacity and never grows with the length of the log.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.readings import Reading
+
+__all__ = ["DEFAULT_HISTORY_SIZE", "SonarHistory"]
+
+#: The paper's history length (section 5-C: "a history of 250 arcs").
+DEFAULT_HISTORY_SIZE = 250
+
+
+class SonarHistory:
+    """Ring buffer of the newest ``capacity`` arcs, stored as one numpy array per field.
+
+    Arcs leave the history in arrival order. An arc that leaves is *retired*: its row (and every
+    method's per-row state beside it) stays frozen in storage until ``on_evict`` has been called
+    with it. Rows are handed to ``on_evict`` in blocks, oldest first, so that committing final
+    points to a global map is one vectorised call per block rather than one per reading. To make
+    that possible the storage holds ``2 * capacity`` rows; memory is still fixed by the capacity
+    and never grows with the length of the log.
+
+    Parameters
+    ----------
+    capacity : int
+        Number of arcs kept live (the paper's history length, 250 by default).
+    on_evict : callable, optional
+        Called with an int64 array of retired slots, oldest first, before those rows are reused
+        and from :meth:`flush`.
+
+    Attributes
+    ----------
+    x, y, r, theta, theta1, theta2, t, beam_width : ndarray of float64, shape (2 * capacity,)
+        The arcs, by slot. ``theta1 = theta - beam_width/2`` and ``theta2 = theta + beam_width/2``:
+        the full beam; methods keep carved intervals in their own state.
+    sensor, reading_id : ndarray of int64, shape (2 * capacity,)
+        Sensor index and input position of each arc; ``reading_id`` is -1 in unused slots.
+    """
+
+    def __init__(
+        self,
+        capacity: int = DEFAULT_HISTORY_SIZE,
+        on_evict: Callable[[npt.NDArray[np.int64]], None] | None = None,
+    ) -> None:
+        if capacity < 1:
+            msg = f"history capacity must be at least 1, got {capacity}"
+            raise ValueError(msg)
+        self.capacity = capacity
+        self.storage_size = 2 * capacity
+        self._on_evict = on_evict
+        self.x = np.zeros(self.storage_size)
+        self.y = np.zeros(self.storage_size)
+        self.r = np.zeros(self.storage_size)
+        self.theta = np.zeros(self.storage_size)
+        self.theta1 = np.zeros(self.storage_size)
+        self.theta2 = np.zeros(self.storage_size)
+        self.t = np.zeros(self.storage_size)
+        self.beam_width = np.zeros(self.storage_size)
+        self.sensor = np.zeros(self.storage_size, dtype=np.int64)
+        self.reading_id = np.full(self.storage_size, -1, dtype=np.int64)
+        self._appended = 0  # arcs appended so far; arc k lives in slot k % storage_size
+        self._committed = 0  # arcs handed to on_evict so far
+
+    def __len__(self) -> int:
+        """Number of live arcs (at most ``capacity``)."""
+        return min(self._appended, self.capacity)
+
+    @property
+    def appended(self) -> int:
+        """Number of arcs appended since the history was made."""
+        return self._appended
+
+    def append(self, reading: Reading, reading_id: int, beam_width: float) -> int:
+        """Store ``reading`` as the newest arc and return its slot (amortised O(1)).
+
+        The oldest live arc retires when the history is full.
+        """
+        sequence = self._appended
+        if sequence - self._committed >= self.storage_size:
+            # The row about to be reused holds a retired arc nobody has committed yet.
+            self._evict_upto(sequence - self.capacity)
+        slot = sequence % self.storage_size
+        half = 0.5 * beam_width
+        self.x[slot] = reading.x
+        self.y[slot] = reading.y
+        self.r[slot] = reading.range
+        self.theta[slot] = reading.theta
+        self.theta1[slot] = reading.theta - half
+        self.theta2[slot] = reading.theta + half
+        self.t[slot] = reading.t
+        self.beam_width[slot] = beam_width
+        self.sensor[slot] = reading.sensor
+        self.reading_id[slot] = reading_id
+        self._appended = sequence + 1
+        return slot
+
+    def slots(self) -> npt.NDArray[np.int64]:
+        """Live slots from oldest to newest, shape (len(self),)."""
+        first = self._appended - len(self)
+        return np.arange(first, self._appended, dtype=np.int64) % self.storage_size
+
+    def flush_retired(self) -> None:
+        """Hand every retired, uncommitted arc to ``on_evict``."""
+        self._evict_upto(self._appended - len(self))
+
+    def flush(self) -> None:
+        """Hand every uncommitted arc, live ones included, to ``on_evict`` (end of a log)."""
+        self._evict_upto(self._appended)
+
+    def _evict_upto(self, end: int) -> None:
+        if end <= self._committed:
+            return
+        slots = np.arange(self._committed, end, dtype=np.int64) % self.storage_size
+        self._committed = end
+        if self._on_evict is not None:
+            self._on_evict(slots)

@@ -1,0 +1,15 @@
+"""File formats at the edges of the library: readings and maps as CSV, and dataset adapters."""
+
+from sonarcarve.io.errors import InputError
+from sonarcarve.io.map_csv import MAP_COLUMNS, read_map_csv, write_map_csv
+from sonarcarve.io.readings_csv import READINGS_COLUMNS, read_readings_csv, write_readings_csv
+
+__all__ = [
+    "MAP_COLUMNS",
+    "READINGS_COLUMNS",
+    "InputError",
+    "read_map_csv",
+    "read_readings_csv",
+    "write_map_csv",
+    "write_readings_csv",
+]

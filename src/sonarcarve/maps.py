@@ -1,0 +1,157 @@
+"""Local and global range maps: one point per surviving arc (paper, eq. 3.3, 3.6, 5.1-5.3).
+
+A :class:`LocalMap` is what a method returns on request: one point per arc in the history that
+survived, labelled by the model that placed it. A :class:`GlobalMap` collects the *final* point of
+every arc as it leaves the history (paper, Fig. 7 and 13). Both are struct-of-arrays values with
+the batch axis first.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from enum import IntEnum
+from typing import Self
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "GlobalMap",
+    "GlobalMapBuilder",
+    "LocalMap",
+    "PointSource",
+    "chord_error",
+]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+class PointSource(IntEnum):
+    """The sonar model that placed a map point (the ``source`` column of the map CSV)."""
+
+    CENTERLINE = 0  #: centre of an uncarved arc (section 2-A)
+    CARVED = 1  #: centre of a carved arc (eq. 3.6)
+    ATM = 2  #: median of transversal intersections (section 2-D)
+
+    @property
+    def label(self) -> str:
+        """Lower-case name used in files: ``centerline``, ``carved`` or ``atm``."""
+        return self.name.lower()
+
+
+def chord_error(r: npt.ArrayLike, width: npt.ArrayLike) -> FloatArray:
+    """Maximum Euclidean error of a point at the centre of an arc (eq. 5.2 and 5.3).
+
+    ``E_m = θ_d / 2`` (eq. 5.2) and ``E_s = 2 r sin(E_m / 2)`` (eq. 5.3).
+
+    Parameters
+    ----------
+    r : array-like, shape (n,)
+        Arc radii, metres.
+    width : array-like, shape (n,)
+        Angular widths θ_d = |θ2 − θ1| (eq. 5.1), radians.
+
+    Examples
+    --------
+    >>> float(chord_error(2.0, 0.0)[()])
+    0.0
+    >>> round(float(chord_error(1.0, np.pi)[()]), 6)  # E_m = π/2: chord of a quarter circle
+    1.414214
+    """
+    e_m = 0.5 * np.asarray(width, dtype=np.float64)
+    return np.asarray(2.0 * np.asarray(r, dtype=np.float64) * np.sin(0.5 * e_m))
+
+
+@dataclass(frozen=True, eq=False)
+class _PointMap:
+    """Map points as a struct of arrays, shape (n,) each (``xy`` is (n, 2)).
+
+    Attributes
+    ----------
+    reading_id : int64
+        The reading's 0-based position in the input stream.
+    t : float64
+        The reading's time, seconds.
+    sensor : int64
+        The sensor that heard it.
+    xy : float64, shape (n, 2)
+        The point, world frame, metres.
+    source : int8
+        :class:`PointSource` code of the model that placed the point.
+    width : float64
+        Final angular width θ_d of the arc, radians (eq. 5.1); for ATM points the width of the
+        interval spanned by the arc's kept intersections.
+    max_error : float64
+        Upper bound on the point's distance from the true reflection, metres (eq. 5.3 for arcs;
+        see :mod:`sonarcarve.methods.atm` for the ATM bound).
+    range : float64
+        The arc's radius r, metres.
+    """
+
+    reading_id: IntArray
+    t: FloatArray
+    sensor: IntArray
+    xy: FloatArray
+    source: npt.NDArray[np.int8]
+    width: FloatArray
+    max_error: FloatArray
+    range: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.reading_id.shape[0])
+
+    @classmethod
+    def empty(cls) -> Self:
+        """A map with no points."""
+        return cls(
+            reading_id=np.zeros(0, dtype=np.int64), t=np.zeros(0), sensor=np.zeros(0, np.int64),
+            xy=np.zeros((0, 2)), source=np.zeros(0, dtype=np.int8), width=np.zeros(0),
+            max_error=np.zeros(0), range=np.zeros(0),
+        )
+
+    @classmethod
+    def concatenate(cls, maps: list[_PointMap]) -> Self:
+        """The points of ``maps`` one after the other."""
+        if not maps:
+            return cls.empty()
+        return cls(**{f.name: np.concatenate([getattr(m, f.name) for m in maps])
+                      for f in fields(cls)})
+
+    def select(self, mask: npt.NDArray[np.bool_] | IntArray) -> Self:
+        """The points picked by a boolean mask or index array."""
+        return type(self)(**{f.name: getattr(self, f.name)[mask] for f in fields(self)})
+
+    def source_labels(self) -> list[str]:
+        """``source`` as the file labels (``centerline``, ``carved``, ``atm``)."""
+        return [PointSource(int(code)).label for code in self.source]
+
+    def count(self, source: PointSource) -> int:
+        """Number of points placed by ``source``."""
+        return int(np.count_nonzero(self.source == source))
+
+
+class LocalMap(_PointMap):
+    """One point per surviving arc in the history at the moment it was requested."""
+
+
+class GlobalMap(_PointMap):
+    """The final point of every surviving arc of a whole log, in reading order."""
+
+
+class GlobalMapBuilder:
+    """Collects committed points cheaply (chunks) and hands out a :class:`GlobalMap`."""
+
+    def __init__(self) -> None:
+        self._chunks: list[_PointMap] = []
+
+    def commit(self, points: _PointMap) -> None:
+        """Add the final points of arcs leaving the history."""
+        if len(points):
+            self._chunks.append(points)
+
+    def build(self) -> GlobalMap:
+        """All points committed so far, as one map."""
+        merged = GlobalMap.concatenate(self._chunks)
+        self._chunks = [merged] if len(merged) else []
+        return merged

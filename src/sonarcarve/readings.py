@@ -1,0 +1,206 @@
+"""Sonar readings: one echo as a value, many as a struct of arrays.
+
+A reading is one echo heard by one sensor: time ``t`` (s), ``sensor`` index, the sensor's origin
+``(x, y)`` (m) and axis ``theta`` (rad, counter-clockwise from +x) in the world frame, the measured
+``range`` r (m) and the beam width φ (rad). A reading with no echo is not an arc and never appears
+here. The beam width may be NaN, meaning "the method's default" (22.5°, the Polaroid transducer
+of the paper, section 2).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, fields
+from typing import NamedTuple, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.errors import SonarcarveError
+
+__all__ = [
+    "DEFAULT_BEAM_WIDTH",
+    "Reading",
+    "ReadingBatch",
+    "ReadingsError",
+]
+
+#: The Polaroid transducer's arc width φ (paper, section 2): 22.5 degrees, in radians.
+DEFAULT_BEAM_WIDTH = math.radians(22.5)
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+class ReadingsError(SonarcarveError, ValueError):
+    """Readings that break the contract: bad values, missing columns, unsorted times."""
+
+
+class Reading(NamedTuple):
+    """One sonar echo in the world frame.
+
+    Attributes
+    ----------
+    t : float
+        Time of the echo, seconds.
+    sensor : int
+        Index of the sensor that heard it.
+    x, y : float
+        Sensor origin in the world frame, metres.
+    theta : float
+        Sensor axis, radians counter-clockwise from +x.
+    range : float
+        Measured range r, metres (> 0).
+    beam_width : float
+        Beam width φ, radians in (0, π); NaN means the method's default.
+    """
+
+    t: float
+    sensor: int
+    x: float
+    y: float
+    theta: float
+    range: float
+    beam_width: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
+class ReadingBatch:
+    """Many readings as a struct of arrays, each of shape (n,), in stream order.
+
+    Build one with :meth:`from_arrays` (validates) or :meth:`from_readings`.
+    """
+
+    t: FloatArray
+    sensor: IntArray
+    x: FloatArray
+    y: FloatArray
+    theta: FloatArray
+    range: FloatArray
+    beam_width: FloatArray
+
+    @classmethod
+    def from_arrays(
+        cls,
+        *,
+        t: npt.ArrayLike,
+        sensor: npt.ArrayLike,
+        x: npt.ArrayLike,
+        y: npt.ArrayLike,
+        theta: npt.ArrayLike,
+        range: npt.ArrayLike,
+        beam_width: npt.ArrayLike | None = None,
+        source: str = "readings",
+        first_line: int | None = None,
+    ) -> ReadingBatch:
+        """Validated batch from array-likes of equal length.
+
+        Raises
+        ------
+        ReadingsError
+            Naming ``source`` and the first offending row (0-based) and column; with
+            ``first_line`` (the file line of row 0) it names the file line instead.
+        """
+        t_arr = np.asarray(t, dtype=np.float64).reshape(-1)
+        n = t_arr.shape[0]
+        width = np.full(n, math.nan) if beam_width is None else beam_width
+        batch = cls(
+            t=t_arr,
+            sensor=np.asarray(sensor, dtype=np.int64).reshape(-1),
+            x=np.asarray(x, dtype=np.float64).reshape(-1),
+            y=np.asarray(y, dtype=np.float64).reshape(-1),
+            theta=np.asarray(theta, dtype=np.float64).reshape(-1),
+            range=np.asarray(range, dtype=np.float64).reshape(-1),
+            beam_width=np.asarray(width, dtype=np.float64).reshape(-1),
+        )
+        batch.validate(source, first_line)
+        return batch
+
+    @classmethod
+    def from_readings(cls, readings: Iterable[Reading], source: str = "readings") -> ReadingBatch:
+        """Validated batch from :class:`Reading` values."""
+        rows = list(readings)
+        columns = [np.array(c) for c in zip(*rows, strict=True)] if rows else [np.zeros(0)] * 7
+        t, sensor, x, y, theta, r, width = columns
+        return cls.from_arrays(t=t, sensor=sensor, x=x, y=y, theta=theta, range=r,
+                               beam_width=width, source=source)
+
+    @classmethod
+    def empty(cls) -> ReadingBatch:
+        """A batch with no readings."""
+        return cls.from_readings([])
+
+    @classmethod
+    def concatenate(cls, batches: Sequence[ReadingBatch]) -> ReadingBatch:
+        """The readings of ``batches`` one after the other (times must stay sorted)."""
+        if not batches:
+            return cls.empty()
+        merged = cls(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(cls)))
+        merged.validate("concatenated readings")
+        return merged
+
+    def validate(self, source: str = "readings", first_line: int | None = None) -> None:
+        """Check shapes and values; raise :class:`ReadingsError` naming the first bad row."""
+        where = _Where(source, first_line)
+        n = len(self.t)
+        for f in fields(self):
+            if getattr(self, f.name).shape != (n,):
+                size = getattr(self, f.name).size
+                msg = f"{source}: column {f.name!r} has {size} rows, expected {n}"
+                raise ReadingsError(msg)
+        for name in ("t", "x", "y", "theta", "range"):
+            _first_bad(where, name, ~np.isfinite(getattr(self, name)), "is NaN or infinite")
+        _first_bad(where, "range", self.range <= 0.0, "must be > 0")
+        _first_bad(where, "sensor", self.sensor < 0, "must be >= 0")
+        width = self.beam_width
+        known = ~np.isnan(width)
+        _first_bad(where, "beam_width", known & ~((width > 0.0) & (width < math.pi)),
+                   "must lie in (0, pi) radians")
+        if n > 1:
+            _first_bad(where, "t", np.concatenate([[False], np.diff(self.t) < 0.0]),
+                       "goes backwards in time")
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    @overload
+    def __getitem__(self, index: int) -> Reading: ...
+    @overload
+    def __getitem__(self, index: slice | npt.NDArray[np.bool_] | IntArray) -> ReadingBatch: ...
+
+    def __getitem__(
+        self, index: int | slice | npt.NDArray[np.bool_] | IntArray
+    ) -> Reading | ReadingBatch:
+        if isinstance(index, int | np.integer):
+            return Reading(
+                float(self.t[index]), int(self.sensor[index]), float(self.x[index]),
+                float(self.y[index]), float(self.theta[index]), float(self.range[index]),
+                float(self.beam_width[index]),
+            )
+        return ReadingBatch(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+
+    def __iter__(self) -> Iterator[Reading]:
+        return (self[i] for i in range(len(self)))
+
+    def with_beam_width(self, default: float) -> ReadingBatch:
+        """A copy where unknown (NaN) beam widths are replaced by ``default`` radians."""
+        width = np.where(np.isnan(self.beam_width), default, self.beam_width)
+        return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
+                               "beam_width": width})
+
+
+class _Where(NamedTuple):
+    source: str
+    first_line: int | None
+
+    def row(self, row: int) -> str:
+        if self.first_line is None:
+            return f"{self.source}: row {row}"
+        return f"{self.source}: line {row + self.first_line}"
+
+
+def _first_bad(where: _Where, column: str, bad: npt.NDArray[np.bool_], problem: str) -> None:
+    if bad.any():
+        msg = f"{where.row(int(np.argmax(bad)))}, column {column!r} {problem}"
+        raise ReadingsError(msg)
