@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from collections.abc import Callable
+from enum import IntEnum
 from typing import ClassVar, TypeVar
 
 import numpy as np
@@ -22,7 +24,7 @@ from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, GlobalMapBuilder, LocalMap, PointSource
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 
-__all__ = ["ArcModel", "Estimates", "Measures", "SonarMethod"]
+__all__ = ["ArcModel", "CommitListener", "Estimates", "Measures", "Removal", "SonarMethod"]
 
 M = TypeVar("M", LocalMap, GlobalMap)
 
@@ -59,6 +61,20 @@ class Estimates:
     width: FloatArray
     max_error: FloatArray
     source: npt.NDArray[np.int8]
+    removal: npt.NDArray[np.int8] | None = None
+    """Why a dead arc died (:class:`Removal` codes), where the model knows; None otherwise."""
+
+
+class Removal(IntEnum):
+    """Why an arc no longer yields a point."""
+
+    NONE = 0  #: still alive
+    FULLY_CARVED = 1  #: every point of the arc lies in newer freespace (section 3)
+    SPLIT = 2  #: carving would have split the arc in two (section 3: the arc is ignored)
+
+
+#: Called with the history, the committed slots (oldest first) and their final estimates.
+CommitListener = Callable[[SonarHistory, "SlotArray", Estimates], None]
 
 
 @dataclass(frozen=True)
@@ -142,6 +158,7 @@ class SonarMethod(ABC):
         self._global = GlobalMapBuilder()
         self._readings = 0
         self._finished = False
+        self._listeners: list[CommitListener] = []
         self.models: tuple[ArcModel, ...] = self._make_models()
 
     @abstractmethod
@@ -216,11 +233,19 @@ class SonarMethod(ABC):
         """Readings added so far."""
         return self._readings
 
-    def _commit(self, slots: SlotArray) -> None:
-        self._global.commit(self._points(slots, GlobalMap))
+    def add_commit_listener(self, listener: CommitListener) -> None:
+        """Call ``listener(history, slots, estimates)`` for every block of arcs leaving the
+        history (their final state), e.g. to attribute removed arcs to ground truth."""
+        self._listeners.append(listener)
 
-    def _points(self, slots: SlotArray, kind: type[M]) -> M:
+    def _commit(self, slots: SlotArray) -> None:
         est = self.estimates(slots)
+        for listener in self._listeners:
+            listener(self.history, slots, est)
+        self._global.commit(self._points(slots, GlobalMap, est))
+
+    def _points(self, slots: SlotArray, kind: type[M], est: Estimates | None = None) -> M:
+        est = self.estimates(slots) if est is None else est
         keep = slots[est.alive]
         h = self.history
         return kind(

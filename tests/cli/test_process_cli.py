@@ -1,0 +1,84 @@
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.cli import main
+from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_readings_csv
+from sonarcarve.readings import ReadingBatch
+
+
+def _write_ring_readings(path: Path, n: int = 120) -> ReadingBatch:
+    """A robot driving along +x between two walls at y = +-1.5, ranges from the true geometry."""
+    k = np.arange(n)
+    theta = np.where(k % 2 == 0, math.pi / 2, -math.pi / 2)
+    batch = ReadingBatch.from_arrays(t=0.1 * k, sensor=k % 2, x=0.05 * k, y=np.zeros(n),
+                                     theta=theta, range=np.full(n, 1.5))
+    write_readings_csv(batch, path)
+    return batch
+
+
+def test_process_writes_the_contract_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    readings = tmp_path / "r.csv"
+    batch = _write_ring_readings(readings)
+    out = tmp_path / "map.csv"
+    assert main(["process", str(readings), "--method", "centerline", "--out", str(out)]) == 0
+    assert out.read_text().splitlines()[0] == ",".join(MAP_COLUMNS)
+    points = read_map_csv(out)
+    assert points.reading_id.tolist() == list(range(len(batch)))
+    # Centerline points sit on the axis at range r: here exactly on the walls y = +-1.5.
+    np.testing.assert_allclose(np.abs(points.xy[:, 1]), 1.5)
+    np.testing.assert_allclose(points.xy[:, 0], batch.x, atol=1e-12)
+    assert set(points.source_labels()) == {"centerline"}
+    assert "readings in" in capsys.readouterr().out
+
+
+def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
+    good = tmp_path / "good.csv"
+    _write_ring_readings(good)
+    nan_file = tmp_path / "nan.csv"
+    nan_file.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,nan\n")
+    missing_col = tmp_path / "cols.csv"
+    missing_col.write_text("t,sensor,x,y,theta\n0,0,0,0,0\n")
+    unsorted = tmp_path / "unsorted.csv"
+    unsorted.write_text("t,sensor,x,y,theta,range\n1,0,0,0,0,1\n0,0,0,0,0,1\n")
+    negative = tmp_path / "neg.csv"
+    negative.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,-3\n")
+    corrupt = tmp_path / "corrupt.csv"
+    corrupt.write_bytes(b"\x00\xff\xfe garbage \x89PNG")
+    return [
+        ([str(nan_file)], "NaN or infinite"),
+        ([str(missing_col)], "missing column"),
+        ([str(unsorted)], "backwards in time"),
+        ([str(negative)], "must be > 0"),
+        ([str(corrupt)], str(corrupt)),
+        ([str(tmp_path / "absent.csv")], "no such file"),
+        ([str(good), "--method", "nonsense"], "unknown method 'nonsense'"),
+        ([str(good), "--history", "0"], "--history must be at least 1"),
+        ([str(good), "--beam-width", "200"], "--beam-width must lie in (0, 180)"),
+        ([str(good), "--range-tolerance", "-1"], "--range-tolerance must be"),
+    ]
+
+
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for args, message in _bad_cases(tmp_path):
+        out = tmp_path / "map.csv"
+        out.write_text("precious\n")
+        code = main(["process", *args, "--out", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2, args
+        assert message in err, (args, err)
+        assert err.count("\n") == 1, err
+        assert "Traceback" not in err
+        assert out.read_text() == "precious\n", "an existing output must be left untouched"
+        assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".map.csv")) == []
+
+
+def test_version_and_help(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--version"]) == 0
+    assert "sonarcarve" in capsys.readouterr().out
+    assert main(["process", "--help"]) == 0
+    assert "--method" in capsys.readouterr().out

@@ -1,0 +1,67 @@
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
+
+
+def _batch(**overrides: object) -> ReadingBatch:
+    columns: dict[str, object] = {
+        "t": [0.0, 0.1, 0.2], "sensor": [0, 1, 2], "x": [0.0, 0.0, 0.1], "y": [0.0, 0.0, 0.0],
+        "theta": [0.0, 1.0, 2.0], "range": [1.0, 2.0, 3.0],
+    }
+    columns.update(overrides)
+    return ReadingBatch.from_arrays(**columns)  # type: ignore[arg-type]
+
+
+def test_default_beam_width_is_the_polaroid_arc() -> None:
+    assert math.degrees(DEFAULT_BEAM_WIDTH) == pytest.approx(22.5)
+
+
+def test_batch_round_trips_through_readings() -> None:
+    batch = _batch()
+    again = ReadingBatch.from_readings(list(batch))
+    assert len(again) == 3
+    np.testing.assert_array_equal(again.range, [1.0, 2.0, 3.0])
+    assert batch[1][:6] == Reading(0.1, 1, 0.0, 0.0, 1.0, 2.0)[:6]
+    assert math.isnan(batch[1].beam_width)
+
+
+def test_slicing_and_masks_give_batches() -> None:
+    batch = _batch()
+    assert len(batch[1:]) == 2
+    assert batch[np.array([True, False, True])].sensor.tolist() == [0, 2]
+
+
+@pytest.mark.parametrize(
+    ("overrides", "problem"),
+    [
+        ({"range": [1.0, 0.0, 3.0]}, "row 1, column 'range' must be > 0"),
+        ({"range": [1.0, -2.0, 3.0]}, "row 1, column 'range' must be > 0"),
+        ({"range": [1.0, 2.0, math.nan]}, "row 2, column 'range' is NaN or infinite"),
+        ({"x": [math.inf, 0.0, 0.0]}, "row 0, column 'x' is NaN or infinite"),
+        ({"t": [0.0, 0.5, 0.2]}, "row 2, column 't' goes backwards in time"),
+        ({"beam_width": [0.3, math.pi, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
+        ({"beam_width": [0.3, 0.0, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
+        ({"sensor": [0, -1, 2]}, "row 1, column 'sensor' must be >= 0"),
+    ],
+)
+def test_validation_names_row_and_column(overrides: dict[str, object], problem: str) -> None:
+    with pytest.raises(ReadingsError) as caught:
+        _batch(**overrides)
+    assert problem in str(caught.value)
+    assert "\n" not in str(caught.value)
+
+
+def test_unknown_beam_width_becomes_the_default() -> None:
+    batch = _batch(beam_width=[0.3, math.nan, 0.2]).with_beam_width(0.5)
+    assert batch.beam_width.tolist() == [0.3, 0.5, 0.2]
+
+
+def test_concatenate_keeps_order_and_checks_time() -> None:
+    batch = _batch()
+    both = ReadingBatch.concatenate([batch[:2], batch[2:]])
+    np.testing.assert_array_equal(both.t, batch.t)
+    with pytest.raises(ReadingsError, match="backwards"):
+        ReadingBatch.concatenate([batch[2:], batch[:2]])
