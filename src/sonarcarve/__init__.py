@@ -5,17 +5,23 @@ the centerline model, the Arc Transversal Median (ATM), arc carving and their co
 a ring-buffer history of sonar arcs, with local and global maps and the paper's measures.
 """
 
+from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
+from sonarcarve.geometry import CarveOutcome, arc_remainder, carve_arc
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
 from sonarcarve.methods import (
     METHODS,
+    AtmMethod,
+    CarvingMethod,
     CenterlineMethod,
+    CombinedMethod,
     Measures,
     MethodConfig,
     SonarMethod,
     make_method,
 )
 from sonarcarve.pipeline import ProcessResult, process_readings
+from sonarcarve.polling import PolledLog, SonarPoller, naive_stamps, poll_readings
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
 
 __version__ = "0.1.0"
@@ -24,20 +30,34 @@ __all__ = [
     "DEFAULT_BEAM_WIDTH",
     "DEFAULT_HISTORY_SIZE",
     "METHODS",
+    "AtmMethod",
+    "CarveOutcome",
+    "CarvingMethod",
     "CenterlineMethod",
+    "CombinedMethod",
     "GlobalMap",
     "LocalMap",
+    "MapFilter",
     "Measures",
     "MethodConfig",
     "PointSource",
+    "PolledLog",
     "ProcessResult",
     "Reading",
     "ReadingBatch",
+    "ReadingFilter",
     "ReadingsError",
     "SonarHistory",
     "SonarMethod",
+    "SonarPoller",
     "__version__",
+    "arc_remainder",
+    "carve_arc",
     "chord_error",
+    "filter_map",
+    "filter_readings",
     "make_method",
+    "naive_stamps",
+    "poll_readings",
     "process_readings",
 ]

@@ -8,6 +8,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sonarcarve.filters import (
+    MapFilter,
+    MapFilterReport,
+    ReadingFilter,
+    ReadingFilterReport,
+    filter_map,
+    filter_readings,
+)
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods.base import SonarMethod
 from sonarcarve.readings import ReadingBatch
@@ -24,7 +32,7 @@ class ProcessResult:
     global_map : GlobalMap
         One point per surviving reading (the ``process`` output).
     readings : int
-        Readings processed.
+        Readings processed (after the reading filters, if any).
     mean_unprocessed_share : float
         Mean over the run of the share of history arcs still unprocessed (Table I), sampled
         every ``sample_every`` readings once the history is full.
@@ -32,6 +40,10 @@ class ProcessResult:
         Arcs removed by carving, by cause.
     seconds : float
         Wall time spent in the method (sampling for the measures excluded).
+    reading_filter : ReadingFilterReport or None
+        What the reading filters dropped (None if none ran).
+    map_filter : MapFilterReport or None
+        What the map filters dropped from the global map (None if none ran).
     """
 
     global_map: GlobalMap
@@ -40,6 +52,8 @@ class ProcessResult:
     fully_carved: int
     split: int
     seconds: float
+    reading_filter: ReadingFilterReport | None = None
+    map_filter: MapFilterReport | None = None
 
     @property
     def readings_per_second(self) -> float:
@@ -53,6 +67,8 @@ def process_readings(
     *,
     sample_every: int | None = None,
     on_progress: Callable[[int], None] | None = None,
+    reading_filter: ReadingFilter | None = None,
+    map_filter: MapFilter | None = None,
 ) -> ProcessResult:
     """Feed ``batch`` to ``method``, finish it, and return the global map with the measures.
 
@@ -65,26 +81,47 @@ def process_readings(
     sample_every : int, optional
         How often (in readings) to sample the unprocessed share; default a tenth of the history.
     on_progress : callable, optional
-        Called with the number of readings done after each chunk.
+        Called with the number of input rows done after each chunk.
+    reading_filter : ReadingFilter, optional
+        Reading filters applied before the method; kept readings keep their input row as id.
+    map_filter : MapFilter, optional
+        Map filters applied to the finished global map.
     """
+    ids = None
+    filter_report = None
+    if reading_filter is not None:
+        filtered = filter_readings(batch, reading_filter)
+        ids, filter_report = filtered.ids, filtered.report
+        batch = filtered.batch
     every = sample_every or max(1, method.history.capacity // 10)
     shares: list[float] = []
     seconds = 0.0
     for start in range(0, len(batch), every):
         chunk = batch[start : start + every]
         tic = time.perf_counter()
-        method.add_many(chunk, first_id=start)
+        if ids is None:
+            method.add_many(chunk, first_id=start)
+        else:
+            for reading, reading_id in zip(chunk, ids[start : start + every].tolist(), strict=True):
+                method.add(reading, reading_id)
         seconds += time.perf_counter() - tic
         if start + len(chunk) >= method.history.capacity:
             shares.append(method.measures().unprocessed_share)
-        if on_progress is not None:
-            on_progress(start + len(chunk))
+        if on_progress is not None:  # progress counts input rows, dropped ones included
+            done = start + len(chunk)
+            on_progress(done if ids is None else int(ids[done - 1]) + 1)
+    if on_progress is not None and filter_report is not None:
+        on_progress(filter_report.total)
     measures = method.measures()
     if not shares:
         shares.append(measures.unprocessed_share)
     tic = time.perf_counter()
     global_map = method.finish()
     seconds += time.perf_counter() - tic
+    map_report = None
+    if map_filter is not None:
+        kept = filter_map(global_map, map_filter)
+        global_map, map_report = kept.points, kept.report
     return ProcessResult(
         global_map=global_map,
         readings=len(batch),
@@ -92,4 +129,6 @@ def process_readings(
         fully_carved=measures.fully_carved,
         split=measures.split,
         seconds=seconds,
+        reading_filter=filter_report,
+        map_filter=map_report,
     )

@@ -46,8 +46,8 @@ def plot_world(world: World, ax: Axes | None = None, **style: Any) -> list[Any]:
     from matplotlib.collections import LineCollection
 
     ax = ax or new_axes()
-    lines = LineCollection(world.segments.reshape(-1, 2, 2),
-                           **({"colors": "0.6", "linewidths": 1.5, "zorder": 1} | style))
+    options: dict[str, Any] = {"colors": "0.6", "linewidths": 1.5, "zorder": 1} | style
+    lines = LineCollection(list(world.segments.reshape(-1, 2, 2)), **options)
     ax.add_collection(lines)
     ax.autoscale_view()
     return [lines]

@@ -11,7 +11,13 @@ from collections.abc import Sequence
 
 import typer
 
-from sonarcarve.cli import process  # noqa: F401 - registers the command
+from sonarcarve.cli import (
+    convert,  # noqa: F401 - registers the command
+    experiments,  # noqa: F401 - registers the command
+    process,  # noqa: F401 - registers the command
+    simulate,  # noqa: F401 - registers the command
+    worlds,  # noqa: F401 - registers the command
+)
 from sonarcarve.cli.app import app
 from sonarcarve.errors import SonarcarveError
 

@@ -12,6 +12,7 @@ from rich.table import Table
 
 from sonarcarve.cli.app import app, console
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.methods import METHODS, MethodConfig, make_method
 from sonarcarve.pipeline import ProcessResult, process_readings
@@ -43,7 +44,26 @@ def process(
         = MethodConfig.range_tolerance,
     min_transversal: Annotated[float, typer.Option(
         help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
-        = math.degrees(MethodConfig.min_transversal),
+        = round(math.degrees(MethodConfig.min_transversal), 6),
+    max_range: Annotated[float | None, typer.Option(
+        help="Drop readings farther than this, metres (reading filter; off by default). The "
+             f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
+             "sensors' height and floor.", rich_help_panel="Filters")] = None,
+    min_range: Annotated[float | None, typer.Option(
+        help="Drop readings nearer than this, metres (reading filter).",
+        rich_help_panel="Filters")] = None,
+    jump_threshold: Annotated[float | None, typer.Option(
+        help="Drop a reading whose range differs by more than this (metres) from the same "
+             "sensor's previous reading: a jumping sensor is ignored for one reading.",
+        rich_help_panel="Filters")] = None,
+    outlier_radius: Annotated[float | None, typer.Option(
+        help="Map filter: drop points with fewer than --outlier-neighbours other points within "
+             "this radius, metres.", rich_help_panel="Filters")] = None,
+    outlier_neighbours: Annotated[int, typer.Option(
+        help="k of the outlier test (needs --outlier-radius).", rich_help_panel="Filters")] = 1,
+    max_error: Annotated[float | None, typer.Option(
+        help="Map filter: drop points whose error bound max_error exceeds this, metres "
+             "(paper, Fig. 13b).", rich_help_panel="Filters")] = None,
 ) -> None:
     """Map READINGS with one method and write its global map to --out.
 
@@ -51,18 +71,28 @@ def process(
     (`source` is the model that placed the point: centerline, carved or atm; `width` the final
     angular width in radians; `max_error` the error bound in metres).
 
+    Filters are off unless asked for: reading filters (--max-range, --min-range,
+    --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
+    rows; map filters (--max-error, then --outlier-radius) drop points from the global map.
+
     Example: `sonarcarve process readings.csv --method carve --out map.csv`
+
+    Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
     """
     config = _config(method, history, beam_width, range_tolerance, min_transversal)
+    reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
+                                          outlier_neighbours, max_error)
     batch = read_readings_csv(readings)
     sonar = make_method(method, config)
     if len(batch) >= _PROGRESS_MIN_READINGS:
         with _progress() as bar:
             task = bar.add_task(f"{method}", total=len(batch))
             result = process_readings(
-                batch, sonar, on_progress=lambda n: bar.update(task, completed=n))
+                batch, sonar, on_progress=lambda n: bar.update(task, completed=n),
+                reading_filter=reading_filter, map_filter=map_filter)
     else:
-        result = process_readings(batch, sonar)
+        result = process_readings(batch, sonar, reading_filter=reading_filter,
+                                  map_filter=map_filter)
     write_map_csv(result.global_map, out)
     console.print(_summary(method, result, out))
 
@@ -88,6 +118,29 @@ def _config(method: str, history: int, beam_width_deg: float, tolerance: float,
                         range_tolerance=tolerance, min_transversal=math.radians(transversal_deg))
 
 
+def _filters(max_range: float | None, min_range: float | None, jump: float | None,
+             radius: float | None, neighbours: int, max_error: float | None,
+             ) -> tuple[ReadingFilter | None, MapFilter | None]:
+    for name, value in (("--max-range", max_range), ("--min-range", min_range),
+                        ("--jump-threshold", jump), ("--outlier-radius", radius),
+                        ("--max-error", max_error)):
+        if value is not None and not (math.isfinite(value) and value > 0.0):
+            msg = f"{name} must be a finite number > 0 (metres), got {value}"
+            raise ParameterError(msg)
+    if max_range is not None and min_range is not None and min_range > max_range:
+        msg = f"--min-range ({min_range}) exceeds --max-range ({max_range})"
+        raise ParameterError(msg)
+    if neighbours < 1:
+        msg = f"--outlier-neighbours must be at least 1, got {neighbours}"
+        raise ParameterError(msg)
+    if neighbours != 1 and radius is None:
+        msg = "--outlier-neighbours needs --outlier-radius"
+        raise ParameterError(msg)
+    readings = ReadingFilter(max_range=max_range, min_range=min_range, jump_threshold=jump)
+    points = MapFilter(max_error=max_error, outlier_radius=radius, outlier_neighbours=neighbours)
+    return (readings if readings.active else None), (points if points.active else None)
+
+
 def _progress() -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeRemainingColumn(), console=console, transient=True)
@@ -97,7 +150,20 @@ def _summary(method: str, result: ProcessResult, out: Path) -> Table:
     table = Table(title=f"sonarcarve process --method {method}", show_header=False)
     table.add_column(style="bold")
     table.add_column(justify="right")
-    table.add_row("readings in", f"{result.readings:,}")
+    dropped = result.reading_filter
+    if dropped is None:
+        table.add_row("readings in", f"{result.readings:,}")
+    else:
+        table.add_row("readings in", f"{dropped.total:,}")
+        table.add_row("dropped: beyond --max-range", f"{dropped.too_far:,}")
+        table.add_row("dropped: below --min-range", f"{dropped.too_near:,}")
+        table.add_row("dropped: --jump-threshold", f"{dropped.jumps:,}")
+        table.add_row("readings mapped", f"{result.readings:,}")
+    points = result.map_filter
+    if points is not None:
+        table.add_row("points before map filters", f"{points.total:,}")
+        table.add_row("dropped: above --max-error", f"{points.max_error:,}")
+        table.add_row("dropped: outliers", f"{points.outliers:,}")
     table.add_row("points out", f"{len(result.global_map):,}")
     table.add_row("fully carved", f"{result.fully_carved:,}")
     table.add_row("split (dropped)", f"{result.split:,}")

@@ -3,13 +3,18 @@
 from sonarcarve.io.errors import InputError
 from sonarcarve.io.map_csv import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.readings_csv import READINGS_COLUMNS, read_readings_csv, write_readings_csv
+from sonarcarve.io.roboND import RoboNDLog, RoboNDReport, bundled_robond_dir, read_robond
 
 __all__ = [
     "MAP_COLUMNS",
     "READINGS_COLUMNS",
     "InputError",
+    "RoboNDLog",
+    "RoboNDReport",
+    "bundled_robond_dir",
     "read_map_csv",
     "read_readings_csv",
+    "read_robond",
     "write_map_csv",
     "write_readings_csv",
 ]

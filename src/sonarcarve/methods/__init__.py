@@ -4,14 +4,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from sonarcarve.methods.atm import AtmMethod
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod
+from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.centerline import CenterlineMethod
+from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.methods.config import MethodConfig
 
 __all__ = [
     "METHODS",
     "ArcModel",
+    "AtmMethod",
+    "CarvingMethod",
+    "CarvingModel",
     "CenterlineMethod",
+    "CombinedMethod",
     "Estimates",
     "Measures",
     "MethodConfig",
@@ -24,9 +31,29 @@ def _centerline(config: MethodConfig) -> SonarMethod:
     return CenterlineMethod(config.history_size, config.beam_width)
 
 
+def _atm(config: MethodConfig) -> SonarMethod:
+    return AtmMethod(
+        config.history_size, config.beam_width, config.min_transversal, config.range_resolution
+    )
+
+
+def _carve(config: MethodConfig) -> SonarMethod:
+    return CarvingMethod(config.history_size, config.beam_width, config.range_tolerance)
+
+
+def _combined(config: MethodConfig) -> SonarMethod:
+    return CombinedMethod(
+        config.history_size, config.beam_width, config.range_tolerance,
+        config.min_transversal, config.range_resolution,
+    )
+
+
 #: Method name -> factory from a :class:`MethodConfig`.
 METHODS: dict[str, Callable[[MethodConfig], SonarMethod]] = {
     "centerline": _centerline,
+    "carve": _carve,
+    "atm": _atm,
+    "combined": _combined,
 }
 
 

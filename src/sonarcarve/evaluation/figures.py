@@ -1,0 +1,378 @@
+"""Figures of the experiments, drawn from their results (plain dicts and arrays).
+
+matplotlib is imported inside each function with the Agg backend, so nothing here needs a
+display or slows down importing the package. Each ``plot_*`` function draws on the axes it is
+given (or a new figure) and returns the figure; :func:`write_figures` saves every figure the
+results allow as one PNG each.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.io.atomic import atomic_path
+from sonarcarve.maps import PointSource
+from sonarcarve.plotting import SOURCE_COLORS
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "FIGURES",
+    "plot_fig04",
+    "plot_fig10",
+    "plot_fig11",
+    "plot_fig12",
+    "plot_fig13",
+    "plot_latency_accuracy",
+    "plot_openings",
+    "plot_sensitivity",
+    "plot_true_error",
+    "write_figures",
+]
+
+JsonDict = dict[str, Any]
+
+#: One colour per method, the same in every figure.
+METHOD_COLORS = {"atm": "#2ca02c", "carving": "#1f77b4", "combined": "#9467bd",
+                 "centerline": "#d62728"}
+METHOD_ORDER = ("atm", "carving", "combined", "centerline")
+
+
+def _figure(rows: int = 1, cols: int = 1, width: float = 7.0,
+            height: float = 4.5) -> tuple[Figure, Any]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
+                             squeeze=False)
+    return fig, axes
+
+
+def _values(seq: Sequence[float | None]) -> npt.NDArray[np.float64]:
+    return np.array([np.nan if v is None else v for v in seq], dtype=np.float64)
+
+
+def _centers(edges: Sequence[float]) -> npt.NDArray[np.float64]:
+    e = np.asarray(edges, dtype=np.float64)
+    return np.asarray(0.5 * (e[1:] + e[:-1]))
+
+
+def _binned_line(ax: Axes, entry: JsonDict, label: str, color: str, scale: float = 1.0,
+                 style: str = "-o") -> None:
+    """A per-range-bin line with its min-max band over seeds."""
+    x = _centers(entry["edges"])
+    y = _values(entry["value"]) * scale
+    ax.plot(x, y, style, color=color, label=label, ms=3)
+    if "min" in entry:
+        ax.fill_between(x, _values(entry["min"]) * scale, _values(entry["max"]) * scale,
+                        color=color, alpha=0.15, lw=0)
+
+
+def _own_axes(ax: Axes | None, width: float = 7.0, height: float = 4.5) -> tuple[Figure, Axes]:
+    if ax is not None:
+        return ax.figure, ax  # type: ignore[return-value]
+    fig, axes = _figure(width=width, height=height)
+    return fig, axes[0, 0]
+
+
+def plot_fig10(results: JsonDict, ax: Axes | None = None) -> Figure:
+    """Paper Fig. 10: percentage of history arcs unprocessed, by range."""
+    fig, ax = _own_axes(ax)
+    for label in ("atm", "carving", "combined"):
+        _binned_line(ax, results["fig10"][label], label, METHOD_COLORS[label],
+                     style="-o" if label != "combined" else "--")
+    ax.set_xlabel("range of the reading (m)")
+    ax.set_ylabel("unprocessed (% of history arcs)")
+    ax.set_title("Fig. 10: unprocessed arcs by range (office tour; band: min-max over seeds)")
+    ax.set_ylim(0, 100)
+    ax.legend()
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_fig11(results: JsonDict, ax: Axes | None = None) -> Figure:
+    """Paper Fig. 11: mean and median angular width of carved arcs, by range."""
+    fig, ax = _own_axes(ax)
+    f11 = results["fig11"]
+    _binned_line(ax, f11["carved_only"]["mean"], "carved arcs: mean", METHOD_COLORS["carving"])
+    _binned_line(ax, f11["carved_only"]["median"], "carved arcs: median", "#17becf",
+                 style="-s")
+    _binned_line(ax, f11["all_surviving"]["mean"], "all surviving arcs: mean", "0.4",
+                 style="--")
+    ax.axhline(22.5, color="0.6", lw=0.8, ls=":", label="beam width φ (uncarved)")
+    ax.set_xlabel("range of the reading (m)")
+    ax.set_ylabel("final angular width θ_d (degrees)")
+    ax.set_title("Fig. 11: angular width of carved arcs by range")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize="small")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_fig12(results: JsonDict, ax: Axes | None = None) -> Figure:
+    """Paper Fig. 12: mean maximum Euclidean error by range (eq. 5.3, 5.4)."""
+    fig, ax = _own_axes(ax)
+    f12 = results["fig12"]
+    _binned_line(ax, f12["carving"], "carving (measured, eq. 5.3)", METHOD_COLORS["carving"])
+    _binned_line(ax, f12["centerline"], "centerline (E_m = φ/2)", METHOD_COLORS["centerline"])
+    _binned_line(ax, f12["combined"], "combined (measured)", METHOD_COLORS["combined"],
+                 style="--")
+    ax.axhline(f12["atm_bound"], color=METHOD_COLORS["atm"], ls="-",
+               label=f"ATM theoretical bound (eq. 5.4 × δ) = {f12['atm_bound']:.3f} m")
+    ax.set_xlabel("range of the reading (m)")
+    ax.set_ylabel("mean maximum error (m)")
+    ax.set_title("Fig. 12: mean maximum Euclidean error by range")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize="small")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def _scatter_points(ax: Axes, snap: JsonDict, size: float = 6.0) -> None:
+    xy = np.asarray(snap["xy"]).reshape(-1, 2)
+    source = np.asarray(snap["source"])
+    for code, color in SOURCE_COLORS.items():
+        mask = source == code
+        if np.any(mask):
+            ax.scatter(xy[mask, 0], xy[mask, 1], s=size, c=color, linewidths=0, zorder=3,
+                       label=f"{PointSource(code).label} ({int(mask.sum())})")
+
+
+def _walls(ax: Axes, segments: npt.ArrayLike) -> None:
+    from matplotlib.collections import LineCollection
+
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
+    ax.add_collection(LineCollection(list(seg), colors="0.75", linewidths=2.0, zorder=1))
+
+
+def _robot(ax: Axes, xy: Sequence[float], radius: float = 0.205) -> None:
+    from matplotlib.patches import Circle
+
+    ax.add_patch(Circle((xy[0], xy[1]), radius, fill=False, color="k", lw=1.0, zorder=4))
+
+
+def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
+    """Paper Fig. 4: distance from the facing wall when each local map first shows it.
+
+    Left: bars (mean over seeds, whiskers min-max) for all points and for refined points only;
+    right: the local maps of ATM (refined points only, as in the paper), centerline and carving
+    when the robot is about 4 m from the wall (seed 0).
+    """
+    snaps = (artifacts or {}).get("snapshots") or {}
+    panels = [m for m in ("atm", "centerline", "carving") if snaps.get(m)]
+    fig, axes = _figure(1, 1 + len(panels), width=4.2 + 3.0 * len(panels), height=5.0)
+    tj = results["t_junction"]
+    ax = axes[0, 0]
+    x = np.arange(len(METHOD_ORDER))
+    for offset, kind, hatch in ((-0.2, "all", ""), (0.2, "refined", "//")):
+        means = _values([tj[kind][m]["mean"] for m in METHOD_ORDER])
+        lo = means - _values([tj[kind][m]["min"] for m in METHOD_ORDER])
+        hi = _values([tj[kind][m]["max"] for m in METHOD_ORDER]) - means
+        ax.bar(x + offset, np.nan_to_num(means), 0.4, yerr=np.nan_to_num([lo, hi]),
+               color=[METHOD_COLORS[m] for m in METHOD_ORDER], hatch=hatch, alpha=0.85,
+               edgecolor="k", label="any point" if kind == "all" else "refined points only")
+        for xi, mean in zip(x + offset, means, strict=True):
+            if not np.isfinite(mean):
+                ax.text(xi, 0.1, "never", rotation=90, ha="center", va="bottom", fontsize=8)
+    ax.set_xticks(x, list(METHOD_ORDER))
+    ax.set_ylabel("distance from the facing wall (m)")
+    ax.set_title(f"≥ {tj['points']} points within {tj['radius_m']:g} m of the wall")
+    ax.legend(fontsize="small")
+    for k, method in enumerate(panels, start=1):
+        ax = axes[0, k]
+        snap = dict(snaps[method])
+        if method == "atm":
+            keep = np.asarray(snap["source"]) == PointSource.ATM
+            snap = {**snap, "xy": np.asarray(snap["xy"])[keep],
+                    "source": np.asarray(snap["source"])[keep]}
+        _walls(ax, snap["world"])
+        _scatter_points(ax, snap)
+        _robot(ax, snap["robot"])
+        ax.set_aspect("equal")
+        ax.set_xlim(-4.0, 4.0)
+        ax.set_ylim(snap["robot"][1] - 3.0, snap["robot"][1] + snap["wall_distance"] + 1.0)
+        title = "ATM (medians only)" if method == "atm" else method
+        ax.set_title(f"{title}, {snap['wall_distance']:.1f} m from the wall", fontsize=9)
+        ax.legend(fontsize=7, loc="lower right", markerscale=2)
+    fig.suptitle("Fig. 4: T junction, when does the facing wall appear?")
+    return fig
+
+
+def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
+    """Paper Fig. 2 and 9: share of runs whose local map shows the opening passable.
+
+    Left: passable share by distance for each method (all opening runs); right: local maps at
+    2 m of the example runs (seed 0): a doorway and the narrow hallway, per method.
+    """
+    snaps = (artifacts or {}).get("snapshots") or {}
+    worlds = [w for w in ("doorway", "narrow-hallway") if snaps.get(w)]
+    methods = ["centerline", "atm", "carving", "combined"]
+    rows = max(1, len(worlds))
+    cols = 1 + (len(methods) if worlds else 0)
+    fig, axes = _figure(rows, cols, width=4.5 + 2.6 * (cols - 1), height=3.6 * rows)
+    ax = axes[0, 0]
+    op = results["openings"]
+    distances = sorted(op[METHOD_ORDER[0]], key=float)
+    x = np.arange(len(distances))
+    for k, m in enumerate(METHOD_ORDER):
+        ax.bar(x + (k - 1.5) * 0.2, [op[m][d] for d in distances], 0.2,
+               color=METHOD_COLORS[m], label=m)
+    ax.set_xticks(x, [f"{float(d):g} m" for d in distances])
+    ax.set_xlabel("distance before the opening")
+    ax.set_ylabel("runs with the opening passable (%)")
+    ax.set_ylim(0, 105)
+    ax.legend(fontsize="small", loc="lower left")
+    ax.set_title("all opening runs")
+    for r in range(1, rows):
+        axes[r, 0].axis("off")
+    for r, world in enumerate(worlds):
+        for c, method in enumerate(methods, start=1):
+            ax = axes[r, c]
+            snap = snaps[world].get(method)
+            if snap is None:
+                ax.axis("off")
+                continue
+            _walls(ax, snap["world"])
+            gap = np.asarray(snap["opening"])
+            ax.plot(gap[:, 0], gap[:, 1], color="orange", lw=1.0, ls="--", zorder=2)
+            _scatter_points(ax, snap, size=5.0)
+            _robot(ax, snap["robot"])
+            centre = gap.mean(axis=0)
+            ax.set_xlim(centre[0] - 2.2, centre[0] + 2.2)
+            ax.set_ylim(centre[1] - 3.2, centre[1] + 1.0)
+            ax.set_aspect("equal")
+            ax.set_title(f"{world}: {method}", fontsize=9)
+            ax.tick_params(labelsize=7)
+    fig.suptitle("Fig. 2 and 9: narrow openings (dashed: the gap; maps at 2 m before it)")
+    return fig
+
+
+def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure | None:
+    """Paper Fig. 13: final global maps of ATM (medians) and carving (max-error thresholded)."""
+    maps = (artifacts or {}).get("fig13") or {}
+    if not maps.get("atm") or not maps.get("carving"):
+        return None
+    fig, axes = _figure(1, 2, width=14.0, height=5.6)
+    threshold = results["fig13"]["threshold_m"]
+    for ax, method in zip(axes[0], ("atm", "carving"), strict=True):
+        data = maps[method]
+        _walls(ax, data["world"])
+        xy = np.asarray(data["xy"]).reshape(-1, 2)
+        ax.scatter(xy[:, 0], xy[:, 1], s=0.6, c=METHOD_COLORS[method], linewidths=0, zorder=3)
+        ax.set_aspect("equal")
+        ax.autoscale_view()
+        title = ("(a) ATM map: medians of transversal intersections" if method == "atm" else
+                 f"(b) arc carving map: max error ≤ {threshold:.3f} m")
+        ax.set_title(f"{title} ({len(xy)} points)", fontsize=10)
+    fig.suptitle("Fig. 13: final global maps, office tour seed 0 (grey: true walls)")
+    return fig
+
+
+def plot_true_error(results: JsonDict, ax: Axes | None = None) -> Figure:
+    """True error of local-map points by range: median (solid) and 90th percentile (dashed)."""
+    fig, ax = _own_axes(ax)
+    for m in METHOD_ORDER:
+        entry = results["true_error_by_range"][m]
+        _binned_line(ax, entry["median"], f"{m} median", METHOD_COLORS[m])
+        _binned_line(ax, entry["p90"], f"{m} p90", METHOD_COLORS[m], style=":")
+    ax.set_yscale("log")
+    ax.set_xlabel("range of the reading (m)")
+    ax.set_ylabel("distance of local-map points to the true walls (m)")
+    ax.set_title("True error of local-map points by range (office tour)")
+    ax.legend(fontsize="x-small", ncol=2)
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_latency_accuracy(results: JsonDict) -> Figure:
+    """Share of wall patches whose local-map points are right, against time and distance."""
+    la = results["latency_accuracy"]
+    tolerances = [k for k in la[METHOD_ORDER[0]] if k != "patches_seen"]
+    fig, axes = _figure(len(tolerances), 2, width=11.0, height=3.6 * len(tolerances))
+    for r, tol in enumerate(tolerances):
+        for c, (grid, key, unit) in enumerate(((la["grid_s"], "curve_s", "s"),
+                                               (la["grid_m"], "curve_m", "m"))):
+            ax = axes[r, c]
+            for m in METHOD_ORDER:
+                ax.plot(grid, la[m][tol][key], color=METHOD_COLORS[m], label=m)
+            ax.set_xlabel(f"delay since the patch came into view ({unit})" if unit == "s"
+                          else "distance travelled since the patch came into view (m)")
+            ax.set_ylabel(f"patches within {float(tol) * 100:g} cm (%)")
+            ax.set_ylim(0, 100)
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize="small")
+    fig.suptitle(f"Latency against accuracy: {la['patch_length_m']:g} m wall patches, "
+                 "half of their local-map points within the tolerance")
+    return fig
+
+
+def plot_sensitivity(results: JsonDict) -> Figure:
+    """Each swept parameter against true error, unprocessed share and fully carved share."""
+    sens = {k: v for k, v in results["sensitivity"].items() if k != "scenario"}
+    measures = (("error_median", "median true error (m)"),
+                ("unprocessed", "unprocessed (%)"), ("fully_carved", "fully carved (%)"))
+    fig, axes = _figure(len(sens), len(measures), width=12.0, height=2.6 * len(sens))
+    for r, (param, entry) in enumerate(sens.items()):
+        x = np.asarray(entry["values"], dtype=np.float64)
+        for c, (key, label) in enumerate(measures):
+            ax = axes[r, c]
+            for m in METHOD_ORDER:
+                if m in entry:
+                    ax.plot(x, _values(entry[m][key]), "-o", ms=3, color=METHOD_COLORS[m],
+                            label=m)
+            if param == "history":
+                ax.set_xscale("log")
+            ax.set_xlabel(f"{param} ({entry['unit']})", fontsize=8)
+            ax.set_ylabel(label, fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize="x-small")
+    fig.suptitle("Sensitivity (office tour, seed 0)")
+    return fig
+
+
+#: File name -> (results key it needs, function of (results, artifacts) -> Figure or None).
+FIGURES: dict[str, tuple[str, Callable[[JsonDict, JsonDict], Figure | None]]] = {
+    "fig04_t_junction.png": ("t_junction",
+                             lambda r, a: plot_fig04(r, a.get("t-junction"))),
+    "fig02_09_openings.png": ("openings", lambda r, a: plot_openings(r, a.get("openings"))),
+    "fig10_unprocessed_by_range.png": ("fig10", lambda r, a: plot_fig10(r)),
+    "fig11_carved_width_by_range.png": ("fig11", lambda r, a: plot_fig11(r)),
+    "fig12_max_error_by_range.png": ("fig12", lambda r, a: plot_fig12(r)),
+    "fig13_global_maps.png": ("fig13", lambda r, a: plot_fig13(r, a.get("office"))),
+    "true_error_by_range.png": ("true_error_by_range", lambda r, a: plot_true_error(r)),
+    "latency_accuracy.png": ("latency_accuracy", lambda r, a: plot_latency_accuracy(r)),
+    "sensitivity.png": ("sensitivity", lambda r, a: plot_sensitivity(r)),
+}
+
+
+def write_figures(results: JsonDict, artifacts: JsonDict, out: str | Path,
+                  dpi: int = 110) -> list[Path]:
+    """Save every figure whose results are present as ``out/<name>.png``; return the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = Path(out)
+    written = []
+    for name, (key, make) in FIGURES.items():
+        if key not in results:
+            continue
+        fig = make(results, artifacts)
+        if fig is None:
+            continue
+        with atomic_path(folder / name, suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
+        plt.close(fig)
+        written.append(folder / name)
+    return written

@@ -1,0 +1,481 @@
+"""Write what the experiments produced: ``results.json``, figures, and the RESULTS.md section.
+
+The Markdown section lives between ``<!-- experiments:begin -->`` and
+``<!-- experiments:end -->`` of a file whose other parts belong to someone else: only that span
+is rewritten (it is appended, markers included, when the file has none).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.evaluation.experiments import ExperimentResults
+from sonarcarve.evaluation.figures import write_figures
+from sonarcarve.io.atomic import atomic_path, atomic_text
+
+__all__ = [
+    "BEGIN_MARKER",
+    "END_MARKER",
+    "PAPER",
+    "ReportError",
+    "render_section",
+    "replace_section",
+    "write_outputs",
+]
+
+JsonDict = dict[str, Any]
+
+BEGIN_MARKER = "<!-- experiments:begin -->"
+END_MARKER = "<!-- experiments:end -->"
+
+#: The paper's numbers (section 5), where it gives one.
+PAPER: JsonDict = {
+    "table1": {"atm": 31.75, "carving": 55.59, "combined": 7.68, "centerline": 0.0},
+    "fully_carved_share_min": 20.0,  # "over 20 percent of all arcs ... were fully carved"
+    "combined_refined_min": 92.0,  # "more than 92 percent of all arcs ... some increase"
+}
+
+
+class ReportError(SonarcarveError):
+    """A Markdown file whose experiments markers are broken."""
+
+
+# ============================================================================ files
+
+
+def write_outputs(
+    results: ExperimentResults,
+    out: str | Path,
+    *,
+    command: str,
+    figures_dir: str | Path | None = None,
+    results_md: str | Path | None = None,
+) -> list[Path]:
+    """Write ``results.json`` and the figures into ``out``; optionally copy the figures and
+    regenerate the experiments section of ``results_md``. Returns the files written."""
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    data = {"command": command, **results.results}
+    with atomic_text(folder / "results.json") as handle:
+        json.dump(_clean(data), handle, indent=1, allow_nan=False)
+        handle.write("\n")
+    written = [folder / "results.json"]
+    figures = write_figures(results.results, results.artifacts, folder)
+    written += figures
+    shown = figures
+    if figures_dir is not None:
+        target = Path(figures_dir)
+        target.mkdir(parents=True, exist_ok=True)
+        shown = []
+        for path in figures:
+            with atomic_path(target / path.name, suffix=".png") as tmp:
+                shutil.copyfile(path, tmp)
+            shown.append(target / path.name)
+        written += shown
+    if results_md is not None:
+        md = Path(results_md)
+        rel = [Path(os.path.relpath(p, md.parent)).as_posix() for p in shown]
+        section = render_section(data, command, rel)
+        old = md.read_text(encoding="utf-8") if md.exists() else ""
+        with atomic_text(md) as handle:
+            handle.write(replace_section(old, section, str(md)))
+        written.append(md)
+    return written
+
+
+def _clean(value: Any) -> Any:
+    """JSON-ready: NaN and inf become None, tuples lists, numpy scalars floats."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
+    if isinstance(value, bool) or value is None or isinstance(value, str | int):
+        return value
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return value
+
+
+def replace_section(text: str, section: str, where: str = "RESULTS.md") -> str:
+    """``text`` with the span between the markers (inclusive) replaced by ``section``.
+
+    ``section`` must start with :data:`BEGIN_MARKER` and end with :data:`END_MARKER`. Without
+    markers in ``text`` the section is appended.
+
+    Raises
+    ------
+    ReportError
+        When only one marker is present, or they are out of order or repeated.
+
+    Examples
+    --------
+    >>> replace_section("a\\n<!-- experiments:begin -->\\nold\\n<!-- experiments:end -->\\nb\\n",
+    ...                 "<!-- experiments:begin -->\\nnew\\n<!-- experiments:end -->")
+    'a\\n<!-- experiments:begin -->\\nnew\\n<!-- experiments:end -->\\nb\\n'
+    """
+    begins, ends = text.count(BEGIN_MARKER), text.count(END_MARKER)
+    if begins == 0 and ends == 0:
+        joint = "" if not text or text.endswith("\n\n") else ("\n" if text.endswith("\n")
+                                                               else "\n\n")
+        return f"{text}{joint}{section}\n"
+    start, stop = text.find(BEGIN_MARKER), text.find(END_MARKER)
+    if begins != 1 or ends != 1 or stop < start:
+        line = text[:start if begins else stop].count("\n") + 1
+        msg = (f"{where}: line {line}: expected one {BEGIN_MARKER} followed by one "
+               f"{END_MARKER}")
+        raise ReportError(msg)
+    return text[:start] + section + text[stop + len(END_MARKER):]
+
+
+# ============================================================================ rendering
+
+
+def _f(value: float | None, digits: int = 1, unit: str = "") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return f"{value:.{digits}f}{unit}"
+
+
+def _range(spread: JsonDict | None, digits: int = 1) -> str:
+    if not spread or spread.get("mean") is None:
+        return "n/a"
+    if len([v for v in spread["per_seed"] if v is not None]) <= 1:
+        return _f(spread["mean"], digits)
+    return f"{spread['mean']:.{digits}f} ({spread['min']:.{digits}f}-{spread['max']:.{digits}f})"
+
+
+def render_section(results: JsonDict, command: str, figures: Sequence[str] = ()) -> str:
+    """The Markdown experiments section for ``results`` (``results.json`` content).
+
+    ``figures`` are paths of the PNGs relative to the Markdown file.
+    """
+    meta = results.get("meta", {})
+    settings = meta.get("settings", {})
+    config = settings.get("method_config", {})
+    figs = {Path(f).name: f for f in figures}
+    lines = [
+        BEGIN_MARKER,
+        "## Experiments: the paper's section 5 on the simulator",
+        "",
+        "<!-- Generated by sonarcarve.evaluation.report; edits here are overwritten. -->",
+        "",
+        f"Command: `{command}` (what `make experiments` runs). Wall time "
+        f"{_f(meta.get('seconds', math.nan) / 60.0, 1)} min for {meta.get('simulations')} "
+        f"simulations and {meta.get('jobs')} method runs, {settings.get('jobs')} worker "
+        f"processes; seeds 0-{settings.get('seeds', 1) - 1}. Robot `scout2` (16 sonars, "
+        f"φ = {_f(config.get('beam_width_deg'), 1)}°, one-inch range quantum) at "
+        f"{_f(settings.get('speed'), 1)} m/s; history {config.get('history_size')} arcs, "
+        f"ATM ψ = {_f(config.get('min_transversal_deg'), 0)}°, carving ε = "
+        f"{_f(config.get('range_tolerance_m'), 3)} m (the library defaults). "
+        "Ranges in brackets are min-max over seeds.",
+        "",
+    ]
+    for part in (_table1, _fully_carved, _fig4, _openings, _fig10_12, _fig13, _true_error,
+                 _latency, _sensitivity):
+        lines += part(results, figs)
+    lines.append(END_MARKER)
+    return "\n".join(lines)
+
+
+def _img(figs: dict[str, str], name: str, alt: str) -> list[str]:
+    return [f"![{alt}]({figs[name]})", ""] if name in figs else []
+
+
+def _table1(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "table1" not in r:
+        return []
+    paper = PAPER["table1"]
+    spread = r["table1_spread"]
+    alive = r.get("table1_alive_only", {})
+    out = ["### Table I: mean percentage of the history unprocessed", "",
+           "| method | paper | ours: all history rows | ours: live arcs only |",
+           "|---|---:|---:|---:|"]
+    names = {"atm": "ATM", "carving": "Arc carving", "combined": "Arc carving and ATM",
+             "centerline": "Centerline"}
+    for key, name in names.items():
+        out.append(f"| {name} | {paper[key]:.2f} | {_range(spread[key], 2)} | "
+                   f"{_f(alive.get(key), 2)} |")
+    out += ["", "Sampled every 16 readings once the history is full; *all rows* counts arcs "
+            "carving removed as processed (the library's measure), *live arcs only* leaves them "
+            "out, as the paper's history, which drops removed arcs, would."]
+    out += ["", *_table1_sentences(r), ""]
+    return out
+
+
+def _share_below(entry: JsonDict, limit: float) -> float:
+    edges, counts = entry["edges"], entry["count"]
+    total = sum(counts)
+    below = sum(c for lo, c in zip(edges[:-1], counts, strict=True) if lo < limit)
+    return 100.0 * below / total if total else math.nan
+
+
+def _table1_sentences(r: JsonDict) -> list[str]:
+    t1, paper = r["table1"], PAPER["table1"]
+    short = _share_below(r["fig10"]["carving"], 1.0)
+    carve_short = _bin_value(r["fig10"]["carving"], 0.25)
+    carve_far = _mean_above(r["fig10"]["carving"], 3.0)
+    atm_far = _mean_above(r["fig10"]["atm"], 3.0)
+    return [
+        f"- ATM: {t1['atm']:.1f} % against the paper's {paper['atm']:.2f} %: "
+        + ("close; " if abs(t1["atm"] - paper["atm"]) < 5 else "a different level; ")
+        + "ATM's latency is set by how far the robot drives between readings of one obstacle "
+        "(eq. 2.2), so it depends on speed, ψ and the tour, none of which the paper states.",
+        f"- Arc carving: {t1['carving']:.1f} % against {paper['carving']:.2f} %"
+        + (" (lower). " if t1["carving"] < paper["carving"] else ". ")
+        + "The paper blames its high share on the many short arcs, which carving processes "
+        f"last (Fig. 10); in our tour {short:.0f} % of history arcs are shorter than 1 m, and "
+        f"beyond 3 m carving leaves {_f(carve_far, 0)} % unprocessed against ATM's "
+        f"{_f(atm_far, 0)} %, the paper's point (its first bin, below 0.5 m: "
+        f"{_f(carve_short, 0)} %).",
+        f"- Both: {t1['combined']:.1f} % against {paper['combined']:.2f} %, "
+        f"so {100 - t1['combined']:.1f} % of arcs gain some azimuth resolution (paper: "
+        f"over {PAPER['combined_refined_min']:.0f} %); combined is at most the smaller of the two "
+        "by construction (one history, processed by either model).",
+        "- Centerline: 0 % in both, by definition.",
+    ]
+
+
+def _bin_value(entry: JsonDict, x: float) -> float | None:
+    for lo, hi, v in zip(entry["edges"][:-1], entry["edges"][1:], entry["value"], strict=True):
+        if lo <= x < hi:
+            return v  # type: ignore[no-any-return]
+    return None
+
+
+def _mean_above(entry: JsonDict, limit: float) -> float | None:
+    num = den = 0.0
+    for lo, v, c in zip(entry["edges"][:-1], entry["value"], entry["count"], strict=True):
+        if lo >= limit and v is not None:
+            num += v * c
+            den += c
+    return num / den if den else None
+
+
+def _fully_carved(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "fully_carved" not in r:
+        return []
+    fc, sp = r["fully_carved"], r["fully_carved_spread"]
+    return [
+        "### Fully carved arcs (section 5-C)", "",
+        "| measure | paper | ours |", "|---|---:|---:|",
+        f"| arcs fully carved (% of all arcs) | over {PAPER['fully_carved_share_min']:.0f} | "
+        f"{_range(sp['share'])} |",
+        f"| arcs dropped as split (% of all arcs) | not reported | {_f(fc['split_share'])} |",
+        f"| spurious readings removed (% of non-direct readings fully carved) | not measurable |"
+        f" {_range(sp['spurious_removed'])} |",
+        f"| true readings lost (% of direct readings fully carved) | not measurable | "
+        f"{_range(sp['true_lost'])} |",
+        f"| fully carved arcs that were spurious (%) | not measurable | "
+        f"{_f(fc['spurious_of_removed'])} |",
+        f"| spurious readings in the log (%) | not measurable | {_f(fc['spurious_readings'])} |",
+        "",
+        "Truth from the simulator: a *true* reading is a direct echo (kind `direct`), a "
+        "*spurious* one is crosstalk, a floor echo or multipath.",
+        f"- The fully carved share ({fc['share']:.1f} %) "
+        + ("agrees with the paper's \"over 20 percent\"." if fc["share"] > 20.0 else
+           "is below the paper's \"over 20 percent\".")
+        + f" But carving is not only removing spurious returns: it removes "
+        f"{fc['spurious_removed']:.0f} % of the spurious readings and also "
+        f"{fc['true_lost']:.0f} % of the direct ones, so {fc['spurious_of_removed']:.0f} % of "
+        "fully carved arcs were spurious. On smooth (specular) walls a reading's freespace "
+        "sector is not truly free: walls seen at a glancing angle inside the beam send no echo, "
+        "so newer readings carve away arcs that were right. The paper had no ground truth to "
+        "see this.",
+        "",
+    ]
+
+
+def _fig4(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "t_junction" not in r:
+        return []
+    tj = r["t_junction"]
+    out = ["### Fig. 4: T junction, when the facing wall appears", "",
+           f"The robot drives up the stem of the T (2 m corridors) towards the facing wall; the "
+           f"wall *shows* in a local map once at least {tj['points']} of its points lie within "
+           f"{tj['radius_m']:g} m of that wall. Distance from the robot's centre to the wall at "
+           f"that moment, metres (larger is earlier); the drive ends "
+           f"{_f(tj.get('end_distance_m'), 2)} m from the wall.", "",
+           "| method | any point of the map | refined points only (carved or ATM) |",
+           "|---|---:|---:|"]
+    for m in ("atm", "carving", "combined", "centerline"):
+        refined = "n/a (no refined points)" if m == "centerline" else (
+            _range(tj["refined"][m], 2) if tj["refined"][m]["mean"] is not None
+            else "never during the drive")
+        out.append(f"| {m} | {_range(tj['all'][m], 2)} | {refined} |")
+    atm_never = tj["refined"]["atm"]["mean"] is None
+    out += ["", "- Paper, Fig. 4: the ATM map has no point on the approaching wall while the "
+            "centerline map does. "
+            + ("Same here: ATM's medians never reach the facing wall during the drive, "
+               if atm_never else "Here ATM's medians reach it late, ")
+            + "while carving refines it "
+            + (f"{tj['refined']['carving']['mean']:.1f} m before the wall."
+               if tj["refined"]["carving"]["mean"] is not None else "not at all either.")
+            + " Every map that keeps centerline points shows the wall as soon as it is in range "
+            "(the same distance for all), which is why the paper combines them.", ""]
+    out += _img(figs, "fig04_t_junction.png", "Fig. 4")
+    return out
+
+
+def _openings(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "openings" not in r:
+        return []
+    op, d = r["openings"], r["openings_definition"]
+    dist = [f"{x:g}" for x in d["distances_m"]]
+    out = ["### Fig. 2 and 9: narrow openings passable", "",
+           f"{d['runs']} runs: doors of width {', '.join(f'{w:g}' for w in d['widths_m'])} m "
+           f"approached at {', '.join(f'{h:g}' for h in d['door_headings_deg'])}° from the "
+           f"wall normal aiming {', '.join(f'{o:g}' for o in d['door_offsets_m'])} m off the "
+           f"door's centre; drives down a 2 m corridor past a side opening of the same widths "
+           f"({', '.join(f'{o:g}' for o in d['corridor_offsets_m'])} m off the centre line); "
+           "and the narrow hallway of Fig. 9 (widths above 0.9 m); all seeds. *Passable*: "
+           f"along the gap there is a stretch at least {d['clearance_m']:.2f} m wide (Scout2 "
+           f"diameter 0.41 m + 0.05 m) with no local-map point within {d['gap_depth_m']:g} m "
+           "of the gap line; distances are measured along the drive (how far the robot still "
+           "has to go to reach the door or come abreast of the opening).", "",
+           "| method | " + " | ".join(f"{x} m before" for x in dist) + " |",
+           "|---|" + "---:|" * len(dist)]
+    for m in ("centerline", "atm", "carving", "combined"):
+        out.append(f"| {m} | " + " | ".join(_f(op[m][x], 0, " %") for x in dist) + " |")
+    by = r.get("openings_by_world", {})
+    doors = {m: _avg([v for k, v in by.get(m, {}).get(dist[0], {}).items()
+                      if k.startswith("doorway")]) for m in op}
+    out += ["", "- The paper shows single examples (Fig. 2: centerline misses a doorway; Fig. "
+            "9: ATM plus centerline closes a hallway that carving keeps open); here the share "
+            f"of runs. At {dist[0]} m, doorways alone: centerline {_f(doors['centerline'], 0)} "
+            f"%, ATM {_f(doors['atm'], 0)} %, carving {_f(doors['carving'], 0)} %, combined "
+            f"{_f(doors['combined'], 0)} %. Side openings seen from a corridor and the "
+            "narrow hallway are passable in almost every map: on specular walls few echoes "
+            "come from the gap's edges at the angles that would put centerline points inside "
+            "it.", ""]
+    out += _img(figs, "fig02_09_openings.png", "Fig. 2 and 9")
+    return out
+
+
+def _avg(values: list[float]) -> float | None:
+    return sum(values) / len(values) if values else None
+
+
+def _fig10_12(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "fig10" not in r:
+        return []
+    f12 = r["fig12"]
+    carve = f12["carving"]
+    far = _mean_above(carve, 3.0)
+    center_far = _mean_above(f12["centerline"], 3.0)
+    out = ["### Fig. 10, 11, 12: latency, carved width and maximum error by range", "",
+           "- Fig. 10 (unprocessed share by range): as in the paper, ATM's share grows with "
+           "range (eq. 2.2) and carving's is lowest for long arcs.",
+           "- Fig. 11 (final angular width of arcs carving carved, by range): widths shrink "
+           "with range as in the paper; the final width is the arc's state when it leaves the "
+           "history.",
+           f"- Fig. 12 (mean maximum error, eq. 5.3): beyond 3 m carving's mean bound is "
+           f"{_f(far, 3)} m against centerline's {_f(center_far, 3)} m; ATM's theoretical "
+           f"bound (eq. 5.4 in units of the one-inch range quantum) is {f12['atm_bound']:.3f} m "
+           "for every range, far below both: the paper's Fig. 12 reads the same way.", ""]
+    for name, alt in (("fig10_unprocessed_by_range.png", "Fig. 10"),
+                      ("fig11_carved_width_by_range.png", "Fig. 11"),
+                      ("fig12_max_error_by_range.png", "Fig. 12")):
+        out += _img(figs, name, alt)
+    return out
+
+
+def _fig13(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "fig13" not in r:
+        return []
+    f = r["fig13"]
+    out = ["### Fig. 13: final global maps", "",
+           f"ATM's map keeps the medians of transversal intersections only; carving's keeps "
+           f"points whose maximum error is at most {f['threshold_m']:.3f} m, ATM's own bound, so "
+           "both maps promise the same accuracy.", "",
+           "| map | points in the global map | points shown | their true error, median / "
+           "p90 (m) |", "|---|---:|---:|---:|"]
+    for m in ("atm", "carving", "combined"):
+        e = f[m]
+        out.append(f"| {m} | {_f(e['points'], 0)} | {_f(e['kept'], 0)} | "
+                   f"{_f(e['kept_error_median'], 3)} / {_f(e['kept_error_p90'], 3)} |")
+    out += ["", "- The paper: \"these maps are quite similar\"; compare the shown points' true "
+            "errors above.", ""]
+    out += _img(figs, "fig13_global_maps.png", "Fig. 13")
+    return out
+
+
+def _true_error(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "true_error" not in r:
+        return []
+    te, sp, g = r["true_error"], r["true_error_spread"], r["true_error_global"]
+    out = ["### Beyond the paper: true error of the maps", "",
+           "Distance of every local-map point, at every snapshot (every 16 readings), to the "
+           "nearest true wall; and of every global-map point.", "",
+           "| method | local map: median (m) | local map: p90 (m) | global map: median | "
+           "global map: p90 |", "|---|---:|---:|---:|---:|"]
+    for m in ("centerline", "atm", "carving", "combined"):
+        out.append(f"| {m} | {_range(sp[m]['median'], 3)} | {_range(sp[m]['p90'], 3)} | "
+                   f"{_f(g[m]['median'], 3)} | {_f(g[m]['p90'], 3)} |")
+    carve, center = te["carving"]["median"], te["centerline"]["median"]
+    out += ["", "- " + (f"Carving's median true error ({carve:.3f} m) is below centerline's "
+                        f"({center:.3f} m), as its bounds (Fig. 12) promise."
+                        if carve < center else
+                        f"Carving's median true error ({carve:.3f} m) is NOT below "
+                        f"centerline's ({center:.3f} m): see the discussion below."), ""]
+    out += _img(figs, "true_error_by_range.png", "true error by range")
+    return out
+
+
+def _latency(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "latency_accuracy" not in r:
+        return []
+    la = r["latency_accuracy"]
+    tols = [k for k in la["carving"] if k != "patches_seen"]
+    out = ["### Beyond the paper: latency against accuracy", "",
+           f"Every wall is cut into {la['patch_length_m']:g} m patches. A patch comes into view "
+           "with the first direct reading that reflects off it; it is *right* at the first "
+           "snapshot where at least half of the local-map points of readings that reflected "
+           "off it lie within the tolerance of the true walls. Delay from view to right, in "
+           "seconds and metres driven (median over the patches that got right).", "",
+           "| method | " + " | ".join(f"within {float(t) * 100:g} cm: right (%) | median s | "
+                                      "median m" for t in tols) + " |",
+           "|---|" + "---:|" * (3 * len(tols))]
+    for m in ("centerline", "atm", "carving", "combined"):
+        cells = []
+        for t in tols:
+            e = la[m][t]
+            cells += [_f(e["resolved_share"], 0), _f(e["median_s"], 1), _f(e["median_m"], 2)]
+        out.append(f"| {m} | " + " | ".join(cells) + " |")
+    out += [""]
+    out += _img(figs, "latency_accuracy.png", "latency against accuracy")
+    return out
+
+
+def _sensitivity(r: JsonDict, figs: dict[str, str]) -> list[str]:
+    if "sensitivity" not in r:
+        return []
+    sens = r["sensitivity"]
+    sc = sens["scenario"]
+    out = ["### Beyond the paper: sensitivity", "",
+           f"The first {sc['length_m']:g} m of the office tour, seed {sc['seed']}; one "
+           "parameter changed at a time from the defaults above; simulations shared by every "
+           "parameter that does not change them (history, ε, ψ). Median true error of the "
+           "local map (m) / unprocessed (%) / fully carved (%):", ""]
+    for param, entry in sens.items():
+        if param == "scenario":
+            continue
+        methods = [m for m in ("carving", "atm", "combined", "centerline") if m in entry]
+        out += [f"**{param}** ({entry['unit']})", "",
+                "| value | " + " | ".join(methods) + " |", "|---|" + "---:|" * len(methods)]
+        for i, v in enumerate(entry["values"]):
+            cells = [f"{_f(entry[m]['error_median'][i], 3)} / "
+                     f"{_f(entry[m]['unprocessed'][i], 0)} / "
+                     f"{_f(entry[m]['fully_carved'][i], 0)}" for m in methods]
+            out.append(f"| {v:g} | " + " | ".join(cells) + " |")
+        out.append("")
+    out += _img(figs, "sensitivity.png", "sensitivity")
+    return out

@@ -1,0 +1,109 @@
+"""Waypoint files: the path a simulated robot follows (``sonarcarve simulate --path FILE``).
+
+Two formats, told apart by the file name's suffix; coordinates in metres, world frame:
+
+- **CSV** (``.csv``): a header naming at least the columns ``x`` and ``y`` (others are ignored),
+  then one waypoint per row. Blank lines and lines starting with ``#`` are skipped::
+
+      x,y
+      1.0,1.0
+      6.5,1.0
+      6.5,4.0
+
+- **JSON** (``.json``): ``{"waypoints": [[x, y], ...]}`` or just ``[[x, y], ...]``.
+
+A path needs at least two waypoints; the robot drives through them in order.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.io.errors import InputError
+
+__all__ = ["read_waypoints"]
+
+
+def read_waypoints(path: str | Path) -> npt.NDArray[np.float64]:
+    """Waypoints from a CSV or JSON file, shape (k, 2), metres.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the place (line, column or entry) of the first problem.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in {".csv", ".json"}:
+        msg = f"{path}: waypoint files must end in .csv (header x,y) or .json ([[x, y], ...])"
+        raise InputError(msg)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        msg = f"{path}: no such file"
+        raise InputError(msg) from None
+    except (OSError, UnicodeDecodeError) as err:
+        msg = f"{path}: cannot read ({err})"
+        raise InputError(msg) from None
+    points = _from_csv(path, text) if suffix == ".csv" else _from_json(path, text)
+    if points.shape[0] < 2:
+        msg = f"{path}: a path needs at least 2 waypoints, found {points.shape[0]}"
+        raise InputError(msg)
+    return points
+
+
+def _from_csv(path: Path, text: str) -> npt.NDArray[np.float64]:
+    rows = [(number, row) for number, row in enumerate(csv.reader(text.splitlines()), start=1)
+            if row and any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")]
+    if not rows:
+        msg = f"{path}: empty file, expected a header x,y and one waypoint per line"
+        raise InputError(msg)
+    header_line, header = rows[0]
+    names = [cell.strip() for cell in header]
+    if "x" not in names or "y" not in names:
+        msg = f"{path}: line {header_line}, header must name columns x and y, got {','.join(names)}"
+        raise InputError(msg)
+    ix, iy = names.index("x"), names.index("y")
+    points = [[_cell(path, number, row, ix, "x"), _cell(path, number, row, iy, "y")]
+              for number, row in rows[1:]]
+    return np.array(points, dtype=np.float64).reshape(-1, 2)
+
+
+def _cell(path: Path, line: int, row: list[str], index: int, name: str) -> float:
+    text = row[index].strip() if index < len(row) else ""
+    try:
+        value = float(text)
+    except ValueError:
+        msg = f"{path}: line {line}, column {name!r} is not a number: {text!r}"
+        raise InputError(msg) from None
+    if not math.isfinite(value):
+        msg = f"{path}: line {line}, column {name!r} must be finite, got {text!r}"
+        raise InputError(msg)
+    return value
+
+
+def _from_json(path: Path, text: str) -> npt.NDArray[np.float64]:
+    try:
+        data: Any = json.loads(text)
+    except json.JSONDecodeError as err:
+        msg = f"{path}: line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
+        raise InputError(msg) from None
+    if isinstance(data, dict):
+        data = data.get("waypoints")
+    if not isinstance(data, list):
+        msg = f"{path}: expected {{\"waypoints\": [[x, y], ...]}} or a list [[x, y], ...]"
+        raise InputError(msg)
+    for i, point in enumerate(data):
+        if (not isinstance(point, list) or len(point) != 2
+                or not all(isinstance(v, int | float) and not isinstance(v, bool)
+                           and math.isfinite(v) for v in point)):
+            msg = f"{path}: waypoint {i} must be [x, y] with finite numbers, got {point!r}"
+            raise InputError(msg)
+    return np.array(data, dtype=np.float64).reshape(-1, 2)

@@ -1,0 +1,294 @@
+"""The Arc Transversal Median (ATM) model (paper, section 2-D; error bound eq. 5.4).
+
+Every new arc is intersected with every live arc of the history. An intersection of the two
+*circles* is kept when it lies inside *both* arcs' full beams (eq. 2.1: ``τ`` in
+``[θ − φ/2, θ + φ/2]``, not a carved interval) and the two arcs cross there transversally, at an
+angle of at least ψ. Kept intersections are stored with both arcs, as bearings relative to each
+arc's axis θ; an arc's ATM point is on its circle at the median of its stored bearings, and an arc
+with none falls back to its centerline point.
+
+Two facts shape the model and the choice of ψ:
+
+* Two arcs with origins ``D`` apart and equal range ``r`` cross at ``2 asin(D / 2r)``, so a
+  crossing at ψ or more needs ``D ≥ D_min = 2 r sin(ψ/2)`` of travel (eq. 2.2): latency grows
+  with range and with ψ.
+* At a point inside both beams the radii point along the two bearings, so the angle between them
+  is within ``φ`` of the angle between the two sensor axes. Two readings of one sensor on a
+  translating robot therefore never cross at more than ``φ`` (22.5° for the Polaroid): with
+  ``ψ > φ`` only pairs of *different* sensors (or of one sensor after the robot turned) can meet.
+  The same argument shows that with ``ψ > φ`` the *mirror* crossing of two arcs that share a
+  point reflector (its reflection in the line of the origins) is never kept; below φ it can be.
+
+Choosing ψ (default 20°, :class:`~sonarcarve.methods.config.MethodConfig`). Smaller ψ cuts
+latency (eq. 2.2: ``D_min`` = 0.17 r at 10°, 0.35 r at 20°, 0.52 r at 30°, 0.77 r at 45°) and
+loosens the noise bound (eq. 5.4: 11.4, 5.7, 3.7, 2.4 range quanta). Measured with
+``benchmarks/min_transversal.py`` (5 synthetic corridor logs, 13,540 readings, 1 cm range
+noise, one-inch quantum, history 250), the median distance of ATM points to the walls was
+0.054 / 0.049 / 0.053 / 0.064 m and the mean unprocessed share 14 / 22 / 29 / 39 % for
+ψ = 10 / 20 / 30 / 45°: the bound is loose in practice (medians of many crossings), while
+large ψ only crosses arcs from far-apart origins, whose reflectors on a wall differ. 20° had the
+lowest error with a quarter less latency than 30°.
+
+The circle–circle intersection geometry is in :mod:`sonarcarve.geometry`
+(:func:`~sonarcarve.geometry.circle_intersections`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry import common_chord
+from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
+from sonarcarve.maps import PointSource, chord_error
+from sonarcarve.methods.base import (
+    ArcModel,
+    Estimates,
+    FloatArray,
+    SlotArray,
+    SonarMethod,
+    arc_point,
+)
+from sonarcarve.methods.config import MethodConfig
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+
+__all__ = ["AtmMethod", "AtmModel", "atm_error_bound"]
+
+
+def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
+    """Error bound of one ATM point, metres: ``δ (1/sin ψ + 1/tan ψ)`` (eq. 5.4 times δ).
+
+    Eq. 5.4 is dimensionless: it is the error in units of the range uncertainty δ (the sensor's
+    range quantum, one inch for the Polaroid). A range known to ``δ`` makes each arc an annulus
+    of width δ; two annuli crossing at angle ψ overlap in a rhombus of side ``δ / sin ψ``, and
+    ``δ (1/sin ψ + 1/tan ψ) = δ cot(ψ/2)`` is that rhombus's extent along either arc (one side
+    plus the projection of the adjacent one): the azimuth uncertainty of the crossing. The
+    rhombus's long diagonal is ``δ / sin(ψ/2)``, larger by ``1 / cos(ψ/2)``; but with each range
+    within ``±δ/2`` of the truth the crossing is at most *half* that diagonal,
+    ``δ / (2 sin(ψ/2))``, from the true reflector (to first order in δ/r), and
+    ``δ cot(ψ/2)`` exceeds that by ``2 cos(ψ/2) ≥ √2``, so it is a safe bound for a common point
+    reflector. It does not cover specular walls, where two arcs' reflectors differ. With exact
+    ranges (δ = 0) the bound is 0; with ψ = 0 (tangent crossings kept) there is none (``inf``).
+
+    Examples
+    --------
+    >>> round(atm_error_bound(math.radians(90.0), 1.0), 12)
+    1.0
+    >>> round(atm_error_bound(math.radians(30.0), 0.0254), 4)  # 3.732 inches
+    0.0948
+    >>> atm_error_bound(0.0, 0.0254)  # ψ = 0 keeps tangent crossings: no bound
+    inf
+    """
+    if range_resolution == 0.0:
+        return 0.0  # exact ranges: every crossing of arcs sharing a reflector is the reflector
+    if min_transversal == 0.0:
+        return math.inf
+    return range_resolution * (1.0 / math.sin(min_transversal) + 1.0 / math.tan(min_transversal))
+
+
+@numba.njit(cache=True)
+def _add_arc(
+    x: FloatArray,
+    y: FloatArray,
+    r: FloatArray,
+    cos_axis: FloatArray,
+    sin_axis: FloatArray,
+    cos_half: FloatArray,
+    slot: int,
+    older: SlotArray,
+    cos_psi: float,
+    bearings: npt.NDArray[np.float32],
+    counts: npt.NDArray[np.int32],
+) -> int:
+    """Intersect the arc in ``slot`` with every ``older`` arc and store the kept crossings.
+
+    Kept: ``|cos γ| ≤ cos ψ`` (transversal angle ≥ ψ) and inside both full beams (eq. 2.1). Each
+    kept crossing is appended to both rows of ``bearings`` as a bearing relative to that arc's
+    axis. Returns the number of crossings kept.
+
+    Most pairs fail the transversal test, so it comes first and costs no square root or trig:
+    with ``cos γ = (rj² + ri² − d²) / (2 rj ri)`` it reads ``|rj² + ri² − d²| ≤ 2 rj ri cos ψ``,
+    which for ψ > 0 also implies that the circles cross (``|cos γ| < 1``). The beam test
+    compares ``(p − o)·axis`` with ``r cos(φ/2)`` (``|τ − θ| ≤ φ/2`` for ``φ < π``); only kept
+    crossings pay for an ``atan2``.
+    """
+    width = bearings.shape[1]
+    xj, yj, rj = x[slot], y[slot], r[slot]
+    cj, sj, hj = cos_axis[slot], sin_axis[slot], cos_half[slot]
+    kept = 0
+    for i in older:
+        ri = r[i]
+        dx = x[i] - xj
+        dy = y[i] - yj
+        d2 = dx * dx + dy * dy
+        # Both crossings of a pair share one transversal angle: reject the pair at once. (d2 = 0
+        # passes only for equal, concentric circles at ψ = 0: they never cross.)
+        if abs(rj * rj + ri * ri - d2) > 2.0 * rj * ri * cos_psi or d2 == 0.0:
+            continue
+        a, h = common_chord(d2, rj, ri)
+        d = math.sqrt(d2)
+        ux = dx / d
+        uy = dy / d
+        for sign in (1.0, -1.0):
+            # The crossing relative to o_j (p) and to o_i (q).
+            px = a * ux - sign * h * uy
+            py = a * uy + sign * h * ux
+            along_j = px * cj + py * sj
+            if along_j < rj * hj:
+                continue
+            qx = px - dx
+            qy = py - dy
+            along_i = qx * cos_axis[i] + qy * sin_axis[i]
+            if along_i < ri * cos_half[i]:
+                continue
+            # The store holds every crossing an arc can have (see AtmModel), so these guards
+            # never drop one; they only keep a bad caller from writing out of bounds.
+            if counts[slot] < width:
+                bearings[slot, counts[slot]] = math.atan2(cj * py - sj * px, along_j)
+                counts[slot] += 1
+            if counts[i] < width:
+                bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
+                counts[i] += 1
+            kept += 1
+    return kept
+
+
+@numba.njit(cache=True)
+def _medians(
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray
+) -> tuple[FloatArray, FloatArray]:
+    """Median and span (max − min) of each slot's stored bearings; 0 where it has none."""
+    n = slots.shape[0]
+    median = np.zeros(n)
+    span = np.zeros(n)
+    for k in range(n):
+        s = slots[k]
+        c = counts[s]
+        if c == 0:
+            continue
+        values = np.sort(bearings[s, :c].astype(np.float64))
+        median[k] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
+        span[k] = values[c - 1] - values[0]
+    return median, span
+
+
+class AtmModel(ArcModel):
+    """ATM over a shared history (section 2-D): the median of transversal crossings per arc.
+
+    State is fixed-size, independent of the length of the log: ``bearings`` has one row per
+    history slot and room for every crossing an arc can collect. An arc meets at most
+    ``capacity − 1`` older arcs when it arrives and ``capacity − 1`` newer ones while it is live,
+    and two circles cross at most twice, so ``4 (capacity − 1)`` columns can never overflow
+    (both crossings of one pair can lie in both beams when two sensors face each other). That is
+    ``2 capacity × 4 (capacity − 1) × 4`` bytes: 2 MB at the paper's 250.
+
+    Crossings found with a partner that later leaves the history stay with the arc: they were
+    found while both were live. A row is reset only when its slot is reused by a new arc.
+
+    Parameters
+    ----------
+    history : SonarHistory
+        The shared history.
+    min_transversal : float
+        ψ, radians in ``[0, π/2]``: crossings at a smaller angle are dropped (eq. 2.2, 5.4);
+        at 0 every crossing is kept and the error bound is infinite.
+    range_resolution : float
+        δ, metres (≥ 0): the range quantum that scales eq. 5.4 (see :func:`atm_error_bound`).
+
+    Notes
+    -----
+    :meth:`estimates` gives, per arc: ``processed`` = at least one kept crossing (Table I);
+    ``alive`` always (ATM removes nothing); ``width`` = span of the kept bearings (0 for a single
+    crossing), or the beam width φ for a centerline fallback; ``max_error`` =
+    :func:`atm_error_bound` for ATM points, ``chord_error(r, φ)`` (eq. 5.3) for fallbacks.
+    """
+
+    def __init__(self, history: SonarHistory, min_transversal: float, range_resolution: float):
+        super().__init__(history)
+        if not 0.0 <= min_transversal <= 0.5 * math.pi:
+            msg = f"min transversal angle must lie in [0, pi/2] radians, got {min_transversal}"
+            raise ValueError(msg)
+        if not (math.isfinite(range_resolution) and range_resolution >= 0.0):
+            msg = f"range resolution must be finite and >= 0 metres, got {range_resolution}"
+            raise ValueError(msg)
+        self.min_transversal = min_transversal
+        self.range_resolution = range_resolution
+        self.error_bound = atm_error_bound(min_transversal, range_resolution)
+        self._cos_psi = math.cos(min_transversal)
+        columns = max(1, 4 * (history.capacity - 1))
+        self.bearings = np.zeros((history.storage_size, columns), dtype=np.float32)
+        self.counts = np.zeros(history.storage_size, dtype=np.int32)
+        # Per-slot cos θ, sin θ and cos(φ/2), so the pair loop needs no trig for its beam tests.
+        self._cos_axis = np.zeros(history.storage_size)
+        self._sin_axis = np.zeros(history.storage_size)
+        self._cos_half = np.zeros(history.storage_size)
+        self._kept = 0
+
+    def on_add(self, slot: int, older: SlotArray) -> None:
+        """Reset ``slot``'s crossings, then intersect its arc with every ``older`` live arc."""
+        h = self.history
+        self.counts[slot] = 0
+        self._cos_axis[slot] = math.cos(h.theta[slot])
+        self._sin_axis[slot] = math.sin(h.theta[slot])
+        self._cos_half[slot] = math.cos(0.5 * h.beam_width[slot])
+        self._kept += _add_arc(
+            h.x, h.y, h.r, self._cos_axis, self._sin_axis, self._cos_half, slot,
+            np.ascontiguousarray(older), self._cos_psi, self.bearings, self.counts,
+        )
+
+    def estimates(self, slots: SlotArray) -> Estimates:
+        h = self.history
+        slots = np.ascontiguousarray(slots, dtype=np.int64)
+        median, span = _medians(self.bearings, self.counts, slots)
+        has = self.counts[slots] > 0
+        beam = h.beam_width[slots]
+        return Estimates(
+            alive=np.ones(len(slots), dtype=bool),
+            processed=has,
+            xy=arc_point(h, slots, h.theta[slots] + median),
+            width=np.where(has, span, beam),
+            max_error=np.where(has, self.error_bound, chord_error(h.r[slots], beam)),
+            source=np.where(has, int(PointSource.ATM), int(PointSource.CENTERLINE)).astype(
+                np.int8
+            ),
+        )
+
+    def counters(self) -> dict[str, int]:
+        """``atm_crossings``: transversal crossings kept since the start (each counted once)."""
+        return {"atm_crossings": self._kept}
+
+
+class AtmMethod(SonarMethod):
+    """ATM as a streaming method (section 2-D).
+
+    Parameters
+    ----------
+    history_size, beam_width
+        As for :class:`~sonarcarve.methods.base.SonarMethod`.
+    min_transversal : float
+        ψ, radians (see :class:`AtmModel`).
+    range_resolution : float
+        δ, metres (see :func:`atm_error_bound`).
+    """
+
+    name = "atm"
+
+    def __init__(
+        self,
+        history_size: int = DEFAULT_HISTORY_SIZE,
+        beam_width: float = DEFAULT_BEAM_WIDTH,
+        min_transversal: float = MethodConfig.min_transversal,
+        range_resolution: float = MethodConfig.range_resolution,
+    ) -> None:
+        self.min_transversal = min_transversal
+        self.range_resolution = range_resolution
+        super().__init__(history_size, beam_width)
+
+    def _make_models(self) -> tuple[AtmModel]:
+        return (AtmModel(self.history, self.min_transversal, self.range_resolution),)
+
+    def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
+        return estimates[0]

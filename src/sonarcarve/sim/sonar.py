@@ -1,0 +1,674 @@
+"""Ultrasonic sensor physics: what a sonar hears when it fires at a world of walls.
+
+A firing is traced as a fan of rays across the beam (paper, section 2: the main lobe of width φ).
+Each ray stops at the first wall it meets. Walls are smooth, so sound is reflected
+*specularly*: a ray comes back to the sensor only when it meets the wall within the critical
+angle of the wall's normal, or when it meets the wall near a corner or a free wall end (edges
+and corners scatter in every direction). Time of flight measures the *first* echo, so the
+nearest echoing ray wins and its hit point is the reading's true reflection point.
+
+On top of that come the failures the paper met on its Scout2 (Appendix B), each with a rate:
+
+* **crosstalk**: the late echo of a previous ping (another sensor's, typically off a wall
+  beyond its maximum range) arrives while this sensor listens; the range is that echo's path
+  length minus the time between the two firings, usually wrong;
+* **floor bounce**: while the robot tilts (random episodes), sensors facing down the tilt hear
+  the floor at about 0.6 m;
+* **multipath**: a ray reflected specularly off one wall meets a second wall head-on and comes
+  back the same way: the range is the length of the bounced path, too long.
+
+Every echo carries its truth: its :class:`EchoKind` and, where there is one, its reflection
+point (a wall point for direct echoes, the second wall point for multipath ones).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
+from enum import IntEnum
+
+import numpy as np
+import numpy.typing as npt
+from scipy.spatial import cKDTree
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.sim.robot import RobotDescription
+from sonarcarve.sim.world import World
+
+__all__ = [
+    "DEFAULT_PHYSICS",
+    "NO_ECHO",
+    "EchoKind",
+    "Echoes",
+    "Firings",
+    "SonarPhysics",
+    "SonarPhysicsError",
+    "fire_sonars",
+]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Kind code of a firing that heard nothing.
+NO_ECHO = -1
+
+#: Firings traced together: bounds the (rays x walls) arrays to a few tens of megabytes while
+#: keeping each batch's robot positions close together, so the wall pre-filter stays tight.
+_CHUNK_FIRINGS = 256
+
+#: Distance (m) by which a bounced ray starts off its first wall, so it does not re-hit it.
+_BOUNCE_OFFSET = 1e-7
+
+
+class SonarPhysicsError(SonarcarveError, ValueError):
+    """Sonar physics parameters out of their valid range."""
+
+
+class EchoKind(IntEnum):
+    """What produced a reading: the code stored per reading in the truth arrays."""
+
+    DIRECT = 0
+    CROSSTALK = 1
+    FLOOR = 2
+    MULTIPATH = 3
+
+    @property
+    def label(self) -> str:
+        """Lower-case name, as written in truth files: ``direct``, ``crosstalk``, ..."""
+        return self.name.lower()
+
+
+@dataclass(frozen=True)
+class SonarPhysics:
+    """How the simulated sensors behave; every effect can be switched off on its own.
+
+    Attributes
+    ----------
+    rays_per_beam : int
+        Rays traced evenly across the beam, edges included (odd: one on the axis). At 31
+        rays a 22.5° beam has rays 0.75° apart, 8 cm apart at 6.5 m.
+    specular : bool
+        Smooth walls (True): a ray echoes only within ``critical_angle`` of the wall normal or
+        near a corner. False: every wall echoes from any angle (the idealised "arc" sensor).
+    critical_angle : float
+        Largest incidence angle (between the ray and the wall normal), radians, at which a
+        smooth wall still returns an echo. Default 17.5°: the middle of the 15-20° range
+        commonly quoted for Polaroid transducers on smooth walls (assumed, not measured here).
+    corner_radius : float
+        Metres: a ray meeting a wall within this distance of a corner or a free wall end echoes
+        whatever its incidence (edges and corners scatter sound back).
+    corner_echoes : bool
+        Corners and free wall ends inside the beam and in sight echo from the corner point
+        itself (exactly, not only where a ray happens to land near them).
+    range_noise : float
+        Standard deviation of the Gaussian range noise, metres (default 1 cm).
+    quantise : bool
+        Round ranges to the robot's range resolution.
+    crosstalk_probability : float
+        Chance that a late echo of a recent ping, arriving while this sensor listens and from
+        within ``crosstalk_acceptance`` of its axis, is loud enough to be heard. The default
+        0.2 is a judgement (such echoes have travelled 14 m or more); on the office tour it
+        makes about 5 % of scout2's readings crosstalk (``benchmarks/simulate_speed.py``).
+    crosstalk_lookback : int
+        How many previous firings can still be echoing (2: the last two pings).
+    crosstalk_acceptance : float
+        Half-angle, radians, about the sensor axis from which a sensor hears a stray echo
+        (default 90°: the front half-plane; the robot body shadows the rest).
+    floor_episode_rate : float
+        Tilt episodes (bumps, ramps, door sills) per second of travel time.
+    floor_episode_duration : float
+        Mean length of a tilt episode, seconds (exponentially distributed).
+    floor_probability : float
+        Chance that a sensor facing down the tilt hears the floor during an episode.
+    floor_range : float
+        Mean range of a floor echo, metres: the paper's Scout2 sensors sit 10.25 in above the
+        floor and hear it "at just over 2 feet" (Appendix B), so 0.62 m.
+    floor_range_sd : float
+        Standard deviation of the floor echo range, metres.
+    floor_half_angle : float
+        Sensors within this angle of the tilt direction, radians, see the floor.
+    multipath_probability : float
+        Chance that a bounced echo (specular off one wall, head-on at a second) is loud enough
+        to be heard, when it arrives before any direct echo.
+    sound_speed : float
+        Speed of sound, m/s (343: dry air at 20 °C); converts firing gaps to ranges.
+    """
+
+    rays_per_beam: int = 31
+    specular: bool = True
+    critical_angle: float = math.radians(17.5)
+    corner_radius: float = 0.05
+    corner_echoes: bool = True
+    range_noise: float = 0.01
+    quantise: bool = True
+    crosstalk_probability: float = 0.2
+    crosstalk_lookback: int = 2
+    crosstalk_acceptance: float = math.radians(90.0)
+    floor_episode_rate: float = 1.0 / 30.0
+    floor_episode_duration: float = 1.0
+    floor_probability: float = 0.5
+    floor_range: float = 0.62
+    floor_range_sd: float = 0.05
+    floor_half_angle: float = math.radians(60.0)
+    multipath_probability: float = 0.5
+    sound_speed: float = 343.0
+
+    def __post_init__(self) -> None:
+        if self.rays_per_beam < 1:
+            _bad("rays_per_beam", self.rays_per_beam, "must be at least 1")
+        if self.crosstalk_lookback < 0:
+            _bad("crosstalk_lookback", self.crosstalk_lookback, "must be >= 0")
+        if not 0.0 <= self.critical_angle <= math.pi / 2:
+            _bad("critical_angle", self.critical_angle, "must lie in [0, π/2] radians")
+        for name in ("crosstalk_probability", "floor_probability", "multipath_probability"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                _bad(name, getattr(self, name), "must lie in [0, 1]")
+        for name in ("corner_radius", "range_noise", "floor_episode_rate",
+                     "floor_episode_duration", "floor_range", "floor_range_sd",
+                     "floor_half_angle", "crosstalk_acceptance"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                _bad(name, value, "must be a finite number >= 0")
+        if not (math.isfinite(self.sound_speed) and self.sound_speed > 0.0):
+            _bad("sound_speed", self.sound_speed, "must be > 0")
+
+    @classmethod
+    def clean(cls) -> SonarPhysics:
+        """Specular walls and corners only: no noise, no quantisation, no spurious echoes."""
+        return cls(range_noise=0.0, quantise=False, crosstalk_probability=0.0,
+                   floor_episode_rate=0.0, multipath_probability=0.0)
+
+    @classmethod
+    def ideal(cls) -> SonarPhysics:
+        """The arc model's sensor: every wall in the beam echoes; nothing else goes wrong."""
+        return replace(cls.clean(), specular=False)
+
+
+#: The default sensor model (every effect on, at the documented defaults).
+DEFAULT_PHYSICS = SonarPhysics()
+
+
+@dataclass(frozen=True, eq=False)
+class Firings:
+    """When and where sensors fired: struct of arrays, shape (n,), in time order.
+
+    Attributes
+    ----------
+    t : ndarray
+        Firing times, seconds.
+    sensor : ndarray of int64
+        Index of the sensor that fired.
+    x, y, theta : ndarray
+        The sensor's true origin (m) and axis (rad) in the world frame at that time.
+    """
+
+    t: FloatArray
+    sensor: IntArray
+    x: FloatArray
+    y: FloatArray
+    theta: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def __getitem__(self, index: slice | IntArray | BoolArray) -> Firings:
+        return Firings(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+
+
+@dataclass(frozen=True, eq=False)
+class Echoes:
+    """What each firing heard: struct of arrays aligned with :class:`Firings`.
+
+    Attributes
+    ----------
+    range : ndarray, shape (n,)
+        Measured range (noise, quantisation), metres; NaN where the sensor heard nothing.
+    true_range : ndarray, shape (n,)
+        Noise-free range of the echo that was heard (half its path length, less the firing gap
+        for crosstalk), metres; NaN where nothing was heard.
+    kind : ndarray of int64, shape (n,)
+        :class:`EchoKind` code, or :data:`NO_ECHO`.
+    reflection : ndarray, shape (n, 2)
+        True reflection point in the world frame, metres; NaN for floor and crosstalk echoes
+        and where nothing was heard.
+    """
+
+    range: FloatArray
+    true_range: FloatArray
+    kind: IntArray
+    reflection: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.range.shape[0])
+
+    @property
+    def heard(self) -> BoolArray:
+        """Firings that produced a reading."""
+        return np.asarray(self.kind != NO_ECHO)
+
+
+def fire_sonars(
+    world: World,
+    robot: RobotDescription,
+    firings: Firings,
+    physics: SonarPhysics | None = None,
+    rng: np.random.Generator | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> Echoes:
+    """Simulate every firing: trace its beam, add spurious echoes, keep the first one heard.
+
+    Parameters
+    ----------
+    world : World
+        The walls.
+    robot : RobotDescription
+        Beam widths, range limits, resolution and firing period of the sensors.
+    firings : Firings
+        Firing times and true sensor poses, in time order.
+    physics : SonarPhysics, optional
+        Which effects to simulate and how strongly (default :data:`DEFAULT_PHYSICS`).
+    rng : numpy.random.Generator, optional
+        Source of randomness (default: seeded with 0). Every random draw is made up front in
+        a fixed order, so a seed fixes the output whatever the batching.
+    on_progress : callable, optional
+        Called as ``on_progress(done, total)`` (firings traced so far) after each batch.
+
+    Returns
+    -------
+    Echoes
+        One entry per firing.
+    """
+    physics = DEFAULT_PHYSICS if physics is None else physics
+    gen = np.random.default_rng(0) if rng is None else rng
+    n = len(firings)
+    draws = _Draws.make(gen, firings, physics)
+    geometry = _WallGeometry.make(world)
+    far_range = robot.max_range + physics.sound_speed * _max_gap(firings, physics) / 2.0
+    traced = _trace_all(geometry, robot, firings, physics, far_range, on_progress)
+    crosstalk = _crosstalk(robot, firings, physics, traced)
+    floor = _floor(robot, firings, physics, draws)
+    candidates = np.column_stack([
+        traced.direct_range,
+        np.where(draws.crosstalk < physics.crosstalk_probability, crosstalk, np.inf),
+        floor,
+        np.where(draws.multipath < physics.multipath_probability, traced.multipath_range, np.inf),
+    ])
+    winner = np.argmin(candidates, axis=1)  # ties go to the lower code: direct first
+    true_range = candidates[np.arange(n), winner]
+    measured = _measure(true_range + physics.range_noise * draws.noise, robot, physics)
+    heard = np.isfinite(true_range) & (measured >= robot.min_range) & (measured <= robot.max_range)
+    reflection = np.full((n, 2), np.nan)
+    direct = heard & (winner == EchoKind.DIRECT)
+    bounced = heard & (winner == EchoKind.MULTIPATH)
+    reflection[direct] = traced.direct_point[direct]
+    reflection[bounced] = traced.multipath_point[bounced]
+    return Echoes(
+        range=np.where(heard, measured, np.nan),
+        true_range=np.where(heard, true_range, np.nan),
+        kind=np.where(heard, winner, NO_ECHO).astype(np.int64),
+        reflection=reflection,
+    )
+
+
+def _measure(r: FloatArray, robot: RobotDescription, physics: SonarPhysics) -> FloatArray:
+    """Quantise ranges to the robot's resolution (round to nearest) when asked."""
+    if physics.quantise and robot.range_resolution > 0.0:
+        return np.asarray(np.round(r / robot.range_resolution) * robot.range_resolution)
+    return r
+
+
+# --------------------------------------------------------------------------- random draws
+
+
+@dataclass(frozen=True)
+class _Draws:
+    """Every random number of a simulation, drawn in one fixed order.
+
+    ``tilt`` is the robot-frame direction the robot tilts towards at each firing (NaN: level).
+    """
+
+    noise: FloatArray
+    crosstalk: FloatArray
+    multipath: FloatArray
+    floor_gate: FloatArray
+    floor_range: FloatArray
+    tilt: FloatArray
+
+    @classmethod
+    def make(cls, rng: np.random.Generator, firings: Firings, physics: SonarPhysics) -> _Draws:
+        n = len(firings)
+        noise = rng.standard_normal(n)
+        crosstalk = rng.random(n)
+        multipath = rng.random(n)
+        floor_gate = rng.random(n)
+        floor_range = physics.floor_range + physics.floor_range_sd * rng.standard_normal(n)
+        t0, t1 = (float(firings.t[0]), float(firings.t[-1])) if n else (0.0, 0.0)
+        count = int(rng.poisson(physics.floor_episode_rate * (t1 - t0)))
+        starts = rng.uniform(t0, t1, count)
+        ends = starts + rng.exponential(physics.floor_episode_duration, count)
+        directions = rng.uniform(-math.pi, math.pi, count)
+        tilt = np.full(n, np.nan)
+        for start, end, direction in zip(starts, ends, directions, strict=True):
+            lo, hi = np.searchsorted(firings.t, [start, end], side="left")
+            tilt[lo:hi] = direction
+        return cls(noise, crosstalk, multipath, floor_gate, floor_range, tilt)
+
+
+def _max_gap(firings: Firings, physics: SonarPhysics) -> float:
+    """Longest time back to a firing whose late echoes can still be heard (crosstalk)."""
+    lag = physics.crosstalk_lookback
+    if physics.crosstalk_probability <= 0.0 or lag == 0 or len(firings) <= lag:
+        return 0.0
+    return float(np.max(firings.t[lag:] - firings.t[:-lag]))
+
+
+# --------------------------------------------------------------------------- walls
+
+
+@dataclass(frozen=True, eq=False)
+class _WallGeometry:
+    """A world with what tracing needs precomputed: unit normals, bounding boxes, corners.
+
+    ``scatter`` holds the corners and free wall ends (shape (m, 2)): every segment endpoint
+    except where exactly two collinear walls continue each other (a wall split in two is still
+    one smooth wall there).
+    """
+
+    world: World
+    normals: FloatArray
+    boxes: FloatArray
+    scatter: FloatArray
+    tree: cKDTree | None
+
+    @classmethod
+    def make(cls, world: World) -> _WallGeometry:
+        seg = world.segments
+        edge = seg[:, 2:] - seg[:, :2]
+        length = np.maximum(np.hypot(edge[:, 0], edge[:, 1]), 1e-300)
+        normals = np.column_stack((-edge[:, 1], edge[:, 0])) / length[:, None]
+        xs, ys = seg[:, [0, 2]], seg[:, [1, 3]]
+        boxes = np.column_stack((xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)))
+        scatter = _scatter_points(seg)
+        tree = cKDTree(scatter) if scatter.shape[0] else None
+        return cls(world, normals, boxes, scatter, tree)
+
+    def near(self, xmin: float, ymin: float, xmax: float, ymax: float,
+             margin: float) -> tuple[World, IntArray, FloatArray]:
+        """Walls (as a world, plus their global indices) and corners in a box grown by margin."""
+        b = self.boxes
+        keep = ((b[:, 2] >= xmin - margin) & (b[:, 0] <= xmax + margin)
+                & (b[:, 3] >= ymin - margin) & (b[:, 1] <= ymax + margin))
+        index = np.flatnonzero(keep)
+        s = self.scatter
+        corner_keep = ((s[:, 0] >= xmin - margin) & (s[:, 0] <= xmax + margin)
+                       & (s[:, 1] >= ymin - margin) & (s[:, 1] <= ymax + margin))
+        return replace(self.world, segments=self.world.segments[index]), index, s[corner_keep]
+
+    def near_corner(self, points: FloatArray, radius: float) -> BoolArray:
+        """Which points, shape (k, 2), lie within ``radius`` of a corner or free wall end."""
+        if self.tree is None or radius <= 0.0 or points.shape[0] == 0:
+            return np.zeros(points.shape[0], dtype=bool)
+        distance, _ = self.tree.query(points, k=1, distance_upper_bound=radius * (1 + 1e-12))
+        return np.asarray(np.isfinite(distance))
+
+
+def _scatter_points(seg: FloatArray, tol: float = 1e-9) -> FloatArray:
+    """Corners and free ends of the walls ``seg`` (n, 4), duplicates merged; shape (m, 2).
+
+    An endpoint is *not* a corner only where exactly one other wall ends at it and continues
+    it in a straight line, with no third wall touching the point.
+    """
+    n = seg.shape[0]
+    if n == 0:
+        return np.zeros((0, 2))
+    ends = np.concatenate([seg[:, :2], seg[:, 2:]])  # end k belongs to wall k % n
+    owner = np.arange(2 * n) % n
+    pairs = cKDTree(ends).query_pairs(tol, output_type="ndarray")
+    pairs = pairs[owner[pairs[:, 0]] != owner[pairs[:, 1]]]
+    count = np.bincount(pairs.ravel(), minlength=2 * n)
+    partner = np.full(2 * n, -1)
+    single = pairs[(count[pairs[:, 0]] == 1) & (count[pairs[:, 1]] == 1)]
+    partner[single[:, 0]], partner[single[:, 1]] = single[:, 1], single[:, 0]
+    candidates = np.flatnonzero(partner >= 0)
+    edge = seg[:, 2:] - seg[:, :2]
+    # Direction from each end into its own wall.
+    inward = np.where((np.arange(2 * n) < n)[:, None], edge[owner], -edge[owner])
+    a, b = inward[candidates], inward[partner[candidates]]
+    cross = np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+    scale = np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
+    straight = (cross <= 1e-9 * scale) & (np.sum(a * b, axis=1) < 0.0)
+    candidates = candidates[straight]
+    crowded = _touching_count(seg, ends[candidates], tol) > 2  # a third wall meets the joint
+    keep = np.ones(2 * n, dtype=bool)
+    keep[candidates[~crowded]] = False
+    points = ends[keep]
+    return np.asarray(np.unique(np.round(points, 9), axis=0)) if points.size else points
+
+
+def _touching_count(seg: FloatArray, points: FloatArray, tol: float) -> IntArray:
+    """How many walls pass within ``tol`` of each point, shape (k,); blocks bound memory."""
+    counts = np.zeros(points.shape[0], dtype=np.int64)
+    a, edge = seg[:, :2], seg[:, 2:] - seg[:, :2]
+    length2 = np.maximum(np.sum(edge * edge, axis=1), 1e-300)
+    step = max(1, (1 << 18) // max(seg.shape[0], 1))
+    for lo in range(0, points.shape[0], step):
+        p = points[lo:lo + step]
+        u = np.clip(np.einsum("kwj,wj->kw", p[:, None, :] - a[None], edge) / length2, 0.0, 1.0)
+        near = a[None] + u[:, :, None] * edge[None]
+        gap = np.hypot(p[:, None, 0] - near[..., 0], p[:, None, 1] - near[..., 1])
+        counts[lo:lo + step] = np.sum(gap <= tol, axis=1)
+    return counts
+
+
+# --------------------------------------------------------------------------- beam tracing
+
+
+@dataclass(frozen=True, eq=False)
+class _Traced:
+    """Per-firing results of the deterministic geometry (no randomness).
+
+    ``echo_distance`` and ``echo_point`` (shapes (n, R) and (n, R, 2)) keep every ray that
+    echoes diffusely, out to the crosstalk horizon: the raw material of late echoes.
+    """
+
+    direct_range: FloatArray
+    direct_point: FloatArray
+    multipath_range: FloatArray
+    multipath_point: FloatArray
+    echo_distance: FloatArray
+    echo_point: FloatArray
+
+
+def _trace_all(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+               physics: SonarPhysics, far_range: float,
+               on_progress: Callable[[int, int], None] | None) -> _Traced:
+    n, rays = len(firings), physics.rays_per_beam
+    out = _Traced(
+        direct_range=np.full(n, np.inf), direct_point=np.full((n, 2), np.nan),
+        multipath_range=np.full(n, np.inf), multipath_point=np.full((n, 2), np.nan),
+        echo_distance=np.full((n, rays), np.inf), echo_point=np.full((n, rays, 2), np.nan),
+    )
+    for lo in range(0, n, _CHUNK_FIRINGS):
+        hi = min(lo + _CHUNK_FIRINGS, n)
+        if len(geometry.world):
+            _trace_chunk(geometry, robot, firings[lo:hi], physics, far_range, out, lo)
+        if on_progress is not None:
+            on_progress(hi, n)
+    return out
+
+
+def _trace_chunk(geometry: _WallGeometry, robot: RobotDescription, chunk: Firings,
+                 physics: SonarPhysics, far_range: float, out: _Traced, offset: int) -> None:
+    """Trace the beams of one batch of firings and write the results into ``out`` rows."""
+    f, rays = len(chunk), physics.rays_per_beam
+    rows = slice(offset, offset + f)
+    box = (float(chunk.x.min()), float(chunk.y.min()), float(chunk.x.max()), float(chunk.y.max()))
+    near_world, near_index, corners = geometry.near(*box, margin=robot.max_range)
+    spread = np.linspace(-0.5, 0.5, rays) if rays > 1 else np.zeros(1)
+    width = robot.beam_width[chunk.sensor]
+    angle = (chunk.theta[:, None] + width[:, None] * spread[None, :]).reshape(-1)
+    origin = np.repeat(np.column_stack((chunk.x, chunk.y)), rays, axis=0)
+    distance, wall = _cast(near_world, near_index, origin, angle, robot.max_range)
+    if far_range > robot.max_range:
+        missed = np.flatnonzero(~np.isfinite(distance))
+        if missed.size:
+            far_world, far_index, _ = geometry.near(*box, margin=far_range)
+            distance[missed], wall[missed] = _cast(far_world, far_index, origin[missed],
+                                                   angle[missed], far_range)
+    direction = np.column_stack((np.cos(angle), np.sin(angle)))
+    hit = np.isfinite(distance)
+    point = origin + np.where(hit, distance, 0.0)[:, None] * direction
+    echoing = hit & _echoes_back(geometry, physics, direction, wall, point)
+
+    # Direct echoes: the nearest echoing ray beyond the blanking distance (time of flight).
+    heard = echoing & (distance >= robot.min_range) & (distance <= robot.max_range)
+    ray_range = np.where(heard, distance, np.inf).reshape(f, rays)
+    best = np.argmin(ray_range, axis=1)
+    direct_range = ray_range[np.arange(f), best]
+    direct_point = point.reshape(f, rays, 2)[np.arange(f), best]
+    if physics.corner_echoes and corners.shape[0]:
+        corner_range, corner_point = _corner_echoes(near_world, chunk, width, corners, robot)
+        closer = corner_range < direct_range
+        direct_range = np.where(closer, corner_range, direct_range)
+        direct_point = np.where(closer[:, None], corner_point, direct_point)
+    out.direct_range[rows] = direct_range
+    out.direct_point[rows] = np.where(np.isfinite(direct_range)[:, None], direct_point, np.nan)
+    out.echo_distance[rows] = np.where(echoing, distance, np.inf).reshape(f, rays)
+    out.echo_point[rows] = point.reshape(f, rays, 2)
+
+    if physics.multipath_probability > 0.0 and physics.specular:
+        bounce = hit & ~echoing & (distance <= robot.max_range)
+        _multipath(geometry, near_world, near_index, robot, physics, direction, wall, point,
+                   distance, bounce, out, offset, rays)
+
+
+def _cast(world: World, index: IntArray, origin: FloatArray, angle: FloatArray,
+          limit: float) -> tuple[FloatArray, IntArray]:
+    """``World.cast_rays`` on a sub-world, with wall indices mapped back to the full world."""
+    if origin.shape[0] == 0 or index.size == 0:
+        return np.full(origin.shape[0], np.inf), np.full(origin.shape[0], -1, dtype=np.int64)
+    distance, local = world.cast_rays(origin, angle, max_range=limit)
+    return distance, np.where(local >= 0, index[np.maximum(local, 0)], -1).astype(np.int64)
+
+
+def _echoes_back(geometry: _WallGeometry, physics: SonarPhysics, direction: FloatArray,
+                 wall: IntArray, point: FloatArray) -> BoolArray:
+    """Whether each ray's hit returns sound to where the ray came from.
+
+    A smooth wall returns it when the incidence angle (between the ray and the wall normal) is
+    below the critical angle; corners and free ends within ``corner_radius`` always do.
+    """
+    hit = wall >= 0
+    if not physics.specular:
+        return hit
+    normal = geometry.normals[np.maximum(wall, 0)]
+    cos_incidence = np.abs(np.sum(direction * normal, axis=1))
+    # The small slack keeps a ray exactly at the critical angle on the echoing side.
+    facing = cos_incidence >= math.cos(physics.critical_angle) - 1e-12
+    near = np.zeros_like(hit)
+    candidates = np.flatnonzero(hit & ~facing)
+    near[candidates] = geometry.near_corner(point[candidates], physics.corner_radius)
+    return np.asarray(hit & (facing | near))
+
+
+def _corner_echoes(world: World, chunk: Firings, width: FloatArray, corners: FloatArray,
+                   robot: RobotDescription) -> tuple[FloatArray, FloatArray]:
+    """Nearest corner or free wall end in each beam and in sight: range (f,), point (f, 2)."""
+    dx = corners[None, :, 0] - chunk.x[:, None]
+    dy = corners[None, :, 1] - chunk.y[:, None]
+    dist = np.hypot(dx, dy)
+    off_axis = np.abs(np.angle(np.exp(1j * (np.arctan2(dy, dx) - chunk.theta[:, None]))))
+    inside = ((dist >= robot.min_range) & (dist <= robot.max_range)
+              & (off_axis <= width[:, None] / 2.0 + 1e-12))
+    f_idx, c_idx = np.nonzero(inside)
+    corner_range = np.full(len(chunk), np.inf)
+    corner_point = np.full((len(chunk), 2), np.nan)
+    if f_idx.size == 0:
+        return corner_range, corner_point
+    target = dist[f_idx, c_idx]
+    seen, _ = world.cast_rays(np.column_stack((chunk.x[f_idx], chunk.y[f_idx])),
+                              np.arctan2(dy[f_idx, c_idx], dx[f_idx, c_idx]),
+                              max_range=robot.max_range + 1.0)
+    # In sight: nothing stops the ray before the corner (it may stop at the corner itself).
+    visible = seen >= target * (1.0 - 1e-9) - 1e-9
+    f_idx, c_idx, target = f_idx[visible], c_idx[visible], target[visible]
+    order = np.lexsort((target, f_idx))  # per firing, nearest corner first
+    first = order[np.r_[True, np.diff(f_idx[order]) != 0]] if order.size else order
+    corner_range[f_idx[first]] = target[first]
+    corner_point[f_idx[first]] = corners[c_idx[first]]
+    return corner_range, corner_point
+
+
+def _multipath(geometry: _WallGeometry, world: World, index: IntArray, robot: RobotDescription,
+               physics: SonarPhysics, direction: FloatArray, wall: IntArray, point: FloatArray,
+               distance: FloatArray, bounce: BoolArray, out: _Traced, offset: int,
+               rays: int) -> None:
+    """One specular bounce: reflected rays that meet a second wall head-on come back the same
+    way, so the sensor hears them at the length of the bounced path (too long)."""
+    which = np.flatnonzero(bounce)
+    if which.size == 0:
+        return
+    normal = geometry.normals[wall[which]]
+    d = direction[which]
+    mirrored = d - 2.0 * np.sum(d * normal, axis=1)[:, None] * normal
+    start = point[which] + _BOUNCE_OFFSET * mirrored
+    second, wall2 = _cast(world, index, start, np.arctan2(mirrored[:, 1], mirrored[:, 0]),
+                          robot.max_range)
+    total = distance[which] + _BOUNCE_OFFSET + second
+    hit2 = np.isfinite(second) & (total <= robot.max_range) & (total >= robot.min_range)
+    end = start + np.where(hit2, second, 0.0)[:, None] * mirrored
+    returns = hit2 & _echoes_back(geometry, physics, mirrored, np.where(hit2, wall2, -1), end)
+    firing = which // rays
+    path = np.where(returns, total, np.inf)
+    order = np.lexsort((path, firing))
+    first = order[np.r_[True, np.diff(firing[order]) != 0]]
+    first = first[np.isfinite(path[first])]
+    out.multipath_range[offset + firing[first]] = path[first]
+    out.multipath_point[offset + firing[first]] = end[first]
+
+
+# --------------------------------------------------------------------------- spurious echoes
+
+
+def _crosstalk(robot: RobotDescription, firings: Firings, physics: SonarPhysics,
+               traced: _Traced) -> FloatArray:
+    """Apparent range of the first late echo of a recent ping, per firing (inf: none).
+
+    Sensor k fires at t_k; the ping of an earlier firing j reflects (diffusely) at P on a wall
+    at distance d_j and reaches sensor k after travelling d_j + |P − o_k|. Sensor k times it
+    from its own firing, so it reads (d_j + |P − o_k|)/2 − c (t_k − t_j)/2.
+    """
+    n = len(firings)
+    best = np.full(n, np.inf)
+    if physics.crosstalk_probability <= 0.0:
+        return best
+    c = physics.sound_speed
+    for lag in range(1, min(physics.crosstalk_lookback, n - 1) + 1):
+        k = np.arange(lag, n)
+        j = k - lag
+        px = traced.echo_point[j, :, 0] - firings.x[k, None]
+        py = traced.echo_point[j, :, 1] - firings.y[k, None]
+        back = np.hypot(px, py)
+        apparent = (traced.echo_distance[j] + back) / 2.0 - c * (firings.t[k] - firings.t[j])[
+            :, None] / 2.0
+        arrival = np.abs(np.angle(np.exp(1j * (np.arctan2(py, px) - firings.theta[k, None]))))
+        ok = (np.isfinite(apparent) & (apparent >= robot.min_range)
+              & (apparent <= robot.max_range) & (arrival <= physics.crosstalk_acceptance))
+        best[k] = np.minimum(best[k], np.min(np.where(ok, apparent, np.inf), axis=1))
+    return best
+
+
+def _floor(robot: RobotDescription, firings: Firings, physics: SonarPhysics,
+           draws: _Draws) -> FloatArray:
+    """Floor echo range per firing (inf: none): sensors facing down a tilt hear the floor."""
+    off = np.abs(np.angle(np.exp(1j * (robot.bearing[firings.sensor] - draws.tilt))))
+    facing = np.isfinite(draws.tilt) & (off <= physics.floor_half_angle)
+    heard = facing & (draws.floor_gate < physics.floor_probability)
+    return np.asarray(np.where(heard, np.maximum(draws.floor_range, 0.0), np.inf))
+
+
+def _bad(name: str, value: object, problem: str) -> None:
+    msg = f"SonarPhysics.{name} {problem}, got {value!r}"
+    raise SonarPhysicsError(msg)

@@ -1,0 +1,83 @@
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.cli import main
+from sonarcarve.io import read_map_csv, write_readings_csv
+from sonarcarve.readings import ReadingBatch
+
+
+def _readings(path: Path) -> ReadingBatch:
+    """A robot driving along +x with one sensor looking left at a wall 1.5 m away; some rows
+    are far (6 m) or near (0.1 m)."""
+    n = 60
+    k = np.arange(n)
+    r = np.full(n, 1.5)
+    r[[7, 30]] = 6.0
+    r[[12]] = 0.1
+    batch = ReadingBatch.from_arrays(t=0.1 * k, sensor=np.zeros(n, int), x=0.05 * k,
+                                     y=np.zeros(n), theta=np.full(n, math.pi / 2), range=r)
+    write_readings_csv(batch, path)
+    return batch
+
+
+def _run(tmp_path: Path, *options: str) -> tuple[int, Path]:
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _readings(readings)
+    return main(["process", str(readings), "--method", "centerline", "--out", str(out),
+                 *options]), out
+
+
+def test_reading_filters_keep_input_rows_as_ids(tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    code, out = _run(tmp_path, "--max-range", "3.81", "--min-range", "0.2")
+    assert code == 0
+    ids = read_map_csv(out).reading_id.tolist()
+    assert ids == [i for i in range(60) if i not in (7, 12, 30)]
+    text = capsys.readouterr().out
+    assert "beyond --max-range" in text
+    assert "readings mapped" in text
+
+
+def test_jump_filter_drops_the_row_after_a_spike_too(tmp_path: Path) -> None:
+    code, out = _run(tmp_path, "--jump-threshold", "1.0")
+    assert code == 0
+    # Spikes at 7, 12 and 30 jump, and so do the readings after them (back to 1.5).
+    dropped = {7, 8, 12, 13, 30, 31}
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in dropped]
+
+
+def test_map_filters_drop_outliers_and_inaccurate_points(tmp_path: Path) -> None:
+    # Centerline points sit at the range along the axis: the wall row at y = 1.5 spaced 5 cm,
+    # the 6 m rows 1.15 m apart at y = 6 and the 0.1 m row alone at y = 0.1.
+    code, out = _run(tmp_path, "--outlier-radius", "0.2", "--outlier-neighbours", "2")
+    assert code == 0
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60)
+                                                     if i not in (7, 12, 30)]
+    # Centerline max error is the chord for φ/2 (eq. 5.3): 2 r sin(φ/4), largest for 6 m.
+    bound = 2 * 1.5 * math.sin(math.radians(22.5) / 4)
+    code, out = _run(tmp_path, "--max-error", f"{bound * 1.01}")
+    assert code == 0
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in (7, 30)]
+
+
+@pytest.mark.parametrize(("options", "text"), [
+    (["--max-range", "-1"], "--max-range must be a finite number > 0"),
+    (["--min-range", "nan"], "--min-range must be"),
+    (["--max-range", "1", "--min-range", "2"], "--min-range (2.0) exceeds --max-range (1.0)"),
+    (["--jump-threshold", "0"], "--jump-threshold must be"),
+    (["--outlier-radius", "inf"], "--outlier-radius must be"),
+    (["--outlier-radius", "1", "--outlier-neighbours", "0"], "--outlier-neighbours must be"),
+    (["--outlier-neighbours", "3"], "--outlier-neighbours needs --outlier-radius"),
+    (["--max-error", "-0.5"], "--max-error must be"),
+])
+def test_bad_filter_values_are_one_line_errors(tmp_path: Path, options: list[str], text: str,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    code, out = _run(tmp_path, *options)
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert text in err
+    assert len(err.splitlines()) == 1
+    assert not out.exists()

@@ -1,0 +1,97 @@
+"""`sonarcarve simulate` in-process: files written, determinism, paths, one-line errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.cli import main
+from sonarcarve.io import read_readings_csv
+from sonarcarve.io.truth import read_truth_json
+from sonarcarve.sim.world import load_world
+
+
+def run(*args: str) -> int:
+    return main(["simulate", *args])
+
+
+def test_doorway_writes_readings_and_truth(tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "door.csv"
+    assert run("--world", "doorway", "--seed", "1", "--out", str(out)) == 0
+    header = out.read_text().splitlines()[0]
+    assert header == "t,sensor,x,y,theta,range,beam_width"
+    readings = read_readings_csv(out)
+    truth = read_truth_json(tmp_path / "door.truth.json")
+    assert len(readings) > 50
+    assert truth.kind.shape == (len(readings),)
+    np.testing.assert_array_equal(truth.world.segments, load_world("doorway").segments)
+    np.testing.assert_allclose(readings.beam_width, np.radians(22.5))
+    printed = capsys.readouterr().out
+    assert "firings" in printed
+    assert "direct" in printed
+
+
+def test_same_seed_same_bytes_other_seed_differs(tmp_path: Path) -> None:
+    outs = [tmp_path / name for name in ("a.csv", "b.csv", "c.csv")]
+    for out, seed in zip(outs, ("4", "4", "5"), strict=True):
+        assert run("--world", "doorway", "--seed", seed, "--odometry", "--out", str(out)) == 0
+    assert outs[0].read_bytes() == outs[1].read_bytes()
+    assert (tmp_path / "a.truth.json").read_bytes() == (tmp_path / "b.truth.json").read_bytes()
+    assert outs[0].read_bytes() != outs[2].read_bytes()
+
+
+def test_odometry_changes_the_stamps_not_the_ranges(tmp_path: Path) -> None:
+    plain, drift = tmp_path / "plain.csv", tmp_path / "drift.csv"
+    assert run("--world", "t-junction", "--robot", "p3dx-front", "--out", str(plain)) == 0
+    assert run("--world", "t-junction", "--robot", "p3dx-front", "--odometry",
+               "--out", str(drift)) == 0
+    a, b = read_readings_csv(plain), read_readings_csv(drift)
+    np.testing.assert_array_equal(a.range, b.range)
+    assert not np.array_equal(a.x, b.x)
+
+
+def test_path_file_is_followed(tmp_path: Path) -> None:
+    path = tmp_path / "path.csv"
+    path.write_text("x,y\n0,0\n0,2.5\n-2,2.5\n")
+    out = tmp_path / "r.csv"
+    assert run("--world", "doorway", "--robot", "roboND-8", "--path", str(path),
+               "--out", str(out)) == 0
+    readings = read_readings_csv(out)
+    # roboND-8 sensors sit at the robot centre: every origin lies on the path's two legs.
+    on_first = (np.abs(readings.x) < 1e-9) & (readings.y > -1e-9) & (readings.y < 2.5 + 1e-9)
+    on_second = (np.abs(readings.y - 2.5) < 1e-9) & (readings.x < 1e-9) & (readings.x > -2 - 1e-9)
+    assert np.all(on_first | on_second)
+    assert on_second.any()
+
+
+def test_explore(tmp_path: Path) -> None:
+    out = tmp_path / "e.csv"
+    assert run("--world", "t-junction", "--explore", "20", "--seed", "2", "--out", str(out)) == 0
+    readings = read_readings_csv(out)
+    assert readings.t[-1] == pytest.approx(20.0, abs=0.05)
+
+
+@pytest.mark.parametrize(
+    ("args", "problem"),
+    [
+        (["--world", "atlantis"], "unknown world 'atlantis'"),
+        (["--world", "doorway", "--robot", "nomad"], "unknown robot 'nomad'"),
+        (["--world", "doorway", "--path", "nowhere.csv"], "no such file"),
+        (["--world", "doorway", "--path", "p.csv", "--explore", "5"], "not both"),
+        (["--world", "doorway", "--explore", "-3"], "--explore must be a positive"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], problem: str,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "never.csv"
+    assert run(*args, "--out", str(out)) == 2
+    err = capsys.readouterr().err.strip()
+    assert problem in err
+    assert len(err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,183 @@
+"""The arc carving method (paper, sections 3 and 5-A), on hand-made scenes and a random stream."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve import (
+    DEFAULT_BEAM_WIDTH,
+    CarveOutcome,
+    CarvingMethod,
+    MethodConfig,
+    PointSource,
+    Reading,
+    ReadingBatch,
+    carve_arc,
+    chord_error,
+    make_method,
+)
+from sonarcarve.methods.base import Estimates, Removal, SlotArray
+
+PHI = DEFAULT_BEAM_WIDTH
+
+
+def _reading(t: float, x: float, y: float, theta: float, r: float,
+             width: float = math.nan) -> Reading:
+    return Reading(t=t, sensor=0, x=x, y=y, theta=theta, range=r, beam_width=width)
+
+
+def _exact(range_tolerance: float = 0.0, history_size: int = 250) -> CarvingMethod:
+    return CarvingMethod(history_size=history_size, range_tolerance=range_tolerance)
+
+
+def test_freespace_covering_an_older_arc_fully_carves_it() -> None:
+    method = _exact()
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0))
+    method.add(_reading(1.0, 0.0, 0.0, 0.0, 2.0))  # same beam, longer: arc 0 is all freespace
+    assert method.local_map().reading_id.tolist() == [1]
+    measures = method.measures()
+    assert (measures.fully_carved, measures.split) == (1, 0)
+    assert method.finish().reading_id.tolist() == [1]
+
+
+def test_a_split_arc_is_dropped_and_counted_as_split() -> None:
+    method = _exact()
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0))  # arc on r = 2, bearings ±φ/2
+    # A narrow beam from (1, 0) along +x crosses that arc in its middle, nowhere near its ends.
+    method.add(_reading(1.0, 1.0, 0.0, 0.0, 5.0, width=0.05))
+    assert method.local_map().reading_id.tolist() == [1]
+    measures = method.measures()
+    assert (measures.fully_carved, measures.split) == (0, 1)
+
+
+def test_overlapping_beam_shrinks_the_arc_to_the_rest() -> None:
+    method = _exact()
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0))  # [-φ/2, φ/2]
+    method.add(_reading(1.0, 0.0, 0.0, PHI / 2, 2.0))  # freespace bearings [0, φ]
+    local = method.local_map()
+    assert local.reading_id.tolist() == [0, 1]
+    # Arc 0 keeps [-φ/2, 0]: its point is at -φ/4 (eq. 3.6), width φ/2 (5.1), bound eq. 5.3.
+    assert local.xy[0] == pytest.approx([math.cos(-PHI / 4), math.sin(-PHI / 4)], abs=1e-12)
+    assert local.width[0] == pytest.approx(PHI / 2, abs=1e-12)
+    assert local.max_error[0] == pytest.approx(2.0 * math.sin(PHI / 8), abs=1e-12)
+    assert local.source.tolist() == [PointSource.CARVED, PointSource.CENTERLINE]
+    # Arc 1 is the centerline point (eq. 3.3).
+    assert local.xy[1] == pytest.approx([2 * math.cos(PHI / 2), 2 * math.sin(PHI / 2)])
+    assert method.measures().unprocessed_share == 0.5
+
+
+def test_the_newer_arc_is_never_carved_by_older_freespace() -> None:
+    method = _exact()
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 5.0))
+    method.add(_reading(1.0, 0.0, 0.0, 0.0, 1.0))  # inside reading 0's freespace, but newer
+    local = method.local_map()
+    assert local.reading_id.tolist() == [0, 1]
+    assert local.source.tolist() == [PointSource.CENTERLINE] * 2
+    assert method.measures().unprocessed_share == 1.0
+
+
+def test_range_tolerance_spares_echoes_within_it() -> None:
+    older = _reading(0.0, 0.0, 0.0, 0.0, 1.0)
+    newer = _reading(1.0, 0.0, 0.0, 0.0, 1.03)
+    for tolerance, kept in ((0.0, [1]), (0.05, [0, 1])):
+        method = _exact(tolerance)
+        method.add(older)
+        method.add(newer)
+        assert method.local_map().reading_id.tolist() == kept
+
+
+def test_removed_arcs_count_as_processed_and_report_why() -> None:
+    method = _exact()
+    removal: dict[int, int] = {}
+
+    def record(history: object, slots: SlotArray, est: Estimates) -> None:
+        assert est.removal is not None
+        ids = method.history.reading_id[slots].tolist()
+        removal.update(zip(ids, est.removal.tolist(), strict=True))
+
+    method.add_commit_listener(record)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0))
+    method.add(_reading(1.0, 0.0, 0.0, 0.0, 2.0))
+    assert method.measures().unprocessed_share == 0.5  # arc 0 removed (processed), arc 1 fresh
+    method.finish()
+    assert removal == {0: Removal.FULLY_CARVED, 1: Removal.NONE}
+
+
+def test_retired_arcs_are_not_carved() -> None:
+    method = _exact(history_size=1)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0))
+    method.add(_reading(1.0, 0.0, 0.0, 0.0, 2.0))  # arc 0 has left the history already
+    assert method.finish().reading_id.tolist() == [0, 1]
+    assert method.measures().fully_carved == 0
+
+
+@pytest.mark.parametrize("tolerance", [-0.01, math.nan, math.inf])
+def test_bad_range_tolerance_is_rejected(tolerance: float) -> None:
+    with pytest.raises(ValueError, match="range tolerance"):
+        CarvingMethod(range_tolerance=tolerance)
+
+
+def test_factory_reads_the_config() -> None:
+    method = make_method("carve", MethodConfig(history_size=7, range_tolerance=0.07))
+    assert isinstance(method, CarvingMethod)
+    assert method.history.capacity == 7
+    assert method.models[0].range_tolerance == 0.07
+
+
+# -- against a slow reference: the paper's procedure (section 5-A) with the scalar carve_arc ------
+
+
+def _random_batch(seed: int, n: int) -> ReadingBatch:
+    rng = np.random.default_rng(seed)
+    return ReadingBatch.from_arrays(
+        t=np.arange(n, dtype=float), sensor=rng.integers(0, 16, n),
+        x=rng.uniform(0.0, 2.0, n), y=rng.uniform(0.0, 2.0, n), theta=rng.uniform(-7, 7, n),
+        range=rng.uniform(0.3, 3.0, n),
+    )
+
+
+def _reference(batch: ReadingBatch, history_size: int, tolerance: float) -> dict[int, tuple]:
+    """Final ``(alive, lo, hi, carved)`` of every reading, by the letter of section 5-A."""
+    lo = batch.theta - PHI / 2
+    hi = batch.theta + PHI / 2
+    alive = np.ones(len(batch), dtype=bool)
+    carved = np.zeros(len(batch), dtype=bool)
+    for k in range(len(batch)):
+        for i in range(max(0, k - history_size + 1), k):
+            if not alive[i]:
+                continue
+            status, lo[i], hi[i] = carve_arc(
+                batch.x[i], batch.y[i], batch.range[i], lo[i], hi[i], batch.x[k], batch.y[k],
+                batch.range[k], batch.theta[k] - PHI / 2, batch.theta[k] + PHI / 2, tolerance)
+            alive[i] = status in (CarveOutcome.UNCHANGED, CarveOutcome.SHRUNK)
+            carved[i] |= status != CarveOutcome.UNCHANGED
+    return {k: (bool(alive[k]), lo[k], hi[k], bool(carved[k])) for k in range(len(batch))}
+
+
+@pytest.mark.parametrize(("seed", "history_size", "tolerance"),
+                         [(0, 10, 0.0), (1, 25, 0.05), (2, 300, 0.0)])
+def test_method_matches_the_sequential_reference(seed: int, history_size: int,
+                                                 tolerance: float) -> None:
+    batch = _random_batch(seed, 250)
+    method = CarvingMethod(history_size=history_size, range_tolerance=tolerance)
+    method.add_many(batch)
+    global_map = method.finish()
+    expected = _reference(batch, history_size, tolerance)
+    survivors = [k for k, (alive, *_) in expected.items() if alive]
+    assert global_map.reading_id.tolist() == survivors
+    assert len(survivors) < len(batch)  # the scene does carve
+    lo = np.array([expected[k][1] for k in survivors])
+    hi = np.array([expected[k][2] for k in survivors])
+    r = batch.range[survivors]
+    mid = 0.5 * (lo + hi)
+    xy = np.column_stack((batch.x[survivors] + r * np.cos(mid),
+                          batch.y[survivors] + r * np.sin(mid)))
+    np.testing.assert_allclose(global_map.xy, xy, atol=1e-12)
+    np.testing.assert_allclose(global_map.width, hi - lo, atol=1e-12)
+    np.testing.assert_allclose(global_map.max_error, chord_error(r, hi - lo), atol=1e-12)
+    carved = [expected[k][3] for k in survivors]
+    assert (global_map.source == PointSource.CARVED).tolist() == carved
+    assert 0 < sum(carved) < len(carved)

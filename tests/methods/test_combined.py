@@ -1,0 +1,135 @@
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.maps import PointSource
+from sonarcarve.methods import METHODS, MethodConfig, make_method
+from sonarcarve.methods.atm import AtmMethod, AtmModel
+from sonarcarve.methods.base import Estimates, SonarMethod
+from sonarcarve.methods.carving import CarvingMethod, CarvingModel
+from sonarcarve.methods.combined import CombinedMethod, combine_carving_atm
+from sonarcarve.readings import Reading
+from sonarcarve.sim.world import World
+
+PHI = math.radians(22.5)
+INCH = 0.0254
+
+
+def _room_stream(seed: int) -> list[Reading]:
+    """A 16-sensor ring driven round a room with a box in it.
+
+    Echo range: the nearest wall over 31 rays across the beam, plus 5 mm noise, quantised to
+    one inch; echoes beyond 6 m are lost.
+    """
+    walls = np.array([
+        [0.0, 0.0, 8.0, 0.0], [8.0, 0.0, 8.0, 5.0], [8.0, 5.0, 0.0, 5.0], [0.0, 5.0, 0.0, 0.0],
+        [3.0, 2.0, 5.0, 2.0], [5.0, 2.0, 5.0, 3.0], [5.0, 3.0, 3.0, 3.0], [3.0, 3.0, 3.0, 2.0],
+    ])
+    world = World(walls, "room-with-box")
+    rng = np.random.default_rng(seed)
+    path = np.array([[1.0, 1.0], [7.0, 1.0], [7.0, 4.0], [1.0, 4.0], [1.0, 1.2]])
+    readings: list[Reading] = []
+    for start, end in itertools.pairwise(path):
+        heading = math.atan2(*(end - start)[::-1])
+        steps = int(np.linalg.norm(end - start) / 0.15)
+        for s in range(steps):
+            centre = start + (end - start) * s / steps
+            for sensor in range(16):
+                theta = heading + sensor * 2.0 * math.pi / 16
+                origin = centre + 0.2 * np.array([math.cos(theta), math.sin(theta)])
+                rays = theta + np.linspace(-PHI / 2, PHI / 2, 31)
+                distance, _ = world.cast_rays(origin, rays)
+                r = float(distance.min()) + rng.normal(0.0, 0.005)
+                r = round(r / INCH) * INCH
+                if 0.1 < r < 6.0:
+                    readings.append(Reading(float(len(readings)), sensor, float(origin[0]),
+                                            float(origin[1]), theta, r, PHI))
+    return readings
+
+
+def _model(method: SonarMethod, kind: type) -> object:
+    (model,) = (m for m in method.models if isinstance(m, kind))
+    return model
+
+
+def test_combined_is_at_least_as_good_as_either_method_on_every_arc() -> None:
+    size, psi, tol = 60, math.radians(30.0), 0.025
+    carving = CarvingMethod(size, PHI, range_tolerance=tol)
+    atm = AtmMethod(size, PHI, min_transversal=psi, range_resolution=INCH)
+    both = CombinedMethod(size, PHI, range_tolerance=tol, min_transversal=psi,
+                          range_resolution=INCH)
+    labels_seen: set[int] = set()
+    stream = _room_stream(seed=1)
+    assert len(stream) > 500
+    for k, reading in enumerate(stream):
+        for method in (carving, atm, both):
+            method.add(reading)
+        if k % 25:
+            continue
+        slots = both.history.slots()
+        np.testing.assert_array_equal(slots, carving.history.slots())
+        c, a, b = carving.estimates(slots), atm.estimates(slots), both.estimates(slots)
+        # Table I: processed by either, so the share is at most the smaller one.
+        assert np.mean(~b.processed) <= min(np.mean(~c.processed), np.mean(~a.processed))
+        assert b.alive.tolist() == c.alive.tolist()  # carving removes, ATM never does
+        live = b.alive
+        assert np.all(b.max_error[live] <= c.max_error[live])
+        # Up to rounding: an uncarved arc's width (θ + φ/2) - (θ - φ/2) is φ to within an ulp.
+        assert np.all(b.max_error[live] <= a.max_error[live] * (1.0 + 1e-12))
+        assert set(b.source[live].tolist()) <= {int(s) for s in PointSource}
+        # Each point is one model's own point, labelled with that model.
+        from_atm = live & (b.source == PointSource.ATM)
+        np.testing.assert_array_equal(b.xy[from_atm], a.xy[from_atm])
+        np.testing.assert_array_equal(b.xy[live & ~from_atm], c.xy[live & ~from_atm])
+        assert np.all(b.source[live & ~from_atm] == c.source[live & ~from_atm])
+        labels_seen |= set(b.source[live].tolist())
+    assert labels_seen == {int(s) for s in PointSource}  # the stream exercises every choice
+    # Running both on one history changes neither model's state.
+    assert _model(both, AtmModel).counters() == _model(atm, AtmModel).counters()
+    assert _model(both, CarvingModel).counters() == _model(carving, CarvingModel).counters()
+    # The final map keeps exactly the arcs carving kept.
+    assert both.finish().reading_id.tolist() == carving.finish().reading_id.tolist()
+
+
+def _estimates(processed: list[bool], max_error: list[float], source: PointSource,
+               alive: list[bool] | None = None) -> Estimates:
+    n = len(processed)
+    return Estimates(
+        alive=np.array(alive if alive is not None else [True] * n),
+        processed=np.array(processed),
+        xy=np.full((n, 2), float(source)),  # tells the two models' points apart
+        width=np.full(n, 0.1 * float(source)),
+        max_error=np.array(max_error),
+        source=np.full(n, int(source), dtype=np.int8),
+    )
+
+
+def test_the_smaller_bound_wins_ties_go_to_carving_and_unprocessed_atm_never_counts() -> None:
+    carving = _estimates([True, True, False, True, False], [0.2, 0.1, 0.1, 0.1, 0.3],
+                         PointSource.CARVED, alive=[True, True, True, False, True])
+    atm = _estimates([True, True, False, True, True], [0.1, 0.1, 0.01, 0.01, 0.3],
+                     PointSource.ATM)
+    out = combine_carving_atm(carving, atm)
+    assert out.source.tolist() == [PointSource.ATM, PointSource.CARVED, PointSource.CARVED,
+                                   PointSource.ATM, PointSource.CARVED]
+    assert out.xy[:, 0].tolist() == [float(s) for s in out.source]
+    assert out.max_error.tolist() == [0.1, 0.1, 0.1, 0.01, 0.3]
+    assert out.alive.tolist() == [True, True, True, False, True]  # carving's removal stands
+    assert out.processed.tolist() == [True, True, False, True, True]
+
+
+def test_combined_is_registered_and_configured() -> None:
+    assert "combined" in METHODS
+    config = MethodConfig(history_size=9, range_tolerance=0.01, min_transversal=0.5,
+                          range_resolution=0.01)
+    method = make_method("combined", config)
+    assert isinstance(method, CombinedMethod)
+    carving, atm = method.models
+    assert isinstance(carving, CarvingModel)
+    assert isinstance(atm, AtmModel)
+    assert carving.range_tolerance == pytest.approx(0.01)
+    assert atm.min_transversal == pytest.approx(0.5)
+    assert atm.range_resolution == pytest.approx(0.01)
+    assert carving.history is atm.history is method.history  # one shared history

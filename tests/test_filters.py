@@ -1,0 +1,211 @@
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from sonarcarve.filters import (
+    PAPER_MAX_RANGE,
+    DropReason,
+    FilterError,
+    MapFilter,
+    ReadingFilter,
+    ReadingFilterStream,
+    filter_map,
+    filter_readings,
+    max_error_mask,
+    outlier_mask,
+)
+from sonarcarve.maps import GlobalMap, LocalMap, PointSource
+from sonarcarve.methods import CenterlineMethod
+from sonarcarve.pipeline import process_readings
+from sonarcarve.readings import ReadingBatch
+
+
+def _batch(sensor: list[int], r: list[float]) -> ReadingBatch:
+    n = len(r)
+    k = np.arange(n)
+    return ReadingBatch.from_arrays(t=0.1 * k, sensor=sensor, x=0.01 * k, y=np.zeros(n),
+                                    theta=0.3 * k, range=r)
+
+
+def test_paper_max_range_is_150_inches() -> None:
+    assert math.isclose(PAPER_MAX_RANGE, 3.81)
+
+
+def test_range_filters_drop_by_hand() -> None:
+    b = _batch([0, 1, 2, 3, 4], [0.1, 0.5, 3.0, 3.81, 3.82])
+    out = filter_readings(b, ReadingFilter(max_range=3.81, min_range=0.2))
+    assert out.ids.tolist() == [1, 2, 3]  # 3.81 itself is kept: "farther than" is strict
+    assert out.reasons.tolist() == [DropReason.TOO_NEAR, 0, 0, 0, DropReason.TOO_FAR]
+    r = out.report
+    assert (r.total, r.too_near, r.too_far, r.jumps, r.kept) == (5, 1, 1, 0, 3)
+
+
+def test_jump_filter_by_hand_with_interleaved_sensors() -> None:
+    # sensor 0: 1.0 1.1 3.0 3.0 1.0 1.05   sensor 1: 2.0 2.6 2.7
+    sensor = [0, 1, 0, 0, 1, 0, 0, 1, 0]
+    r = [1.0, 2.0, 1.1, 3.0, 2.6, 3.0, 1.0, 2.7, 1.05]
+    out = filter_readings(_batch(sensor, r), ReadingFilter(jump_threshold=0.5))
+    # row 3: 1.1 -> 3.0 jumps; row 4: 2.0 -> 2.6 jumps; row 5 agrees with row 3 (kept although
+    # row 3 was dropped); row 6: 3.0 -> 1.0 jumps; row 7 agrees with 2.6; row 8 with 1.0.
+    assert out.ids.tolist() == [0, 1, 2, 5, 7, 8]
+    assert out.report.jumps == 3
+
+
+def test_isolated_spike_costs_two_readings_and_a_step_one() -> None:
+    spike = filter_readings(_batch([0] * 5, [2.0, 2.0, 4.5, 2.0, 2.0]),
+                            ReadingFilter(jump_threshold=1.0))
+    assert spike.ids.tolist() == [0, 1, 4]
+    step = filter_readings(_batch([0] * 5, [2.0, 2.0, 4.5, 4.5, 4.5]),
+                           ReadingFilter(jump_threshold=1.0))
+    assert step.ids.tolist() == [0, 1, 3, 4]
+
+
+def test_range_dropped_reading_is_not_the_previous_for_the_jump_filter() -> None:
+    # 9.0 is beyond max range: the jump filter compares 2.1 with 2.0, not with 9.0.
+    out = filter_readings(_batch([0, 0, 0], [2.0, 9.0, 2.1]),
+                          ReadingFilter(max_range=5.0, jump_threshold=0.5))
+    assert out.ids.tolist() == [0, 2]
+    assert (out.report.too_far, out.report.jumps) == (1, 0)
+
+
+def test_kept_batch_is_the_input_rows_named_by_ids() -> None:
+    rng = np.random.default_rng(3)
+    n = 200
+    b = ReadingBatch.from_arrays(t=np.arange(n), sensor=rng.integers(0, 4, n), x=rng.normal(size=n),
+                                 y=rng.normal(size=n), theta=rng.normal(size=n),
+                                 range=rng.uniform(0.1, 6, n))
+    out = filter_readings(b, ReadingFilter(max_range=4.0, min_range=0.3, jump_threshold=1.0))
+    for name in ("t", "sensor", "x", "y", "theta", "range"):
+        np.testing.assert_array_equal(getattr(out.batch, name), getattr(b, name)[out.ids])
+    assert len(out.batch) == out.report.kept
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    data=st.lists(st.tuples(st.integers(0, 3), st.floats(0.05, 6.0)), max_size=40),
+    max_range=st.none() | st.floats(1.0, 6.0),
+    min_range=st.none() | st.floats(0.05, 1.0),
+    jump=st.none() | st.floats(0.01, 3.0),
+)
+def test_stream_and_batch_make_the_same_decisions(
+    data: list[tuple[int, float]], max_range: float | None, min_range: float | None,
+    jump: float | None,
+) -> None:
+    b = _batch([s for s, _ in data], [r for _, r in data])
+    spec = ReadingFilter(max_range=max_range, min_range=min_range, jump_threshold=jump)
+    stream = ReadingFilterStream(spec)
+    reasons = [stream.check(reading) for reading in b]
+    batch = filter_readings(b, spec)
+    assert batch.reasons.tolist() == [int(r) for r in reasons]
+    assert stream.report == batch.report
+
+
+@pytest.mark.parametrize(("kwargs", "text"), [
+    ({"max_range": -1.0}, "max_range must be"),
+    ({"min_range": math.nan}, "min_range must be"),
+    ({"jump_threshold": 0.0}, "jump_threshold must be"),
+    ({"max_range": 1.0, "min_range": 2.0}, "exceeds max_range"),
+])
+def test_bad_reading_filter_parameters(kwargs: dict[str, float], text: str) -> None:
+    with pytest.raises(FilterError, match=text):
+        ReadingFilter(**kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "text"), [
+    ({"max_error": -0.1}, "max_error must be"),
+    ({"outlier_radius": math.inf}, "outlier_radius must be"),
+    ({"outlier_radius": 1.0, "outlier_neighbours": 0}, "outlier_neighbours must be"),
+])
+def test_bad_map_filter_parameters(kwargs: dict[str, float], text: str) -> None:
+    with pytest.raises(FilterError, match=text):
+        MapFilter(**kwargs)
+
+
+def _slow_outliers(xy: np.ndarray, radius: float, k: int) -> np.ndarray:
+    keep = np.zeros(len(xy), dtype=bool)
+    for i in range(len(xy)):
+        others = sum(1 for j in range(len(xy))
+                     if j != i and math.dist(xy[i], xy[j]) <= radius)
+        keep[i] = others >= k
+    return keep
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(0, 60), radius=st.floats(0.05, 2.0),
+       k=st.integers(1, 4))
+def test_outlier_mask_matches_a_double_loop(seed: int, n: int, radius: float, k: int) -> None:
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 4, (n, 2))
+    if n > 3:
+        xy[1] = xy[0]  # coincident points count as neighbours of each other
+    np.testing.assert_array_equal(outlier_mask(xy, radius, k), _slow_outliers(xy, radius, k))
+
+
+def test_max_error_mask_keeps_the_threshold_itself() -> None:
+    assert max_error_mask([0.0, 0.2, 0.2000001], 0.2).tolist() == [True, True, False]
+
+
+def _points(kind: type[GlobalMap] | type[LocalMap], xy: list[list[float]],
+            err: list[float]) -> GlobalMap | LocalMap:
+    n = len(xy)
+    return kind(reading_id=np.arange(10, 10 + n), t=np.arange(n, dtype=float),
+                sensor=np.zeros(n, np.int64), xy=np.array(xy, dtype=float),
+                source=np.full(n, PointSource.CARVED, np.int8), width=np.zeros(n),
+                max_error=np.array(err), range=np.ones(n))
+
+
+@pytest.mark.parametrize("kind", [GlobalMap, LocalMap])
+def test_filter_map_thresholds_before_the_outlier_test(kind: type[GlobalMap]) -> None:
+    # Point 1 is point 0's only neighbour but is too inaccurate: once it is gone, point 0 is
+    # an outlier. Points 2 and 3 vouch for each other.
+    pts = _points(kind, [[0, 0], [0.1, 0], [5, 5], [5.1, 5]], [0.01, 0.9, 0.02, 0.03])
+    out = filter_map(pts, MapFilter(max_error=0.5, outlier_radius=0.2, outlier_neighbours=1))
+    assert type(out.points) is kind
+    assert out.points.reading_id.tolist() == [12, 13]
+    r = out.report
+    assert (r.total, r.max_error, r.outliers, r.kept) == (4, 1, 1, 2)
+
+
+def test_filter_map_off_changes_nothing() -> None:
+    pts = _points(GlobalMap, [[0, 0], [9, 9]], [1.0, 2.0])
+    out = filter_map(pts, MapFilter())
+    assert out.points.reading_id.tolist() == [10, 11]
+    assert not MapFilter().active
+    assert out.report.kept == 2
+
+
+def test_pipeline_keeps_input_rows_as_ids() -> None:
+    rng = np.random.default_rng(11)
+    n = 300
+    b = ReadingBatch.from_arrays(t=np.arange(n) * 0.1, sensor=rng.integers(0, 3, n),
+                                 x=rng.normal(size=n), y=rng.normal(size=n),
+                                 theta=rng.uniform(-3, 3, n), range=rng.uniform(0.2, 6, n))
+    result = process_readings(b, CenterlineMethod(history_size=50),
+                              reading_filter=ReadingFilter(max_range=4.0, jump_threshold=2.0))
+    ids = result.global_map.reading_id
+    expected_drops = result.reading_filter
+    assert expected_drops is not None
+    assert len(ids) == expected_drops.kept == result.readings
+    assert np.all(b.range[ids] <= 4.0)
+    assert expected_drops.too_far == int(np.sum(b.range > 4.0))
+    # Each centerline point lies on the axis of the input row its id names (section 2-A).
+    on_axis = np.column_stack((b.x[ids] + b.range[ids] * np.cos(b.theta[ids]),
+                               b.y[ids] + b.range[ids] * np.sin(b.theta[ids])))
+    np.testing.assert_allclose(result.global_map.xy, on_axis, atol=1e-9)
+
+
+def test_pipeline_map_filter_reports_its_drops() -> None:
+    n = 40
+    k = np.arange(n)
+    b = ReadingBatch.from_arrays(t=k * 0.1, sensor=np.zeros(n, int), x=0.05 * k, y=np.zeros(n),
+                                 theta=np.full(n, math.pi / 2), range=np.where(k == 20, 4.0, 1.0))
+    result = process_readings(b, CenterlineMethod(history_size=10),
+                              map_filter=MapFilter(outlier_radius=0.2, outlier_neighbours=1))
+    # The points form a row at y = 1 spaced 5 cm, except row 20, alone at y = 4.
+    assert result.map_filter is not None
+    assert result.map_filter.outliers == 1
+    assert 20 not in result.global_map.reading_id.tolist()
+    assert len(result.global_map) == n - 1
