@@ -28,7 +28,7 @@ test: $(TEST_STAMP)  ## lint, type-check and run the whole test suite (slow expe
 	$(BIN)/python -m pytest -n 2 -m "not slow" -q
 
 experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESULTS.md numbers and docs/figures
-	$(BIN)/sonarcarve experiments --out docs/experiments
+	$(BIN)/sonarcarve experiments --out docs/experiments --figures docs/figures --results-md docs/RESULTS.md
 	$(BIN)/python -m pytest -m slow -q
 
 bench: $(STAMP)  ## throughput and memory benchmarks (results go into docs/RESULTS.md by hand, with the command)

@@ -72,6 +72,9 @@ class SonarHistory:
         self.beam_width = np.zeros(self.storage_size)
         self.sensor = np.zeros(self.storage_size, dtype=np.int64)
         self.reading_id = np.full(self.storage_size, -1, dtype=np.int64)
+        # Slot numbers laid out twice, so that any window of live slots is one contiguous slice.
+        self._wrapped = np.arange(2 * self.storage_size, dtype=np.int64) % self.storage_size
+        self._wrapped.flags.writeable = False
         self._appended = 0  # arcs appended so far; arc k lives in slot k % storage_size
         self._committed = 0  # arcs handed to on_evict so far
 
@@ -109,9 +112,9 @@ class SonarHistory:
         return slot
 
     def slots(self) -> npt.NDArray[np.int64]:
-        """Live slots from oldest to newest, shape (len(self),)."""
-        first = self._appended - len(self)
-        return np.arange(first, self._appended, dtype=np.int64) % self.storage_size
+        """Live slots from oldest to newest, shape (len(self),) (a read-only view)."""
+        first = (self._appended - len(self)) % self.storage_size
+        return self._wrapped[first : first + len(self)]
 
     def flush_retired(self) -> None:
         """Hand every retired, uncommitted arc to ``on_evict``."""

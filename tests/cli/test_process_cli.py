@@ -19,7 +19,9 @@ def _write_ring_readings(path: Path, n: int = 120) -> ReadingBatch:
     return batch
 
 
-def test_process_writes_the_contract_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_process_writes_the_contract_map(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     readings = tmp_path / "r.csv"
     batch = _write_ring_readings(readings)
     out = tmp_path / "map.csv"

@@ -111,8 +111,8 @@ class Settings:
         Readings between two snapshots of the history (16 = one Scout2 ring cycle, 0.64 s).
     office_length : float or None
         Metres of the office tour to drive (None: all of it).
-    sweep_length : float
-        Metres of the office tour driven by each sensitivity run.
+    sweep_length : float or None
+        Metres of the office tour driven by each sensitivity run (None: all of it).
     opening_widths : tuple of float
         Door and side-opening widths, metres.
     """
@@ -124,12 +124,12 @@ class Settings:
     speed: float = DEFAULT_SPEED
     sample_every: int = 16
     office_length: float | None = None
-    sweep_length: float = 120.0
+    sweep_length: float | None = None
     opening_widths: tuple[float, ...] = (0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2)
     door_headings_deg: tuple[float, ...] = (0.0, 20.0, -35.0, 45.0)
     door_offsets: tuple[float, ...] = (0.0, 0.15, -0.15)
     corridor_offsets: tuple[float, ...] = (-0.4, 0.0, 0.4)
-    sweep_sample_every: int = 64
+    sweep_sample_every: int = 32
     sweeps: tuple[tuple[str, tuple[float, ...]], ...] = (
         ("history", (50, 100, 250, 500, 1000, 2000)),
         ("range_tolerance", (0.0, 0.01, 0.025, 0.05, 0.1)),
@@ -348,10 +348,51 @@ def analyse_office(sim: Simulation, record: RunRecord, job: Job,
     out["thresholded_points"] = int(np.count_nonzero(kept))
     out["thresholded_error"] = metrics.error_summary(gerr[kept]).as_dict()
     out["latency_accuracy"] = latency_accuracy(sim, record, points, err)
+    out["truth_breakdown"] = truth_breakdown(sim, final, gmap.reading_id, gerr)
     if detail:
         out["global_map"] = {"xy": gmap.xy[kept], "source": gmap.source[kept],
                              "world": sim.world.segments}
     return out
+
+
+def truth_breakdown(sim: Simulation, final: ArcTable, map_reading: npt.NDArray[np.int64],
+                    map_error: FloatArray) -> JsonDict:
+    """Why a map's error is what it is: what it kept and lost, judged by the simulator's truth.
+
+    Returns the global map's share of spurious points (percent) and the true error of its
+    points from direct readings only (so maps that keep different readings can be compared);
+    the median range and centerline error (metres) of the direct readings the method removed
+    and of those it kept; and, for arcs placed by carving, the share (percent) whose final
+    interval still contains the bearing of the true reflection.
+    """
+    kind = sim.truth.kind
+    direct_map = kind[map_reading] == EchoKind.DIRECT
+    b = sim.readings
+    axis = np.column_stack((b.x + b.range * np.cos(b.theta), b.y + b.range * np.sin(b.theta)))
+    rid = final.reading_id
+    direct = kind[rid] == EchoKind.DIRECT
+    lost = direct & ~final.alive
+    kept = direct & final.alive
+    centerline_err = metrics.segment_distance(axis[rid[lost | kept]], sim.world.segments)[0]
+    err_of = dict(zip(rid[lost | kept].tolist(), centerline_err.tolist(), strict=True))
+    carved = kept & (final.source == PointSource.CARVED)
+    truth = sim.truth.reflection[rid[carved]]
+    origin = np.column_stack((b.x[rid[carved]], b.y[rid[carved]]))
+    true_bearing = np.arctan2(truth[:, 1] - origin[:, 1], truth[:, 0] - origin[:, 0])
+    point = final.xy[carved]
+    centre = np.arctan2(point[:, 1] - origin[:, 1], point[:, 0] - origin[:, 0])
+    off = np.abs(np.angle(np.exp(1j * (true_bearing - centre))))
+    return {
+        "spurious_share": metrics.percent(~direct_map),
+        "direct_error": metrics.error_summary(map_error[direct_map]).as_dict(),
+        "lost_direct_median_range": _median_or_none(final.range[lost]),
+        "kept_direct_median_range": _median_or_none(final.range[kept]),
+        "lost_direct_centerline_error": _median_or_none(
+            np.array([err_of[i] for i in rid[lost].tolist()])),
+        "kept_direct_centerline_error": _median_or_none(
+            np.array([err_of[i] for i in rid[kept].tolist()])),
+        "carved_contains_truth": metrics.percent(off <= 0.5 * final.width[carved] + 1e-9),
+    }
 
 
 def fig13_threshold(config: MethodConfig) -> float:
@@ -677,6 +718,13 @@ def _summarise_office(s: Settings, outs: dict[tuple[Any, ...], JsonDict]) -> tup
         entry["patches_seen"] = _spread(o["latency_accuracy"]["patches_seen"]
                                         for o in by_method[m])["mean"]
         res["latency_accuracy"][label[m]] = entry
+    res["truth_breakdown"] = {}
+    for m in ALL_METHODS:
+        per = [o["truth_breakdown"] for o in by_method[m]]
+        entry = {k: _spread(p[k] for p in per)["mean"] for k in per[0] if k != "direct_error"}
+        entry["direct_error"] = {q: _spread(p["direct_error"][q] for p in per)["mean"]
+                                 for q in ("median", "p90")}
+        res["truth_breakdown"][label[m]] = entry
     first = {m: by_method[m][0] for m in ALL_METHODS}
     res["office_runs"] = {
         "seeds": s.seeds, "readings": _spread(o["readings"] for o in by_method["carve"])["mean"],

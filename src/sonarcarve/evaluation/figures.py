@@ -261,15 +261,21 @@ def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure |
     maps = (artifacts or {}).get("fig13") or {}
     if not maps.get("atm") or not maps.get("carving"):
         return None
-    fig, axes = _figure(1, 2, width=14.0, height=5.6)
+    # Show the part of the building the tour mapped (the walls' box is much larger).
+    every = np.vstack([np.asarray(maps[m]["xy"]).reshape(-1, 2) for m in ("atm", "carving")])
+    lo = np.percentile(every, 0.5, axis=0) - 2.0 if len(every) else np.zeros(2)
+    hi = np.percentile(every, 99.5, axis=0) + 2.0 if len(every) else np.ones(2)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-9)
+    fig, axes = _figure(1, 2, width=15.0, height=min(12.0, 1.0 + 7.5 * aspect))
     threshold = results["fig13"]["threshold_m"]
     for ax, method in zip(axes[0], ("atm", "carving"), strict=True):
         data = maps[method]
         _walls(ax, data["world"])
         xy = np.asarray(data["xy"]).reshape(-1, 2)
-        ax.scatter(xy[:, 0], xy[:, 1], s=0.6, c=METHOD_COLORS[method], linewidths=0, zorder=3)
+        ax.scatter(xy[:, 0], xy[:, 1], s=1.2, c=METHOD_COLORS[method], linewidths=0, zorder=3)
         ax.set_aspect("equal")
-        ax.autoscale_view()
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
         title = ("(a) ATM map: medians of transversal intersections" if method == "atm" else
                  f"(b) arc carving map: max error ≤ {threshold:.3f} m")
         ax.set_title(f"{title} ({len(xy)} points)", fontsize=10)

@@ -301,8 +301,7 @@ def builtin_worlds() -> dict[str, str]:
     >>> sorted(builtin_worlds())
     ['doorway', 'narrow-hallway', 'office', 'random:SEED', 't-junction']
     """
-    described = {name: _read_json_text(path, name).get("description", "")
-                 for name, path in _builtin_paths().items()}
+    described = {name: _read_builtin(name).description for name in _builtin_paths()}
     described["random:SEED"] = (
         "seeded floor of corridors and rooms with doors; random:SEED:WxH for another size")
     return {name: str(text) for name, text in described.items()}
