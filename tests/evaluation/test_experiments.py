@@ -104,3 +104,20 @@ def test_quick_plans_are_small_and_distinct() -> None:
     full = Settings.make()
     assert full.seeds == 3
     assert math.isclose(full.method_config().beam_width, math.radians(22.5))
+
+
+@pytest.mark.slow
+def test_full_size_runs_show_the_papers_qualitative_claims() -> None:
+    # Paper Fig. 4: ATM's refined map shows the approaching wall later than carving's (or never).
+    # Paper Fig. 2: next to a door, carving's map shows it passable at least as often as
+    # centerline's.
+    res = run_experiments(Settings.make(seeds=1), ["t-junction", "openings"]).results
+    refined = res["t_junction"]["refined"]
+    carving_at = refined["carving"]["mean"]
+    atm_at = refined["atm"]["mean"]
+    assert carving_at is not None
+    assert atm_at is None or atm_at < carving_at
+    doors = res["openings_by_world"]
+    door_share = {m: np.mean([v for k, v in doors[m]["1"].items() if k.startswith("doorway")])
+                  for m in ("carving", "centerline")}
+    assert door_share["carving"] >= door_share["centerline"]

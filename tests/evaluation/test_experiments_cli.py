@@ -19,7 +19,8 @@ METHODS = ("atm", "carving", "combined", "centerline")
 def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any], Path]:
     root = tmp_path_factory.mktemp("experiments")
     md = root / "RESULTS.md"
-    md.write_text(f"# Results\n\nLead's text.\n\n{BEGIN_MARKER}\nold\n{END_MARKER}\n\nTail.\n")
+    md.write_text(f"# Results\n\nLead's text.\n\n{BEGIN_MARKER}\nSTALE-SECTION\n{END_MARKER}"
+                  "\n\nTail.\n")
     out = root / "out"
     code = main(["experiments", "--quick", "--out", str(out), "--figures", str(root / "figs"),
                  "--results-md", str(md)])
@@ -72,7 +73,7 @@ def test_figures_and_markdown_are_written(quick_run: tuple[Path, dict[str, Any],
     text = md.read_text()
     assert text.startswith("# Results\n\nLead's text.\n\n")
     assert text.endswith(f"{END_MARKER}\n\nTail.\n")
-    assert "old" not in text
+    assert "STALE-SECTION" not in text
     assert text.count(BEGIN_MARKER) == 1
     assert res["command"] in text
     assert "31.75" in text  # the paper's ATM number sits next to ours

@@ -13,6 +13,7 @@ import typer
 
 from sonarcarve.cli import (
     convert,  # noqa: F401 - registers the command
+    demo,  # noqa: F401 - registers the command
     experiments,  # noqa: F401 - registers the command
     process,  # noqa: F401 - registers the command
     simulate,  # noqa: F401 - registers the command

@@ -349,6 +349,7 @@ def analyse_office(sim: Simulation, record: RunRecord, job: Job,
     out["thresholded_error"] = metrics.error_summary(gerr[kept]).as_dict()
     out["latency_accuracy"] = latency_accuracy(sim, record, points, err)
     out["truth_breakdown"] = truth_breakdown(sim, final, gmap.reading_id, gerr)
+    out["duration"] = sim.trajectory.duration
     if detail:
         out["global_map"] = {"xy": gmap.xy[kept], "source": gmap.source[kept],
                              "world": sim.world.segments}
@@ -728,6 +729,7 @@ def _summarise_office(s: Settings, outs: dict[tuple[Any, ...], JsonDict]) -> tup
     first = {m: by_method[m][0] for m in ALL_METHODS}
     res["office_runs"] = {
         "seeds": s.seeds, "readings": _spread(o["readings"] for o in by_method["carve"])["mean"],
+        "duration_s": _spread(o["duration"] for o in by_method["carve"])["mean"],
         "method_seconds": {label[m]: _spread(o["seconds"] for o in by_method[m])["mean"]
                            for m in ALL_METHODS}}
     artifacts = {"fig13": {label[m]: first[m].get("global_map") for m in ("atm", "carve")}}
