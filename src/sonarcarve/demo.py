@@ -32,7 +32,12 @@ import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation import metrics
-from sonarcarve.evaluation.experiments import CLEARANCE_MARGIN, GAP_DEPTH, removal_summary
+from sonarcarve.evaluation.experiments import (
+    CLEARANCE_MARGIN,
+    GAP_DEPTH,
+    cut_polyline,
+    removal_summary,
+)
 from sonarcarve.evaluation.instrument import ArcTable, RunRecord, record_run
 from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import GlobalMap
@@ -49,6 +54,7 @@ __all__ = [
     "APPROACH_DISTANCE",
     "DEMO_METHODS",
     "FIGURE_FILES",
+    "FIGURE_TEXT",
     "METHOD_COLORS",
     "METHOD_LABELS",
     "TABLE_COLUMNS",
@@ -59,6 +65,8 @@ __all__ = [
     "MethodSummary",
     "caption",
     "check_output_dir",
+    "demo_config",
+    "load_demo_world",
     "run_demo",
     "summary_json",
     "summary_markdown",
@@ -95,12 +103,22 @@ RANGE_EDGES = tuple(np.round(np.arange(0.0, 7.0 + 1e-9, 0.5), 3).tolist())
 _HEAD_ON = math.radians(45.0)
 _AHEAD = math.radians(75.0)
 
+#: Readings each method processes once, untimed, before its run (see :func:`run_demo`).
+_WARM_UP = 64
+
 #: Output files, in the order a reader should look at them.
 FIGURE_FILES = {
     "global_maps": "fig1-global-maps.png",
     "map_zoom": "fig2-global-maps-zoom.png",
     "error_by_range": "fig3-error-vs-range.png",
     "door_closeup": "fig4-door-local-maps.png",
+}
+#: What each figure shows, in a few words (printed by the CLI, listed in ``summary.md``).
+FIGURE_TEXT = {
+    "global_maps": "each method's final map over the true walls",
+    "map_zoom": "a close-up of those maps (dashed box of fig. 1)",
+    "error_by_range": "map error against the range of the reading",
+    "door_closeup": "the robot's local maps just before a door",
 }
 #: Size of the zoomed window of :func:`plot_map_zoom`, metres (at most the whole map).
 ZOOM_SIZE = (16.0, 11.0)
@@ -136,9 +154,11 @@ class MethodSummary:
         Share of all readings whose arc carving emptied completely, percent (section 5-C).
     spurious_removed_pct : float
         Of the spurious readings (crosstalk, floor and multipath echoes), the share the method
-        left out of its map (fully carved, or split and dropped), percent.
+        left out of its map (fully carved, or split and dropped), percent; NaN if there were no
+        spurious readings.
     true_lost_pct : float
-        Of the direct readings (true echoes off a wall), the share left out the same way, percent.
+        Of the direct readings (true echoes off a wall), the share left out the same way,
+        percent; NaN if there were none.
     map_points : int
         Points in the global map.
     seconds : float
@@ -331,16 +351,15 @@ def run_demo(
     DemoError
         Bad ``history_size``, ``max_length`` or method name.
     """
-    config = _config(history_size, methods, max_length)
-    the_world = world if isinstance(world, World) else load_world(world)
-    if the_world.tour is None:
-        msg = f"world {the_world.name!r} has no tour to drive; the demo needs one"
-        raise WorldError(msg)
+    config = demo_config(history_size, methods, max_length)
+    the_world = load_demo_world(world)
     the_robot = load_robot(robot)
     seconds: dict[str, float] = {}
 
     tic = time.perf_counter()
-    trajectory = follow_waypoints(_cut_polyline(the_world.tour, max_length))
+    tour = the_world.tour
+    assert tour is not None  # load_demo_world checked it
+    trajectory = follow_waypoints(cut_polyline(tour, max_length))
     sim = simulate(the_world, the_robot, trajectory, seed, on_progress=(
         None if on_progress is None else lambda done, total: on_progress("simulate", done, total)))
     seconds["simulate"] = time.perf_counter() - tic
@@ -356,6 +375,9 @@ def run_demo(
     records: dict[str, RunRecord] = {}
     for name in methods:
         tic = time.perf_counter()
+        # Load (or compile) the method's numba kernels on a few readings first, so that the
+        # readings-per-second column measures processing, not one-off start-up.
+        make_method(name, config).add_many(sim.readings[:_WARM_UP])
         records[name] = record_run(sim.readings, make_method(name, config), stops, on_progress=(
             None if on_progress is None else _reporter(on_progress, name, n)))
         seconds[name] = time.perf_counter() - tic
@@ -384,8 +406,30 @@ def _reporter(callback: ProgressCallback, step: str, total: int) -> Callable[[in
     return report
 
 
-def _config(history_size: int, methods: tuple[str, ...], max_length: float | None,
-            ) -> MethodConfig:
+def load_demo_world(world: str | World) -> World:
+    """The world of a demo: loaded (:func:`~sonarcarve.sim.world.load_world`) and with a tour.
+
+    Raises
+    ------
+    WorldError
+        Unknown or unreadable world, or one without a tour.
+    """
+    the_world = world if isinstance(world, World) else load_world(world)
+    if the_world.tour is None:
+        msg = f"world {the_world.name!r} has no tour to drive; the demo needs one"
+        raise WorldError(msg)
+    return the_world
+
+
+def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS,
+                max_length: float | None = None) -> MethodConfig:
+    """The methods' parameters of a demo, after checking the options.
+
+    Raises
+    ------
+    DemoError
+        ``history_size`` below 1, an unknown method, or a ``max_length`` that is not > 0.
+    """
     if history_size < 1:
         msg = f"--history must be at least 1, got {history_size}"
         raise DemoError(msg)
@@ -399,27 +443,15 @@ def _config(history_size: int, methods: tuple[str, ...], max_length: float | Non
     return MethodConfig(history_size=history_size)
 
 
-def _cut_polyline(points: npt.ArrayLike, length: float | None) -> FloatArray:
-    """The first ``length`` metres of a polyline (all of it for None)."""
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    if length is None:
-        return p
-    steps = np.hypot(*np.diff(p, axis=0).T)
-    travelled = np.concatenate(([0.0], np.cumsum(steps)))
-    if length >= travelled[-1]:
-        return p
-    k = int(np.searchsorted(travelled, length, side="right"))
-    share = (length - travelled[k - 1]) / steps[k - 1]
-    return np.vstack((p[:k], p[k - 1] + share * (p[k] - p[k - 1])))
-
-
 def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
                capacity: int) -> MethodSummary:
-    samples = record.samples
-    full = samples.select(record.sample_readings[samples.sample] >= capacity)
+    # Table I's measure over the regular snapshots only (the door moments would bias it).
+    added = record.sample_readings[record.samples.sample]
+    regular = record.samples.select(added % SAMPLE_EVERY == 0)
+    full = regular.select(record.sample_readings[regular.sample] >= capacity)
     if not len(full):  # a tour too short to fill the history: use what there is
-        full = samples
-    unprocessed = metrics.percent(~full.processed) if len(full) else 0.0
+        full = regular
+    unprocessed = metrics.percent(~full.processed)
     removal = removal_summary(record.final, sim.truth.kind)
     summary = metrics.error_summary(err)
     return MethodSummary(
@@ -428,17 +460,12 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
         unprocessed_pct=unprocessed,
         median_error_m=summary.median,
         p90_error_m=summary.p90,
-        fully_carved_pct=_zero_if_nan(removal["share"]),
-        spurious_removed_pct=_zero_if_nan(removal["spurious_removed_or_split"]),
-        true_lost_pct=_zero_if_nan(removal["true_lost_or_split"]),
+        fully_carved_pct=removal["share"],
+        spurious_removed_pct=removal["spurious_removed_or_split"],
+        true_lost_pct=removal["true_lost_or_split"],
         map_points=len(record.global_map),
         seconds=record.seconds,
     )
-
-
-def _zero_if_nan(value: float) -> float:
-    # An empty class (say, no spurious readings at all) has nothing to remove: report 0 %.
-    return 0.0 if math.isnan(value) else float(value)
 
 
 # ============================================================================ doors
@@ -608,8 +635,8 @@ def caption(result: DemoResult) -> str:
         for method, name in (("carve", "Carving"), ("atm", "ATM"), ("combined", "Combined")):
             if method in names:
                 parts.append(_compare(name, result.summary(method), base))
-    if "carve" in names:
-        carve = result.summary("carve")
+    carve = result.summary("carve") if "carve" in names else None
+    if carve is not None and math.isfinite(carve.spurious_removed_pct + carve.true_lost_pct):
         parts.append(f"Carving left out {carve.spurious_removed_pct:.0f}% of the spurious "
                      f"readings, but also {carve.true_lost_pct:.0f}% of the true ones.")
     return " ".join(parts)
@@ -633,6 +660,7 @@ def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
 
 def summary_markdown(result: DemoResult) -> str:
     """``summary.md``: the table, its caption, the figures and how the run was made."""
+    sim = result.simulation
     header, rows = table_rows(result)
     header = [title.replace("-\n", "").replace("\n", " ") for title in header]
     lines = [f"# sonarcarve demo: {result.world.name}, seed {result.seed}", ""]
@@ -644,25 +672,15 @@ def summary_markdown(result: DemoResult) -> str:
               for _, title, text in TABLE_COLUMNS[1:]]
     lines += ["", "## Figures", ""]
     for key, name in FIGURE_FILES.items():
-        lines.append(f"- [{name}]({name}): {_FIGURE_TEXT[key]}")
+        lines.append(f"- [{name}]({name}): {FIGURE_TEXT[key]}")
     lines += ["", "## Run", "",
-              f"- command: `sonarcarve demo --world {result.world.name} --seed {result.seed} "
-              f"--history {result.config.history_size}`",
-              f"- robot: {result.simulation.robot.name}; readings per kind: "
-              + ", ".join(f"{k} {v:,}" for k, v in result.simulation.kind_counts().items()),
+              f"- world: {result.world.name}; seed {result.seed}; history "
+              f"{result.config.history_size} arcs; tour {sim.trajectory.path_length:.0f} m in "
+              f"{sim.trajectory.duration:.0f} s",
+              f"- robot: {sim.robot.name}; readings per kind: "
+              + ", ".join(f"{k} {v:,}" for k, v in sim.kind_counts().items()),
               "- seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()), ""]
     return "\n".join(lines)
-
-
-_FIGURE_TEXT = {
-    "global_maps": "each method's final map (dots, coloured by the model that placed them) "
-                   "over the true walls (grey)",
-    "map_zoom": "the same maps in the dashed box of fig. 1 (the densest part of the tour)",
-    "error_by_range": "how far map points lie from the true walls, by the reading's range "
-                      "(median and 90th percentile per 0.5 m bin)",
-    "door_closeup": "the robot's local maps just before a door (the door where the maps "
-                    "differ most; every door's numbers are in summary.json)",
-}
 
 
 def summary_json(result: DemoResult) -> str:

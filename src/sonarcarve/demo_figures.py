@@ -28,7 +28,7 @@ from sonarcarve.demo import (
     DemoResult,
 )
 from sonarcarve.evaluation import metrics
-from sonarcarve.evaluation.experiments import GAP_DEPTH
+from sonarcarve.evaluation.experiments import CLEARANCE_MARGIN, GAP_DEPTH
 from sonarcarve.evaluation.instrument import ArcTable
 from sonarcarve.maps import PointSource
 from sonarcarve.sim.simulate import Simulation
@@ -241,18 +241,19 @@ def plot_door_closeup(result: DemoResult) -> Figure:
         label = METHOD_LABELS.get(method, method)
         if door is not None:
             gap = float(np.hypot(*(door.jambs[1] - door.jambs[0])))
-            ax.set_title(f"{label}: {door.free_width[method]:.2f} m of the {gap:.2f} m "
-                         "door free", fontsize=11)
+            verdict = "passable" if door.passable[method] else "BLOCKED"
+            ax.set_title(f"{label}: {door.free_width[method]:.2f} m of the {gap:.2f} m door "
+                         f"free, {verdict}", fontsize=11)
         else:
             ax.set_title(f"{label}: local map", fontsize=11)
         ax.legend(loc="lower left", fontsize=7, framealpha=0.9)
     axes[0, 0].set_ylabel("y (m)")
     if door is not None:
-        fig.suptitle(
-            f"What the robot's local map shows {APPROACH_DISTANCE:g} m before driving through "
-            f"a door (t = {view.t:.0f} s)" if door.how == "through" else
-            f"What the robot's local map shows {door.distance:.1f} m from a door "
-            f"(t = {view.t:.0f} s)", fontsize=12)
+        where = (f"{APPROACH_DISTANCE:g} m before driving through a door" if door.how == "through"
+                 else f"{door.distance:.1f} m from a door")
+        need = 2.0 * float(sim.robot.robot_radius) + CLEARANCE_MARGIN
+        fig.suptitle(f"What the robot's local map shows {where} (t = {view.t:.0f} s); the "
+                     f"robot needs {need:.2f} m free to pass", fontsize=12)
     else:
         fig.suptitle(f"Local maps at mid-tour (t = {view.t:.0f} s); the tour approaches no door",
                      fontsize=12)

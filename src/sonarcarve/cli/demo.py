@@ -22,10 +22,14 @@ from rich.text import Text
 from sonarcarve.cli.app import app, console
 from sonarcarve.demo import (
     APPROACH_DISTANCE,
+    FIGURE_FILES,
+    FIGURE_TEXT,
     METHOD_COLORS,
     DemoResult,
     caption,
     check_output_dir,
+    demo_config,
+    load_demo_world,
     run_demo,
     table_rows,
     write_demo_outputs,
@@ -50,14 +54,14 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     "- **median / p90 error cm**: distance of the final map's points to the true walls "
     "(50th and 90th percentile; lower is better).\n"
     "- **fully carved %**: readings whose whole arc newer readings showed to be free space.\n"
-    "- **spurious removed %**: of the spurious readings, the share left out of the map; "
-    "**true lost %**: the same for true wall echoes.\n"
-    f"- **doors open**: doors the tour approaches that the local map showed passable "
-    f"{APPROACH_DISTANCE:g} m before them (the paper's Fig. 2).\n"
-    "- **readings/s**: processing speed of the method.\n\n"
+    "- **spurious removed %**: of the spurious readings, the share left out of the map "
+    "(carving removed them); **true lost %**: the same for true wall echoes.\n"
+    "- **map points**: points in the final map; **readings per s**: processing speed.\n\n"
     "Writes into --out: fig1-global-maps.png (each method's map over the true walls), "
-    "fig2-error-vs-range.png (error against the reading's range), fig3-door-local-maps.png "
-    "(the local maps just before a door), summary.md and summary.json.\n\n"
+    "fig2-global-maps-zoom.png (a close-up of the same maps), fig3-error-vs-range.png "
+    "(error against the reading's range), fig4-door-local-maps.png (what the robot's local "
+    f"map shows {APPROACH_DISTANCE:g} m before a door), summary.md and summary.json. Takes "
+    "about 10 s for the office tour.\n\n"
     "Example: `sonarcarve demo --world t-junction --seed 3 --out /tmp/demo`"
 ))
 def demo(
@@ -74,7 +78,10 @@ def demo(
         help="Arcs kept in each method's history (paper: 250).")] = 250,
 ) -> None:
     """Simulate a tour and compare centerline, ATM, arc carving and combined maps."""
+    # Every bad option fails here, in one line, before a progress bar or a file appears.
     check_output_dir(out)
+    demo_config(history)
+    the_world = load_demo_world(world)
     tic = time.perf_counter()
     with _progress() as bar:
         tasks: dict[str, TaskID] = {}
@@ -84,17 +91,19 @@ def demo(
                 tasks[step] = bar.add_task(_STEPS.get(step, step), total=total)
             bar.update(tasks[step], completed=done, total=total)
 
-        result = run_demo(world, seed, history_size=history, on_progress=on_progress)
+        result = run_demo(the_world, seed, history_size=history, on_progress=on_progress)
         figures = bar.add_task("drawing figures", total=None)
         written = write_demo_outputs(result, out)
         bar.update(figures, total=1, completed=1)
-    console.print()
     console.print(_table(result))
     console.print()
     console.print(Text(caption(result)), width=min(console.width, 110))
     console.print()
-    console.print(f"[bold]Figures and summary in {out}/:[/bold] "
-                  + ", ".join(path.name for path in written))
+    console.print(f"[bold]Wrote {len(written)} files to {out}/[/bold], look at them in order:")
+    for key, name in FIGURE_FILES.items():
+        console.print(f"  {name:<28} {FIGURE_TEXT[key]}", highlight=False)
+    others = [p.name for p in written if p.name not in FIGURE_FILES.values()]
+    console.print(f"  {' and '.join(others)}: this table, as text and as data", highlight=False)
     console.print(f"[dim]done in {time.perf_counter() - tic:.1f} s (simulation "
                   f"{result.seconds['simulate']:.1f} s).[/dim]")
 

@@ -34,6 +34,7 @@ import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation import metrics
+from sonarcarve.evaluation.appendix import APPENDIX_EXPERIMENTS, experiment_summariser
 from sonarcarve.evaluation.instrument import ArcTable, RunRecord, record_run, sample_points
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import MethodConfig, make_method
@@ -913,6 +914,9 @@ EXPERIMENTS: dict[str, Experiment] = {
     "sensitivity": Experiment("sensitivity", "history, ε, φ, ψ, speed, noise sweeps",
                               _plan_sensitivity, _summarise_sensitivity),
 }
+# The appendix experiments (polling, real-log, odometry) plan no jobs: they run in summarise.
+EXPERIMENTS.update({name: Experiment(name, title, lambda s: [], experiment_summariser(name))
+                    for name, (title, _) in APPENDIX_EXPERIMENTS.items()})
 
 
 # ============================================================================ running

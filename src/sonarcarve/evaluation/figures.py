@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.evaluation.appendix import APPENDIX_FIGURES
 from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import PointSource
 from sonarcarve.plotting import SOURCE_COLORS
@@ -359,6 +360,7 @@ FIGURES: dict[str, tuple[str, Callable[[JsonDict, JsonDict], Figure | None]]] = 
     "latency_accuracy.png": ("latency_accuracy", lambda r, a: plot_latency_accuracy(r)),
     "sensitivity.png": ("sensitivity", lambda r, a: plot_sensitivity(r)),
 }
+FIGURES.update(APPENDIX_FIGURES)  # appendix-*.png of sonarcarve.evaluation.appendix
 
 
 def write_figures(results: JsonDict, artifacts: JsonDict, out: str | Path,

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.evaluation.appendix import appendix_markdown, replace_appendix_section
 from sonarcarve.evaluation.experiments import ExperimentResults
 from sonarcarve.evaluation.figures import write_figures
 from sonarcarve.io.atomic import atomic_path, atomic_text
@@ -85,7 +86,11 @@ def write_outputs(
         section = render_section(data, command, rel)
         old = md.read_text(encoding="utf-8") if md.exists() else ""
         with atomic_text(md) as handle:
-            handle.write(replace_section(old, section, str(md)))
+            text = replace_section(old, section, str(md))
+            if any(key.startswith("appendix_") for key in data):  # its own markers
+                text = replace_appendix_section(text, appendix_markdown(data, command, rel),
+                                                str(md))
+            handle.write(text)
         written.append(md)
     return written
 
