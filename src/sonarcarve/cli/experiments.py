@@ -17,7 +17,12 @@ from rich.progress import (
 )
 
 from sonarcarve.cli.app import app, console
-from sonarcarve.evaluation.experiments import EXPERIMENTS, Settings, run_experiments
+from sonarcarve.evaluation.experiments import (
+    EXPERIMENTS,
+    ExperimentError,
+    Settings,
+    run_experiments,
+)
 from sonarcarve.evaluation.report import write_outputs
 
 __all__ = ["experiments"]
@@ -53,6 +58,10 @@ def experiments(
 ) -> None:
     """Run the experiments and write their results and figures."""
     names = [n.strip() for item in (only or []) for n in item.split(",") if n.strip()]
+    if names and results_md is not None:
+        # A partial run would replace the whole generated section with a partial one.
+        msg = "--results-md rewrites the whole results section: run it without --only"
+        raise ExperimentError(msg)
     workers = jobs if jobs is not None else (1 if quick else max(1, os.cpu_count() or 1))
     settings = Settings.make(quick=quick, seeds=seeds, jobs=workers)
     command = _command(out, quick, names, seeds, jobs, figures, results_md)
