@@ -17,6 +17,14 @@ remaining, is longer than two sampling steps, so that every piece holds a sample
 sampled interval must match the exact one to within one step. Cases that fail that condition are
 measure-zero ties (a boundary through an end, a tangency) and get the pointwise check only; a
 separate test makes sure that such skipping stays rare on generic cases.
+
+Specular-aware carving (``max_incidence = β < π/2``) is checked against the same sampled
+reference with one more per-sample test: the incidence ``γ``, the angle ``o_i``-``p``-``o_j``
+computed with atan2 and folded into ``[0, π/2]``, must be at most ``β``. Its boundary, the two
+circles of radius ``D / (2 sin β)`` through ``o_i`` and ``o_j`` (inscribed angle theorem, a
+construction the code under test does not use), joins the sector's boundary in the ``CLEAR``
+test, with the same reasoning: near a tangency of circle ``i`` with those circles the code's
+acos/sqrt lose accuracy but the crossing angle shrinks in proportion.
 """
 
 from __future__ import annotations
@@ -31,6 +39,7 @@ from hypothesis import strategies as st
 
 from sonarcarve.geometry import (
     MIN_PIECE,
+    NO_INCIDENCE_LIMIT,
     ArcStatus,
     CarveOutcome,
     arc_bounding_circle,
@@ -42,6 +51,7 @@ from sonarcarve.geometry import (
 SAMPLES = 2001
 CLEAR = 1e-9  # metres: samples nearer the sector's boundary are ties
 TWO_PI = 2.0 * math.pi
+OFF = NO_INCIDENCE_LIMIT  # β = π/2: the paper
 
 Case = tuple[float, float, float, float, float, float, float, float, float, float, float]
 
@@ -77,16 +87,49 @@ def _boundary_distance(px, py, fx, fy, radius, f_lo, f_hi):
     return np.minimum(far_arc, np.minimum(*edges))
 
 
-class Sampled:
-    """The arc as SAMPLES bearings, each classified against the sector directly."""
+def _incidence(px, py, ox, oy, fx, fy):
+    """The angle o-p-f at each p, folded into [0, π/2] (a wall reflects from both faces)."""
+    wx, wy, vx, vy = px - ox, py - oy, px - fx, py - fy
+    gamma = np.arctan2(np.abs(wx * vy - wy * vx), wx * vx + wy * vy)  # in [0, π]
+    return np.minimum(gamma, math.pi - gamma)
 
-    def __init__(self, case: Case) -> None:
+
+def _locus_distance(px, py, ox, oy, fx, fy, beta):
+    """Distance from each p to the locus γ = β: two circles through o and f of radius
+    D / (2 sin β), centred on the perpendicular bisector (the line o f itself when β = 0)."""
+    dx, dy = fx - ox, fy - oy
+    dist = math.hypot(dx, dy)
+    if beta >= OFF or dist == 0.0:
+        return np.full(np.shape(px), np.inf)
+    nx, ny = -dy / dist, dx / dist
+    if beta == 0.0:
+        return np.abs((px - ox) * nx + (py - oy) * ny)
+    radius = dist / (2.0 * math.sin(beta))
+    offset = 0.5 * dist / math.tan(beta)
+    mx, my = 0.5 * (ox + fx), 0.5 * (oy + fy)
+    return np.minimum(*(np.abs(np.hypot(px - mx - k * offset * nx, py - my - k * offset * ny)
+                               - radius) for k in (1.0, -1.0)))
+
+
+class Sampled:
+    """The arc as SAMPLES bearings, each classified against the sector directly.
+
+    With ``beta < π/2`` a sample is carved only if it is in the sector and its incidence seen
+    from the sector's apex is at most ``beta`` (``Z_ij^β``).
+    """
+
+    def __init__(self, case: Case, beta: float = OFF) -> None:
         ox, oy, r, lo, hi, fx, fy, fr, f_lo, f_hi, eps = case
         self.tau = np.linspace(lo, hi, SAMPLES)
         self.step = (hi - lo) / (SAMPLES - 1)
         px, py = ox + r * np.cos(self.tau), oy + r * np.sin(self.tau)
-        self.remaining = ~_in_sector(px, py, fx, fy, fr - eps, f_lo, f_hi)
-        self.clear = _boundary_distance(px, py, fx, fy, fr - eps, f_lo, f_hi) > CLEAR
+        carved = _in_sector(px, py, fx, fy, fr - eps, f_lo, f_hi)
+        boundary = _boundary_distance(px, py, fx, fy, fr - eps, f_lo, f_hi)
+        if beta < OFF:
+            carved &= _incidence(px, py, ox, oy, fx, fy) <= beta
+            boundary = np.minimum(boundary, _locus_distance(px, py, ox, oy, fx, fy, beta))
+        self.remaining = ~carved
+        self.clear = boundary > CLEAR
 
     def runs(self) -> list[tuple[float, float]]:
         """First and last bearing of each run of remaining samples."""
@@ -96,8 +139,8 @@ class Sampled:
         return [(self.tau[a], self.tau[b]) for a, b in zip(starts, stops, strict=True)]
 
 
-def _pieces(case: Case) -> np.ndarray:
-    return arc_remainder(*case)
+def _pieces(case: Case, beta: float = OFF) -> np.ndarray:
+    return arc_remainder(*case, beta)
 
 
 def _all_pieces(case: Case, pieces: np.ndarray) -> list[float]:
@@ -179,19 +222,34 @@ def cases(draw: st.DrawFn) -> Case:
     return (ox, oy, r, lo, hi, fx, fy, fr, f_lo, f_hi, eps)
 
 
+@st.composite
+def specular_cases(draw: st.DrawFn) -> tuple[Case, float]:
+    """A case of :func:`cases` and a critical angle β, with the incidence's own ties: β whose
+    locus circles touch circle ``i`` (``D = r sin β``), and β = 0 and π/2."""
+    case = draw(cases())
+    ox, oy, r, fx, fy = case[0], case[1], case[2], case[5], case[6]
+    dist = math.hypot(fx - ox, fy - oy)
+    kind = draw(st.sampled_from(["any", "any", "any", "special", "tangent"]))
+    if kind == "tangent" and 0.0 < dist < r:
+        return case, math.asin(dist / r)
+    if kind == "special":
+        return case, draw(st.sampled_from([0.0, math.radians(17.5), OFF - 1e-6, OFF]))
+    return case, draw(st.floats(0.01, OFF - 0.01))
+
+
 # -- exact versus sampled ------------------------------------------------------------------------
 
 
-def _check_against_samples(case: Case) -> bool:
+def _check_against_samples(case: Case, beta: float = OFF) -> bool:
     """Assert the exact carving against the sampled one; return whether it was unambiguous."""
-    sampled = Sampled(case)
-    pieces = _pieces(case)
+    sampled = Sampled(case, beta)
+    pieces = _pieces(case, beta)
     # Pointwise: every clear sample is classified alike, with no angular tolerance.
     exact = _exact_remaining(sampled.tau, pieces)
     assert np.array_equal(exact[sampled.clear], sampled.remaining[sampled.clear])
     if not _unambiguous(case, sampled, pieces):
         return False
-    status, new_lo, new_hi = carve_arc(*case)
+    status, new_lo, new_hi = carve_arc(*case, beta)
     runs = sampled.runs()
     if not runs:
         assert status == CarveOutcome.FULLY_CARVED
@@ -212,6 +270,12 @@ def test_exact_carving_agrees_with_the_sampled_reference(case: Case) -> None:
     _check_against_samples(case)
 
 
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(spec=specular_cases())
+def test_specular_carving_agrees_with_the_sampled_reference(spec: tuple[Case, float]) -> None:
+    _check_against_samples(*spec)
+
+
 def test_generic_cases_are_rarely_ties_and_cover_every_outcome() -> None:
     rng = np.random.default_rng(7)
     outcomes: set[int] = set()
@@ -223,6 +287,43 @@ def test_generic_cases_are_rarely_ties_and_cover_every_outcome() -> None:
             outcomes.add(carve_arc(*case)[0])
     assert checked >= 0.9 * 400  # the outcome check is not skipped away
     assert outcomes == set(CarveOutcome)
+
+
+def test_specular_generic_cases_are_rarely_ties_and_the_angle_matters() -> None:
+    rng = np.random.default_rng(11)
+    outcomes: set[int] = set()
+    checked = differs = 0
+    for _ in range(400):
+        case, beta = _generic(rng), rng.uniform(0.05, OFF - 0.05)
+        if _check_against_samples(case, beta):
+            checked += 1
+            outcomes.add(carve_arc(*case, beta)[0])
+        paper, specular = _pieces(case), _pieces(case, beta)
+        differs += paper.shape != specular.shape or not np.array_equal(paper, specular)
+    assert checked >= 0.9 * 400
+    assert outcomes == set(CarveOutcome)
+    assert differs >= 0.1 * 400  # the incidence condition does change the answer
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(case=cases())
+def test_right_angle_limit_is_the_paper_exactly(case: Case) -> None:
+    # β = π/2 admits every incidence: the result is bitwise the paper's, in every kernel.
+    assert np.array_equal(_pieces(case, OFF), _pieces(case))
+    assert carve_arc(*case, OFF) == carve_arc(*case)
+    assert carve_arc(*case, 2.0) == carve_arc(*case)  # anything above π/2 is "off" too
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(spec=specular_cases())
+def test_specular_carves_a_subset_of_the_paper(spec: tuple[Case, float]) -> None:
+    # Z_ij^β ⊂ Z_ij, so the paper's remainder lies inside the specular one: every sample the
+    # paper keeps, the specular mode keeps too (ties on the boundaries aside).
+    case, beta = spec
+    sampled = Sampled(case, beta)
+    paper = _exact_remaining(sampled.tau, _pieces(case))
+    specular = _exact_remaining(sampled.tau, _pieces(case, beta))
+    assert not np.any(paper & ~specular & sampled.clear)
 
 
 # -- consistency of the exact API ----------------------------------------------------------------
@@ -266,8 +367,30 @@ def test_carving_does_not_depend_on_the_unwrapping(case: Case, turns: int) -> No
 
 
 @settings(max_examples=200, deadline=None, derandomize=True)
-@given(case=cases())
-def test_batch_kernel_matches_the_scalar_one(case: Case) -> None:
+@given(spec=specular_cases())
+def test_batch_kernel_matches_the_scalar_one(spec: tuple[Case, float]) -> None:
+    case, beta = spec
+    _check_batch_against_scalar(case, beta)
+
+
+def test_batch_kernel_shortcuts_match_the_scalar_one_in_specular_mode() -> None:
+    # Small arcs well inside long sectors, from near and far origins: the cases where the
+    # batch kernel's bounding-circle shortcut decides "fully carved" without the exact path.
+    rng = np.random.default_rng(5)
+    for _ in range(3000):
+        fx, fy, aim = *rng.uniform(-1.0, 1.0, 2), rng.uniform(-math.pi, math.pi)
+        reach = rng.uniform(0.5, 4.0)
+        px, py = fx + reach * math.cos(aim), fy + reach * math.sin(aim)  # a point on arc i
+        back, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 3.0)
+        ox, oy = px - r * math.cos(back), py - r * math.sin(back)
+        half = rng.uniform(0.0, 0.3)
+        width = rng.uniform(0.3, 1.0)
+        case = (ox, oy, r, back - half, back + half, fx, fy, reach + rng.uniform(0.0, 2.0),
+                aim - width / 2, aim + width / 2, 0.0)
+        _check_batch_against_scalar(case, rng.choice([OFF, rng.uniform(0.0, OFF)]))
+
+
+def _check_batch_against_scalar(case: Case, beta: float) -> None:
     ox, oy, r, lo, hi, fx, fy, fr, f_lo, f_hi, eps = case
     n = 3  # the arc sits in row 1 of 3; rows 0 and 2 must stay untouched
     x, y, rr = np.full(n, ox), np.full(n, oy), np.full(n, r)
@@ -276,8 +399,8 @@ def test_batch_kernel_matches_the_scalar_one(case: Case) -> None:
     status = np.zeros(n, dtype=np.int8)
     carved = np.zeros(n, dtype=bool)
     fully, split = carve_arcs(np.array([1]), x, y, rr, lo_a, hi_a, bounds, status, carved,
-                              fx, fy, fr, f_lo, f_hi, eps)
-    expected, new_lo, new_hi = carve_arc(*case)
+                              fx, fy, fr, f_lo, f_hi, eps, beta)
+    expected, new_lo, new_hi = carve_arc(*case, beta)
     assert (fully, split) == (int(expected == CarveOutcome.FULLY_CARVED),
                               int(expected == CarveOutcome.SPLIT))
     assert carved[1] == (expected != CarveOutcome.UNCHANGED)
@@ -367,6 +490,91 @@ def test_zero_length_arc_is_a_point() -> None:
 def test_no_freespace_within_the_tolerance() -> None:
     assert carve_arc(0.0, 0.0, 0.5, -0.2, 0.2, 0.0, 0.0, 0.04, -0.2, 0.2, 0.05)[0] == (
         CarveOutcome.UNCHANGED)
+
+
+# -- specular-aware carving: hand-made cases ------------------------------------------------------
+
+# A wall along x = 1 heard head-on from the origin (arc i: r = 1, bearings ±0.1), then passed
+# by reading j at (0, 0.9) whose beam [-0.9, -0.5] meets that wall 40° off its normal: on a
+# specular wall j hears nothing, and reports a far echo at 3 m.
+WALL = (0.0, 0.0, 1.0, -0.1, 0.1, 0.0, 0.9, 3.0, -0.9, -0.5, 0.0)
+
+
+def _wall_incidence(tau: float) -> float:
+    """Incidence at e(τ) seen from (0, 0.9), by elementary trigonometry: the angle between the
+    radius (bearing τ) and the line of sight from (0, 0.9)."""
+    sight = math.atan2(math.sin(tau) - 0.9, math.cos(tau))
+    return abs(tau - sight)
+
+
+def test_glancing_reading_does_not_carve_a_head_on_wall() -> None:
+    incidences = [_wall_incidence(t) for t in np.linspace(-0.1, 0.1, 101)]
+    assert math.radians(39) < min(incidences) < max(incidences) < math.radians(45)
+    assert carve_arc(*WALL)[0] == CarveOutcome.FULLY_CARVED  # the paper loses the wall
+    for beta_deg in (17.5, 20.0, 30.0, 39.0):
+        assert carve_arc(*WALL, math.radians(beta_deg)) == (CarveOutcome.UNCHANGED, -0.1, 0.1)
+    assert carve_arc(*WALL, math.radians(46.0))[0] == CarveOutcome.FULLY_CARVED
+
+
+def test_critical_angle_inside_the_arc_cuts_where_the_incidence_equals_it() -> None:
+    beta = math.radians(42.0)
+    # The incidence grows with τ here; bisection for the τ where it equals β.
+    a, b = -0.1, 0.1
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        a, b = (m, b) if _wall_incidence(m) < beta else (a, m)
+    status, lo, hi = carve_arc(*WALL, beta)
+    # Below that τ the incidence is under β and j's free space carves; above, it keeps.
+    assert (status, lo, hi) == (CarveOutcome.SHRUNK, pytest.approx(a, abs=1e-12), 0.1)
+    # The cut lies on the inscribed-angle circle through o_i and o_j: radius D / (2 sin β),
+    # centre on the bisector y = 0.45 at x = ±(D/2) / tan β.
+    px, py = math.cos(lo), math.sin(lo)
+    radius, offset = 0.9 / (2 * math.sin(beta)), 0.45 / math.tan(beta)
+    assert min(abs(math.hypot(px - k * offset, py - 0.45) - radius)
+               for k in (1, -1)) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_readings_from_the_same_place_carve_at_any_critical_angle() -> None:
+    # From the same origin every incidence is 0 (the line of sight is the normal).
+    args = (0.0, 0.0, 1.0, -0.2, 0.2, 0.0, 0.0, 1.5, -0.3, 0.3, 0.0)
+    for beta in (0.0, 0.1, OFF):
+        assert carve_arc(*args, beta)[0] == CarveOutcome.FULLY_CARVED
+
+
+def test_specular_zero_length_arc_is_a_point() -> None:
+    # The point e(0) of the wall above, in j's free space at 42° incidence.
+    point = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.9, 3.0, -0.9, -0.5, 0.0)
+    assert _wall_incidence(0.0) == pytest.approx(math.atan(0.9))
+    assert carve_arc(*point, math.radians(45.0))[0] == CarveOutcome.FULLY_CARVED
+    assert carve_arc(*point, math.radians(40.0))[0] == CarveOutcome.UNCHANGED
+
+
+def test_a_tilted_view_can_split_the_arc_in_specular_mode() -> None:
+    # Reading j at (2, 0) looking back along -x at the unit circle: the incidence is 0 at
+    # τ = 0 (in line with both origins) and grows away from it, so a small β keeps only
+    # the middle of the carved set. Incidence at e(τ) seen from (2, 0): the angle between
+    # e(τ) and e(τ) - (2, 0).
+    beam = (math.pi - 1.0, math.pi + 1.0)
+    args = (0.0, 0.0, 1.0, -0.5, 0.5, 2.0, 0.0, 1.1, *beam, 0.0)
+    # The paper carves |e(τ) - (2, 0)|² = 5 - 4 cos τ < 1.21: |τ| < acos(0.9475).
+    cut = math.acos(0.9475)
+    assert arc_remainder(*args) == pytest.approx(np.array([[-0.5, -cut], [cut, 0.5]]), abs=1e-12)
+    beta = math.radians(20.0)
+    pieces = arc_remainder(*args, beta)
+    # Carved: |τ| < τ* < cut, where the incidence (sin γ = 2 sin τ / |e(τ) - (2, 0)|, law of
+    # sines) equals β.
+    t_star = _bisect(lambda t: math.asin(2 * math.sin(t) / math.hypot(math.cos(t) - 2,
+                                                                       math.sin(t))) - beta,
+                     0.0, 0.5)
+    assert t_star < cut
+    assert pieces == pytest.approx(np.array([[-0.5, -t_star], [t_star, 0.5]]), abs=1e-12)
+
+
+def _bisect(f, a: float, b: float) -> float:
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        a, b = (m, b) if f(m) < 0.0 else (a, m)
+    return 0.5 * (a + b)
 
 
 # -- shapely cross-check -------------------------------------------------------------------------

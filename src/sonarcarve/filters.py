@@ -35,7 +35,6 @@ from typing import Generic, TypeVar
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial import cKDTree
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.maps import GlobalMap, LocalMap
@@ -369,6 +368,8 @@ def outlier_mask(xy: npt.ArrayLike, radius: float, neighbours: int) -> BoolArray
     pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     if pts.shape[0] == 0:
         return np.zeros(0, dtype=bool)
+    from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
+
     counts = cKDTree(pts).query_ball_point(pts, r=radius, return_length=True)
     return np.asarray(counts - 1 >= neighbours)  # the point itself is in its own ball
 

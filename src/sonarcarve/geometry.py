@@ -46,6 +46,37 @@ Degenerate cases, decided deliberately:
 * *Zero-length arcs* (``hi - lo < MIN_PIECE``): the arc is a point, fully carved iff that point
   is in ``F_j``, otherwise unchanged.
 * *No freespace* (``R ≤ 0``, a range within the tolerance): nothing is carved.
+
+Specular-aware carving (beyond the paper; opt-in)
+-------------------------------------------------
+On smooth walls an echo comes back only when the beam meets the wall close to its normal. An
+echo of reading ``i`` at ``p`` therefore implies a surface through ``p`` whose normal points
+back at ``o_i``; reading ``j`` would see that surface at the incidence angle ``γ(p)``, the angle
+``o_i``-``p``-``o_j`` of the triangle folded into ``[0, π/2]`` (a thin wall reflects from both
+faces; this is the same angle as ATM's transversal angle). If ``γ(p)`` exceeds a critical angle
+``β``, reading ``j`` could not have heard that surface, so its freespace is no evidence against
+``p``. The carved set becomes ::
+
+    Z_ij^β = {p ∈ C_i ∩ F_j : γ(p) ≤ β},       β = π/2: Z_ij^β = Z_ij (the paper),
+
+a fourth condition on the circle. With ``w = p - o_i`` and ``v = p - o_j``,
+``sin γ = |w × v| / (|w| |v|)`` (folding keeps the sine), so for ``β < π/2`` the condition is
+``(w × v)² ≤ sin²β |w|² |v|²``. On circle ``i`` (``w = r e(τ)``, ``c = cos(τ - α)``) it reads ::
+
+    q(c) = D² c² - 2 r D sin²β c + r² sin²β - D² cos²β ≥ 0,
+
+an upward parabola with roots ``c± = (r sin²β ± cos β sqrt(D² - r² sin²β)) / D``: it holds for
+``c ≤ c-`` or ``c ≥ c+``, bounded by the four bearings ``α ± acos c±``, and everywhere when
+``D ≤ r sin β`` (including ``D = 0``: from the same place every incidence is 0). Geometrically
+the boundary ``γ = β`` is the pair of circles of radius ``D / (2 sin β)`` through ``o_i`` and
+``o_j`` (inscribed angle theorem: their major arcs see ``o_i o_j`` at ``β``, their minor arcs at
+``π - β``), and these are its crossings with circle ``i``. The four bearings join the
+breakpoints and the condition joins the midpoint test, so the result stays exact; the remainder
+may now have up to six pieces (ten boundaries inside the arc).
+
+``β`` is a trade-off, not necessarily the sensor's critical angle: a real echo only says the
+wall's normal is within that critical angle of the line of sight, and corners echo from every
+direction, so a small ``β`` also spares spurious arcs (``benchmarks/specular.py`` measures it).
 """
 
 from __future__ import annotations
@@ -61,6 +92,7 @@ from numba import njit
 
 __all__ = [
     "MIN_PIECE",
+    "NO_INCIDENCE_LIMIT",
     "ArcStatus",
     "CarveOutcome",
     "arc_bounding_circle",
@@ -75,7 +107,15 @@ FloatArray = npt.NDArray[np.float64]
 #: rounding at tangencies; 1e-12 rad is a picometre on a metre-range arc).
 MIN_PIECE = 1e-12
 
+#: ``max_incidence`` that switches specular-aware carving off: every incidence is at most π/2,
+#: so ``Z_ij^β = Z_ij`` and carving is the paper's (eq. 3.4).
+NO_INCIDENCE_LIMIT = 0.5 * math.pi
+
 _TWO_PI = 2.0 * math.pi
+
+# Room in the scratch arrays: lo, hi and at most 2 + 2 + 2 + 4 boundaries inside (disk, two
+# half-planes, incidence), so at most 11 sub-intervals.
+_SCRATCH = 12
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -134,8 +174,38 @@ def _add_cut(cuts: FloatArray, count: int, angle: float, lo: float, hi: float) -
 
 
 @_compiled
+def _incidence_sine(max_incidence: float) -> float:
+    """``sin β`` for the kernels; 1.0 (no limit) when ``β ≥ π/2``.
+
+    The kernels test ``sin γ ≤ sin β`` only when this is below 1, so ``β = π/2`` runs exactly
+    the paper's code path (rounding at ``γ = π/2`` cannot flip a point).
+    """
+    if max_incidence >= NO_INCIDENCE_LIMIT:
+        return 1.0
+    return math.sin(max(max_incidence, 0.0))
+
+
+@_compiled
+def _incidence_ok(ox: float, oy: float, px: float, py: float, fx: float, fy: float,
+                  sin_beta: float) -> bool:
+    """Whether reading ``j`` at ``o_j = f`` sees the surface implied at ``p`` within ``β``.
+
+    ``sin γ ≤ sin β`` with ``γ`` the angle ``o``-``p``-``f`` folded into ``[0, π/2]``, written
+    without division: ``(w × v)² ≤ sin²β |w|² |v|²`` for ``w = p - o``, ``v = p - f``.
+    """
+    if sin_beta >= 1.0:
+        return True
+    wx = px - ox
+    wy = py - oy
+    vx = px - fx
+    vy = py - fy
+    cross = wx * vy - wy * vx
+    return cross * cross <= sin_beta * sin_beta * (wx * wx + wy * wy) * (vx * vx + vy * vy)
+
+
+@_compiled
 def _sort_prefix(values: FloatArray, count: int) -> None:
-    """Insertion sort of ``values[:count]`` (at most 8 values: cheaper than a library sort)."""
+    """Insertion sort of ``values[:count]`` (at most 12 values: cheaper than a library sort)."""
     for i in range(1, count):
         v = values[i]
         j = i - 1
@@ -167,14 +237,15 @@ def _merge_runs(starts: FloatArray, ends: FloatArray, flags: npt.NDArray[np.bool
 def _remainder_core(
     ox: float, oy: float, r: float, lo: float, hi: float,
     fx: float, fy: float, radius: float,
-    a1: float, u1x: float, u1y: float, a2: float, u2x: float, u2y: float,
+    a1: float, u1x: float, u1y: float, a2: float, u2x: float, u2y: float, sin_beta: float,
     cuts: FloatArray, starts: FloatArray, ends: FloatArray, flags: npt.NDArray[np.bool_],
 ) -> int:
-    """Pieces of ``[lo, hi]`` outside the sector, written to ``starts``/``ends``; their count.
+    """Pieces of ``[lo, hi]`` outside ``Z_ij^β``, written to ``starts``/``ends``; their count.
 
     ``radius`` is the freespace radius ``R = r_j - ε``; ``(u1x, u1y)`` and ``(u2x, u2y)`` are the
     unit vectors of the sector's bounding bearings ``a1 = f_lo`` and ``a2 = f_hi`` (hoisted so a
-    batch computes them once). Scratch arrays need room for 8 values. Requires ``r > 0``,
+    batch computes them once); ``sin_beta`` is :func:`_incidence_sine` of the critical angle
+    (1: the paper). Scratch arrays need room for ``_SCRATCH`` values. Requires ``r > 0``,
     ``hi - lo ≥ MIN_PIECE``.
     """
     # The arc as one remaining run, for the early exits.
@@ -207,20 +278,34 @@ def _remainder_core(
     hp2 = _ALL if s2 >= 1.0 else (_NONE if s2 <= -1.0 else _SOME)
     if hp1 == _NONE or hp2 == _NONE:
         return 1
+    # Incidence condition sin γ ≤ sin β: everywhere on the circle when D ≤ r sin β (module
+    # docstring), never nowhere: the points in line with o_i and o_j have γ = 0.
+    rsb2 = r * r * sin_beta * sin_beta
+    incidence = _SOME if sin_beta < 1.0 and dist2 > rsb2 else _ALL
 
     cuts[0] = lo
     n = 1
     # Direction of o_j from o_i (cos α, sin α), for the disk test below without more trig.
     ca = 0.0
     sa = 0.0
-    if disk == _SOME:
+    alpha = 0.0
+    if disk == _SOME or incidence == _SOME:
         dist = math.sqrt(dist2)
         ca = dx / dist
         sa = dy / dist
         alpha = math.atan2(dy, dx)
+    if disk == _SOME:
         half = math.acos(k)
         n = _add_cut(cuts, n, alpha - half, lo, hi)
         n = _add_cut(cuts, n, alpha + half, lo, hi)
+    if incidence == _SOME:
+        # Roots c± of q(c) = 0 (module docstring): four bearings α ± acos c±.
+        cos_beta = math.sqrt((1.0 - sin_beta) * (1.0 + sin_beta))
+        root = cos_beta * math.sqrt(dist2 - rsb2)
+        for c in ((r * sin_beta * sin_beta + root) / dist, (r * sin_beta * sin_beta - root) / dist):
+            half = math.acos(min(max(c, -1.0), 1.0))
+            n = _add_cut(cuts, n, alpha - half, lo, hi)
+            n = _add_cut(cuts, n, alpha + half, lo, hi)
     if hp1 == _SOME:
         b = math.asin(s1)
         n = _add_cut(cuts, n, a1 + b, lo, hi)
@@ -247,6 +332,12 @@ def _remainder_core(
             inside = sm * u1x - cm * u1y >= s1
         if inside and hp2 == _SOME:
             inside = sm * u2x - cm * u2y <= s2
+        if inside and incidence == _SOME:
+            # sin²γ = (w × v)² / (|w|² |v|²) with w = r e(m), v = w - d: w × v = -r (e(m) × d).
+            cross = cm * dy - sm * dx
+            vx = r * cm - dx
+            vy = r * sm - dy
+            inside = cross * cross <= sin_beta * sin_beta * (vx * vx + vy * vy)
         starts[i] = cuts[i]
         ends[i] = cuts[i + 1]
         flags[i] = inside
@@ -283,18 +374,20 @@ def _point_in_sector(px: float, py: float, fx: float, fy: float, radius: float,
 def _carve_core(
     ox: float, oy: float, r: float, lo: float, hi: float,
     fx: float, fy: float, radius: float,
-    a1: float, u1x: float, u1y: float, a2: float, u2x: float, u2y: float,
+    a1: float, u1x: float, u1y: float, a2: float, u2x: float, u2y: float, sin_beta: float,
     cuts: FloatArray, starts: FloatArray, ends: FloatArray, flags: npt.NDArray[np.bool_],
 ) -> tuple[int, float, float]:
     """:func:`carve_arc` with the sector's unit vectors hoisted and scratch arrays supplied."""
     if hi - lo < MIN_PIECE:
         m = 0.5 * (lo + hi)
-        if radius > 0.0 and _point_in_sector(ox + r * math.cos(m), oy + r * math.sin(m), fx, fy,
-                                             radius, u1x, u1y, u2x, u2y):
+        px = ox + r * math.cos(m)
+        py = oy + r * math.sin(m)
+        if (radius > 0.0 and _point_in_sector(px, py, fx, fy, radius, u1x, u1y, u2x, u2y)
+                and _incidence_ok(ox, oy, px, py, fx, fy, sin_beta)):
             return _FULLY_CARVED, lo, hi
         return _UNCHANGED, lo, hi
     count = _remainder_core(ox, oy, r, lo, hi, fx, fy, radius, a1, u1x, u1y, a2, u2x, u2y,
-                            cuts, starts, ends, flags)
+                            sin_beta, cuts, starts, ends, flags)
     if count == 0:
         return _FULLY_CARVED, lo, hi
     if count >= 2:
@@ -308,9 +401,13 @@ def _carve_core(
 def carve_arc(
     ox: float, oy: float, r: float, lo: float, hi: float,
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float,
-    tolerance: float = 0.0,
+    tolerance: float = 0.0, max_incidence: float = NO_INCIDENCE_LIMIT,
 ) -> tuple[int, float, float]:
     """Carve arc ``i`` by the freespace of a newer reading ``j``: ``C_i - Z_ij`` (eq. 3.4, 3.5).
+
+    With ``max_incidence = β < π/2`` only ``Z_ij^β`` is carved: the points of ``Z_ij`` whose
+    implied surface reading ``j`` would see within ``β`` of its normal (specular-aware carving,
+    beyond the paper; see the module docstring).
 
     Parameters
     ----------
@@ -324,6 +421,10 @@ def carve_arc(
         Its full beam ``[θ_j - φ_j/2, θ_j + φ_j/2]``, radians, ``0 ≤ f_hi - f_lo < π``.
     tolerance : float
         Range tolerance ε ≥ 0, metres: the freespace (eq. 3.2) ends at ``fr - ε``.
+    max_incidence : float
+        Critical angle β in ``[0, π/2]``, radians: points whose incidence ``γ`` seen from
+        ``o_j`` exceeds it are not carved. :data:`NO_INCIDENCE_LIMIT` (π/2, the default): the
+        paper.
 
     Returns
     -------
@@ -346,36 +447,48 @@ def carve_arc(
     >>> status, lo, hi = carve_arc(0.0, 0.0, 1.0, -0.2, 0.2, 0.0, 0.0, 2.0, 0.0, 0.3)
     >>> CarveOutcome(status).name, round(lo, 12), round(hi, 12)
     ('SHRUNK', -0.2, 0.0)
+
+    A wall seen head-on from the origin at 1 m, then from (0, 0.9) at a glancing angle by a
+    reading that heard nothing up to 3 m: the paper carves the arc away, a 20° critical angle
+    keeps it (from (0, 0.9) the implied wall is seen at 39°-45° incidence):
+
+    >>> args = (0.0, 0.0, 1.0, -0.1, 0.1, 0.0, 0.9, 3.0, -0.9, -0.5)
+    >>> CarveOutcome(carve_arc(*args)[0]).name
+    'FULLY_CARVED'
+    >>> CarveOutcome(carve_arc(*args, 0.0, math.radians(20.0))[0]).name
+    'UNCHANGED'
     """
-    cuts = np.empty(8)
-    starts = np.empty(8)
-    ends = np.empty(8)
-    flags = np.empty(8, dtype=np.bool_)
+    cuts = np.empty(_SCRATCH)
+    starts = np.empty(_SCRATCH)
+    ends = np.empty(_SCRATCH)
+    flags = np.empty(_SCRATCH, dtype=np.bool_)
     return _carve_core(ox, oy, r, lo, hi, fx, fy, fr - tolerance,
                        f_lo, math.cos(f_lo), math.sin(f_lo), f_hi, math.cos(f_hi), math.sin(f_hi),
-                       cuts, starts, ends, flags)
+                       _incidence_sine(max_incidence), cuts, starts, ends, flags)
 
 
 @_compiled
 def _remainder_pieces(
     ox: float, oy: float, r: float, lo: float, hi: float,
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float, tolerance: float,
+    max_incidence: float,
 ) -> FloatArray:
-    cuts = np.empty(8)
-    starts = np.empty(8)
-    ends = np.empty(8)
-    flags = np.empty(8, dtype=np.bool_)
+    cuts = np.empty(_SCRATCH)
+    starts = np.empty(_SCRATCH)
+    ends = np.empty(_SCRATCH)
+    flags = np.empty(_SCRATCH, dtype=np.bool_)
     radius = fr - tolerance
     u1x, u1y, u2x, u2y = math.cos(f_lo), math.sin(f_lo), math.cos(f_hi), math.sin(f_hi)
+    sin_beta = _incidence_sine(max_incidence)
     if hi - lo < MIN_PIECE:
         status, _, _ = _carve_core(ox, oy, r, lo, hi, fx, fy, radius, f_lo, u1x, u1y, f_hi, u2x,
-                                   u2y, cuts, starts, ends, flags)
+                                   u2y, sin_beta, cuts, starts, ends, flags)
         count = 0 if status == _FULLY_CARVED else 1
         starts[0] = lo
         ends[0] = hi
     else:
         count = _remainder_core(ox, oy, r, lo, hi, fx, fy, radius, f_lo, u1x, u1y, f_hi, u2x,
-                                u2y, cuts, starts, ends, flags)
+                                u2y, sin_beta, cuts, starts, ends, flags)
     out = np.empty((count, 2))
     for i in range(count):
         out[i, 0] = starts[i]
@@ -386,11 +499,12 @@ def _remainder_pieces(
 def arc_remainder(
     ox: float, oy: float, r: float, lo: float, hi: float,
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float,
-    tolerance: float = 0.0,
+    tolerance: float = 0.0, max_incidence: float = NO_INCIDENCE_LIMIT,
 ) -> FloatArray:
     """Every piece of the remainder ``[lo, hi] \\ Z_ij`` (eq. 3.4, 3.5), split or not.
 
-    Same parameters as :func:`carve_arc`. Returns an array of shape (n, 2), n in 0..4, of
+    Same parameters as :func:`carve_arc` (with ``max_incidence < π/2``: ``[lo, hi] \\
+    Z_ij^β``). Returns an array of shape (n, 2), n in 0..6 (0..4 in the paper's mode), of
     ``[start, end]`` bearings in increasing order; n = 0 means fully carved, n ≥ 2 split.
 
     Examples
@@ -402,7 +516,7 @@ def arc_remainder(
     """
     return np.asarray(_remainder_pieces(float(ox), float(oy), float(r), float(lo), float(hi),
                                         float(fx), float(fy), float(fr), float(f_lo),
-                                        float(f_hi), float(tolerance)))
+                                        float(f_hi), float(tolerance), float(max_incidence)))
 
 
 @_compiled
@@ -437,7 +551,7 @@ def carve_arcs(
     lo: FloatArray, hi: FloatArray, bounds: FloatArray,
     status: npt.NDArray[np.int8], carved: npt.NDArray[np.bool_],
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float,
-    tolerance: float,
+    tolerance: float, max_incidence: float = NO_INCIDENCE_LIMIT,
 ) -> tuple[int, int]:
     """Carve many arcs by one newer reading's freespace, in place (eq. 3.5, section 5-A).
 
@@ -446,7 +560,11 @@ def carve_arcs(
     unchanged, a circle inside the sector means the arc is fully carved; only the remaining arcs
     need :func:`carve_arc`'s exact, trigonometric path (5 % of the live arcs on the ring-corridor
     stream of ``benchmarks/synthetic.py``, counted over 600 readings at history 250). Both
-    shortcuts are exact: the circle contains the arc.
+    shortcuts are exact: the circle contains the arc. With ``max_incidence = β < π/2`` a circle
+    inside the sector fully carves the arc only if every point ``p`` of the arc also has
+    ``sin γ(p) ≤ sin β``; that is certain when ``D = |o_i - o_j| ≤ r_i sin β`` (module
+    docstring) or, since ``sin γ ≤ D / |p - o_j|`` (law of sines), when ``D ≤ sin β`` times the
+    circle's least distance from ``o_j``. Otherwise the exact path decides.
 
     Parameters
     ----------
@@ -465,19 +583,23 @@ def carve_arcs(
     fx, fy, fr, f_lo, f_hi, tolerance : float
         The newer reading's origin, range, full beam and the range tolerance ε (see
         :func:`carve_arc`).
+    max_incidence : float
+        Critical angle β, radians (see :func:`carve_arc`; π/2, the default: the paper).
 
     Returns
     -------
     fully_carved, split : int
         Arcs removed by this call, by cause.
     """
-    cuts = np.empty(8)
-    starts = np.empty(8)
-    ends = np.empty(8)
-    flags = np.empty(8, dtype=np.bool_)
+    cuts = np.empty(_SCRATCH)
+    starts = np.empty(_SCRATCH)
+    ends = np.empty(_SCRATCH)
+    flags = np.empty(_SCRATCH, dtype=np.bool_)
     radius = fr - tolerance
     if radius <= 0.0:
         return 0, 0
+    sin_beta = _incidence_sine(max_incidence)
+    sb2 = sin_beta * sin_beta
     u1x = math.cos(f_lo)
     u1y = math.sin(f_lo)
     u2x = math.cos(f_hi)
@@ -498,14 +620,22 @@ def carve_arcs(
         dist2 = dx * dx + dy * dy
         if dist2 >= (radius + rho) * (radius + rho):
             continue
-        if left > rho and right > rho and radius > rho and dist2 < (radius - rho) ** 2:
+        inside = left > rho and right > rho and radius > rho and dist2 < (radius - rho) ** 2
+        if inside and sin_beta < 1.0:
+            ex = x[slot] - fx
+            ey = y[slot] - fy
+            origins2 = ex * ex + ey * ey  # D²
+            if origins2 > sb2 * r[slot] * r[slot]:
+                clearance = math.sqrt(dist2) - rho
+                inside = clearance > 0.0 and origins2 <= sb2 * clearance * clearance
+        if inside:
             outcome = _FULLY_CARVED
             new_lo = lo[slot]
             new_hi = hi[slot]
         else:
             outcome, new_lo, new_hi = _carve_core(
                 x[slot], y[slot], r[slot], lo[slot], hi[slot], fx, fy, radius,
-                f_lo, u1x, u1y, f_hi, u2x, u2y, cuts, starts, ends, flags,
+                f_lo, u1x, u1y, f_hi, u2x, u2y, sin_beta, cuts, starts, ends, flags,
             )
         if outcome == _UNCHANGED:
             continue

@@ -138,8 +138,8 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
                               label="carved point: at the jamb"))
     for origin, name in ((oi, "sensor, reading i"), (oj, "sensor, reading j (later)")):
         artists.append(ax.scatter(origin[0], origin[1], s=40, color="k", zorder=5))
-        artists.append(ax.annotate(name, (origin[0], origin[1]), textcoords="offset points", xytext=(6, -12),
-                                   fontsize="small"))
+        artists.append(ax.annotate(name, (origin[0], origin[1]), textcoords="offset points",
+                                   xytext=(6, -12), fontsize="small"))
     artists.append(ax.annotate("0.9 m door", (0.95, wall_y), textcoords="offset points",
                                xytext=(-25, -22), fontsize="small", color="0.3"))
     ax.set_xlim(-0.7, 2.6)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,9 @@ from sonarcarve import (
     chord_error,
     make_method,
 )
+from sonarcarve.cli import main
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
+from sonarcarve.io import read_map_csv, write_readings_csv
 from sonarcarve.methods.base import Estimates, Removal, SlotArray
 
 PHI = DEFAULT_BEAM_WIDTH
@@ -125,6 +129,71 @@ def test_factory_reads_the_config() -> None:
     assert isinstance(method, CarvingMethod)
     assert method.history.capacity == 7
     assert method.models[0].range_tolerance == 0.07
+    assert method.models[0].max_incidence == NO_INCIDENCE_LIMIT  # the paper by default
+    for name in ("carve", "combined"):
+        method = make_method(name, MethodConfig(max_incidence=0.3))
+        assert method.models[0].max_incidence == 0.3
+
+
+# -- specular-aware carving (beyond the paper) ----------------------------------------------------
+
+# A wall along x = 1. Reading 0 hears it head-on from the origin. Reading 1, from (0, 0.9), aims
+# its beam 40° off the wall's normal (bearing -0.7): on a specular wall (critical angle 17.5°)
+# it hears nothing there and reports a far echo at 3 m, whose sector covers arc 0.
+HEAD_ON = _reading(0.0, 0.0, 0.0, 0.0, 1.0)
+GLANCING = _reading(1.0, 0.0, 0.9, -0.7, 3.0)
+
+
+def test_paper_mode_carves_a_wall_a_glancing_reading_missed() -> None:
+    for method in (_exact(), CarvingMethod(range_tolerance=0.0, max_incidence=math.pi / 2)):
+        method.add_many(ReadingBatch.from_readings([HEAD_ON, GLANCING]))
+        assert method.local_map().reading_id.tolist() == [1]
+        assert method.measures().fully_carved == 1
+
+
+@pytest.mark.parametrize("degrees", [17.5, 30.0])
+def test_specular_mode_keeps_the_wall(degrees: float) -> None:
+    # Seen from (0, 0.9) the wall points of arc 0 lie at incidences of 37°-47° (the angle
+    # between the radius from the origin and the line of sight from (0, 0.9)).
+    tau = np.linspace(-PHI / 2, PHI / 2, 101)
+    sight = np.arctan2(np.sin(tau) - 0.9, np.cos(tau))
+    assert np.all(np.abs(tau - sight) > math.radians(36.0))
+    method = CarvingMethod(range_tolerance=0.0, max_incidence=math.radians(degrees))
+    method.add_many(ReadingBatch.from_readings([HEAD_ON, GLANCING]))
+    local = method.local_map()
+    assert local.reading_id.tolist() == [0, 1]
+    assert local.xy[0] == pytest.approx([1.0, 0.0])  # untouched: the centerline point
+    assert local.source[0] == PointSource.CENTERLINE
+
+
+def test_specular_mode_still_carves_from_in_front() -> None:
+    # The same wall seen again head-on from farther back with a longer range: incidence 0, so
+    # the newer reading's free space is evidence against arc 0 at any critical angle.
+    method = CarvingMethod(range_tolerance=0.0, max_incidence=math.radians(17.5))
+    method.add_many(ReadingBatch.from_readings([HEAD_ON, _reading(1.0, -0.5, 0.0, 0.0, 2.0)]))
+    assert method.local_map().reading_id.tolist() == [1]
+
+
+@pytest.mark.parametrize("incidence", [-0.01, math.nan, 1.6])
+def test_bad_max_incidence_is_rejected(incidence: float) -> None:
+    with pytest.raises(ValueError, match="max incidence"):
+        CarvingMethod(max_incidence=incidence)
+
+
+def test_cli_max_incidence(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    readings = tmp_path / "r.csv"
+    write_readings_csv(ReadingBatch.from_readings([HEAD_ON, GLANCING]), readings)
+    kept = {}
+    for extra in ([], ["--max-incidence", "90"], ["--max-incidence", "17.5"]):
+        out = tmp_path / f"map{len(kept)}.csv"
+        args = ["process", str(readings), "-m", "carve", "--range-tolerance", "0", "-o", str(out)]
+        assert main([*args, *extra]) == 0
+        kept[" ".join(extra)] = read_map_csv(out).reading_id.tolist()
+    assert kept == {"": [1], "--max-incidence 90": [1], "--max-incidence 17.5": [0, 1]}
+    capsys.readouterr()
+    assert main(["process", str(readings), "-o", str(tmp_path / "x.csv"),
+                 "--max-incidence", "0"]) == 2
+    assert "--max-incidence must lie in (0, 90] degrees" in capsys.readouterr().err
 
 
 # -- against a slow reference: the paper's procedure (section 5-A) with the scalar carve_arc ------
@@ -139,7 +208,8 @@ def _random_batch(seed: int, n: int) -> ReadingBatch:
     )
 
 
-def _reference(batch: ReadingBatch, history_size: int, tolerance: float) -> dict[int, tuple]:
+def _reference(batch: ReadingBatch, history_size: int, tolerance: float,
+               max_incidence: float = NO_INCIDENCE_LIMIT) -> dict[int, tuple]:
     """Final ``(alive, lo, hi, carved)`` of every reading, by the letter of section 5-A."""
     lo = batch.theta - PHI / 2
     hi = batch.theta + PHI / 2
@@ -151,21 +221,25 @@ def _reference(batch: ReadingBatch, history_size: int, tolerance: float) -> dict
                 continue
             status, lo[i], hi[i] = carve_arc(
                 batch.x[i], batch.y[i], batch.range[i], lo[i], hi[i], batch.x[k], batch.y[k],
-                batch.range[k], batch.theta[k] - PHI / 2, batch.theta[k] + PHI / 2, tolerance)
+                batch.range[k], batch.theta[k] - PHI / 2, batch.theta[k] + PHI / 2, tolerance,
+                max_incidence)
             alive[i] = status in (CarveOutcome.UNCHANGED, CarveOutcome.SHRUNK)
             carved[i] |= status != CarveOutcome.UNCHANGED
     return {k: (bool(alive[k]), lo[k], hi[k], bool(carved[k])) for k in range(len(batch))}
 
 
-@pytest.mark.parametrize(("seed", "history_size", "tolerance"),
-                         [(0, 10, 0.0), (1, 25, 0.05), (2, 300, 0.0)])
+@pytest.mark.parametrize(("seed", "history_size", "tolerance", "incidence_deg"),
+                         [(0, 10, 0.0, 90.0), (1, 25, 0.05, 90.0), (2, 300, 0.0, 90.0),
+                          (3, 25, 0.05, 30.0), (4, 300, 0.0, 17.5)])
 def test_method_matches_the_sequential_reference(seed: int, history_size: int,
-                                                 tolerance: float) -> None:
+                                                 tolerance: float, incidence_deg: float) -> None:
     batch = _random_batch(seed, 250)
-    method = CarvingMethod(history_size=history_size, range_tolerance=tolerance)
+    incidence = math.radians(incidence_deg)
+    method = CarvingMethod(history_size=history_size, range_tolerance=tolerance,
+                           max_incidence=incidence)
     method.add_many(batch)
     global_map = method.finish()
-    expected = _reference(batch, history_size, tolerance)
+    expected = _reference(batch, history_size, tolerance, incidence)
     survivors = [k for k, (alive, *_) in expected.items() if alive]
     assert global_map.reading_id.tolist() == survivors
     assert len(survivors) < len(batch)  # the scene does carve

@@ -45,6 +45,13 @@ def process(
     min_transversal: Annotated[float, typer.Option(
         help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
         = round(math.degrees(MethodConfig.min_transversal), 6),
+    max_incidence: Annotated[float | None, typer.Option(
+        help="β in degrees, in (0, 90]: specular-aware carving (beyond the paper; off by "
+             "default). A newer reading then does not carve the part of an older arc whose "
+             "implied wall (facing the older sensor) it would meet at more than β from the "
+             "normal: smooth walls send no echo at such glancing angles, so the newer "
+             "reading's free space says nothing there. 90 = off = the paper. Example: "
+             "--max-incidence 30.")] = None,
     max_range: Annotated[float | None, typer.Option(
         help="Drop readings farther than this, metres (reading filter; off by default). The "
              f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
@@ -79,7 +86,8 @@ def process(
 
     Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
     """
-    config = _config(method, history, beam_width, range_tolerance, min_transversal)
+    config = _config(method, history, beam_width, range_tolerance, min_transversal,
+                     max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
     batch = read_readings_csv(readings)
@@ -98,7 +106,7 @@ def process(
 
 
 def _config(method: str, history: int, beam_width_deg: float, tolerance: float,
-            transversal_deg: float) -> MethodConfig:
+            transversal_deg: float, incidence_deg: float | None = None) -> MethodConfig:
     if method not in METHODS:
         msg = f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
         raise ParameterError(msg)
@@ -114,8 +122,15 @@ def _config(method: str, history: int, beam_width_deg: float, tolerance: float,
     if not 0.0 <= transversal_deg <= 90.0:
         msg = f"--min-transversal must lie in [0, 90] degrees, got {transversal_deg}"
         raise ParameterError(msg)
+    incidence = MethodConfig.max_incidence
+    if incidence_deg is not None:
+        if not 0.0 < incidence_deg <= 90.0:
+            msg = f"--max-incidence must lie in (0, 90] degrees, got {incidence_deg}"
+            raise ParameterError(msg)
+        incidence = min(math.radians(incidence_deg), MethodConfig.max_incidence)
     return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
-                        range_tolerance=tolerance, min_transversal=math.radians(transversal_deg))
+                        range_tolerance=tolerance, min_transversal=math.radians(transversal_deg),
+                        max_incidence=incidence)
 
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,

@@ -38,13 +38,14 @@ def _atm(config: MethodConfig) -> SonarMethod:
 
 
 def _carve(config: MethodConfig) -> SonarMethod:
-    return CarvingMethod(config.history_size, config.beam_width, config.range_tolerance)
+    return CarvingMethod(config.history_size, config.beam_width, config.range_tolerance,
+                         config.max_incidence)
 
 
 def _combined(config: MethodConfig) -> SonarMethod:
     return CombinedMethod(
         config.history_size, config.beam_width, config.range_tolerance,
-        config.min_transversal, config.range_resolution,
+        config.min_transversal, config.range_resolution, config.max_incidence,
     )
 
 

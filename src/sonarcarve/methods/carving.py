@@ -7,6 +7,13 @@ covers entirely is *fully carved*; an arc that would fall apart in two or more p
 both are removed from the map (section 3) and counted separately. The point of a surviving arc
 is the middle of its carved interval (eq. 3.6), labelled ``carved`` once it has been carved and
 ``centerline`` before (then it is exactly the centerline point, eq. 3.3).
+
+Opt-in, beyond the paper: with a critical angle ``max_incidence = β < π/2`` a newer reading
+carves only the points of an older arc whose implied (specular) surface it would have seen
+within ``β`` of the normal (``Z_ij^β``, see :mod:`sonarcarve.geometry`): on smooth walls a beam
+that meets a wall at a glancing angle hears nothing, so its freespace is no evidence against
+echoes from that wall. The default, :data:`~sonarcarve.geometry.NO_INCIDENCE_LIMIT` (π/2), is
+the paper.
 """
 
 from __future__ import annotations
@@ -17,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from sonarcarve.geometry import ArcStatus, arc_bounding_circle, carve_arcs
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcStatus, arc_bounding_circle, carve_arcs
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
 from sonarcarve.methods.base import (
@@ -53,6 +60,7 @@ def _add_arc_py(
     x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray,
     status: npt.NDArray[np.int8], carved: npt.NDArray[np.bool_], tolerance: float,
+    max_incidence: float,
 ) -> tuple[int, int]:
     """Initialise row ``slot`` as its full beam (section 3), then carve ``older`` by it (3.5).
 
@@ -68,7 +76,8 @@ def _add_arc_py(
     status[slot] = 0  # ArcStatus.ALIVE
     carved[slot] = False
     return carve_arcs(older, x, y, r, lo, hi, bounds, status, carved,
-                      x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance)
+                      x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
+                      max_incidence)
 
 
 # Compiled by call rather than as a decorator so that mypy keeps the signature above for readers.
@@ -84,6 +93,9 @@ class CarvingModel(ArcModel):
         The history whose rows this model carves.
     range_tolerance : float
         ε ≥ 0, metres: the freespace of a reading of range r ends at ``r - ε`` (0: the paper).
+    max_incidence : float
+        Critical angle β in ``[0, π/2]``, radians: a newer reading does not carve points of an
+        older arc whose implied surface it would see at a larger incidence (π/2: the paper).
 
     Attributes
     ----------
@@ -98,12 +110,17 @@ class CarvingModel(ArcModel):
         (:func:`~sonarcarve.geometry.arc_bounding_circle`): a cheap first test in carving.
     """
 
-    def __init__(self, history: SonarHistory, range_tolerance: float) -> None:
+    def __init__(self, history: SonarHistory, range_tolerance: float,
+                 max_incidence: float = NO_INCIDENCE_LIMIT) -> None:
         if not (math.isfinite(range_tolerance) and range_tolerance >= 0.0):
             msg = f"range tolerance must be a finite number of metres >= 0, got {range_tolerance}"
             raise ValueError(msg)
+        if not 0.0 <= max_incidence <= NO_INCIDENCE_LIMIT:
+            msg = f"max incidence must lie in [0, π/2] radians, got {max_incidence}"
+            raise ValueError(msg)
         super().__init__(history)
         self.range_tolerance = float(range_tolerance)
+        self.max_incidence = float(max_incidence)
         size = history.storage_size
         self.lo = np.zeros(size)
         self.hi = np.zeros(size)
@@ -122,6 +139,7 @@ class CarvingModel(ArcModel):
         fully, split = _add_arc(
             slot, older, h.x, h.y, h.r, h.theta1, h.theta2,
             self.lo, self.hi, self.bounds, self.status, self.carved, self.range_tolerance,
+            self.max_incidence,
         )
         self._fully_carved += fully
         self._split += split
@@ -167,6 +185,9 @@ class CarvingMethod(SonarMethod):
     range_tolerance : float
         ε ≥ 0, metres (0 is the paper exactly; the default is measured, see
         :data:`DEFAULT_RANGE_TOLERANCE`).
+    max_incidence : float
+        Critical angle β in ``[0, π/2]``, radians, of specular-aware carving (beyond the paper;
+        see :class:`CarvingModel`). π/2, the default: off, the paper.
     """
 
     name = "carve"
@@ -176,12 +197,14 @@ class CarvingMethod(SonarMethod):
         history_size: int = DEFAULT_HISTORY_SIZE,
         beam_width: float = DEFAULT_BEAM_WIDTH,
         range_tolerance: float = DEFAULT_RANGE_TOLERANCE,
+        max_incidence: float = NO_INCIDENCE_LIMIT,
     ) -> None:
         self.range_tolerance = range_tolerance
+        self.max_incidence = max_incidence
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel]:
-        return (CarvingModel(self.history, self.range_tolerance),)
+        return (CarvingModel(self.history, self.range_tolerance, self.max_incidence),)
 
     def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
         return estimates[0]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.methods.atm import AtmModel
 from sonarcarve.methods.base import Estimates, SonarMethod
@@ -67,6 +68,9 @@ class CombinedMethod(SonarMethod):
         ATM's ψ, radians (see :class:`~sonarcarve.methods.atm.AtmModel`).
     range_resolution : float
         ATM's δ, metres (see :func:`~sonarcarve.methods.atm.atm_error_bound`).
+    max_incidence : float
+        Carving's critical angle β, radians (see
+        :class:`~sonarcarve.methods.carving.CarvingModel`; π/2, the default: the paper).
 
     Notes
     -----
@@ -83,15 +87,17 @@ class CombinedMethod(SonarMethod):
         range_tolerance: float = DEFAULT_RANGE_TOLERANCE,
         min_transversal: float = MethodConfig.min_transversal,
         range_resolution: float = MethodConfig.range_resolution,
+        max_incidence: float = NO_INCIDENCE_LIMIT,
     ) -> None:
         self.range_tolerance = range_tolerance
+        self.max_incidence = max_incidence
         self.min_transversal = min_transversal
         self.range_resolution = range_resolution
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel, AtmModel]:
         return (
-            CarvingModel(self.history, self.range_tolerance),
+            CarvingModel(self.history, self.range_tolerance, self.max_incidence),
             AtmModel(self.history, self.min_transversal, self.range_resolution),
         )
 

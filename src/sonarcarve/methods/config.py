@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH
@@ -34,6 +35,11 @@ class MethodConfig:
         share fell from 29 % to 22 % at equal point error (see :mod:`sonarcarve.methods.atm`).
     range_resolution : float
         Range quantum of the sensors, metres (paper: one inch); scales ATM's error bound (5.4).
+    max_incidence : float
+        β in ``[0, π/2]``, radians: specular-aware carving (beyond the paper), where a newer
+        reading does not carve the points of an older arc whose implied surface it would see
+        at an incidence above β (see :mod:`sonarcarve.geometry`). Default π/2
+        (:data:`~sonarcarve.geometry.NO_INCIDENCE_LIMIT`): off, the paper.
     """
 
     history_size: int = DEFAULT_HISTORY_SIZE
@@ -41,3 +47,4 @@ class MethodConfig:
     range_tolerance: float = DEFAULT_RANGE_TOLERANCE
     min_transversal: float = math.radians(20.0)
     range_resolution: float = 0.0254
+    max_incidence: float = NO_INCIDENCE_LIMIT
