@@ -45,6 +45,16 @@ def test_slicing_and_masks_give_batches() -> None:
         ({"beam_width": [0.3, math.pi, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
         ({"beam_width": [0.3, 0.0, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
         ({"sensor": [0, -1, 2]}, "row 1, column 'sensor' must be >= 0"),
+        ({"sensor": [0, 1.5, 2]}, "row 1, column 'sensor' is not a whole number"),
+        ({"sensor": [0, 1, math.nan]}, "row 2, column 'sensor' is not a whole number"),
+        ({"sensor": [math.inf, 1, 2]}, "row 0, column 'sensor' is not a whole number"),
+        # Huge values: a numpy cast would wrap them (with a RuntimeWarning) to a wrong index.
+        ({"sensor": [0, 99999999999999999999, 2]}, "row 1, column 'sensor' must be at most"),
+        ({"sensor": [0, 1e20, 2]}, "row 1, column 'sensor' must be at most 2147483647"),
+        ({"sensor": np.array([0, 2**40, 2])}, "row 1, column 'sensor' must be at most"),
+        ({"sensor": np.array([0, 2**63], dtype=np.uint64)[[0, 0, 1]]},
+         "row 2, column 'sensor' must be at most"),
+        ({"sensor": ["a", "b", "c"]}, "column 'sensor' is not numeric"),
     ],
 )
 def test_validation_names_row_and_column(overrides: dict[str, object], problem: str) -> None:
@@ -65,3 +75,11 @@ def test_concatenate_keeps_order_and_checks_time() -> None:
     np.testing.assert_array_equal(both.t, batch.t)
     with pytest.raises(ReadingsError, match="backwards"):
         ReadingBatch.concatenate([batch[2:], batch[:2]])
+
+
+def test_whole_float_sensors_are_accepted_up_to_the_limit() -> None:
+    from sonarcarve.readings import MAX_SENSOR
+
+    batch = _batch(sensor=[0.0, 15.0, float(MAX_SENSOR)])
+    assert batch.sensor.dtype == np.int64
+    assert batch.sensor.tolist() == [0, 15, MAX_SENSOR]

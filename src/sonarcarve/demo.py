@@ -4,7 +4,8 @@
 centerline, ATM, arc carving and the combined method over the same readings, and measures each
 against the ground truth the simulator knows:
 
-* how much of the history is still unprocessed (the paper's Table I, section 5-B),
+* how much of the history is still unprocessed (the paper's Table I, section 5-B; arcs carving
+  removed count as processed, see :func:`~sonarcarve.evaluation.instrument.unprocessed_percent`),
 * how far the global map's points lie from the true walls (median and 90th percentile),
 * which readings carving removed, split by what really produced them (direct echoes against
   crosstalk, floor and multipath echoes; section 3 and 5-C),
@@ -32,14 +33,19 @@ import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation import metrics
-from sonarcarve.evaluation.experiments import (
-    CLEARANCE_MARGIN,
-    GAP_DEPTH,
-    cut_polyline,
-    removal_summary,
+from sonarcarve.evaluation.analyses import GAP_DEPTH, passage_clearance, removal_summary
+from sonarcarve.evaluation.analyses import METHOD_LABELS as EXPERIMENT_LABELS
+from sonarcarve.evaluation.drawing import METHOD_COLORS as EXPERIMENT_COLORS
+from sonarcarve.evaluation.instrument import (
+    ArcTable,
+    RunRecord,
+    full_history_samples,
+    record_run,
+    unprocessed_percent,
 )
-from sonarcarve.evaluation.instrument import ArcTable, RunRecord, record_run
-from sonarcarve.io.atomic import atomic_path
+from sonarcarve.evaluation.output import json_ready
+from sonarcarve.evaluation.scenarios import cut_polyline
+from sonarcarve.io.atomic import atomic_path, make_output_dir
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.sim.motion import Trajectory, follow_waypoints
@@ -84,8 +90,7 @@ METHOD_LABELS = {"centerline": "centerline", "atm": "ATM", "carve": "carving",
                  "combined": "combined"}
 #: One colour per method: the colour of the point source it stands for (``SOURCE_COLORS``);
 #: combined, which mixes carved and ATM points, in purple (as in the experiments' figures).
-METHOD_COLORS = {"centerline": "#d62728", "atm": "#2ca02c", "carve": "#1f77b4",
-                 "combined": "#9467bd"}
+METHOD_COLORS = {name: EXPERIMENT_COLORS[label] for name, label in EXPERIMENT_LABELS.items()}
 #: Methods shown in the doorway close-up (the brief of Fig. 2: centerline against carving).
 CLOSEUP_METHODS = ("centerline", "carve", "combined")
 
@@ -96,8 +101,6 @@ APPROACH_DISTANCE = 1.5
 #: Readings between two snapshots of the history for the unprocessed share (16 = one cycle of
 #: the Scout2 ring, 0.64 s; the experiments use the same).
 SAMPLE_EVERY = 16
-#: Range bins of the error-against-range figure, metres (Scout2 maximum range 6.48 m).
-RANGE_EDGES = tuple(np.round(np.arange(0.0, 7.0 + 1e-9, 0.5), 3).tolist())
 #: A door not driven through counts as approached when it is within this angle of the robot's
 #: heading (head-on), or of its side (passed by), radians.
 _HEAD_ON = math.radians(45.0)
@@ -148,6 +151,8 @@ class MethodSummary:
     unprocessed_pct : float
         Mean share of the history not yet processed, percent (Table I): over snapshots every
         :data:`SAMPLE_EVERY` readings once the history is full (all snapshots if it never is).
+        Arcs carving removed stay in the history and count as processed (the library's
+        measure); the paper's history drops them.
     median_error_m, p90_error_m : float
         Median and 90th percentile distance of the global map's points to the true walls, m.
     fully_carved_pct : float
@@ -192,7 +197,7 @@ class MethodSummary:
         for name in ("readings", "unprocessed_pct", "median_error_m", "p90_error_m",
                      "fully_carved_pct", "spurious_removed_pct", "true_lost_pct", "map_points",
                      "seconds", "readings_per_second"):
-            row[name] = _json_number(getattr(self, name))
+            row[name] = json_ready(getattr(self, name))
         return row
 
 
@@ -238,7 +243,9 @@ class DoorApproach:
         Method -> widest stretch of the gap with no map point within ``GAP_DEPTH`` of the gap
         line, metres (:func:`~sonarcarve.evaluation.metrics.free_width`).
     passable : dict of str to bool
-        Method -> free width at least the robot's diameter plus ``CLEARANCE_MARGIN``.
+        Method -> free width at least
+        :func:`~sonarcarve.evaluation.analyses.passage_clearance` (the robot's diameter plus a
+        margin).
     """
 
     opening: int
@@ -446,12 +453,7 @@ def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS
 def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
                capacity: int) -> MethodSummary:
     # Table I's measure over the regular snapshots only (the door moments would bias it).
-    added = record.sample_readings[record.samples.sample]
-    regular = record.samples.select(added % SAMPLE_EVERY == 0)
-    full = regular.select(record.sample_readings[regular.sample] >= capacity)
-    if not len(full):  # a tour too short to fill the history: use what there is
-        full = regular
-    unprocessed = metrics.percent(~full.processed)
+    unprocessed = unprocessed_percent(full_history_samples(record, capacity, every=SAMPLE_EVERY))
     removal = removal_summary(record.final, sim.truth.kind)
     summary = metrics.error_summary(err)
     return MethodSummary(
@@ -536,11 +538,8 @@ def _view(sim: Simulation, records: Mapping[str, RunRecord], readings: int) -> L
     """Every method's local map once ``readings`` readings have been added."""
     t = float(sim.readings.t[readings - 1])
     x, y, h = sim.trajectory.pose_at(t)
-    maps = {}
-    for name, rec in records.items():
-        k = int(np.searchsorted(rec.sample_readings, readings))
-        snap = rec.snapshot(k)
-        maps[name] = snap.select(snap.alive)
+    maps = {name: rec.local_map(int(np.searchsorted(rec.sample_readings, readings)))
+            for name, rec in records.items()}
     return LocalView(readings, t, (float(x), float(y), float(h)), maps)
 
 
@@ -548,7 +547,7 @@ def _measure_door(sim: Simulation, records: Mapping[str, RunRecord],
                   candidate: _Candidate) -> DoorApproach:
     jambs = np.asarray(sim.world.openings[candidate.opening], dtype=np.float64)
     region = metrics.gap_region(jambs[0], jambs[1], GAP_DEPTH)
-    clearance = 2.0 * sim.robot.robot_radius + CLEARANCE_MARGIN
+    clearance = passage_clearance(sim.robot.robot_radius)
     view = _view(sim, records, candidate.readings)
     free = {name: metrics.free_width(local.xy, region) for name, local in view.maps.items()}
     return DoorApproach(candidate.opening, jambs, candidate.how, view, free,
@@ -595,7 +594,8 @@ def _cm(value: float) -> str:
 TABLE_COLUMNS = (
     ("method", "method", "sonar processing method"),
     ("readings", "readings", "sonar readings processed"),
-    ("unprocessed_pct", "unpro-\ncessed\n%", "mean share of the history not yet processed"),
+    ("unprocessed_pct", "unpro-\ncessed\n%",
+     "mean share of the history not yet processed (arcs carving removed count as processed)"),
     ("median_error_m", "median\nerror\ncm", "median distance of map points to the true walls"),
     ("p90_error_m", "p90\nerror\ncm", "90th percentile of that distance"),
     ("fully_carved_pct", "fully\ncarved\n%", "readings whose whole arc was carved away"),
@@ -706,20 +706,7 @@ def summary_json(result: DemoResult) -> str:
         "figures": list(FIGURE_FILES.values()),
         "seconds": result.seconds,
     }
-    return json.dumps(data, indent=2, allow_nan=False, default=_json_default) + "\n"
-
-
-def _json_number(value: float) -> float | int | None:
-    if isinstance(value, int | np.integer):
-        return int(value)
-    return float(value) if math.isfinite(value) else None
-
-
-def _json_default(value: object) -> object:
-    if isinstance(value, np.generic):
-        return value.item()
-    msg = f"not JSON serialisable: {type(value).__name__}"
-    raise TypeError(msg)
+    return json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n"
 
 
 # ============================================================================ outputs
@@ -758,6 +745,7 @@ def write_demo_outputs(result: DemoResult, out: str | Path) -> list[Path]:
         SUMMARY_MD: summary_markdown(result).encode(),
         SUMMARY_JSON: summary_json(result).encode(),
     }
+    make_output_dir(target)  # atomic_path creates no folders
     written = []
     for name, content in files.items():
         with atomic_path(target / name) as tmp:

@@ -23,12 +23,12 @@ from sonarcarve.demo import (
     CLOSEUP_METHODS,
     METHOD_COLORS,
     METHOD_LABELS,
-    RANGE_EDGES,
     ZOOM_SIZE,
     DemoResult,
 )
 from sonarcarve.evaluation import metrics
-from sonarcarve.evaluation.experiments import CLEARANCE_MARGIN, GAP_DEPTH
+from sonarcarve.evaluation.analyses import GAP_DEPTH, RANGE_EDGES, passage_clearance
+from sonarcarve.evaluation.drawing import new_figure, scatter_sources
 from sonarcarve.evaluation.instrument import ArcTable
 from sonarcarve.maps import PointSource
 from sonarcarve.sim.simulate import Simulation
@@ -43,33 +43,10 @@ __all__ = ["plot_door_closeup", "plot_error_by_range", "plot_global_maps", "plot
 FloatArray = npt.NDArray[np.float64]
 
 
-def _figure(rows: int, cols: int, width: float, height: float,
-            **options: Any) -> tuple[Figure, Any]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
-                             squeeze=False, **options)
-    return fig, axes
-
-
 def _walls(ax: Axes, world: World, **style: Any) -> None:
     from sonarcarve.plotting import plot_world
 
     plot_world(world, ax, **({"colors": "0.55", "linewidths": 1.2} | style))
-
-
-def _scatter_sources(ax: Axes, xy: FloatArray, source: npt.NDArray[np.int8],
-                     size: float) -> None:
-    from sonarcarve.plotting import SOURCE_COLORS
-
-    for code, color in SOURCE_COLORS.items():
-        mask = source == code
-        if np.any(mask):
-            ax.scatter(xy[mask, 0], xy[mask, 1], s=size, c=color, linewidths=0, zorder=3,
-                       label=f"{PointSource(code).label} ({int(mask.sum()):,})")
 
 
 def _map_limits(result: DemoResult, margin: float = 1.5) -> tuple[float, float, float, float]:
@@ -110,7 +87,7 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
     rows = math.ceil(len(result.methods) / cols)
     aspect = (y1 - y0) / max(x1 - x0, 1e-9)
     width = 13.0 if cols == 2 else 7.0
-    fig, axes = _figure(rows, cols, width=width,
+    fig, axes = new_figure(rows, cols, width=width,
                         height=min(14.0, 1.0 + rows * (width / cols) * aspect),
                         sharex=True, sharey=True)
     traj = result.simulation.trajectory
@@ -118,7 +95,7 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
         gmap = result.global_maps[row.method]
         _walls(ax, result.world)
         ax.plot(traj.x, traj.y, color="0.25", lw=0.7, ls=":", zorder=2, label="robot path")
-        _scatter_sources(ax, gmap.xy, gmap.source, size)
+        scatter_sources(ax, gmap.xy, gmap.source, size)
         if box is not None:
             ax.add_patch(Rectangle((box[0], box[2]), box[1] - box[0], box[3] - box[2],
                                    fill=False, ls="--", lw=1.2, color="k", zorder=4))
@@ -165,7 +142,7 @@ def plot_error_by_range(result: DemoResult) -> Figure:
 
     from sonarcarve.maps import chord_error
 
-    fig, axes = _figure(1, 1, width=10.5, height=5.5)
+    fig, axes = new_figure(1, 1, width=10.5, height=5.5)
     ax = axes[0, 0]
     edges = np.asarray(RANGE_EDGES)
     handles = []
@@ -206,7 +183,7 @@ def plot_door_closeup(result: DemoResult) -> Figure:
     view = door.view if door is not None else result.fallback_view
     methods = [m for m in CLOSEUP_METHODS if view is not None and m in view.maps]
     cols = max(1, len(methods))
-    fig, axes = _figure(1, cols, width=4.8 * cols, height=5.9, sharex=True, sharey=True)
+    fig, axes = new_figure(1, cols, width=4.8 * cols, height=5.9, sharex=True, sharey=True)
     if view is None or not methods:
         axes[0, 0].axis("off")
         return fig
@@ -226,7 +203,7 @@ def plot_door_closeup(result: DemoResult) -> Figure:
         ax.plot(traj.x[ahead], traj.y[ahead], color="k", ls=":", lw=1.2, zorder=4,
                 label="path ahead")
         _local_arcs(ax, sim, local)
-        _scatter_sources(ax, local.xy, local.source, 20.0)
+        scatter_sources(ax, local.xy, local.source, 20.0)
         if door is not None:
             ax.plot(door.jambs[:, 0], door.jambs[:, 1], color="orange", lw=3.0, ls="--",
                     zorder=2, label="the door")
@@ -251,7 +228,7 @@ def plot_door_closeup(result: DemoResult) -> Figure:
     if door is not None:
         where = (f"{APPROACH_DISTANCE:g} m before driving through a door" if door.how == "through"
                  else f"{door.distance:.1f} m from a door")
-        need = 2.0 * float(sim.robot.robot_radius) + CLEARANCE_MARGIN
+        need = passage_clearance(float(sim.robot.robot_radius))
         fig.suptitle(f"What the robot's local map shows {where} (t = {view.t:.0f} s); the "
                      f"robot needs {need:.2f} m free to pass", fontsize=12)
     else:

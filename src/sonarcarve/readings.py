@@ -21,6 +21,7 @@ from sonarcarve.errors import SonarcarveError
 
 __all__ = [
     "DEFAULT_BEAM_WIDTH",
+    "MAX_SENSOR",
     "Reading",
     "ReadingBatch",
     "ReadingsError",
@@ -28,6 +29,10 @@ __all__ = [
 
 #: The Polaroid transducer's arc width φ (paper, section 2): 22.5 degrees, in radians.
 DEFAULT_BEAM_WIDTH = math.radians(22.5)
+#: Largest sensor index accepted. Indices name the sensors of one robot, so anything near this
+#: is a damaged file; the bound (2**31 - 1) keeps an index exact in every integer type and in
+#: float64, which is how a CSV column is first parsed.
+MAX_SENSOR = 2**31 - 1
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -100,14 +105,15 @@ class ReadingBatch:
         ------
         ReadingsError
             Naming ``source`` and the first offending row (0-based) and column; with
-            ``first_line`` (the file line of row 0) it names the file line instead.
+            ``first_line`` (the file line of row 0) it names the file line instead. A sensor
+            must be a whole number in [0, :data:`MAX_SENSOR`].
         """
         t_arr = np.asarray(t, dtype=np.float64).reshape(-1)
         n = t_arr.shape[0]
         width = np.full(n, math.nan) if beam_width is None else beam_width
         batch = cls(
             t=t_arr,
-            sensor=np.asarray(sensor, dtype=np.int64).reshape(-1),
+            sensor=_sensor_indices(sensor, _Where(source, first_line)),
             x=np.asarray(x, dtype=np.float64).reshape(-1),
             y=np.asarray(y, dtype=np.float64).reshape(-1),
             theta=np.asarray(theta, dtype=np.float64).reshape(-1),
@@ -198,6 +204,30 @@ class _Where(NamedTuple):
         if self.first_line is None:
             return f"{self.source}: row {row}"
         return f"{self.source}: line {row + self.first_line}"
+
+
+def _sensor_indices(sensor: npt.ArrayLike, where: _Where) -> IntArray:
+    """``sensor`` as int64, or :class:`ReadingsError` for a value that is no index.
+
+    Checked before the cast because numpy's cast of a fractional, non-finite or huge value
+    silently truncates or wraps (with a RuntimeWarning), which would report the wrong problem.
+    """
+    values = np.asarray(sensor).reshape(-1)
+    if values.dtype.kind in "iub":
+        _first_bad(where, "sensor", values < 0, "must be >= 0")
+        _first_bad(where, "sensor", values > MAX_SENSOR, f"must be at most {MAX_SENSOR}")
+        return values.astype(np.int64)
+    try:
+        numbers = values.astype(np.float64)
+    except (TypeError, ValueError):
+        msg = f"{where.source}: column 'sensor' is not numeric (sensors are whole numbers)"
+        raise ReadingsError(msg) from None
+    with np.errstate(invalid="ignore"):
+        _first_bad(where, "sensor", ~np.isfinite(numbers) | (numbers != np.floor(numbers)),
+                   "is not a whole number")
+    _first_bad(where, "sensor", numbers < 0, "must be >= 0")
+    _first_bad(where, "sensor", numbers > MAX_SENSOR, f"must be at most {MAX_SENSOR}")
+    return numbers.astype(np.int64)
 
 
 def _first_bad(where: _Where, column: str, bad: npt.NDArray[np.bool_], problem: str) -> None:

@@ -15,7 +15,6 @@ from sonarcarve.evaluation.appendix import (
     END_MARKER,
     AppendixError,
     AppendixSettings,
-    _pose_corrected,
     appendix_markdown,
     latest_firing,
     line_spread,
@@ -25,6 +24,7 @@ from sonarcarve.evaluation.appendix import (
     run_appendix,
     write_appendix_section,
 )
+from sonarcarve.evaluation.appendix_odometry import _pose_corrected
 from sonarcarve.io.roboND import read_robond
 from sonarcarve.polling import poll_readings, simulate_polls
 from sonarcarve.sim.motion import Trajectory, follow_waypoints
@@ -207,16 +207,25 @@ def test_markdown_section_and_replacement(quick: tuple[dict[str, Any], Path],
     for title in ("Appendix A, Fig. 14", "roboND", "Fig. 7"):
         assert title in md
     path = tmp_path / "RESULTS.md"
-    path.write_text("# Results\n\nkeep me\n<!-- experiments:begin -->\nx\n"
-                    "<!-- experiments:end -->\n")
+    head = "# Results\n\nkeep me\n<!-- experiments:begin -->\nx\n<!-- experiments:end -->\n"
+    path.write_text(head)
+    # An existing file without the appendix markers is refused and left as it was.
+    with pytest.raises(AppendixError, match=r"RESULTS\.md: has no <!-- appendix:begin -->"):
+        write_appendix_section(path, quick[0], "cmd")
+    assert path.read_text() == head
+    path.write_text(f"{head}\n{BEGIN_MARKER}\nold\n{END_MARKER}\n\ntail\n")
     write_appendix_section(path, quick[0], "cmd")
     first = path.read_text()
-    assert first.startswith("# Results\n\nkeep me\n<!-- experiments:begin -->\nx\n")
+    assert first.startswith(f"{head}\n{BEGIN_MARKER}\n")
+    assert first.endswith(f"{END_MARKER}\n\ntail\n")
     write_appendix_section(path, quick[0], "cmd2")
     second = path.read_text()
     assert second.count(BEGIN_MARKER) == 1
     assert "cmd2" in second
     assert "`cmd`" not in second
+    # A file that does not exist yet is created with the section alone.
+    fresh = write_appendix_section(tmp_path / "new.md", quick[0], "cmd")
+    assert fresh.read_text() == appendix_markdown(quick[0], "cmd") + "\n"
     with pytest.raises(AppendixError, match="line 2"):
         replace_appendix_section(f"a\n{END_MARKER}\n{BEGIN_MARKER}\n", md)
 

@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from sonarcarve.evaluation.analyses import first_reading_within
 from sonarcarve.evaluation.appendix import APPENDIX_EXPERIMENTS
 from sonarcarve.evaluation.experiments import (
     EXPERIMENTS,
     ExperimentError,
     Scenario,
     Settings,
-    _first_reading_within,
     cut_polyline,
     fig13_keep,
     removal_summary,
@@ -81,11 +81,11 @@ def test_opening_distance_is_measured_along_the_drive() -> None:
     # Head-on drive from the origin towards a door centred on (0, 4.5).
     sim = run_simulation(Scenario("doorway:0.8", 0, path=((0.0, 0.0), (0.0, 3.7))))
     gap = sim.world.openings[0].tolist()
-    stop = _first_reading_within(sim, gap, 2.0)
+    stop = first_reading_within(sim, gap, 2.0)
     assert stop > 1
     y = sim.trajectory.pose_at(sim.readings.t[[stop - 2, stop - 1]])[1]
     assert y[0] < 4.5 - 2.0 <= y[1]
-    assert _first_reading_within(sim, gap, 0.1) == 0  # the drive stops 0.8 m short
+    assert first_reading_within(sim, gap, 0.1) == 0  # the drive stops 0.8 m short
 
 
 def test_bad_requests_raise() -> None:

@@ -10,6 +10,8 @@ from typing import Any
 import pytest
 
 from sonarcarve.cli import main
+from sonarcarve.evaluation.appendix import BEGIN_MARKER as APPENDIX_BEGIN
+from sonarcarve.evaluation.appendix import END_MARKER as APPENDIX_END
 from sonarcarve.evaluation.report import BEGIN_MARKER, END_MARKER
 
 METHODS = ("atm", "carving", "combined", "centerline")
@@ -20,7 +22,7 @@ def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str,
     root = tmp_path_factory.mktemp("experiments")
     md = root / "RESULTS.md"
     md.write_text(f"# Results\n\nLead's text.\n\n{BEGIN_MARKER}\nSTALE-SECTION\n{END_MARKER}"
-                  "\n\nTail.\n")
+                  f"\n\nMiddle.\n\n{APPENDIX_BEGIN}\nSTALE-APPENDIX\n{APPENDIX_END}\n\nTail.\n")
     out = root / "out"
     code = main(["experiments", "--quick", "--out", str(out), "--figures", str(root / "figs"),
                  "--results-md", str(md)])
@@ -72,12 +74,25 @@ def test_figures_and_markdown_are_written(quick_run: tuple[Path, dict[str, Any],
         assert (md.parent / "figs" / name).exists()
     text = md.read_text()
     assert text.startswith("# Results\n\nLead's text.\n\n")
-    assert f"{END_MARKER}\n\nTail.\n" in text  # the appendix section is appended after it
+    assert f"{END_MARKER}\n\nMiddle.\n\n{APPENDIX_BEGIN}\n" in text
+    assert text.endswith(f"{APPENDIX_END}\n\nTail.\n")
     assert "STALE-SECTION" not in text
+    assert "STALE-APPENDIX" not in text
     assert text.count(BEGIN_MARKER) == 1
+    assert text.count(APPENDIX_BEGIN) == 1
     assert res["command"] in text
     assert "31.75" in text  # the paper's ATM number sits next to ours
     assert "](figs/fig10_unprocessed_by_range.png)" in text
+    # Table I's carving line names both measures: all history rows and live arcs only.
+    t1, alive = res["table1"], res["table1_alive_only"]
+    assert (f"Arc carving: {t1['carving']:.1f} % of all history rows "
+            f"({alive['carving']:.1f} % of live arcs only)") in text
+    # The history sweep sentence names the smallest and largest history actually swept.
+    hist = res["sensitivity"]["history"]
+    lo, hi = min(hist["values"]), max(hist["values"])
+    err = dict(zip(hist["values"], hist["carving"]["error_median"], strict=True))
+    assert (f"carving's median true error {err[lo]:.3f} m with {lo:g} arcs, "
+            f"{err[hi]:.3f} m with {hi:g})") in text
 
 
 def test_unknown_experiment_is_a_one_line_error(

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from sonarcarve.evaluation.metrics import (
     binned,
+    combine_binned,
     count_near_segment,
     error_summary,
     first_at_least,
@@ -181,3 +182,20 @@ def test_patch_latency_ignores_samples_before_first_view() -> None:
 def test_resolved_share_curve() -> None:
     curve = resolved_share_curve([0.5, 2.0, math.inf, 1.0], [0.0, 1.0, 5.0])
     assert curve.tolist() == [0.0, 50.0, 75.0]
+
+
+def test_combine_binned_averages_runs_per_bin_by_hand() -> None:
+    edges = [0.0, 1.0, 2.0, 3.0]
+    runs = [binned([0.5, 0.6, 1.5], [0.1, 0.2, 1.5], edges).as_dict(),  # bins 0 and 1
+            binned([0.1, 0.9], [0.5, 0.7], edges).as_dict()]  # bin 0 only
+    out = combine_binned(runs, "mean")
+    assert out["edges"] == edges
+    assert out["count"] == [4, 1, 0]
+    # Bin 0: run means 0.55 and 0.5; bin 1: only the first run; bin 2: no run.
+    assert out["value"][0] == pytest.approx(0.525)
+    assert out["min"][0] == pytest.approx(0.5)
+    assert out["max"][0] == pytest.approx(0.55)
+    assert out["value"][1] == pytest.approx(1.5)
+    assert out["value"][2] is None
+    assert out["min"][2] is None
+    assert combine_binned(runs, "median")["max"][0] == pytest.approx(0.55)

@@ -3,15 +3,25 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+from sonarcarve.evaluation.appendix import BEGIN_MARKER as APPENDIX_BEGIN
+from sonarcarve.evaluation.appendix import END_MARKER as APPENDIX_END
+from sonarcarve.evaluation.appendix import AppendixError
+from sonarcarve.evaluation.experiments import ExperimentResults
+from sonarcarve.evaluation.output import json_ready
 from sonarcarve.evaluation.report import (
     BEGIN_MARKER,
     END_MARKER,
     ReportError,
-    _clean,
+    _history_effect,
+    _mean_between,
+    check_results_md,
     replace_section,
+    write_outputs,
 )
 
 NEW = f"{BEGIN_MARKER}\nnew\n{END_MARKER}"
@@ -22,14 +32,20 @@ def test_replaces_only_the_marked_span() -> None:
     assert replace_section(text, NEW) == f"head\n\n{NEW}\n\ntail\n"
 
 
-def test_appends_when_there_are_no_markers() -> None:
+def test_blank_text_becomes_the_section() -> None:
     assert replace_section("", NEW) == f"{NEW}\n"
-    assert replace_section("# Results\n", NEW) == f"# Results\n\n{NEW}\n"
-    assert replace_section("# Results", NEW) == f"# Results\n\n{NEW}\n"
+    assert replace_section("\n \n", NEW) == f"{NEW}\n"
+
+
+def test_text_without_markers_is_refused_unless_appending() -> None:
+    with pytest.raises(ReportError, match=r"^README\.md: has no <!-- experiments:begin -->"):
+        replace_section("# My notes\n", NEW, "README.md")
+    assert replace_section("# Results\n", NEW, append_missing=True) == f"# Results\n\n{NEW}\n"
+    assert replace_section("# Results", NEW, append_missing=True) == f"# Results\n\n{NEW}\n"
 
 
 def test_is_idempotent() -> None:
-    once = replace_section("a\n", NEW)
+    once = replace_section("a\n", NEW, append_missing=True)
     assert replace_section(once, NEW) == once
 
 
@@ -43,9 +59,86 @@ def test_broken_markers_raise_naming_the_file(text: str) -> None:
         replace_section(text, NEW, "docs/RESULTS.md")
 
 
-def test_clean_makes_strict_json() -> None:
-    import numpy as np
-
+def test_json_ready_makes_strict_json() -> None:
     data = {"a": math.nan, "b": (1, np.float64(2.5), math.inf), "c": {"d": np.int64(3)},
-            "e": True}
-    assert _clean(data) == {"a": None, "b": [1, 2.5, None], "c": {"d": 3}, "e": True}
+            "e": True, "f": np.array([1.0, np.nan]), "g": np.bool_(False), 7: "seven"}
+    assert json_ready(data) == {"a": None, "b": [1, 2.5, None], "c": {"d": 3}, "e": True,
+                                "f": [1.0, None], "g": False, "7": "seven"}
+
+
+# -- the writer: existing files must hold the markers ------------------------------------------
+
+def test_writer_refuses_a_file_without_markers_before_writing_anything(tmp_path: Path) -> None:
+    md = tmp_path / "README.md"
+    md.write_text("# My project\n\nHand-written text.\n")
+    out = tmp_path / "out"
+    with pytest.raises(ReportError, match=r"README\.md: has no") as info:
+        write_outputs(ExperimentResults(), out, command="cmd", results_md=md)
+    assert len(str(info.value).splitlines()) == 1
+    assert md.read_text() == "# My project\n\nHand-written text.\n"
+    assert not out.exists()
+
+
+def test_writer_appends_the_appendix_only_to_a_results_file(tmp_path: Path) -> None:
+    # The experiments markers make it a results file: a missing appendix section is appended.
+    md = tmp_path / "RESULTS.md"
+    md.write_text(f"{BEGIN_MARKER}\n{END_MARKER}\n\ntail\n")
+    check_results_md(md)
+    results = ExperimentResults(results={"appendix_meta": {}})
+    write_outputs(results, tmp_path / "out", command="cmd", results_md=md)
+    text = md.read_text()
+    assert f"{END_MARKER}\n\ntail\n\n{APPENDIX_BEGIN}\n" in text
+    assert text.endswith(f"{APPENDIX_END}\n")
+    # Broken appendix markers are refused before anything is written.
+    md.write_text(f"{BEGIN_MARKER}\n{END_MARKER}\n{APPENDIX_END}\n")
+    with pytest.raises(AppendixError, match=r"RESULTS\.md: line 3"):
+        check_results_md(md)
+    with pytest.raises(AppendixError):
+        write_outputs(results, tmp_path / "out2", command="cmd", results_md=md)
+    assert md.read_text() == f"{BEGIN_MARKER}\n{END_MARKER}\n{APPENDIX_END}\n"
+    assert not (tmp_path / "out2").exists()
+    check_results_md(md, appendix=False)  # the experiments section alone is fine
+
+
+def test_writer_creates_a_missing_file_and_keeps_text_around_markers(tmp_path: Path) -> None:
+    md = tmp_path / "new.md"
+    check_results_md(md)
+    written = write_outputs(ExperimentResults(), tmp_path / "out", command="cmd-1",
+                            results_md=md)
+    assert md in written
+    first = md.read_text()
+    assert first.startswith(BEGIN_MARKER)
+    assert first.rstrip().endswith(END_MARKER)
+    assert "`cmd-1`" in first
+    md.write_text(f"head\n\n{first}\ntail\n")
+    write_outputs(ExperimentResults(), tmp_path / "out", command="cmd-2", results_md=md)
+    second = md.read_text()
+    assert second.startswith("head\n\n" + BEGIN_MARKER)
+    assert second.endswith(f"{END_MARKER}\n\ntail\n")
+    assert "`cmd-2`" in second
+    assert "`cmd-1`" not in second
+    assert APPENDIX_BEGIN not in second  # no appendix results, no appendix section
+    assert APPENDIX_END not in second
+
+
+# -- text helpers --------------------------------------------------------------------------------
+
+def test_history_sentence_names_the_smallest_and_largest_history_swept() -> None:
+    def sweep(values: list[float], errors: list[float | None]) -> dict[str, object]:
+        return {"sensitivity": {"history": {"values": values,
+                                            "carving": {"error_median": errors}}}}
+
+    quick = _history_effect(sweep([50, 250], [0.059, 0.047]))
+    assert "0.059 m with 50 arcs, 0.047 m with 250)" in quick
+    shuffled = _history_effect(sweep([250, 2000, 50], [0.05, 0.04, 0.07]))
+    assert "0.070 m with 50 arcs, 0.040 m with 2000)" in shuffled
+    assert _history_effect(sweep([250], [0.05])) == ""  # one value: nothing to compare
+    assert _history_effect(sweep([50, 250], [None, 0.05])) == ""
+
+
+def test_binned_means_weight_bins_by_count() -> None:
+    entry = {"edges": [0.0, 1.0, 2.0, 3.0], "value": [10.0, 40.0, None], "count": [3, 1, 5]}
+    assert _mean_between(entry, high=1.0) == pytest.approx(10.0)
+    assert _mean_between(entry, 0.0, 2.0) == pytest.approx((3 * 10.0 + 40.0) / 4)
+    assert _mean_between(entry, 1.0) == pytest.approx(40.0)  # the empty bin is left out
+    assert _mean_between(entry, 2.0) is None

@@ -162,3 +162,9 @@ def test_t_junction_and_narrow_hallway_parameters() -> None:
         doorway_world(door_width=9.0)
     with pytest.raises(WorldError):
         corridor_opening_world(opening_width=20.0)
+
+
+def test_random_world_refuses_a_negative_seed() -> None:
+    with pytest.raises(WorldError) as info:
+        random_world(-2)
+    assert str(info.value) == "seed must be an integer >= 0, got -2"

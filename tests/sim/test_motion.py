@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from sonarcarve.sim import motion
 from sonarcarve.sim.generate import random_world
 from sonarcarve.sim.motion import (
     ROBOT_RADIUS,
@@ -15,7 +16,7 @@ from sonarcarve.sim.motion import (
     follow_waypoints,
     with_odometry_drift,
 )
-from sonarcarve.sim.world import WorldError, load_world
+from sonarcarve.sim.world import World, WorldError, load_world
 
 
 def _distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
@@ -214,3 +215,65 @@ def test_odometry_bad_parameters() -> None:
                    {"heading_bias": np.inf}):
         with pytest.raises(WorldError):
             with_odometry_drift(truth, seed=0, **kwargs)  # type: ignore[arg-type]
+
+
+# --- size limits -------------------------------------------------------------------------------
+
+def test_waypoints_beyond_max_coordinate_are_refused() -> None:
+    assert motion.MAX_COORDINATE == 1e5
+    with pytest.raises(WorldError) as info:
+        follow_waypoints([[0.0, 0.0], [1e300, 0.0]])
+    assert str(info.value) == ("waypoints[1] (1e+300, 0) lies farther than the limit of 100000 m "
+                               "(MAX_COORDINATE) from the origin in x or y")
+    with pytest.raises(WorldError, match=r"waypoints\[0\] \(0, -100001\)"):
+        follow_waypoints([[0.0, -100_001.0], [0.0, 0.0]])
+    # At the limit itself: 200 km at 0.4 m/s is 500,000 s, 501 poses at dt = 1000 s.
+    tr = follow_waypoints([[-1e5, 1e5], [1e5, 1e5]], dt=1000.0)
+    assert len(tr) == 501
+
+
+def test_a_path_needing_more_than_max_poses_is_refused_before_allocating() -> None:
+    assert motion.MAX_POSES == 10_000_000
+    # 100 km at 0.4 m/s = 250,000 s; every 1 ms that is 2.5e8 poses.
+    with pytest.raises(WorldError) as info:
+        follow_waypoints([[0.0, 0.0], [1e5, 0.0]], dt=1e-3)
+    message = str(info.value)
+    assert message.startswith("path of 250000 s sampled every 0.001 s needs 2.5e+08 poses")
+    assert "limit of 10,000,000 (MAX_POSES)" in message
+
+
+def test_max_poses_is_the_boundary(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(motion, "MAX_POSES", 11)
+    # 1 m at 0.5 m/s every 0.2 s: t = 0, 0.2, ..., 2.0, that is 11 poses: allowed.
+    assert len(follow_waypoints([[0.0, 0.0], [1.0, 0.0]], speed=0.5, dt=0.2)) == 11
+    with pytest.raises(WorldError, match="MAX_POSES"):
+        follow_waypoints([[0.0, 0.0], [1.2, 0.0]], speed=0.5, dt=0.2)  # 13 poses
+    with pytest.raises(WorldError, match="MAX_POSES"):
+        explore(load_world("t-junction"), 2.2, seed=0, dt=0.2)  # 12 poses
+    monkeypatch.setattr(motion, "MAX_POSES", 12)
+    assert len(explore(load_world("t-junction"), 2.2, seed=0, dt=0.2)) == 12
+
+
+def test_explore_refuses_a_billion_seconds_at_once() -> None:
+    with pytest.raises(WorldError) as info:
+        explore(load_world("doorway"), 1e9, seed=0)
+    # 1e9 s every 0.05 s is 2e10 poses (+1).
+    assert str(info.value).startswith("exploration of 1e+09 s sampled every 0.05 s needs 2e+10 "
+                                      "poses, more than the limit of 10,000,000 (MAX_POSES)")
+
+
+def test_explore_refuses_a_world_too_big_for_its_planning_grid() -> None:
+    # A 400 m square: (401 m / 0.1 m)^2 = 1.6e7 cells > 1e7.
+    square = World(np.array([[0, 0, 400, 0], [400, 0, 400, 400], [400, 400, 0, 400],
+                             [0, 400, 0, 0]], dtype=float), "plaza")
+    with pytest.raises(WorldError, match=r"plaza: 400 m x 400 m is too big to explore: its "
+                                         r"0\.1 m planning grid would have 1\.61e\+07 cells"):
+        explore(square, 10.0, seed=0, start=(200.0, 200.0))
+
+
+def test_seeded_motion_refuses_negative_seeds() -> None:
+    tr = follow_waypoints([[0.0, 0.0], [1.0, 0.0]])
+    with pytest.raises(WorldError, match=r"^seed must be an integer >= 0, got -1$"):
+        with_odometry_drift(tr, seed=-1)
+    with pytest.raises(WorldError, match=r"^seed must be an integer >= 0, got -3$"):
+        explore(load_world("doorway"), 1.0, seed=-3)

@@ -128,5 +128,57 @@ def test_broken_yaml_syntax_names_the_line(tmp_path: Path) -> None:
 def test_unknown_name_and_missing_file() -> None:
     with pytest.raises(RobotError, match=r"unknown robot 'nomad'.*scout2"):
         load_robot("nomad")
-    with pytest.raises(RobotError, match=r"no such robot file"):
+    with pytest.raises(RobotError, match=r"missing/robot\.yaml: no such file"):
         load_robot("missing/robot.yaml")
+
+
+@pytest.mark.parametrize(
+    ("order", "problem"),
+    [
+        ("[0, 1, 0]", "lists sensor 0 2 times; list each of 0..1 once"),
+        ("[1, 1]", "lists sensor 1 2 times; list each of 0..1 once"),
+        ("[1]", "leaves out sensor 0; list each of 0..1 once"),
+    ],
+)
+def test_firing_order_must_fire_each_sensor_once(tmp_path: Path, order: str,
+                                                 problem: str) -> None:
+    path = tmp_path / "ring.yaml"
+    path.write_text(GOOD_YAML + f"firing_order: {order}\n")
+    with pytest.raises(RobotError) as info:
+        load_robot(path)
+    assert str(info.value) == f"{path}: field 'firing_order' {problem}"
+
+
+def test_firing_order_lists_every_sensor_left_out() -> None:
+    with pytest.raises(RobotError) as info:
+        RobotDescription(
+            name="ring", mount_x=np.zeros(5), mount_y=np.zeros(5), bearing=np.zeros(5),
+            beam_width=np.full(5, 0.3), firing_order=np.array([3, 0]), firing_period=0.1,
+            range_resolution=0.0, min_range=0.1, max_range=5.0, robot_radius=0.2)
+    assert str(info.value) == ("ring: field 'firing_order' leaves out sensors 1, 2, 4; list each "
+                               "of 0..4 once")
+
+
+def test_robot_file_problems_use_the_shared_wording(tmp_path: Path) -> None:
+    with pytest.raises(RobotError) as info:
+        load_robot(tmp_path)
+    assert str(info.value) == f"{tmp_path}: is a directory"
+    with pytest.raises(RobotError) as info:
+        load_robot(tmp_path / "robot.yml")
+    assert str(info.value) == f"{tmp_path / 'robot.yml'}: no such file"
+    path = tmp_path / "big.yaml"
+    path.write_text(GOOD_YAML.replace("max_range: 4.0", f"max_range: {10**400}"))
+    with pytest.raises(RobotError, match=r"field 'max_range' must be a finite number, got 1000"):
+        load_robot(path)
+
+
+def test_firing_schedule_refuses_more_than_max_firings() -> None:
+    robot = load_robot("scout2")  # fires every 0.04 s
+    # One week: 604,800 s / 0.04 s = 15,120,000 intervals, 15,120,001 firings > 1e7.
+    with pytest.raises(RobotError) as info:
+        robot.firing_schedule(0.0, 604_800.0)
+    assert str(info.value) == ("scout2: firing every 0.04 s from t = 0 s to 604800 s takes "
+                               "1.512e+07 firings, more than the limit of 10,000,000 "
+                               "(MAX_FIRINGS)")
+    with pytest.raises(RobotError, match="MAX_FIRINGS"):
+        robot.firing_schedule(0.0, math.inf)

@@ -109,6 +109,7 @@ def test_files_round_trip_and_are_byte_identical_per_seed(tmp_path: Path) -> Non
     paths = []
     for folder in ("a", "b"):
         out = tmp_path / folder / "run.csv"
+        out.parent.mkdir()  # writers create no folders
         written = write_simulation(simulate(ROOM, robot, loop(), seed=5), out)
         assert written == truth_path(out) == out.with_name("run.truth.json")
         paths.append(out)

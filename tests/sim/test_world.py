@@ -17,7 +17,9 @@ from PIL import Image
 from sonarcarve.sim.world import (
     World,
     WorldError,
+    _first_crossing,
     builtin_worlds,
+    check_seed,
     load_world,
     read_ros_map,
     read_world_json,
@@ -436,3 +438,171 @@ def test_json_written_file_is_json(tmp_path: Path) -> None:
     data = json.loads(path.read_text())
     assert set(data) == {"name", "description", "segments", "tour", "openings"}
     assert read_world_json(path).segments.shape == (8, 4)
+
+
+# --- seeds --------------------------------------------------------------------------------------
+
+def test_check_seed_accepts_non_negative_integers_only() -> None:
+    assert check_seed(0) == 0
+    assert check_seed(np.int64(5)) == 5
+    assert check_seed(2**70) == 2**70  # numpy seeds take big integers
+    for bad in (-1, True, 1.5, "3", None):
+        with pytest.raises(WorldError) as info:
+            check_seed(bad, "the seed")
+        assert str(info.value) == f"the seed must be an integer >= 0, got {bad!r}"
+
+
+@pytest.mark.parametrize("spec", ["random:-1", "random:-7:40x30"])
+def test_negative_random_seed_is_a_one_line_world_error(spec: str) -> None:
+    with pytest.raises(WorldError) as info:
+        load_world(spec)
+    seed = spec.split(":")[1]
+    assert str(info.value) == f"{spec}: seed must be an integer >= 0, got {seed}"
+
+
+# --- walls and tour must make sense together ---------------------------------------------------
+
+_BOX = [[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0]]
+_INNER = [4, 0, 4, 4]  # segments[4]: a wall from the bottom up to y = 4, at x = 4
+
+
+@pytest.mark.parametrize(
+    ("world", "expected"),
+    [
+        ({"segments": []}, "no walls: 'segments' is empty (give [x1, y1, x2, y2] walls)"),
+        ({"segments": [*_BOX, [3, 3, 3, 3]]},
+         "segments[4] is a wall of zero length (both ends at (3, 3))"),
+        ({"segments": _BOX, "tour": [[1, 1], [1, 1.0], [1, 1]]},
+         "tour needs at least 2 distinct waypoints, all 3 are (1, 1)"),
+        ({"segments": _BOX, "tour": [[1, 1], [5, 1], [5, 7.5]]},
+         "tour[2] (5, 7.5) lies outside the walls' bounding box x in [0, 10], y in [0, 6]"),
+        # Leg 1 runs along y = 2 from x = 2 to 8: it crosses x = 4, below the wall's top (y = 4).
+        ({"segments": [*_BOX, _INNER], "tour": [[2, 5], [2, 2], [8, 2]]},
+         "tour leg 1 (tour[1] -> tour[2]) runs into wall segments[4] at (4, 2)"),
+    ],
+)
+def test_world_json_geometry_problems_name_file_and_key(tmp_path: Path, world: dict[str, object],
+                                                       expected: str) -> None:
+    path = tmp_path / "w.json"
+    path.write_text(json.dumps(world))
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    assert str(info.value) == f"{path}: {expected}"
+
+
+def _boxed(folder: Path, tour: list[list[float]]) -> Path:
+    """A world file: the box with the inner wall (segments[4]) and the given tour."""
+    path = folder / "box.json"
+    path.write_text(json.dumps({"segments": [*_BOX, _INNER], "tour": tour}))
+    return path
+
+
+def test_world_value_checks_walls_and_tour_points_but_not_tour_against_walls() -> None:
+    with pytest.raises(WorldError, match=r"^box: segments\[1\] is a wall of zero length"):
+        World(np.array([[0.0, 0.0, 1.0, 0.0], [2.0, 2.0, 2.0, 2.0]]), "box")
+    with pytest.raises(WorldError, match=r"^box: tour needs at least 2 distinct waypoints"):
+        World(np.array(_BOX, dtype=float), "box", tour=np.array([[1.0, 1.0], [1.0, 1.0]]))
+    # A world of some of another's walls keeps the whole tour (the sonar simulator does this).
+    part = World(np.array([_INNER], dtype=float), "part", tour=np.array([[2.0, 1.0], [8.0, 1.0]]))
+    assert part.tour is not None
+
+
+def test_tour_crossing_is_found_in_tour_order(tmp_path: Path) -> None:
+    path = _boxed(tmp_path, [[2, 5], [8, 5], [8, 1], [1, 1]])
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    # Leg 2 goes left along y = 1 from x = 8 and meets x = 4 first.
+    assert str(info.value) == (f"{path}: tour leg 2 (tour[2] -> tour[3]) runs into wall "
+                               "segments[4] at (4, 1)")
+    # Clear of the inner wall: over its top (y = 5 > 4) and down the far side.
+    ok = load_world(_boxed(tmp_path, [[2, 1], [2, 5], [8, 5], [8, 1]]))
+    assert ok.tour_length == pytest.approx(4.0 + 6.0 + 4.0)
+
+
+@pytest.mark.parametrize(
+    ("tour", "leg", "point"),
+    [
+        ([[1, 5], [4, 5], [4, 4.5], [4, 4]], 2, (4, 4)),      # ends exactly on the wall's end
+        ([[1, 5], [4, 5], [4, 4.5], [4, 3], [5, 3]], 2, (4, 4)),  # runs down along the wall
+        ([[5, 1], [5, 2], [4, 2]], 1, (4, 2)),                # stops exactly on the wall
+        ([[4, 5], [4, 3]], 0, (4, 4)),                        # from above, onto the wall
+        ([[4, 2], [5, 2]], 0, (4, 2)),                        # starts on the wall
+    ],
+)
+def test_touching_a_wall_counts_as_running_into_it(tmp_path: Path, tour: list[list[float]],
+                                                   leg: int, point: tuple[float, float]) -> None:
+    path = _boxed(tmp_path, tour)
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    assert str(info.value) == (f"{path}: tour leg {leg} (tour[{leg}] -> tour[{leg + 1}]) runs "
+                               f"into wall segments[4] at ({point[0]:g}, {point[1]:g})")
+
+
+@pytest.mark.parametrize(
+    "tour",
+    [
+        [[4, 4.5], [4, 5.5]],          # on the wall's line, beyond its top end
+        [[3.5, 1], [3.5, 5], [3.999, 5]],  # parallel to it, 0.5 m and then 1 mm off
+        [[3, 5], [5, 5], [5, 4.5], [5, 4.5], [5, 1]],  # a repeated waypoint, clear of walls
+        [[0.5, 0.5], [0.5, 5.5]],      # inside the box, 0.5 m from its wall
+    ],
+)
+def test_tours_that_keep_off_the_walls_are_accepted(tmp_path: Path,
+                                                    tour: list[list[float]]) -> None:
+    world = load_world(_boxed(tmp_path, tour))
+    np.testing.assert_array_equal(world.tour, tour)  # type: ignore[arg-type]
+
+
+small = st.integers(-4, 4)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(small, small, small, small), min_size=1, max_size=5),
+       st.lists(st.tuples(small, small), min_size=2, max_size=5))
+def test_first_crossing_matches_shapely(walls: list[tuple[int, ...]],
+                                        tour: list[tuple[int, int]]) -> None:
+    """On an integer grid touching is exact, so the 1e-9 m tolerance plays no part."""
+    shapely = pytest.importorskip("shapely")
+    segments = np.array([w for w in walls if w[:2] != w[2:]], dtype=float).reshape(-1, 4)
+    assume(segments.shape[0] > 0)
+    points = np.array(tour, dtype=float)
+    found = _first_crossing(points, segments)
+    lines = [shapely.LineString([s[:2], s[2:]]) for s in segments]
+    expected = None
+    for leg, (a, b) in enumerate(itertools.pairwise(points)):
+        piece = shapely.LineString([a, b]) if np.any(a != b) else shapely.Point(a)
+        hits = [line.intersection(piece) for line in lines]
+        starts = [min(math.hypot(x - a[0], y - a[1]) for x, y in _coords(hit))
+                  for hit in hits if not hit.is_empty]
+        if starts:
+            expected = (leg, min(starts))
+            break
+    if expected is None:
+        assert found is None
+        return
+    assert found is not None
+    leg, wall, (x, y) = found
+    assert leg == expected[0]
+    assert math.hypot(x - points[leg, 0], y - points[leg, 1]) == pytest.approx(expected[1],
+                                                                             abs=1e-9)
+    assert lines[wall].distance(shapely.Point(x, y)) <= 1e-9
+
+
+def _coords(geometry: object) -> list[tuple[float, float]]:
+    parts = getattr(geometry, "geoms", [geometry])
+    return [xy for part in parts for xy in part.coords]  # type: ignore[attr-defined]
+
+
+def test_a_ros_map_without_occupied_cells_has_no_walls(tmp_path: Path) -> None:
+    path = _write_map(tmp_path, np.full((4, 4), 254))
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    assert str(info.value) == (f"{path}: no walls: image map.pgm has no occupied cells "
+                               "(occupied_thresh 0.65, negate 0, mode trinary)")
+
+
+def test_generated_and_builtin_worlds_pass_their_tour_checks() -> None:
+    for name in ("office", "doorway", "t-junction", "narrow-hallway", "random:3", "random:4:30x20"):
+        world = load_world(name)
+        assert world.tour is not None
+        assert _first_crossing(world.tour, world.segments) is None

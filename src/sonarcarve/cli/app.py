@@ -1,14 +1,168 @@
-"""The typer application every command module registers on."""
+"""The typer application every command module registers on, and what the commands share.
+
+- :data:`app`, :data:`console`, :data:`err_console`: where commands register and print.
+- :func:`lazy_command`: list a command whose module is imported only when the command runs, so
+  ``sonarcarve --help`` and each command load only what they use.
+- :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
+  every command prints.
+
+The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
+than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
+type names (``INTEGER``, ``FLOAT``) instead of ``<float>``/``<list[str]>``, flags show no type,
+and float defaults print without trailing zeros (``20`` for 20.0).
+"""
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Iterable
+from typing import Any
+
 import typer
 from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    ProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
-__all__ = ["app", "console", "err_console"]
+__all__ = ["app", "console", "err_console", "lazy_command", "progress", "summary_table"]
+
+#: Command name -> (module that registers it, the first paragraph of its help). Filled by
+#: :func:`lazy_command` from ``sonarcarve/cli/__init__.py``.
+LAZY_COMMANDS: dict[str, tuple[str, str]] = {}
+
+
+def lazy_command(name: str, module: str, summary: str) -> None:
+    """List command ``name``, registered by importing ``module`` when the command is run.
+
+    ``summary`` is what ``sonarcarve --help`` shows for it without importing the module; it
+    must be the first paragraph of the command's help (a test checks).
+    """
+    LAZY_COMMANDS[name] = (module, summary)
+
+
+class _Argument(TyperArgument):
+    """An argument whose usage reads ``READINGS.csv`` / ``[FOLDER]``, with no type column."""
+
+    def _usage_display_name(self) -> str:
+        name = self.display_name_raw if self.required else f"[{self.display_name_raw}]"
+        return name + ("..." if self.nargs != 1 else "")
+
+    def display_type_rich(self, ctx: Any) -> str | None:
+        return None
+
+
+#: Click's names for the plain types, shown for an option that has no metavar.
+_TYPE_NAMES = {"int": "INTEGER", "float": "FLOAT", "str": "TEXT", "Path": "PATH"}
+
+
+class _Option(TyperOption):
+    """An option showing its metavar (or ``FLOAT``...), nothing for a flag, ``20`` for 20.0."""
+
+    def display_type_rich(self, ctx: Any) -> str | None:
+        if self.metavar is not None:
+            return self.metavar
+        if self.is_flag or self.count:
+            return None
+        bare = self.bare_type().removeprefix("list[").removesuffix("]")
+        return _TYPE_NAMES.get(bare, bare.upper())
+
+    def _get_default_string(self, *, ctx: Any, show_default_is_str: bool,
+                            default_value: Any) -> str:
+        if isinstance(default_value, float) and not show_default_is_str:
+            return f"{default_value:g}"
+        return super()._get_default_string(ctx=ctx, show_default_is_str=show_default_is_str,
+                                           default_value=default_value)
+
+
+def _tidy_param(param: Any) -> None:
+    # typer builds its own parameter classes and offers no hook to choose others; the
+    # subclasses above change only how a parameter is displayed, never how it parses.
+    if type(param) is TyperArgument:
+        param.__class__ = _Argument
+    elif type(param) is TyperOption:
+        param.__class__ = _Option
+
+
+class _Command(TyperCommand):
+    """A command with tidied parameters (including the ``--help`` flag, made on demand)."""
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)
+        _tidy_param(option)
+        return option
+
+
+def _tidy_command(command: Any) -> Any:
+    if type(command) is TyperCommand:
+        command.__class__ = _Command
+    for param in command.params:
+        _tidy_param(param)
+    return command
+
+
+class _LazyCommand(TyperCommand):
+    """Stands in for a command in ``sonarcarve --help`` until the command is run."""
+
+    def __init__(self, name: str, module: str, summary: str, markup: Any) -> None:
+        super().__init__(name, help=summary, rich_markup_mode=markup)
+        self.module = module
+
+
+class _Group(TyperGroup):
+    """The root group: lists lazy commands, loads one when it runs, tidies every help screen."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        for param in self.params:
+            _tidy_param(param)
+        for command in self.commands.values():
+            _tidy_command(command)
+        for name, (module, summary) in LAZY_COMMANDS.items():
+            if name not in self.commands:
+                self.commands[name] = _LazyCommand(name, module, summary, self.rich_markup_mode)
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)
+        _tidy_param(option)
+        return option
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        # The order of LAZY_COMMANDS, whether or not a module happens to be imported already.
+        names = [name for name in LAZY_COMMANDS if name in self.commands]
+        return names + [name for name in self.commands if name not in LAZY_COMMANDS]
+
+    def resolve_command(self, ctx: Any, args: list[str]) -> tuple[str | None, Any, list[str]]:
+        name, command, rest = super().resolve_command(ctx, args)
+        if isinstance(command, _LazyCommand) and name is not None:
+            command = self.commands[name] = _load(name, command.module)
+        return name, command, rest
+
+
+def _load(name: str, module: str) -> Any:
+    """Import ``module`` and build the click command it registered as ``name``."""
+    importlib.import_module(module)
+    for info in app.registered_commands:
+        callback_name = info.callback.__name__ if info.callback is not None else ""
+        if (info.name or typer.main.get_command_name(callback_name)) == name:
+            command = typer.main.get_command_from_info(
+                info, pretty_exceptions_short=app.pretty_exceptions_short,
+                rich_markup_mode=app.rich_markup_mode)
+            return _tidy_command(command)
+    msg = f"module {module} registers no command {name!r}"  # a bug, not a user error
+    raise RuntimeError(msg)
+
 
 app = typer.Typer(
     name="sonarcarve",
+    cls=_Group,
     help=(
         "Accurate, low-latency maps from ultrasonic range sensors.\n\n"
         "Arc carving (Silver et al.) removes from each sonar arc the parts that newer readings "
@@ -24,6 +178,34 @@ app = typer.Typer(
 
 console = Console()
 err_console = Console(stderr=True)
+
+
+def summary_table(title: str, rows: Iterable[tuple[str, str]]) -> Table:
+    """The two-column table a command prints when done: label (bold), value (right-aligned)."""
+    table = Table(title=title, show_header=False)
+    table.add_column(style="bold")
+    table.add_column(justify="right")
+    for label, value in rows:
+        table.add_row(label, value)
+    return table
+
+
+def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
+    """A transient progress bar on :data:`console`: label, bar, done/total, time.
+
+    Parameters
+    ----------
+    label_width : int
+        Right-align task labels to this many characters (0: as they come), so the bars of
+        several tasks line up.
+    elapsed : bool
+        Show the time elapsed instead of the time remaining (for runs of several stages, where
+        one stage's rate says little about the rest).
+    """
+    label = f"{{task.description:>{label_width}}}" if label_width else "{task.description}"
+    clock: ProgressColumn = TimeElapsedColumn() if elapsed else TimeRemainingColumn()
+    return Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), clock,
+                    console=console, transient=True)
 
 
 def _show_version(value: bool) -> None:

@@ -10,9 +10,10 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from sonarcarve.cli.app import app, console
+from sonarcarve.cli.app import app, console, summary_table
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import read_robond, write_readings_csv
+from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
 
 __all__ = ["CONVERTERS", "convert"]
@@ -29,19 +30,17 @@ def _robond(directory: Path | None, out: Path, beam_width: float | None,
     write_readings_csv(log.batch, out)
     r = log.report
     source = directory if directory is not None else f"{bundled_robond_dir()} (bundled)"
-    table = Table(title=f"roboND log: {source}", show_header=False)
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    table.add_row("records", f"{r.records:,}")
-    table.add_row("sensor values", f"{r.values:,}")
-    table.add_row("no echo (dropped)", f"{r.no_echo:,}")
-    table.add_row("repeats while moving (any value)", f"{r.repeats:,}")
-    table.add_row("stale echoes (dropped)", f"{r.stale:,}")
-    table.add_row(f"repeats while standing ({'kept' if r.duplicates_kept else 'dropped'})",
-                  f"{r.duplicates:,}")
-    table.add_row("readings written", f"{r.readings:,}")
-    table.add_row("readings CSV", str(out))
-    return table
+    return summary_table(f"roboND log: {source}", [
+        ("records", f"{r.records:,}"),
+        ("sensor values", f"{r.values:,}"),
+        ("no echo (dropped)", f"{r.no_echo:,}"),
+        ("repeats while moving (any value)", f"{r.repeats:,}"),
+        ("stale echoes (dropped)", f"{r.stale:,}"),
+        (f"repeats while standing ({'kept' if r.duplicates_kept else 'dropped'})",
+         f"{r.duplicates:,}"),
+        ("readings written", f"{r.readings:,}"),
+        ("readings CSV", str(out)),
+    ])
 
 
 #: Format name (lower case) -> converter(directory, out, beam width rad or None, keep dups).
@@ -54,11 +53,15 @@ CONVERTERS: dict[str, Callable[[Path | None, Path, float | None, bool], Table]] 
 def convert(
     fmt: Annotated[str, typer.Argument(
         metavar="FORMAT", help="Data set format: roboND (the bundled 8-sensor real log).")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Readings CSV to write.")],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", metavar="READINGS.csv",
+        help="Readings CSV to write (seconds, metres, radians). Its folder must exist.")],
     directory: Annotated[Path | None, typer.Argument(
+        metavar="FOLDER",
         help="Folder holding the data set's files; default: the copy bundled with sonarcarve.")]
         = None,
     beam_width: Annotated[float | None, typer.Option(
+        metavar="DEGREES",
         help="Beam width φ in degrees written with each reading (roboND default: 20).")] = None,
     keep_duplicates: Annotated[bool, typer.Option(
         help="Keep values that repeat while the robot stands still (they add identical arcs).")]
@@ -84,4 +87,7 @@ def convert(
             msg = f"--beam-width must lie in (0, 180) degrees, got {beam_width}"
             raise ConvertError(msg)
         width = math.radians(beam_width)
+    # The data set's own files must survive a --out that names one of them.
+    inputs = sorted(directory.iterdir()) if directory is not None and directory.is_dir() else []
+    check_output_file(out, inputs=inputs, label=f"--out {out}")
     console.print(converter(directory, out, width, keep_duplicates))

@@ -3,23 +3,15 @@
 from __future__ import annotations
 
 import time
-from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich import box
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskID,
-    TextColumn,
-    TimeElapsedColumn,
-)
+from rich.progress import TaskID
 from rich.table import Table
 from rich.text import Text
 
-from sonarcarve.cli.app import app, console
+from sonarcarve.cli.app import app, console, progress
 from sonarcarve.demo import (
     APPROACH_DISTANCE,
     FIGURE_FILES,
@@ -27,13 +19,13 @@ from sonarcarve.demo import (
     METHOD_COLORS,
     DemoResult,
     caption,
-    check_output_dir,
     demo_config,
     load_demo_world,
     run_demo,
     table_rows,
     write_demo_outputs,
 )
+from sonarcarve.io.atomic import check_output_dir
 
 __all__ = ["demo"]
 
@@ -66,24 +58,25 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
 ))
 def demo(
     world: Annotated[str, typer.Option(
-        "--world", "-w",
+        "--world", "-w", metavar="WORLD",
         help="Built-in world (office, doorway, t-junction, narrow-hallway), random:SEED, or "
              "a walls .json / ROS map .yaml file; it must have a tour.")] = "office",
     seed: Annotated[int, typer.Option(
         help="Seeds the simulated noise and spurious echoes: same seed, same numbers.")] = 0,
-    out: Annotated[Path, typer.Option(
-        "--out", "-o", help="Folder for the figures, summary.md and summary.json (created; "
-                            "files of the same names are replaced).")] = Path("demo-output"),
+    out: Annotated[str, typer.Option(
+        "--out", "-o", metavar="FOLDER",
+        help="Folder for the figures, summary.md and summary.json (created with its missing "
+             "parents; files of the same names are replaced).")] = "demo-output",
     history: Annotated[int, typer.Option(
-        help="Arcs kept in each method's history (paper: 250).")] = 250,
+        metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")] = 250,
 ) -> None:
     """Simulate a tour and compare centerline, ATM, arc carving and combined maps."""
     # Every bad option fails here, in one line, before a progress bar or a file appears.
-    check_output_dir(out)
+    folder = check_output_dir(out, label=f"--out {out}")  # a str: "" is not "."
     demo_config(history)
     the_world = load_demo_world(world)
     tic = time.perf_counter()
-    with _progress() as bar:
+    with progress(label_width=20, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}
 
         def on_progress(step: str, done: int, total: int) -> None:
@@ -93,7 +86,7 @@ def demo(
 
         result = run_demo(the_world, seed, history_size=history, on_progress=on_progress)
         figures = bar.add_task("drawing figures", total=None)
-        written = write_demo_outputs(result, out)
+        written = write_demo_outputs(result, folder)
         bar.update(figures, total=1, completed=1)
     console.print(_table(result))
     console.print()
@@ -124,7 +117,3 @@ def _table(result: DemoResult) -> Table:
         table.add_row(f"[{color}]{cells[0]}[/]" if color else cells[0], *cells[1:])
     return table
 
-
-def _progress() -> Progress:
-    return Progress(TextColumn("{task.description:>20}"), BarColumn(), MofNCompleteColumn(),
-                    TimeElapsedColumn(), console=console, transient=True)

@@ -7,23 +7,19 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskID,
-    TextColumn,
-    TimeElapsedColumn,
-)
+from rich.progress import TaskID
 
-from sonarcarve.cli.app import app, console
+from sonarcarve.cli.app import app, console, progress
+from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation.experiments import (
     EXPERIMENTS,
     ExperimentError,
     Settings,
     run_experiments,
 )
-from sonarcarve.evaluation.report import write_outputs
+from sonarcarve.evaluation.report import BEGIN_MARKER, END_MARKER, replace_section, write_outputs
+from sonarcarve.io.atomic import check_output_dir, check_output_file
+from sonarcarve.io.errors import InputError
 
 __all__ = ["experiments"]
 
@@ -36,25 +32,30 @@ _NAMES = ", ".join(f"`{name}` ({exp.title})" for name, exp in EXPERIMENTS.items(
     f"Experiments: {_NAMES}.\n\n"
     "Writes one PNG per figure and `results.json` into --out; with --results-md it also "
     "rewrites the experiments section of that Markdown file (between "
-    "`<!-- experiments:begin -->` and `<!-- experiments:end -->`).\n\n"
+    f"`{BEGIN_MARKER}` and `{END_MARKER}`, which the file must hold; a file that does not "
+    "exist yet is created). Every output path is checked before the run starts.\n\n"
     "Example: `sonarcarve experiments --quick --out /tmp/exp` (seconds); the full run "
     "(`make experiments`) takes minutes."
 ))
 def experiments(
-    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for results.json and figures.")],
+    out: Annotated[str, typer.Option(
+        "--out", "-o", metavar="FOLDER",
+        help="Folder for results.json and figures (created with its missing parents).")],
     quick: Annotated[bool, typer.Option(
         "--quick", help="Small runs (short tours, few openings, short sweeps): seconds.")] = False,
     only: Annotated[list[str] | None, typer.Option(
-        "--only", help=f"Run only this experiment (repeatable): {', '.join(EXPERIMENTS)}.")]
-        = None,
+        "--only", metavar="NAME",
+        help=f"Run only this experiment (repeatable): {', '.join(EXPERIMENTS)}.")] = None,
     seeds: Annotated[int | None, typer.Option(
-        help="Simulation seeds per scenario (default 3, or 1 with --quick).")] = None,
+        metavar="N", help="Simulation seeds per scenario (default 3, or 1 with --quick).")] = None,
     jobs: Annotated[int | None, typer.Option(
-        help="Worker processes (default: all CPUs; 1 with --quick).")] = None,
-    figures: Annotated[Path | None, typer.Option(
-        help="Also copy the PNGs into this folder (e.g. docs/figures).")] = None,
+        metavar="N", help="Worker processes (default: all CPUs; 1 with --quick).")] = None,
+    figures: Annotated[str | None, typer.Option(
+        metavar="FOLDER", help="Also copy the PNGs into this folder (e.g. docs/figures).")] = None,
     results_md: Annotated[Path | None, typer.Option(
-        "--results-md", help="Markdown file whose experiments section to regenerate.")] = None,
+        "--results-md", metavar="FILE.md",
+        help="Markdown file whose experiments section to regenerate (it must hold the markers "
+             "below, or not exist yet).")] = None,
 ) -> None:
     """Run the experiments and write their results and figures."""
     names = [n.strip() for item in (only or []) for n in item.split(",") if n.strip()]
@@ -64,8 +65,15 @@ def experiments(
         raise ExperimentError(msg)
     workers = jobs if jobs is not None else (1 if quick else max(1, os.cpu_count() or 1))
     settings = Settings.make(quick=quick, seeds=seeds, jobs=workers)
-    command = _command(out, quick, names, seeds, jobs, figures, results_md)
-    with _progress() as bar:
+    # A run takes minutes: refuse an output it could not write before, not after.
+    # Folders arrive as str, so that an empty --out is refused instead of meaning ".".
+    folder = check_output_dir(out, label=f"--out {out}")
+    figures_dir = None if figures is None else check_output_dir(figures,
+                                                                 label=f"--figures {figures}")
+    if results_md is not None:
+        _check_results_md(results_md)
+    command = _command(folder, quick, names, seeds, jobs, figures_dir, results_md)
+    with progress(label_width=10, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}
 
         def on_progress(stage: str, done: int, total: int) -> None:
@@ -74,7 +82,7 @@ def experiments(
             bar.update(tasks[stage], completed=done, total=total)
 
         results = run_experiments(settings, names or None, on_progress)
-    written = write_outputs(results, out, command=command, figures_dir=figures,
+    written = write_outputs(results, folder, command=command, figures_dir=figures_dir,
                             results_md=results_md)
     seconds = results.results["meta"]["seconds"]
     console.print(f"experiments done in {seconds:.0f} s: {len(written)} files in {out}")
@@ -114,6 +122,30 @@ def _command(out: Path, quick: bool, names: list[str], seeds: int | None, jobs: 
     return " ".join(parts)
 
 
-def _progress() -> Progress:
-    return Progress(TextColumn("{task.description:>10}"), BarColumn(), MofNCompleteColumn(),
-                    TimeElapsedColumn(), console=console, transient=True)
+
+class ResultsMarkdownError(SonarcarveError):
+    """A ``--results-md`` file without the markers that say where the section goes."""
+
+
+def _check_results_md(path: Path) -> None:
+    """Refuse a --results-md the run could not update as asked.
+
+    A new file is created; an existing one must hold exactly one pair of experiments markers,
+    because without them the report would append the section (and the appendix) to a file the
+    user may have named by mistake.
+    """
+    label = f"--results-md {path}"
+    if not path.exists():
+        check_output_file(path, label=label)
+        return
+    check_output_file(path, label=label)  # a directory, or a folder that refuses new files
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        msg = f"{label}: cannot read ({err})"
+        raise InputError(msg) from None
+    if BEGIN_MARKER not in text and END_MARKER not in text:
+        msg = (f"{label}: has no {BEGIN_MARKER} / {END_MARKER} markers; add them where the "
+               "experiments section belongs, or name a new file")
+        raise ResultsMarkdownError(msg)
+    replace_section(text, f"{BEGIN_MARKER}\n{END_MARKER}", label)  # raises on broken markers

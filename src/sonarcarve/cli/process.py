@@ -7,13 +7,13 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from sonarcarve.cli.app import app, console
+from sonarcarve.cli.app import app, console, progress, summary_table
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.io import read_readings_csv, write_map_csv
+from sonarcarve.io.atomic import check_output_file
 from sonarcarve.methods import METHODS, MethodConfig, make_method
 from sonarcarve.pipeline import ProcessResult, process_readings
 
@@ -30,15 +30,25 @@ class ParameterError(SonarcarveError):
 @app.command()
 def process(
     readings: Annotated[Path, typer.Argument(
-        help="Readings CSV: t,sensor,x,y,theta,range[,beam_width].")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Where to write the global map CSV.")],
+        metavar="READINGS.csv",
+        help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
+             "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
+             "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
+             "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
+             "absent: --beam-width applies).")],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", metavar="MAP.csv",
+        help="Where to write the global map CSV. Its folder must exist; never the input.")],
     method: Annotated[str, typer.Option(
-        "--method", "-m",
+        "--method", "-m", metavar="NAME",
         help="centerline | carve | atm | combined. `combined` runs carving and ATM on one history "
              "and keeps, per arc, the estimate with the smaller error bound.")] = "combined",
-    history: Annotated[int, typer.Option(help="Arcs kept in the history (paper: 250).")] = 250,
+    history: Annotated[int, typer.Option(
+        metavar="ARCS", help="Arcs kept in the history (paper: 250).")] = 250,
     beam_width: Annotated[float, typer.Option(
-        help="Beam width φ in degrees, for readings without a beam_width column.")] = 22.5,
+        metavar="DEGREES",
+        help="Beam width φ in degrees, used only for readings without a beam_width value (no "
+             "such column, or a blank cell); a beam_width column, in radians, wins.")] = 22.5,
     range_tolerance: Annotated[float, typer.Option(
         help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper).")]
         = MethodConfig.range_tolerance,
@@ -72,7 +82,7 @@ def process(
         help="Map filter: drop points whose error bound max_error exceeds this, metres "
              "(paper, Fig. 13b).", rich_help_panel="Filters")] = None,
 ) -> None:
-    """Map READINGS with one method and write its global map to --out.
+    """Map READINGS.csv with one method and write its global map to --out.
 
     The map CSV has one row per surviving reading: `id,t,sensor,x,y,source,width,max_error`
     (`source` is the model that placed the point: centerline, carved or atm; `width` the final
@@ -82,6 +92,11 @@ def process(
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
     rows; map filters (--max-error, then --outlier-radius) drop points from the global map.
 
+    The summary's "unprocessed (mean % of history rows)" is the paper's Table I latency: the
+    share of the history's arcs that no newer reading has sharpened yet, averaged over the run.
+    Arcs carving removed (fully carved or split) count as processed; the paper's history drops
+    them instead, which gives a larger share for carving (docs/RESULTS.md reports both).
+
     Example: `sonarcarve process readings.csv --method carve --out map.csv`
 
     Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
@@ -90,10 +105,11 @@ def process(
                      max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
+    check_output_file(out, inputs=[readings], label=f"--out {out}")
     batch = read_readings_csv(readings)
     sonar = make_method(method, config)
     if len(batch) >= _PROGRESS_MIN_READINGS:
-        with _progress() as bar:
+        with progress() as bar:
             task = bar.add_task(f"{method}", total=len(batch))
             result = process_readings(
                 batch, sonar, on_progress=lambda n: bar.update(task, completed=n),
@@ -156,33 +172,28 @@ def _filters(max_range: float | None, min_range: float | None, jump: float | Non
     return (readings if readings.active else None), (points if points.active else None)
 
 
-def _progress() -> Progress:
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TimeRemainingColumn(), console=console, transient=True)
-
-
 def _summary(method: str, result: ProcessResult, out: Path) -> Table:
-    table = Table(title=f"sonarcarve process --method {method}", show_header=False)
-    table.add_column(style="bold")
-    table.add_column(justify="right")
+    rows: list[tuple[str, str]] = []
     dropped = result.reading_filter
     if dropped is None:
-        table.add_row("readings in", f"{result.readings:,}")
+        rows.append(("readings in", f"{result.readings:,}"))
     else:
-        table.add_row("readings in", f"{dropped.total:,}")
-        table.add_row("dropped: beyond --max-range", f"{dropped.too_far:,}")
-        table.add_row("dropped: below --min-range", f"{dropped.too_near:,}")
-        table.add_row("dropped: --jump-threshold", f"{dropped.jumps:,}")
-        table.add_row("readings mapped", f"{result.readings:,}")
+        rows += [("readings in", f"{dropped.total:,}"),
+                 ("dropped: beyond --max-range", f"{dropped.too_far:,}"),
+                 ("dropped: below --min-range", f"{dropped.too_near:,}"),
+                 ("dropped: --jump-threshold", f"{dropped.jumps:,}"),
+                 ("readings mapped", f"{result.readings:,}")]
     points = result.map_filter
     if points is not None:
-        table.add_row("points before map filters", f"{points.total:,}")
-        table.add_row("dropped: above --max-error", f"{points.max_error:,}")
-        table.add_row("dropped: outliers", f"{points.outliers:,}")
-    table.add_row("points out", f"{len(result.global_map):,}")
-    table.add_row("fully carved", f"{result.fully_carved:,}")
-    table.add_row("split (dropped)", f"{result.split:,}")
-    table.add_row("unprocessed (mean % of history)", f"{100 * result.mean_unprocessed_share:.1f}")
-    table.add_row("readings per second", f"{result.readings_per_second:,.0f}")
-    table.add_row("map written to", str(out))
-    return table
+        rows += [("points before map filters", f"{points.total:,}"),
+                 ("dropped: above --max-error", f"{points.max_error:,}"),
+                 ("dropped: outliers", f"{points.outliers:,}")]
+    rows += [("points out", f"{len(result.global_map):,}"),
+             ("fully carved", f"{result.fully_carved:,}"),
+             ("split (dropped)", f"{result.split:,}"),
+             # Removed arcs count as processed: see the command's help.
+             ("unprocessed (mean % of history rows)",
+              f"{100 * result.mean_unprocessed_share:.1f}"),
+             ("readings per second", f"{result.readings_per_second:,.0f}"),
+             ("map written to", str(out))]
+    return summary_table(f"sonarcarve process --method {method}", rows)

@@ -7,12 +7,12 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from sonarcarve.cli.app import app, console
+from sonarcarve.cli.app import app, console, progress, summary_table
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.io.truth import write_simulation
+from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.truth import truth_path, write_simulation
 from sonarcarve.io.waypoints import read_waypoints
 from sonarcarve.sim.motion import Trajectory, explore, follow_waypoints, with_odometry_drift
 from sonarcarve.sim.robot import BUILTIN_ROBOTS, load_robot
@@ -33,18 +33,20 @@ class SimulateParameterError(SonarcarveError):
 @app.command("simulate")
 def simulate_command(
     world: Annotated[str, typer.Option(
-        "--world", "-w",
+        "--world", "-w", metavar="WORLD",
         help="Built-in world (office, doorway, t-junction, narrow-hallway), random:SEED, a "
              "walls .json file or a ROS map .yaml.")],
     out: Annotated[Path, typer.Option(
-        "--out", "-o", help="Readings CSV to write; the truth goes beside it as "
-                            "NAME.truth.json.")],
+        "--out", "-o", metavar="NAME.csv",
+        help="Readings CSV to write; the truth goes beside it as NAME.truth.json. Its folder "
+             "must exist. Both files are replaced together or not at all.")],
     robot: Annotated[str, typer.Option(
-        "--robot", "-r",
+        "--robot", "-r", metavar="ROBOT",
         help=f"Sonar ring: {', '.join(BUILTIN_ROBOTS)}, or a robot YAML file.")] = "scout2",
     path: Annotated[Path | None, typer.Option(
-        "--path", help="Waypoints to drive through, metres: a CSV with a header x,y, or JSON "
-                       "[[x, y], ...]. Default: the world's built-in tour.")] = None,
+        "--path", metavar="WAYPOINTS",
+        help="Waypoints to drive through, metres: a CSV with a header x,y, or JSON "
+             "[[x, y], ...]. Default: the world's built-in tour.")] = None,
     explore_seconds: Annotated[float | None, typer.Option(
         "--explore", metavar="SECONDS",
         help="Instead of a path, wander the world for this many seconds (seeded).")] = None,
@@ -65,8 +67,9 @@ def simulate_command(
     mirrors, as with real ultrasonic sensors; on top come range noise, quantisation and the
     spurious echoes of real rings (crosstalk, floor bounce, multipath).
 
-    Writes OUT (readings CSV: `t,sensor,x,y,theta,range,beam_width`, seconds, metres, radians)
-    and OUT's `.truth.json` (the walls, and per reading its kind and true reflection point).
+    Writes NAME.csv (readings CSV: `t,sensor,x,y,theta,range,beam_width`; seconds, metres,
+    radians) and NAME.truth.json (the walls, and per reading its kind and true reflection
+    point). Both are checked before the simulation runs and renamed into place together.
 
     Example: `sonarcarve simulate --world office --robot scout2 --seed 1 --out office.csv`
     """
@@ -77,6 +80,10 @@ def simulate_command(
                                             and explore_seconds > 0.0):
         msg = f"--explore must be a positive number of seconds, got {explore_seconds}"
         raise SimulateParameterError(msg)
+    inputs = [p for p in (path, Path(world), Path(robot)) if p is not None and p.is_file()]
+    check_output_file(out, inputs=inputs, label=f"--out {out}")
+    truth = truth_path(out)
+    check_output_file(truth, inputs=inputs, label=f"the truth file {truth} (beside --out)")
     the_world = load_world(world)
     the_robot = load_robot(robot)
     trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
@@ -84,13 +91,13 @@ def simulate_command(
     physics = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
     firings = math.floor(trajectory.duration / the_robot.firing_period) + 1
     if firings >= _PROGRESS_MIN_FIRINGS:
-        with _progress() as bar:
+        with progress() as bar:
             task = bar.add_task(f"simulating {the_world.name}", total=firings)
             result = simulate(the_world, the_robot, trajectory, seed, physics, drift,
                               on_progress=lambda done, _: bar.update(task, completed=done))
     else:
         result = simulate(the_world, the_robot, trajectory, seed, physics, drift)
-    truth = write_simulation(result, out)
+    write_simulation(result, out)
     console.print(_summary(result, out, truth))
 
 
@@ -106,22 +113,11 @@ def _trajectory(world: World, path: Path | None, explore_seconds: float | None, 
     return follow_waypoints(world.tour)
 
 
-def _progress() -> Progress:
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TimeRemainingColumn(), console=console, transient=True)
-
-
 def _summary(result: Simulation, out: Path, truth: Path) -> Table:
-    table = Table(title=f"sonarcarve simulate: {result.world.name}, {result.robot.name}",
-                  show_header=False)
-    table.add_column(style="bold")
-    table.add_column(justify="right")
-    table.add_row("seconds simulated", f"{result.trajectory.duration:,.1f}")
-    table.add_row("metres travelled", f"{result.trajectory.path_length:,.1f}")
-    table.add_row("firings", f"{len(result.firings):,}")
-    table.add_row("readings (echoes heard)", f"{len(result.readings):,}")
-    for kind, count in result.kind_counts().items():
-        table.add_row(f"  {kind}", f"{count:,}")
-    table.add_row("readings written to", str(out))
-    table.add_row("truth written to", str(truth))
-    return table
+    rows = [("seconds simulated", f"{result.trajectory.duration:,.1f}"),
+            ("metres travelled", f"{result.trajectory.path_length:,.1f}"),
+            ("firings", f"{len(result.firings):,}"),
+            ("readings (echoes heard)", f"{len(result.readings):,}")]
+    rows += [(f"  {kind}", f"{count:,}") for kind, count in result.kind_counts().items()]
+    rows += [("readings written to", str(out)), ("truth written to", str(truth))]
+    return summary_table(f"sonarcarve simulate: {result.world.name}, {result.robot.name}", rows)

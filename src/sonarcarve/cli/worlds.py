@@ -11,6 +11,7 @@ from rich.table import Table
 
 from sonarcarve.cli.app import app, console
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.io.atomic import check_output_file
 from sonarcarve.sim.world import World, builtin_worlds, load_world, write_world_json
 
 __all__ = ["worlds"]
@@ -26,11 +27,12 @@ class WorldsUsageError(SonarcarveError):
 @app.command()
 def worlds(
     specs: Annotated[list[str] | None, typer.Argument(
+        metavar="WORLD",
         help="Worlds to describe: built-in names, random:SEED[:WIDTHxHEIGHT], world .json files "
              "or ROS map .yaml files. Default: every built-in world.",
         show_default=False)] = None,
     out: Annotated[Path | None, typer.Option(
-        "--out", "-o",
+        "--out", "-o", metavar="WORLD.json",
         help="Write the one world given as world JSON (walls, tour, openings), e.g. to convert "
              "a ROS map or to freeze a random world.")] = None,
 ) -> None:
@@ -39,12 +41,19 @@ def worlds(
     Without arguments, lists the built-in worlds (the paper's Fig. 2, 4, 7 and 9 scenes and
     the seeded random floors). With arguments, describes those worlds instead.
 
-    Examples: `sonarcarve worlds`, `sonarcarve worlds random:7:40x30 my_map.yaml`,
-    `sonarcarve worlds my_map.yaml --out my_map.json`
+    Examples:
+
+    - `sonarcarve worlds`: the built-in worlds.
+    - `sonarcarve worlds random:7:40x30 my_map.yaml`: a seeded random floor and a ROS map.
+    - `sonarcarve worlds my_map.yaml --out my_map.json`: convert a ROS map to world JSON.
     """
     if out is not None and len(specs or []) != 1:
         msg = "--out needs exactly one world, e.g. `sonarcarve worlds map.yaml --out map.json`"
         raise WorldsUsageError(msg)
+    if out is not None:
+        source = Path((specs or [""])[0])
+        check_output_file(out, inputs=[source] if source.is_file() else [],
+                          label=f"--out {out}")
     rows: list[tuple[str, World, str | None]]
     if specs:
         rows = [(spec, load_world(spec), None) for spec in specs]

@@ -1,7 +1,9 @@
 """The paper's experiments (section 5) regenerated on the simulator, and the ones it could not run.
 
-Each experiment is a plan of *jobs* (one sonar method on one simulated log, then one analysis of
-what it did, see :mod:`sonarcarve.evaluation.instrument`) and a summary of the jobs' outputs:
+Each experiment is a plan of *jobs* (one sonar method on one simulated log, a
+:class:`~sonarcarve.evaluation.scenarios.Scenario`, then one analysis of what it did, see
+:mod:`sonarcarve.evaluation.instrument` and :mod:`sonarcarve.evaluation.analyses`) and a
+summary of the jobs' outputs over seeds:
 
 * ``office``: the paper's Table I, Fig. 10, 11, 12 and 13 and the fully carved share (section
   5-B, 5-C) on the simulated ``office`` tour, several seeds; plus what the paper could not
@@ -22,7 +24,6 @@ from __future__ import annotations
 import math
 import multiprocessing
 import time
-import warnings
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -32,61 +33,68 @@ from typing import Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation import metrics
+from sonarcarve.evaluation.analyses import (
+    ANALYSES,
+    CLEARANCE_MARGIN,
+    GAP_DEPTH,
+    LATENCY_GRID_M,
+    LATENCY_GRID_S,
+    METHOD_LABELS,
+    OPENING_DISTANCES,
+    PATCH_LENGTH,
+    PATCH_TOLERANCES,
+    RANGE_EDGES,
+    WALL_POINTS,
+    WALL_RADIUS,
+    fig13_keep,
+    fig13_threshold,
+    first_reading_within,
+    removal_summary,
+)
 from sonarcarve.evaluation.appendix import APPENDIX_EXPERIMENTS, experiment_summariser
-from sonarcarve.evaluation.instrument import ArcTable, RunRecord, record_run, sample_points
-from sonarcarve.maps import PointSource
+from sonarcarve.evaluation.instrument import record_run
+from sonarcarve.evaluation.scenarios import (
+    ExperimentError,
+    Scenario,
+    build_world,
+    cut_polyline,
+    run_simulation,
+)
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.methods.atm import atm_error_bound
-from sonarcarve.methods.base import Removal
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.sim.motion import DEFAULT_SPEED
-from sonarcarve.sim.simulate import Simulation, simulate
-from sonarcarve.sim.sonar import EchoKind, SonarPhysics
-from sonarcarve.sim.world import World
+from sonarcarve.sim.simulate import Simulation
 
 __all__ = [
+    "CLEARANCE_MARGIN",
     "EXPERIMENTS",
+    "GAP_DEPTH",
     "METHOD_LABELS",
+    "RANGE_EDGES",
     "ExperimentError",
     "ExperimentResults",
     "Scenario",
     "Settings",
+    "build_world",
+    "cut_polyline",
+    "fig13_keep",
+    "fig13_threshold",
+    "removal_summary",
     "run_experiments",
     "run_simulation",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 JsonDict = dict[str, Any]
 
-#: Method CLI name -> the label used in results (the paper's names).
-METHOD_LABELS = {"centerline": "centerline", "carve": "carving", "atm": "atm",
-                 "combined": "combined"}
 #: Every method, in the order tables list them.
 ALL_METHODS = ("atm", "carve", "combined", "centerline")
 
-#: Range bins of Fig. 10-12, metres: 0.5 m wide up to the Scout2's 6.477 m maximum range.
-RANGE_EDGES = tuple(np.round(np.arange(0.0, 7.0 + 1e-9, 0.5), 3).tolist())
-#: Fig. 4: the facing wall "shows" once this many local-map points lie within the radius of it.
-WALL_POINTS = 3
-WALL_RADIUS = 0.10
-#: Fig. 2 and 9: clearance the robot needs (Scout2 diameter 0.41 m + 5 cm margin) and how far
-#: either side of the gap line a map point blocks the gap, metres.
-CLEARANCE_MARGIN = 0.05
-GAP_DEPTH = 0.25
-OPENING_DISTANCES = (1.0, 2.0, 3.0)
 #: The narrow hallway (Fig. 9) needs its narrow part wider than the tour's 0.9 m clearance.
 NARROW_MIN_WIDTH = 0.9
 #: Width of the example run of each opening world whose local maps the figure shows.
 EXAMPLE_WIDTH = {"doorway": 0.8, "corridor-opening": 0.8, "narrow-hallway": 1.0}
-#: Latency against accuracy: wall patches of this length, and the error tolerances, metres.
-PATCH_LENGTH = 0.5
-PATCH_TOLERANCES = (0.05, 0.10)
-
-
-class ExperimentError(SonarcarveError):
-    """A bad experiment request: unknown experiment name, bad setting."""
 
 
 # ============================================================================ settings
@@ -170,106 +178,6 @@ class Settings:
         return replace(base, **changes)
 
 
-# ============================================================================ scenarios
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """Everything that fixes a simulation (hashable: it keys the simulation cache).
-
-    Attributes
-    ----------
-    world : str
-        A :func:`~sonarcarve.sim.world.load_world` spec, or ``doorway:WIDTH``,
-        ``corridor-opening:WIDTH`` or ``narrow-hallway:WIDTH`` for the generated opening worlds.
-    seed : int
-        Simulation seed.
-    path : tuple of (x, y), optional
-        Waypoints to drive; default the world's tour.
-    max_length : float, optional
-        Drive only the first ``max_length`` metres of the path.
-    speed : float
-        m/s.
-    beam_width_deg : float, optional
-        Override every sensor's beam width, degrees.
-    physics : tuple of (name, value)
-        Overrides of :class:`~sonarcarve.sim.sonar.SonarPhysics` fields.
-    robot : str
-        Robot name.
-    """
-
-    world: str
-    seed: int
-    path: tuple[tuple[float, float], ...] | None = None
-    max_length: float | None = None
-    speed: float = DEFAULT_SPEED
-    beam_width_deg: float | None = None
-    physics: tuple[tuple[str, float], ...] = ()
-    robot: str = "scout2"
-
-
-def build_world(spec: str) -> World:
-    """The world of a scenario (see :attr:`Scenario.world`)."""
-    from sonarcarve.sim.generate import (
-        corridor_opening_world,
-        doorway_world,
-        narrow_hallway_world,
-    )
-    from sonarcarve.sim.world import load_world
-
-    kind, _, width = spec.partition(":")
-    if kind == "doorway" and width:
-        # Room wide and deep enough for slanted approaches from 4.3 m away.
-        return doorway_world(float(width), distance=4.5, stop=0.8, room_width=10.0)
-    if kind == "corridor-opening" and width:
-        return corridor_opening_world(float(width))
-    if kind == "narrow-hallway" and width:
-        return narrow_hallway_world(narrow_width=float(width))
-    return load_world(spec)
-
-
-def cut_polyline(points: npt.ArrayLike, length: float | None) -> FloatArray:
-    """The first ``length`` metres of a polyline, shape (k, 2) (all of it for None).
-
-    Examples
-    --------
-    >>> cut_polyline([[0, 0], [2, 0], [2, 2]], 3.0).tolist()
-    [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]]
-    """
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    if length is None:
-        return p
-    steps = np.hypot(*np.diff(p, axis=0).T)
-    travelled = np.concatenate(([0.0], np.cumsum(steps)))
-    if length >= travelled[-1]:
-        return p
-    k = int(np.searchsorted(travelled, length, side="right"))  # first vertex beyond the cut
-    share = (length - travelled[k - 1]) / steps[k - 1]
-    if share <= 0.0:  # the cut falls on a vertex
-        return p[:k]
-    end = p[k - 1] + share * (p[k] - p[k - 1])
-    return np.vstack((p[:k], end))
-
-
-def run_simulation(scenario: Scenario) -> Simulation:
-    """Simulate ``scenario``: drive its path at its speed and fire the robot's sonar ring."""
-    from sonarcarve.sim.motion import follow_waypoints
-    from sonarcarve.sim.robot import load_robot
-
-    world = build_world(scenario.world)
-    robot = load_robot(scenario.robot)
-    if scenario.beam_width_deg is not None:
-        robot = replace(robot, beam_width=np.full(robot.n_sensors,
-                                                  math.radians(scenario.beam_width_deg)))
-    path = world.tour if scenario.path is None else np.asarray(scenario.path, dtype=np.float64)
-    if path is None:
-        msg = f"world {scenario.world!r} has no tour; give the scenario a path"
-        raise ExperimentError(msg)
-    trajectory = follow_waypoints(cut_polyline(path, scenario.max_length), speed=scenario.speed)
-    physics: SonarPhysics = replace(SonarPhysics(), **dict[str, Any](scenario.physics))
-    return simulate(world, robot, trajectory, scenario.seed, physics=physics)
-
-
 # ============================================================================ jobs
 
 
@@ -302,7 +210,7 @@ def _sample_stops(n: int, every: int, analysis: str, sim: Simulation,
     stops = np.arange(every, n + 1, every, dtype=np.int64)
     if analysis == "opening":
         # Snapshot exactly when the robot first comes within each distance of the gap.
-        extra = [_first_reading_within(sim, options["opening"], d) for d in OPENING_DISTANCES]
+        extra = [first_reading_within(sim, options["opening"], d) for d in OPENING_DISTANCES]
         stops = np.concatenate((stops, [e for e in extra if e > 0]))
     return stops
 
@@ -310,292 +218,6 @@ def _sample_stops(n: int, every: int, analysis: str, sim: Simulation,
 def _run_one(args: tuple[Job, Simulation]) -> JsonDict:
     return run_job(*args)
 
-
-# ============================================================================ analyses
-
-
-def analyse_office(sim: Simulation, record: RunRecord, job: Job,
-                   detail: bool = False) -> JsonDict:
-    """Table I, Fig. 10-12, fully carved, true error, latency-vs-accuracy for one run."""
-    edges = np.asarray(RANGE_EDGES)
-    capacity = job.config.history_size
-    samples = record.samples
-    full = samples.select(record.sample_readings[samples.sample] >= capacity)
-    alive_full = full.select(full.alive)
-    out: JsonDict = {
-        "unprocessed": metrics.percent(~full.processed),
-        "unprocessed_alive": metrics.percent(~alive_full.processed),
-        "unprocessed_by_range": metrics.binned(
-            (~full.processed).astype(float) * 100.0, full.range, edges).as_dict(),
-    }
-    final = record.final
-    live = final.select(final.alive)
-    carved = live.select(live.source == PointSource.CARVED)
-    out["width_by_range"] = metrics.binned(np.degrees(live.width), live.range, edges).as_dict()
-    out["carved_width_by_range"] = metrics.binned(
-        np.degrees(carved.width), carved.range, edges).as_dict()
-    out["max_error_by_range"] = metrics.binned(live.max_error, live.range, edges).as_dict()
-    out["removal"] = removal_summary(final, sim.truth.kind)
-    # True error of every local-map point at every snapshot (what the robot navigated on).
-    points = sample_points(record)
-    err = metrics.segment_distance(points.xy, sim.world.segments)[0]
-    out["true_error"] = metrics.error_summary(err).as_dict()
-    out["true_error_by_range"] = metrics.binned(err, points.range, edges).as_dict()
-    gmap = record.global_map
-    gerr = metrics.segment_distance(gmap.xy, sim.world.segments)[0]
-    kept = fig13_keep(gmap.source, gmap.max_error, job.method, fig13_threshold(job.config))
-    out["global_error"] = metrics.error_summary(gerr).as_dict()
-    out["global_points"] = len(gmap)
-    out["thresholded_points"] = int(np.count_nonzero(kept))
-    out["thresholded_error"] = metrics.error_summary(gerr[kept]).as_dict()
-    out["latency_accuracy"] = latency_accuracy(sim, record, points, err)
-    out["truth_breakdown"] = truth_breakdown(sim, final, gmap.reading_id, gerr)
-    out["duration"] = sim.trajectory.duration
-    if detail:
-        out["global_map"] = {"xy": gmap.xy[kept], "source": gmap.source[kept],
-                             "world": sim.world.segments}
-    return out
-
-
-def truth_breakdown(sim: Simulation, final: ArcTable, map_reading: npt.NDArray[np.int64],
-                    map_error: FloatArray) -> JsonDict:
-    """Why a map's error is what it is: what it kept and lost, judged by the simulator's truth.
-
-    Returns the global map's share of spurious points (percent) and the true error of its
-    points from direct readings only (so maps that keep different readings can be compared);
-    the median range and centerline error (metres) of the direct readings the method removed
-    and of those it kept; and, for arcs placed by carving, the share (percent) whose final
-    interval still contains the bearing of the true reflection.
-    """
-    kind = sim.truth.kind
-    direct_map = kind[map_reading] == EchoKind.DIRECT
-    b = sim.readings
-    axis = np.column_stack((b.x + b.range * np.cos(b.theta), b.y + b.range * np.sin(b.theta)))
-    rid = final.reading_id
-    direct = kind[rid] == EchoKind.DIRECT
-    lost = direct & ~final.alive
-    kept = direct & final.alive
-    centerline_err = metrics.segment_distance(axis[rid[lost | kept]], sim.world.segments)[0]
-    err_of = dict(zip(rid[lost | kept].tolist(), centerline_err.tolist(), strict=True))
-    carved = kept & (final.source == PointSource.CARVED)
-    truth = sim.truth.reflection[rid[carved]]
-    origin = np.column_stack((b.x[rid[carved]], b.y[rid[carved]]))
-    true_bearing = np.arctan2(truth[:, 1] - origin[:, 1], truth[:, 0] - origin[:, 0])
-    point = final.xy[carved]
-    centre = np.arctan2(point[:, 1] - origin[:, 1], point[:, 0] - origin[:, 0])
-    off = np.abs(np.angle(np.exp(1j * (true_bearing - centre))))
-    return {
-        "spurious_share": metrics.percent(~direct_map),
-        "direct_error": metrics.error_summary(map_error[direct_map]).as_dict(),
-        "lost_direct_median_range": _median_or_none(final.range[lost]),
-        "kept_direct_median_range": _median_or_none(final.range[kept]),
-        "lost_direct_centerline_error": _median_or_none(
-            np.array([err_of[i] for i in rid[lost].tolist()])),
-        "kept_direct_centerline_error": _median_or_none(
-            np.array([err_of[i] for i in rid[kept].tolist()])),
-        "carved_contains_truth": metrics.percent(off <= 0.5 * final.width[carved] + 1e-9),
-    }
-
-
-def fig13_threshold(config: MethodConfig) -> float:
-    """Fig. 13's max-error threshold, metres: ATM's own guaranteed bound (eq. 5.4 times δ).
-
-    A carved point is kept when its bound (eq. 5.3) is no worse than what ATM guarantees for
-    its crossings, so the two maps promise the same accuracy.
-    """
-    return atm_error_bound(config.min_transversal, config.range_resolution)
-
-
-def fig13_keep(source: npt.NDArray[np.int8], max_error: FloatArray, method: str,
-               threshold: float) -> npt.NDArray[np.bool_]:
-    """Points of a global map shown in Fig. 13.
-
-    ATM's map (a) shows the medians of transversal intersections only (no centerline
-    fallbacks); every other map (b) keeps the points whose bound is within ``threshold``.
-    """
-    if method == "atm":
-        return np.asarray(source == PointSource.ATM)
-    return np.asarray(max_error <= threshold)
-
-
-def removal_summary(final: ArcTable, kind: npt.NDArray[np.int64]) -> JsonDict:
-    """Shares (percent) of arcs removed by carving, split by what produced the reading.
-
-    ``share`` is the fully carved share of all arcs (paper, section 5-C: "over 20 percent");
-    ``spurious_removed`` the share of spurious readings (any kind but direct) that were fully
-    carved; ``true_lost`` the share of direct readings that were; ``spurious_of_removed`` the
-    share of fully carved arcs that were spurious.
-    """
-    k = kind[final.reading_id]
-    fully = final.removal == Removal.FULLY_CARVED
-    split = final.removal == Removal.SPLIT
-    direct = k == EchoKind.DIRECT
-    return {
-        "share": metrics.percent(fully),
-        "split_share": metrics.percent(split),
-        "spurious_removed": metrics.percent(fully[~direct]),
-        "true_lost": metrics.percent(fully[direct]),
-        "spurious_of_removed": metrics.percent(~direct[fully]),
-        "spurious_removed_or_split": metrics.percent((fully | split)[~direct]),
-        "true_lost_or_split": metrics.percent((fully | split)[direct]),
-        "spurious_readings": metrics.percent(~direct),
-        "unknown_removal": int(np.count_nonzero(final.removal < 0)),
-    }
-
-
-def latency_accuracy(sim: Simulation, record: RunRecord, points: ArcTable,
-                     err: FloatArray) -> JsonDict:
-    """Per 0.5 m wall patch: delay from first view to a local map within 5 and 10 cm.
-
-    A patch is seen at the first direct reading whose true reflection lies on it; it is right
-    at the first snapshot where at least half of its local-map points (points of readings that
-    reflected off it) are within the tolerance of the true walls (see
-    :func:`~sonarcarve.evaluation.metrics.patch_latency`). Delays are in seconds and in metres
-    travelled; patches never right count as never (inf) and keep the curves below 100 %.
-    """
-    segments = sim.world.segments
-    patches = metrics.patch_index(segments, PATCH_LENGTH)
-    reflection = np.where((sim.truth.kind == EchoKind.DIRECT)[:, None], sim.truth.reflection,
-                          np.nan)
-    reading_patch = metrics.patch_of_points(reflection, segments, patches)
-    sample_t = record.sample_times(sim.readings)
-    grid_s = np.asarray(LATENCY_GRID_S)
-    grid_m = np.asarray(LATENCY_GRID_M)
-    out: JsonDict = {"patches_seen": 0}
-    for tol in PATCH_TOLERANCES:
-        seen, resolved = metrics.patch_latency(
-            reading_patch=reading_patch, reading_t=sim.readings.t, sample_t=sample_t,
-            row_sample=points.sample, row_reading=points.reading_id, row_error=err,
-            n_patches=len(patches), tolerance=tol)
-        mask = np.isfinite(seen)
-        ok = np.isfinite(resolved[mask])
-        delay_s = np.full(ok.shape, np.inf)
-        delay_s[ok] = resolved[mask][ok] - seen[mask][ok]
-        dist = sim.trajectory.distance_at
-        delay_m = np.full(delay_s.shape, np.inf)
-        delay_m[ok] = dist(resolved[mask][ok]) - dist(seen[mask][ok])
-        out["patches_seen"] = int(mask.sum())
-        out[f"{tol:g}"] = {
-            "resolved_share": metrics.percent(ok),
-            "median_s": _median_or_none(delay_s[ok]),
-            "median_m": _median_or_none(delay_m[ok]),
-            "curve_s": metrics.resolved_share_curve(delay_s, grid_s).tolist(),
-            "curve_m": metrics.resolved_share_curve(delay_m, grid_m).tolist(),
-        }
-    return out
-
-
-LATENCY_GRID_S = tuple(np.round(np.linspace(0.0, 60.0, 121), 3).tolist())
-LATENCY_GRID_M = tuple(np.round(np.linspace(0.0, 20.0, 101), 3).tolist())
-
-
-def analyse_t_junction(sim: Simulation, record: RunRecord, job: Job,
-                       detail: bool = False) -> JsonDict:
-    """Fig. 4: robot-to-facing-wall distance when the local map first shows the wall.
-
-    The facing wall is the wall hit by a ray from the start of the drive along its heading. The
-    wall *shows* once at least :data:`WALL_POINTS` local-map points lie within
-    :data:`WALL_RADIUS` of it; counted over all the method's points, and over its *refined*
-    points only (not ``centerline``: carved or ATM), which is what the paper's Fig. 4(a) shows.
-    """
-    traj = sim.trajectory
-    start = np.array([traj.x[0], traj.y[0]])
-    _, wall_index = sim.world.cast_rays(start, [traj.heading[0]])
-    facing = sim.world.segments[int(wall_index[0])]
-    points = sample_points(record)
-    near = metrics.segment_distance(points.xy, facing[None, :])[0] <= WALL_RADIUS
-    k = len(record.sample_readings)
-    all_counts = np.bincount(points.sample[near], minlength=k)
-    refined = near & (points.source != PointSource.CENTERLINE)
-    refined_counts = np.bincount(points.sample[refined], minlength=k)
-    sample_t = record.sample_times(sim.readings)
-    x, y, _ = traj.pose_at(sample_t)
-    wall_distance = metrics.segment_distance(np.column_stack((x, y)), facing[None, :])[0]
-    out: JsonDict = {"end_distance": float(wall_distance[-1]) if k else None}
-    for name, counts in (("all", all_counts), ("refined", refined_counts)):
-        first = metrics.first_at_least(counts, WALL_POINTS)
-        out[name] = None if first < 0 else float(wall_distance[first])
-    if detail:
-        # The local maps when the robot is about 4 m from the wall (the paper's Fig. 4 moment).
-        moment = int(np.argmin(np.abs(wall_distance - 4.0)))
-        snap = points.select(points.sample == moment)
-        out["snapshot"] = {"xy": snap.xy, "source": snap.source,
-                           "robot": [float(x[moment]), float(y[moment])],
-                           "wall_distance": float(wall_distance[moment]),
-                           "world": sim.world.segments}
-    return out
-
-
-def _first_reading_within(sim: Simulation, opening: Sequence[Sequence[float]],
-                          distance: float) -> int:
-    """Readings added when the robot is first within ``distance`` of being level with the gap.
-
-    The distance is measured along the robot's heading: ``(c - p) · (cos h, sin h)`` for gap
-    centre ``c``, robot position ``p`` and heading ``h``, i.e. how far it still has to drive to
-    reach the door (head-on) or to come abreast of a side opening. 0 when it never gets there.
-    """
-    centre = 0.5 * (np.asarray(opening[0]) + np.asarray(opening[1]))
-    x, y, heading = sim.trajectory.pose_at(sim.readings.t)
-    ahead = (centre[0] - x) * np.cos(heading) + (centre[1] - y) * np.sin(heading)
-    within = np.flatnonzero(ahead <= distance)
-    return int(within[0]) + 1 if within.size else 0
-
-
-def analyse_opening(sim: Simulation, record: RunRecord, job: Job,
-                    opening: Sequence[Sequence[float]] = (), detail: bool = False) -> JsonDict:
-    """Fig. 2 and 9: is the opening passable in the local map 1, 2 and 3 m before it?
-
-    Distances are along the drive (see :func:`_first_reading_within`).
-
-    Passable: some stretch of the gap at least the robot's diameter plus
-    :data:`CLEARANCE_MARGIN` wide has no map point within :data:`GAP_DEPTH` of the gap line
-    (see :func:`~sonarcarve.evaluation.metrics.free_width`). ``None`` where the drive never
-    comes that close.
-    """
-    region = metrics.gap_region(opening[0], opening[1], GAP_DEPTH)
-    clearance = 2.0 * sim.robot.robot_radius + CLEARANCE_MARGIN
-    points = sample_points(record)
-    out: JsonDict = {"width": region.width}
-    for d in OPENING_DISTANCES:
-        stop = _first_reading_within(sim, opening, d)
-        if stop <= 0:
-            out[f"{d:g}"] = None
-            continue
-        k = int(np.searchsorted(record.sample_readings, stop))
-        snap = points.select(points.sample == k)
-        out[f"{d:g}"] = bool(metrics.is_passable(snap.xy, region, clearance))
-        if detail and d == 2.0:
-            x, y, _ = sim.trajectory.pose_at(sim.readings.t[stop - 1])
-            out["snapshot"] = {"xy": snap.xy, "source": snap.source,
-                               "robot": [float(x), float(y)], "world": sim.world.segments,
-                               "opening": np.asarray(opening)}
-    return out
-
-
-def analyse_sweep(sim: Simulation, record: RunRecord, job: Job) -> JsonDict:
-    """One point of a sensitivity curve: true error, unprocessed share, fully carved share."""
-    capacity = job.config.history_size
-    samples = record.samples
-    filled = min(capacity, len(sim.readings))
-    full = samples.select(record.sample_readings[samples.sample] >= filled)
-    points = sample_points(record)
-    err = metrics.segment_distance(points.xy, sim.world.segments)[0]
-    summary = metrics.error_summary(err)
-    fully = record.final.removal == Removal.FULLY_CARVED
-    return {"error_median": summary.median, "error_p90": summary.p90,
-            "unprocessed": metrics.percent(~full.processed), "fully_carved": metrics.percent(fully)}
-
-
-ANALYSES: dict[str, Callable[..., JsonDict]] = {
-    "office": analyse_office,
-    "t-junction": analyse_t_junction,
-    "opening": analyse_opening,
-    "sweep": analyse_sweep,
-}
-
-
-def _median_or_none(a: FloatArray) -> float | None:
-    return float(np.median(a)) if a.size else None
 
 
 # ============================================================================ experiments
@@ -631,19 +253,7 @@ def _spread(values: Iterable[float | None]) -> JsonDict:
 
 
 def _binned_over_seeds(outs: list[JsonDict], key: str, stat: str = "mean") -> JsonDict:
-    rows = np.array([[np.nan if x is None else x for x in o[key][stat]] for o in outs])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: empty range bins
-        mean = np.nanmean(rows, axis=0)
-        lo = np.nanmin(rows, axis=0)
-        hi = np.nanmax(rows, axis=0)
-    counts = np.sum([o[key]["count"] for o in outs], axis=0)
-    return {"edges": outs[0][key]["edges"], "value": _nan_list(mean), "min": _nan_list(lo),
-            "max": _nan_list(hi), "count": [int(c) for c in counts]}
-
-
-def _nan_list(a: FloatArray) -> list[float | None]:
-    return [None if not math.isfinite(float(x)) else float(x) for x in a]
+    return metrics.combine_binned([o[key] for o in outs], stat)
 
 
 def _summarise_office(s: Settings, outs: dict[tuple[Any, ...], JsonDict]) -> tuple[JsonDict,

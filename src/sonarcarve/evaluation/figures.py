@@ -2,29 +2,38 @@
 
 matplotlib is imported inside each function with the Agg backend, so nothing here needs a
 display or slows down importing the package. Each ``plot_*`` function draws on the axes it is
-given (or a new figure) and returns the figure; :func:`write_figures` saves every figure the
+given (or a new figure) and returns the figure; :data:`FIGURES` names every figure, the
+appendix's (:data:`APPENDIX_FIGURES`) included, and :func:`write_figures` saves every figure the
 results allow as one PNG each.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.evaluation.appendix import APPENDIX_FIGURES
+from sonarcarve.evaluation.appendix_odometry import plot_odometry
+from sonarcarve.evaluation.appendix_polling import plot_polling
+from sonarcarve.evaluation.appendix_real_log import plot_real_log
+from sonarcarve.evaluation.drawing import (
+    METHOD_COLORS,
+    new_figure,
+    scatter_sources,
+    segments_collection,
+)
 from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import PointSource
-from sonarcarve.plotting import SOURCE_COLORS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 __all__ = [
+    "APPENDIX_FIGURES",
     "FIGURES",
     "plot_fig04",
     "plot_fig10",
@@ -40,22 +49,7 @@ __all__ = [
 
 JsonDict = dict[str, Any]
 
-#: One colour per method, the same in every figure.
-METHOD_COLORS = {"atm": "#2ca02c", "carving": "#1f77b4", "combined": "#9467bd",
-                 "centerline": "#d62728"}
 METHOD_ORDER = ("atm", "carving", "combined", "centerline")
-
-
-def _figure(rows: int = 1, cols: int = 1, width: float = 7.0,
-            height: float = 4.5) -> tuple[Figure, Any]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
-                             squeeze=False)
-    return fig, axes
 
 
 def _values(seq: Sequence[float | None]) -> npt.NDArray[np.float64]:
@@ -81,7 +75,7 @@ def _binned_line(ax: Axes, entry: JsonDict, label: str, color: str, scale: float
 def _own_axes(ax: Axes | None, width: float = 7.0, height: float = 4.5) -> tuple[Figure, Axes]:
     if ax is not None:
         return ax.figure, ax  # type: ignore[return-value]
-    fig, axes = _figure(width=width, height=height)
+    fig, axes = new_figure(width=width, height=height)
     return fig, axes[0, 0]
 
 
@@ -138,21 +132,8 @@ def plot_fig12(results: JsonDict, ax: Axes | None = None) -> Figure:
     return fig
 
 
-def _scatter_points(ax: Axes, snap: JsonDict, size: float = 6.0) -> None:
-    xy = np.asarray(snap["xy"]).reshape(-1, 2)
-    source = np.asarray(snap["source"])
-    for code, color in SOURCE_COLORS.items():
-        mask = source == code
-        if np.any(mask):
-            ax.scatter(xy[mask, 0], xy[mask, 1], s=size, c=color, linewidths=0, zorder=3,
-                       label=f"{PointSource(code).label} ({int(mask.sum())})")
-
-
 def _walls(ax: Axes, segments: npt.ArrayLike) -> None:
-    from matplotlib.collections import LineCollection
-
-    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(list(seg), colors="0.75", linewidths=2.0, zorder=1))
+    segments_collection(ax, segments, color="0.75", linewidth=2.0)
 
 
 def _robot(ax: Axes, xy: Sequence[float], radius: float = 0.205) -> None:
@@ -170,7 +151,7 @@ def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     """
     snaps = (artifacts or {}).get("snapshots") or {}
     panels = [m for m in ("atm", "centerline", "carving") if snaps.get(m)]
-    fig, axes = _figure(1, 1 + len(panels), width=4.2 + 3.0 * len(panels), height=5.0)
+    fig, axes = new_figure(1, 1 + len(panels), width=4.2 + 3.0 * len(panels), height=5.0)
     tj = results["t_junction"]
     ax = axes[0, 0]
     x = np.arange(len(METHOD_ORDER))
@@ -196,7 +177,7 @@ def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
             snap = {**snap, "xy": np.asarray(snap["xy"])[keep],
                     "source": np.asarray(snap["source"])[keep]}
         _walls(ax, snap["world"])
-        _scatter_points(ax, snap)
+        scatter_sources(ax, snap["xy"], snap["source"], 6.0)
         _robot(ax, snap["robot"])
         ax.set_aspect("equal")
         ax.set_xlim(-4.0, 4.0)
@@ -219,7 +200,7 @@ def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figur
     methods = ["centerline", "atm", "carving", "combined"]
     rows = max(1, len(worlds))
     cols = 1 + (len(methods) if worlds else 0)
-    fig, axes = _figure(rows, cols, width=4.5 + 2.6 * (cols - 1), height=3.6 * rows)
+    fig, axes = new_figure(rows, cols, width=4.5 + 2.6 * (cols - 1), height=3.6 * rows)
     ax = axes[0, 0]
     op = results["openings"]
     distances = sorted(op[METHOD_ORDER[0]], key=float)
@@ -245,7 +226,7 @@ def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figur
             _walls(ax, snap["world"])
             gap = np.asarray(snap["opening"])
             ax.plot(gap[:, 0], gap[:, 1], color="orange", lw=1.0, ls="--", zorder=2)
-            _scatter_points(ax, snap, size=5.0)
+            scatter_sources(ax, snap["xy"], snap["source"], 5.0)
             _robot(ax, snap["robot"])
             centre = gap.mean(axis=0)
             ax.set_xlim(centre[0] - 2.2, centre[0] + 2.2)
@@ -267,7 +248,7 @@ def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure |
     lo = np.percentile(every, 0.5, axis=0) - 2.0 if len(every) else np.zeros(2)
     hi = np.percentile(every, 99.5, axis=0) + 2.0 if len(every) else np.ones(2)
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-9)
-    fig, axes = _figure(1, 2, width=15.0, height=min(12.0, 1.0 + 7.5 * aspect))
+    fig, axes = new_figure(1, 2, width=15.0, height=min(12.0, 1.0 + 7.5 * aspect))
     threshold = results["fig13"]["threshold_m"]
     for ax, method in zip(axes[0], ("atm", "carving"), strict=True):
         data = maps[method]
@@ -304,7 +285,7 @@ def plot_latency_accuracy(results: JsonDict) -> Figure:
     """Share of wall patches whose local-map points are right, against time and distance."""
     la = results["latency_accuracy"]
     tolerances = [k for k in la[METHOD_ORDER[0]] if k != "patches_seen"]
-    fig, axes = _figure(len(tolerances), 2, width=11.0, height=3.6 * len(tolerances))
+    fig, axes = new_figure(len(tolerances), 2, width=11.0, height=3.6 * len(tolerances))
     for r, tol in enumerate(tolerances):
         for c, (grid, key, unit) in enumerate(((la["grid_s"], "curve_s", "s"),
                                                (la["grid_m"], "curve_m", "m"))):
@@ -327,7 +308,7 @@ def plot_sensitivity(results: JsonDict) -> Figure:
     sens = {k: v for k, v in results["sensitivity"].items() if k != "scenario"}
     measures = (("error_median", "median true error (m)"),
                 ("unprocessed", "unprocessed (%)"), ("fully_carved", "fully carved (%)"))
-    fig, axes = _figure(len(sens), len(measures), width=12.0, height=2.6 * len(sens))
+    fig, axes = new_figure(len(sens), len(measures), width=12.0, height=2.6 * len(sens))
     for r, (param, entry) in enumerate(sens.items()):
         x = np.asarray(entry["values"], dtype=np.float64)
         for c, (key, label) in enumerate(measures):
@@ -347,8 +328,22 @@ def plot_sensitivity(results: JsonDict) -> Figure:
     return fig
 
 
-#: File name -> (results key it needs, function of (results, artifacts) -> Figure or None).
-FIGURES: dict[str, tuple[str, Callable[[JsonDict, JsonDict], Figure | None]]] = {
+FigureMaker = Callable[[JsonDict, JsonDict], "Figure | None"]
+
+#: The appendix's figures (:mod:`sonarcarve.evaluation.appendix`), as in :data:`FIGURES`;
+#: their artifacts are keyed by experiment name (``polling``, ``real-log``, ``odometry``).
+APPENDIX_FIGURES: dict[str, tuple[str, FigureMaker]] = {
+    "appendix-polling.png": ("appendix_polling",
+                             lambda r, a: plot_polling(r, a.get("polling"))),
+    "appendix-real-log.png": ("appendix_real_log",
+                              lambda r, a: plot_real_log(r, a.get("real-log"))),
+    "appendix-odometry.png": ("appendix_odometry",
+                              lambda r, a: plot_odometry(r, a.get("odometry"))),
+}
+
+#: File name -> (results key it needs, function of (results, artifacts by experiment name) ->
+#: Figure or None), every figure of the experiments and the appendix.
+FIGURES: dict[str, tuple[str, FigureMaker]] = {
     "fig04_t_junction.png": ("t_junction",
                              lambda r, a: plot_fig04(r, a.get("t-junction"))),
     "fig02_09_openings.png": ("openings", lambda r, a: plot_openings(r, a.get("openings"))),
@@ -359,21 +354,42 @@ FIGURES: dict[str, tuple[str, Callable[[JsonDict, JsonDict], Figure | None]]] = 
     "true_error_by_range.png": ("true_error_by_range", lambda r, a: plot_true_error(r)),
     "latency_accuracy.png": ("latency_accuracy", lambda r, a: plot_latency_accuracy(r)),
     "sensitivity.png": ("sensitivity", lambda r, a: plot_sensitivity(r)),
+    **APPENDIX_FIGURES,
 }
-FIGURES.update(APPENDIX_FIGURES)  # appendix-*.png of sonarcarve.evaluation.appendix
 
 
-def write_figures(results: JsonDict, artifacts: JsonDict, out: str | Path,
-                  dpi: int = 110) -> list[Path]:
-    """Save every figure whose results are present as ``out/<name>.png``; return the paths."""
+def write_figures(results: JsonDict, artifacts: JsonDict, out: str | Path, dpi: int = 110,
+                  names: Iterable[str] | None = None) -> list[Path]:
+    """Save every figure of :data:`FIGURES` whose results are present as ``out/<name>``.
+
+    Parameters
+    ----------
+    results : dict
+        Results as in ``results.json``; a figure is drawn only when its key is present.
+    artifacts : dict
+        The arrays the figures need, keyed by experiment name.
+    out : path
+        Folder for the PNGs, created (with its parents) if missing.
+    dpi : int
+        Resolution of the PNGs.
+    names : iterable of str, optional
+        Only these figures (file names, keys of :data:`FIGURES`); default all.
+
+    Returns
+    -------
+    list of Path
+        The PNGs written, in :data:`FIGURES` order.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    chosen = FIGURES if names is None else {n: FIGURES[n] for n in names}
     written = []
-    for name, (key, make) in FIGURES.items():
+    for name, (key, make) in chosen.items():
         if key not in results:
             continue
         fig = make(results, artifacts)

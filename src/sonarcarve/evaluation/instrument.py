@@ -4,7 +4,8 @@
 :class:`~sonarcarve.methods.base.SonarMethod` and keeps two tables (struct of arrays):
 
 * ``samples``: every arc in the history (alive or not) at chosen moments: what the robot's
-  local map held and which arcs were still unprocessed (paper, section 5-B, Table I, Fig. 10).
+  local map held and which arcs were still unprocessed (paper, section 5-B, Table I, Fig. 10;
+  see :func:`unprocessed_percent` for how arcs carving removed count).
 * ``final``: every arc's estimate as it left the history, through the method's commit listener
   (its final width and error bound, Fig. 11 and 12; and why it died, for the fully carved share).
 
@@ -22,12 +23,20 @@ from typing import Self
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.evaluation import metrics
 from sonarcarve.history import SonarHistory
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods.base import Estimates, Removal, SonarMethod
 from sonarcarve.readings import ReadingBatch
 
-__all__ = ["ArcTable", "RunRecord", "record_run", "sample_points"]
+__all__ = [
+    "ArcTable",
+    "RunRecord",
+    "full_history_samples",
+    "record_run",
+    "sample_points",
+    "unprocessed_percent",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -49,7 +58,9 @@ class ArcTable:
     range : float64
         The arc's radius r, metres.
     alive, processed : bool
-        As in :class:`~sonarcarve.methods.base.Estimates`.
+        As in :class:`~sonarcarve.methods.base.Estimates`. An arc carving removed (fully carved
+        or split) is not alive but *is* processed (it was carved): the paper's history drops
+        such arcs, this table keeps them (see :func:`unprocessed_percent`).
     xy : float64, shape (n, 2)
         The arc's map point (meaningless where not ``alive``).
     width, max_error : float64
@@ -155,6 +166,10 @@ class RunRecord:
         """The rows of snapshot ``k``."""
         return self.samples.select(self.samples.sample == k)
 
+    def local_map(self, k: int) -> ArcTable:
+        """The local map at snapshot ``k``: its ``alive`` rows (one point per surviving arc)."""
+        return self.samples.select((self.samples.sample == k) & self.samples.alive)
+
 
 def record_run(
     batch: ReadingBatch,
@@ -229,3 +244,31 @@ def record_run(
 def sample_points(record: RunRecord) -> ArcTable:
     """The local-map points of every snapshot: the ``alive`` rows of ``record.samples``."""
     return record.samples.select(record.samples.alive)
+
+
+def full_history_samples(record: RunRecord, capacity: int, *,
+                         every: int | None = None) -> ArcTable:
+    """The snapshot rows Table I's unprocessed share is taken over (paper, section 5-B).
+
+    The rows of the snapshots taken once ``capacity`` readings had been added (a full history
+    of ``capacity`` arcs), or of every snapshot when the run never filled it. With ``every``,
+    only snapshots taken after a multiple of ``every`` readings count (regular sampling, leaving
+    out snapshots taken at chosen moments).
+    """
+    samples = record.samples
+    if every is not None:
+        samples = samples.select(record.sample_readings[samples.sample] % every == 0)
+    full = samples.select(record.sample_readings[samples.sample] >= capacity)
+    return full if len(full) else samples
+
+
+def unprocessed_percent(rows: ArcTable, *, live_only: bool = False) -> float:
+    """Share of ``rows`` not yet processed, percent (Table I's measure; NaN for no rows).
+
+    Every row counts by default, so an arc carving removed (fully carved or split) counts as
+    processed: it was carved. This is the library's measure
+    (:attr:`~sonarcarve.methods.base.Measures.unprocessed_share`). The paper's history drops
+    removed arcs, so with ``live_only`` only ``alive`` rows count, as the paper's would.
+    """
+    kept = rows.select(rows.alive) if live_only else rows
+    return metrics.percent(~kept.processed)

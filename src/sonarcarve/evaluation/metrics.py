@@ -11,7 +11,9 @@ arrays of shape (m, 4) holding ``(x1, y1, x2, y2)``.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+import warnings
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -23,6 +25,7 @@ __all__ = [
     "GapRegion",
     "PatchIndex",
     "binned",
+    "combine_binned",
     "count_near_segment",
     "error_summary",
     "first_at_least",
@@ -135,6 +138,42 @@ def binned(values: npt.ArrayLike, keys: npt.ArrayLike, edges: npt.ArrayLike) -> 
             median[b] = float(np.median(sel))
             p90[b] = float(np.percentile(sel, 90.0))
     return BinnedStats(e, counts, mean, median, p90)
+
+
+def combine_binned(entries: Sequence[Mapping[str, Any]], stat: str = "mean") -> dict[str, Any]:
+    """Several runs' binned curves as one (for example one curve per simulation seed).
+
+    Parameters
+    ----------
+    entries : sequence of dict
+        :meth:`BinnedStats.as_dict` outputs over the same edges (None marks an empty bin).
+    stat : str
+        Which statistic to combine: ``mean``, ``median`` or ``p90``.
+
+    Returns
+    -------
+    dict
+        ``edges``; per bin ``value`` (mean over the runs whose bin is not empty), ``min`` and
+        ``max`` over those runs (None where every run's bin is empty); ``count`` summed.
+
+    Examples
+    --------
+    >>> a = {"edges": [0.0, 1.0, 2.0], "median": [1.0, None], "count": [2, 0]}
+    >>> b = {"edges": [0.0, 1.0, 2.0], "median": [3.0, None], "count": [1, 0]}
+    >>> combine_binned([a, b], "median")
+    {'edges': [0.0, 1.0, 2.0], 'value': [2.0, None], 'min': [1.0, None], 'max': [3.0, None], \
+'count': [3, 0]}
+    """
+    rows = np.array([[np.nan if x is None else x for x in e[stat]] for e in entries],
+                    dtype=np.float64)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: empty bins
+        mean = np.nanmean(rows, axis=0)
+        lo = np.nanmin(rows, axis=0)
+        hi = np.nanmax(rows, axis=0)
+    counts = np.sum([e["count"] for e in entries], axis=0)
+    return {"edges": list(entries[0]["edges"]), "value": _json_list(mean),
+            "min": _json_list(lo), "max": _json_list(hi), "count": [int(c) for c in counts]}
 
 
 # -- error bounds and true error ---------------------------------------------------------------

@@ -2,30 +2,42 @@
 
 The Markdown section lives between ``<!-- experiments:begin -->`` and
 ``<!-- experiments:end -->`` of a file whose other parts belong to someone else: only that span
-is rewritten (it is appended, markers included, when the file has none).
+is rewritten (and the appendix's, between its own markers, when the appendix ran). A file that
+does not exist yet is created with the sections; an existing one without the experiments
+markers is refused (:class:`ReportError`), never appended to. The appendix section is appended
+at the end of a file that has the experiments markers but none of its own yet.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.evaluation.appendix import appendix_markdown, replace_appendix_section
+from sonarcarve.evaluation.appendix import APPENDIX_MARKERS, appendix_markdown
 from sonarcarve.evaluation.experiments import ExperimentResults
 from sonarcarve.evaluation.figures import write_figures
-from sonarcarve.io.atomic import atomic_path, atomic_text
+from sonarcarve.evaluation.output import (
+    Markers,
+    check_marked_file,
+    copy_into,
+    json_ready,
+    links_from,
+    replace_marked_section,
+    write_marked_file,
+)
+from sonarcarve.io.atomic import atomic_text
 
 __all__ = [
     "BEGIN_MARKER",
     "END_MARKER",
+    "EXPERIMENTS_MARKERS",
     "PAPER",
     "ReportError",
+    "check_results_md",
     "render_section",
     "replace_section",
     "write_outputs",
@@ -45,7 +57,11 @@ PAPER: JsonDict = {
 
 
 class ReportError(SonarcarveError):
-    """A Markdown file whose experiments markers are broken."""
+    """A Markdown file whose experiments markers are missing or broken."""
+
+
+#: The experiments section's markers in a Markdown file, and the error a broken file raises.
+EXPERIMENTS_MARKERS = Markers(BEGIN_MARKER, END_MARKER, ReportError)
 
 
 # ============================================================================ files
@@ -60,66 +76,73 @@ def write_outputs(
     results_md: str | Path | None = None,
 ) -> list[Path]:
     """Write ``results.json`` and the figures into ``out``; optionally copy the figures and
-    regenerate the experiments section of ``results_md``. Returns the files written."""
+    regenerate the experiments section of ``results_md``. Returns the files written.
+
+    Raises
+    ------
+    ReportError, AppendixError
+        Before anything is written, when ``results_md`` exists but lacks the experiments
+        markers, or either section's markers are broken (see :func:`check_results_md`).
+    """
+    data = {"command": command, **results.results}
+    appendix = any(key.startswith("appendix_") for key in data)  # its own section
+    if results_md is not None:
+        check_results_md(results_md, appendix=appendix)
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    data = {"command": command, **results.results}
     with atomic_text(folder / "results.json") as handle:
-        json.dump(_clean(data), handle, indent=1, allow_nan=False)
+        json.dump(json_ready(data), handle, indent=1, allow_nan=False)
         handle.write("\n")
     written = [folder / "results.json"]
     figures = write_figures(results.results, results.artifacts, folder)
     written += figures
     shown = figures
     if figures_dir is not None:
-        target = Path(figures_dir)
-        target.mkdir(parents=True, exist_ok=True)
-        shown = []
-        for path in figures:
-            with atomic_path(target / path.name, suffix=".png") as tmp:
-                shutil.copyfile(path, tmp)
-            shown.append(target / path.name)
+        shown = [copy_into(path, figures_dir) for path in figures]
         written += shown
     if results_md is not None:
-        md = Path(results_md)
-        rel = [Path(os.path.relpath(p, md.parent)).as_posix() for p in shown]
-        section = render_section(data, command, rel)
-        old = md.read_text(encoding="utf-8") if md.exists() else ""
-        with atomic_text(md) as handle:
-            text = replace_section(old, section, str(md))
-            if any(key.startswith("appendix_") for key in data):  # its own markers
-                text = replace_appendix_section(text, appendix_markdown(data, command, rel),
-                                                str(md))
-            handle.write(text)
-        written.append(md)
+        rel = links_from(results_md, shown)
+        sections = [(EXPERIMENTS_MARKERS, render_section(data, command, rel))]
+        if appendix:
+            sections.append((APPENDIX_MARKERS, appendix_markdown(data, command, rel)))
+        written.append(write_marked_file(results_md, sections,
+                                         appendable=[APPENDIX_MARKERS]))
     return written
 
 
-def _clean(value: Any) -> Any:
-    """JSON-ready: NaN and inf become None, tuples lists, numpy scalars floats."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
-    if isinstance(value, bool) or value is None or isinstance(value, str | int):
-        return value
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    return value
+def check_results_md(results_md: str | Path, *, appendix: bool = True) -> None:
+    """Check that :func:`write_outputs` can regenerate the sections of ``results_md``.
 
-
-def replace_section(text: str, section: str, where: str = "RESULTS.md") -> str:
-    """``text`` with the span between the markers (inclusive) replaced by ``section``.
-
-    ``section`` must start with :data:`BEGIN_MARKER` and end with :data:`END_MARKER`. Without
-    markers in ``text`` the section is appended.
+    Fine when the file does not exist (or is blank): it will be created. Otherwise it must hold
+    :data:`BEGIN_MARKER` and :data:`END_MARKER` once each, in order; with ``appendix`` (when the
+    appendix experiments run) the appendix's markers must be intact too, or absent (the
+    appendix section is then appended).
 
     Raises
     ------
     ReportError
-        When only one marker is present, or they are out of order or repeated.
+        The experiments markers are missing or broken (one line naming the file and the line).
+    AppendixError
+        The appendix markers are broken.
+    """
+    check_marked_file(results_md, [EXPERIMENTS_MARKERS, *([APPENDIX_MARKERS] if appendix
+                                                          else [])],
+                      appendable=[APPENDIX_MARKERS])
+
+
+def replace_section(text: str, section: str, where: str = "RESULTS.md", *,
+                    append_missing: bool = False) -> str:
+    """``text`` with the span between the markers (inclusive) replaced by ``section``.
+
+    ``section`` must start with :data:`BEGIN_MARKER` and end with :data:`END_MARKER`. A blank
+    ``text`` becomes the section; a ``text`` without markers gets it appended only with
+    ``append_missing`` (see :func:`~sonarcarve.evaluation.output.replace_marked_section`).
+
+    Raises
+    ------
+    ReportError
+        When ``text`` has no markers (and not ``append_missing``), only one, or they are out of
+        order or repeated; the message names ``where`` and the line.
 
     Examples
     --------
@@ -127,18 +150,8 @@ def replace_section(text: str, section: str, where: str = "RESULTS.md") -> str:
     ...                 "<!-- experiments:begin -->\\nnew\\n<!-- experiments:end -->")
     'a\\n<!-- experiments:begin -->\\nnew\\n<!-- experiments:end -->\\nb\\n'
     """
-    begins, ends = text.count(BEGIN_MARKER), text.count(END_MARKER)
-    if begins == 0 and ends == 0:
-        joint = "" if not text or text.endswith("\n\n") else ("\n" if text.endswith("\n")
-                                                               else "\n\n")
-        return f"{text}{joint}{section}\n"
-    start, stop = text.find(BEGIN_MARKER), text.find(END_MARKER)
-    if begins != 1 or ends != 1 or stop < start:
-        line = text[:start if begins else stop].count("\n") + 1
-        msg = (f"{where}: line {line}: expected one {BEGIN_MARKER} followed by one "
-               f"{END_MARKER}")
-        raise ReportError(msg)
-    return text[:start] + section + text[stop + len(END_MARKER):]
+    return replace_marked_section(text, section, BEGIN_MARKER, END_MARKER, where,
+                                  append_missing=append_missing, error=ReportError)
 
 
 # ============================================================================ rendering
@@ -211,9 +224,12 @@ def _table1(r: JsonDict, figs: dict[str, str]) -> list[str]:
     for key, name in names.items():
         out.append(f"| {name} | {paper[key]:.2f} | {_range(spread[key], 2)} | "
                    f"{_f(alive.get(key), 2)} |")
-    out += ["", "Sampled every 16 readings once the history is full; *all rows* counts arcs "
-            "carving removed as processed (the library's measure), *live arcs only* leaves them "
-            "out, as the paper's history, which drops removed arcs, would."]
+    out += ["", "Sampled every 16 readings once the history is full. *All history rows* is the "
+            "library's measure (`SonarMethod.measures().unprocessed_share`; also the one of "
+            "Fig. 10 and the sensitivity tables below): an arc carving removed (fully carved, "
+            "or split and dropped) stays in the history and counts as processed, since it was "
+            "carved. The paper's history drops removed arcs, so its Table I can count only arcs "
+            "still alive: *live arcs only* leaves removed arcs out, as the paper would."]
     out += ["", *_table1_sentences(r), ""]
     return out
 
@@ -227,17 +243,20 @@ def _share_below(entry: JsonDict, limit: float) -> float:
 
 def _table1_sentences(r: JsonDict) -> list[str]:
     t1, paper = r["table1"], PAPER["table1"]
+    alive = r.get("table1_alive_only", {})
     short = _share_below(r["fig10"]["carving"], 1.0)
-    carve_short = _mean_below(r["fig10"]["carving"], 1.0)
-    carve_far = _mean_above(r["fig10"]["carving"], 3.0)
-    atm_far = _mean_above(r["fig10"]["atm"], 3.0)
+    carve_short = _mean_between(r["fig10"]["carving"], high=1.0)
+    carve_far = _mean_between(r["fig10"]["carving"], 3.0)
+    atm_far = _mean_between(r["fig10"]["atm"], 3.0)
     slow_short = carve_short is not None and carve_far is not None and carve_short > carve_far
     return [
         f"- ATM: {t1['atm']:.1f} % against the paper's {paper['atm']:.2f} %"
         + (", close. " if abs(t1["atm"] - paper["atm"]) < 5 else ". ")
         + "ATM's latency is set by how far the robot drives between readings of one obstacle "
         "(eq. 2.2), so it depends on speed, ψ and the tour, which the paper does not give.",
-        f"- Arc carving: {t1['carving']:.1f} % against {paper['carving']:.2f} %. The paper "
+        f"- Arc carving: {t1['carving']:.1f} % of all history rows "
+        f"({_f(alive.get('carving'), 1)} % of live arcs only) against {paper['carving']:.2f} %. "
+        "The paper "
         "explains its high share by the many short arcs, which carving processes last (its "
         f"Fig. 10). {short:.0f} % of our history arcs are shorter than 1 m, and carving leaves "
         f"{_f(carve_short, 0)} % of them unprocessed against {_f(carve_far, 0)} % of arcs "
@@ -248,37 +267,17 @@ def _table1_sentences(r: JsonDict) -> list[str]:
         + f"which is why our share is {'lower' if t1['carving'] < paper['carving'] else 'so'}. "
         f"Long arcs behave as in the paper: beyond 3 m carving leaves {_f(carve_far, 0)} % "
         f"unprocessed against ATM's {_f(atm_far, 0)} %.",
-        f"- Both: {t1['combined']:.1f} % against {paper['combined']:.2f} %, so "
-        f"{100 - t1['combined']:.1f} % of history arcs gain some azimuth resolution (paper: more "
-        f"than {PAPER['combined_refined_min']:.0f} %). Combined is never above the smaller of the "
-        "two: one history, an arc is processed when either model processed it.",
+        f"- Both: {t1['combined']:.1f} % of all history rows "
+        f"({_f(alive.get('combined'), 1)} % of live arcs only) against "
+        f"{paper['combined']:.2f} %, so "
+        + (f"{100 - alive['combined']:.1f} % of the live history arcs gain some azimuth "
+           "resolution" if alive.get("combined") is not None else
+           f"{100 - t1['combined']:.1f} % of history arcs are processed")
+        + f" (paper: more than {PAPER['combined_refined_min']:.0f} %). Combined is never above "
+        "the smaller of the two: one history, an arc is processed when either model processed "
+        "it.",
         "- Centerline: 0 % in both, by definition.",
     ]
-
-
-def _mean_below(entry: JsonDict, limit: float) -> float | None:
-    num = den = 0.0
-    for hi, v, c in zip(entry["edges"][1:], entry["value"], entry["count"], strict=True):
-        if hi <= limit and v is not None:
-            num += v * c
-            den += c
-    return num / den if den else None
-
-
-def _bin_value(entry: JsonDict, x: float) -> float | None:
-    for lo, hi, v in zip(entry["edges"][:-1], entry["edges"][1:], entry["value"], strict=True):
-        if lo <= x < hi:
-            return v  # type: ignore[no-any-return]
-    return None
-
-
-def _mean_above(entry: JsonDict, limit: float) -> float | None:
-    num = den = 0.0
-    for lo, v, c in zip(entry["edges"][:-1], entry["value"], entry["count"], strict=True):
-        if lo >= limit and v is not None:
-            num += v * c
-            den += c
-    return num / den if den else None
 
 
 def _fully_carved(r: JsonDict, figs: dict[str, str]) -> list[str]:
@@ -414,14 +413,14 @@ def _fig10_12(r: JsonDict, figs: dict[str, str]) -> list[str]:
         return []
     f10, f11, f12 = r["fig10"], r["fig11"]["carved_only"], r["fig12"]
     atm_mid = _mean_between(f10["atm"], 1.0, 3.0)
-    atm_far = _mean_above(f10["atm"], 3.0)
+    atm_far = _mean_between(f10["atm"], 3.0)
     carve_mid = _mean_between(f10["carving"], 1.0, 3.0)
-    carve_far = _mean_above(f10["carving"], 3.0)
+    carve_far = _mean_between(f10["carving"], 3.0)
     w_near = _mean_between(f11["mean"], 1.0, 3.0)
-    w_far = _mean_above(f11["mean"], 4.0)
+    w_far = _mean_between(f11["mean"], 4.0)
     shrink = w_near is not None and w_far is not None and w_far < w_near
-    carve_far_err = _mean_above(f12["carving"], 3.0)
-    center_far_err = _mean_above(f12["centerline"], 3.0)
+    carve_far_err = _mean_between(f12["carving"], 3.0)
+    center_far_err = _mean_between(f12["centerline"], 3.0)
     below_everywhere = all(
         c is None or z is None or c <= z
         for c, z in zip(f12["carving"]["value"], f12["centerline"]["value"], strict=True))
@@ -429,7 +428,8 @@ def _fig10_12(r: JsonDict, figs: dict[str, str]) -> list[str]:
                                          strict=True) if v is not None and v > f12["atm_bound"]),
                     None)
     out = ["### Fig. 10, 11, 12: latency, carved width and maximum error by range", "",
-           f"- Fig. 10: ATM leaves {_f(atm_mid, 0)} % of arcs of 1-3 m unprocessed and "
+           f"- Fig. 10 (all history rows, removed arcs counting as processed, as in Table I): "
+           f"ATM leaves {_f(atm_mid, 0)} % of arcs of 1-3 m unprocessed and "
            f"{_f(atm_far, 0)} % beyond 3 m, growing with range as eq. 2.2 predicts and as in "
            f"the paper. Carving: {_f(carve_mid, 0)} % and {_f(carve_far, 0)} %; "
            + ("it also grows with range, unlike the paper's nearly flat curve, but stays below "
@@ -472,19 +472,23 @@ def _span(r: JsonDict) -> str:
 
 
 def _history_effect(r: JsonDict) -> str:
-    """How carving's error changes from the default history to the longest one swept."""
+    """How carving's error changes from the shortest history swept to the longest."""
     entry = r.get("sensitivity", {}).get("history")
-    if not entry or "carving" not in entry or 250 not in entry["values"]:
+    if not entry or "carving" not in entry or len(set(entry["values"])) < 2:
         return ""
     values, errors = entry["values"], entry["carving"]["error_median"]
-    base, last = errors[values.index(250)], errors[-1]
-    if base is None or last is None:
+    short = min(range(len(values)), key=lambda i: values[i])
+    long = max(range(len(values)), key=lambda i: values[i])
+    if errors[short] is None or errors[long] is None:
         return ""
     return (f" (the history sweep below: carving's median true error "
-            f"{base:.3f} m with 250 arcs, {last:.3f} m with {values[-1]:g})")
+            f"{errors[short]:.3f} m with {values[short]:g} arcs, {errors[long]:.3f} m with "
+            f"{values[long]:g})")
 
 
-def _mean_between(entry: JsonDict, low: float, high: float) -> float | None:
+def _mean_between(entry: JsonDict, low: float = -math.inf,
+                  high: float = math.inf) -> float | None:
+    """Count-weighted mean of a binned curve over the bins lying within ``[low, high]``."""
     num = den = 0.0
     for lo, hi, v, c in zip(entry["edges"][:-1], entry["edges"][1:], entry["value"],
                             entry["count"], strict=True):
@@ -611,7 +615,8 @@ def _sensitivity(r: JsonDict, figs: dict[str, str]) -> list[str]:
             f"The first {sc['length_m']:g} m of the office tour") + f", seed {sc['seed']}; one "
            "parameter changed at a time from the defaults above; simulations shared by every "
            "parameter that does not change them (history, ε, ψ). Median true error of the "
-           "local map (m) / unprocessed (%) / fully carved (%):", ""]
+           "local map (m) / unprocessed (% of all history rows, as in Table I) / fully carved "
+           "(%):", ""]
     for param, entry in sens.items():
         if param == "scenario":
             continue

@@ -1,6 +1,6 @@
 """File formats at the edges of the library: readings and maps as CSV, and dataset adapters."""
 
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, OutputError
 from sonarcarve.io.map_csv import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.readings_csv import READINGS_COLUMNS, read_readings_csv, write_readings_csv
 from sonarcarve.io.roboND import RoboNDLog, RoboNDReport, bundled_robond_dir, read_robond
@@ -9,6 +9,7 @@ __all__ = [
     "MAP_COLUMNS",
     "READINGS_COLUMNS",
     "InputError",
+    "OutputError",
     "RoboNDLog",
     "RoboNDReport",
     "bundled_robond_dir",

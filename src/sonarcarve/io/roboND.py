@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, read_text
 from sonarcarve.readings import ReadingBatch
 
 __all__ = [
@@ -128,14 +128,7 @@ class RoboNDLog:
 
 
 def _read_table(path: Path, columns: tuple[str, ...]) -> npt.NDArray[np.float64]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        msg = f"{path}: no such file"
-        raise InputError(msg) from None
-    except (OSError, UnicodeDecodeError) as err:
-        msg = f"{path}: cannot read as text ({err})"
-        raise InputError(msg) from None
+    text = read_text(path, InputError)
     lines = text.splitlines()
     while lines and not lines[-1].strip():
         lines.pop()  # trailing blank lines are harmless
@@ -162,10 +155,21 @@ def _read_table(path: Path, columns: tuple[str, ...]) -> npt.NDArray[np.float64]
     back = np.flatnonzero(np.diff(table[:, 0]) <= 0.0)
     if back.size:
         row = int(back[0]) + 1
-        msg = (f"{path}: line {row + 1}, time {table[row, 0]:g} ms is not after the previous "
-               f"line's {table[row - 1, 0]:g} ms")
+        msg = (f"{path}: line {row + 1}, time {_amount(table[row, 0])} ms is not after the "
+               f"previous line's {_amount(table[row - 1, 0])} ms")
         raise InputError(msg)
     return table
+
+
+def _amount(value: float) -> str:
+    """A logged quantity for a message: whole milliseconds (or millimetres) as integers.
+
+    >>> _amount(1687560.0), _amount(-5.0), _amount(12.5)
+    ('1687560', '-5', '12.5')
+    """
+    number = float(value)
+    # Beyond 1e15 a float's integer digits are not all meaningful: keep its shortest repr.
+    return str(int(number)) if number.is_integer() and abs(number) < 1e15 else repr(number)
 
 
 def read_robond(
@@ -205,7 +209,7 @@ def read_robond(
     if bad.size:
         line, sensor = int(bad[0, 0]) + 1, int(bad[0, 1])
         msg = (f"{meas_path}: line {line}, column 'r{sensor}' must be > 0 mm, "
-               f"got {values[line - 1, sensor]:g}")
+               f"got {_amount(values[line - 1, sensor])}")
         raise InputError(msg)
     return _readings(poses, values, beam_width, keep_duplicates)
 
@@ -216,8 +220,8 @@ def _check_match(poses_path: Path, poses: npt.NDArray[np.float64], meas_path: Pa
     differ = np.flatnonzero(poses[:n, 0] != meas[:n, 0])
     if differ.size:
         line = int(differ[0]) + 1
-        msg = (f"{meas_path}: line {line}, time {meas[line - 1, 0]:g} ms does not match "
-               f"{poses_path.name} line {line} ({poses[line - 1, 0]:g} ms)")
+        msg = (f"{meas_path}: line {line}, time {_amount(meas[line - 1, 0])} ms does not match "
+               f"{poses_path.name} line {line} ({_amount(poses[line - 1, 0])} ms)")
         raise InputError(msg)
     if len(poses) != len(meas):
         short, long_path = (meas_path, poses_path) if len(meas) < len(poses) else (poses_path,

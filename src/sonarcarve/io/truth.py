@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.atomic import atomic_text
+from sonarcarve.io.atomic import atomic_paths, atomic_text
 from sonarcarve.io.errors import InputError
 from sonarcarve.io.readings_csv import write_readings_csv
 from sonarcarve.sim.sonar import EchoKind
@@ -181,9 +181,18 @@ def _reading(path: Path, index: int, row: Any) -> tuple[int, tuple[float, float]
 def write_simulation(simulation: Simulation, readings_path: str | Path) -> Path:
     """Write a simulation's readings CSV and, beside it, its truth file; return the truth path.
 
-    The truth file is written first, so a readings CSV on disk always has its truth beside it.
+    Both are written to temporary files first and renamed into place only when both are
+    complete, so a failure leaves both targets as they were: never a new readings CSV beside an
+    old truth file, nor an orphan truth file.
+
+    Raises
+    ------
+    OutputError
+        One of the two files cannot be written (nothing was replaced).
     """
     truth = truth_path(readings_path)
-    write_truth_json(truth, simulation.world, simulation.truth.kind, simulation.truth.reflection)
-    write_readings_csv(simulation.readings, readings_path)
+    with atomic_paths(truth, readings_path) as (truth_tmp, readings_tmp):
+        write_truth_json(truth_tmp, simulation.world, simulation.truth.kind,
+                         simulation.truth.reflection)
+        write_readings_csv(simulation.readings, readings_tmp)
     return truth

@@ -12,13 +12,14 @@ Two formats, told apart by the file name's suffix; coordinates in metres, world 
 
 - **JSON** (``.json``): ``{"waypoints": [[x, y], ...]}`` or just ``[[x, y], ...]``.
 
-A path needs at least two waypoints; the robot drives through them in order.
+A path needs at least two distinct waypoints; the robot drives through them in order. Every
+coordinate must be finite and within :data:`~sonarcarve.sim.motion.MAX_COORDINATE` (100 km) of
+the origin.
 """
 
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -26,9 +27,13 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, finite_number, parse_json, read_text
+from sonarcarve.sim.motion import MAX_COORDINATE
 
 __all__ = ["read_waypoints"]
+
+#: Waypoints closer than this, metres, are the same point (as in ``follow_waypoints``).
+_SAME_POINT = 1e-9
 
 
 def read_waypoints(path: str | Path) -> npt.NDArray[np.float64]:
@@ -44,17 +49,15 @@ def read_waypoints(path: str | Path) -> npt.NDArray[np.float64]:
     if suffix not in {".csv", ".json"}:
         msg = f"{path}: waypoint files must end in .csv (header x,y) or .json ([[x, y], ...])"
         raise InputError(msg)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        msg = f"{path}: no such file"
-        raise InputError(msg) from None
-    except (OSError, UnicodeDecodeError) as err:
-        msg = f"{path}: cannot read ({err})"
-        raise InputError(msg) from None
+    text = read_text(path, InputError)
     points = _from_csv(path, text) if suffix == ".csv" else _from_json(path, text)
     if points.shape[0] < 2:
         msg = f"{path}: a path needs at least 2 waypoints, found {points.shape[0]}"
+        raise InputError(msg)
+    if not np.any(np.hypot(*(points[1:] - points[0]).T) > _SAME_POINT):
+        x, y = points[0]
+        msg = (f"{path}: a path needs at least 2 distinct waypoints, all {points.shape[0]} are "
+               f"({x:g}, {y:g})")
         raise InputError(msg)
     return points
 
@@ -86,24 +89,34 @@ def _cell(path: Path, line: int, row: list[str], index: int, name: str) -> float
     if not math.isfinite(value):
         msg = f"{path}: line {line}, column {name!r} must be finite, got {text!r}"
         raise InputError(msg)
+    if abs(value) > MAX_COORDINATE:
+        msg = (f"{path}: line {line}, column {name!r} must lie within ±{MAX_COORDINATE:g} m, "
+               f"got {text!r}")
+        raise InputError(msg)
     return value
 
 
 def _from_json(path: Path, text: str) -> npt.NDArray[np.float64]:
-    try:
-        data: Any = json.loads(text)
-    except json.JSONDecodeError as err:
-        msg = f"{path}: line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
-        raise InputError(msg) from None
+    data: Any = parse_json(text, path, InputError)
     if isinstance(data, dict):
         data = data.get("waypoints")
     if not isinstance(data, list):
         msg = f"{path}: expected {{\"waypoints\": [[x, y], ...]}} or a list [[x, y], ...]"
         raise InputError(msg)
+    points = np.empty((len(data), 2))
     for i, point in enumerate(data):
-        if (not isinstance(point, list) or len(point) != 2
-                or not all(isinstance(v, int | float) and not isinstance(v, bool)
-                           and math.isfinite(v) for v in point)):
-            msg = f"{path}: waypoint {i} must be [x, y] with finite numbers, got {point!r}"
+        xy = [finite_number(v) for v in point] if isinstance(point, list) else []
+        if len(xy) != 2 or None in xy:
+            msg = f"{path}: waypoint {i} must be [x, y] with finite numbers, got {_short(point)}"
             raise InputError(msg)
-    return np.array(data, dtype=np.float64).reshape(-1, 2)
+        points[i] = xy
+        if np.abs(points[i]).max() > MAX_COORDINATE:
+            msg = (f"{path}: waypoint {i} must lie within ±{MAX_COORDINATE:g} m of the origin "
+                   f"in x and y, got {_short(point)}")
+            raise InputError(msg)
+    return points
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.sim.world import World, WorldError, write_world_json
+from sonarcarve.sim.world import World, WorldError, check_seed, write_world_json
 
 __all__ = [
     "BUILTIN_RECIPES",
@@ -131,7 +131,7 @@ def random_world(seed: int, width: float = 60.0, height: float = 40.0) -> World:
     Parameters
     ----------
     seed : int
-        Same seed, same world (for a given numpy version: numpy may change its random streams
+        >= 0. Same seed, same world (for a given numpy version: numpy may change its random streams
         between versions, which is why the built-in ``office`` is stored, not regenerated).
     width, height : float
         Building outline, metres, each in [10, 1000].
@@ -145,8 +145,9 @@ def random_world(seed: int, width: float = 60.0, height: float = 40.0) -> World:
     Raises
     ------
     WorldError
-        If the size is outside [10, 1000] m.
+        If the seed is negative or not an integer, or the size is outside [10, 1000] m.
     """
+    seed = check_seed(seed)
     lo, hi = _SIZE_LIMITS
     if not (lo <= width <= hi and lo <= height <= hi):
         msg = f"random world size must lie in [{lo:g}, {hi:g}] m, got {width:g} x {height:g}"

@@ -18,12 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.sim.world import World, WorldError
+from sonarcarve.sim.world import World, WorldError, check_seed
 
 __all__ = [
     "DEFAULT_DT",
     "DEFAULT_SPEED",
     "DEFAULT_TURN_RATE",
+    "MAX_COORDINATE",
+    "MAX_POSES",
     "ROBOT_RADIUS",
     "Trajectory",
     "explore",
@@ -100,6 +102,18 @@ DEFAULT_DT = 0.05
 DEFAULT_TURN_RATE = 1.0
 #: Half the distance between the drive wheels, metres (assumed: wheels near a 0.41 m body's rim).
 HALF_WHEEL_BASE = 0.17
+#: Largest |x| or |y| of a waypoint, metres (100 km: any building, far from float trouble).
+MAX_COORDINATE = 1e5
+#: Most poses :func:`follow_waypoints` and :func:`explore` will make: 10 million poses are
+#: 320 MB of trajectory arrays and, at the default 0.05 s, 139 hours of driving.
+MAX_POSES = 10_000_000
+
+
+def _check_pose_count(count: float, duration: float, dt: float, what: str) -> None:
+    if count > MAX_POSES:
+        msg = (f"{what} of {duration:.6g} s sampled every {dt:g} s needs {count:.4g} poses, more "
+               f"than the limit of {MAX_POSES:,} (MAX_POSES); use a shorter {what} or a larger dt")
+        raise WorldError(msg)
 
 
 def _check_positive(**values: float) -> None:
@@ -181,6 +195,13 @@ def follow_waypoints(waypoints: npt.ArrayLike, speed: float = DEFAULT_SPEED,
     Trajectory
         Starting at the first waypoint facing the first leg; heading unwrapped.
 
+    Raises
+    ------
+    WorldError
+        Bad parameters; waypoints that are not finite, lie farther than :data:`MAX_COORDINATE`
+        from the origin in x or y, or hold fewer than 2 distinct points; a drive needing more
+        than :data:`MAX_POSES` poses.
+
     Examples
     --------
     >>> tr = follow_waypoints([[0, 0], [1, 0], [1, 1]], speed=0.5, dt=0.5, turn_rate=np.pi / 2)
@@ -199,6 +220,12 @@ def _distinct_points(waypoints: npt.ArrayLike) -> FloatArray:
     points = np.asarray(waypoints, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 2 or not np.all(np.isfinite(points)):
         msg = f"waypoints must be finite numbers of shape (k, 2), got shape {points.shape}"
+        raise WorldError(msg)
+    far = np.flatnonzero(np.abs(points).max(axis=1, initial=0.0) > MAX_COORDINATE)
+    if far.size:
+        x, y = points[far[0]]
+        msg = (f"waypoints[{far[0]}] ({x:g}, {y:g}) lies farther than the limit of "
+               f"{MAX_COORDINATE:g} m (MAX_COORDINATE) from the origin in x or y")
         raise WorldError(msg)
     keep = np.concatenate(([True], np.hypot(*np.diff(points, axis=0).T) > 1e-9))
     points = points[keep]
@@ -253,7 +280,9 @@ def _corner(vertex: FloatArray, unit: FloatArray, heading: float, turn: float, c
 def _sample(pieces: Sequence[_Piece], dt: float, t0: float) -> Trajectory:
     bounds = np.concatenate(([0.0], np.cumsum([piece.duration for piece in pieces])))
     total = float(bounds[-1])
-    local = np.arange(math.floor(total / dt + 1e-9) + 1) * dt
+    steps = math.floor(total / dt + 1e-9)
+    _check_pose_count(steps + 1 + (total - steps * dt > 1e-9), total, dt, "path")
+    local = np.arange(steps + 1) * dt
     if total - local[-1] > 1e-9:
         local = np.append(local, total)
     local[-1] = min(local[-1], total)
@@ -280,6 +309,10 @@ _OPEN_GOAL = 0.55        # goals need this much clearance (centres of rooms and 
 _SEARCH_LIMIT = 25.0     # first goal search stays within this path cost
 _LOOKAHEAD = 0.5         # pure-pursuit look-ahead, metres
 _GIVE_UP = 1.5           # seconds blocked before a goal is abandoned
+#: Most planning-grid cells explore() builds: about a 316 m x 316 m world. The grid and its graph
+#: take about 255 bytes a cell at peak (measured: 2.3 GB for the 9.1 million cells of
+#: random_world(1, 300, 300), ru_maxrss before and after _PlanningGrid.build).
+_MAX_GRID_CELLS = 10_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -306,6 +339,11 @@ class _PlanningGrid:
         x0, y0 = xmin - 0.5, ymin - 0.5
         nx = math.ceil((xmax - xmin + 1.0) / res)
         ny = math.ceil((ymax - ymin + 1.0) / res)
+        if nx * ny > _MAX_GRID_CELLS:
+            msg = (f"{world.name}: {xmax - xmin:.6g} m x {ymax - ymin:.6g} m is too big to "
+                   f"explore: its {res:g} m planning grid would have {nx * ny:.3g} cells, more "
+                   f"than the limit of {_MAX_GRID_CELLS:.3g}")
+            raise WorldError(msg)
         blocked = _blocked_cells(world.segments, (x0, y0), (ny, nx), threshold)
         blocked[[0, -1], :] = True
         blocked[:, [0, -1]] = True
@@ -529,10 +567,14 @@ def explore(world: World, seconds: float, seed: int, speed: float = DEFAULT_SPEE
     Raises
     ------
     WorldError
-        Bad parameters, or a start closer than ``robot_radius`` + 0.02 m to a wall.
+        Bad parameters (a negative seed, say), more than :data:`MAX_POSES` poses, a world whose
+        planning grid would exceed 10 million cells (about 316 m x 316 m, 2.5 GB), or a start
+        closer than ``robot_radius`` + 0.02 m to a wall.
     """
     _check_positive(seconds=seconds, speed=speed, dt=dt, robot_radius=robot_radius,
                     turn_rate=turn_rate)
+    check_seed(seed)
+    _check_pose_count(round(seconds / dt) + 1, seconds, dt, "exploration")
     rng = np.random.default_rng(seed)
     grid = _PlanningGrid.build(world, robot_radius + _PLAN_MARGIN)
     x, y, heading = _start_pose(world, grid, start, rng)
@@ -612,6 +654,11 @@ def with_odometry_drift(trajectory: Trajectory, seed: int, translation_noise: fl
     -------
     Trajectory
         Same times; equal to ``trajectory`` when all three parameters are 0.
+
+    Raises
+    ------
+    WorldError
+        A negative seed, a negative or non-finite noise, a non-finite bias.
     """
     for name, value in (("translation_noise", translation_noise),
                         ("rotation_noise", rotation_noise)):
@@ -621,6 +668,7 @@ def with_odometry_drift(trajectory: Trajectory, seed: int, translation_noise: fl
     if not math.isfinite(heading_bias):
         msg = f"heading_bias must be finite, got {heading_bias}"
         raise WorldError(msg)
+    check_seed(seed)
     rng = np.random.default_rng(seed)
     dx, dy = np.diff(trajectory.x), np.diff(trajectory.y)
     turn = np.diff(trajectory.heading)

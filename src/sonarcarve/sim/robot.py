@@ -9,7 +9,7 @@ A robot is described in YAML (built-in ones live in ``sonarcarve/sim/robots/``):
     min_range: 0.15            # m, echoes closer than this are not heard (blanking)
     max_range: 6.477           # m, echoes farther than this time out
     firing_period: 0.04        # s between two successive firings of the ring
-    firing_order: [0, 1, 2]    # optional, sensor indices in firing order (default: as listed)
+    firing_order: [1, 0]       # optional: each sensor once, in firing order (default: as listed)
     beam_width_deg: 22.5       # default beam width φ of every sensor, degrees
     sensors:                   # one entry per sensor, in index order
       - {x: 0.205, y: 0.0, bearing_deg: 0.0}                        # robot frame, m and degrees
@@ -29,12 +29,13 @@ from typing import Any, NoReturn
 
 import numpy as np
 import numpy.typing as npt
-import yaml
 
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.io.errors import finite_number, parse_yaml, read_text
 
 __all__ = [
     "BUILTIN_ROBOTS",
+    "MAX_FIRINGS",
     "RobotDescription",
     "RobotError",
     "load_robot",
@@ -46,6 +47,9 @@ IntArray = npt.NDArray[np.int64]
 
 #: Names of the robots shipped with the package (``sonarcarve/sim/robots/<name>.yaml``).
 BUILTIN_ROBOTS = ("p3dx-front", "roboND-8", "scout2")
+#: Most firings :meth:`RobotDescription.firing_schedule` makes (80 MB of times and sensors;
+#: 111 hours of a ring firing every 0.04 s).
+MAX_FIRINGS = 10_000_000
 
 _TOP_FIELDS = {
     "name", "description", "robot_radius", "range_resolution", "min_range", "max_range",
@@ -72,8 +76,9 @@ class RobotDescription:
         Sensor axes relative to the robot heading, radians counter-clockwise.
     beam_width : ndarray, shape (n,)
         Full beam width φ of each sensor, radians in (0, π).
-    firing_order : ndarray of int64, shape (m,)
-        Sensor indices in the order the ring fires them; the sequence repeats.
+    firing_order : ndarray of int64, shape (n,)
+        Sensor indices in the order the ring fires them, each sensor once; the sequence
+        repeats.
     firing_period : float
         Seconds between two successive firings (one sensor at a time).
     range_resolution : float
@@ -121,6 +126,7 @@ class RobotDescription:
             _fail(where, "beam_width", "must lie in (0, 180) degrees")
         if order.size == 0 or np.any((order < 0) | (order >= n)):
             _fail(where, "firing_order", f"must list sensor indices in 0..{n - 1}")
+        _check_firing_order(where, order, n)
         _check_positive(where, "firing_period", self.firing_period, strict=True)
         _check_positive(where, "range_resolution", self.range_resolution, strict=False)
         _check_positive(where, "min_range", self.min_range, strict=False)
@@ -145,6 +151,11 @@ class RobotDescription:
         Firing ``k`` happens at ``t_start + k * firing_period`` and uses sensor
         ``firing_order[k % len(firing_order)]``.
 
+        Raises
+        ------
+        RobotError
+            If the span holds more than :data:`MAX_FIRINGS` firings, or is not finite.
+
         Returns
         -------
         times : ndarray, shape (k,)
@@ -152,7 +163,14 @@ class RobotDescription:
         sensors : ndarray of int64, shape (k,)
             Sensor index of each firing.
         """
-        count = math.floor((t_end - t_start) / self.firing_period + 1e-9) + 1
+        span = (t_end - t_start) / self.firing_period
+        if not math.isfinite(span) or span + 1 > MAX_FIRINGS:
+            where = self.source or self.name
+            msg = (f"{where}: firing every {self.firing_period:g} s from t = {t_start:g} s to "
+                   f"{t_end:g} s takes {span + 1:.4g} firings, more than the limit of "
+                   f"{MAX_FIRINGS:,} (MAX_FIRINGS)")
+            raise RobotError(msg)
+        count = math.floor(span + 1e-9) + 1
         k = np.arange(max(count, 0), dtype=np.int64)
         times = np.asarray(t_start + k * self.firing_period, dtype=np.float64)
         return times, np.asarray(self.firing_order[k % self.firing_order.shape[0]])
@@ -196,30 +214,17 @@ def load_robot(spec: str | Path) -> RobotDescription:
         source = resources.files("sonarcarve.sim").joinpath("robots", f"{text_spec}.yaml")
         return parse_robot(source.read_text(encoding="utf-8"), text_spec)
     path = Path(spec)
-    if not path.is_file():
-        if path.suffix.lower() in {".yaml", ".yml"} or path.parent != Path():
-            msg = f"{path}: no such robot file"
-        else:
-            msg = (f"unknown robot {text_spec!r}; built-in robots: {', '.join(BUILTIN_ROBOTS)} "
-                   "(or give a YAML file)")
+    looks_like_name = path.suffix.lower() not in {".yaml", ".yml"} and path.parent == Path()
+    if looks_like_name and not path.exists():
+        msg = (f"unknown robot {text_spec!r}; built-in robots: {', '.join(BUILTIN_ROBOTS)} "
+               "(or give a YAML file)")
         raise RobotError(msg)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        msg = f"{path}: cannot read ({err})"
-        raise RobotError(msg) from None
-    return parse_robot(text, str(path))
+    return parse_robot(read_text(path, RobotError), str(path))
 
 
 def parse_robot(text: str, source: str = "robot") -> RobotDescription:
     """A robot from YAML text; ``source`` names it in errors (file name or built-in name)."""
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark is not None else "YAML"
-        msg = f"{source}: {where}: not valid YAML ({getattr(err, 'problem', err)})"
-        raise RobotError(msg) from None
+    data = parse_yaml(text, source, RobotError)
     if not isinstance(data, dict):
         msg = f"{source}: expected a mapping of fields at the top level"
         raise RobotError(msg)
@@ -276,9 +281,26 @@ def _required(source: str, data: dict[Any, Any], name: str, parent: str = "") ->
 
 
 def _number(source: str, field: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        _fail(source, field, f"must be a finite number, got {value!r}")
-    return float(value)
+    number = finite_number(value)
+    if number is None:
+        text = repr(value)
+        _fail(source, field, f"must be a finite number, got {text[:40]}")
+    return number
+
+
+def _check_firing_order(source: str, order: IntArray, n: int) -> None:
+    """Each of the n sensors exactly once: a ring that skips a sensor or fires one twice per
+    cycle is almost always a typo, and the polling model assumes one firing per sensor."""
+    counts = np.bincount(order, minlength=n)
+    twice = np.flatnonzero(counts > 1)
+    if twice.size:
+        _fail(source, "firing_order",
+              f"lists sensor {twice[0]} {counts[twice[0]]} times; list each of 0..{n - 1} once")
+    missing = np.flatnonzero(counts == 0)
+    if missing.size:
+        _fail(source, "firing_order",
+              f"leaves out sensor{'s' if missing.size > 1 else ''} "
+              f"{', '.join(map(str, missing.tolist()))}; list each of 0..{n - 1} once")
 
 
 def _check_positive(source: str, field: str, value: float, *, strict: bool) -> None:

@@ -20,7 +20,7 @@ from sonarcarve.sim.sonar import (
     SonarPhysics,
     fire_sonars,
 )
-from sonarcarve.sim.world import World
+from sonarcarve.sim.world import World, check_seed
 
 __all__ = ["Simulation", "SonarTruth", "simulate"]
 
@@ -138,7 +138,8 @@ def simulate(
     trajectory : Trajectory
         The true motion; echoes are computed from these poses.
     seed : int
-        Seeds every random draw (noise, spurious echoes): same inputs and seed, same output.
+        >= 0. Seeds every random draw (noise, spurious echoes): same inputs and seed, same
+        output.
     physics : SonarPhysics
         The sensor model (see :class:`~sonarcarve.sim.sonar.SonarPhysics`).
     odometry : Trajectory, optional
@@ -150,7 +151,15 @@ def simulate(
     Returns
     -------
     Simulation
+
+    Raises
+    ------
+    WorldError
+        A seed that is not an integer >= 0 (:func:`~sonarcarve.sim.world.check_seed`).
+    RobotError
+        A trajectory longer than :data:`~sonarcarve.sim.robot.MAX_FIRINGS` firings.
     """
+    seed = check_seed(seed)
     times, sensors = robot.firing_schedule(float(trajectory.t[0]), float(trajectory.t[-1]))
     firings = _firings(robot, trajectory, times, sensors)
     echoes = fire_sonars(world, robot, firings, physics, np.random.default_rng(seed), on_progress)

@@ -13,6 +13,11 @@ Worlds come from :func:`load_world`, which accepts
   ...]``); metres,
 - a ``.yaml``/``.yml`` ROS map_server map (``image``, ``resolution``, ``origin``,
   ``occupied_thresh``, ``negate``): the boundaries of its occupied cells become walls.
+
+No :class:`World` has a wall of zero length, nor a tour with fewer than two distinct waypoints.
+A world read from a file has at least one wall, and its tour stays inside the walls' bounding
+box and meets no wall (checked by the loader only: a world made of some of another's walls, as
+the sonar simulator makes, keeps the whole tour).
 """
 
 from __future__ import annotations
@@ -28,15 +33,16 @@ from typing import Any, NoReturn
 
 import numpy as np
 import numpy.typing as npt
-import yaml
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import atomic_text
+from sonarcarve.io.errors import finite_number, load_json, load_yaml
 
 __all__ = [
     "World",
     "WorldError",
     "builtin_worlds",
+    "check_seed",
     "load_world",
     "read_ros_map",
     "read_world_json",
@@ -53,9 +59,46 @@ _PAIRS_PER_CHUNK = 1 << 19
 #: How to spell a random world (see :func:`sonarcarve.sim.generate.random_world`).
 _RANDOM_SPEC_HELP = "random:SEED or random:SEED:WIDTHxHEIGHT (metres)"
 
+#: Lengths and distances at or below this, metres, count as zero (walls, tour legs, contacts).
+_TINY = 1e-9
+
 
 class WorldError(SonarcarveError):
-    """A world that cannot be loaded or built: bad file, unknown name, degenerate walls."""
+    """A world that cannot be loaded or built (bad file, unknown name, degenerate walls, a tour
+    through a wall), or a simulation parameter out of range (seed, speed, duration)."""
+
+
+def check_seed(seed: object, where: str = "seed") -> int:
+    """``seed`` as an int if it can seed the simulator's random generator: an integer >= 0.
+
+    Every seeded function of :mod:`sonarcarve.sim` calls this first, so a bad seed gives a
+    one-line error instead of numpy's traceback.
+
+    Parameters
+    ----------
+    seed : object
+        The seed to check.
+    where : str
+        Names the seed in the message (e.g. ``"random:-1: seed"``).
+
+    Raises
+    ------
+    WorldError
+        ``<where> must be an integer >= 0, got <seed>``.
+
+    Examples
+    --------
+    >>> check_seed(7)
+    7
+    >>> check_seed(-1)
+    Traceback (most recent call last):
+    ...
+    sonarcarve.sim.world.WorldError: seed must be an integer >= 0, got -1
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        msg = f"{where} must be an integer >= 0, got {seed!r}"
+        raise WorldError(msg)
+    return int(seed)
 
 
 def _no_openings() -> FloatArray:
@@ -73,8 +116,9 @@ class World:
     name : str
         Where the world came from (built-in name or file).
     tour : ndarray, shape (k, 2), or None
-        Waypoints of a collision-free path through the world (k >= 2), metres; for the built-in
-        worlds every point of the polyline is at least 0.45 m from every wall.
+        Waypoints of a collision-free path through the world (at least 2 distinct), metres;
+        loaders check that it stays inside the walls' bounding box and meets no wall; for the
+        built-in worlds every point of the polyline is at least 0.45 m from every wall.
     openings : ndarray, shape (k, 2, 2)
         Door or passage gaps: ``openings[i, 0]`` and ``openings[i, 1]`` are the two ends (jambs)
         of gap ``i``, metres. Empty, shape (0, 2, 2), when unknown.
@@ -113,6 +157,10 @@ class World:
             msg = f"{self.name}: opening coordinates must be finite"
             raise WorldError(msg)
         object.__setattr__(self, "openings", openings)
+        problem = _geometry_problem(seg, self.tour, against_walls=False)
+        if problem is not None:
+            msg = f"{self.name}: {problem}"
+            raise WorldError(msg)
 
     def __len__(self) -> int:
         return int(self.segments.shape[0])
@@ -229,7 +277,7 @@ def _cast_chunk(segments: FloatArray, origin: FloatArray, angle: FloatArray,
     # Solve origin + s * direction = a + u * edge for every (ray, wall) pair (Cramer's rule).
     denom = _cross(direction[:, None, :], edge[None, :, :])
     delta = a[None, :, :] - origin[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         s = _cross(delta, edge[None, :, :]) / denom
         u = _cross(delta, direction[:, None, :]) / denom
     hit = (np.abs(denom) > 1e-12) & (s > 1e-9) & (u >= 0.0) & (u <= 1.0) & (s <= max_range)
@@ -252,6 +300,101 @@ def _point_segment_distance(points: FloatArray, segments: FloatArray) -> FloatAr
 
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+
+
+# --------------------------------------------------------------------------------------------
+# Consistency of walls and tour
+# --------------------------------------------------------------------------------------------
+
+def _geometry_problem(segments: FloatArray, tour: FloatArray | None, *,
+                      against_walls: bool = True) -> str | None:
+    """What is wrong with the walls and the tour, as the tail of a message, or None.
+
+    Checks that no wall has zero length and that a tour has two distinct waypoints; with
+    ``against_walls`` (and walls to check against), also that the tour stays inside the walls'
+    bounding box and meets no wall.
+    """
+    lengths = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    short = np.flatnonzero(lengths <= _TINY)
+    if short.size:
+        x, y = segments[short[0], :2]
+        return f"segments[{short[0]}] is a wall of zero length (both ends at ({x:g}, {y:g}))"
+    if tour is None:
+        return None
+    if not np.any(np.hypot(*(tour[1:] - tour[0]).T) > _TINY):
+        x, y = tour[0]
+        return (f"tour needs at least 2 distinct waypoints, all {tour.shape[0]} are "
+                f"({x:g}, {y:g})")
+    if not (against_walls and segments.shape[0]):
+        return None
+    low, high = segments.reshape(-1, 2).min(axis=0), segments.reshape(-1, 2).max(axis=0)
+    outside = np.flatnonzero(np.any((tour < low - _TINY) | (tour > high + _TINY), axis=1))
+    if outside.size:
+        i = int(outside[0])
+        return (f"tour[{i}] ({tour[i, 0]:g}, {tour[i, 1]:g}) lies outside the walls' bounding "
+                f"box x in [{low[0]:g}, {high[0]:g}], y in [{low[1]:g}, {high[1]:g}]")
+    crossing = _first_crossing(tour, segments)
+    if crossing is not None:
+        leg, wall, (x, y) = crossing
+        return (f"tour leg {leg} (tour[{leg}] -> tour[{leg + 1}]) runs into wall "
+                f"segments[{wall}] at ({x:g}, {y:g})")
+    return None
+
+
+def _first_crossing(tour: FloatArray, segments: FloatArray
+                    ) -> tuple[int, int, tuple[float, float]] | None:
+    """The first place, in tour order, where the tour polyline meets a wall.
+
+    Returns ``(leg, wall, (x, y))``: leg ``i`` runs from ``tour[i]`` to ``tour[i + 1]``; touching
+    a wall (an end point on it, or running along it) counts as meeting it. None if it meets none.
+    Walls must have non-zero length.
+    """
+    start, step = tour[:-1], np.diff(tour, axis=0)
+    rows = max(1, _PAIRS_PER_CHUNK // segments.shape[0])
+    for lo in range(0, start.shape[0], rows):
+        contact = _leg_contacts(start[lo:lo + rows], step[lo:lo + rows], segments)
+        legs = np.flatnonzero(np.isfinite(contact).any(axis=1))
+        if legs.size:
+            leg = int(legs[0])
+            wall = int(np.argmin(contact[leg]))
+            x, y = start[lo + leg] + contact[leg, wall] * step[lo + leg]
+            return lo + leg, wall, (float(x), float(y))
+    return None
+
+
+def _leg_contacts(start: FloatArray, step: FloatArray, segments: FloatArray) -> FloatArray:
+    """Per (leg, wall) pair, shape (k, n): the leg parameter in [0, 1] of the first point the leg
+    shares with the wall (within 1e-9 m), or ``inf`` where they share none.
+
+    Leg ``i`` is ``start[i] + t * step[i]``, wall ``j`` is ``a[j] + u * edge[j]``, t and u in
+    [0, 1]. Crossing legs solve both equations by Cramer's rule; parallel legs meet a wall only
+    when they lie on its line, from where its overlap with the wall is read off directly.
+    """
+    a, edge = segments[:, :2], segments[:, 2:] - segments[:, :2]
+    edge_len = np.hypot(edge[:, 0], edge[:, 1])[None, :]
+    step_len = np.hypot(step[:, 0], step[:, 1])[:, None]
+    tol_t = _TINY / np.maximum(step_len, _TINY)    # metres of slack as parameters
+    tol_u = _TINY / edge_len
+    denom = _cross(step[:, None, :], edge[None, :, :])
+    delta = a[None, :, :] - start[:, None, :]
+    off_line = _cross(delta, edge[None, :, :])     # edge_len times the start's distance to it
+    parallel = np.abs(denom) <= 1e-12 * step_len * edge_len
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = off_line / denom
+        u = _cross(delta, step[:, None, :]) / denom
+        crossing = (~parallel & (t >= -tol_t) & (t <= 1 + tol_t)
+                    & (u >= -tol_u) & (u <= 1 + tol_u))
+        # Parallel: where the leg's ends fall along the wall (0 and 1 are the wall's ends).
+        u0 = -np.sum(delta * edge[None, :, :], axis=2) / edge_len**2
+        u1 = u0 + (step @ edge.T) / edge_len**2
+        on_line = parallel & (np.abs(off_line) <= _TINY * edge_len)
+        overlap = on_line & (np.maximum(u0, u1) >= -tol_u) & (np.minimum(u0, u1) <= 1 + tol_u)
+        inside = (u0 >= -tol_u) & (u0 <= 1 + tol_u)
+        reach = np.where(inside, 0.0, (np.where(u0 < 0.0, 0.0, 1.0) - u0) / (u1 - u0))
+    contact = np.full(denom.shape, np.inf)
+    contact[crossing] = np.clip(t[crossing], 0.0, 1.0)
+    contact[overlap] = np.clip(reach[overlap], 0.0, 1.0)
+    return contact
 
 
 # --------------------------------------------------------------------------------------------
@@ -337,6 +480,7 @@ def _load_random(rest: str, spec: str) -> World:
     except ValueError:
         msg = f"{spec}: seed must be an integer ({_RANDOM_SPEC_HELP})"
         raise WorldError(msg) from None
+    check_seed(seed, f"{spec}: seed")
     if not size_text:
         return random_world(seed)
     width_text, x, height_text = size_text.lower().partition("x")
@@ -365,10 +509,12 @@ def read_world_json(path: str | Path) -> World:
     ------
     WorldError
         Missing file, invalid JSON, missing ``segments``, wrong shapes, non-numbers or
-        non-finite numbers; the message names the file and the field.
+        non-finite numbers, no walls, a wall of zero length, a tour with fewer than two distinct
+        waypoints or one that leaves the walls' bounding box or runs into a wall; the message
+        names the file and the field.
     """
     path = Path(path)
-    data = _read_json_text(path, str(path))
+    data = _read_json_object(path)
     if "segments" not in data:
         _fail(path, "missing key 'segments' (a list of [x1, y1, x2, y2] walls)")
     segments = _number_array(data["segments"], (4,), "segments", "[x1, y1, x2, y2]", path)
@@ -382,6 +528,11 @@ def read_world_json(path: str | Path) -> World:
     description = data.get("description", "")
     if not isinstance(name, str) or not isinstance(description, str):
         _fail(path, "'name' and 'description' must be strings")
+    if not segments.shape[0]:
+        _fail(path, "no walls: 'segments' is empty (give [x1, y1, x2, y2] walls)")
+    problem = _geometry_problem(segments, tour)
+    if problem is not None:
+        _fail(path, problem)  # here, not in World(), so that the message names the file
     return World(segments, name, tour, openings, description)
 
 
@@ -413,19 +564,10 @@ def _rows_json(rows: list[Any]) -> str:
     return f"[\n    {body}\n  ]"
 
 
-def _read_json_text(path: Path, where: str) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        _fail(where, "no such file")
-    except (OSError, UnicodeDecodeError) as err:
-        _fail(where, f"cannot read: {err}")
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        _fail(where, f"line {err.lineno}, column {err.colno}: invalid JSON: {err.msg}")
+def _read_json_object(path: Path) -> dict[str, Any]:
+    data = load_json(path, WorldError)
     if not isinstance(data, dict):
-        _fail(where, "top level must be an object with a 'segments' key")
+        _fail(path, "top level must be an object with a 'segments' key")
     return data
 
 
@@ -454,8 +596,8 @@ def _number_array(value: Any, row_shape: tuple[int], key: str, expected: str,
         for j, number in enumerate(row):
             if isinstance(number, bool) or not isinstance(number, int | float):
                 _fail(path, f"{key}[{i}][{j}] must be a number, got {_short(number)}")
-            if not math.isfinite(number):
-                _fail(path, f"{key}[{i}][{j}] must be finite, got {number}")
+            if finite_number(number) is None:
+                _fail(path, f"{key}[{i}][{j}] must be finite, got {_short(number)}")
     return np.array(value, dtype=np.float64).reshape(-1, width)
 
 
@@ -499,9 +641,8 @@ def read_ros_map(path: str | Path) -> World:
         _fail(path, f"resolution must be > 0, got {resolution}")
     origin = meta["origin"]
     if (not isinstance(origin, list) or len(origin) not in (2, 3)
-            or not all(isinstance(v, int | float) and not isinstance(v, bool)
-                       and math.isfinite(v) for v in origin)):
-        _fail(path, f"origin must be [x, y, yaw] finite numbers, got {origin!r}")
+            or any(finite_number(v) is None for v in origin)):
+        _fail(path, f"origin must be [x, y, yaw] finite numbers, got {_short(origin)}")
     thresh = _yaml_number(meta, "occupied_thresh", path, 0.65)
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
@@ -515,8 +656,10 @@ def read_ros_map(path: str | Path) -> World:
             pixels = np.asarray(image.convert("L"), dtype=np.float64)
     except FileNotFoundError:
         _fail(path, f"image {image_path}: no such file")
-    except (OSError, UnidentifiedImageError, ValueError) as err:
-        _fail(path, f"image {image_path}: cannot read: {err}")
+    except IsADirectoryError:
+        _fail(path, f"image {image_path}: is a directory")
+    except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) as err:
+        _fail(path, f"image {image_path}: cannot read ({' '.join(str(err).split())})")
     if mode == "raw":
         occupied = (pixels <= 100.0) & (pixels > 100.0 * thresh)
     else:
@@ -525,23 +668,14 @@ def read_ros_map(path: str | Path) -> World:
     yaw = float(origin[2]) if len(origin) == 3 else 0.0
     segments = segments_from_occupancy(occupied, resolution, (float(origin[0]), float(origin[1])),
                                        yaw)
+    if not segments.shape[0]:
+        _fail(path, f"no walls: image {image_path.name} has no occupied cells "
+                    f"(occupied_thresh {thresh:g}, negate {int(negate)}, mode {mode})")
     return World(segments, path.stem, description=f"ROS map {path.name}")
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        _fail(path, "no such file")
-    except (OSError, UnicodeDecodeError) as err:
-        _fail(path, f"cannot read: {err}")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
-        problem = getattr(err, "problem", None) or "syntax error"
-        _fail(path, f"{where}invalid YAML: {problem}")
+    data = load_yaml(path, WorldError)
     if not isinstance(data, dict):
         _fail(path, "top level must be a mapping with image, resolution and origin")
     return data
@@ -549,9 +683,10 @@ def _read_yaml(path: Path) -> dict[str, Any]:
 
 def _yaml_number(meta: dict[str, Any], key: str, path: Path, default: float | None = None) -> float:
     value = meta.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        _fail(path, f"{key} must be a finite number, got {value!r}")
-    return float(value)
+    number = finite_number(value)
+    if number is None:
+        _fail(path, f"{key} must be a finite number, got {_short(value)}")
+    return number
 
 
 def segments_from_occupancy(occupied: npt.ArrayLike, resolution: float,

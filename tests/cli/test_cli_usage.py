@@ -1,0 +1,131 @@
+"""The CLI shell: one-line usage errors, help screens, lazy command loading."""
+
+from __future__ import annotations
+
+import inspect
+import re
+import subprocess
+import sys
+
+import pytest
+import typer
+
+from sonarcarve.cli import main
+from sonarcarve.cli.app import LAZY_COMMANDS, app
+
+COMMANDS = ("process", "simulate", "convert", "worlds", "demo", "experiments")
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["process", "r.csv", "--out", "m.csv", "--bogus"], ["no such option", "--bogus"]),
+    (["process", "r.csv"], ["missing option", "--out"]),
+    (["process"], ["missing argument", "READINGS.csv"]),
+    (["process", "r.csv", "--out", "m.csv", "--history", "abc"],
+     ["invalid value for '--history'", "'abc' is not a whole number"]),
+    (["process", "r.csv", "--out", "m.csv", "--beam-width", "wide"],
+     ["invalid value for '--beam-width'", "'wide' is not a number"]),
+    (["nocmd"], ["no such command 'nocmd'"]),
+    (["proces"], ["no such command 'proces'", "did you mean 'process'"]),
+    (["simulate", "--world", "doorway", "--out", "x.csv", "--odometry=yes"],
+     ["--odometry", "does not take a value"]),
+    (["experiments", "--out", "o", "--seeds"], ["--seeds", "requires an argument"]),
+])
+def test_usage_errors_are_one_plain_line_exit_2(
+    args: list[str], words: list[str], capsys: pytest.CaptureFixture[str],
+    tmp_path: object, monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.chdir(str(tmp_path))
+    assert main(args) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("sonarcarve: error: ")
+    for word in words:
+        assert word.lower() in lines[0].lower(), (word, lines[0])
+    # No rich panel, no usage block, no traceback, nothing on stdout.
+    assert not re.search(r"[╭╰│]|Usage:|Traceback", captured.err)
+    assert captured.out == ""
+
+
+def test_help_and_version_exit_0(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for name in COMMANDS:
+        assert name in text
+    assert main(["--version"]) == 0
+    from sonarcarve import __version__
+
+    assert capsys.readouterr().out.strip() == f"sonarcarve {__version__}"
+
+
+def test_no_arguments_prints_the_help(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([]) == 2  # a usage error, as click has it; but the whole help, not one line
+    captured = capsys.readouterr()
+    assert "Commands" in captured.out
+    assert "process" in captured.out
+    assert "Traceback" not in captured.err
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_help_screens_have_no_typer_type_noise(
+    name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main([name, "--help"]) == 0
+    text = capsys.readouterr().out
+    usage = next(line for line in text.splitlines() if "Usage:" in line)
+    assert "{" not in usage, usage
+    for noise in ("<bool>", "<path>", "<str>", "<int>", "<float>", "<list["):
+        assert noise not in text, (name, noise)
+    # Float defaults without trailing zeros: "[default: 20]", not "[default: 20.0]".
+    assert not re.search(r"\[default: -?\d+\.0\]", text), text
+
+
+def test_process_help_states_units_and_the_unprocessed_measure(
+    capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["process", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.replace("│", " ").split())
+    assert "Usage: sonarcarve process [OPTIONS] READINGS.csv" in text
+    for phrase in ("t in seconds", "metres", "radians counter-clockwise from +x",
+                   "range in metres", "beam_width in radians", "used only for readings "
+                   "without a beam_width value", "mean % of history rows",
+                   "count as processed", "[default: 20]"):
+        assert phrase in text, phrase
+
+
+def test_worlds_help_shows_one_example_per_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["worlds", "--help"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    examples = [line for line in lines if "sonarcarve worlds" in line and "Usage" not in line]
+    assert len(examples) == 3
+    # Each starts its own line (a list item), not the middle of a sentence.
+    assert all(line.lstrip().startswith("•") for line in examples), examples
+
+
+def test_the_root_help_summaries_are_the_commands_own() -> None:
+    """What `sonarcarve --help` shows without importing a command is its help's first paragraph."""
+    from sonarcarve.cli.app import _load
+
+    assert set(LAZY_COMMANDS) == set(COMMANDS)
+    for name, (module, summary) in LAZY_COMMANDS.items():
+        command = _load(name, module)
+        first = inspect.cleandoc(command.help or "").split("\n\n")[0].replace("\n", " ")
+        assert summary == first, name
+
+
+def test_root_help_imports_no_command_module() -> None:
+    code = ("import sys\nfrom sonarcarve.cli import main\nassert main(['--help']) == 0\n"
+            "print('LOADED', sorted(m for m in sys.modules if m.startswith('sonarcarve.cli.')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    loaded = next(line for line in done.stdout.splitlines() if line.startswith("LOADED"))
+    assert loaded == "LOADED ['sonarcarve.cli.app']"
+
+
+def test_a_command_runs_through_typers_own_runner_too() -> None:
+    from typer.testing import CliRunner
+
+    result = CliRunner().invoke(app, ["worlds", "--help"])
+    assert result.exit_code == 0
+    assert "[WORLD]..." in result.output
+    assert isinstance(typer.main.get_command(app), typer.core.TyperGroup)
