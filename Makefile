@@ -31,8 +31,12 @@ experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESU
 	$(BIN)/sonarcarve experiments --out docs/experiments --figures docs/figures --results-md docs/RESULTS.md
 	$(BIN)/python -m pytest -m slow -q
 
-bench: $(STAMP)  ## throughput and memory benchmarks (results go into docs/RESULTS.md by hand, with the command)
+bench: $(STAMP)  ## every benchmark: throughput, simulator speed, parameter choices (tables for docs/RESULTS.md)
 	$(BIN)/python benchmarks/throughput.py
+	$(BIN)/python benchmarks/simulate_speed.py
+	$(BIN)/python benchmarks/range_tolerance.py
+	$(BIN)/python benchmarks/min_transversal.py
+	$(BIN)/python benchmarks/specular.py
 
 clean:
 	rm -rf $(VENV) demo-output .pytest_cache .mypy_cache .ruff_cache

@@ -7,7 +7,9 @@ a ring-buffer history of sonar arcs, with local and global maps and the paper's 
 
 from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
 from sonarcarve.geometry import CarveOutcome, arc_remainder, carve_arc
+from sonarcarve.grid import GridError, OccupancyGrid, SonarConeModel
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
+from sonarcarve.io import read_map_csv, read_readings_csv, write_map_csv, write_readings_csv
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
 from sonarcarve.methods import (
     METHODS,
@@ -36,10 +38,12 @@ __all__ = [
     "CenterlineMethod",
     "CombinedMethod",
     "GlobalMap",
+    "GridError",
     "LocalMap",
     "MapFilter",
     "Measures",
     "MethodConfig",
+    "OccupancyGrid",
     "PointSource",
     "PolledLog",
     "ProcessResult",
@@ -47,6 +51,7 @@ __all__ = [
     "ReadingBatch",
     "ReadingFilter",
     "ReadingsError",
+    "SonarConeModel",
     "SonarHistory",
     "SonarMethod",
     "SonarPoller",
@@ -60,4 +65,8 @@ __all__ = [
     "naive_stamps",
     "poll_readings",
     "process_readings",
+    "read_map_csv",
+    "read_readings_csv",
+    "write_map_csv",
+    "write_readings_csv",
 ]
