@@ -68,20 +68,21 @@ def test_read_text_permission_denied(tmp_path: Path) -> None:
         # '[1, 2' ends at column 6 of line 2: the JSON parser wants ',' or ']' there.
         (parse_json, '\n[1, 2', "f.x: line 2, column 6: invalid JSON (Expecting ',' delimiter)"),
         (parse_json, "[" * 100_000, "f.x: invalid JSON (nested too deeply)"),
-        (parse_json, "1" * 5000, "f.x: invalid JSON (Exceeds the limit (4300 digits) for "
-                                 "integer string conversion: value has 5000 digits)"),
+        (parse_json, "1" * 5000, "f.x: invalid JSON (Exceeds the limit"),
         # The second ':' of "key: a: b" is at line 2, column 7.
         (parse_yaml, "a: 1\nkey: a: b\n", "f.x: line 2, column 7: invalid YAML (mapping values "
                                          "are not allowed here)"),
-        (parse_yaml, "a: " + "1" * 5000, "f.x: invalid YAML (Exceeds the limit (4300 digits) "
-                                         "for integer string conversion: value has 5000 digits)"),
+        (parse_yaml, "a: " + "1" * 5000, "f.x: invalid YAML (Exceeds the limit"),
     ],
 )
 def test_parse_errors_name_line_and_column(parse: Callable[..., object], text: str,
                                            expected: str) -> None:
     with pytest.raises(_MyError) as info:
         parse(text, "f.x", _MyError)
-    assert str(info.value) == expected
+    # Python's own wording of its integer-size limit varies by version: compare up to it.
+    assert str(info.value) == expected or (
+        expected.endswith("(Exceeds the limit") and str(info.value).startswith(expected)
+        and "\n" not in str(info.value))
 
 
 def test_load_json_and_yaml_read_then_parse(tmp_path: Path) -> None:

@@ -182,6 +182,22 @@ def test_shallow_crossings_are_dropped(psi_deg: float, kept: bool) -> None:
         np.testing.assert_allclose(est.xy, [p, p], atol=1e-9)
 
 
+@pytest.mark.parametrize(("psi_deg", "kept"), [(30.0, False), (10.0, True)])
+def test_crossings_of_facing_sensors_fold_to_their_acute_angle(psi_deg: float,
+                                                               kept: bool) -> None:
+    # Sensors at (0, 0) and (2, 0) face each other and both hear something at 1.01 m: the
+    # circles cross at (1, ±0.142), inside both beams, where the radii meet at 180° - 16.2°.
+    # Folded into [0, 90°] that is 16.2°: a shallow crossing, dropped at ψ = 30°, kept at 10°.
+    method = AtmMethod(history_size=10, beam_width=PHI, min_transversal=math.radians(psi_deg),
+                       range_resolution=INCH)
+    method.add(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.01))
+    method.add(Reading(0.1, 1, 2.0, 0.0, math.pi, 1.01))
+    half_angle = math.degrees(math.atan2(math.sqrt(1.01**2 - 1.0), 1.0))  # 8.1° off each axis
+    assert 2 * half_angle == pytest.approx(16.2, abs=0.1)
+    est = _atm(method).estimates(method.history.slots())
+    assert est.processed.tolist() == [kept, kept]
+
+
 @pytest.mark.parametrize("rotated", [0, 1])
 @pytest.mark.parametrize(("offset", "kept"), [(0.6, False), (0.4, True)])
 def test_crossings_outside_either_beam_are_dropped(rotated: int, offset: float,
