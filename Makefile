@@ -37,6 +37,7 @@ bench: $(STAMP)  ## every benchmark: throughput, simulator speed, parameter choi
 	$(BIN)/python benchmarks/range_tolerance.py
 	$(BIN)/python benchmarks/min_transversal.py
 	$(BIN)/python benchmarks/specular.py
+	$(BIN)/python benchmarks/grid_baseline.py
 
 clean:
 	rm -rf $(VENV) demo-output .pytest_cache .mypy_cache .ruff_cache

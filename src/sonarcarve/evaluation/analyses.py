@@ -354,15 +354,23 @@ def analyse_sweep(sim: Simulation, record: RunRecord, job: Job) -> JsonDict:
     """One point of a sensitivity curve: true error, unprocessed share, fully carved share.
 
     The unprocessed share is :func:`analyse_office`'s (every history row: removed arcs count
-    as processed).
+    as processed). The local map's points are also split by source: ``refined_share`` is the
+    share (percent) placed by carving or ATM, ``error_median_refined`` their median true error
+    and ``error_median_fallback`` / ``fallback_median_range`` the median true error and range
+    (metres) of the centerline points (None where there are none).
     """
     full = full_history_samples(record, job.config.history_size)
     points = sample_points(record)
     err = metrics.segment_distance(points.xy, sim.world.segments)[0]
     summary = metrics.error_summary(err)
     fully = record.final.removal == Removal.FULLY_CARVED
+    refined = points.source != PointSource.CENTERLINE
     return {"error_median": summary.median, "error_p90": summary.p90,
-            "unprocessed": unprocessed_percent(full), "fully_carved": metrics.percent(fully)}
+            "unprocessed": unprocessed_percent(full), "fully_carved": metrics.percent(fully),
+            "refined_share": metrics.percent(refined),
+            "error_median_refined": _median_or_none(err[refined]),
+            "error_median_fallback": _median_or_none(err[~refined]),
+            "fallback_median_range": _median_or_none(points.range[~refined])}
 
 
 ANALYSES: dict[str, Callable[..., JsonDict]] = {

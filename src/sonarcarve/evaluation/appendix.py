@@ -1,7 +1,9 @@
-"""The paper's appendix and Fig. 7 measured: sonar polling, a real 8-sensor log, odometry maps.
+"""The paper's appendix and Fig. 7 measured: sonar polling, filters, a real 8-sensor log,
+odometry maps.
 
-Three experiments, each a function of :class:`AppendixSettings` returning JSON-ready results
-and the arrays its figure needs, each in its own module with its figure and its Markdown:
+Four experiments, each a function of :class:`AppendixSettings` returning JSON-ready results
+and the arrays its figure needs, each in its own module with its figure (if any) and its
+Markdown:
 
 * ``polling`` (:func:`polling_experiment`, Appendix A, Fig. 14,
   :mod:`~sonarcarve.evaluation.appendix_polling`): the simulated office tour read by a host
@@ -9,6 +11,11 @@ and the arrays its figure needs, each in its own module with its figure and its 
   at the poll where a value changed) and by sonar polling (:mod:`sonarcarve.polling`);
   centerline global maps of both, their error to the true walls, and the polling error bound
   checked against the true stamping error.
+* ``filters`` (:func:`filters_experiment`, Appendix B,
+  :mod:`~sonarcarve.evaluation.appendix_filters`): the reading filters (maximum range, jump)
+  and map filters (outlier test, max-error thresholding) of :mod:`sonarcarve.filters`, alone
+  and together, on the office tour for centerline, carving and combined: what they remove,
+  judged by the simulator's truth, and the map's error to the true walls.
 * ``real-log`` (:func:`real_log_experiment`, :mod:`~sonarcarve.evaluation.appendix_real_log`):
   every method on the bundled roboND-sonar-8 log (no ground truth), with a map sharpness
   measure that needs none (:func:`line_spread`), the share of readings each method removed,
@@ -19,13 +26,14 @@ and the arrays its figure needs, each in its own module with its figure and its 
   each point moved back by its reading's pose error (what the local map itself got wrong).
 
 This module runs them: :func:`run_appendix` writes the figures (``appendix-*.png``) and
-``appendix-results.json``; :func:`appendix_markdown` renders the ``docs/RESULTS.md`` section
-between :data:`BEGIN_MARKER` and :data:`END_MARKER`.
+returns the results; :func:`appendix_markdown` renders the ``docs/RESULTS.md`` section between
+:data:`BEGIN_MARKER` and :data:`END_MARKER`. ``sonarcarve experiments`` runs the same
+experiments through its registry and keeps their numbers in its ``results.json``, the one
+results file (this module writes no JSON of its own, so none can go stale beside it).
 """
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
@@ -34,6 +42,7 @@ from typing import Any
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation.appendix_base import AppendixError, AppendixSettings
+from sonarcarve.evaluation.appendix_filters import filters_experiment, filters_markdown
 from sonarcarve.evaluation.appendix_odometry import odometry_experiment, odometry_markdown
 from sonarcarve.evaluation.appendix_polling import (
     latest_firing,
@@ -58,7 +67,6 @@ from sonarcarve.evaluation.output import (
     replace_marked_section,
     write_marked_file,
 )
-from sonarcarve.io.atomic import atomic_text
 
 __all__ = [
     "APPENDIX_EXPERIMENTS",
@@ -72,6 +80,7 @@ __all__ = [
     "ReferencePicture",
     "appendix_markdown",
     "experiment_summariser",
+    "filters_experiment",
     "latest_firing",
     "line_spread",
     "odometry_experiment",
@@ -100,6 +109,8 @@ APPENDIX_EXPERIMENTS: dict[str, tuple[str, Callable[[AppendixSettings],
                                                     tuple[JsonDict, JsonDict]]]] = {
     "polling": ("Appendix A, Fig. 14: sonar polling against naive stamps",
                 polling_experiment),
+    "filters": ("Appendix B: reading and map filters, judged by the truth",
+                filters_experiment),
     "real-log": ("the real roboND 8-sensor log, every method, map sharpness",
                  real_log_experiment),
     "odometry": ("Fig. 7: global maps from dead-reckoned poses", odometry_experiment),
@@ -130,12 +141,12 @@ def write_appendix_figures(results: JsonDict, artifacts: JsonDict, out: str | Pa
 
 def run_appendix(out_dir: str | Path, quick: bool = False, seeds: int | None = None,
                  only: Sequence[str] | None = None) -> JsonDict:
-    """Run the appendix experiments, write their figures and ``appendix-results.json``.
+    """Run the appendix experiments and write their figures (no JSON: see the module notes).
 
     Parameters
     ----------
     out_dir : path
-        Folder for the PNGs (``appendix-*.png``) and the JSON.
+        Folder for the PNGs (``appendix-*.png``).
     quick : bool
         Small runs (one seed, 40 m of the tour, 10 Hz polling): seconds.
     seeds : int, optional
@@ -146,8 +157,9 @@ def run_appendix(out_dir: str | Path, quick: bool = False, seeds: int | None = N
     Returns
     -------
     dict
-        JSON-ready results: ``appendix_polling``, ``appendix_real_log``, ``appendix_odometry``
-        (those run) and ``appendix_meta`` (settings, seconds, figure files).
+        JSON-ready results: ``appendix_polling``, ``appendix_filters``, ``appendix_real_log``,
+        ``appendix_odometry`` (those run) and ``appendix_meta`` (settings, seconds, figure
+        files).
     """
     names = list(only) if only else list(APPENDIX_EXPERIMENTS)
     for name in names:
@@ -168,11 +180,7 @@ def run_appendix(out_dir: str | Path, quick: bool = False, seeds: int | None = N
     results["appendix_meta"] = {"experiments": names, "settings": asdict(settings),
                                 "seconds": time.perf_counter() - tic,
                                 "figures": [p.name for p in figures]}
-    results = json_ready(results)
-    with atomic_text(folder / "appendix-results.json") as handle:
-        json.dump(results, handle, indent=1, allow_nan=False)
-        handle.write("\n")
-    return results
+    return dict(json_ready(results))
 
 
 # ============================================================================ RESULTS.md
@@ -230,7 +238,8 @@ def appendix_markdown(results: JsonDict, command: str = "",
     meta = results.get("appendix_meta", {})
     lines = [
         BEGIN_MARKER,
-        "## Appendix A and B, Fig. 7 and 14: sonar polling, a real log, maps from odometry",
+        "## Appendix A and B, Fig. 7 and 14: sonar polling, filters, a real log, maps from "
+        "odometry",
         "",
         "<!-- Generated by sonarcarve.evaluation.appendix; edits here are overwritten. -->",
         "",
@@ -239,7 +248,7 @@ def appendix_markdown(results: JsonDict, command: str = "",
         seconds = meta.get("seconds")
         took = f" ({seconds:.0f} s)" if isinstance(seconds, int | float) else ""
         lines += [f"Command: `{command}`{took}.", ""]
-    for part in (polling_markdown, real_log_markdown, odometry_markdown):
+    for part in (polling_markdown, filters_markdown, real_log_markdown, odometry_markdown):
         lines += part(results, figs)
     lines.append(END_MARKER)
     return "\n".join(lines)
@@ -247,14 +256,14 @@ def appendix_markdown(results: JsonDict, command: str = "",
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m sonarcarve.evaluation.appendix``: run the appendix experiments alone, write
-    the figures and JSON into ``--out`` and (with ``--results-md``) only the appendix section
-    of that Markdown file. ``sonarcarve experiments`` runs the same experiments
-    (``--only polling`` and so on) through the experiment registry."""
+    the figures into ``--out`` and (with ``--results-md``) only the appendix section of that
+    Markdown file. Their numbers go to ``results.json`` only through ``sonarcarve
+    experiments``, which runs the same experiments (``--only polling`` and so on)."""
     import argparse
 
     parser = argparse.ArgumentParser(prog="python -m sonarcarve.evaluation.appendix",
                                      description=main.__doc__)
-    parser.add_argument("--out", required=True, help="folder for appendix-*.png and JSON")
+    parser.add_argument("--out", required=True, help="folder for appendix-*.png")
     parser.add_argument("--figures", help="also copy the PNGs into this folder (docs/figures)")
     parser.add_argument("--results-md", help="Markdown file whose appendix section to rewrite")
     parser.add_argument("--quick", action="store_true", help="small runs (seconds)")

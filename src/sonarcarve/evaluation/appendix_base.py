@@ -1,9 +1,9 @@
 """What the appendix experiments share: their settings, error, simulations and text helpers.
 
 The experiments themselves live in :mod:`~sonarcarve.evaluation.appendix_polling`,
-:mod:`~sonarcarve.evaluation.appendix_real_log` and
-:mod:`~sonarcarve.evaluation.appendix_odometry`; :mod:`sonarcarve.evaluation.appendix` runs them
-and writes their outputs. The helpers here are for those modules, not a general API.
+:mod:`~sonarcarve.evaluation.appendix_filters`, :mod:`~sonarcarve.evaluation.appendix_real_log`
+and :mod:`~sonarcarve.evaluation.appendix_odometry`; :mod:`sonarcarve.evaluation.appendix` runs
+them and writes their outputs. The helpers here are for those modules, not a general API.
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ class AppendixSettings:
     quick : bool
         Small runs for the test suite.
     seeds : int
-        Simulation seeds 0..seeds-1 (polling and odometry).
+        Simulation seeds 0..seeds-1 (polling, filters and odometry).
     tour_length : float or None
         Metres of the office tour to drive (None: all of it, 261 m).
     poll_rates : tuple of float

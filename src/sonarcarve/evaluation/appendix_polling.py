@@ -336,6 +336,8 @@ def plot_polling(results: JsonDict, artifacts: JsonDict | None) -> Figure | None
                 ax.add_patch(Rectangle(zoom, 14.0, 10.0, fill=False, ec="#1f77b4", lw=1.2,
                                        zorder=4))
             ax.tick_params(labelsize=7)
+            ax.set_xlabel("x (m)", fontsize=8)
+            ax.set_ylabel("y (m)", fontsize=8)
         e = art["errors"][name]
         axes[0, col].set_title(f"{titles[name]}\n{len(xy)} points, error to walls median "
                                f"{fmt_cm(e['median'])}, p90 {fmt_cm(e['p90'])}", fontsize=9)
@@ -347,7 +349,7 @@ def plot_polling(results: JsonDict, artifacts: JsonDict | None) -> Figure | None
                          "firing order and the firing period", fontsize=9)
     axes[0, 0].legend(loc="upper right", fontsize="x-small", markerscale=5)
     fig.suptitle(f"Fig. 14: centerline global maps, office tour seed 0, host polling at "
-                 f"{art['rate']:g} Hz (grey: true walls; metres)")
+                 f"{art['rate']:g} Hz (grey: true walls)")
     return fig
 
 

@@ -471,6 +471,10 @@ SWEEP_METHODS = {
     "range_noise": (("carve", "atm", "combined", "centerline"), "m"),
 }
 
+#: What each sensitivity run reports (see :func:`~sonarcarve.evaluation.analyses.analyse_sweep`).
+SWEEP_MEASURES = ("error_median", "error_p90", "unprocessed", "fully_carved", "refined_share",
+                  "error_median_refined", "error_median_fallback", "fallback_median_range")
+
 
 def _sweep_job(s: Settings, param: str, value: float, method: str) -> Job:
     scenario = Scenario("office", 0, max_length=s.sweep_length, speed=s.speed)
@@ -507,7 +511,7 @@ def _summarise_sensitivity(s: Settings, outs: dict[tuple[Any, ...], JsonDict]) -
             per = [outs[("sweep", param, v, m)] for v in values]
             entry[METHOD_LABELS[m]] = {
                 q: [None if p[q] is None or not math.isfinite(p[q]) else float(p[q]) for p in per]
-                for q in ("error_median", "error_p90", "unprocessed", "fully_carved")}
+                for q in SWEEP_MEASURES}
         res[param] = entry
     res["scenario"] = {"world": "office", "seed": 0, "length_m": s.sweep_length,
                        "sample_every": s.sweep_sample_every}

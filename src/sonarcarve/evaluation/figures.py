@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 __all__ = [
     "APPENDIX_FIGURES",
     "FIGURES",
+    "SWEEP_LABELS",
     "plot_fig04",
     "plot_fig10",
     "plot_fig11",
@@ -260,7 +261,9 @@ def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure |
         ax.set_ylim(lo[1], hi[1])
         title = ("(a) ATM map: medians of transversal intersections" if method == "atm" else
                  f"(b) arc carving map: max error ≤ {threshold:.3f} m")
-        ax.set_title(f"{title} ({len(xy)} points)", fontsize=10)
+        ax.set_title(f"{title}\n(seed 0: {len(xy)} points)", fontsize=10)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
     fig.suptitle("Fig. 13: final global maps, office tour seed 0 (grey: true walls)")
     return fig
 
@@ -303,28 +306,63 @@ def plot_latency_accuracy(results: JsonDict) -> Figure:
     return fig
 
 
+#: Each swept parameter of the sensitivity experiment in words, with its unit.
+SWEEP_LABELS = {
+    "history": "history length (arcs)",
+    "range_tolerance": "range tolerance ε (m)",
+    "beam_width_deg": "beam width φ (deg)",
+    "min_transversal_deg": "minimum transversal angle ψ (deg)",
+    "speed": "speed (m/s)",
+    "range_noise": "range noise σ (m)",
+}
+
+#: Line style of each method in the sensitivity figure: carving thick and solid, combined
+#: dashed on top of it, so that both show where their values coincide (fully carved share).
+_SWEEP_STYLE: dict[str, dict[str, Any]] = {
+    "carving": {"ls": "-", "marker": "s", "lw": 4.0, "ms": 8, "alpha": 0.5, "zorder": 2},
+    "combined": {"ls": "--", "marker": "^", "lw": 1.5, "ms": 5, "zorder": 3},
+    "atm": {"ls": "-", "marker": "o", "lw": 1.3, "ms": 4, "zorder": 2},
+    "centerline": {"ls": ":", "marker": "D", "lw": 1.5, "ms": 3.5, "zorder": 2},
+}
+
+
 def plot_sensitivity(results: JsonDict) -> Figure:
-    """Each swept parameter against true error, unprocessed share and fully carved share."""
+    """Each swept parameter against true error, unprocessed share and fully carved share.
+
+    One row per parameter (x: its value, labelled by :data:`SWEEP_LABELS`), one column per
+    measure; one legend for the whole figure.
+    """
     sens = {k: v for k, v in results["sensitivity"].items() if k != "scenario"}
+    seed = results["sensitivity"].get("scenario", {}).get("seed", 0)
     measures = (("error_median", "median true error (m)"),
-                ("unprocessed", "unprocessed (%)"), ("fully_carved", "fully carved (%)"))
-    fig, axes = new_figure(len(sens), len(measures), width=12.0, height=2.6 * len(sens))
+                ("unprocessed", "unprocessed (% of history rows)"),
+                ("fully_carved", "fully carved (% of arcs)"))
+    fig, axes = new_figure(len(sens), len(measures), width=12.0, height=2.6 * len(sens) + 0.6)
+    handles: dict[str, Any] = {}
     for r, (param, entry) in enumerate(sens.items()):
         x = np.asarray(entry["values"], dtype=np.float64)
         for c, (key, label) in enumerate(measures):
             ax = axes[r, c]
-            for m in METHOD_ORDER:
+            for m in ("carving", "combined", "atm", "centerline"):
                 if m in entry:
-                    ax.plot(x, _values(entry[m][key]), "-o", ms=3, color=METHOD_COLORS[m],
-                            label=m)
+                    (line,) = ax.plot(x, _values(entry[m][key]), color=METHOD_COLORS[m],
+                                      label=m, **_SWEEP_STYLE[m])
+                    handles.setdefault(m, line)
             if param == "history":
                 ax.set_xscale("log")
-            ax.set_xlabel(f"{param} ({entry['unit']})", fontsize=8)
+                ax.set_xticks(x, [f"{v:g}" for v in x])
+                ax.minorticks_off()
+            else:
+                ax.locator_params(axis="x", nbins=6)
+            ax.set_xlabel(SWEEP_LABELS.get(param, f"{param} ({entry['unit']})"), fontsize=8)
             ax.set_ylabel(label, fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize="x-small")
-    fig.suptitle("Sensitivity (office tour, seed 0)")
+    order = [m for m in METHOD_ORDER if m in handles]
+    fig.legend([handles[m] for m in order], order, loc="outside lower center",
+               ncol=len(order), fontsize="small")
+    fig.suptitle(f"Sensitivity (office tour, seed {seed} only; one parameter changed at a "
+                 "time from the defaults)")
     return fig
 
 

@@ -13,13 +13,14 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.evaluation.appendix import APPENDIX_MARKERS, appendix_markdown
 from sonarcarve.evaluation.experiments import ExperimentResults
-from sonarcarve.evaluation.figures import write_figures
+from sonarcarve.evaluation.figures import SWEEP_LABELS, write_figures
 from sonarcarve.evaluation.output import (
     Markers,
     check_marked_file,
@@ -275,7 +276,7 @@ def _table1_sentences(r: JsonDict) -> list[str]:
            f"{100 - t1['combined']:.1f} % of history arcs are processed")
         + f" (paper: more than {PAPER['combined_refined_min']:.0f} %). Combined is never above "
         "the smaller of the two: one history, an arc is processed when either model processed "
-        "it.",
+        "it." + _combined_sentence(r),
         "- Centerline: 0 % in both, by definition.",
     ]
 
@@ -433,7 +434,11 @@ def _fig10_12(r: JsonDict, figs: dict[str, str]) -> list[str]:
            f"{_f(atm_far, 0)} % beyond 3 m, growing with range as eq. 2.2 predicts and as in "
            f"the paper. Carving: {_f(carve_mid, 0)} % and {_f(carve_far, 0)} %; "
            + ("it also grows with range, unlike the paper's nearly flat curve, but stays below "
-              "ATM's for long arcs." if carve_far is not None and carve_mid is not None
+              "ATM's for long arcs. A long arc is carved only by a newer reading whose freespace "
+              "reaches it, that is a long reading beside it, and one must come within the "
+              f"history window ({_span(r)}), while a short arc is reached by almost any newer "
+              "reading that sweeps across it (the reason long carved arcs also stay wide, Fig. "
+              "11 below)." if carve_far is not None and carve_mid is not None
               and carve_far > carve_mid + 5 else "nearly flat, as in the paper."),
            f"- Fig. 11: carved arcs end {_f(w_near, 1)}° wide on average at 1-3 m and "
            f"{_f(w_far, 1)}° beyond 4 m "
@@ -498,6 +503,52 @@ def _mean_between(entry: JsonDict, low: float = -math.inf,
     return num / den if den else None
 
 
+def _seeds(r: JsonDict) -> str:
+    """``seed 0`` or ``seeds 0-N`` of the run's settings."""
+    n = int(r.get("meta", {}).get("settings", {}).get("seeds", 1))
+    return "seed 0" if n == 1 else f"seeds 0-{n - 1}"
+
+
+def _seed_stat(r: JsonDict) -> str:
+    """``means over seeds 0-N``, or ``seed 0's numbers`` for a one-seed run."""
+    seeds = _seeds(r)
+    return "seed 0's numbers" if seeds == "seed 0" else f"means over {seeds}"
+
+
+def _unprocessed_counts(entry: JsonDict) -> list[float]:
+    """Unprocessed arcs per range bin of a Fig. 10 curve (share times arcs), 0 for empty bins."""
+    return [0.0 if v is None else v * c / 100.0 for v, c in zip(entry["value"], entry["count"],
+                                                                 strict=True)]
+
+
+def _combined_sentence(r: JsonDict) -> str:
+    """Why combined's unprocessed share is above the paper's: the two models' latencies are
+    correlated through range here, anti-correlated in the paper (from Fig. 10's bins)."""
+    f10, t1, paper = r.get("fig10", {}), r["table1"], PAPER["table1"]
+    if not {"carving", "atm", "combined"} <= set(f10):
+        return ""
+    carve, atm = f10["carving"], f10["atm"]
+    total = sum(carve["count"])
+    slow = _unprocessed_counts(carve)
+    far = sum(u for lo, u in zip(carve["edges"][:-1], slow, strict=True) if lo >= 3.0)
+    # Were the two independent within each range bin, an arc would stay unprocessed by both
+    # with the product of the two shares of its bin.
+    per_bin = sum(c * (pc or 0.0) * (pa or 0.0) / 1e4 for c, pc, pa in
+                  zip(carve["count"], carve["value"], atm["value"], strict=True))
+    if not total or not sum(slow):
+        return ""
+    return (f" Why more than the paper's {paper['combined']:.2f} %: here "
+            f"{100.0 * far / sum(slow):.0f} % of the arcs carving leaves unprocessed lie beyond "
+            f"3 m, where ATM also leaves {_f(_mean_between(atm, 3.0), 0)} % unprocessed (Fig. "
+            "10), so the two latencies are correlated through range: were they independent, "
+            f"combined would leave {t1['carving']:.1f} % × {t1['atm']:.1f} % = "
+            f"{t1['carving'] * t1['atm'] / 100.0:.1f} %, independent within each 0.5 m range "
+            f"bin {100.0 * per_bin / total:.1f} %; it leaves {t1['combined']:.1f} %. In the "
+            "paper carving's slow arcs were the short ones, which ATM processes quickly: its "
+            f"{paper['combined']:.2f} % is far below its own {paper['carving']:.2f} % × "
+            f"{paper['atm']:.2f} % = {paper['carving'] * paper['atm'] / 100.0:.1f} %.")
+
+
 def _fig13(r: JsonDict, figs: dict[str, str]) -> list[str]:
     if "fig13" not in r:
         return []
@@ -506,6 +557,8 @@ def _fig13(r: JsonDict, figs: dict[str, str]) -> list[str]:
            f"ATM's map keeps the medians of transversal intersections only; carving's keeps "
            f"points whose maximum error is at most {f['threshold_m']:.3f} m, ATM's own bound, so "
            "both maps promise the same accuracy.", "",
+           f"The table gives {_seed_stat(r)} (point counts included); the figure shows the "
+           "maps of seed 0, whose point counts are in its panel titles.", "",
            "| map | points in the global map | points shown | their true error, median / "
            "p90 (m) |", "|---|---:|---:|---:|"]
     for m in ("atm", "carving", "combined"):
@@ -610,9 +663,10 @@ def _sensitivity(r: JsonDict, figs: dict[str, str]) -> list[str]:
         return []
     sens = r["sensitivity"]
     sc = sens["scenario"]
-    out = ["### Beyond the paper: sensitivity", "",
+    out = [f"### Beyond the paper: sensitivity (seed {sc['seed']} only)", "",
            ("The whole office tour" if sc["length_m"] is None else
-            f"The first {sc['length_m']:g} m of the office tour") + f", seed {sc['seed']}; one "
+            f"The first {sc['length_m']:g} m of the office tour") + f", seed {sc['seed']} only "
+           f"(one run per value, where the sections above average {_seeds(r)}); one "
            "parameter changed at a time from the defaults above; simulations shared by every "
            "parameter that does not change them (history, ε, ψ). Median true error of the "
            "local map (m) / unprocessed (% of all history rows, as in Table I) / fully carved "
@@ -621,7 +675,8 @@ def _sensitivity(r: JsonDict, figs: dict[str, str]) -> list[str]:
         if param == "scenario":
             continue
         methods = [m for m in ("carving", "atm", "combined", "centerline") if m in entry]
-        out += [f"**{param}** ({entry['unit']})", "",
+        out += [f"**{SWEEP_LABELS[param]}**" if param in SWEEP_LABELS else
+                f"**{param}** ({entry['unit']})", "",
                 "| value | " + " | ".join(methods) + " |", "|---|" + "---:|" * len(methods)]
         for i, v in enumerate(entry["values"]):
             cells = [f"{_f(entry[m]['error_median'][i], 3)} / "
@@ -662,9 +717,51 @@ def _sweep_sentences(sens: JsonDict) -> list[str]:
         f"- Beam width φ: centerline's error goes from {beam_center}°, carving's from "
         f"{beam_carve}°.",
         f"- ψ: ATM's unprocessed share goes from {psi_atm}° (eq. 2.2: larger ψ needs more "
-        "travel).",
+        "travel)." + _psi_sentence(sens),
         f"- Speed: ATM's unprocessed share goes from {ends('speed', 'atm', 'unprocessed')} "
         f"m/s; carving's error from {ends('speed', 'carving')} m/s.",
         f"- Range noise: carving's error goes from {ends('range_noise', 'carving')} m, "
         f"ATM's from {ends('range_noise', 'atm')} m, centerline's from "
         f"{ends('range_noise', 'centerline')} m.", ""]
+
+
+def _psi_sentence(sens: JsonDict) -> str:
+    """Why ATM's median error need not be monotone in ψ: its points are a mixture of crossings
+    and centerline fallbacks whose share and kind change with ψ."""
+    entry = sens.get("min_transversal_deg")
+    if not entry or "atm" not in entry or len(entry["values"]) < 2:
+        return ""
+    atm, values = entry["atm"], entry["values"]
+    err = atm["error_median"]
+    needed = ("refined_share", "error_median_refined", "error_median_fallback",
+              "fallback_median_range")
+    if any(v is None for v in err) or not all(k in atm for k in needed):
+        return ""
+    lo, hi = 0, len(values) - 1
+    steps = [b - a for a, b in pairwise(err)]
+    monotone = all(d >= 0 for d in steps) or all(d <= 0 for d in steps)
+    peak = max(range(len(err)), key=lambda i: err[i])
+    shape = ("rises" if monotone and err[hi] >= err[lo] else "falls" if monotone else
+             f"is not monotone (largest, {err[peak]:.3f} m, at {values[peak]:g}°)")
+    fallback = [None if v is None else 100.0 - v for v in atm["refined_share"]]
+    f_range, f_err = atm["fallback_median_range"], atm["error_median_fallback"]
+
+    def at(key: str, i: int, digits: int = 3) -> str:
+        return _f(atm[key][i], digits)
+
+    out = (f" ATM's median error {shape} from {err[lo]:.3f} m at {values[lo]:g}° to "
+           f"{err[hi]:.3f} m at {values[hi]:g}°. Its local map mixes crossings (median error "
+           f"{at('error_median_refined', lo)} m at {values[lo]:g}°, "
+           f"{at('error_median_refined', hi)} m at {values[hi]:g}°) with centerline "
+           f"fallbacks, {_f(fallback[lo], 0)} % of its points at {values[lo]:g}° and "
+           f"{_f(fallback[hi], 0)} % at {values[hi]:g}°: a larger ψ admits fewer crossings, "
+           "each better conditioned (eq. 5.4), and leaves more arcs to centerline.")
+    if None in (f_range[lo], f_range[hi], f_err[lo], f_err[hi]):
+        return out
+    if f_range[hi] < f_range[lo] and f_err[hi] < f_err[lo]:
+        out += (f" At small ψ the fallbacks are the long arcs no pair crosses in time (median "
+                f"range {f_range[lo]:.2f} m, error {f_err[lo]:.3f} m); at large ψ shorter arcs "
+                f"fall back too (median range {f_range[hi]:.2f} m), which centerline already "
+                f"places well (error {f_err[hi]:.3f} m), so the mixture's median follows the "
+                "share and the kind of the fallbacks, not ψ alone.")
+    return out
