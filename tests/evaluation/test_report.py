@@ -142,3 +142,43 @@ def test_binned_means_weight_bins_by_count() -> None:
     assert _mean_between(entry, 0.0, 2.0) == pytest.approx((3 * 10.0 + 40.0) / 4)
     assert _mean_between(entry, 1.0) == pytest.approx(40.0)  # the empty bin is left out
     assert _mean_between(entry, 2.0) is None
+
+
+def test_combined_sentence_compares_with_independent_latencies() -> None:
+    from sonarcarve.evaluation.report import _combined_sentence
+
+    def curve(values: list[float]) -> dict[str, object]:
+        return {"edges": [0.0, 3.0, 6.0], "value": values, "count": [100, 100]}
+
+    r = {"fig10": {"carving": curve([10.0, 50.0]), "atm": curve([20.0, 60.0]),
+                   "combined": curve([5.0, 19.0])},
+         "table1": {"carving": 30.0, "atm": 40.0, "combined": 12.0}}
+    text = _combined_sentence(r)
+    # Carving leaves 10 + 50 arcs unprocessed per 100 per bin: 50 / 60 of them beyond 3 m.
+    assert "here 83 % of the arcs carving leaves unprocessed lie beyond 3 m" in text
+    assert "ATM also leaves 60 % unprocessed" in text
+    assert "30.0 % × 40.0 % = 12.0 %" in text
+    # Per bin: (0.1 * 0.2 + 0.5 * 0.6) / 2 = 16 %.
+    assert "range bin 16.0 %; it leaves 12.0 %" in text
+    assert "55.59 % × 31.75 % = 17.6 %" in text
+    assert _combined_sentence({"table1": r["table1"]}) == ""
+
+
+def test_psi_sentence_says_whether_atm_error_is_monotone() -> None:
+    from sonarcarve.evaluation.report import _psi_sentence
+
+    def sweep(errors: list[float]) -> dict[str, object]:
+        atm = {"error_median": errors, "refined_share": [80.0, 50.0, 40.0],
+               "error_median_refined": [0.02, 0.02, 0.02],
+               "error_median_fallback": [0.3, 0.2, 0.1],
+               "fallback_median_range": [3.5, 2.5, 1.5]}
+        return {"min_transversal_deg": {"values": [10.0, 45.0, 60.0], "atm": atm}}
+
+    bumpy = _psi_sentence(sweep([0.03, 0.06, 0.04]))
+    assert "is not monotone in ψ: 0.030 m at 10°, largest (0.060 m) at 45°, 0.040 m at 60°" \
+        in bumpy
+    assert "20 % of its points at 10° and 60 % at 60°" in bumpy
+    assert "median range 3.50 m, error 0.300 m" in bumpy
+    assert "rises from 0.030 m at 10° to 0.050 m at 60°" in _psi_sentence(
+        sweep([0.03, 0.04, 0.05]))
+    assert _psi_sentence({}) == ""

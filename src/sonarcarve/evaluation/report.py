@@ -741,16 +741,20 @@ def _psi_sentence(sens: JsonDict) -> str:
     steps = [b - a for a, b in pairwise(err)]
     monotone = all(d >= 0 for d in steps) or all(d <= 0 for d in steps)
     peak = max(range(len(err)), key=lambda i: err[i])
-    shape = ("rises" if monotone and err[hi] >= err[lo] else "falls" if monotone else
-             f"is not monotone (largest, {err[peak]:.3f} m, at {values[peak]:g}°)")
+    if monotone:
+        shape = (f"{'rises' if err[hi] >= err[lo] else 'falls'} from {err[lo]:.3f} m at "
+                 f"{values[lo]:g}° to {err[hi]:.3f} m at {values[hi]:g}°")
+    else:
+        shape = (f"is not monotone in ψ: {err[lo]:.3f} m at {values[lo]:g}°, largest "
+                 f"({err[peak]:.3f} m) at {values[peak]:g}°, {err[hi]:.3f} m at "
+                 f"{values[hi]:g}°")
     fallback = [None if v is None else 100.0 - v for v in atm["refined_share"]]
     f_range, f_err = atm["fallback_median_range"], atm["error_median_fallback"]
 
     def at(key: str, i: int, digits: int = 3) -> str:
         return _f(atm[key][i], digits)
 
-    out = (f" ATM's median error {shape} from {err[lo]:.3f} m at {values[lo]:g}° to "
-           f"{err[hi]:.3f} m at {values[hi]:g}°. Its local map mixes crossings (median error "
+    out = (f" ATM's median error {shape}. Its local map mixes crossings (median error "
            f"{at('error_median_refined', lo)} m at {values[lo]:g}°, "
            f"{at('error_median_refined', hi)} m at {values[hi]:g}°) with centerline "
            f"fallbacks, {_f(fallback[lo], 0)} % of its points at {values[lo]:g}° and "
