@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
@@ -15,17 +16,47 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import read_robond, write_readings_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
+from sonarcarve.io.rosbag import read_rosbag
+from sonarcarve.sim.robot import load_robot
 
-__all__ = ["CONVERTERS", "convert"]
+__all__ = ["CONVERTERS", "ConvertOptions", "convert"]
 
 
 class ConvertError(SonarcarveError):
     """An unknown format or a bad parameter of ``convert``."""
 
 
-def _robond(directory: Path | None, out: Path, beam_width: float | None,
-            keep_duplicates: bool) -> Table:
-    log = read_robond(directory, keep_duplicates=keep_duplicates,
+@dataclass(frozen=True)
+class ConvertOptions:
+    """The options of ``convert``; each format uses some and rejects the others it cannot use.
+
+    Attributes
+    ----------
+    beam_width : float or None
+        φ in radians, or None for the format's default.
+    keep_duplicates : bool
+        roboND: keep repeats while standing.
+    robot : str or None
+        rosbag: built-in robot name or YAML file giving the sensor mounts.
+    range_topics : list of str
+        rosbag: Range topics in sensor order (empty: all, natural-sorted).
+    odom_topic : str or None
+        rosbag: Odometry topic (None: the only one).
+    """
+
+    beam_width: float | None = None
+    keep_duplicates: bool = False
+    robot: str | None = None
+    range_topics: tuple[str, ...] = ()
+    odom_topic: str | None = None
+
+
+def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
+    if opts.robot is not None or opts.range_topics or opts.odom_topic is not None:
+        msg = "--robot, --range-topic and --odom-topic apply to the rosbag format only"
+        raise ConvertError(msg)
+    beam_width = opts.beam_width
+    log = read_robond(directory, keep_duplicates=opts.keep_duplicates,
                       beam_width=ROBOND_BEAM_WIDTH if beam_width is None else beam_width)
     write_readings_csv(log.batch, out)
     r = log.report
@@ -43,29 +74,69 @@ def _robond(directory: Path | None, out: Path, beam_width: float | None,
     ])
 
 
-#: Format name (lower case) -> converter(directory, out, beam width rad or None, keep dups).
-CONVERTERS: dict[str, Callable[[Path | None, Path, float | None, bool], Table]] = {
+def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
+    if source is None:
+        msg = "rosbag needs SOURCE: a rosbag1 file (*.bag) or a rosbag2 folder"
+        raise ConvertError(msg)
+    if opts.keep_duplicates:
+        msg = "--keep-duplicates applies to the roboND format only"
+        raise ConvertError(msg)
+    robot = load_robot(opts.robot) if opts.robot is not None else None
+    log = read_rosbag(source, robot=robot, range_topics=list(opts.range_topics) or None,
+                      odom_topic=opts.odom_topic, beam_width=opts.beam_width)
+    write_readings_csv(log.batch, out)
+    r = log.report
+    rows = [(f"messages on {topic}", f"{count:,}") for topic, count in r.messages.items()]
+    return summary_table(f"ROS bag: {source}", [
+        *rows,
+        ("sensors", f"{len(r.sensors):,}"),
+        ("mounts", robot.name if robot is not None else "none (sensor = odometry pose)"),
+        ("no echo (dropped)", f"{r.no_echo:,}"),
+        ("outside odometry span (dropped)", f"{r.outside_odometry:,}"),
+        ("readings written", f"{r.readings:,}"),
+        ("readings CSV", str(out)),
+    ])
+
+
+#: Format name (lower case) -> converter(source, out, options).
+CONVERTERS: dict[str, Callable[[Path | None, Path, ConvertOptions], Table]] = {
     "robond": _robond,
+    "rosbag": _rosbag,
 }
 
 
 @app.command()
 def convert(
     fmt: Annotated[str, typer.Argument(
-        metavar="FORMAT", help="Data set format: roboND (the bundled 8-sensor real log).")],
+        metavar="FORMAT",
+        help="Data set format: roboND (the bundled 8-sensor real log) or rosbag (ROS 1/2 bag "
+             "of sensor_msgs/Range + nav_msgs/Odometry).")],
     out: Annotated[Path, typer.Option(
         "--out", "-o", metavar="READINGS.csv",
         help="Readings CSV to write (seconds, metres, radians). Its folder must exist.")],
     directory: Annotated[Path | None, typer.Argument(
-        metavar="FOLDER",
-        help="Folder holding the data set's files; default: the copy bundled with sonarcarve.")]
+        metavar="SOURCE",
+        help="roboND: folder holding the log's files (default: the bundled copy); "
+             "rosbag: a rosbag1 file (*.bag) or a rosbag2 folder.")]
         = None,
     beam_width: Annotated[float | None, typer.Option(
         metavar="DEGREES",
         help="Beam width φ in degrees written with each reading (roboND default: 20).")] = None,
     keep_duplicates: Annotated[bool, typer.Option(
-        help="Keep values that repeat while the robot stands still (they add identical arcs).")]
+        help="roboND: keep values that repeat while the robot stands still (they add "
+             "identical arcs).")]
         = False,
+    robot: Annotated[str | None, typer.Option(
+        metavar="NAME|ROBOT.yaml",
+        help="rosbag: sensor mounts, a built-in robot (p3dx-front, roboND-8, scout2) or a "
+             "YAML file; sensor i takes mount i. Default: sensors at the odometry pose.")]
+        = None,
+    range_topic: Annotated[list[str] | None, typer.Option(
+        metavar="TOPIC",
+        help="rosbag: a Range topic; repeat in sensor order (default: every Range topic, "
+             "natural-sorted by name; frame_ids number the sensors within a topic).")] = None,
+    odom_topic: Annotated[str | None, typer.Option(
+        metavar="TOPIC", help="rosbag: the Odometry topic (default: the only one).")] = None,
 ) -> None:
     """Convert a data set's files into the readings CSV (t,sensor,x,y,theta,range,beam_width).
 
@@ -74,12 +145,17 @@ def convert(
     values are dropped, and so are stale repeats: a value equal to the same sensor's value in
     the previous record although the robot moved (the sensor had not fired again).
 
+    rosbag: each sensor_msgs/Range echo (header stamp, s) inside [min_range, max_range] becomes
+    a reading posed by the robot pose interpolated in nav_msgs/Odometry composed with the
+    sensor's --robot mount; beam width = field_of_view when > 0.
+
     Example: `sonarcarve convert roboND --out roboND.csv` then
-    `sonarcarve process roboND.csv --out map.csv`.
+    `sonarcarve process roboND.csv --out map.csv`; or
+    `sonarcarve convert rosbag run.bag --robot p3dx-front --out run.csv`.
     """
     converter = CONVERTERS.get(fmt.lower())
     if converter is None:
-        msg = f"unknown format {fmt!r}; choose one of: roboND"
+        msg = f"unknown format {fmt!r}; choose one of: roboND, rosbag"
         raise ConvertError(msg)
     width = None
     if beam_width is not None:
@@ -89,5 +165,9 @@ def convert(
         width = math.radians(beam_width)
     # The data set's own files must survive a --out that names one of them.
     inputs = sorted(directory.iterdir()) if directory is not None and directory.is_dir() else []
+    if directory is not None and directory.is_file():
+        inputs = [directory]
     check_output_file(out, inputs=inputs, label=f"--out {out}")
-    console.print(converter(directory, out, width, keep_duplicates))
+    options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates, robot=robot,
+                             range_topics=tuple(range_topic or ()), odom_topic=odom_topic)
+    console.print(converter(directory, out, options))
