@@ -31,6 +31,7 @@ __all__ = [
     "load_json",
     "load_yaml",
     "parse_json",
+    "parse_number",
     "parse_yaml",
     "read_text",
 ]
@@ -179,3 +180,30 @@ def finite_number(value: object) -> float | None:
     except OverflowError:
         return None
     return number if math.isfinite(number) else None
+
+
+def parse_number(text: str, where: str, column: str, *, finite: bool = True,
+                 error_type: ErrorType = InputError) -> float:
+    """One cell of a text table as a float, or a one-line error naming ``where`` and ``column``.
+
+    ``where`` is the place, e.g. ``"poses.txt: line 4"``. With ``finite=False`` NaN and
+    infinities pass (for callers that report them with their own, more specific message).
+
+    Examples
+    --------
+    >>> parse_number(" 2.5", "f: line 3", "x")
+    2.5
+    >>> parse_number("abc", "f: line 3", "x")
+    Traceback (most recent call last):
+    ...
+    sonarcarve.io.errors.InputError: f: line 3, column 'x' is not a number: 'abc'
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        msg = f"{where}, column {column!r} is not a number: {text!r}"
+        raise error_type(msg) from None
+    if finite and not math.isfinite(value):
+        msg = f"{where}, column {column!r} is not finite: {text!r}"
+        raise error_type(msg)
+    return value

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from sonarcarve.io.atomic import atomic_text
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.readings import ReadingBatch, ReadingsError
 
 __all__ = ["READINGS_COLUMNS", "read_readings_csv", "write_readings_csv"]
@@ -102,11 +102,8 @@ def _column(path: Path, body: list[tuple[int, list[str]]], index: int, name: str
         if name == _OPTIONAL and not text.strip():
             values[k] = math.nan  # unknown beam width: the method's default applies
             continue
-        try:
-            values[k] = float(text)
-        except ValueError:
-            msg = f"{path}: line {line}, column {name!r} is not a number: {text!r}"
-            raise InputError(msg) from None
+        # NaN and infinities pass here: validation names them with the row's context.
+        values[k] = parse_number(text, f"{path}: line {line}", name, finite=False)
     return values
 
 

@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.errors import InputError, read_text
+from sonarcarve.io.errors import InputError, parse_number, read_text
 from sonarcarve.readings import ReadingBatch
 
 __all__ = [
@@ -143,15 +143,7 @@ def _read_table(path: Path, columns: tuple[str, ...]) -> npt.NDArray[np.float64]
                    f"({' '.join(columns)}), found {len(fields)}")
             raise InputError(msg)
         for column, (name, field) in enumerate(zip(columns, fields, strict=True)):
-            try:
-                value = float(field)
-            except ValueError:
-                msg = f"{path}: line {number}, column {name!r} is not a number: {field!r}"
-                raise InputError(msg) from None
-            if not math.isfinite(value):
-                msg = f"{path}: line {number}, column {name!r} is not finite: {field!r}"
-                raise InputError(msg)
-            table[number - 1, column] = value
+            table[number - 1, column] = parse_number(field, f"{path}: line {number}", name)
     back = np.flatnonzero(np.diff(table[:, 0]) <= 0.0)
     if back.size:
         row = int(back[0]) + 1

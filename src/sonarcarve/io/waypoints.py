@@ -20,14 +20,13 @@ the origin.
 from __future__ import annotations
 
 import csv
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.errors import InputError, finite_number, parse_json, read_text
+from sonarcarve.io.errors import InputError, finite_number, parse_json, parse_number, read_text
 from sonarcarve.sim.motion import MAX_COORDINATE
 
 __all__ = ["read_waypoints"]
@@ -81,14 +80,7 @@ def _from_csv(path: Path, text: str) -> npt.NDArray[np.float64]:
 
 def _cell(path: Path, line: int, row: list[str], index: int, name: str) -> float:
     text = row[index].strip() if index < len(row) else ""
-    try:
-        value = float(text)
-    except ValueError:
-        msg = f"{path}: line {line}, column {name!r} is not a number: {text!r}"
-        raise InputError(msg) from None
-    if not math.isfinite(value):
-        msg = f"{path}: line {line}, column {name!r} must be finite, got {text!r}"
-        raise InputError(msg)
+    value = parse_number(text, f"{path}: line {line}", name)
     if abs(value) > MAX_COORDINATE:
         msg = (f"{path}: line {line}, column {name!r} must lie within ±{MAX_COORDINATE:g} m, "
                f"got {text!r}")
