@@ -11,7 +11,7 @@ script simulates the tour once per seed, then maps the whole log with
 * the methods ``centerline``, ``carve`` and ``combined`` (library defaults; their global map);
 * ``carve`` and ``combined`` fed only readings of at most 3.81 m (the paper's maximum-range
   filter, Appendix B, :data:`~sonarcarve.filters.PAPER_MAX_RANGE`);
-* :class:`~sonarcarve.grid.OccupancyGrid` at 0.05, 0.10 and 0.20 m, with the cone model of
+* :class:`~sonarcarve.grids.elfes.OccupancyGrid` at 0.05, 0.10 and 0.20 m, with the cone model of
   Elfes (no distance fade) and with ROS ``range_sensor_layer``'s 1.2 m fade (the library's
   default); the map is the centres of the cells above the default threshold (0.65). Each grid's
   origin is shifted by a seeded random fraction of a cell, so that walls do not sit on cell
@@ -20,10 +20,10 @@ script simulates the tour once per seed, then maps the whole log with
 and prints markdown tables, means over seeds, of:
 
 * points in the map; median and 90th percentile of their distance to the nearest true wall
-  (:func:`~sonarcarve.evaluation.metrics.segment_distance`), and the share farther than
+  (:func:`~sonarcarve.lab.metrics.segment_distance`), and the share farther than
   0.25 m (phantom obstacles: 0.25 m is the depth at which a point blocks an opening, Fig. 2);
 * covered: the share of *seen* wall patches that hold a map point. Walls are cut into 0.5 m
-  patches (:func:`~sonarcarve.evaluation.metrics.patch_index`); a patch is seen if the true
+  patches (:func:`~sonarcarve.lab.metrics.patch_index`); a patch is seen if the true
   reflection point of at least one direct echo lies on it, and covered if at least one map
   point lies within 0.10 m of its nearest wall and projects onto that patch;
 * memory: the grid's float32 array, and the peak traced memory (tracemalloc) of one untimed run
@@ -36,7 +36,7 @@ Further tables: the occupancy threshold (office), the grid's update engines (num
 the numpy version, office seed 0), and the doorway of Fig. 2: on the ``doorway`` world (a
 0.85 m door, the tour stops 1 m short of it) is the door passable in the final map, i.e. is
 there a stretch of at least 0.46 m (Scout2 diameter + 5 cm) of the door line with no map point
-within 0.25 m of it (:func:`~sonarcarve.evaluation.metrics.free_width`)? For grids this is
+within 0.25 m of it (:func:`~sonarcarve.lab.metrics.free_width`)? For grids this is
 measured on the occupied cells' centres and, more strictly, on their whole squares.
 """
 
@@ -54,8 +54,17 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve import ReadingBatch, make_method
-from sonarcarve.evaluation.analyses import GAP_DEPTH, passage_clearance
-from sonarcarve.evaluation.metrics import (
+from sonarcarve.filters import PAPER_MAX_RANGE
+from sonarcarve.grids.elfes import (
+    DEFAULT_OCCUPIED_THRESHOLD,
+    ROS_FADE_RANGE,
+    OccupancyGrid,
+    SonarConeModel,
+    _update_kernel,
+    _update_numpy,
+)
+from sonarcarve.lab.analyses import GAP_DEPTH, passage_clearance
+from sonarcarve.lab.metrics import (
     GapRegion,
     PatchIndex,
     free_width,
@@ -64,17 +73,8 @@ from sonarcarve.evaluation.metrics import (
     patch_of_points,
     segment_distance,
 )
-from sonarcarve.filters import PAPER_MAX_RANGE
-from sonarcarve.grid import (
-    DEFAULT_OCCUPIED_THRESHOLD,
-    ROS_FADE_RANGE,
-    OccupancyGrid,
-    SonarConeModel,
-    _update_kernel,
-    _update_numpy,
-)
+from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
-from sonarcarve.sim.robot import load_robot
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.sim.world import World, load_world

@@ -12,7 +12,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from sonarcarve.sim import BUILTIN_ROBOTS, load_robot, simulate
+from sonarcarve.robot import BUILTIN_ROBOTS, load_robot
+from sonarcarve.sim import simulate
 from sonarcarve.sim.motion import follow_waypoints
 from sonarcarve.sim.world import load_world
 

@@ -43,13 +43,13 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve import MethodConfig, ReadingBatch, make_method
-from sonarcarve.evaluation.metrics import segment_distance
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import SonarHistory
+from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.methods.base import Estimates, Removal, SlotArray
 from sonarcarve.pipeline import process_readings
+from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
-from sonarcarve.sim.robot import load_robot
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.sim.world import load_world

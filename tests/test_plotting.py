@@ -3,8 +3,7 @@ from pathlib import Path
 import numpy as np
 
 from sonarcarve.maps import LocalMap, PointSource
-from sonarcarve.plotting import new_axes, plot_map, plot_world, write_carving_explainer
-from sonarcarve.sim.world import World
+from sonarcarve.plotting import new_axes, plot_map, plot_walls, write_carving_explainer
 
 
 def test_explainer_figure_is_written(tmp_path: Path) -> None:
@@ -25,5 +24,5 @@ def test_map_points_are_drawn_once_per_source() -> None:
     assert len(artists) == 2  # carved and atm; no empty centerline series
     offsets = np.concatenate([a.get_offsets() for a in artists])
     np.testing.assert_allclose(np.sort(offsets[:, 0]), [0.0, 1.0, 2.0])
-    (walls,) = plot_world(World(np.array([[0.0, 0.0, 1.0, 0.0]])), ax)
+    (walls,) = plot_walls(np.array([[0.0, 0.0, 1.0, 0.0]]), ax)
     assert len(walls.get_segments()) == 1

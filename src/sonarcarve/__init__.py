@@ -7,7 +7,7 @@ a ring-buffer history of sonar arcs, with local and global maps and the paper's 
 
 from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
 from sonarcarve.geometry import CarveOutcome, arc_remainder, carve_arc
-from sonarcarve.grid import GridError, OccupancyGrid, SonarConeModel
+from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.io import read_map_csv, read_readings_csv, write_map_csv, write_readings_csv
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error

@@ -36,9 +36,11 @@ from typing import Generic, TypeVar
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.constants import INCH
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.maps import GlobalMap, LocalMap
 from sonarcarve.readings import Reading, ReadingBatch
+from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "PAPER_MAX_RANGE",
@@ -59,12 +61,9 @@ __all__ = [
 
 #: The paper's maximum range (Appendix B): 150 inches, in metres. Specific to the Scout2's
 #: sensors and mounting height; not a default anywhere.
-PAPER_MAX_RANGE = 150 * 0.0254
+PAPER_MAX_RANGE = 150 * INCH
 
 M = TypeVar("M", LocalMap, GlobalMap)
-BoolArray = npt.NDArray[np.bool_]
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 class FilterError(SonarcarveError, ValueError):

@@ -15,6 +15,8 @@ from typing import Self
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.typing import FloatArray, IntArray
+
 __all__ = [
     "GlobalMap",
     "GlobalMapBuilder",
@@ -23,8 +25,6 @@ __all__ = [
     "chord_error",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 class PointSource(IntEnum):

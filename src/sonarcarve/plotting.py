@@ -11,15 +11,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from sonarcarve.maps import GlobalMap, LocalMap
-    from sonarcarve.sim.world import World
 
-__all__ = ["SOURCE_COLORS", "new_axes", "plot_arc", "plot_freespace", "plot_map", "plot_world"]
+__all__ = ["SOURCE_COLORS", "new_axes", "plot_arc", "plot_freespace", "plot_map", "plot_walls"]
 
 #: One colour per point source, the same in every figure.
 SOURCE_COLORS = {
@@ -41,13 +41,15 @@ def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
     return ax
 
 
-def plot_world(world: World, ax: Axes | None = None, **style: Any) -> list[Any]:
-    """Draw the walls as light grey lines (the paper's "obstacles drawn in for display")."""
+def plot_walls(segments: npt.ArrayLike, ax: Axes | None = None, **style: Any) -> list[Any]:
+    """Draw wall ``segments`` (shape (n, 4): x1, y1, x2, y2, metres) as light grey lines (the
+    paper's "obstacles drawn in for display")."""
     from matplotlib.collections import LineCollection
 
     ax = ax or new_axes()
     options: dict[str, Any] = {"colors": "0.6", "linewidths": 1.5, "zorder": 1} | style
-    lines = LineCollection(list(world.segments.reshape(-1, 2, 2)), **options)
+    walls = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
+    lines = LineCollection(list(walls), **options)
     ax.add_collection(lines)
     ax.autoscale_view()
     return [lines]
@@ -107,7 +109,7 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
     from sonarcarve.geometry import CarveOutcome, carve_arc
 
     ax = ax or new_axes(7.0, 5.5)
-    half = math.radians(22.5) / 2
+    half = DEFAULT_BEAM_WIDTH / 2
     jamb_left, jamb_right, wall_y = 0.5, 1.4, 2.0
     oi = np.array([0.2, 0.0])
     theta_i = math.atan2(wall_y - oi[1], 0.5 * (jamb_left + jamb_right) - oi[0])

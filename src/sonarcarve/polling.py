@@ -62,6 +62,7 @@ import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.readings import ReadingBatch
+from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "FiringCause",
@@ -82,8 +83,6 @@ __all__ = [
     "simulate_polls",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 PoseFunction = Callable[[FloatArray], tuple[FloatArray, FloatArray, FloatArray]]
 
 #: Slack for rounding when checking that an interval is not empty, seconds.

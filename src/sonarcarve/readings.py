@@ -17,7 +17,9 @@ from typing import NamedTuple, overload
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "DEFAULT_BEAM_WIDTH",
@@ -27,15 +29,11 @@ __all__ = [
     "ReadingsError",
 ]
 
-#: The Polaroid transducer's arc width φ (paper, section 2): 22.5 degrees, in radians.
-DEFAULT_BEAM_WIDTH = math.radians(22.5)
 #: Largest sensor index accepted. Indices name the sensors of one robot, so anything near this
 #: is a damaged file; the bound (2**31 - 1) keeps an index exact in every integer type and in
 #: float64, which is how a CSV column is first parsed.
 MAX_SENSOR = 2**31 - 1
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 class ReadingsError(SonarcarveError, ValueError):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from sonarcarve.cli import main
-from sonarcarve.evaluation.report import BEGIN_MARKER, END_MARKER
 from sonarcarve.io import write_readings_csv
+from sonarcarve.lab.report import BEGIN_MARKER, END_MARKER
 from sonarcarve.readings import ReadingBatch
 
 #: A directory that refuses new files even for root (the sandbox may run tests as root, for
@@ -115,7 +115,7 @@ def test_simulate_keeps_both_old_files_when_the_readings_cannot_be_written(
         raise OSError(28, "No space left on device")
 
     # The failure comes after the truth file has been written (to its temporary file).
-    monkeypatch.setattr("sonarcarve.io.truth.write_readings_csv", disk_full)
+    monkeypatch.setattr("sonarcarve.sim.truth.write_readings_csv", disk_full)
     assert main(["simulate", "--world", "doorway", "--out", "run.csv"]) == 2
     _one_line_error(capsys, "run.csv", "No space left on device")
     assert _snapshot(workdir) == before

@@ -9,7 +9,7 @@ import pytest
 
 from sonarcarve.cli import main
 from sonarcarve.io import read_readings_csv
-from sonarcarve.io.truth import read_truth_json
+from sonarcarve.sim.truth import read_truth_json
 from sonarcarve.sim.world import load_world
 
 

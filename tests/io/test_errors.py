@@ -19,8 +19,8 @@ from sonarcarve.io.errors import (
     read_text,
 )
 from sonarcarve.io.roboND import read_robond
-from sonarcarve.io.waypoints import read_waypoints
-from sonarcarve.sim.robot import RobotError, load_robot
+from sonarcarve.robot import RobotError, load_robot
+from sonarcarve.sim.waypoints import read_waypoints
 from sonarcarve.sim.world import WorldError, load_world
 
 

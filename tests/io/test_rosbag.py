@@ -14,7 +14,7 @@ from rosbags.typesys import Stores, get_typestore
 from sonarcarve.cli import main
 from sonarcarve.io import read_readings_csv
 from sonarcarve.io.rosbag import RosbagError, read_rosbag
-from sonarcarve.sim.robot import parse_robot
+from sonarcarve.robot import parse_robot
 
 TS = get_typestore(Stores.ROS2_HUMBLE)
 RANGE = "sensor_msgs/msg/Range"

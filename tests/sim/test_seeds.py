@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.robot import load_robot
 from sonarcarve.sim import (
     explore,
     follow_waypoints,
-    load_robot,
     load_world,
     random_world,
     simulate,

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from sonarcarve.io import read_readings_csv
-from sonarcarve.io.truth import read_truth_json, truth_path, write_simulation
+from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import Trajectory
-from sonarcarve.sim.robot import load_robot
 from sonarcarve.sim.simulate import simulate
 from sonarcarve.sim.sonar import NO_ECHO, EchoKind
+from sonarcarve.sim.truth import read_truth_json, truth_path, write_simulation
 from sonarcarve.sim.world import World
 
 ROOM = World(np.array([[0, 0, 8, 0], [8, 0, 8, 6], [8, 6, 0, 6], [0, 6, 0, 0],

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import sonarcarve.sim.sonar as sonar_module
-from sonarcarve.sim.robot import RobotDescription, load_robot
+from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.sonar import (
     NO_ECHO,
     Echoes,

@@ -17,7 +17,7 @@ from sonarcarve.io import read_robond, write_readings_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
 from sonarcarve.io.rosbag import read_rosbag
-from sonarcarve.sim.robot import load_robot
+from sonarcarve.robot import load_robot
 
 __all__ = ["CONVERTERS", "ConvertOptions", "convert"]
 

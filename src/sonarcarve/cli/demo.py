@@ -12,7 +12,8 @@ from rich.table import Table
 from rich.text import Text
 
 from sonarcarve.cli.app import app, console, progress
-from sonarcarve.demo import (
+from sonarcarve.io.atomic import check_output_dir
+from sonarcarve.lab.demo import (
     APPROACH_DISTANCE,
     FIGURE_FILES,
     FIGURE_TEXT,
@@ -25,7 +26,6 @@ from sonarcarve.demo import (
     table_rows,
     write_demo_outputs,
 )
-from sonarcarve.io.atomic import check_output_dir
 
 __all__ = ["demo"]
 

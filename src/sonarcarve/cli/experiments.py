@@ -11,15 +11,15 @@ from rich.progress import TaskID
 
 from sonarcarve.cli.app import app, console, progress
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.evaluation.experiments import (
+from sonarcarve.io.atomic import check_output_dir, check_output_file
+from sonarcarve.io.errors import InputError
+from sonarcarve.lab.experiments import (
     EXPERIMENTS,
     ExperimentError,
     Settings,
     run_experiments,
 )
-from sonarcarve.evaluation.report import BEGIN_MARKER, END_MARKER, replace_section, write_outputs
-from sonarcarve.io.atomic import check_output_dir, check_output_file
-from sonarcarve.io.errors import InputError
+from sonarcarve.lab.report import BEGIN_MARKER, END_MARKER, replace_section, write_outputs
 
 __all__ = ["experiments"]
 

@@ -12,12 +12,12 @@ from rich.table import Table
 from sonarcarve.cli.app import app, console, progress, summary_table
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import check_output_file
-from sonarcarve.io.truth import truth_path, write_simulation
-from sonarcarve.io.waypoints import read_waypoints
+from sonarcarve.robot import BUILTIN_ROBOTS, load_robot
 from sonarcarve.sim.motion import Trajectory, explore, follow_waypoints, with_odometry_drift
-from sonarcarve.sim.robot import BUILTIN_ROBOTS, load_robot
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
+from sonarcarve.sim.truth import truth_path, write_simulation
+from sonarcarve.sim.waypoints import read_waypoints
 from sonarcarve.sim.world import World, WorldError, load_world
 
 __all__ = ["simulate_command"]

@@ -14,7 +14,7 @@ Sensors are numbered ``0, 1, ...`` in this order:
    numbers: ``/sonar_2`` before ``/sonar_10``);
 2. within one topic, ``frame_id`` values in natural sorted order.
 
-Sensor ``i`` takes mount ``i`` of the :class:`~sonarcarve.sim.robot.RobotDescription`
+Sensor ``i`` takes mount ``i`` of the :class:`~sonarcarve.robot.RobotDescription`
 (``mount_x, mount_y, bearing``), so list the topics, or name the frames, in the robot's sensor
 order. Without a robot description every sensor sits at the robot's origin facing its heading
 (use this only when the odometry already gives the sensor's own pose).
@@ -44,7 +44,8 @@ import numpy.typing as npt
 
 from sonarcarve.io.errors import InputError
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.sim.robot import RobotDescription
+from sonarcarve.robot import RobotDescription
+from sonarcarve.typing import FloatArray
 
 __all__ = [
     "ODOMETRY_TYPE",
@@ -55,7 +56,6 @@ __all__ = [
     "read_rosbag",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Message type of sonar ranges (ROS 2 spelling; rosbags normalises ROS 1 names to it).
 RANGE_TYPE = "sensor_msgs/msg/Range"

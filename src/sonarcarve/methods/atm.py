@@ -44,16 +44,10 @@ import numpy.typing as npt
 from sonarcarve.geometry import common_chord
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.base import (
-    ArcModel,
-    Estimates,
-    FloatArray,
-    SlotArray,
-    SonarMethod,
-    arc_point,
-)
+from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
 from sonarcarve.methods.config import MethodConfig
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.typing import FloatArray, SlotArray
 
 __all__ = ["AtmMethod", "AtmModel", "atm_error_bound"]
 

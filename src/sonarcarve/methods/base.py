@@ -23,14 +23,12 @@ import numpy.typing as npt
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, GlobalMapBuilder, LocalMap, PointSource
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
+from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = ["ArcModel", "CommitListener", "Estimates", "Measures", "Removal", "SonarMethod"]
 
 M = TypeVar("M", LocalMap, GlobalMap)
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
-SlotArray = npt.NDArray[np.int64]
 
 
 @dataclass(frozen=True, eq=False)

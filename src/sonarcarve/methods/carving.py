@@ -27,16 +27,9 @@ from numba import njit
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcStatus, arc_bounding_circle, carve_arcs
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.base import (
-    ArcModel,
-    Estimates,
-    FloatArray,
-    Removal,
-    SlotArray,
-    SonarMethod,
-    arc_point,
-)
+from sonarcarve.methods.base import ArcModel, Estimates, Removal, SonarMethod, arc_point
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.typing import FloatArray, SlotArray
 
 __all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
 

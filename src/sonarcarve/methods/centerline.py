@@ -5,14 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.base import (
-    ArcModel,
-    Estimates,
-    SlotArray,
-    SonarMethod,
-    arc_point,
-    source_codes,
-)
+from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point, source_codes
+from sonarcarve.typing import SlotArray
 
 __all__ = ["CenterlineMethod", "CenterlineModel"]
 

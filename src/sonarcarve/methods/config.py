@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from sonarcarve.constants import POLAROID_RANGE_RESOLUTION
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
@@ -46,5 +47,5 @@ class MethodConfig:
     beam_width: float = DEFAULT_BEAM_WIDTH
     range_tolerance: float = DEFAULT_RANGE_TOLERANCE
     min_transversal: float = math.radians(20.0)
-    range_resolution: float = 0.0254
+    range_resolution: float = POLAROID_RANGE_RESOLUTION
     max_incidence: float = NO_INCIDENCE_LIMIT

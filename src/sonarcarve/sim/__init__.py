@@ -1,4 +1,5 @@
-"""A sonar simulator with ground truth: worlds, robots, sonar physics and motion."""
+"""A sonar simulator with ground truth: worlds, sonar physics and motion (robots are
+:mod:`sonarcarve.robot`, shared with the product for sensor mounts)."""
 
 from sonarcarve.sim.generate import corridor_opening_world, doorway_world, random_world
 from sonarcarve.sim.motion import (
@@ -8,7 +9,6 @@ from sonarcarve.sim.motion import (
     follow_waypoints,
     with_odometry_drift,
 )
-from sonarcarve.sim.robot import BUILTIN_ROBOTS, RobotDescription, RobotError, load_robot
 from sonarcarve.sim.simulate import Simulation, SonarTruth, simulate
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
@@ -23,15 +23,12 @@ from sonarcarve.sim.sonar import (
 from sonarcarve.sim.world import World, WorldError, builtin_worlds, load_world
 
 __all__ = [
-    "BUILTIN_ROBOTS",
     "DEFAULT_PHYSICS",
     "NO_ECHO",
     "ROBOT_RADIUS",
     "EchoKind",
     "Echoes",
     "Firings",
-    "RobotDescription",
-    "RobotError",
     "Simulation",
     "SonarPhysics",
     "SonarPhysicsError",
@@ -45,7 +42,6 @@ __all__ = [
     "explore",
     "fire_sonars",
     "follow_waypoints",
-    "load_robot",
     "load_world",
     "random_world",
     "simulate",

@@ -16,9 +16,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 
 from sonarcarve.sim.world import World, WorldError, check_seed, write_world_json
+from sonarcarve.typing import FloatArray
 
 __all__ = [
     "BUILTIN_RECIPES",
@@ -34,7 +34,6 @@ __all__ = [
     "write_builtin_worlds",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Door width of generated floors, metres: leaves 0.5 m either side of a door's centre line,
 #: more than the 0.45 m tour clearance a 0.41 m-diameter robot needs.

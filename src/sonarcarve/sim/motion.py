@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.sim.world import World, WorldError, check_seed
+from sonarcarve.typing import FloatArray
 
 __all__ = [
     "DEFAULT_DT",
@@ -33,7 +34,6 @@ __all__ = [
     "with_odometry_drift",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)

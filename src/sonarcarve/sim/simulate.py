@@ -7,11 +7,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import numpy.typing as npt
 
 from sonarcarve.readings import ReadingBatch
+from sonarcarve.robot import RobotDescription
 from sonarcarve.sim.motion import Trajectory
-from sonarcarve.sim.robot import RobotDescription
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
     Echoes,
@@ -21,11 +20,10 @@ from sonarcarve.sim.sonar import (
     fire_sonars,
 )
 from sonarcarve.sim.world import World, check_seed
+from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = ["Simulation", "SonarTruth", "simulate"]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,7 +155,7 @@ def simulate(
     WorldError
         A seed that is not an integer >= 0 (:func:`~sonarcarve.sim.world.check_seed`).
     RobotError
-        A trajectory longer than :data:`~sonarcarve.sim.robot.MAX_FIRINGS` firings.
+        A trajectory longer than :data:`~sonarcarve.robot.MAX_FIRINGS` firings.
     """
     seed = check_seed(seed)
     times, sensors = robot.firing_schedule(float(trajectory.t[0]), float(trajectory.t[-1]))

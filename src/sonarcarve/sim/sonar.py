@@ -29,12 +29,12 @@ from dataclasses import dataclass, fields, replace
 from enum import IntEnum
 
 import numpy as np
-import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.sim.robot import RobotDescription
+from sonarcarve.robot import RobotDescription
 from sonarcarve.sim.world import World
+from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "DEFAULT_PHYSICS",
@@ -47,9 +47,6 @@ __all__ = [
     "fire_sonars",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Kind code of a firing that heard nothing.
 NO_ECHO = -1

@@ -37,6 +37,7 @@ import numpy.typing as npt
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import finite_number, load_json, load_yaml
+from sonarcarve.typing import BoolArray, FloatArray
 
 __all__ = [
     "World",
@@ -50,8 +51,6 @@ __all__ = [
     "write_world_json",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Ray/wall (or point/wall) pairs evaluated at once; bounds the temporaries to a few tens of MB.
 _PAIRS_PER_CHUNK = 1 << 19

@@ -1,0 +1,184 @@
+"""Robot descriptions: the built-in rings match their documented layouts; bad files fail clearly."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, RobotError, load_robot
+
+GOOD_YAML = """\
+name: two-eyes
+robot_radius: 0.2
+range_resolution: 0.01
+min_range: 0.1
+max_range: 4.0
+firing_period: 0.05
+beam_width_deg: 30
+sensors:
+  - {x: 0.2, y: 0.0, bearing_deg: 0}
+  - {x: 0.0, y: 0.2, bearing_deg: 90, beam_width_deg: 10}
+"""
+
+
+@pytest.mark.parametrize("name", BUILTIN_ROBOTS)
+def test_every_builtin_robot_loads(name: str) -> None:
+    robot = load_robot(name)
+    assert robot.n_sensors > 0
+    assert robot.max_range > robot.min_range >= 0.0
+    assert np.all((robot.beam_width > 0) & (robot.beam_width < math.pi))
+    assert sorted(set(robot.firing_order.tolist())) == list(range(robot.n_sensors))
+    assert robot.description
+
+
+def test_scout2_is_the_papers_ring() -> None:
+    robot = load_robot("scout2")
+    assert robot.n_sensors == 16
+    # Equally spaced 22.5 degrees apart, on a 0.41 m diameter body, 22.5 degree beams.
+    steps = np.diff(np.unwrap(robot.bearing))
+    np.testing.assert_allclose(np.mod(steps, 2 * math.pi), math.radians(22.5), atol=1e-12)
+    np.testing.assert_allclose(np.hypot(robot.mount_x, robot.mount_y), 0.41 / 2, atol=1e-3)
+    np.testing.assert_allclose(np.arctan2(robot.mount_y, robot.mount_x),
+                               np.angle(np.exp(1j * robot.bearing)), atol=1e-3)
+    np.testing.assert_allclose(robot.beam_width, math.radians(22.5))
+    assert robot.range_resolution == pytest.approx(0.0254)  # one inch
+    np.testing.assert_array_equal(robot.firing_order, np.arange(16))
+
+
+def test_p3dx_and_robond_bearings() -> None:
+    p3dx = load_robot("p3dx-front")
+    assert sorted(np.round(np.degrees(p3dx.bearing), 9)) == [-90, -50, -30, -10, 10, 30, 50, 90]
+    nd = load_robot("roboND-8")
+    np.testing.assert_allclose(np.degrees(nd.bearing),
+                               [-90, -37.5, -22.5, -7.5, 7.5, 22.5, 37.5, 90])
+    np.testing.assert_array_equal(nd.mount_x, 0.0)
+    np.testing.assert_array_equal(nd.mount_y, 0.0)
+    assert (nd.min_range, nd.max_range) == (0.17, 5.0)
+
+
+def test_yaml_file_loads_with_defaults_and_overrides(tmp_path: Path) -> None:
+    path = tmp_path / "two.yaml"
+    path.write_text(GOOD_YAML)
+    robot = load_robot(path)
+    assert robot.name == "two-eyes"
+    np.testing.assert_allclose(robot.beam_width, np.radians([30, 10]))
+    np.testing.assert_array_equal(robot.firing_order, [0, 1])
+    assert robot.cycle_time == pytest.approx(0.1)
+
+
+def test_firing_schedule_cycles_through_the_order() -> None:
+    robot = load_robot("p3dx-front")
+    times, sensors = robot.firing_schedule(1.0, 1.0 + 0.04 * 20)
+    assert times.shape == (21,)
+    np.testing.assert_allclose(np.diff(times), 0.04)
+    assert times[0] == 1.0
+    np.testing.assert_array_equal(sensors, np.arange(21) % 8)
+
+
+def test_sensor_poses_rotate_mounts_with_the_heading() -> None:
+    robot = RobotDescription(
+        name="t", mount_x=np.array([0.2]), mount_y=np.array([0.1]), bearing=np.array([0.5]),
+        beam_width=np.array([0.3]), firing_order=np.array([0]), firing_period=0.1,
+        range_resolution=0.0, min_range=0.1, max_range=5.0, robot_radius=0.25)
+    # Heading 90 degrees: robot-frame x points to world +y, robot-frame y to world -x.
+    sx, sy, theta = robot.sensor_poses(1.0, 2.0, math.pi / 2, 0)
+    assert float(sx) == pytest.approx(1.0 - 0.1)
+    assert float(sy) == pytest.approx(2.0 + 0.2)
+    assert float(theta) == pytest.approx(math.pi / 2 + 0.5)
+
+
+@pytest.mark.parametrize(
+    ("text", "field"),
+    [
+        (GOOD_YAML.replace("max_range: 4.0\n", ""), "max_range"),
+        (GOOD_YAML.replace("max_range: 4.0", "max_range: far"), "max_range"),
+        (GOOD_YAML.replace("bearing_deg: 90,", "bearing: 90,"), "sensors[1].bearing"),
+        (GOOD_YAML.replace("{x: 0.2, y: 0.0, ", "{x: 0.2, "), "sensors[0].y"),
+        (GOOD_YAML.replace("firing_period: 0.05", "firing_period: 0"), "firing_period"),
+        (GOOD_YAML.replace("min_range: 0.1", "min_range: 5.0"), "min_range"),
+        (GOOD_YAML + "firing_order: [0, 7]\n", "firing_order"),
+        (GOOD_YAML + "colour: red\n", "colour"),
+        (GOOD_YAML.replace("beam_width_deg: 30", "beam_width_deg: 200"), "beam_width_deg"),
+        (GOOD_YAML.replace("beam_width_deg: 10", "beam_width_deg: 0"), "sensors[1].beam_width_deg"),
+    ],
+)
+def test_bad_robot_yaml_names_file_and_field(tmp_path: Path, text: str, field: str) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(RobotError) as info:
+        load_robot(path)
+    message = str(info.value)
+    assert "\n" not in message
+    assert str(path) in message
+    assert repr(field) in message
+    assert isinstance(info.value, SonarcarveError)
+
+
+def test_broken_yaml_syntax_names_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: x\nsensors: [\n  - {x: 1\n")
+    with pytest.raises(RobotError, match=r"broken\.yaml: line \d+"):
+        load_robot(path)
+
+
+def test_unknown_name_and_missing_file() -> None:
+    with pytest.raises(RobotError, match=r"unknown robot 'nomad'.*scout2"):
+        load_robot("nomad")
+    with pytest.raises(RobotError, match=r"missing/robot\.yaml: no such file"):
+        load_robot("missing/robot.yaml")
+
+
+@pytest.mark.parametrize(
+    ("order", "problem"),
+    [
+        ("[0, 1, 0]", "lists sensor 0 2 times; list each of 0..1 once"),
+        ("[1, 1]", "lists sensor 1 2 times; list each of 0..1 once"),
+        ("[1]", "leaves out sensor 0; list each of 0..1 once"),
+    ],
+)
+def test_firing_order_must_fire_each_sensor_once(tmp_path: Path, order: str,
+                                                 problem: str) -> None:
+    path = tmp_path / "ring.yaml"
+    path.write_text(GOOD_YAML + f"firing_order: {order}\n")
+    with pytest.raises(RobotError) as info:
+        load_robot(path)
+    assert str(info.value) == f"{path}: field 'firing_order' {problem}"
+
+
+def test_firing_order_lists_every_sensor_left_out() -> None:
+    with pytest.raises(RobotError) as info:
+        RobotDescription(
+            name="ring", mount_x=np.zeros(5), mount_y=np.zeros(5), bearing=np.zeros(5),
+            beam_width=np.full(5, 0.3), firing_order=np.array([3, 0]), firing_period=0.1,
+            range_resolution=0.0, min_range=0.1, max_range=5.0, robot_radius=0.2)
+    assert str(info.value) == ("ring: field 'firing_order' leaves out sensors 1, 2, 4; list each "
+                               "of 0..4 once")
+
+
+def test_robot_file_problems_use_the_shared_wording(tmp_path: Path) -> None:
+    with pytest.raises(RobotError) as info:
+        load_robot(tmp_path)
+    assert str(info.value) == f"{tmp_path}: is a directory"
+    with pytest.raises(RobotError) as info:
+        load_robot(tmp_path / "robot.yml")
+    assert str(info.value) == f"{tmp_path / 'robot.yml'}: no such file"
+    path = tmp_path / "big.yaml"
+    path.write_text(GOOD_YAML.replace("max_range: 4.0", f"max_range: {10**400}"))
+    with pytest.raises(RobotError, match=r"field 'max_range' must be a finite number, got 1000"):
+        load_robot(path)
+
+
+def test_firing_schedule_refuses_more_than_max_firings() -> None:
+    robot = load_robot("scout2")  # fires every 0.04 s
+    # One week: 604,800 s / 0.04 s = 15,120,000 intervals, 15,120,001 firings > 1e7.
+    with pytest.raises(RobotError) as info:
+        robot.firing_schedule(0.0, 604_800.0)
+    assert str(info.value) == ("scout2: firing every 0.04 s from t = 0 s to 604800 s takes "
+                               "1.512e+07 firings, more than the limit of 10,000,000 "
+                               "(MAX_FIRINGS)")
+    with pytest.raises(RobotError, match="MAX_FIRINGS"):
+        robot.firing_schedule(0.0, math.inf)
