@@ -12,7 +12,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install -q --upgrade pip
 
 $(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install -q -e .
+	$(BIN)/python -m pip install -q -e '.[all]'
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
@@ -22,16 +22,18 @@ $(TEST_STAMP): pyproject.toml | $(BIN)/python
 demo: $(STAMP)  ## simulate an office tour, map it with every method, print the table, write figures
 	$(BIN)/sonarcarve demo --out demo-output
 
-test: $(TEST_STAMP)  ## lint, type-check and run the whole test suite (slow experiment runs excluded)
+test: $(TEST_STAMP)  ## lint, type-check, check the import contracts, run the tests and doctests (slow runs excluded)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -n 2 -m "not slow" -q
 
 experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESULTS.md numbers and docs/figures
 	$(BIN)/sonarcarve experiments --out docs/experiments --figures docs/figures --results-md docs/RESULTS.md
 	$(BIN)/python -m pytest -m slow -q
 
-bench: $(STAMP)  ## every benchmark: throughput, simulator speed, parameter choices (tables for docs/RESULTS.md)
+bench: $(STAMP)  ## every benchmark: throughput, simulator speed, import time, parameter choices (tables for docs/RESULTS.md)
+	$(BIN)/python benchmarks/import_time.py
 	$(BIN)/python benchmarks/throughput.py
 	$(BIN)/python benchmarks/simulate_speed.py
 	$(BIN)/python benchmarks/range_tolerance.py

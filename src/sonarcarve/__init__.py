@@ -9,7 +9,13 @@ from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_read
 from sonarcarve.geometry import CarveOutcome, arc_remainder, carve_arc
 from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
-from sonarcarve.io import read_map_csv, read_readings_csv, write_map_csv, write_readings_csv
+from sonarcarve.io import (
+    read_map_csv,
+    read_readings_csv,
+    read_rosbag,
+    write_map_csv,
+    write_readings_csv,
+)
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
 from sonarcarve.methods import (
     METHODS,
@@ -67,6 +73,7 @@ __all__ = [
     "process_readings",
     "read_map_csv",
     "read_readings_csv",
+    "read_rosbag",
     "write_map_csv",
     "write_readings_csv",
 ]

@@ -119,7 +119,7 @@ def test_root_help_imports_no_command_module() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     loaded = next(line for line in done.stdout.splitlines() if line.startswith("LOADED"))
-    assert loaded == "LOADED ['sonarcarve.cli.app']"
+    assert loaded == "LOADED ['sonarcarve.cli.app', 'sonarcarve.cli.main']"
 
 
 def test_a_command_runs_through_typers_own_runner_too() -> None:

@@ -1,124 +1,30 @@
-"""Command-line interface: a thin layer over library calls.
+"""Command-line interface: a thin layer over library calls (``sonarcarve --help``).
 
-Each command lives in its own module and registers itself on :data:`app`; the list below names
-the module and the command's one-line summary, and the module is imported only when its command
-runs (``sonarcarve --help`` imports none of them). :func:`main` turns every user-fixable error,
-a usage error or a :class:`~sonarcarve.errors.SonarcarveError`, into one line on stderr and
-exit code 2, with no traceback.
+The commands need the ``cli`` extra (typer, rich, PyYAML). :func:`main` is the console entry
+point; without the extra it says what to install, in one line, instead of a traceback.
 """
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import Any
 
-import typer
-from typer._click.exceptions import ClickException, NoArgsIsHelpError
-from typer.exceptions import Abort
-
-from sonarcarve.cli.app import app, lazy_command
-from sonarcarve.errors import SonarcarveError
-
-__all__ = ["app", "main"]
-
-#: Exit code for bad input or usage, as click uses for usage errors.
-EXIT_BAD_INPUT = 2
-
-# One line per command: name, module, and the first paragraph of its help.
-lazy_command("demo", "sonarcarve.cli.demo",
-             "Simulate a robot touring a building, map its sonar readings with every method, "
-             "and compare the maps with the true walls.")
-lazy_command("simulate", "sonarcarve.cli.simulate",
-             "Simulate a sonar log with ground truth: drive a robot through a world, record "
-             "echoes.")
-lazy_command("process", "sonarcarve.cli.process",
-             "Map READINGS.csv with one method and write its global map to --out.")
-lazy_command("convert", "sonarcarve.cli.convert",
-             "Convert a data set's files into the readings CSV "
-             "(t,sensor,x,y,theta,range,beam_width).")
-lazy_command("worlds", "sonarcarve.cli.worlds",
-             "List the simulator's worlds: size, walls, area, gaps (doors, openings), tour "
-             "length.")
-lazy_command("experiments", "sonarcarve.cli.experiments",
-             "Regenerate the paper's experiments (section 5) on the simulator, plus what the "
-             "paper could not measure without ground truth.")
+__all__ = ["main"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI with ``argv`` (default: ``sys.argv[1:]``) and return the exit code.
-
-    A usage error (unknown command or option, missing or malformed value) and a
-    :class:`SonarcarveError` from the library both become one line ``sonarcarve: error: ...``
-    on stderr and exit code 2; nothing prints a traceback for bad input. ``--help`` and
-    ``--version`` exit 0; ``sonarcarve`` alone prints the help and exits 2.
-    """
-    command = typer.main.get_command(app)
-    args = list(sys.argv[1:] if argv is None else argv)
+    """Run the CLI with ``argv`` (default: ``sys.argv[1:]``); return the exit code."""
     try:
-        result = command.main(args=args, prog_name="sonarcarve", standalone_mode=False)
-    except NoArgsIsHelpError:
-        return EXIT_BAD_INPUT  # the help is already printed
-    except ClickException as err:
-        _error(usage_message(err))
-        return EXIT_BAD_INPUT
-    except SonarcarveError as err:
-        _error(str(err))
-        return EXIT_BAD_INPUT
-    except Abort:
-        _error("aborted")
-        return 1
-    except SystemExit as done:  # a broken pipe, as click handles it
-        return done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-    return result if isinstance(result, int) else 0
+        import typer  # noqa: F401  (only to tell a missing extra apart)
+        import yaml  # noqa: F401
+        from rich import console  # noqa: F401
+    except ModuleNotFoundError as err:
+        print(f"sonarcarve: error: the command line needs {err.name}: "
+              "pip install 'sonarcarve[cli]'", file=sys.stderr)
+        return 2
+    from sonarcarve.cli.main import main as run
 
-
-def usage_message(err: ClickException) -> str:
-    """Click's message for ``err`` in plain words on one line, without the final full stop.
-
-    Typer validates values with pydantic, whose message for ``--history abc`` is "Input should
-    be a valid integer, unable to parse string as an integer"; the common cases are reworded
-    as "'abc' is not a whole number".
-    """
-    message = err.format_message()
-    cause = err.__cause__
-    errors = getattr(cause, "errors", None)
-    hint = _hint(err)
-    if callable(errors) and hint:
-        details: list[dict[str, Any]] = errors()
-        plain = _plain_words(details[0]) if details else None
-        if plain is not None:
-            message = f"invalid value for {hint}: {plain}"
-    message = " ".join(message.split()).rstrip(".")
-    return message[:1].lower() + message[1:] if message[1:2].islower() else message
-
-
-def _hint(err: ClickException) -> str | None:
-    given = getattr(err, "param_hint", None)
-    if isinstance(given, str):
-        return given
-    param = getattr(err, "param", None)
-    return str(param.get_error_hint()) if param is not None else None
-
-
-_PLAIN = {
-    "int_parsing": "is not a whole number",
-    "int_from_float": "is not a whole number",
-    "float_parsing": "is not a number",
-    "bool_parsing": "is not true or false",
-}
-
-
-def _plain_words(detail: dict[str, Any]) -> str | None:
-    problem = _PLAIN.get(str(detail.get("type")))
-    if problem is None or "input" not in detail:
-        return None
-    return f"{detail['input']!r} {problem}"
-
-
-def _error(message: str) -> None:
-    # One physical line, whatever the message holds.
-    print(f"sonarcarve: error: {' '.join(message.splitlines())}", file=sys.stderr)
+    return run(argv)
 
 
 if __name__ == "__main__":  # pragma: no cover

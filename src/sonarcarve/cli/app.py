@@ -35,7 +35,7 @@ from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 __all__ = ["app", "console", "err_console", "lazy_command", "progress", "summary_table"]
 
 #: Command name -> (module that registers it, the first paragraph of its help). Filled by
-#: :func:`lazy_command` from ``sonarcarve/cli/__init__.py``.
+#: :func:`lazy_command` from ``sonarcarve/cli/main.py``.
 LAZY_COMMANDS: dict[str, tuple[str, str]] = {}
 
 

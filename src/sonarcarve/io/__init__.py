@@ -1,9 +1,11 @@
-"""File formats at the edges of the library: readings and maps as CSV, and dataset adapters."""
+"""File formats at the edges of the library: readings and maps as CSV, ROS bags, and dataset
+adapters."""
 
 from sonarcarve.io.errors import InputError, OutputError
 from sonarcarve.io.map_csv import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.readings_csv import READINGS_COLUMNS, read_readings_csv, write_readings_csv
 from sonarcarve.io.roboND import RoboNDLog, RoboNDReport, bundled_robond_dir, read_robond
+from sonarcarve.io.rosbag import RosbagLog, RosbagReport, SensorMounts, read_rosbag
 
 __all__ = [
     "MAP_COLUMNS",
@@ -12,10 +14,14 @@ __all__ = [
     "OutputError",
     "RoboNDLog",
     "RoboNDReport",
+    "RosbagLog",
+    "RosbagReport",
+    "SensorMounts",
     "bundled_robond_dir",
     "read_map_csv",
     "read_readings_csv",
     "read_robond",
+    "read_rosbag",
     "write_map_csv",
     "write_readings_csv",
 ]

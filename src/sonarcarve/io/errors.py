@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.extras import require
 
 __all__ = [
     "InputError",
@@ -134,7 +135,7 @@ def parse_yaml(text: str, where: str | Path, error_type: ErrorType = InputError)
         ``<where>: line L, column C: invalid YAML (<reason>)`` (without the place when the YAML
         library gives none).
     """
-    import yaml
+    yaml = require("yaml", "cli", "YAML files (robots, map_server maps)")
 
     try:
         return yaml.safe_load(text)

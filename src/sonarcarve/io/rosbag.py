@@ -37,14 +37,14 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.extras import require
 from sonarcarve.io.errors import InputError
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.robot import RobotDescription
 from sonarcarve.typing import FloatArray
 
 __all__ = [
@@ -53,8 +53,34 @@ __all__ = [
     "RosbagError",
     "RosbagLog",
     "RosbagReport",
+    "SensorMounts",
     "read_rosbag",
 ]
+
+
+class SensorMounts(Protocol):
+    """Where each sensor sits on the robot: what :func:`read_rosbag` needs of a robot
+    description (:class:`~sonarcarve.robot.RobotDescription` is one)."""
+
+    @property
+    def name(self) -> str:
+        """Name for messages."""
+
+    @property
+    def n_sensors(self) -> int:
+        """Number of sensors."""
+
+    @property
+    def mount_x(self) -> FloatArray:
+        """Sensor x in the robot frame (forward), metres, shape (n_sensors,)."""
+
+    @property
+    def mount_y(self) -> FloatArray:
+        """Sensor y in the robot frame (left), metres, shape (n_sensors,)."""
+
+    @property
+    def bearing(self) -> FloatArray:
+        """Sensor axis relative to the robot heading, radians, shape (n_sensors,)."""
 
 
 #: Message type of sonar ranges (ROS 2 spelling; rosbags normalises ROS 1 names to it).
@@ -147,6 +173,7 @@ def _yaw(q: Any) -> float:
 
 def _open_reader(bag: Path) -> Any:
     """An opened AnyReader, or a one-line RosbagError."""
+    require("rosbags", "ros", "ROS bags")
     from rosbags.highlevel import AnyReader, AnyReaderError
     from rosbags.typesys import Stores, get_typestore
 
@@ -250,7 +277,7 @@ def _read_messages(bag: Path, reader: Any, range_topics: list[str],
 
 
 def _number_sensors(bag: Path, ranges: _Ranges, range_topics: list[str],
-                    robot: RobotDescription | None) -> tuple[tuple[str, str], ...]:
+                    robot: SensorMounts | None) -> tuple[tuple[str, str], ...]:
     rank = {topic: i for i, topic in enumerate(range_topics)}
     keys = sorted(set(zip(ranges.topic, ranges.frame, strict=True)),
                   key=lambda k: (rank[k[0]], _natural_key(k[1])))
@@ -273,7 +300,7 @@ def _robot_pose(odom: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArray
 def read_rosbag(
     path: str | Path,
     *,
-    robot: RobotDescription | None = None,
+    robot: SensorMounts | None = None,
     range_topics: Sequence[str] | None = None,
     odom_topic: str | None = None,
     beam_width: float | None = None,
@@ -284,7 +311,7 @@ def read_rosbag(
     ----------
     path : str or Path
         A rosbag1 file (``*.bag``) or a rosbag2 folder.
-    robot : RobotDescription, optional
+    robot : SensorMounts, optional
         Sensor mounts; sensor ``i`` (module notes) takes mount ``i``. Default: every sensor at
         the robot origin facing its heading.
     range_topics : sequence of str, optional
@@ -356,7 +383,7 @@ def read_rosbag(
     return RosbagLog(batch=batch, report=report)
 
 
-def _mounts(robot: RobotDescription | None,
+def _mounts(robot: SensorMounts | None,
             sensor: npt.NDArray[np.int64]) -> tuple[FloatArray, FloatArray, FloatArray]:
     if robot is None:
         zero = np.zeros(sensor.shape, dtype=np.float64)
