@@ -65,29 +65,7 @@ def chord_error(r: npt.ArrayLike, width: npt.ArrayLike) -> FloatArray:
 
 @dataclass(frozen=True, eq=False)
 class _PointMap:
-    """Map points as a struct of arrays, shape (n,) each (``xy`` is (n, 2)).
-
-    Attributes
-    ----------
-    reading_id : int64
-        The reading's 0-based position in the input stream.
-    t : float64
-        The reading's time, seconds.
-    sensor : int64
-        The sensor that heard it.
-    xy : float64, shape (n, 2)
-        The point, world frame, metres.
-    source : int8
-        :class:`PointSource` code of the model that placed the point.
-    width : float64
-        Final angular width θ_d of the arc, radians (eq. 5.1); for ATM points the width of the
-        interval spanned by the arc's kept intersections.
-    max_error : float64
-        Upper bound on the point's distance from the true reflection, metres (eq. 5.3 for arcs;
-        see :mod:`sonarcarve.methods.atm` for the ATM bound).
-    range : float64
-        The arc's radius r, metres.
-    """
+    """Map points as a struct of arrays (see :class:`LocalMap` for the fields)."""
 
     reading_id: IntArray
     t: FloatArray
@@ -132,11 +110,42 @@ class _PointMap:
 
 
 class LocalMap(_PointMap):
-    """One point per surviving arc in the history at the moment it was requested."""
+    """One point per surviving arc in the history at the moment it was requested (eq. 3.6).
+
+    Arrays of shape (n,), oldest reading first (``xy`` is (n, 2)). Filter it like any struct
+    of arrays, e.g. ``local.select(local.max_error < 0.15)``; note that an ATM point's bound is
+    ``δ (1/sin ψ + 1/tan ψ)``, 0.144 m at the defaults, so a threshold below that keeps no ATM
+    point.
+
+    Attributes
+    ----------
+    reading_id : int64
+        The reading's 0-based position in the input stream.
+    t : float64
+        The reading's time, seconds.
+    sensor : int64
+        The sensor that heard it.
+    xy : float64, shape (n, 2)
+        The point, world frame, metres.
+    source : int8
+        :class:`PointSource` code of the model that placed the point.
+    width : float64
+        Final angular width θ_d of the arc, radians (eq. 5.1); for ATM points the width of the
+        interval spanned by the arc's kept intersections.
+    max_error : float64
+        Upper bound on the point's distance from the true reflection, metres (eq. 5.3 for arcs;
+        see :mod:`sonarcarve.methods.atm` for the ATM bound).
+    range : float64
+        The arc's radius r, metres.
+    """
 
 
 class GlobalMap(_PointMap):
-    """The final point of every surviving arc of a whole log, in reading order."""
+    """The final point of every surviving arc of a whole log, in reading order (Fig. 7, 13).
+
+    The same fields as :class:`LocalMap`; each point is the arc's state when it left the
+    history. This is what ``sonarcarve process`` writes (the map CSV contract).
+    """
 
 
 class GlobalMapBuilder:
