@@ -209,3 +209,84 @@ def test_pipeline_map_filter_reports_its_drops() -> None:
     assert result.map_filter.outliers == 1
     assert 20 not in result.global_map.reading_id.tolist()
     assert len(result.global_map) == n - 1
+
+
+# -- boundaries, by hand (issue 8): each test fails if a strict comparison turns non-strict ------
+
+
+def _stream_reasons(b: ReadingBatch, spec: ReadingFilter) -> list[DropReason]:
+    stream = ReadingFilterStream(spec)
+    return [stream.check(reading) for reading in b]
+
+
+def test_jump_equal_to_the_threshold_is_kept() -> None:
+    # Appendix B: a sensor is ignored when its range varies "by more than a threshold"; the
+    # docstring: "changes by more than jump_threshold". Every step here is exactly 0.5 (exact in
+    # binary), up and down, so every reading is kept; the last step, 0.5625, is a jump.
+    r = [1.0, 1.5, 2.0, 2.5, 2.0, 1.5, 2.0625]
+    b = _batch([0] * len(r), r)
+    spec = ReadingFilter(jump_threshold=0.5)
+    out = filter_readings(b, spec)
+    assert out.ids.tolist() == [0, 1, 2, 3, 4, 5]
+    assert out.reasons.tolist() == [0, 0, 0, 0, 0, 0, DropReason.JUMP]
+    assert out.report.jumps == 1
+    assert _stream_reasons(b, spec) == [DropReason.KEPT] * 6 + [DropReason.JUMP]
+
+
+def test_jump_just_above_the_threshold_is_dropped() -> None:
+    # 0.25 -> 0.5 is exactly the threshold 0.25 (kept); 0.5 -> 0.75000001 just above (dropped).
+    b = _batch([3, 3, 3], [0.25, 0.5, 0.75000001])
+    spec = ReadingFilter(jump_threshold=0.25)
+    assert filter_readings(b, spec).ids.tolist() == [0, 1]
+    assert _stream_reasons(b, spec) == [DropReason.KEPT, DropReason.KEPT, DropReason.JUMP]
+
+
+def test_range_filters_keep_their_exact_limits_in_both_forms() -> None:
+    # "farther than max_range" and "nearer than min_range" are strict: the limits are kept.
+    r = [0.25, 4.0, 0.2499999, 4.0000001]
+    b = _batch([0, 1, 2, 3], r)
+    spec = ReadingFilter(max_range=4.0, min_range=0.25)
+    out = filter_readings(b, spec)
+    assert out.ids.tolist() == [0, 1]
+    assert (out.report.too_near, out.report.too_far) == (1, 1)
+    assert _stream_reasons(b, spec) == [DropReason.KEPT, DropReason.KEPT, DropReason.TOO_NEAR,
+                                        DropReason.TOO_FAR]
+
+
+def test_max_range_equal_to_min_range_keeps_only_that_range() -> None:
+    b = _batch([0, 0, 0], [1.0, 0.5, 1.5])
+    spec = ReadingFilter(max_range=1.0, min_range=1.0)
+    assert filter_readings(b, spec).ids.tolist() == [0]
+    assert _stream_reasons(b, spec) == [DropReason.KEPT, DropReason.TOO_NEAR, DropReason.TOO_FAR]
+
+
+def test_outlier_filter_by_hand() -> None:
+    # Seven points (ids 10-16): a square of side 0.5, a pair 0.5 apart and a loner:
+    #   id 10 (0, 0)    id 11 (0.5, 0)    id 12 (0, 0.5)    id 13 (0.5, 0.5)
+    #   id 14 (3, 3)    id 15 (3.5, 3)    id 16 (9, 0)
+    # R = 0.5: each corner of the square has two others at exactly 0.5 (the diagonal, 0.707,
+    # is out); 14 and 15 have one each; 16 none.
+    xy = [[0, 0], [0.5, 0], [0, 0.5], [0.5, 0.5], [3, 3], [3.5, 3], [9, 0]]
+    err = [0.0] * 7
+    one = filter_map(_points(GlobalMap, xy, err), MapFilter(outlier_radius=0.5))
+    assert one.points.reading_id.tolist() == [10, 11, 12, 13, 14, 15]
+    assert (one.report.outliers, one.report.kept) == (1, 6)
+    two = filter_map(_points(GlobalMap, xy, err),
+                     MapFilter(outlier_radius=0.5, outlier_neighbours=2))
+    assert two.points.reading_id.tolist() == [10, 11, 12, 13]
+    assert (two.report.outliers, two.report.kept) == (3, 4)
+    three = filter_map(_points(GlobalMap, xy, err),
+                       MapFilter(outlier_radius=0.5, outlier_neighbours=3))
+    assert len(three.points) == 0
+    wider = filter_map(_points(GlobalMap, xy, err),
+                       MapFilter(outlier_radius=0.75, outlier_neighbours=3))
+    assert wider.points.reading_id.tolist() == [10, 11, 12, 13]  # now the diagonal counts
+    assert outlier_mask(xy, 0.4999, 1).tolist() == [False] * 7  # just short of every neighbour
+
+
+def test_max_error_filter_by_hand() -> None:
+    pts = _points(LocalMap, [[0, 0], [1, 0], [2, 0], [3, 0]], [0.25, 0.5, 0.5000001, np.inf])
+    out = filter_map(pts, MapFilter(max_error=0.5))
+    assert type(out.points) is LocalMap
+    assert out.points.reading_id.tolist() == [10, 11]  # the threshold itself is kept
+    assert (out.report.total, out.report.max_error, out.report.outliers) == (4, 2, 0)

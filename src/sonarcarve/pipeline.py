@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import (
     MapFilter,
     MapFilterReport,
@@ -20,7 +21,11 @@ from sonarcarve.maps import GlobalMap
 from sonarcarve.methods.base import SonarMethod
 from sonarcarve.readings import ReadingBatch
 
-__all__ = ["ProcessResult", "process_readings"]
+__all__ = ["ProcessError", "ProcessResult", "process_readings"]
+
+
+class ProcessError(SonarcarveError, ValueError):
+    """A bad argument to :func:`process_readings` (a sampling step < 1, a used method)."""
 
 
 @dataclass(frozen=True)
@@ -86,14 +91,27 @@ def process_readings(
         Reading filters applied before the method; kept readings keep their input row as id.
     map_filter : MapFilter, optional
         Map filters applied to the finished global map.
+
+    Raises
+    ------
+    ProcessError
+        ``sample_every`` < 1, or a method that has already been fed readings.
     """
+    if sample_every is not None and sample_every < 1:
+        # 0 would silently mean the default, and a negative step would process nothing.
+        msg = f"sample_every must be at least 1 reading, got {sample_every}"
+        raise ProcessError(msg)
+    if method.readings:
+        msg = (f"process_readings needs a fresh method; this {method.name} method has "
+               f"already been fed {method.readings} readings")
+        raise ProcessError(msg)
     ids = None
     filter_report = None
     if reading_filter is not None:
         filtered = filter_readings(batch, reading_filter)
         ids, filter_report = filtered.ids, filtered.report
         batch = filtered.batch
-    every = sample_every or max(1, method.history.capacity // 10)
+    every = max(1, method.history.capacity // 10) if sample_every is None else sample_every
     shares: list[float] = []
     seconds = 0.0
     for start in range(0, len(batch), every):

@@ -8,18 +8,21 @@ final angular width (radians), ``max_error`` the bound in metres.
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path
 
 import numpy as np
 
 from sonarcarve.io.atomic import atomic_text
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.maps import GlobalMap, PointSource
 
 __all__ = ["MAP_COLUMNS", "read_map_csv", "write_map_csv"]
 
 MAP_COLUMNS = ("id", "t", "sensor", "x", "y", "source", "width", "max_error")
 _SOURCE_BY_LABEL = {source.label: source for source in PointSource}
+#: Largest id or sensor index read back exactly (int64 and float64 agree up to 2**53).
+_MAX_INDEX = 2**53
 
 
 def write_map_csv(points: GlobalMap, path: str | Path) -> None:
@@ -37,28 +40,70 @@ def write_map_csv(points: GlobalMap, path: str | Path) -> None:
 
 
 def read_map_csv(path: str | Path) -> GlobalMap:
-    """Read a map CSV back (``range`` is not in the file and comes back as NaN)."""
+    """Read a map CSV back (``range`` is not in the file and comes back as NaN).
+
+    Columns after the first eight are ignored: the contract only ever appends new ones.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the line of the first problem: a missing file, a header
+        that does not start with the eight contract columns, a line with too few fields, an
+        ``id`` or ``sensor`` that is not a whole number >= 0, an unknown ``source`` label, a
+        NaN anywhere or an infinite value anywhere but ``max_error`` (ATM's bound may be
+        ``inf``).
+    """
     path = Path(path)
     try:
         with path.open(newline="", encoding="utf-8") as handle:
-            rows = list(csv.reader(handle))
+            reader = csv.reader(handle)
+            rows = [(reader.line_num, row) for row in reader]
     except OSError as err:
         msg = f"{path}: cannot read ({err.strerror})"
         raise InputError(msg) from None
-    if not rows or tuple(name.strip() for name in rows[0]) != MAP_COLUMNS:
+    except (UnicodeDecodeError, csv.Error) as err:
+        msg = f"{path}: cannot read as CSV ({err})"
+        raise InputError(msg) from None
+    while rows and not rows[-1][1]:
+        rows.pop()  # blank lines at the end
+    header = tuple(name.strip() for name in rows[0][1]) if rows else ()
+    if header[: len(MAP_COLUMNS)] != MAP_COLUMNS:
         msg = f"{path}: line 1, expected header {','.join(MAP_COLUMNS)}"
         raise InputError(msg)
     body = rows[1:]
-    try:
-        source = [_SOURCE_BY_LABEL[row[5]] for row in body]
-        numbers = np.array([[float(row[i]) for i in (0, 1, 2, 3, 4, 6, 7)] for row in body])
-    except (KeyError, ValueError, IndexError) as err:
-        msg = f"{path}: malformed row ({err})"
-        raise InputError(msg) from None
-    numbers = numbers.reshape(-1, 7)
+    numbers = np.empty((len(body), 7))
+    source = np.empty(len(body), dtype=np.int8)
+    for k, (line, row) in enumerate(body):
+        where = f"{path}: line {line}"
+        if len(row) < len(MAP_COLUMNS):
+            msg = f"{where} has {len(row)} fields, expected at least {len(MAP_COLUMNS)}"
+            raise InputError(msg)
+        label = row[5].strip()
+        if label not in _SOURCE_BY_LABEL:
+            choices = ", ".join(_SOURCE_BY_LABEL)
+            msg = f"{where}, column 'source' is {label!r}, expected one of {choices}"
+            raise InputError(msg)
+        source[k] = _SOURCE_BY_LABEL[label]
+        for j, i in enumerate((0, 1, 2, 3, 4, 6, 7)):
+            numbers[k, j] = _cell(row[i], where, MAP_COLUMNS[i])
     return GlobalMap(
         reading_id=numbers[:, 0].astype(np.int64), t=numbers[:, 1],
         sensor=numbers[:, 2].astype(np.int64), xy=numbers[:, 3:5].copy(),
-        source=np.array(source, dtype=np.int8).reshape(-1), width=numbers[:, 5],
+        source=source, width=numbers[:, 5],
         max_error=numbers[:, 6], range=np.full(len(body), np.nan),
     )
+
+
+def _cell(text: str, where: str, column: str) -> float:
+    """One numeric cell; ``max_error`` alone may be ``inf`` (an ATM bound with ψ = 0)."""
+    value = parse_number(text, where, column, finite=False)
+    if math.isnan(value):
+        msg = f"{where}, column {column!r} is NaN"
+        raise InputError(msg)
+    if math.isinf(value) and not (column == "max_error" and value > 0):
+        msg = f"{where}, column {column!r} is not finite: {text!r}"
+        raise InputError(msg)
+    if column in ("id", "sensor") and not (0 <= value <= _MAX_INDEX and value.is_integer()):
+        msg = f"{where}, column {column!r} is not a whole number >= 0: {text!r}"
+        raise InputError(msg)
+    return value

@@ -18,7 +18,6 @@ diffs and greps well.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -26,10 +25,10 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.io.atomic import atomic_paths, atomic_text
-from sonarcarve.io.errors import InputError
+from sonarcarve.io.errors import InputError, finite_number
 from sonarcarve.io.readings_csv import write_readings_csv
 from sonarcarve.sim.sonar import EchoKind
-from sonarcarve.sim.world import World
+from sonarcarve.sim.world import World, WorldError
 
 if TYPE_CHECKING:
     from sonarcarve.sim.simulate import Simulation
@@ -147,12 +146,21 @@ def _world(path: Path, value: Any) -> World:
     if not isinstance(value, dict) or not isinstance(value.get("segments"), list):
         msg = f"{path}: 'world' must be an object with 'segments' [[x1, y1, x2, y2], ...]"
         raise InputError(msg)
+    bad = f"{path}: world segments must be rows of four numbers [x1, y1, x2, y2]"
     try:
-        segments = np.array(value["segments"], dtype=np.float64).reshape(-1, 4)
-    except (TypeError, ValueError):
-        msg = f"{path}: world segments must be rows of four numbers [x1, y1, x2, y2]"
+        segments = np.array(value["segments"], dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(bad) from None
+    if segments.size == 0:
+        segments = segments.reshape(0, 4)
+    if segments.ndim != 2 or segments.shape[1] != 4:  # not [[1, 2], [3, 4]] read as one wall
+        raise InputError(bad)
+    name = str(value.get("name", path.name))
+    try:
+        return World(segments, name=name)
+    except WorldError as err:  # its message starts with the world's name, not the file's
+        msg = f"{path}: world {name!r}: {str(err).removeprefix(f'{name}: ')}"
         raise InputError(msg) from None
-    return World(segments, name=str(value.get("name", path.name)))
 
 
 def _reading(path: Path, index: int, row: Any) -> tuple[int, tuple[float, float] | None]:
@@ -160,19 +168,18 @@ def _reading(path: Path, index: int, row: Any) -> tuple[int, tuple[float, float]
     if not isinstance(row, dict):
         msg = f"{where} must be an object {{id, kind, reflection}}"
         raise InputError(msg)
-    if row.get("id") != index:
+    if type(row.get("id")) is not int or row["id"] != index:  # not True, 0.0 or "0"
         msg = f"{where}: id {row.get('id')!r}, expected {index} (ids are CSV rows, in order)"
         raise InputError(msg)
     label = row.get("kind")
-    if label not in _KIND_CODES:
+    if not isinstance(label, str) or label not in _KIND_CODES:
         msg = f"{where}: unknown kind {label!r}; expected one of {', '.join(_KIND_CODES)}"
         raise InputError(msg)
     point = row.get("reflection")
     if point is None:
         return _KIND_CODES[label], None
     if (not isinstance(point, list) or len(point) != 2
-            or not all(isinstance(v, int | float) and not isinstance(v, bool)
-                       and math.isfinite(v) for v in point)):
+            or not all(finite_number(v) is not None for v in point)):
         msg = f"{where}: reflection must be null or [x, y] (finite numbers), got {point!r}"
         raise InputError(msg)
     return _KIND_CODES[label], (float(point[0]), float(point[1]))

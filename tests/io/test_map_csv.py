@@ -1,0 +1,140 @@
+"""The map CSV (design contract): ``id,t,sensor,x,y,source,width,max_error``."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv
+from sonarcarve.maps import GlobalMap, PointSource
+
+HEADER = "id,t,sensor,x,y,source,width,max_error"
+
+
+def _map() -> GlobalMap:
+    return GlobalMap(
+        reading_id=np.array([0, 3, 7], dtype=np.int64),
+        t=np.array([0.0, 0.25, 1.5]),
+        sensor=np.array([2, 0, 15], dtype=np.int64),
+        xy=np.array([[1.0, -2.5], [0.125, 3.0], [-4.0, 0.5]]),
+        source=np.array([PointSource.CENTERLINE, PointSource.CARVED, PointSource.ATM],
+                        dtype=np.int8),
+        width=np.array([0.5, 0.25, 0.0]),
+        max_error=np.array([0.75, 0.0625, math.inf]),
+        range=np.array([3.0, 2.0, 1.0]),
+    )
+
+
+def test_header_is_the_contract() -> None:
+    # The first eight columns keep their names, order and meaning for ever (design.md).
+    assert ",".join(MAP_COLUMNS) == HEADER
+
+
+def test_written_text_by_hand(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    write_map_csv(_map(), path)
+    assert path.read_text(encoding="utf-8") == (
+        "id,t,sensor,x,y,source,width,max_error\n"
+        "0,0.0,2,1.0,-2.5,centerline,0.5,0.75\n"
+        "3,0.25,0,0.125,3.0,carved,0.25,0.0625\n"
+        "7,1.5,15,-4.0,0.5,atm,0.0,inf\n"
+    )
+
+
+def test_empty_map_is_just_the_header(tmp_path: Path) -> None:
+    path = tmp_path / "empty.csv"
+    write_map_csv(GlobalMap.empty(), path)
+    assert path.read_text(encoding="utf-8") == HEADER + "\n"
+    back = read_map_csv(path)
+    assert len(back) == 0
+    assert back.xy.shape == (0, 2)
+
+
+def test_round_trip(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    original = _map()
+    write_map_csv(original, path)
+    back = read_map_csv(path)
+    assert type(back) is GlobalMap
+    assert back.reading_id.tolist() == [0, 3, 7]
+    assert back.reading_id.dtype == np.int64
+    assert back.t.tolist() == [0.0, 0.25, 1.5]
+    assert back.sensor.tolist() == [2, 0, 15]
+    assert back.xy.tolist() == [[1.0, -2.5], [0.125, 3.0], [-4.0, 0.5]]
+    assert back.source_labels() == ["centerline", "carved", "atm"]
+    assert back.source.dtype == np.int8
+    assert back.width.tolist() == [0.5, 0.25, 0.0]
+    assert back.max_error.tolist() == [0.75, 0.0625, math.inf]
+    assert np.isnan(back.range).all()  # not in the file
+
+
+def test_floats_round_trip_exactly(tmp_path: Path) -> None:
+    # Values with no short decimal form, the extremes of float64 and negative zero.
+    values = np.array([0.1, 1 / 3, math.pi, -math.e * 1e-300, 5e-324, 1.7976931348623157e308,
+                       -0.0, 2.0**-52 + 1.0])
+    n = len(values)
+    pts = GlobalMap(reading_id=np.arange(n, dtype=np.int64), t=np.abs(values[::-1]),
+                    sensor=np.zeros(n, np.int64), xy=np.column_stack((values, values[::-1])),
+                    source=np.zeros(n, np.int8), width=np.abs(values), max_error=np.abs(values),
+                    range=np.ones(n))
+    path = tmp_path / "floats.csv"
+    write_map_csv(pts, path)
+    back = read_map_csv(path)
+    for field in ("t", "xy", "width", "max_error"):
+        got, want = getattr(back, field), getattr(pts, field)
+        assert got.tobytes() == want.tobytes(), field  # bit for bit, signed zero included
+
+
+def test_appended_columns_are_ignored(tmp_path: Path) -> None:
+    # "New columns are only ever appended": a reader of today must read tomorrow's file.
+    path = tmp_path / "newer.csv"
+    path.write_text(HEADER + ",confidence\n5,1.0,1,2.0,3.0,carved,0.5,0.25,0.9\n")
+    back = read_map_csv(path)
+    assert back.reading_id.tolist() == [5]
+    assert back.xy.tolist() == [[2.0, 3.0]]
+    assert back.max_error.tolist() == [0.25]
+
+
+GOOD = "0,0.0,2,1.0,-2.5,centerline,0.5,0.75\n"
+
+
+@pytest.mark.parametrize(("text", "where", "problem"), [
+    ("id,t,sensor,x,y,source,width\n0,0.0,2,1.0,-2.5,centerline,0.5\n", "line 1", "header"),
+    ("id,t,sensor,y,x,source,width,max_error\n" + GOOD, "line 1", "header"),
+    ("", "line 1", "header"),
+    (HEADER + "\n" + GOOD + "1,0.0,2,1.0,-2.5,wall,0.5,0.75\n", "line 3", "'wall'"),
+    (HEADER + "\n" + GOOD + GOOD + "2,0.0,2,nan,-2.5,carved,0.5,0.75\n", "line 4", "'x' is NaN"),
+    (HEADER + "\n" + "0,0.0,2,1.0,-2.5,atm,0.5,nan\n", "line 2", "'max_error' is NaN"),
+    (HEADER + "\n" + "0,inf,2,1.0,-2.5,atm,0.5,0.1\n", "line 2", "'t' is not finite"),
+    (HEADER + "\n" + "0,0.0,2,1.0,-2.5,atm,0.5,-inf\n", "line 2", "'max_error' is not finite"),
+    (HEADER + "\n" + "0,0.0,2,1.0,-2.5\n", "line 2", "5 fields"),
+    (HEADER + "\n" + "0,0.0,2,one,-2.5,atm,0.5,0.1\n", "line 2", "'x' is not a number"),
+    (HEADER + "\n" + "1.5,0.0,2,1.0,-2.5,atm,0.5,0.1\n", "line 2", "'id' is not a whole number"),
+    (HEADER + "\n" + "1,0.0,-2,1.0,-2.5,atm,0.5,0.1\n", "line 2", "'sensor' is not a whole"),
+])
+def test_bad_files_fail_with_one_line_naming_file_and_line(
+    tmp_path: Path, text: str, where: str, problem: str
+) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SonarcarveError) as info:
+        read_map_csv(path)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(f"{path}: {where}")
+    assert problem in message
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(SonarcarveError, match=r"absent\.csv"):
+        read_map_csv(tmp_path / "absent.csv")
+
+
+def test_trailing_blank_lines_are_harmless(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    path.write_text(HEADER + "\n" + GOOD + "\n\n")
+    assert read_map_csv(path).reading_id.tolist() == [0]

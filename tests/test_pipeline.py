@@ -1,0 +1,224 @@
+"""process_readings: the whole-log run behind ``sonarcarve process``.
+
+The centerline method is used wherever points must be known by hand: its point is
+``origin + r (cos θ, sin θ)`` (eq. 3.3).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.filters import FilterError, MapFilter, ReadingFilter
+from sonarcarve.maps import GlobalMap
+from sonarcarve.methods import CarvingMethod, CenterlineMethod, Estimates
+from sonarcarve.methods.centerline import CenterlineModel
+from sonarcarve.pipeline import ProcessError, process_readings
+from sonarcarve.readings import ReadingBatch
+from sonarcarve.typing import SlotArray
+
+
+def _row(n: int, ranges: list[float] | None = None) -> ReadingBatch:
+    """Readings k = 0..n-1: sensor at (0.5 k, 0) looking along +y at range 1 (or ``ranges``)."""
+    k = np.arange(n)
+    r = np.ones(n) if ranges is None else np.array(ranges)
+    return ReadingBatch.from_arrays(t=0.1 * k, sensor=k % 2, x=0.5 * k, y=np.zeros(n),
+                                    theta=np.full(n, math.pi / 2), range=r)
+
+
+def test_global_map_is_every_reading_on_its_axis() -> None:
+    result = process_readings(_row(5, [1.0, 2.0, 1.5, 1.0, 3.0]), CenterlineMethod(history_size=2))
+    points = result.global_map
+    assert type(points) is GlobalMap
+    assert points.reading_id.tolist() == [0, 1, 2, 3, 4]
+    np.testing.assert_allclose(points.xy, [[0.0, 1.0], [0.5, 2.0], [1.0, 1.5], [1.5, 1.0],
+                                           [2.0, 3.0]], atol=1e-12)
+    assert points.t.tolist() == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4])
+    assert points.sensor.tolist() == [0, 1, 0, 1, 0]
+    assert points.source_labels() == ["centerline"] * 5
+    assert result.readings == 5
+    assert (result.fully_carved, result.split) == (0, 0)
+    assert result.mean_unprocessed_share == 0.0
+    assert result.reading_filter is None
+    assert result.map_filter is None
+    assert result.seconds >= 0.0
+
+
+def test_global_map_equals_the_method_run_by_hand() -> None:
+    rng = np.random.default_rng(5)
+    n = 57
+    batch = ReadingBatch.from_arrays(t=np.arange(n) * 0.1, sensor=rng.integers(0, 4, n),
+                                     x=rng.normal(size=n), y=rng.normal(size=n),
+                                     theta=rng.uniform(-3, 3, n), range=rng.uniform(0.2, 5, n))
+    result = process_readings(batch, CenterlineMethod(history_size=8), sample_every=5)
+    by_hand = CenterlineMethod(history_size=8)
+    for reading in batch:
+        by_hand.add(reading)
+    expected = by_hand.finish()
+    for field in ("reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range"):
+        np.testing.assert_array_equal(getattr(result.global_map, field), getattr(expected, field))
+    # ... and both are eq. 3.3 applied to the input rows.
+    np.testing.assert_allclose(result.global_map.xy, np.column_stack(
+        (batch.x + batch.range * np.cos(batch.theta), batch.y + batch.range * np.sin(batch.theta))),
+        atol=1e-12)
+    assert result.global_map.reading_id.tolist() == list(range(n))
+
+
+def test_fully_carved_arcs_are_counted_and_left_out() -> None:
+    # Two echoes from one pose along +x, the second farther: the first arc lies in the second's
+    # freespace, so carving removes it (section 3).
+    batch = ReadingBatch.from_arrays(t=[0, 1], sensor=[0, 0], x=[0, 0], y=[0, 0], theta=[0, 0],
+                                     range=[1.0, 3.0])
+    result = process_readings(batch, CarvingMethod(history_size=10))
+    assert (result.fully_carved, result.split) == (1, 0)
+    assert result.global_map.reading_id.tolist() == [1]
+    assert result.readings == 2
+
+
+def test_empty_log() -> None:
+    result = process_readings(ReadingBatch.empty(), CenterlineMethod(history_size=4))
+    assert len(result.global_map) == 0
+    assert result.readings == 0
+    assert result.mean_unprocessed_share == 0.0
+
+
+# -- sampling the unprocessed share -----------------------------------------------------------
+
+
+class _FarModel(CenterlineModel):
+    """Centerline points, but an arc counts as unprocessed while its range exceeds 2 m."""
+
+    def estimates(self, slots: SlotArray) -> Estimates:
+        est = super().estimates(slots)
+        return dataclasses.replace(est, processed=self.history.r[slots] <= 2.0)
+
+
+class _FarMethod(CenterlineMethod):
+    name = "far-is-unprocessed"
+
+    def _make_models(self) -> tuple[CenterlineModel]:
+        return (_FarModel(self.history),)
+
+
+# History of 4; "3" marks an unprocessed arc.
+RANGES = [1.0, 3.0, 1.0, 1.0, 3.0, 3.0, 1.0, 1.0]
+
+
+@pytest.mark.parametrize(("every", "expected"), [
+    # Samples once the history is full (after reading 4), at the end of each chunk:
+    (1, (1 / 4 + 2 / 4 + 2 / 4 + 2 / 4 + 2 / 4) / 5),  # after 4, 5, 6, 7, 8 readings
+    (2, (1 / 4 + 2 / 4 + 2 / 4) / 3),  # after 4, 6, 8: rows 0-3, 2-5, 4-7
+    (4, (1 / 4 + 2 / 4) / 2),  # after 4, 8
+    (3, (2 / 4 + 2 / 4) / 2),  # after 6, 8 (3 < 4: the history is not full yet)
+    (None, (1 / 4 + 2 / 4 + 2 / 4 + 2 / 4 + 2 / 4) / 5),  # default: a tenth of 4, at least 1
+])
+def test_unprocessed_share_is_sampled_every_so_many_readings(every: int | None,
+                                                              expected: float) -> None:
+    result = process_readings(_row(8, RANGES), _FarMethod(history_size=4), sample_every=every)
+    assert result.mean_unprocessed_share == pytest.approx(expected, rel=1e-12)
+    assert result.readings == 8
+    assert len(result.global_map) == 8
+
+
+def test_default_sampling_is_a_tenth_of_the_history() -> None:
+    # History 20: the default step is 2 readings, so progress comes at 2, 4, ..., 24, then 25.
+    calls: list[int] = []
+    process_readings(_row(25), CenterlineMethod(history_size=20), on_progress=calls.append)
+    assert calls == [2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 25]
+
+
+def test_short_log_samples_the_end() -> None:
+    # The history (10) never fills: the share is the one at the end, 2 unprocessed arcs of 3.
+    result = process_readings(_row(3, [1.0, 3.0, 3.0]), _FarMethod(history_size=10))
+    assert result.mean_unprocessed_share == pytest.approx(2 / 3, rel=1e-12)
+
+
+# -- progress -----------------------------------------------------------------------------------
+
+
+def test_progress_counts_input_rows() -> None:
+    calls: list[int] = []
+    process_readings(_row(10), CenterlineMethod(history_size=4), sample_every=4,
+                     on_progress=calls.append)
+    assert calls == [4, 8, 10]
+
+
+def test_progress_counts_dropped_rows_too() -> None:
+    # Rows 3 and 7 are beyond max range: the kept rows are 0 1 2 4 5 6 8 9, in chunks of 3:
+    # (0 1 2) ends at input row 2, (4 5 6) at row 6, (8 9) at row 9; then the total, 10.
+    ranges = [1.0, 1.0, 1.0, 9.0, 1.0, 1.0, 1.0, 9.0, 1.0, 1.0]
+    calls: list[int] = []
+    result = process_readings(_row(10, ranges), CenterlineMethod(history_size=4), sample_every=3,
+                              on_progress=calls.append, reading_filter=ReadingFilter(max_range=5))
+    assert calls == [3, 7, 10, 10]
+    assert result.global_map.reading_id.tolist() == [0, 1, 2, 4, 5, 6, 8, 9]
+
+
+# -- filters ------------------------------------------------------------------------------------
+
+
+def test_reading_filter_report_and_ids() -> None:
+    # sensor 0 (even rows): 1.0 1.0 1.0 4.0 4.0; sensor 1 (odd rows): 0.1 1.0 9.0 1.0 1.0
+    ranges = [1.0, 0.1, 1.0, 1.0, 1.0, 9.0, 4.0, 1.0, 4.0, 1.0]
+    spec = ReadingFilter(max_range=5.0, min_range=0.2, jump_threshold=2.0)
+    result = process_readings(_row(10, ranges), CenterlineMethod(history_size=3), sample_every=2,
+                              reading_filter=spec)
+    report = result.reading_filter
+    assert report is not None
+    # row 1 too near, row 5 too far, row 6 (1.0 -> 4.0) jumps; row 8 agrees with row 6.
+    assert (report.total, report.too_near, report.too_far, report.jumps) == (10, 1, 1, 1)
+    assert report.kept == 7
+    assert result.readings == 7
+    points = result.global_map
+    assert points.reading_id.tolist() == [0, 2, 3, 4, 7, 8, 9]  # input rows, not renumbered
+    np.testing.assert_allclose(points.xy, [[0.0, 1.0], [1.0, 1.0], [1.5, 1.0], [2.0, 1.0],
+                                           [3.5, 1.0], [4.0, 4.0], [4.5, 1.0]], atol=1e-12)
+
+
+def test_map_filter_report() -> None:
+    # A row of points 0.5 m apart at y = 1, but row 3 far away at y = 8 and row 5 inaccurate.
+    ranges = [1.0, 1.0, 1.0, 8.0, 1.0, 1.0, 1.0]
+    batch = _row(7, ranges)
+    width = np.where(np.arange(7) == 5, 3.0, 0.1)  # row 5: a wide beam, a large max_error
+    batch = ReadingBatch.from_arrays(t=batch.t, sensor=batch.sensor, x=batch.x, y=batch.y,
+                                     theta=batch.theta, range=batch.range, beam_width=width)
+    spec = MapFilter(max_error=0.5, outlier_radius=0.6, outlier_neighbours=1)
+    result = process_readings(batch, CenterlineMethod(history_size=3), map_filter=spec)
+    report = result.map_filter
+    assert report is not None
+    # Row 5: 2 sin(3/4) = 1.36 > 0.5 dropped first; then row 3 is alone, and rows 4 and 6
+    # (1 m apart once row 5 is gone) have no neighbour within 0.6 m.
+    assert (report.total, report.max_error, report.outliers, report.kept) == (7, 1, 3, 3)
+    assert result.global_map.reading_id.tolist() == [0, 1, 2]
+    assert result.readings == 7  # map filters drop points, not readings
+
+
+# -- bad arguments ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("every", [0, -1])
+def test_bad_sample_every(every: int) -> None:
+    with pytest.raises(ProcessError, match="sample_every") as info:
+        process_readings(_row(5), CenterlineMethod(history_size=4), sample_every=every)
+    assert isinstance(info.value, SonarcarveError)
+
+
+def test_used_method_is_refused() -> None:
+    method = CenterlineMethod(history_size=4)
+    process_readings(_row(3), method)
+    with pytest.raises(ProcessError, match="fresh method") as info:
+        process_readings(_row(3), method)
+    assert isinstance(info.value, SonarcarveError)
+
+
+def test_bad_filter_parameters_are_sonarcarve_errors() -> None:
+    with pytest.raises(FilterError) as info:
+        ReadingFilter(jump_threshold=-1.0)
+    assert isinstance(info.value, SonarcarveError)
+    with pytest.raises(FilterError) as info:
+        MapFilter(outlier_radius=0.0)
+    assert isinstance(info.value, SonarcarveError)
