@@ -162,7 +162,10 @@ def _reference(resolution: float, bounds: tuple[float, float, float, float],
                model: SonarConeModel, batch: ReadingBatch) -> npt.NDArray[np.float64]:
     """Every cell of the grid against every reading, straight from the model's definition."""
     grid = OccupancyGrid(resolution, bounds, model)
-    xs, ys = grid.cell_centers()
+    # Cell centres from the grid's definition, not from the grid under test.
+    rows, cols = grid.shape
+    xs = bounds[0] + (np.arange(cols) + 0.5) * resolution
+    ys = bounds[1] + (np.arange(rows) + 0.5) * resolution
     band = (resolution + model.range_tolerance) / 2
     l_hit, l_miss, l_min, l_max = (logit(p) for p in (model.p_hit, model.p_miss, model.p_min,
                                                       model.p_max))
