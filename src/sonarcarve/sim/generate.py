@@ -1,6 +1,6 @@
 """World generators: seeded office floors, the paper's scenes, and parametric test worlds.
 
-Every generator returns a :class:`~sonarcarve.sim.world.World` with walls, a collision-free
+Every generator returns a :class:`~sonarcarve.sim.walls.World` with walls, a collision-free
 ``tour`` and the ``openings`` (door and passage gaps). The built-in worlds shipped in
 ``sonarcarve/sim/worlds/`` are the output of :data:`BUILTIN_RECIPES`; regenerate them with
 ``python -c "from sonarcarve.sim.generate import write_builtin_worlds; write_builtin_worlds()"``.
@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sonarcarve.sim.world import World, WorldError, check_seed, write_world_json
+from sonarcarve.sim.walls import World, WorldError, check_seed
+from sonarcarve.sim.world_files import write_world_json
 from sonarcarve.typing import FloatArray
 
 __all__ = [

@@ -1,4 +1,5 @@
-"""Figures of the demo (``sonarcarve demo``), drawn from a :class:`~sonarcarve.lab.demo.DemoResult`.
+"""Figures of the demo (``sonarcarve demo``), drawn from a
+:class:`~sonarcarve.lab.demo.results.DemoResult`.
 
 1. :func:`plot_global_maps`: each method's whole global map over the true walls;
 2. :func:`plot_map_zoom`: the same maps in a window where single points can be seen;
@@ -19,13 +20,13 @@ import numpy as np
 
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import GAP_DEPTH, RANGE_EDGES, passage_clearance
-from sonarcarve.lab.demo import (
+from sonarcarve.lab.demo.doors import DoorApproach, LocalView
+from sonarcarve.lab.demo.results import DemoResult
+from sonarcarve.lab.demo.scenario import (
     APPROACH_DISTANCE,
     CLOSEUP_METHODS,
     METHOD_COLORS,
     METHOD_LABELS,
-    ZOOM_SIZE,
-    DemoResult,
 )
 from sonarcarve.lab.drawing import new_figure, scatter_sources
 from sonarcarve.lab.instrument import ArcTable
@@ -37,8 +38,32 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["plot_door_closeup", "plot_error_by_range", "plot_global_maps", "plot_map_zoom"]
+__all__ = [
+    "FIGURE_FILES",
+    "FIGURE_TEXT",
+    "ZOOM_SIZE",
+    "plot_door_closeup",
+    "plot_error_by_range",
+    "plot_global_maps",
+    "plot_map_zoom",
+]
 
+#: Output files, in the order a reader should look at them.
+FIGURE_FILES = {
+    "global_maps": "fig1-global-maps.png",
+    "map_zoom": "fig2-global-maps-zoom.png",
+    "error_by_range": "fig3-error-vs-range.png",
+    "door_closeup": "fig4-door-local-maps.png",
+}
+#: What each figure shows, in a few words (printed by the CLI, listed in ``summary.md``).
+FIGURE_TEXT = {
+    "global_maps": "each method's final map over the true walls",
+    "map_zoom": "a close-up of those maps (dashed box of fig. 1)",
+    "error_by_range": "map error against the range of the reading",
+    "door_closeup": "the robot's local maps just before a door",
+}
+#: Size of the zoomed window of :func:`plot_map_zoom`, metres (at most the whole map).
+ZOOM_SIZE = (16.0, 11.0)
 
 
 def _walls(ax: Axes, world: World, **style: Any) -> None:
@@ -185,59 +210,69 @@ def plot_door_closeup(result: DemoResult) -> Figure:
     if view is None or not methods:
         axes[0, 0].axis("off")
         return fig
-    sim = result.simulation
-    rx, ry, _ = view.robot
-    focus = np.array([[rx, ry]]) if door is None else np.vstack(([rx, ry], door.jambs))
-    centre = 0.5 * (focus.min(axis=0) + focus.max(axis=0))
-    half = 0.5 * float(np.max(focus.max(axis=0) - focus.min(axis=0))) + 1.6
-    traj = sim.trajectory
-    # The next 2.5 approach distances of the drive: through the door and a little beyond.
-    travelled = traj.distance_at(traj.t)
-    now = float(traj.distance_at(view.t))
-    ahead = (traj.t >= view.t) & (travelled <= now + 2.5 * APPROACH_DISTANCE)
     for ax, method in zip(axes[0], methods, strict=True):
-        local = view.maps[method]
-        _walls(ax, result.world, colors="0.45", linewidths=2.0)
-        ax.plot(traj.x[ahead], traj.y[ahead], color="k", ls=":", lw=1.2, zorder=4,
-                label="path ahead")
-        _local_arcs(ax, sim, local)
-        scatter_sources(ax, local.xy, local.source, 20.0)
-        if door is not None:
-            ax.plot(door.jambs[:, 0], door.jambs[:, 1], color="orange", lw=3.0, ls="--",
-                    zorder=2, label="the door")
-            ax.scatter(door.jambs[:, 0], door.jambs[:, 1], s=110, marker="s",
-                       facecolors="none", edgecolors="darkorange", linewidths=2.2, zorder=5,
-                       label="its jambs")
-        _robot(ax, view.robot, float(sim.robot.robot_radius))
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_aspect("equal")
-        ax.set_xlabel("x (m)")
-        label = METHOD_LABELS.get(method, method)
-        if door is not None:
-            gap = float(np.hypot(*(door.jambs[1] - door.jambs[0])))
-            verdict = "passable" if door.passable[method] else "BLOCKED"
-            ax.set_title(f"{label}: {door.free_width[method]:.2f} m of the {gap:.2f} m door "
-                         f"free, {verdict}", fontsize=11)
-        else:
-            ax.set_title(f"{label}: local map", fontsize=11)
-        ax.legend(loc="lower left", fontsize=7, framealpha=0.9)
+        _closeup_panel(ax, result, view, door, method)
     axes[0, 0].set_ylabel("y (m)")
-    if door is not None:
-        where = (f"{APPROACH_DISTANCE:g} m before driving through a door" if door.how == "through"
-                 else f"{door.distance:.1f} m from a door")
-        need = passage_clearance(float(sim.robot.robot_radius))
-        fig.suptitle(f"What the robot's local map shows {where} (t = {view.t:.0f} s); the "
-                     f"robot needs {need:.2f} m free to pass", fontsize=12)
-    else:
-        fig.suptitle(f"Local maps at mid-tour (t = {view.t:.0f} s); the tour approaches no door",
-                     fontsize=12)
+    fig.suptitle(_closeup_title(result, view, door), fontsize=12)
     fig.text(0.5, 0.01, "Dots: one point per reading in the history; faint arcs: where each "
              "reading's echo can still have come from (carving shrinks them); free = widest "
              f"stretch of the door with no point within {GAP_DEPTH:g} m of it",
              ha="center", va="bottom", fontsize=9, color="0.25")
     _leave_margin(fig, bottom=0.04)
     return fig
+
+
+def _closeup_panel(ax: Axes, result: DemoResult, view: LocalView, door: DoorApproach | None,
+                   method: str) -> None:
+    """One panel of fig. 4: ``method``'s local map, the path ahead, the door and the robot."""
+    sim = result.simulation
+    traj = sim.trajectory
+    # The next 2.5 approach distances of the drive: through the door and a little beyond.
+    travelled = traj.distance_at(traj.t)
+    now = float(traj.distance_at(view.t))
+    ahead = (traj.t >= view.t) & (travelled <= now + 2.5 * APPROACH_DISTANCE)
+    local = view.maps[method]
+    _walls(ax, result.world, colors="0.45", linewidths=2.0)
+    ax.plot(traj.x[ahead], traj.y[ahead], color="k", ls=":", lw=1.2, zorder=4,
+            label="path ahead")
+    _local_arcs(ax, sim, local)
+    scatter_sources(ax, local.xy, local.source, 20.0)
+    if door is not None:
+        ax.plot(door.jambs[:, 0], door.jambs[:, 1], color="orange", lw=3.0, ls="--",
+                zorder=2, label="the door")
+        ax.scatter(door.jambs[:, 0], door.jambs[:, 1], s=110, marker="s",
+                   facecolors="none", edgecolors="darkorange", linewidths=2.2, zorder=5,
+                   label="its jambs")
+    _robot(ax, view.robot, float(sim.robot.robot_radius))
+    # A square around the robot and the door's jambs, 1.6 m beyond the farther of them.
+    rx, ry, _ = view.robot
+    focus = np.array([[rx, ry]]) if door is None else np.vstack(([rx, ry], door.jambs))
+    centre = 0.5 * (focus.min(axis=0) + focus.max(axis=0))
+    half = 0.5 * float(np.max(focus.max(axis=0) - focus.min(axis=0))) + 1.6
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    label = METHOD_LABELS.get(method, method)
+    if door is not None:
+        gap = float(np.hypot(*(door.jambs[1] - door.jambs[0])))
+        verdict = "passable" if door.passable[method] else "BLOCKED"
+        ax.set_title(f"{label}: {door.free_width[method]:.2f} m of the {gap:.2f} m door "
+                     f"free, {verdict}", fontsize=11)
+    else:
+        ax.set_title(f"{label}: local map", fontsize=11)
+    ax.legend(loc="lower left", fontsize=7, framealpha=0.9)
+
+
+def _closeup_title(result: DemoResult, view: LocalView, door: DoorApproach | None) -> str:
+    """Fig. 4's title: where the robot is, and how much free width it needs."""
+    if door is None:
+        return f"Local maps at mid-tour (t = {view.t:.0f} s); the tour approaches no door"
+    where = (f"{APPROACH_DISTANCE:g} m before driving through a door" if door.how == "through"
+             else f"{door.distance:.1f} m from a door")
+    need = passage_clearance(float(result.simulation.robot.robot_radius))
+    return (f"What the robot's local map shows {where} (t = {view.t:.0f} s); the "
+            f"robot needs {need:.2f} m free to pass")
 
 
 def _robot(ax: Axes, pose: tuple[float, float, float], radius: float) -> None:

@@ -1,0 +1,138 @@
+"""What a demo measured: one :class:`MethodSummary` per method and the whole :class:`DemoResult`.
+
+These records are what the table (:mod:`~sonarcarve.lab.demo.table`) and the figures
+(:mod:`~sonarcarve.lab.demo.figures`) are drawn from; :func:`~sonarcarve.lab.demo.run_demo`
+makes them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from sonarcarve.lab.demo.doors import DoorApproach, LocalView
+from sonarcarve.lab.demo.scenario import METHOD_LABELS
+from sonarcarve.lab.output import json_ready
+from sonarcarve.maps import GlobalMap
+from sonarcarve.methods import MethodConfig
+from sonarcarve.sim.simulate import Simulation
+from sonarcarve.sim.world import World
+from sonarcarve.typing import FloatArray
+
+__all__ = ["DemoResult", "MethodSummary"]
+
+
+@dataclass(frozen=True)
+class MethodSummary:
+    """One row of the demo table: one method over the whole tour.
+
+    Attributes
+    ----------
+    method : str
+        CLI name (``centerline``, ``atm``, ``carve``, ``combined``).
+    readings : int
+        Readings the method processed.
+    unprocessed_pct : float
+        Mean share of the history not yet processed, percent (Table I): over snapshots every
+        :data:`~sonarcarve.lab.demo.scenario.SAMPLE_EVERY` readings once the history is full
+        (all snapshots if it never is).
+        Arcs carving removed stay in the history and count as processed (the library's
+        measure); the paper's history drops them.
+    median_error_m, p90_error_m : float
+        Median and 90th percentile distance of the global map's points to the true walls, m.
+    fully_carved_pct : float
+        Share of all readings whose arc carving emptied completely, percent (section 5-C).
+    spurious_removed_pct : float
+        Of the spurious readings (crosstalk, floor and multipath echoes), the share the method
+        left out of its map (fully carved, or split and dropped), percent; NaN if there were no
+        spurious readings.
+    true_lost_pct : float
+        Of the direct readings (true echoes off a wall), the share left out the same way,
+        percent; NaN if there were none.
+    map_points : int
+        Points in the global map.
+    seconds : float
+        Time spent inside the method (snapshots excluded), seconds.
+    """
+
+    method: str
+    readings: int
+    unprocessed_pct: float
+    median_error_m: float
+    p90_error_m: float
+    fully_carved_pct: float
+    spurious_removed_pct: float
+    true_lost_pct: float
+    map_points: int
+    seconds: float
+
+    @property
+    def label(self) -> str:
+        """The method's display name."""
+        return METHOD_LABELS.get(self.method, self.method)
+
+    @property
+    def readings_per_second(self) -> float:
+        """Throughput of the method on this tour."""
+        return self.readings / self.seconds if self.seconds > 0.0 else math.inf
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready (NaN and inf become None)."""
+        row: dict[str, Any] = {"method": self.method, "label": self.label}
+        for name in ("readings", "unprocessed_pct", "median_error_m", "p90_error_m",
+                     "fully_carved_pct", "spurious_removed_pct", "true_lost_pct", "map_points",
+                     "seconds", "readings_per_second"):
+            row[name] = json_ready(getattr(self, name))
+        return row
+
+
+@dataclass(frozen=True, eq=False)
+class DemoResult:
+    """Everything :func:`run_demo` measured, ready for the table and the figures.
+
+    Attributes
+    ----------
+    world : World
+        The simulated world.
+    seed : int
+        Simulation seed.
+    config : MethodConfig
+        The methods' parameters.
+    simulation : Simulation
+        The readings and their ground truth.
+    methods : tuple of MethodSummary
+        One row per method, in :data:`~sonarcarve.lab.demo.scenario.DEMO_METHODS` order.
+    global_maps : dict of str to GlobalMap
+        Method -> its global map.
+    map_errors : dict of str to ndarray
+        Method -> distance of each global map point to the true walls, metres, shape (points,).
+    doors : tuple of DoorApproach
+        Every door the tour approaches, in tour order.
+    closeup : DoorApproach or None
+        The door shown in the close-up figure (None when the tour approaches none).
+    fallback_view : LocalView or None
+        Local maps at mid-tour, for the close-up when there is no door.
+    seconds : dict of str to float
+        Wall time per step (``simulate``, each method incl. its snapshots, ``measure``).
+    """
+
+    world: World
+    seed: int
+    config: MethodConfig
+    simulation: Simulation
+    methods: tuple[MethodSummary, ...]
+    global_maps: dict[str, GlobalMap]
+    map_errors: dict[str, FloatArray]
+    doors: tuple[DoorApproach, ...]
+    closeup: DoorApproach | None
+    fallback_view: LocalView | None
+    seconds: dict[str, float]
+
+    def summary(self, method: str) -> MethodSummary:
+        """The table row of ``method``."""
+        for row in self.methods:
+            if row.method == method:
+                return row
+        msg = f"no method {method!r} in this demo"
+        raise KeyError(msg)

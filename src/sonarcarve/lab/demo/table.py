@@ -1,0 +1,152 @@
+"""The demo's table and summaries: the printed table, its caption, ``summary.md``, ``summary.json``.
+
+Pure text from a :class:`~sonarcarve.lab.demo.results.DemoResult`; the CLI prints the table
+(:func:`table_rows`, :func:`caption`) and :func:`~sonarcarve.lab.demo.outputs.write_demo_outputs`
+writes the summaries.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
+from sonarcarve.lab.demo.results import DemoResult, MethodSummary
+from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE
+from sonarcarve.lab.output import json_ready
+
+__all__ = ["TABLE_COLUMNS", "caption", "summary_json", "summary_markdown", "table_rows"]
+
+
+def _pct(value: float) -> str:
+    return "–" if math.isnan(value) else f"{value:.1f}"
+
+
+def _rate(value: float) -> str:
+    if not math.isfinite(value):
+        return "–"
+    return f"{value / 1000.0:,.0f}k" if value >= 10_000.0 else f"{value:,.0f}"
+
+
+def _cm(value: float) -> str:
+    return "–" if math.isnan(value) else f"{100.0 * value:.1f}"
+
+
+#: Table columns: (key, header as printed with line breaks, unit-free description).
+TABLE_COLUMNS = (
+    ("method", "method", "sonar processing method"),
+    ("readings", "readings", "sonar readings processed"),
+    ("unprocessed_pct", "unpro-\ncessed\n%",
+     "mean share of the history not yet processed (arcs carving removed count as processed)"),
+    ("median_error_m", "median\nerror\ncm", "median distance of map points to the true walls"),
+    ("p90_error_m", "p90\nerror\ncm", "90th percentile of that distance"),
+    ("fully_carved_pct", "fully\ncarved\n%", "readings whose whole arc was carved away"),
+    ("spurious_removed_pct", "spurious\nremoved\n%",
+     "of the spurious readings, share left out of the map"),
+    ("true_lost_pct", "true\nlost\n%", "of the true wall echoes, share left out of the map"),
+    ("map_points", "map\npoints", "points in the final map"),
+    ("readings_per_second", "readings\nper s", "processing speed"),
+)
+
+
+def table_rows(result: DemoResult) -> tuple[list[str], list[list[str]]]:
+    """Header (with line breaks) and cells of the demo table, as printed and in ``summary.md``."""
+    header = [title for _, title, _ in TABLE_COLUMNS]
+    rows = [[row.label, f"{row.readings:,}", _pct(row.unprocessed_pct), _cm(row.median_error_m),
+             _cm(row.p90_error_m), _pct(row.fully_carved_pct), _pct(row.spurious_removed_pct),
+             _pct(row.true_lost_pct), f"{row.map_points:,}", _rate(row.readings_per_second)]
+            for row in result.methods]
+    return header, rows
+
+
+def caption(result: DemoResult) -> str:
+    """How to read the table, in plain words, with this run's numbers (one paragraph)."""
+    sim = result.simulation
+    kinds = sim.kind_counts()
+    spurious = sum(v for k, v in kinds.items() if k != "direct")
+    parts = [
+        f"How to read: every method mapped the same {len(sim.readings):,} readings "
+        f"({spurious:,} of them spurious echoes) of a {sim.trajectory.path_length:.0f} m "
+        f"simulated tour of '{result.world.name}'. Error is the distance from a map point to "
+        "the true walls; unprocessed is the share of the history still waiting for a later "
+        "reading to refine it (latency). Lower is better for both."
+    ]
+    names = {row.method for row in result.methods}
+    if "centerline" in names:
+        base = result.summary("centerline")
+        for method, name in (("carve", "Carving"), ("atm", "ATM"), ("combined", "Combined")):
+            if method in names:
+                parts.append(_compare(name, result.summary(method), base))
+    carve = result.summary("carve") if "carve" in names else None
+    if carve is not None and math.isfinite(carve.spurious_removed_pct + carve.true_lost_pct):
+        parts.append(f"Carving left out {carve.spurious_removed_pct:.0f}% of the spurious "
+                     f"readings, but also {carve.true_lost_pct:.0f}% of the true ones.")
+    return " ".join(parts)
+
+
+def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
+    """"Carving: points 2.0x closer to the walls than centerline (...), 22% unprocessed."."""
+    ratio = base.median_error_m / row.median_error_m if row.median_error_m > 0.0 else math.nan
+    if not math.isfinite(ratio):
+        how = "no points to compare"
+    elif ratio >= 1.05:
+        how = f"points {ratio:.1f}x closer to the walls than centerline's"
+    elif ratio <= 1.0 / 1.05:
+        how = f"points {1.0 / ratio:.1f}x FARTHER from the walls than centerline's"
+    else:
+        how = "points as close to the walls as centerline's"
+    return (f"{name}: {how} (median {_cm(row.median_error_m)} against "
+            f"{_cm(base.median_error_m)} cm), {row.unprocessed_pct:.0f}% of the history "
+            "unprocessed.")
+
+
+def summary_markdown(result: DemoResult) -> str:
+    """``summary.md``: the table, its caption, the figures and how the run was made."""
+    sim = result.simulation
+    header, rows = table_rows(result)
+    header = [title.replace("-\n", "").replace("\n", " ") for title in header]
+    lines = [f"# sonarcarve demo: {result.world.name}, seed {result.seed}", ""]
+    lines.append("| " + " | ".join(header) + " |")
+    lines.append("|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|")
+    lines += ["| " + " | ".join(cells) + " |" for cells in rows]
+    lines += ["", caption(result), "", "Columns:", ""]
+    lines += [f"- {title.replace('-' + chr(10), '').replace(chr(10), ' ')}: {text}"
+              for _, title, text in TABLE_COLUMNS[1:]]
+    lines += ["", "## Figures", ""]
+    for key, name in FIGURE_FILES.items():
+        lines.append(f"- [{name}]({name}): {FIGURE_TEXT[key]}")
+    lines += ["", "## Run", "",
+              f"- world: {result.world.name}; seed {result.seed}; history "
+              f"{result.config.history_size} arcs; tour {sim.trajectory.path_length:.0f} m in "
+              f"{sim.trajectory.duration:.0f} s",
+              f"- robot: {sim.robot.name}; readings per kind: "
+              + ", ".join(f"{k} {v:,}" for k, v in sim.kind_counts().items()),
+              "- seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()), ""]
+    return "\n".join(lines)
+
+
+def summary_json(result: DemoResult) -> str:
+    """``summary.json``: settings, one record per method, the doors, timings."""
+    sim = result.simulation
+    data: dict[str, Any] = {
+        "world": result.world.name,
+        "seed": result.seed,
+        "robot": sim.robot.name,
+        "history_size": result.config.history_size,
+        "tour_m": sim.trajectory.path_length,
+        "tour_s": sim.trajectory.duration,
+        "readings": len(sim.readings),
+        "readings_by_kind": sim.kind_counts(),
+        "methods": [row.as_dict() for row in result.methods],
+        "approach_distance_m": APPROACH_DISTANCE,
+        "doors": [{"opening": d.opening, "how": d.how, "jambs": d.jambs.tolist(),
+                   "readings": d.view.readings, "t": d.view.t,
+                   "distance_m": d.distance,
+                   "free_width_m": d.free_width, "passable": d.passable} for d in result.doors],
+        "closeup_opening": None if result.closeup is None else result.closeup.opening,
+        "caption": caption(result),
+        "figures": list(FIGURE_FILES.values()),
+        "seconds": result.seconds,
+    }
+    return json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n"

@@ -1,0 +1,103 @@
+"""``sonarcarve demo`` in process: the files it writes, what it prints, how it refuses input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from sonarcarve.cli import main
+from sonarcarve.lab.demo import DEMO_METHODS, FIGURE_FILES, METHOD_LABELS
+
+PERCENT_FIELDS = ("unprocessed_pct", "fully_carved_pct", "spurious_removed_pct", "true_lost_pct")
+
+
+def test_cli_writes_every_figure_and_summary(tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "nested" / "demo"
+    assert main(["demo", "--world", "doorway", "--seed", "1", "--out", str(out)]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted([*FIGURE_FILES.values(), "summary.json", "summary.md"])
+    for name in FIGURE_FILES.values():
+        with Image.open(out / name) as png:
+            assert png.format == "PNG"
+            assert min(png.size) >= 400  # a real figure, not an empty canvas
+
+    summary = json.loads((out / "summary.json").read_text())
+    rows = summary["methods"]
+    assert [row["method"] for row in rows] == list(DEMO_METHODS)
+    by_name = {row["method"]: row for row in rows}
+    assert by_name["centerline"]["unprocessed_pct"] == 0.0
+    # Centerline keeps every reading: one point each, nothing removed.
+    assert by_name["centerline"]["map_points"] == summary["readings"]
+    for row in rows:
+        assert row["readings"] == summary["readings"]
+        for name in PERCENT_FIELDS:
+            assert row[name] is None or 0.0 <= row[name] <= 100.0
+        assert 0.0 <= row["median_error_m"] <= row["p90_error_m"]
+        assert row["readings_per_second"] > 0.0
+
+    printed = capsys.readouterr().out
+    table_rows = [line for line in printed.splitlines()
+                  if line.split() and line.split()[0] in METHOD_LABELS.values()]
+    assert [line.split()[0] for line in table_rows] == [METHOD_LABELS[m] for m in DEMO_METHODS]
+    assert "How to read" in printed
+    markdown = (out / "summary.md").read_text()
+    assert sum(line.startswith(f"| {METHOD_LABELS[m]} |") for m in DEMO_METHODS
+               for line in markdown.splitlines()) == len(DEMO_METHODS)
+
+
+def test_cli_help_teaches_the_columns() -> None:
+    from typer.testing import CliRunner
+
+    from sonarcarve.cli.app import app
+
+    result = CliRunner().invoke(app, ["demo", "--help"], terminal_width=100)
+    assert result.exit_code == 0
+    for phrase in ("unprocessed", "spurious removed", "true lost", "Example", "--history"):
+        assert phrase in result.output
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--world", "no-such-world"], "no-such-world"),
+    (["--world", "doorway", "--history", "0"], "--history must be at least 1"),
+])
+def test_cli_bad_input_is_one_line_and_writes_nothing(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str,
+) -> None:
+    fresh = tmp_path / "fresh"
+    assert main(["demo", *args, "--out", str(fresh)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err
+    assert len(err.splitlines()) == 1
+    assert not fresh.exists()
+
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / "mine.txt").write_text("untouched")
+    assert main(["demo", *args, "--out", str(kept)]) == 2
+    assert [p.name for p in kept.iterdir()] == ["mine.txt"]
+    assert (kept / "mine.txt").read_text() == "untouched"
+
+
+def test_cli_out_that_is_a_file_is_refused(tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["demo", "--world", "doorway", "--out", str(blocker / "sub")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    assert blocker.read_text() == "x"
+
+
+def test_cli_world_without_tour_is_refused(tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    walls = tmp_path / "walls.json"
+    walls.write_text('{"name": "box", "segments": [[0, 0, 4, 0], [4, 0, 4, 4]]}')
+    out = tmp_path / "out"
+    assert main(["demo", "--world", str(walls), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "has no tour" in err[0]
+    assert not out.exists()
