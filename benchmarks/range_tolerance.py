@@ -25,7 +25,7 @@ import argparse
 import numpy as np
 
 from sonarcarve import CarvingMethod, CenterlineMethod, GlobalMap, SonarHistory, SonarMethod
-from sonarcarve.methods.base import Estimates, Removal, SlotArray
+from sonarcarve.methods.base import ArcFate, Estimates, SlotArray
 from synthetic import Stream, corridor_stream
 
 
@@ -34,18 +34,18 @@ def _row(label: str, noise: float, stream: Stream, method: SonarMethod) -> str:
     removal = np.zeros(n, dtype=np.int8)
 
     def record(history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
-        if est.removal is not None:
-            removal[history.reading_id[slots]] = est.removal
+        if est.fate is not None:
+            removal[history.reading_id[slots]] = est.fate
 
     method.add_commit_listener(record)
     method.add_many(stream.batch)
     global_map: GlobalMap = method.finish()
     distance = stream.world.distance_to_walls(global_map.xy)
     true = ~stream.spurious
-    fully = removal == Removal.FULLY_CARVED
-    split = removal == Removal.SPLIT
+    fully = removal == ArcFate.FULLY_CARVED
+    split = removal == ArcFate.SPLIT
     true_fully = np.count_nonzero(true & fully) / max(1, np.count_nonzero(true))
-    removed_spurious = (np.count_nonzero(stream.spurious & (removal != Removal.NONE))
+    removed_spurious = (np.count_nonzero(stream.spurious & (removal != ArcFate.ALIVE))
                         / max(1, np.count_nonzero(stream.spurious)))
     return (f"| {noise * 100:.1f} | {label} | {np.median(distance) * 100:.2f} | "
             f"{np.percentile(distance, 90) * 100:.1f} | {np.mean(fully):.3f} | "

@@ -46,7 +46,7 @@ from sonarcarve import MethodConfig, ReadingBatch, make_method
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import SonarHistory
 from sonarcarve.lab.metrics import segment_distance
-from sonarcarve.methods.base import Estimates, Removal, SlotArray
+from sonarcarve.methods.base import ArcFate, Estimates, SlotArray
 from sonarcarve.pipeline import process_readings
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
@@ -98,8 +98,8 @@ def _measure(sim: Simulation, name: str, beta: float) -> Row:
     removal = np.zeros(len(sim.readings), dtype=np.int8)
 
     def record(history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
-        if est.removal is not None:
-            removal[history.reading_id[slots]] = est.removal
+        if est.fate is not None:
+            removal[history.reading_id[slots]] = est.fate
 
     method.add_commit_listener(record)
     result = process_readings(sim.readings, method)
@@ -117,8 +117,8 @@ def _measure(sim: Simulation, name: str, beta: float) -> Row:
         median=float(np.median(distance)),
         p90=float(np.percentile(distance, 90.0)),
         direct_lost=100.0 * float(np.mean(lost[direct])),
-        direct_fully=100.0 * float(np.mean(removal[direct] == Removal.FULLY_CARVED)),
-        direct_split=100.0 * float(np.mean(removal[direct] == Removal.SPLIT)),
+        direct_fully=100.0 * float(np.mean(removal[direct] == ArcFate.FULLY_CARVED)),
+        direct_split=100.0 * float(np.mean(removal[direct] == ArcFate.SPLIT)),
         direct_only_lost=direct_only,
         spurious_removed=100.0 * float(np.mean(lost[~direct])),
         unprocessed=100.0 * result.mean_unprocessed_share,

@@ -40,8 +40,7 @@ from hypothesis import strategies as st
 from sonarcarve.geometry import (
     MIN_PIECE,
     NO_INCIDENCE_LIMIT,
-    ArcStatus,
-    CarveOutcome,
+    ArcFate,
     arc_bounding_circle,
     arc_remainder,
     carve_arc,
@@ -252,12 +251,12 @@ def _check_against_samples(case: Case, beta: float = OFF) -> bool:
     status, new_lo, new_hi = carve_arc(*case, beta)
     runs = sampled.runs()
     if not runs:
-        assert status == CarveOutcome.FULLY_CARVED
+        assert status == ArcFate.FULLY_CARVED
     elif len(runs) >= 2:
-        assert status == CarveOutcome.SPLIT
+        assert status == ArcFate.SPLIT
     else:
         first, last = runs[0]
-        expected = (CarveOutcome.UNCHANGED if sampled.remaining.all() else CarveOutcome.SHRUNK)
+        expected = (ArcFate.UNCHANGED if sampled.remaining.all() else ArcFate.SHRUNK)
         assert status == expected
         assert abs(new_lo - first) <= sampled.step
         assert abs(new_hi - last) <= sampled.step
@@ -286,7 +285,7 @@ def test_generic_cases_are_rarely_ties_and_cover_every_outcome() -> None:
             checked += 1
             outcomes.add(carve_arc(*case)[0])
     assert checked >= 0.9 * 400  # the outcome check is not skipped away
-    assert outcomes == set(CarveOutcome)
+    assert outcomes == set(ArcFate)
 
 
 def test_specular_generic_cases_are_rarely_ties_and_the_angle_matters() -> None:
@@ -301,7 +300,7 @@ def test_specular_generic_cases_are_rarely_ties_and_the_angle_matters() -> None:
         paper, specular = _pieces(case), _pieces(case, beta)
         differs += paper.shape != specular.shape or not np.array_equal(paper, specular)
     assert checked >= 0.9 * 400
-    assert outcomes == set(CarveOutcome)
+    assert outcomes == set(ArcFate)
     assert differs >= 0.1 * 400  # the incidence condition does change the answer
 
 
@@ -342,15 +341,15 @@ def test_outcome_interval_and_pieces_agree(case: Case) -> None:
     if hi - lo >= MIN_PIECE:
         assert np.all(pieces[:, 1] - pieces[:, 0] >= MIN_PIECE)
     if len(pieces) == 0:
-        assert status == CarveOutcome.FULLY_CARVED
+        assert status == ArcFate.FULLY_CARVED
     elif len(pieces) >= 2:
-        assert status == CarveOutcome.SPLIT
+        assert status == ArcFate.SPLIT
     elif (pieces[0, 0], pieces[0, 1]) == (lo, hi):
-        assert (status, new_lo, new_hi) == (CarveOutcome.UNCHANGED, lo, hi)
+        assert (status, new_lo, new_hi) == (ArcFate.UNCHANGED, lo, hi)
     else:
-        assert status == CarveOutcome.SHRUNK
+        assert status == ArcFate.SHRUNK
         assert (new_lo, new_hi) == (pieces[0, 0], pieces[0, 1])
-    if status != CarveOutcome.SHRUNK:
+    if status != ArcFate.SHRUNK:
         assert (new_lo, new_hi) == (lo, hi)
 
 
@@ -401,16 +400,16 @@ def _check_batch_against_scalar(case: Case, beta: float) -> None:
     fully, split = carve_arcs(np.array([1]), x, y, rr, lo_a, hi_a, bounds, status, carved,
                               fx, fy, fr, f_lo, f_hi, eps, beta)
     expected, new_lo, new_hi = carve_arc(*case, beta)
-    assert (fully, split) == (int(expected == CarveOutcome.FULLY_CARVED),
-                              int(expected == CarveOutcome.SPLIT))
-    assert carved[1] == (expected != CarveOutcome.UNCHANGED)
-    if expected == CarveOutcome.SHRUNK:
+    assert (fully, split) == (int(expected == ArcFate.FULLY_CARVED),
+                              int(expected == ArcFate.SPLIT))
+    assert carved[1] == (expected != ArcFate.UNCHANGED)
+    if expected == ArcFate.SHRUNK:
         assert (lo_a[1], hi_a[1]) == (new_lo, new_hi)
         assert np.allclose(bounds[1], arc_bounding_circle(ox, oy, r, new_lo, new_hi))
     else:
         assert (lo_a[1], hi_a[1]) == (lo, hi)
-    alive = expected in (CarveOutcome.UNCHANGED, CarveOutcome.SHRUNK)
-    assert status[1] == (ArcStatus.ALIVE if alive else expected)
+    alive = expected in (ArcFate.UNCHANGED, ArcFate.SHRUNK)
+    assert status[1] == (ArcFate.ALIVE if alive else expected)
     assert lo_a[[0, 2]].tolist() == [lo, lo]
     assert not carved[[0, 2]].any()
     assert status[[0, 2]].tolist() == [0, 0]
@@ -433,24 +432,24 @@ PHI = math.radians(22.5)
 
 def test_same_place_longer_range_fully_carves() -> None:
     assert carve_arc(0.0, 0.0, 1.0, -PHI / 2, PHI / 2, 0.0, 0.0, 1.5, -PHI / 2, PHI / 2)[0] == (
-        CarveOutcome.FULLY_CARVED)
+        ArcFate.FULLY_CARVED)
 
 
 def test_same_place_same_range_survives_the_open_disk() -> None:
     status, lo, hi = carve_arc(1.0, 2.0, 3.0, 0.1, 0.5, 1.0, 2.0, 3.0, 0.1, 0.5)
-    assert (status, lo, hi) == (CarveOutcome.UNCHANGED, 0.1, 0.5)
+    assert (status, lo, hi) == (ArcFate.UNCHANGED, 0.1, 0.5)
 
 
 def test_range_tolerance_shortens_the_freespace() -> None:
     args = (0.0, 0.0, 1.0, -0.2, 0.2, 0.0, 0.0, 1.04, -0.2, 0.2)
-    assert carve_arc(*args, 0.0)[0] == CarveOutcome.FULLY_CARVED
-    assert carve_arc(*args, 0.05)[0] == CarveOutcome.UNCHANGED
+    assert carve_arc(*args, 0.0)[0] == ArcFate.FULLY_CARVED
+    assert carve_arc(*args, 0.05)[0] == ArcFate.UNCHANGED
 
 
 def test_overlapping_beam_from_the_same_place_keeps_the_rest() -> None:
     # The beam [0.05, 0.5] covers the arc [-0.2, 0.2] from 0.05 on: [-0.2, 0.05] remains.
     status, lo, hi = carve_arc(0.0, 0.0, 1.0, -0.2, 0.2, 0.0, 0.0, 2.0, 0.05, 0.5)
-    assert status == CarveOutcome.SHRUNK
+    assert status == ArcFate.SHRUNK
     assert (lo, hi) == (-0.2, pytest.approx(0.05, abs=1e-12))
 
 
@@ -462,10 +461,10 @@ def test_disk_from_elsewhere_cuts_where_the_circles_cross() -> None:
     full = (math.pi - 1.5, math.pi + 1.5)
     pieces = arc_remainder(0.0, 0.0, 1.0, -0.5, 0.5, 1.5, 0.0, 0.7, *full)
     assert pieces == pytest.approx(np.array([[-0.5, -cut], [cut, 0.5]]), abs=1e-12)
-    assert carve_arc(0.0, 0.0, 1.0, -0.5, 0.5, 1.5, 0.0, 0.7, *full)[0] == CarveOutcome.SPLIT
+    assert carve_arc(0.0, 0.0, 1.0, -0.5, 0.5, 1.5, 0.0, 0.7, *full)[0] == ArcFate.SPLIT
     # An arc starting at τ = 0 loses only [0, cut).
     status, lo, hi = carve_arc(0.0, 0.0, 1.0, 0.0, 0.5, 1.5, 0.0, 0.7, *full)
-    assert (status, lo, hi) == (CarveOutcome.SHRUNK, pytest.approx(cut, abs=1e-12), 0.5)
+    assert (status, lo, hi) == (ArcFate.SHRUNK, pytest.approx(cut, abs=1e-12), 0.5)
     # Half the beam, bounded by the ray along -x through (1, 0) = e(0): only (-cut, 0) goes.
     pieces = arc_remainder(0.0, 0.0, 1.0, -0.5, 0.5, 1.5, 0.0, 0.7, math.pi, math.pi + 1.5)
     assert pieces == pytest.approx(np.array([[-0.5, -cut], [0.0, 0.5]]), abs=1e-12)
@@ -475,21 +474,21 @@ def test_tangent_disks_carve_nothing() -> None:
     # Circle r=1 about the origin; disks about (3, 0) of radius 2 (outside) and about (0.5, 0)
     # of radius 0.5 (inside) touch it at one point.
     beam = (math.pi - 0.3, math.pi + 0.3)
-    assert carve_arc(0.0, 0.0, 1.0, -0.3, 0.3, 3.0, 0.0, 2.0, *beam)[0] == CarveOutcome.UNCHANGED
+    assert carve_arc(0.0, 0.0, 1.0, -0.3, 0.3, 3.0, 0.0, 2.0, *beam)[0] == ArcFate.UNCHANGED
     assert carve_arc(0.0, 0.0, 1.0, -0.3, 0.3, 0.5, 0.0, 0.5, -0.3, 0.3)[0] == (
-        CarveOutcome.UNCHANGED)
+        ArcFate.UNCHANGED)
 
 
 def test_zero_length_arc_is_a_point() -> None:
     assert carve_arc(0.0, 0.0, 1.0, 0.1, 0.1, 0.0, 0.0, 2.0, 0.0, 0.3)[0] == (
-        CarveOutcome.FULLY_CARVED)
+        ArcFate.FULLY_CARVED)
     assert carve_arc(0.0, 0.0, 1.0, 0.4, 0.4, 0.0, 0.0, 2.0, 0.0, 0.3)[0] == (
-        CarveOutcome.UNCHANGED)
+        ArcFate.UNCHANGED)
 
 
 def test_no_freespace_within_the_tolerance() -> None:
     assert carve_arc(0.0, 0.0, 0.5, -0.2, 0.2, 0.0, 0.0, 0.04, -0.2, 0.2, 0.05)[0] == (
-        CarveOutcome.UNCHANGED)
+        ArcFate.UNCHANGED)
 
 
 # -- specular-aware carving: hand-made cases ------------------------------------------------------
@@ -510,10 +509,10 @@ def _wall_incidence(tau: float) -> float:
 def test_glancing_reading_does_not_carve_a_head_on_wall() -> None:
     incidences = [_wall_incidence(t) for t in np.linspace(-0.1, 0.1, 101)]
     assert math.radians(39) < min(incidences) < max(incidences) < math.radians(45)
-    assert carve_arc(*WALL)[0] == CarveOutcome.FULLY_CARVED  # the paper loses the wall
+    assert carve_arc(*WALL)[0] == ArcFate.FULLY_CARVED  # the paper loses the wall
     for beta_deg in (17.5, 20.0, 30.0, 39.0):
-        assert carve_arc(*WALL, math.radians(beta_deg)) == (CarveOutcome.UNCHANGED, -0.1, 0.1)
-    assert carve_arc(*WALL, math.radians(46.0))[0] == CarveOutcome.FULLY_CARVED
+        assert carve_arc(*WALL, math.radians(beta_deg)) == (ArcFate.UNCHANGED, -0.1, 0.1)
+    assert carve_arc(*WALL, math.radians(46.0))[0] == ArcFate.FULLY_CARVED
 
 
 def test_critical_angle_inside_the_arc_cuts_where_the_incidence_equals_it() -> None:
@@ -525,7 +524,7 @@ def test_critical_angle_inside_the_arc_cuts_where_the_incidence_equals_it() -> N
         a, b = (m, b) if _wall_incidence(m) < beta else (a, m)
     status, lo, hi = carve_arc(*WALL, beta)
     # Below that τ the incidence is under β and j's free space carves; above, it keeps.
-    assert (status, lo, hi) == (CarveOutcome.SHRUNK, pytest.approx(a, abs=1e-12), 0.1)
+    assert (status, lo, hi) == (ArcFate.SHRUNK, pytest.approx(a, abs=1e-12), 0.1)
     # The cut lies on the inscribed-angle circle through o_i and o_j: radius D / (2 sin β),
     # centre on the bisector y = 0.45 at x = ±(D/2) / tan β.
     px, py = math.cos(lo), math.sin(lo)
@@ -538,15 +537,15 @@ def test_readings_from_the_same_place_carve_at_any_critical_angle() -> None:
     # From the same origin every incidence is 0 (the line of sight is the normal).
     args = (0.0, 0.0, 1.0, -0.2, 0.2, 0.0, 0.0, 1.5, -0.3, 0.3, 0.0)
     for beta in (0.0, 0.1, OFF):
-        assert carve_arc(*args, beta)[0] == CarveOutcome.FULLY_CARVED
+        assert carve_arc(*args, beta)[0] == ArcFate.FULLY_CARVED
 
 
 def test_specular_zero_length_arc_is_a_point() -> None:
     # The point e(0) of the wall above, in j's free space at 42° incidence.
     point = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.9, 3.0, -0.9, -0.5, 0.0)
     assert _wall_incidence(0.0) == pytest.approx(math.atan(0.9))
-    assert carve_arc(*point, math.radians(45.0))[0] == CarveOutcome.FULLY_CARVED
-    assert carve_arc(*point, math.radians(40.0))[0] == CarveOutcome.UNCHANGED
+    assert carve_arc(*point, math.radians(45.0))[0] == ArcFate.FULLY_CARVED
+    assert carve_arc(*point, math.radians(40.0))[0] == ArcFate.UNCHANGED
 
 
 def test_a_tilted_view_can_split_the_arc_in_specular_mode() -> None:

@@ -6,7 +6,7 @@ a ring-buffer history of sonar arcs, with local and global maps and the paper's 
 """
 
 from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
-from sonarcarve.geometry import CarveOutcome, arc_remainder, carve_arc
+from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
 from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.io import (
@@ -38,8 +38,8 @@ __all__ = [
     "DEFAULT_BEAM_WIDTH",
     "DEFAULT_HISTORY_SIZE",
     "METHODS",
+    "ArcFate",
     "AtmMethod",
-    "CarveOutcome",
     "CarvingMethod",
     "CenterlineMethod",
     "CombinedMethod",

@@ -16,12 +16,34 @@ from collections.abc import Callable
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.readings import Reading
 
-__all__ = ["DEFAULT_HISTORY_SIZE", "SonarHistory"]
+__all__ = ["DEFAULT_HISTORY_SIZE", "MAX_HISTORY_SIZE", "SonarHistory", "check_history_size"]
 
 #: The paper's history length (section 5-C: "a history of 250 arcs").
 DEFAULT_HISTORY_SIZE = 250
+
+#: Largest history accepted, arcs: 400 times the paper's. The history itself costs about 100
+#: bytes an arc (10 MB here), so the bound only stops a mistyped size from exhausting memory;
+#: methods whose state grows faster refuse smaller sizes themselves (ATM:
+#: :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES`).
+MAX_HISTORY_SIZE = 100_000
+
+
+def check_history_size(value: object) -> int:
+    """``value`` if it is a valid history size (a whole number, not a bool, in
+    [1, :data:`MAX_HISTORY_SIZE`]), else :class:`~sonarcarve.errors.ConfigError`.
+
+    The one rule for :class:`SonarHistory` and
+    :class:`~sonarcarve.methods.config.MethodConfig`.
+    """
+    if (not isinstance(value, int | np.integer) or isinstance(value, bool)
+            or not 1 <= value <= MAX_HISTORY_SIZE):
+        msg = (f"history_size must be a whole number of arcs in [1, {MAX_HISTORY_SIZE}], "
+               f"got {value!r}")
+        raise ConfigError(msg)
+    return int(value)
 
 
 class SonarHistory:
@@ -37,7 +59,8 @@ class SonarHistory:
     Parameters
     ----------
     capacity : int
-        Number of arcs kept live (the paper's history length, 250 by default).
+        Number of arcs kept live (the paper's history length, 250 by default), in
+        [1, :data:`MAX_HISTORY_SIZE`] (:func:`check_history_size`).
     on_evict : callable, optional
         Called with an int64 array of retired slots, oldest first, before those rows are reused
         and from :meth:`flush`.
@@ -56,10 +79,7 @@ class SonarHistory:
         capacity: int = DEFAULT_HISTORY_SIZE,
         on_evict: Callable[[npt.NDArray[np.int64]], None] | None = None,
     ) -> None:
-        if capacity < 1:
-            msg = f"history capacity must be at least 1, got {capacity}"
-            raise ValueError(msg)
-        self.capacity = capacity
+        self.capacity = check_history_size(capacity)
         self.storage_size = 2 * capacity
         self._on_evict = on_evict
         self.x = np.zeros(self.storage_size)

@@ -106,7 +106,7 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
     """
     import math
 
-    from sonarcarve.geometry import CarveOutcome, carve_arc
+    from sonarcarve.geometry import ArcFate, carve_arc
 
     ax = ax or new_axes(7.0, 5.5)
     half = DEFAULT_BEAM_WIDTH / 2
@@ -118,7 +118,7 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
     lo_i, hi_i = theta_i - half, theta_i + half
     status, new_lo, new_hi = carve_arc(oi[0], oi[1], ri, lo_i, hi_i, oj[0], oj[1], rj,
                                        theta_j - half, theta_j + half)
-    if status != CarveOutcome.SHRUNK:  # the picture is built to show a shrink; keep it honest
+    if status != ArcFate.SHRUNK:  # the picture is built to show a shrink; keep it honest
         msg = f"explainer geometry no longer shrinks the arc (outcome {status})"
         raise RuntimeError(msg)
     artists: list[Any] = []

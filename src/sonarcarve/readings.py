@@ -12,13 +12,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, fields
-from typing import NamedTuple, overload
+from typing import NamedTuple, NoReturn, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ReadingsError
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "Reading",
     "ReadingBatch",
     "ReadingsError",
+    "check_reading",
 ]
 
 #: Largest sensor index accepted. Indices name the sensors of one robot, so anything near this
@@ -34,14 +35,22 @@ __all__ = [
 #: float64, which is how a CSV column is first parsed.
 MAX_SENSOR = 2**31 - 1
 
-
-
-class ReadingsError(SonarcarveError, ValueError):
-    """Readings that break the contract: bad values, missing columns, unsorted times."""
+# The problems a reading can have, worded once for the batch and the single-reading checks.
+_NOT_FINITE = "is NaN or infinite"
+_NOT_POSITIVE = "must be > 0"
+_NEGATIVE = "must be >= 0"
+_NOT_WHOLE = "is not a whole number"
+_TOO_LARGE = f"must be at most {MAX_SENSOR}"
+_BAD_BEAM = "must lie in (0, pi) radians"
+_BACKWARDS = "goes backwards in time"
 
 
 class Reading(NamedTuple):
     """One sonar echo in the world frame.
+
+    A value only: it is checked where it enters a method (:func:`check_reading`, run by
+    ``SonarMethod.add``) or a batch (:meth:`ReadingBatch.validate`), with the same rules and
+    messages.
 
     Attributes
     ----------
@@ -144,9 +153,16 @@ class ReadingBatch:
         merged.validate("concatenated readings")
         return merged
 
-    def validate(self, source: str = "readings", first_line: int | None = None) -> None:
-        """Check shapes and values; raise :class:`ReadingsError` naming the first bad row."""
-        where = _Where(source, first_line)
+    def validate(self, source: str = "readings", first_line: int | None = None,
+                 *, first_id: int | None = None, previous_t: float = -math.inf) -> None:
+        """Check shapes and values; raise :class:`ReadingsError` naming the first bad row.
+
+        The rules are those of :func:`check_reading`, vectorised. The error names
+        ``"{source}: row {i}"``, or ``"{source}: line {i + first_line}"`` with ``first_line``, or
+        ``"reading {i + first_id}"`` with ``first_id`` (a batch fed to a method); ``previous_t``
+        is the time of the reading before the batch (row 0 must not be earlier).
+        """
+        where = _Where(source, first_line, first_id)
         n = len(self.t)
         for f in fields(self):
             if getattr(self, f.name).shape != (n,):
@@ -154,16 +170,16 @@ class ReadingBatch:
                 msg = f"{source}: column {f.name!r} has {size} rows, expected {n}"
                 raise ReadingsError(msg)
         for name in ("t", "x", "y", "theta", "range"):
-            _first_bad(where, name, ~np.isfinite(getattr(self, name)), "is NaN or infinite")
-        _first_bad(where, "range", self.range <= 0.0, "must be > 0")
-        _first_bad(where, "sensor", self.sensor < 0, "must be >= 0")
+            _first_bad(where, name, ~np.isfinite(getattr(self, name)), _NOT_FINITE)
+        _first_bad(where, "range", self.range <= 0.0, _NOT_POSITIVE)
+        _first_bad(where, "sensor", self.sensor < 0, _NEGATIVE)
+        _first_bad(where, "sensor", self.sensor > MAX_SENSOR, _TOO_LARGE)
         width = self.beam_width
         known = ~np.isnan(width)
-        _first_bad(where, "beam_width", known & ~((width > 0.0) & (width < math.pi)),
-                   "must lie in (0, pi) radians")
-        if n > 1:
-            _first_bad(where, "t", np.concatenate([[False], np.diff(self.t) < 0.0]),
-                       "goes backwards in time")
+        _first_bad(where, "beam_width", known & ~((width > 0.0) & (width < math.pi)), _BAD_BEAM)
+        if n > 0:
+            earlier = np.concatenate([[previous_t], self.t[:-1]])
+            _first_bad(where, "t", self.t < earlier, _BACKWARDS)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
@@ -194,11 +210,74 @@ class ReadingBatch:
                                "beam_width": width})
 
 
+def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.inf) -> None:
+    """Check one reading as :meth:`ReadingBatch.validate` checks a row, with the same messages.
+
+    ``t``, ``x``, ``y``, ``theta`` and ``range`` must be finite, ``range > 0``, ``sensor`` a
+    whole number in [0, :data:`MAX_SENSOR`], ``beam_width`` in (0, π) or NaN (the method's
+    default), and ``t`` not earlier than ``previous_t`` (the previous reading's time).
+
+    Cheap: one chain of scalar comparisons in the common case (it runs once per echo); only a
+    reading that fails it is examined field by field for the message.
+
+    Raises
+    ------
+    ReadingsError
+        Naming ``"reading {reading_id}"``, the column and the problem.
+
+    Examples
+    --------
+    >>> check_reading(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0), 0)
+    >>> check_reading(Reading(0.0, 0, 0.0, 0.0, 0.0, -1.0), 17)
+    Traceback (most recent call last):
+    ...
+    sonarcarve.errors.ReadingsError: reading 17, column 'range' must be > 0
+    """
+    t, sensor, x, y, theta, r, width = reading
+    if (previous_t <= t < math.inf and 0.0 < r < math.inf and math.isfinite(x)
+            and math.isfinite(y) and math.isfinite(theta) and type(sensor) is int
+            and 0 <= sensor <= MAX_SENSOR and (width != width or 0.0 < width < math.pi)):
+        return
+    _explain_bad_reading(reading, _Where("", None, reading_id), previous_t)
+
+
+def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> None:
+    """Raise the error of the first problem of ``reading``; return if it has none after all.
+
+    (The fast test in :func:`check_reading` also sends here a whole float or numpy sensor.)
+    """
+    for name in ("t", "x", "y", "theta", "range"):
+        value = getattr(reading, name)
+        if not math.isfinite(value):
+            _raise(where, 0, name, _NOT_FINITE)
+    if reading.range <= 0.0:
+        _raise(where, 0, "range", _NOT_POSITIVE)
+    sensor = reading.sensor
+    try:
+        whole = math.isfinite(sensor) and sensor == math.floor(sensor)
+    except TypeError:
+        whole = False
+    if not whole:
+        _raise(where, 0, "sensor", _NOT_WHOLE)
+    if sensor < 0:
+        _raise(where, 0, "sensor", _NEGATIVE)
+    if sensor > MAX_SENSOR:
+        _raise(where, 0, "sensor", _TOO_LARGE)
+    width = reading.beam_width
+    if not (math.isnan(width) or 0.0 < width < math.pi):
+        _raise(where, 0, "beam_width", _BAD_BEAM)
+    if reading.t < previous_t:
+        _raise(where, 0, "t", _BACKWARDS)
+
+
 class _Where(NamedTuple):
     source: str
     first_line: int | None
+    first_id: int | None = None
 
     def row(self, row: int) -> str:
+        if self.first_id is not None:
+            return f"reading {row + self.first_id}"
         if self.first_line is None:
             return f"{self.source}: row {row}"
         return f"{self.source}: line {row + self.first_line}"
@@ -212,8 +291,8 @@ def _sensor_indices(sensor: npt.ArrayLike, where: _Where) -> IntArray:
     """
     values = np.asarray(sensor).reshape(-1)
     if values.dtype.kind in "iub":
-        _first_bad(where, "sensor", values < 0, "must be >= 0")
-        _first_bad(where, "sensor", values > MAX_SENSOR, f"must be at most {MAX_SENSOR}")
+        _first_bad(where, "sensor", values < 0, _NEGATIVE)
+        _first_bad(where, "sensor", values > MAX_SENSOR, _TOO_LARGE)
         return values.astype(np.int64)
     try:
         numbers = values.astype(np.float64)
@@ -222,13 +301,17 @@ def _sensor_indices(sensor: npt.ArrayLike, where: _Where) -> IntArray:
         raise ReadingsError(msg) from None
     with np.errstate(invalid="ignore"):
         _first_bad(where, "sensor", ~np.isfinite(numbers) | (numbers != np.floor(numbers)),
-                   "is not a whole number")
-    _first_bad(where, "sensor", numbers < 0, "must be >= 0")
-    _first_bad(where, "sensor", numbers > MAX_SENSOR, f"must be at most {MAX_SENSOR}")
+                   _NOT_WHOLE)
+    _first_bad(where, "sensor", numbers < 0, _NEGATIVE)
+    _first_bad(where, "sensor", numbers > MAX_SENSOR, _TOO_LARGE)
     return numbers.astype(np.int64)
 
 
 def _first_bad(where: _Where, column: str, bad: npt.NDArray[np.bool_], problem: str) -> None:
     if bad.any():
-        msg = f"{where.row(int(np.argmax(bad)))}, column {column!r} {problem}"
-        raise ReadingsError(msg)
+        _raise(where, int(np.argmax(bad)), column, problem)
+
+
+def _raise(where: _Where, row: int, column: str, problem: str) -> NoReturn:
+    msg = f"{where.row(row)}, column {column!r} {problem}"
+    raise ReadingsError(msg)

@@ -57,9 +57,13 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
         ([str(corrupt)], str(corrupt)),
         ([str(tmp_path / "absent.csv")], "no such file"),
         ([str(good), "--method", "nonsense"], "unknown method 'nonsense'"),
-        ([str(good), "--history", "0"], "--history must be at least 1"),
-        ([str(good), "--beam-width", "200"], "--beam-width must lie in (0, 180)"),
-        ([str(good), "--range-tolerance", "-1"], "--range-tolerance must be"),
+        ([str(good), "--history", "0"], "history_size must be a whole number of arcs in [1, "),
+        ([str(good), "--history", "100001"], "history_size must be a whole number of arcs"),
+        ([str(good), "--history", "9999"], "history_size too large for ATM"),
+        ([str(good), "--beam-width", "200"], "beam_width must lie in (0, pi) radians"),
+        ([str(good), "--range-tolerance", "-1"], "range_tolerance must be finite and >= 0"),
+        ([str(good), "--min-transversal", "91"], "min_transversal must lie in [0, pi/2]"),
+        ([str(good), "--max-incidence", "-5"], "max_incidence must lie in [0, pi/2]"),
     ]
 
 

@@ -10,8 +10,8 @@ from typing import Any
 import pytest
 
 from sonarcarve.cli import main
-from sonarcarve.lab.appendix import BEGIN_MARKER as APPENDIX_BEGIN
-from sonarcarve.lab.appendix import END_MARKER as APPENDIX_END
+from sonarcarve.lab.report import APPENDIX_BEGIN_MARKER as APPENDIX_BEGIN
+from sonarcarve.lab.report import APPENDIX_END_MARKER as APPENDIX_END
 from sonarcarve.lab.report import BEGIN_MARKER, END_MARKER
 
 METHODS = ("atm", "carving", "combined", "centerline")
@@ -108,5 +108,35 @@ def test_unknown_experiment_is_a_one_line_error(
 def test_help_lists_the_experiments(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["experiments", "--help"]) == 0
     text = capsys.readouterr().out
-    for name in ("office", "t-junction", "openings", "sensitivity"):
+    for name in ("office", "t-junction", "openings", "sensitivity", "polling", "filters",
+                 "real-log", "odometry"):
         assert name in text
+
+
+def test_only_runs_the_named_experiments(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    code = main(["experiments", "--quick", "--only", "real-log", "--only", "odometry,polling",
+                 "--out", str(out)])
+    assert code == 0
+    res = json.loads((out / "results.json").read_text())
+    assert res["meta"]["experiments"] == ["real-log", "odometry", "polling"]
+    assert {"appendix_real_log", "appendix_odometry", "appendix_polling"} <= set(res)
+    assert "table1" not in res
+    assert "appendix_filters" not in res
+    assert res["meta"]["jobs"] == 0  # the appendix experiments plan no method runs
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert pngs == ["appendix-odometry.png", "appendix-polling.png", "appendix-real-log.png"]
+    for name in pngs:
+        assert (out / name).stat().st_size > 10_000
+    assert sorted(p.name for p in out.glob("*.json")) == ["results.json"]
+
+
+def test_only_refuses_to_rewrite_the_results_markdown(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    md = tmp_path / "RESULTS.md"
+    assert main(["experiments", "--quick", "--only", "polling", "--out", str(tmp_path / "o"),
+                 "--results-md", str(md)]) == 2
+    assert "without --only" in capsys.readouterr().err
+    assert not md.exists()
+

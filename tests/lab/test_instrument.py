@@ -12,7 +12,7 @@ from sonarcarve.lab.instrument import (
     sample_points,
     unprocessed_percent,
 )
-from sonarcarve.methods.base import Removal
+from sonarcarve.methods.base import ArcFate
 from sonarcarve.methods.carving import CarvingMethod
 from sonarcarve.methods.centerline import CenterlineMethod
 from sonarcarve.readings import ReadingBatch
@@ -57,7 +57,7 @@ def test_fully_carved_arc_is_dead_in_its_final_row() -> None:
     first = rec.final.select(rec.final.reading_id == 0)
     assert not first.alive[0]
     assert first.processed[0]
-    assert first.removal[0] != Removal.NONE
+    assert first.removal[0] != ArcFate.ALIVE
     assert rec.counters["fully_carved"] == 1
     assert rec.final.alive.tolist() == [False, True]
     # The snapshot still lists both rows (the dead one included) but one map point.

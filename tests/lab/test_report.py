@@ -8,19 +8,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sonarcarve.lab.appendix import BEGIN_MARKER as APPENDIX_BEGIN
-from sonarcarve.lab.appendix import END_MARKER as APPENDIX_END
-from sonarcarve.lab.appendix import AppendixError
 from sonarcarve.lab.experiments import ExperimentResults
+from sonarcarve.lab.experiments.appendix_base import AppendixError
+from sonarcarve.lab.experiments.filters import FiltersResult
 from sonarcarve.lab.output import json_ready
+from sonarcarve.lab.report import APPENDIX_BEGIN_MARKER as APPENDIX_BEGIN
+from sonarcarve.lab.report import APPENDIX_END_MARKER as APPENDIX_END
 from sonarcarve.lab.report import (
     BEGIN_MARKER,
     END_MARKER,
     ReportError,
-    _history_effect,
-    _mean_between,
     check_results_md,
     replace_section,
+    result_json,
     write_outputs,
 )
 
@@ -66,6 +66,30 @@ def test_json_ready_makes_strict_json() -> None:
                                 "f": [1.0, None], "g": False, "7": "seven"}
 
 
+def _filters_result() -> FiltersResult:
+    """A filters result with one variant of one method (numbers made up)."""
+    entry = {"readings_dropped": 1.0, "points_before_map_filter": 9.0, "points_dropped": 0.0,
+             "points": 9.0, "spurious_removed_by_filters": 10.0,
+             "direct_removed_by_filters": 0.0, "spurious_removed": 20.0,
+             "direct_removed": 5.0, "spurious_points": 4.0,
+             "error": {"median": 0.02, "p90": None, "mean": 0.03}}
+    return FiltersResult(
+        scenario={"tour_m": 40.0, "seeds": 1, "whole_tour": False, "readings": 10.0,
+                  "spurious_percent": 30.0},
+        filters={"max_range_m": 3.81, "jump_threshold_m": 0.5, "outlier_radius_m": 0.3,
+                 "outlier_neighbours": 2, "max_error_m": 0.14},
+        variants={"none": "none"}, methods={"combined": {"none": entry}})
+
+
+def test_typed_results_nest_under_their_json_key() -> None:
+    data = result_json(_filters_result())
+    assert set(data) == {"appendix_filters"}
+    assert set(data["appendix_filters"]) == {"scenario", "filters", "variants", "methods"}
+    # A missing value is null in JSON and the one marker in the Markdown.
+    strict = json_ready(data)
+    assert strict["appendix_filters"]["methods"]["combined"]["none"]["error"]["p90"] is None
+
+
 # -- the writer: existing files must hold the markers ------------------------------------------
 
 def test_writer_refuses_a_file_without_markers_before_writing_anything(tmp_path: Path) -> None:
@@ -84,11 +108,14 @@ def test_writer_appends_the_appendix_only_to_a_results_file(tmp_path: Path) -> N
     md = tmp_path / "RESULTS.md"
     md.write_text(f"{BEGIN_MARKER}\n{END_MARKER}\n\ntail\n")
     check_results_md(md)
-    results = ExperimentResults(results={"appendix_meta": {}})
+    results = ExperimentResults(results={"filters": _filters_result()})
     write_outputs(results, tmp_path / "out", command="cmd", results_md=md)
     text = md.read_text()
     assert f"{END_MARKER}\n\ntail\n\n{APPENDIX_BEGIN}\n" in text
     assert text.endswith(f"{APPENDIX_END}\n")
+    assert "### Appendix B: reading filters and map filters" in text
+    assert "| combined | none | 1 | 0 | 10.0 / 20.0 | 0.0 / 5.0 | 9 | 4.0 | 2.0 cm / n/a |" \
+        in text
     # Broken appendix markers are refused before anything is written.
     md.write_text(f"{BEGIN_MARKER}\n{END_MARKER}\n{APPENDIX_END}\n")
     with pytest.raises(AppendixError, match=r"RESULTS\.md: line 3"):
@@ -119,66 +146,3 @@ def test_writer_creates_a_missing_file_and_keeps_text_around_markers(tmp_path: P
     assert "`cmd-1`" not in second
     assert APPENDIX_BEGIN not in second  # no appendix results, no appendix section
     assert APPENDIX_END not in second
-
-
-# -- text helpers --------------------------------------------------------------------------------
-
-def test_history_sentence_names_the_smallest_and_largest_history_swept() -> None:
-    def sweep(values: list[float], errors: list[float | None]) -> dict[str, object]:
-        return {"sensitivity": {"history": {"values": values,
-                                            "carving": {"error_median": errors}}}}
-
-    quick = _history_effect(sweep([50, 250], [0.059, 0.047]))
-    assert "0.059 m with 50 arcs, 0.047 m with 250)" in quick
-    shuffled = _history_effect(sweep([250, 2000, 50], [0.05, 0.04, 0.07]))
-    assert "0.070 m with 50 arcs, 0.040 m with 2000)" in shuffled
-    assert _history_effect(sweep([250], [0.05])) == ""  # one value: nothing to compare
-    assert _history_effect(sweep([50, 250], [None, 0.05])) == ""
-
-
-def test_binned_means_weight_bins_by_count() -> None:
-    entry = {"edges": [0.0, 1.0, 2.0, 3.0], "value": [10.0, 40.0, None], "count": [3, 1, 5]}
-    assert _mean_between(entry, high=1.0) == pytest.approx(10.0)
-    assert _mean_between(entry, 0.0, 2.0) == pytest.approx((3 * 10.0 + 40.0) / 4)
-    assert _mean_between(entry, 1.0) == pytest.approx(40.0)  # the empty bin is left out
-    assert _mean_between(entry, 2.0) is None
-
-
-def test_combined_sentence_compares_with_independent_latencies() -> None:
-    from sonarcarve.lab.report import _combined_sentence
-
-    def curve(values: list[float]) -> dict[str, object]:
-        return {"edges": [0.0, 3.0, 6.0], "value": values, "count": [100, 100]}
-
-    r = {"fig10": {"carving": curve([10.0, 50.0]), "atm": curve([20.0, 60.0]),
-                   "combined": curve([5.0, 19.0])},
-         "table1": {"carving": 30.0, "atm": 40.0, "combined": 12.0}}
-    text = _combined_sentence(r)
-    # Carving leaves 10 + 50 arcs unprocessed per 100 per bin: 50 / 60 of them beyond 3 m.
-    assert "here 83 % of the arcs carving leaves unprocessed lie beyond 3 m" in text
-    assert "ATM also leaves 60 % unprocessed" in text
-    assert "30.0 % × 40.0 % = 12.0 %" in text
-    # Per bin: (0.1 * 0.2 + 0.5 * 0.6) / 2 = 16 %.
-    assert "range bin 16.0 %; it leaves 12.0 %" in text
-    assert "55.59 % × 31.75 % = 17.6 %" in text
-    assert _combined_sentence({"table1": r["table1"]}) == ""
-
-
-def test_psi_sentence_says_whether_atm_error_is_monotone() -> None:
-    from sonarcarve.lab.report import _psi_sentence
-
-    def sweep(errors: list[float]) -> dict[str, object]:
-        atm = {"error_median": errors, "refined_share": [80.0, 50.0, 40.0],
-               "error_median_refined": [0.02, 0.02, 0.02],
-               "error_median_fallback": [0.3, 0.2, 0.1],
-               "fallback_median_range": [3.5, 2.5, 1.5]}
-        return {"min_transversal_deg": {"values": [10.0, 45.0, 60.0], "atm": atm}}
-
-    bumpy = _psi_sentence(sweep([0.03, 0.06, 0.04]))
-    assert "is not monotone in ψ: 0.030 m at 10°, largest (0.060 m) at 45°, 0.040 m at 60°" \
-        in bumpy
-    assert "20 % of its points at 10° and 60 % at 60°" in bumpy
-    assert "median range 3.50 m, error 0.300 m" in bumpy
-    assert "rises from 0.030 m at 10° to 0.050 m at 60°" in _psi_sentence(
-        sweep([0.03, 0.04, 0.05]))
-    assert _psi_sentence({}) == ""

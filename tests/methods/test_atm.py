@@ -6,6 +6,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import circle_intersections
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import METHODS, MethodConfig, make_method
@@ -298,7 +299,7 @@ def test_state_does_not_grow_with_the_log() -> None:
 @pytest.mark.parametrize(("psi", "delta"), [(-0.1, INCH), (1.6, INCH), (0.5, -1.0),
                                             (0.5, math.nan)])
 def test_bad_parameters_are_refused(psi: float, delta: float) -> None:
-    with pytest.raises(ValueError, match=r"min transversal|range resolution"):
+    with pytest.raises(ConfigError, match=r"^(min_transversal|range_resolution) must"):
         AtmMethod(min_transversal=psi, range_resolution=delta)
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from sonarcarve import (
     DEFAULT_BEAM_WIDTH,
-    CarveOutcome,
+    ArcFate,
     CarvingMethod,
     MethodConfig,
     PointSource,
@@ -21,9 +21,10 @@ from sonarcarve import (
     make_method,
 )
 from sonarcarve.cli import main
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.io import read_map_csv, write_readings_csv
-from sonarcarve.methods.base import Estimates, Removal, SlotArray
+from sonarcarve.methods.base import Estimates, SlotArray
 
 PHI = DEFAULT_BEAM_WIDTH
 
@@ -95,19 +96,19 @@ def test_range_tolerance_spares_echoes_within_it() -> None:
 
 def test_removed_arcs_count_as_processed_and_report_why() -> None:
     method = _exact()
-    removal: dict[int, int] = {}
+    fates: dict[int, int] = {}
 
     def record(history: object, slots: SlotArray, est: Estimates) -> None:
-        assert est.removal is not None
+        assert est.fate is not None
         ids = method.history.reading_id[slots].tolist()
-        removal.update(zip(ids, est.removal.tolist(), strict=True))
+        fates.update(zip(ids, est.fate.tolist(), strict=True))
 
     method.add_commit_listener(record)
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0))
     method.add(_reading(1.0, 0.0, 0.0, 0.0, 2.0))
     assert method.measures().unprocessed_share == 0.5  # arc 0 removed (processed), arc 1 fresh
     method.finish()
-    assert removal == {0: Removal.FULLY_CARVED, 1: Removal.NONE}
+    assert fates == {0: ArcFate.FULLY_CARVED, 1: ArcFate.ALIVE}
 
 
 def test_retired_arcs_are_not_carved() -> None:
@@ -120,7 +121,7 @@ def test_retired_arcs_are_not_carved() -> None:
 
 @pytest.mark.parametrize("tolerance", [-0.01, math.nan, math.inf])
 def test_bad_range_tolerance_is_rejected(tolerance: float) -> None:
-    with pytest.raises(ValueError, match="range tolerance"):
+    with pytest.raises(ConfigError, match=r"^range_tolerance must be finite and >= 0 metres"):
         CarvingMethod(range_tolerance=tolerance)
 
 
@@ -176,7 +177,7 @@ def test_specular_mode_still_carves_from_in_front() -> None:
 
 @pytest.mark.parametrize("incidence", [-0.01, math.nan, 1.6])
 def test_bad_max_incidence_is_rejected(incidence: float) -> None:
-    with pytest.raises(ValueError, match="max incidence"):
+    with pytest.raises(ConfigError, match=r"^max_incidence must lie in \[0, pi/2\] radians"):
         CarvingMethod(max_incidence=incidence)
 
 
@@ -192,8 +193,9 @@ def test_cli_max_incidence(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert kept == {"": [1], "--max-incidence 90": [1], "--max-incidence 17.5": [0, 1]}
     capsys.readouterr()
     assert main(["process", str(readings), "-o", str(tmp_path / "x.csv"),
-                 "--max-incidence", "0"]) == 2
-    assert "--max-incidence must lie in (0, 90] degrees" in capsys.readouterr().err
+                 "--max-incidence", "91"]) == 2
+    # The config's rule and message (degrees are converted to radians first).
+    assert "max_incidence must lie in [0, pi/2] radians" in capsys.readouterr().err
 
 
 # -- against a slow reference: the paper's procedure (section 5-A) with the scalar carve_arc ------
@@ -223,8 +225,8 @@ def _reference(batch: ReadingBatch, history_size: int, tolerance: float,
                 batch.x[i], batch.y[i], batch.range[i], lo[i], hi[i], batch.x[k], batch.y[k],
                 batch.range[k], batch.theta[k] - PHI / 2, batch.theta[k] + PHI / 2, tolerance,
                 max_incidence)
-            alive[i] = status in (CarveOutcome.UNCHANGED, CarveOutcome.SHRUNK)
-            carved[i] |= status != CarveOutcome.UNCHANGED
+            alive[i] = status in (ArcFate.UNCHANGED, ArcFate.SHRUNK)
+            carved[i] |= status != ArcFate.UNCHANGED
     return {k: (bool(alive[k]), lo[k], hi[k], bool(carved[k])) for k in range(len(batch))}
 
 

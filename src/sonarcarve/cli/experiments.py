@@ -19,7 +19,13 @@ from sonarcarve.lab.experiments import (
     Settings,
     run_experiments,
 )
-from sonarcarve.lab.report import BEGIN_MARKER, END_MARKER, replace_section, write_outputs
+from sonarcarve.lab.report import (
+    BEGIN_MARKER,
+    END_MARKER,
+    replace_section,
+    result_json,
+    write_outputs,
+)
 
 __all__ = ["experiments"]
 
@@ -84,12 +90,12 @@ def experiments(
         results = run_experiments(settings, names or None, on_progress)
     written = write_outputs(results, folder, command=command, figures_dir=figures_dir,
                             results_md=results_md)
-    seconds = results.results["meta"]["seconds"]
-    console.print(f"experiments done in {seconds:.0f} s: {len(written)} files in {out}")
+    console.print(f"experiments done in {results.seconds:.0f} s: {len(written)} files in {out}")
+    keys = {k: v for result in results.results.values() for k, v in result_json(result).items()}
     for key, label in (("table1", "Table I (unprocessed %)"), ("fully_carved", "fully carved"),
                        ("openings", "openings passable (%)")):
-        if key in results.results:
-            console.print(f"  {label}: {_short(results.results[key])}")
+        if key in keys:
+            console.print(f"  {label}: {_short(keys[key])}")
 
 
 def _short(entry: dict[str, object]) -> str:

@@ -10,12 +10,16 @@ import typer
 from rich.table import Table
 
 from sonarcarve.cli.app import app, console, progress, summary_table
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
+from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
-from sonarcarve.methods import METHODS, MethodConfig, make_method
+from sonarcarve.methods import MethodConfig, SonarMethod, make_method
+from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
 from sonarcarve.pipeline import ProcessResult, process_readings
+from sonarcarve.readings import ReadingBatch
 
 __all__ = ["process"]
 
@@ -24,63 +28,80 @@ _PROGRESS_MIN_READINGS = 20_000
 
 
 class ParameterError(SonarcarveError):
-    """A command-line parameter outside its valid range."""
+    """A filter option outside its valid range (method parameters are checked by
+    :class:`~sonarcarve.methods.MethodConfig`)."""
+
+
+# The command's options, one alias each, so that the command's signature reads as a list.
+_ReadingsArg = Annotated[Path, typer.Argument(
+    metavar="READINGS.csv",
+    help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
+         "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
+         "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
+         "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
+         "absent: --beam-width applies).")]
+_OutOpt = Annotated[Path, typer.Option(
+    "--out", "-o", metavar="MAP.csv",
+    help="Where to write the global map CSV. Its folder must exist; never the input.")]
+_MethodOpt = Annotated[str, typer.Option(
+    "--method", "-m", metavar="NAME",
+    help="centerline | carve | atm | combined. `combined` runs carving and ATM on one history "
+         "and keeps, per arc, the estimate with the smaller error bound.")]
+_HistoryOpt = Annotated[int, typer.Option(
+    metavar="ARCS", help=f"Arcs kept in the history (paper: 250; at most {MAX_HISTORY_SIZE}).")]
+_BeamWidthOpt = Annotated[float, typer.Option(
+    metavar="DEGREES",
+    help="Beam width φ in degrees, used only for readings without a beam_width value (no "
+         "such column, or a blank cell); a beam_width column, in radians, wins.")]
+_ToleranceOpt = Annotated[float, typer.Option(
+    help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper).")]
+_DEFAULT_TRANSVERSAL_DEG = round(math.degrees(DEFAULT_MIN_TRANSVERSAL), 6)
+_TransversalOpt = Annotated[float, typer.Option(
+    help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
+_IncidenceOpt = Annotated[float | None, typer.Option(
+    help="β in degrees, in [0, 90]: specular-aware carving (beyond the paper; off by "
+         "default). A newer reading then does not carve the part of an older arc whose "
+         "implied wall (facing the older sensor) it would meet at more than β from the "
+         "normal: smooth walls send no echo at such glancing angles, so the newer "
+         "reading's free space says nothing there. 90 = off = the paper. Example: "
+         "--max-incidence 30.")]
+_MaxRangeOpt = Annotated[float | None, typer.Option(
+    help="Drop readings farther than this, metres (reading filter; off by default). The "
+         f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
+         "sensors' height and floor.", rich_help_panel="Filters")]
+_MinRangeOpt = Annotated[float | None, typer.Option(
+    help="Drop readings nearer than this, metres (reading filter).",
+    rich_help_panel="Filters")]
+_JumpOpt = Annotated[float | None, typer.Option(
+    help="Drop a reading whose range differs by more than this (metres) from the same "
+         "sensor's previous reading: a jumping sensor is ignored for one reading.",
+    rich_help_panel="Filters")]
+_OutlierRadiusOpt = Annotated[float | None, typer.Option(
+    help="Map filter: drop points with fewer than --outlier-neighbours other points within "
+         "this radius, metres.", rich_help_panel="Filters")]
+_NeighboursOpt = Annotated[int, typer.Option(
+    help="k of the outlier test (needs --outlier-radius).", rich_help_panel="Filters")]
+_MaxErrorOpt = Annotated[float | None, typer.Option(
+    help="Map filter: drop points whose error bound max_error exceeds this, metres "
+         "(paper, Fig. 13b).", rich_help_panel="Filters")]
 
 
 @app.command()
 def process(
-    readings: Annotated[Path, typer.Argument(
-        metavar="READINGS.csv",
-        help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
-             "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
-             "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
-             "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
-             "absent: --beam-width applies).")],
-    out: Annotated[Path, typer.Option(
-        "--out", "-o", metavar="MAP.csv",
-        help="Where to write the global map CSV. Its folder must exist; never the input.")],
-    method: Annotated[str, typer.Option(
-        "--method", "-m", metavar="NAME",
-        help="centerline | carve | atm | combined. `combined` runs carving and ATM on one history "
-             "and keeps, per arc, the estimate with the smaller error bound.")] = "combined",
-    history: Annotated[int, typer.Option(
-        metavar="ARCS", help="Arcs kept in the history (paper: 250).")] = 250,
-    beam_width: Annotated[float, typer.Option(
-        metavar="DEGREES",
-        help="Beam width φ in degrees, used only for readings without a beam_width value (no "
-             "such column, or a blank cell); a beam_width column, in radians, wins.")] = 22.5,
-    range_tolerance: Annotated[float, typer.Option(
-        help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper).")]
-        = MethodConfig.range_tolerance,
-    min_transversal: Annotated[float, typer.Option(
-        help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
-        = round(math.degrees(MethodConfig.min_transversal), 6),
-    max_incidence: Annotated[float | None, typer.Option(
-        help="β in degrees, in (0, 90]: specular-aware carving (beyond the paper; off by "
-             "default). A newer reading then does not carve the part of an older arc whose "
-             "implied wall (facing the older sensor) it would meet at more than β from the "
-             "normal: smooth walls send no echo at such glancing angles, so the newer "
-             "reading's free space says nothing there. 90 = off = the paper. Example: "
-             "--max-incidence 30.")] = None,
-    max_range: Annotated[float | None, typer.Option(
-        help="Drop readings farther than this, metres (reading filter; off by default). The "
-             f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
-             "sensors' height and floor.", rich_help_panel="Filters")] = None,
-    min_range: Annotated[float | None, typer.Option(
-        help="Drop readings nearer than this, metres (reading filter).",
-        rich_help_panel="Filters")] = None,
-    jump_threshold: Annotated[float | None, typer.Option(
-        help="Drop a reading whose range differs by more than this (metres) from the same "
-             "sensor's previous reading: a jumping sensor is ignored for one reading.",
-        rich_help_panel="Filters")] = None,
-    outlier_radius: Annotated[float | None, typer.Option(
-        help="Map filter: drop points with fewer than --outlier-neighbours other points within "
-             "this radius, metres.", rich_help_panel="Filters")] = None,
-    outlier_neighbours: Annotated[int, typer.Option(
-        help="k of the outlier test (needs --outlier-radius).", rich_help_panel="Filters")] = 1,
-    max_error: Annotated[float | None, typer.Option(
-        help="Map filter: drop points whose error bound max_error exceeds this, metres "
-             "(paper, Fig. 13b).", rich_help_panel="Filters")] = None,
+    readings: _ReadingsArg,
+    out: _OutOpt,
+    method: _MethodOpt = "combined",
+    history: _HistoryOpt = DEFAULT_HISTORY_SIZE,
+    beam_width: _BeamWidthOpt = 22.5,
+    range_tolerance: _ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
+    min_transversal: _TransversalOpt = _DEFAULT_TRANSVERSAL_DEG,
+    max_incidence: _IncidenceOpt = None,
+    max_range: _MaxRangeOpt = None,
+    min_range: _MinRangeOpt = None,
+    jump_threshold: _JumpOpt = None,
+    outlier_radius: _OutlierRadiusOpt = None,
+    outlier_neighbours: _NeighboursOpt = 1,
+    max_error: _MaxErrorOpt = None,
 ) -> None:
     """Map READINGS.csv with one method and write its global map to --out.
 
@@ -101,52 +122,53 @@ def process(
 
     Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
     """
-    config = _config(method, history, beam_width, range_tolerance, min_transversal,
-                     max_incidence)
+    config = _config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
+    sonar = make_method(method, config)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     batch = read_readings_csv(readings)
-    sonar = make_method(method, config)
-    if len(batch) >= _PROGRESS_MIN_READINGS:
-        with progress() as bar:
-            task = bar.add_task(f"{method}", total=len(batch))
-            result = process_readings(
-                batch, sonar, on_progress=lambda n: bar.update(task, completed=n),
-                reading_filter=reading_filter, map_filter=map_filter)
-    else:
-        result = process_readings(batch, sonar, reading_filter=reading_filter,
-                                  map_filter=map_filter)
+    result = _run(batch, sonar, method, reading_filter, map_filter)
     write_map_csv(result.global_map, out)
     console.print(_summary(method, result, out))
 
 
-def _config(method: str, history: int, beam_width_deg: float, tolerance: float,
-            transversal_deg: float, incidence_deg: float | None = None) -> MethodConfig:
-    if method not in METHODS:
-        msg = f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
-        raise ParameterError(msg)
-    if history < 1:
-        msg = f"--history must be at least 1, got {history}"
-        raise ParameterError(msg)
-    if not 0.0 < beam_width_deg < 180.0:
-        msg = f"--beam-width must lie in (0, 180) degrees, got {beam_width_deg}"
-        raise ParameterError(msg)
-    if not (tolerance >= 0.0 and math.isfinite(tolerance)):
-        msg = f"--range-tolerance must be a finite number >= 0, got {tolerance}"
-        raise ParameterError(msg)
-    if not 0.0 <= transversal_deg <= 90.0:
-        msg = f"--min-transversal must lie in [0, 90] degrees, got {transversal_deg}"
-        raise ParameterError(msg)
-    incidence = MethodConfig.max_incidence
-    if incidence_deg is not None:
-        if not 0.0 < incidence_deg <= 90.0:
-            msg = f"--max-incidence must lie in (0, 90] degrees, got {incidence_deg}"
-            raise ParameterError(msg)
-        incidence = min(math.radians(incidence_deg), MethodConfig.max_incidence)
-    return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
-                        range_tolerance=tolerance, min_transversal=math.radians(transversal_deg),
-                        max_incidence=incidence)
+def _config(history: int, beam_width_deg: float, tolerance: float, transversal_deg: float,
+            incidence_deg: float | None) -> MethodConfig:
+    """The options in SI units; :class:`MethodConfig` checks every value (one-line errors).
+
+    The config speaks radians; an error about an option given in degrees is prefixed with the
+    option as typed, so that "got 3.49" is not read as the user's number.
+    """
+    incidence = DEFAULT_MAX_INCIDENCE
+    if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
+        incidence = math.radians(incidence_deg)
+    try:
+        return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
+                            range_tolerance=tolerance,
+                            min_transversal=math.radians(transversal_deg),
+                            max_incidence=incidence)
+    except ConfigError as err:
+        typed = {"beam_width": f"--beam-width {beam_width_deg:g}",
+                 "min_transversal": f"--min-transversal {transversal_deg:g}",
+                 "max_incidence": f"--max-incidence {incidence_deg}"}
+        field = str(err).split(" ", 1)[0]
+        if field in typed:
+            msg = f"{typed[field]} (degrees): {err}"
+            raise ConfigError(msg) from None
+        raise
+
+
+def _run(batch: ReadingBatch, sonar: SonarMethod, label: str,
+         reading_filter: ReadingFilter | None, map_filter: MapFilter | None) -> ProcessResult:
+    """Process ``batch`` with ``sonar``, with a progress bar for long logs."""
+    if len(batch) < _PROGRESS_MIN_READINGS:
+        return process_readings(batch, sonar, reading_filter=reading_filter,
+                                map_filter=map_filter)
+    with progress() as bar:
+        task = bar.add_task(label, total=len(batch))
+        return process_readings(batch, sonar, on_progress=lambda n: bar.update(task, completed=n),
+                                reading_filter=reading_filter, map_filter=map_filter)
 
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,

@@ -30,13 +30,13 @@ from sonarcarve.lab.instrument import (
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import MethodConfig
 from sonarcarve.methods.atm import atm_error_bound
-from sonarcarve.methods.base import Removal
+from sonarcarve.methods.base import ArcFate
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.typing import FloatArray, JsonDict
 
 if TYPE_CHECKING:
-    from sonarcarve.lab.experiments import Job
+    from sonarcarve.lab.plan import Job
 
 __all__ = [
     "ANALYSES",
@@ -210,8 +210,8 @@ def removal_summary(final: ArcTable, kind: npt.NDArray[np.int64]) -> JsonDict:
     share of fully carved arcs that were spurious.
     """
     k = kind[final.reading_id]
-    fully = final.removal == Removal.FULLY_CARVED
-    split = final.removal == Removal.SPLIT
+    fully = final.removal == ArcFate.FULLY_CARVED
+    split = final.removal == ArcFate.SPLIT
     direct = k == EchoKind.DIRECT
     return {
         "share": metrics.percent(fully),
@@ -362,7 +362,7 @@ def analyse_sweep(sim: Simulation, record: RunRecord, job: Job) -> JsonDict:
     points = sample_points(record)
     err = metrics.segment_distance(points.xy, sim.world.segments)[0]
     summary = metrics.error_summary(err)
-    fully = record.final.removal == Removal.FULLY_CARVED
+    fully = record.final.removal == ArcFate.FULLY_CARVED
     refined = points.source != PointSource.CENTERLINE
     return {"error_median": summary.median, "error_p90": summary.p90,
             "unprocessed": unprocessed_percent(full), "fully_carved": metrics.percent(fully),

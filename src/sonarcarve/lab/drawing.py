@@ -5,18 +5,26 @@ matplotlib is imported inside each function (Agg backend), never at import time.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["METHOD_COLORS", "new_figure", "scatter_sources", "segments_collection"]
+__all__ = [
+    "METHOD_COLORS",
+    "new_figure",
+    "save_pngs",
+    "scatter_sources",
+    "segments_collection",
+]
 
 #: One colour per method (by its results label), the same in every figure: centerline, carved
 #: and ATM points as in :data:`~sonarcarve.plotting.SOURCE_COLORS`, combined in purple.
@@ -60,3 +68,25 @@ def scatter_sources(ax: Axes, xy: npt.ArrayLike, source: npt.ArrayLike, size: fl
         if np.any(mask):
             ax.scatter(p[mask, 0], p[mask, 1], s=size, c=color, linewidths=0, zorder=3,
                        label=f"{PointSource(code).label} ({int(mask.sum()):,})")
+
+
+def save_pngs(figures: dict[str, Figure | None], folder: str | Path,
+              dpi: int = 110) -> list[Path]:
+    """Save each figure as ``folder/<name>`` (atomically; the folder is created), close it,
+    and return the paths written, in order; None entries (nothing to draw) are skipped."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, fig in figures.items():
+        if fig is None:
+            continue
+        with atomic_path(out / name, suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
+        plt.close(fig)
+        written.append(out / name)
+    return written

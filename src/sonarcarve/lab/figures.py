@@ -1,25 +1,20 @@
-"""Figures of the experiments, drawn from their results (plain dicts and arrays).
+"""Figures of the simulated experiments (office, T junction, openings, sensitivity), drawn from
+their results (plain dicts, as in ``results.json``) and artifacts (arrays).
 
 matplotlib is imported inside each function with the Agg backend, so nothing here needs a
 display or slows down importing the package. Each ``plot_*`` function draws on the axes it is
-given (or a new figure) and returns the figure; :data:`FIGURES` names every figure, the
-appendix's (:data:`APPENDIX_FIGURES`) included, and :func:`write_figures` saves every figure the
-results allow as one PNG each.
+given (or a new figure) and returns the figure; the experiments
+(:mod:`sonarcarve.lab.experiments`) save them. The appendix experiments draw their own.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
-from pathlib import Path
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.atomic import atomic_path
-from sonarcarve.lab.appendix_odometry import plot_odometry
-from sonarcarve.lab.appendix_polling import plot_polling
-from sonarcarve.lab.appendix_real_log import plot_real_log
 from sonarcarve.lab.drawing import (
     METHOD_COLORS,
     new_figure,
@@ -34,8 +29,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
-    "APPENDIX_FIGURES",
-    "FIGURES",
     "SWEEP_LABELS",
     "plot_fig04",
     "plot_fig10",
@@ -46,7 +39,6 @@ __all__ = [
     "plot_openings",
     "plot_sensitivity",
     "plot_true_error",
-    "write_figures",
 ]
 
 
@@ -80,11 +72,12 @@ def _own_axes(ax: Axes | None, width: float = 7.0, height: float = 4.5) -> tuple
     return fig, axes[0, 0]
 
 
-def plot_fig10(results: JsonDict, ax: Axes | None = None) -> Figure:
-    """Paper Fig. 10: percentage of history arcs unprocessed, by range."""
+def plot_fig10(fig10: JsonDict, ax: Axes | None = None) -> Figure:
+    """Paper Fig. 10: percentage of history arcs unprocessed, by range (``fig10``: binned
+    curves by method label)."""
     fig, ax = _own_axes(ax)
     for label in ("atm", "carving", "combined"):
-        _binned_line(ax, results["fig10"][label], label, METHOD_COLORS[label],
+        _binned_line(ax, fig10[label], label, METHOD_COLORS[label],
                      style="-o" if label != "combined" else "--")
     ax.set_xlabel("range of the reading (m)")
     ax.set_ylabel("unprocessed (% of history arcs)")
@@ -95,10 +88,9 @@ def plot_fig10(results: JsonDict, ax: Axes | None = None) -> Figure:
     return fig
 
 
-def plot_fig11(results: JsonDict, ax: Axes | None = None) -> Figure:
+def plot_fig11(f11: JsonDict, ax: Axes | None = None) -> Figure:
     """Paper Fig. 11: mean and median angular width of carved arcs, by range."""
     fig, ax = _own_axes(ax)
-    f11 = results["fig11"]
     _binned_line(ax, f11["carved_only"]["mean"], "carved arcs: mean", METHOD_COLORS["carving"])
     _binned_line(ax, f11["carved_only"]["median"], "carved arcs: median", "#17becf",
                  style="-s")
@@ -114,10 +106,9 @@ def plot_fig11(results: JsonDict, ax: Axes | None = None) -> Figure:
     return fig
 
 
-def plot_fig12(results: JsonDict, ax: Axes | None = None) -> Figure:
+def plot_fig12(f12: JsonDict, ax: Axes | None = None) -> Figure:
     """Paper Fig. 12: mean maximum Euclidean error by range (eq. 5.3, 5.4)."""
     fig, ax = _own_axes(ax)
-    f12 = results["fig12"]
     _binned_line(ax, f12["carving"], "carving (measured, eq. 5.3)", METHOD_COLORS["carving"])
     _binned_line(ax, f12["centerline"], "centerline (E_m = φ/2)", METHOD_COLORS["centerline"])
     _binned_line(ax, f12["combined"], "combined (measured)", METHOD_COLORS["combined"],
@@ -143,7 +134,7 @@ def _robot(ax: Axes, xy: Sequence[float], radius: float = 0.205) -> None:
     ax.add_patch(Circle((xy[0], xy[1]), radius, fill=False, color="k", lw=1.0, zorder=4))
 
 
-def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
+def plot_fig04(tj: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     """Paper Fig. 4: distance from the facing wall when each local map first shows it.
 
     Left: bars (mean over seeds, whiskers min-max) for all points and for refined points only;
@@ -153,7 +144,6 @@ def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     snaps = (artifacts or {}).get("snapshots") or {}
     panels = [m for m in ("atm", "centerline", "carving") if snaps.get(m)]
     fig, axes = new_figure(1, 1 + len(panels), width=4.2 + 3.0 * len(panels), height=5.0)
-    tj = results["t_junction"]
     ax = axes[0, 0]
     x = np.arange(len(METHOD_ORDER))
     for offset, kind, hatch in ((-0.2, "all", ""), (0.2, "refined", "//")):
@@ -190,7 +180,7 @@ def plot_fig04(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     return fig
 
 
-def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figure:
+def plot_openings(op: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     """Paper Fig. 2 and 9: share of runs whose local map shows the opening passable.
 
     Left: passable share by distance for each method (all opening runs); right: local maps at
@@ -203,7 +193,6 @@ def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figur
     cols = 1 + (len(methods) if worlds else 0)
     fig, axes = new_figure(rows, cols, width=4.5 + 2.6 * (cols - 1), height=3.6 * rows)
     ax = axes[0, 0]
-    op = results["openings"]
     distances = sorted(op[METHOD_ORDER[0]], key=float)
     x = np.arange(len(distances))
     for k, m in enumerate(METHOD_ORDER):
@@ -239,7 +228,7 @@ def plot_openings(results: JsonDict, artifacts: JsonDict | None = None) -> Figur
     return fig
 
 
-def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure | None:
+def plot_fig13(threshold: float, artifacts: JsonDict | None = None) -> Figure | None:
     """Paper Fig. 13: final global maps of ATM (medians) and carving (max-error thresholded)."""
     maps = (artifacts or {}).get("fig13") or {}
     if not maps.get("atm") or not maps.get("carving"):
@@ -250,7 +239,6 @@ def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure |
     hi = np.percentile(every, 99.5, axis=0) + 2.0 if len(every) else np.ones(2)
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-9)
     fig, axes = new_figure(1, 2, width=15.0, height=min(12.0, 1.0 + 7.5 * aspect))
-    threshold = results["fig13"]["threshold_m"]
     for ax, method in zip(axes[0], ("atm", "carving"), strict=True):
         data = maps[method]
         _walls(ax, data["world"])
@@ -268,11 +256,11 @@ def plot_fig13(results: JsonDict, artifacts: JsonDict | None = None) -> Figure |
     return fig
 
 
-def plot_true_error(results: JsonDict, ax: Axes | None = None) -> Figure:
+def plot_true_error(by_range: JsonDict, ax: Axes | None = None) -> Figure:
     """True error of local-map points by range: median (solid) and 90th percentile (dashed)."""
     fig, ax = _own_axes(ax)
     for m in METHOD_ORDER:
-        entry = results["true_error_by_range"][m]
+        entry = by_range[m]
         _binned_line(ax, entry["median"], f"{m} median", METHOD_COLORS[m])
         _binned_line(ax, entry["p90"], f"{m} p90", METHOD_COLORS[m], style=":")
     ax.set_yscale("log")
@@ -284,9 +272,8 @@ def plot_true_error(results: JsonDict, ax: Axes | None = None) -> Figure:
     return fig
 
 
-def plot_latency_accuracy(results: JsonDict) -> Figure:
+def plot_latency_accuracy(la: JsonDict) -> Figure:
     """Share of wall patches whose local-map points are right, against time and distance."""
-    la = results["latency_accuracy"]
     tolerances = [k for k in la[METHOD_ORDER[0]] if k != "patches_seen"]
     fig, axes = new_figure(len(tolerances), 2, width=11.0, height=3.6 * len(tolerances))
     for r, tol in enumerate(tolerances):
@@ -326,14 +313,14 @@ _SWEEP_STYLE: dict[str, dict[str, Any]] = {
 }
 
 
-def plot_sensitivity(results: JsonDict) -> Figure:
+def plot_sensitivity(sensitivity: JsonDict) -> Figure:
     """Each swept parameter against true error, unprocessed share and fully carved share.
 
     One row per parameter (x: its value, labelled by :data:`SWEEP_LABELS`), one column per
     measure; one legend for the whole figure.
     """
-    sens = {k: v for k, v in results["sensitivity"].items() if k != "scenario"}
-    seed = results["sensitivity"].get("scenario", {}).get("seed", 0)
+    sens = {k: v for k, v in sensitivity.items() if k != "scenario"}
+    seed = sensitivity.get("scenario", {}).get("seed", 0)
     measures = (("error_median", "median true error (m)"),
                 ("unprocessed", "unprocessed (% of history rows)"),
                 ("fully_carved", "fully carved (% of arcs)"))
@@ -364,77 +351,3 @@ def plot_sensitivity(results: JsonDict) -> Figure:
     fig.suptitle(f"Sensitivity (office tour, seed {seed} only; one parameter changed at a "
                  "time from the defaults)")
     return fig
-
-
-FigureMaker = Callable[[JsonDict, JsonDict], "Figure | None"]
-
-#: The appendix's figures (:mod:`sonarcarve.lab.appendix`), as in :data:`FIGURES`;
-#: their artifacts are keyed by experiment name (``polling``, ``real-log``, ``odometry``).
-APPENDIX_FIGURES: dict[str, tuple[str, FigureMaker]] = {
-    "appendix-polling.png": ("appendix_polling",
-                             lambda r, a: plot_polling(r, a.get("polling"))),
-    "appendix-real-log.png": ("appendix_real_log",
-                              lambda r, a: plot_real_log(r, a.get("real-log"))),
-    "appendix-odometry.png": ("appendix_odometry",
-                              lambda r, a: plot_odometry(r, a.get("odometry"))),
-}
-
-#: File name -> (results key it needs, function of (results, artifacts by experiment name) ->
-#: Figure or None), every figure of the experiments and the appendix.
-FIGURES: dict[str, tuple[str, FigureMaker]] = {
-    "fig04_t_junction.png": ("t_junction",
-                             lambda r, a: plot_fig04(r, a.get("t-junction"))),
-    "fig02_09_openings.png": ("openings", lambda r, a: plot_openings(r, a.get("openings"))),
-    "fig10_unprocessed_by_range.png": ("fig10", lambda r, a: plot_fig10(r)),
-    "fig11_carved_width_by_range.png": ("fig11", lambda r, a: plot_fig11(r)),
-    "fig12_max_error_by_range.png": ("fig12", lambda r, a: plot_fig12(r)),
-    "fig13_global_maps.png": ("fig13", lambda r, a: plot_fig13(r, a.get("office"))),
-    "true_error_by_range.png": ("true_error_by_range", lambda r, a: plot_true_error(r)),
-    "latency_accuracy.png": ("latency_accuracy", lambda r, a: plot_latency_accuracy(r)),
-    "sensitivity.png": ("sensitivity", lambda r, a: plot_sensitivity(r)),
-    **APPENDIX_FIGURES,
-}
-
-
-def write_figures(results: JsonDict, artifacts: JsonDict, out: str | Path, dpi: int = 110,
-                  names: Iterable[str] | None = None) -> list[Path]:
-    """Save every figure of :data:`FIGURES` whose results are present as ``out/<name>``.
-
-    Parameters
-    ----------
-    results : dict
-        Results as in ``results.json``; a figure is drawn only when its key is present.
-    artifacts : dict
-        The arrays the figures need, keyed by experiment name.
-    out : path
-        Folder for the PNGs, created (with its parents) if missing.
-    dpi : int
-        Resolution of the PNGs.
-    names : iterable of str, optional
-        Only these figures (file names, keys of :data:`FIGURES`); default all.
-
-    Returns
-    -------
-    list of Path
-        The PNGs written, in :data:`FIGURES` order.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
-    chosen = FIGURES if names is None else {n: FIGURES[n] for n in names}
-    written = []
-    for name, (key, make) in chosen.items():
-        if key not in results:
-            continue
-        fig = make(results, artifacts)
-        if fig is None:
-            continue
-        with atomic_path(folder / name, suffix=".png") as tmp:
-            fig.savefig(tmp, dpi=dpi, format="png")
-        plt.close(fig)
-        written.append(folder / name)
-    return written

@@ -26,7 +26,7 @@ import numpy.typing as npt
 from sonarcarve.history import SonarHistory
 from sonarcarve.lab import metrics
 from sonarcarve.maps import GlobalMap
-from sonarcarve.methods.base import Estimates, Removal, SonarMethod
+from sonarcarve.methods.base import ArcFate, Estimates, SonarMethod
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import FloatArray, IntArray
 
@@ -67,7 +67,7 @@ class ArcTable:
     source : int8
         :class:`~sonarcarve.maps.PointSource` code.
     removal : int8
-        :class:`~sonarcarve.methods.base.Removal` code; ``REMOVAL_UNKNOWN`` (-1) for a dead arc
+        :class:`~sonarcarve.methods.base.ArcFate` code; ``REMOVAL_UNKNOWN`` (-1) for a dead arc
         whose model gives no reason.
     """
 
@@ -91,10 +91,10 @@ class ArcTable:
     ) -> Self:
         """Rows for ``slots`` of ``history`` with their estimates ``est``."""
         n = len(slots)
-        if est.removal is not None:
-            removal = np.asarray(est.removal, dtype=np.int8)
+        if est.fate is not None:
+            removal = np.asarray(est.fate, dtype=np.int8)
         else:
-            removal = np.where(est.alive, np.int8(Removal.NONE), np.int8(REMOVAL_UNKNOWN))
+            removal = np.where(est.alive, np.int8(ArcFate.ALIVE), np.int8(REMOVAL_UNKNOWN))
         return cls(
             sample=np.full(n, sample, dtype=np.int64),
             reading_id=history.reading_id[slots].copy(),

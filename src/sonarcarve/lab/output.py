@@ -1,4 +1,4 @@
-"""What every evaluation writer shares: strict-JSON values and marked Markdown sections.
+"""What every lab writer shares: strict-JSON values and marked Markdown sections.
 
 A generated section of a Markdown file lives between a begin and an end marker (HTML comments,
 for example ``<!-- experiments:begin -->`` and ``<!-- experiments:end -->``); the rest of the

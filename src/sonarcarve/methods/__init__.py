@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.methods.atm import AtmMethod
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
@@ -59,10 +60,44 @@ METHODS: dict[str, Callable[[MethodConfig], SonarMethod]] = {
 
 
 def make_method(name: str, config: MethodConfig | None = None) -> SonarMethod:
-    """A new method by its CLI name (``centerline``, ``carve``, ``atm``, ``combined``)."""
+    """A new method by its CLI name, built from a validated :class:`MethodConfig`.
+
+    Parameters
+    ----------
+    name : str
+        ``"centerline"`` (section 2-A), ``"carve"`` (arc carving, section 3), ``"atm"`` (Arc
+        Transversal Median, section 2-D) or ``"combined"`` (carving and ATM on one history,
+        section 4); the keys of :data:`METHODS`.
+    config : MethodConfig, optional
+        The parameters (history size in arcs, beam width φ in radians, range tolerance ε in
+        metres, ATM's ψ in radians and δ in metres, specular β in radians); each method reads
+        the ones it needs. Default: ``MethodConfig()``, the paper's settings and the measured
+        defaults documented there.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown ``name``, or a ``config`` that is not a :class:`MethodConfig` (build
+        one: ``MethodConfig(**values)``, which checks every value).
+
+    Examples
+    --------
+    >>> make_method("carve", MethodConfig(history_size=100)).history.capacity
+    100
+    >>> make_method("carving")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sonarcarve.errors.ConfigError: unknown method 'carving'; choose one of centerline, carve, ...
+    """
     try:
         factory = METHODS[name]
-    except KeyError:
+    except (KeyError, TypeError):
         msg = f"unknown method {name!r}; choose one of {', '.join(METHODS)}"
-        raise ValueError(msg) from None
-    return factory(config or MethodConfig())
+        raise ConfigError(msg) from None
+    if config is None:
+        config = MethodConfig()
+    elif not isinstance(config, MethodConfig):
+        msg = (f"config must be a MethodConfig, got {type(config).__name__} "
+               "(build one with MethodConfig(**values))")
+        raise ConfigError(msg)
+    return factory(config)

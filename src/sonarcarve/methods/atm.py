@@ -37,19 +37,39 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import common_chord
+from sonarcarve.geometry._compiled import compiled
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
-from sonarcarve.methods.config import MethodConfig
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.methods.config import (
+    DEFAULT_MIN_TRANSVERSAL,
+    MethodConfig,
+    check_min_transversal,
+    check_range_resolution,
+)
 from sonarcarve.typing import FloatArray, SlotArray
 
-__all__ = ["AtmMethod", "AtmModel", "atm_error_bound"]
+__all__ = ["MAX_ATM_STATE_BYTES", "AtmMethod", "AtmModel", "atm_error_bound"]
+
+
+#: Most memory ATM's crossing store may take, bytes (1 GiB). It keeps room for every crossing an
+#: arc can have, ``2n × 4(n - 1)`` float32 values for a history of ``n`` arcs (about 32 n² bytes:
+#: 2 MB at the paper's 250, 128 MB at 2,000), so ATM refuses histories above about 5,790 arcs.
+MAX_ATM_STATE_BYTES = 2**30
+
+
+def _check_state_size(nbytes: int) -> None:
+    if nbytes > MAX_ATM_STATE_BYTES:
+        msg = (f"history_size too large for ATM: its crossing store would take "
+               f"{nbytes / 2**30:.1f} GiB (32 bytes x history_size²; at most 1 GiB, a history "
+               "of about 5,790 arcs)")
+        raise ConfigError(msg)
 
 
 def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
@@ -83,7 +103,7 @@ def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
     return range_resolution * (1.0 / math.sin(min_transversal) + 1.0 / math.tan(min_transversal))
 
 
-@numba.njit(cache=True)
+@compiled
 def _add_arc(
     x: FloatArray,
     y: FloatArray,
@@ -150,7 +170,7 @@ def _add_arc(
     return kept
 
 
-@numba.njit(cache=True)
+@compiled
 def _medians(
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -202,17 +222,12 @@ class AtmModel(ArcModel):
 
     def __init__(self, history: SonarHistory, min_transversal: float, range_resolution: float):
         super().__init__(history)
-        if not 0.0 <= min_transversal <= 0.5 * math.pi:
-            msg = f"min transversal angle must lie in [0, pi/2] radians, got {min_transversal}"
-            raise ValueError(msg)
-        if not (math.isfinite(range_resolution) and range_resolution >= 0.0):
-            msg = f"range resolution must be finite and >= 0 metres, got {range_resolution}"
-            raise ValueError(msg)
-        self.min_transversal = min_transversal
-        self.range_resolution = range_resolution
+        self.min_transversal = check_min_transversal(min_transversal)
+        self.range_resolution = check_range_resolution(range_resolution)
         self.error_bound = atm_error_bound(min_transversal, range_resolution)
         self._cos_psi = math.cos(min_transversal)
         columns = max(1, 4 * (history.capacity - 1))
+        _check_state_size(history.storage_size * columns * 4)
         self.bearings = np.zeros((history.storage_size, columns), dtype=np.float32)
         self.counts = np.zeros(history.storage_size, dtype=np.int32)
         # Per-slot cos θ, sin θ and cos(φ/2), so the pair loop needs no trig for its beam tests.
@@ -274,11 +289,14 @@ class AtmMethod(SonarMethod):
         self,
         history_size: int = DEFAULT_HISTORY_SIZE,
         beam_width: float = DEFAULT_BEAM_WIDTH,
-        min_transversal: float = MethodConfig.min_transversal,
-        range_resolution: float = MethodConfig.range_resolution,
+        min_transversal: float = DEFAULT_MIN_TRANSVERSAL,
+        range_resolution: float = POLAROID_RANGE_RESOLUTION,
     ) -> None:
-        self.min_transversal = min_transversal
-        self.range_resolution = range_resolution
+        self.config = MethodConfig(history_size=history_size, beam_width=beam_width,
+                                   min_transversal=min_transversal,
+                                   range_resolution=range_resolution)
+        self.min_transversal = self.config.min_transversal
+        self.range_resolution = self.config.range_resolution
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[AtmModel]:

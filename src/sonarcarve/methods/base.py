@@ -14,21 +14,20 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import ClassVar, TypeVar
 
 import numpy as np
-import numpy.typing as npt
 
+from sonarcarve.geometry import ArcFate
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, GlobalMapBuilder, LocalMap, PointSource
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
-from sonarcarve.typing import BoolArray, FloatArray, SlotArray
+from sonarcarve.methods.config import check_beam_width
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, check_reading
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["ArcModel", "CommitListener", "Estimates", "Measures", "Removal", "SonarMethod"]
+__all__ = ["ArcFate", "ArcModel", "CommitListener", "Estimates", "Measures", "SonarMethod"]
 
 M = TypeVar("M", LocalMap, GlobalMap)
-
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,6 +50,10 @@ class Estimates:
         Upper bound on the point's error, metres.
     source : int8
         :class:`~sonarcarve.maps.PointSource` code.
+    fate : int8 or None
+        :class:`~sonarcarve.geometry.ArcFate` code of each arc: ``ALIVE``, or why a dead arc
+        died (``FULLY_CARVED``, ``SPLIT``), where the model knows (carving and the methods that
+        run it); None for models that never remove an arc (centerline, ATM).
     """
 
     alive: BoolArray
@@ -58,17 +61,8 @@ class Estimates:
     xy: FloatArray
     width: FloatArray
     max_error: FloatArray
-    source: npt.NDArray[np.int8]
-    removal: npt.NDArray[np.int8] | None = None
-    """Why a dead arc died (:class:`Removal` codes), where the model knows; None otherwise."""
-
-
-class Removal(IntEnum):
-    """Why an arc no longer yields a point."""
-
-    NONE = 0  #: still alive
-    FULLY_CARVED = 1  #: every point of the arc lies in newer freespace (section 3)
-    SPLIT = 2  #: carving would have split the arc in two (section 3: the arc is ignored)
+    source: Int8Array
+    fate: Int8Array | None = None
 
 
 #: Called with the history, the committed slots (oldest first) and their final estimates.
@@ -134,12 +128,18 @@ class SonarMethod(ABC):
     Feed it readings with :meth:`add` or :meth:`add_many`; ask for :meth:`local_map` at any time;
     call :meth:`finish` at the end of a log to get the :class:`~sonarcarve.maps.GlobalMap`.
 
+    Every reading is checked on the way in (:func:`~sonarcarve.readings.check_reading`): a bad
+    one raises :class:`~sonarcarve.readings.ReadingsError` and leaves the method as it was.
+
     Parameters
     ----------
     history_size : int
         Arcs kept in the history (paper: 250).
     beam_width : float
         Beam width φ in radians, used for readings whose own ``beam_width`` is NaN.
+
+    Both are checked by :class:`~sonarcarve.methods.config.MethodConfig`'s rules (subclasses
+    validate their whole configuration that way before calling this constructor).
     """
 
     #: Name used by the CLI (``--method``).
@@ -148,13 +148,11 @@ class SonarMethod(ABC):
     def __init__(
         self, history_size: int = DEFAULT_HISTORY_SIZE, beam_width: float = DEFAULT_BEAM_WIDTH
     ) -> None:
-        if not 0.0 < beam_width < math.pi:
-            msg = f"beam width must lie in (0, pi) radians, got {beam_width}"
-            raise ValueError(msg)
+        self.beam_width = check_beam_width(beam_width)
         self.history = SonarHistory(history_size, on_evict=self._commit)
-        self.beam_width = beam_width
         self._global = GlobalMapBuilder()
         self._readings = 0
+        self._last_t = -math.inf  # time of the newest reading: times never go backwards
         self._finished = False
         self._listeners: list[CommitListener] = []
         self.models: tuple[ArcModel, ...] = self._make_models()
@@ -170,23 +168,46 @@ class SonarMethod(ABC):
     # -- streaming ---------------------------------------------------------------------------
 
     def add(self, reading: Reading, reading_id: int | None = None) -> None:
-        """Process one reading; ``reading_id`` defaults to its position in the stream."""
+        """Process one reading; ``reading_id`` defaults to its position in the stream.
+
+        Raises
+        ------
+        ReadingsError
+            For a reading :func:`~sonarcarve.readings.check_reading` refuses (non-finite
+            values, range ≤ 0, a sensor that is no index, a beam width outside (0, π), a time
+            before the previous reading's); nothing is changed.
+        """
+        self._check_open()
+        rid = self._readings if reading_id is None else reading_id
+        check_reading(reading, rid, self._last_t)
+        self._add_checked(reading, rid)
+
+    def add_many(self, batch: ReadingBatch, first_id: int | None = None) -> None:
+        """Process a batch in order; ids run on from ``first_id`` (default: the stream count).
+
+        The batch is validated once, vectorised, before any reading is processed (the rules of
+        :meth:`add`, and its first time not before the previous reading's): a bad batch raises
+        :class:`~sonarcarve.readings.ReadingsError` naming the reading and changes nothing.
+        """
+        self._check_open()
+        start = self._readings if first_id is None else first_id
+        batch.validate(first_id=start, previous_t=self._last_t)
+        for offset, reading in enumerate(batch):
+            self._add_checked(reading, start + offset)
+
+    def _check_open(self) -> None:
         if self._finished:
             msg = "this method has finished its log; make a new one for more readings"
             raise RuntimeError(msg)
+
+    def _add_checked(self, reading: Reading, reading_id: int) -> None:
         width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
-        rid = self._readings if reading_id is None else reading_id
-        slot = self.history.append(reading, rid, width)
+        slot = self.history.append(reading, reading_id, width)
         older = self.history.slots()[:-1]
         for model in self.models:
             model.on_add(slot, older)
         self._readings += 1
-
-    def add_many(self, batch: ReadingBatch, first_id: int | None = None) -> None:
-        """Process a batch in order; ids run on from ``first_id`` (default: the stream count)."""
-        start = self._readings if first_id is None else first_id
-        for offset, reading in enumerate(batch):
-            self.add(reading, start + offset)
+        self._last_t = reading.t
 
     # -- maps and measures --------------------------------------------------------------------
 
@@ -266,6 +287,6 @@ def arc_point(history: SonarHistory, slots: SlotArray, bearing: FloatArray) -> F
     )
 
 
-def source_codes(n: int, source: PointSource) -> npt.NDArray[np.int8]:
+def source_codes(n: int, source: PointSource) -> Int8Array:
     """``n`` copies of one source code."""
     return np.full(n, int(source), dtype=np.int8)

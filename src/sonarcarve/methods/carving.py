@@ -18,47 +18,39 @@ the paper.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-import numpy.typing as npt
-from numba import njit
 
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcStatus, arc_bounding_circle, carve_arcs
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle, carve_arcs
+from sonarcarve.geometry._compiled import compiled
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.base import ArcModel, Estimates, Removal, SonarMethod, arc_point
+from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
+from sonarcarve.methods.config import (
+    DEFAULT_RANGE_TOLERANCE,
+    MethodConfig,
+    check_max_incidence,
+    check_range_tolerance,
+)
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH
-from sonarcarve.typing import FloatArray, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
 
-#: Default range tolerance ε, metres: a newer reading's freespace ends ε short of its echo.
-#: Chosen by measurement (``benchmarks/range_tolerance.py``, ring corridor, 20,000 readings,
-#: 1-inch quantisation, 5 % spurious echoes): with ε = 0, rounding and noise let a newer reading's
-#: freespace reach past true echoes, and 15 % (σ = 0), 31 % (σ = 1 cm) and 39 % (σ = 2.5 cm) of
-#: true echoes were fully carved; with ε = 5 cm 0 %, 0.1 % and 8.5 %, while the median distance
-#: of map points to the walls stayed within 2.5 mm of the best ε (1.6-2.5 cm; centerline 12 cm)
-#: and 93-94 % of spurious echoes were still removed. ε = 10 cm costs accuracy (3.7-4 cm).
-DEFAULT_RANGE_TOLERANCE = 0.05
-
-# ArcStatus code -> Removal code (why a dead arc died), for Estimates.removal.
-_REMOVAL = np.zeros(max(ArcStatus) + 1, dtype=np.int8)
-_REMOVAL[ArcStatus.FULLY_CARVED] = Removal.FULLY_CARVED
-_REMOVAL[ArcStatus.SPLIT] = Removal.SPLIT
+_ALIVE = int(ArcFate.ALIVE)
 
 
-def _add_arc_py(
+@compiled
+def _add_arc(
     slot: int, older: SlotArray,
     x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray,
-    status: npt.NDArray[np.int8], carved: npt.NDArray[np.bool_], tolerance: float,
-    max_incidence: float,
+    status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
 ) -> tuple[int, int]:
     """Initialise row ``slot`` as its full beam (section 3), then carve ``older`` by it (3.5).
 
     One compiled call per reading: the Python overhead of doing this field by field was larger
-    than the carving itself.
+    than the carving itself. (Compiled with :func:`~sonarcarve.geometry._compiled.compiled`, whose
+    cache is keyed on the geometry sources too: this kernel inlines :func:`carve_arcs`.)
     """
     lo[slot] = theta1[slot]
     hi[slot] = theta2[slot]
@@ -66,15 +58,11 @@ def _add_arc_py(
     bounds[slot, 0] = cx
     bounds[slot, 1] = cy
     bounds[slot, 2] = radius
-    status[slot] = 0  # ArcStatus.ALIVE
+    status[slot] = _ALIVE
     carved[slot] = False
     return carve_arcs(older, x, y, r, lo, hi, bounds, status, carved,
                       x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
                       max_incidence)
-
-
-# Compiled by call rather than as a decorator so that mypy keeps the signature above for readers.
-_add_arc = njit(cache=True)(_add_arc_py)
 
 
 class CarvingModel(ArcModel):
@@ -95,7 +83,8 @@ class CarvingModel(ArcModel):
     lo, hi : ndarray of float64, shape (history.storage_size,)
         Carved interval ``[θ1', θ2']`` of each row (eq. 3.5), radians, unwrapped.
     status : ndarray of int8, shape (history.storage_size,)
-        :class:`~sonarcarve.geometry.ArcStatus` of each row (alive, fully carved, split).
+        :class:`~sonarcarve.geometry.ArcFate` of each row: ``ALIVE``, ``FULLY_CARVED`` or
+        ``SPLIT`` (removed).
     carved : ndarray of bool, shape (history.storage_size,)
         The row has been carved at least once (shrunk or removed).
     bounds : ndarray of float64, shape (history.storage_size, 3)
@@ -105,20 +94,14 @@ class CarvingModel(ArcModel):
 
     def __init__(self, history: SonarHistory, range_tolerance: float,
                  max_incidence: float = NO_INCIDENCE_LIMIT) -> None:
-        if not (math.isfinite(range_tolerance) and range_tolerance >= 0.0):
-            msg = f"range tolerance must be a finite number of metres >= 0, got {range_tolerance}"
-            raise ValueError(msg)
-        if not 0.0 <= max_incidence <= NO_INCIDENCE_LIMIT:
-            msg = f"max incidence must lie in [0, π/2] radians, got {max_incidence}"
-            raise ValueError(msg)
         super().__init__(history)
-        self.range_tolerance = float(range_tolerance)
-        self.max_incidence = float(max_incidence)
+        self.range_tolerance = check_range_tolerance(range_tolerance)
+        self.max_incidence = check_max_incidence(max_incidence)
         size = history.storage_size
         self.lo = np.zeros(size)
         self.hi = np.zeros(size)
         self.bounds = np.zeros((size, 3))
-        self.status = np.full(size, int(ArcStatus.ALIVE), dtype=np.int8)
+        self.status = np.full(size, _ALIVE, dtype=np.int8)
         self.carved = np.zeros(size, dtype=bool)
         self._fully_carved = 0
         self._split = 0
@@ -145,7 +128,7 @@ class CarvingModel(ArcModel):
         comparable across methods (an arc only leaves the unprocessed pool by interacting).
         """
         status = self.status[slots]
-        alive = status == ArcStatus.ALIVE
+        alive = status == ArcFate.ALIVE
         carved = self.carved[slots]
         lo = self.lo[slots]
         hi = self.hi[slots]
@@ -158,7 +141,7 @@ class CarvingModel(ArcModel):
             max_error=chord_error(self.history.r[slots], width),
             source=np.where(carved, np.int8(PointSource.CARVED),
                             np.int8(PointSource.CENTERLINE)).astype(np.int8),
-            removal=_REMOVAL[status],
+            fate=status,
         )
 
     def counters(self) -> dict[str, int]:
@@ -192,8 +175,10 @@ class CarvingMethod(SonarMethod):
         range_tolerance: float = DEFAULT_RANGE_TOLERANCE,
         max_incidence: float = NO_INCIDENCE_LIMIT,
     ) -> None:
-        self.range_tolerance = range_tolerance
-        self.max_incidence = max_incidence
+        self.config = MethodConfig(history_size=history_size, beam_width=beam_width,
+                                   range_tolerance=range_tolerance, max_incidence=max_incidence)
+        self.range_tolerance = self.config.range_tolerance
+        self.max_incidence = self.config.max_incidence
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel]:

@@ -10,13 +10,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.methods.atm import AtmModel
 from sonarcarve.methods.base import Estimates, SonarMethod
-from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE, CarvingModel
-from sonarcarve.methods.config import MethodConfig
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.methods.carving import CarvingModel
+from sonarcarve.methods.config import (
+    DEFAULT_MIN_TRANSVERSAL,
+    DEFAULT_RANGE_TOLERANCE,
+    MethodConfig,
+)
 
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
@@ -49,7 +53,7 @@ def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
         width=np.where(use_atm, atm.width, carving.width),
         max_error=np.where(use_atm, atm.max_error, carving.max_error),
         source=np.where(use_atm, atm.source, carving.source).astype(np.int8),
-        removal=carving.removal,
+        fate=carving.fate,
     )
 
 
@@ -85,14 +89,19 @@ class CombinedMethod(SonarMethod):
         history_size: int = DEFAULT_HISTORY_SIZE,
         beam_width: float = DEFAULT_BEAM_WIDTH,
         range_tolerance: float = DEFAULT_RANGE_TOLERANCE,
-        min_transversal: float = MethodConfig.min_transversal,
-        range_resolution: float = MethodConfig.range_resolution,
+        min_transversal: float = DEFAULT_MIN_TRANSVERSAL,
+        range_resolution: float = POLAROID_RANGE_RESOLUTION,
         max_incidence: float = NO_INCIDENCE_LIMIT,
     ) -> None:
-        self.range_tolerance = range_tolerance
-        self.max_incidence = max_incidence
-        self.min_transversal = min_transversal
-        self.range_resolution = range_resolution
+        self.config = MethodConfig(
+            history_size=history_size, beam_width=beam_width, range_tolerance=range_tolerance,
+            min_transversal=min_transversal, range_resolution=range_resolution,
+            max_incidence=max_incidence,
+        )
+        self.range_tolerance = self.config.range_tolerance
+        self.max_incidence = self.config.max_incidence
+        self.min_transversal = self.config.min_transversal
+        self.range_resolution = self.config.range_resolution
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel, AtmModel]:

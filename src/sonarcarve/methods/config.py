@@ -1,51 +1,163 @@
-"""One set of named parameters for every method, so the CLI and experiments can build any."""
+"""One set of named, validated parameters for every method, for the CLI and experiments.
+
+Every parameter has one rule, checked in one place: :class:`MethodConfig` runs the ``check_*``
+functions below in ``__post_init__``, and the method and model constructors call the same
+functions, so the API and the CLI report a bad value with the same one-line
+:class:`~sonarcarve.errors.ConfigError`.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
 
-from sonarcarve.constants import POLAROID_RANGE_RESOLUTION
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
-from sonarcarve.history import DEFAULT_HISTORY_SIZE
-from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE, check_history_size
 
-__all__ = ["MethodConfig"]
+__all__ = [
+    "DEFAULT_MIN_TRANSVERSAL",
+    "DEFAULT_RANGE_TOLERANCE",
+    "MAX_HISTORY_SIZE",
+    "MethodConfig",
+    "check_beam_width",
+    "check_history_size",
+    "check_max_incidence",
+    "check_min_transversal",
+    "check_range_resolution",
+    "check_range_tolerance",
+]
+
+#: Default range tolerance ε, metres: a newer reading's freespace ends ε short of its echo.
+#: Chosen by measurement (``benchmarks/range_tolerance.py``, ring corridor, 20,000 readings,
+#: 1-inch quantisation, 5 % spurious echoes): with ε = 0, rounding and noise let a newer reading's
+#: freespace reach past true echoes, and 15 % (σ = 0), 31 % (σ = 1 cm) and 39 % (σ = 2.5 cm) of
+#: true echoes were fully carved; with ε = 5 cm 0 %, 0.1 % and 8.5 %, while the median distance
+#: of map points to the walls stayed within 2.5 mm of the best ε (1.6-2.5 cm; centerline 12 cm)
+#: and 93-94 % of spurious echoes were still removed. ε = 10 cm costs accuracy (3.7-4 cm).
+DEFAULT_RANGE_TOLERANCE = 0.05
+
+#: Default minimum transversal angle ψ of ATM, radians (20°; see :class:`MethodConfig`).
+DEFAULT_MIN_TRANSVERSAL = math.radians(20.0)
+
+
+def _number(name: str, value: object, rule: str) -> float:
+    """``value`` as a float if it is a real number (not a bool), else the rule's error."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        msg = f"{name} must be a number that {rule}, got {value!r}"
+        raise ConfigError(msg)
+    return float(value)
+
+
+def _refuse(name: str, rule: str, value: object) -> None:
+    msg = f"{name} must {rule}, got {value!r}"
+    raise ConfigError(msg)
+
+
+def check_beam_width(value: object, name: str = "beam_width") -> float:
+    """φ in radians, in the open interval (0, π); the value as a float, else ConfigError."""
+    rule = "lie in (0, pi) radians"
+    width = _number(name, value, rule)
+    if not 0.0 < width < math.pi:
+        _refuse(name, rule, value)
+    return width
+
+
+def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
+    """ε in metres, finite and ≥ 0."""
+    rule = "be finite and >= 0 metres"
+    tolerance = _number(name, value, rule)
+    if not (math.isfinite(tolerance) and tolerance >= 0.0):
+        _refuse(name, rule, value)
+    return tolerance
+
+
+def check_min_transversal(value: object, name: str = "min_transversal") -> float:
+    """ψ in radians, in [0, π/2]."""
+    rule = "lie in [0, pi/2] radians"
+    angle = _number(name, value, rule)
+    if not 0.0 <= angle <= 0.5 * math.pi:
+        _refuse(name, rule, value)
+    return angle
+
+
+def check_range_resolution(value: object, name: str = "range_resolution") -> float:
+    """δ in metres, finite and ≥ 0."""
+    rule = "be finite and >= 0 metres"
+    resolution = _number(name, value, rule)
+    if not (math.isfinite(resolution) and resolution >= 0.0):
+        _refuse(name, rule, value)
+    return resolution
+
+
+def check_max_incidence(value: object, name: str = "max_incidence") -> float:
+    """β in radians, in [0, π/2] (π/2: specular-aware carving off, the paper)."""
+    rule = "lie in [0, pi/2] radians"
+    angle = _number(name, value, rule)
+    if not 0.0 <= angle <= NO_INCIDENCE_LIMIT:
+        _refuse(name, rule, value)
+    return angle
 
 
 @dataclass(frozen=True)
 class MethodConfig:
     """Parameters shared by the sonar methods; each method reads the ones it needs.
 
-    Attributes
+    Every field is checked when the config is made; a bad one raises
+    :class:`~sonarcarve.errors.ConfigError` with one line naming the field, for example
+    ``beam_width must lie in (0, pi) radians, got 4.0``. SI units: metres and radians.
+
+    Parameters
     ----------
-    history_size : int
-        Arcs kept in the history (paper, section 5-C: 250).
-    beam_width : float
-        Default beam width φ, radians, for readings that carry none (paper: 22.5°).
-    range_tolerance : float
-        ε, metres: a newer reading's freespace ends at ``r - ε`` (0 is the paper exactly).
-        Default 5 cm, measured with ``benchmarks/range_tolerance.py`` (1-inch quantised ranges,
-        noise σ ≤ 2.5 cm): ε = 0 fully carved 15-39 % of true echoes, 5 cm at most 8.5 %, at a
-        median point error within 2.5 mm of the best ε (see :mod:`sonarcarve.methods.carving`).
-    min_transversal : float
-        ψ, radians: ATM's minimum transversal angle (eq. 2.2, 5.4). Default 20°, measured with
-        ``benchmarks/min_transversal.py``: against 30° it needs a third less travel per crossing
-        (eq. 2.2) and, being below φ, lets two readings of one sensor cross; ATM's unprocessed
-        share fell from 29 % to 22 % at equal point error (see :mod:`sonarcarve.methods.atm`).
-    range_resolution : float
-        Range quantum of the sensors, metres (paper: one inch); scales ATM's error bound (5.4).
-    max_incidence : float
-        β in ``[0, π/2]``, radians: specular-aware carving (beyond the paper), where a newer
+    history_size : int, default 250
+        Arcs kept in the history (paper, section 5-C: 250); a whole number in
+        [1, :data:`~sonarcarve.history.MAX_HISTORY_SIZE`] (2000: memory grows with its square).
+    beam_width : float, default 22.5° (0.3927 rad)
+        Default beam width φ, radians in (0, π), for readings that carry none (paper: 22.5°).
+    range_tolerance : float, default 0.05 m
+        ε, metres, finite and ≥ 0: a newer reading's freespace ends at ``r - ε`` (0 is the
+        paper exactly). Default 5 cm, measured with ``benchmarks/range_tolerance.py`` (1-inch
+        quantised ranges, noise σ ≤ 2.5 cm): ε = 0 fully carved 15-39 % of true echoes, 5 cm at
+        most 8.5 %, at a median point error within 2.5 mm of the best ε (see
+        :data:`DEFAULT_RANGE_TOLERANCE`).
+    min_transversal : float, default 20° (0.349 rad)
+        ψ, radians in [0, π/2]: ATM's minimum transversal angle (eq. 2.2, 5.4). Default 20°,
+        measured with ``benchmarks/min_transversal.py``: against 30° it needs a third less
+        travel per crossing (eq. 2.2) and, being below φ, lets two readings of one sensor cross;
+        ATM's unprocessed share fell from 29 % to 22 % at equal point error (see
+        :mod:`sonarcarve.methods.atm`).
+    range_resolution : float, default 0.0254 m
+        δ, metres, finite and ≥ 0: range quantum of the sensors (paper: one inch); scales ATM's
+        error bound (eq. 5.4).
+    max_incidence : float, default π/2 (off)
+        β, radians in [0, π/2]: specular-aware carving (beyond the paper), where a newer
         reading does not carve the points of an older arc whose implied surface it would see
-        at an incidence above β (see :mod:`sonarcarve.geometry`). Default π/2
+        at an incidence above β (see :mod:`sonarcarve.geometry.specular`). π/2
         (:data:`~sonarcarve.geometry.NO_INCIDENCE_LIMIT`): off, the paper.
+
+    Examples
+    --------
+    >>> MethodConfig(history_size=100).history_size
+    100
+    >>> MethodConfig(beam_width=4.0)
+    Traceback (most recent call last):
+    ...
+    sonarcarve.errors.ConfigError: beam_width must lie in (0, pi) radians, got 4.0
     """
 
     history_size: int = DEFAULT_HISTORY_SIZE
     beam_width: float = DEFAULT_BEAM_WIDTH
     range_tolerance: float = DEFAULT_RANGE_TOLERANCE
-    min_transversal: float = math.radians(20.0)
+    min_transversal: float = DEFAULT_MIN_TRANSVERSAL
     range_resolution: float = POLAROID_RANGE_RESOLUTION
     max_incidence: float = NO_INCIDENCE_LIMIT
+
+    def __post_init__(self) -> None:
+        check_history_size(self.history_size)
+        check_beam_width(self.beam_width)
+        check_range_tolerance(self.range_tolerance)
+        check_min_transversal(self.min_transversal)
+        check_range_resolution(self.range_resolution)
+        check_max_incidence(self.max_incidence)

@@ -9,14 +9,24 @@ true walls, and the polling error bound is checked against the true stamping err
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.lab import metrics
-from sonarcarve.lab.appendix_base import (
+from sonarcarve.lab.drawing import new_figure, save_pngs, segments_collection
+from sonarcarve.lab.experiments.appendix_base import (
     AppendixSettings,
+    mean_or_none,
+    office_simulation,
+    run_global_map,
+    summary_dict,
+)
+from sonarcarve.lab.experiments.base import Artifacts, Experiment, Outputs, Page, Part, no_jobs
+from sonarcarve.lab.formatting import (
     fmt_cm,
     fmt_mm,
     fmt_ms,
@@ -25,15 +35,12 @@ from sonarcarve.lab.appendix_base import (
     fmt_seeds,
     fmt_span,
     md_image,
-    mean_or_none,
-    office_simulation,
-    run_global_map,
-    summary_dict,
 )
-from sonarcarve.lab.drawing import new_figure, segments_collection
+from sonarcarve.lab.plan import Settings
 from sonarcarve.maps import GlobalMap
 from sonarcarve.polling import (
     PolledLog,
+    PolledReadings,
     SonarPoller,
     StampedFiring,
     StampedFirings,
@@ -50,8 +57,30 @@ if TYPE_CHECKING:
 
     from sonarcarve.sim.simulate import Simulation
 
-__all__ = ["latest_firing", "plot_polling", "polling_experiment", "polling_markdown"]
+__all__ = ["EXPERIMENT", "PollingResult", "latest_firing", "plot_polling", "polling_experiment"]
 
+
+@dataclass(frozen=True)
+class PollingResult:
+    """Appendix A measured (``results.json``: ``appendix_polling``).
+
+    Attributes
+    ----------
+    scenario : dict
+        The tour (``tour_m``), seeds, robot, firing period (s), sensors, poll jitter, the
+        mapping method and the polling rate of the figure (Hz).
+    rates : dict
+        Per polling rate (``"10"`` Hz ...), over seeds: polls, contradictions, the poller's
+        stamping errors against its bounds (``polled``: time s, position m, heading deg; share
+        within the bound pooled, maxima and means), the naive stamps' errors (``naive``),
+        readings per log (``readings``) and the centerline maps' error to the true walls
+        (``map_error``: median, p90, mean m; ``map_error_per_seed``: medians).
+    """
+
+    JSON_KEY: ClassVar[str] = "appendix_polling"
+
+    scenario: JsonDict
+    rates: dict[str, JsonDict]
 
 
 def latest_firing(sensor: npt.ArrayLike, at: npt.ArrayLike, firing_t: npt.ArrayLike,
@@ -128,14 +157,29 @@ def _polling_run(sim: Simulation, rate: float, settings: AppendixSettings,
     offset = float(np.max(np.hypot(robot.mount_x, robot.mount_y)))
     out: JsonDict = {"polls": len(log), "contradictions": contradictions,
                      "speed_mps": speed, "turn_rate_rps": turn_rate, "sensor_offset_m": offset}
+    out["polled"] = _polled_errors(sim, log, polled_firings, polled,
+                                   (speed, turn_rate, offset))
+    n_true = _true_rows(sim, log, naive_f, naive.firing)
+    out["naive"] = _naive_errors(sim, naive, n_true)
+    out.update(_maps(sim, settings, polled, naive, n_true, detail))
+    return out
 
-    def true_rows(firings: StampedFirings, rows: IntArray) -> IntArray:
-        return latest_firing(firings.sensor[rows], log.t[firings.poll[rows]], fired.t,
-                             fired.sensor)
 
-    # -- stamping error of sonar polling, against its bound (seconds, metres, radians)
+def _true_rows(sim: Simulation, log: PolledLog, firings: StampedFirings,
+               rows: IntArray) -> IntArray:
+    """The true firing behind each of ``firings[rows]`` (:func:`latest_firing`)."""
+    fired = sim.firings
+    return latest_firing(firings.sensor[rows], log.t[firings.poll[rows]], fired.t, fired.sensor)
+
+
+def _polled_errors(sim: Simulation, log: PolledLog, polled_firings: StampedFirings,
+                   polled: PolledReadings, motion: tuple[float, float, float]) -> JsonDict:
+    """Stamping error of sonar polling against its bound (seconds, metres, radians); ``motion``
+    is the robot's top speed (m/s), top turn rate (rad/s) and largest sensor offset (m)."""
+    robot, traj, fired = sim.robot, sim.trajectory, sim.firings
+    speed, turn_rate, offset = motion
     p_rows = polled.firing
-    p_true = true_rows(polled_firings, p_rows)
+    p_true = _true_rows(sim, log, polled_firings, p_rows)
     found = p_true >= 0
     same_value = np.zeros(p_rows.shape, dtype=bool)
     same_value[found] = sim.echoes.range[p_true[found]] == polled_firings.value[p_rows[found]]
@@ -157,7 +201,7 @@ def _polling_run(sim: Simulation, rate: float, settings: AppendixSettings,
     tx, ty, _ = traj.pose_at(fired.t[p_true])
     interp_err = np.hypot(ix - tx, iy - ty)
     slack = 1e-9  # rounding in the poller's interval arithmetic, seconds (and metres, radians)
-    out["polled"] = {
+    return {
         "readings": len(polled.batch), "matched_percent": metrics.percent(found & same_value),
         "causes": {c: int(np.count_nonzero(polled_firings.cause[p_rows] == i))
                    for i, c in enumerate(("changed", "between", "timeout"))},
@@ -168,30 +212,36 @@ def _polling_run(sim: Simulation, rate: float, settings: AppendixSettings,
         "heading_total_deg": _degrees(_bound_check(total_head, head_bound, slack)),
         "interpolation_max_m": float(interp_err.max()) if interp_err.size else 0.0,
     }
-    # -- the naive stamps: poll time, no bound
-    n_rows = naive.firing
-    n_true = true_rows(naive_f, n_rows)
+
+
+def _naive_errors(sim: Simulation, naive: PolledReadings, n_true: IntArray) -> JsonDict:
+    """Error of the naive stamps (poll time, no bound) against the true firings ``n_true``."""
+    fired = sim.firings
     n_t_err = naive.batch.t - fired.t[n_true]
     n_pos = np.hypot(naive.batch.x - fired.x[n_true], naive.batch.y - fired.y[n_true])
     n_head = np.abs(_wrap(naive.batch.theta - fired.theta[n_true]))
-    out["naive"] = {
+    return {
         "readings": len(naive.batch),
         "time": {"max": float(n_t_err.max()), "mean": float(n_t_err.mean())},
         "position": {"max": float(n_pos.max()), "mean": float(n_pos.mean())},
         "heading_deg": {"max": math.degrees(float(n_head.max())),
                         "mean": math.degrees(float(n_head.mean()))},
     }
-    # -- centerline global maps (Fig. 14) and their error to the true walls
+
+
+def _maps(sim: Simulation, settings: AppendixSettings, polled: PolledReadings,
+          naive: PolledReadings, n_true: IntArray, detail: bool) -> JsonDict:
+    """Centerline global maps (Fig. 14) of true stamps, polling, naive stamps and the naive
+    readings with true stamps, and their error to the true walls."""
     config = settings.method_config()
     segments = sim.world.segments
-    reading_of = sim.firing_reading
-    naive_true = sim.readings[np.sort(reading_of[n_true])]
+    naive_true = sim.readings[np.sort(sim.firing_reading[n_true])]
     batches = {"true": sim.readings, "polled": polled.batch, "naive": naive.batch,
                "naive_true_stamps": naive_true}
     maps = {name: run_global_map(b, "centerline", config)[0] for name, b in batches.items()}
     errors = {name: _map_error(m, segments) for name, m in maps.items()}
-    out["readings"] = {name: len(b) for name, b in batches.items()}
-    out["map_error"] = {name: summary_dict(e) for name, e in errors.items()}
+    out: JsonDict = {"readings": {name: len(b) for name, b in batches.items()},
+                     "map_error": {name: summary_dict(e) for name, e in errors.items()}}
     if detail:
         out["maps"] = {name: {"xy": maps[name].xy, "error": errors[name]}
                        for name in ("naive", "polled")}
@@ -215,7 +265,7 @@ def _degrees(check: JsonDict) -> JsonDict:
             for k, v in check.items()}
 
 
-def polling_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
+def polling_experiment(settings: AppendixSettings) -> tuple[PollingResult, Artifacts]:
     """Appendix A and Fig. 14: naive stamping against sonar polling on the office tour.
 
     For every seed and polling rate: the poller's stamping error against its bound (seconds,
@@ -226,8 +276,8 @@ def polling_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
 
     Returns
     -------
-    results : dict
-        ``{"appendix_polling": ...}``, JSON-ready.
+    result : PollingResult
+        The numbers.
     artifacts : dict
         Seed 0's maps at ``settings.figure_rate`` for the figure.
     """
@@ -246,14 +296,17 @@ def polling_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
                              "readings": run["readings"]}
             per_rate[f"{rate:g}"].append(run)
     robot = sim.robot
-    res: JsonDict = {
-        "scenario": {"world": "office", "robot": "scout2", "tour_m": tour,
-                     "seeds": settings.seeds, "firing_period_s": robot.firing_period,
-                     "sensors": robot.n_sensors, "poll_jitter": settings.poll_jitter,
-                     "method": "centerline", "figure_rate_hz": settings.figure_rate},
-        "rates": {rate: _combine_polling(runs) for rate, runs in per_rate.items()},
-    }
-    return {"appendix_polling": res}, artifacts
+    scenario = {"world": "office", "robot": "scout2", "tour_m": tour,
+                "seeds": settings.seeds, "firing_period_s": robot.firing_period,
+                "sensors": robot.n_sensors, "poll_jitter": settings.poll_jitter,
+                "method": "centerline", "figure_rate_hz": settings.figure_rate}
+    rates = {rate: _combine_polling(runs) for rate, runs in per_rate.items()}
+    return PollingResult(scenario, rates), artifacts
+
+
+def summarise(settings: Settings, outputs: Outputs) -> tuple[PollingResult, Artifacts]:
+    """:func:`polling_experiment` at the appendix's size for ``settings`` (no job outputs)."""
+    return polling_experiment(AppendixSettings.from_settings(settings))
 
 
 def _combine_polling(runs: list[JsonDict]) -> JsonDict:
@@ -297,7 +350,7 @@ def _combine_polling(runs: list[JsonDict]) -> JsonDict:
 # ============================================================================ figure
 
 
-def plot_polling(results: JsonDict, artifacts: JsonDict | None) -> Figure | None:
+def plot_polling(artifacts: JsonDict | None) -> Figure | None:
     """Fig. 14: centerline global maps from naive stamps and from sonar polling (seed 0).
 
     Top: the whole tour; bottom: a zoom on the part of the office where the two maps differ
@@ -374,13 +427,15 @@ def _worst_window(naive_xy: FloatArray, naive_err: FloatArray, polled_xy: FloatA
 # ============================================================================ text
 
 
-def polling_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
-    """The polling subsection of the appendix section (Markdown lines); [] without results."""
-    if "appendix_polling" not in r:
-        return []
-    res = r["appendix_polling"]
-    sc = res["scenario"]
-    rates = res["rates"]
+def figure(result: PollingResult, artifacts: Artifacts, folder: Path) -> list[Path]:
+    """Fig. 14 (:func:`plot_polling`)."""
+    return save_pngs({"appendix-polling.png": plot_polling(artifacts)}, folder)
+
+
+def markdown(result: PollingResult, page: Page) -> list[Part]:
+    """The polling subsection of the appendix section."""
+    sc = result.scenario
+    rates = result.rates
     out = [
         "### Appendix A, Fig. 14: sonar polling against naive stamps", "",
         f"Simulated office tour ({sc['tour_m']:.0f} m, robot `scout2`: {sc['sensors']} sonars "
@@ -430,9 +485,9 @@ def polling_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
             f"{fmt_mm(nv['position']['max'])} / {fmt_mm(nv['position']['mean'])} | "
             f"{e['contradictions']} |")
     out.append("")
-    out += md_image(figs, "appendix-polling.png", "Fig. 14: naive against sonar polling")
+    out += md_image(page.figures, "appendix-polling.png", "Fig. 14: naive against sonar polling")
     out += _polling_sentences(rates)
-    return out
+    return [Part(10, out)]
 
 
 def _polling_sentences(rates: JsonDict) -> list[str]:
@@ -479,3 +534,7 @@ def _polling_sentences(rates: JsonDict) -> list[str]:
         f"{fmt_num(max(e['naive']['heading_deg']['max'] for e in rates.values()), 0)}°).",
         "",
     ]
+
+
+EXPERIMENT = Experiment("polling", "Appendix A, Fig. 14: sonar polling against naive stamps",
+                        "appendix", no_jobs, summarise, figure, markdown)

@@ -2,19 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import pytest
 
-from sonarcarve.lab.appendix import APPENDIX_EXPERIMENTS, appendix_markdown
-from sonarcarve.lab.appendix_base import AppendixSettings
-from sonarcarve.lab.appendix_filters import (
+from sonarcarve.lab.experiments import EXPERIMENTS, Settings
+from sonarcarve.lab.experiments.appendix_base import AppendixSettings
+from sonarcarve.lab.experiments.base import Page
+from sonarcarve.lab.experiments.filters import (
     JUMP_THRESHOLD,
     OUTLIER_NEIGHBOURS,
     OUTLIER_RADIUS,
+    FiltersResult,
     filters_experiment,
-    filters_markdown,
+    markdown,
 )
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.sim.simulate import Simulation
@@ -30,25 +30,25 @@ MAX_RANGE = 150 * 0.0254
 
 
 @pytest.fixture(scope="module")
-def quick() -> tuple[dict[str, Any], Simulation]:
+def quick() -> tuple[FiltersResult, Simulation]:
     settings = AppendixSettings.make(quick=True)
-    res = filters_experiment(settings)[0]["appendix_filters"]
+    res = filters_experiment(settings)[0]
     # The same scenario the experiment drives (one seed, the first 40 m of the office tour).
     sim = run_simulation(Scenario("office", 0, max_length=settings.tour_length))
     return res, sim
 
 
 def test_registered_as_an_appendix_experiment() -> None:
-    assert APPENDIX_EXPERIMENTS["filters"][1] is filters_experiment
+    assert EXPERIMENTS["filters"].section == "appendix"
+    assert EXPERIMENTS["filters"].markdown is markdown
 
 
-def test_every_key_and_share_in_range(quick: tuple[dict[str, Any], Simulation]) -> None:
+def test_every_key_and_share_in_range(quick: tuple[FiltersResult, Simulation]) -> None:
     res, sim = quick
-    assert {"scenario", "filters", "variants", "methods"} <= set(res)
-    assert set(res["methods"]) == METHODS
-    assert set(res["variants"]) == VARIANTS
-    assert res["scenario"]["readings"] == len(sim.readings)
-    for entries in res["methods"].values():
+    assert set(res.methods) == METHODS
+    assert set(res.variants) == VARIANTS
+    assert res.scenario["readings"] == len(sim.readings)
+    for entries in res.methods.values():
         assert set(entries) == VARIANTS
         for e in entries.values():
             for key in COUNTS:
@@ -64,10 +64,10 @@ def test_every_key_and_share_in_range(quick: tuple[dict[str, Any], Simulation]) 
                 assert 0.0 <= e[key] <= 100.0, key
 
 
-def test_filters_only_remove(quick: tuple[dict[str, Any], Simulation]) -> None:
+def test_filters_only_remove(quick: tuple[FiltersResult, Simulation]) -> None:
     res, sim = quick
     n = len(sim.readings)
-    for label, entries in res["methods"].items():
+    for label, entries in res.methods.items():
         none = entries["none"]
         assert none["readings_dropped"] == none["points_dropped"] == 0
         assert none["spurious_removed_by_filters"] == none["direct_removed_by_filters"] == 0.0
@@ -90,7 +90,7 @@ def test_filters_only_remove(quick: tuple[dict[str, Any], Simulation]) -> None:
             assert all(e["points"] <= n for e in entries.values())
 
 
-def test_reading_filter_counts_by_hand(quick: tuple[dict[str, Any], Simulation]) -> None:
+def test_reading_filter_counts_by_hand(quick: tuple[FiltersResult, Simulation]) -> None:
     res, sim = quick
     b = sim.readings
     spurious = sim.truth.kind != EchoKind.DIRECT
@@ -102,7 +102,7 @@ def test_reading_filter_counts_by_hand(quick: tuple[dict[str, Any], Simulation])
         if sensor in previous and abs(r - previous[sensor]) > JUMP_THRESHOLD:
             jumped[i] = True
         previous[sensor] = r
-    center = res["methods"]["centerline"]
+    center = res.methods["centerline"]
     assert center["max_range"]["readings_dropped"] == int(far.sum())
     assert center["max_range"]["spurious_removed"] == pytest.approx(100.0 * far[spurious].mean())
     assert center["max_range"]["direct_removed"] == pytest.approx(100.0 * far[~spurious].mean())
@@ -111,24 +111,22 @@ def test_reading_filter_counts_by_hand(quick: tuple[dict[str, Any], Simulation])
         100.0 * spurious[~far].mean())
 
 
-def test_outlier_test_by_hand(quick: tuple[dict[str, Any], Simulation]) -> None:
+def test_outlier_test_by_hand(quick: tuple[FiltersResult, Simulation]) -> None:
     res, sim = quick
     b = sim.readings
     # Centerline points: on each reading's axis at its range (eq. 3.3 at the beam's centre).
     xy = np.column_stack((b.x + b.range * np.cos(b.theta), b.y + b.range * np.sin(b.theta)))
     d = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
     isolated = (d <= OUTLIER_RADIUS).sum(axis=1) - 1 < OUTLIER_NEIGHBOURS
-    assert res["methods"]["centerline"]["outliers"]["points_dropped"] == int(isolated.sum())
+    assert res.methods["centerline"]["outliers"]["points_dropped"] == int(isolated.sum())
 
 
-def test_markdown_has_the_table(quick: tuple[dict[str, Any], Simulation]) -> None:
+def test_markdown_has_the_table(quick: tuple[FiltersResult, Simulation]) -> None:
     res, _ = quick
-    lines = filters_markdown({"appendix_filters": res}, {})
+    page = Page({}, Settings.make(quick=True), {"filters": res})
+    lines = [line for part in markdown(res, page) for line in part.lines]
     assert lines[0] == "### Appendix B: reading filters and map filters"
     rows = [line for line in lines if line.startswith(("| centerline", "| carving",
                                                        "| combined"))]
     assert len(rows) == len(METHODS) * len(VARIANTS)
     assert any("Paper, Appendix B" in line for line in lines)
-    assert filters_markdown({}, {}) == []
-    section = appendix_markdown({"appendix_filters": res})
-    assert "### Appendix B: reading filters and map filters" in section

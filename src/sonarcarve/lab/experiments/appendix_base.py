@@ -1,15 +1,17 @@
-"""What the appendix experiments share: their settings, error, simulations and text helpers.
+"""What the appendix experiments share: their settings, error, simulations and summaries.
 
-The experiments themselves live in :mod:`~sonarcarve.lab.appendix_polling`,
-:mod:`~sonarcarve.lab.appendix_filters`, :mod:`~sonarcarve.lab.appendix_real_log`
-and :mod:`~sonarcarve.lab.appendix_odometry`; :mod:`sonarcarve.lab.appendix` runs
-them and writes their outputs. The helpers here are for those modules, not a general API.
+The experiments themselves live in :mod:`~sonarcarve.lab.experiments.polling`,
+:mod:`~sonarcarve.lab.experiments.filters`, :mod:`~sonarcarve.lab.experiments.real_log`
+and :mod:`~sonarcarve.lab.experiments.odometry`; they plan no jobs of the runner but run
+themselves in ``summarise``, with :class:`AppendixSettings` derived from the run's
+:class:`~sonarcarve.lab.plan.Settings`. The helpers here are for those modules, not a general
+API.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -19,6 +21,7 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import METHOD_LABELS
 from sonarcarve.lab.drawing import METHOD_COLORS
+from sonarcarve.lab.plan import Settings
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig, make_method
@@ -36,16 +39,7 @@ __all__ = [
     "METHODS",
     "AppendixError",
     "AppendixSettings",
-    "fmt_cm",
-    "fmt_dist",
-    "fmt_mm",
-    "fmt_ms",
-    "fmt_num",
-    "fmt_pct",
-    "fmt_seeds",
-    "fmt_span",
     "json_float",
-    "md_image",
     "mean_or_none",
     "office_simulation",
     "run_global_map",
@@ -88,7 +82,7 @@ class AppendixSettings:
         host's polls are not perfectly periodic.
     spread_radius : float
         Neighbourhood radius of
-        :func:`~sonarcarve.lab.appendix_real_log.line_spread`, metres.
+        :func:`~sonarcarve.lab.experiments.real_log.line_spread`, metres.
     spread_min_points : int
         Fewest points (the point itself included) for a spread to be defined.
     distance_bin : float
@@ -126,6 +120,11 @@ class AppendixSettings:
             return cls(seeds=3 if seeds is None else seeds)
         return cls(quick=True, seeds=1 if seeds is None else seeds, tour_length=40.0,
                    poll_rates=(10.0,), distance_bin=10.0)
+
+    @classmethod
+    def from_settings(cls, settings: Settings) -> AppendixSettings:
+        """The appendix's settings for a run of the experiments: quick or full, same seeds."""
+        return cls.make(quick=settings.quick, seeds=settings.seeds)
 
     def method_config(self) -> MethodConfig:
         """The library defaults (history 250, φ 22.5°, ψ 20°, ε 5 cm, δ one inch)."""
@@ -168,59 +167,3 @@ def run_global_map(batch: ReadingBatch, method: str,
     result = process_readings(batch, make_method(method, config))
     return result.global_map, {"readings": result.readings, "fully_carved": result.fully_carved,
                                "split": result.split}
-
-
-# ============================================================================ text
-
-
-def fmt_cm(value: float | None) -> str:
-    """A distance in cm, one decimal; n/a for None."""
-    return "n/a" if value is None else f"{100.0 * value:.1f} cm"
-
-
-
-def fmt_num(value: float | None, digits: int = 1) -> str:
-    """``value`` with ``digits`` decimals; n/a for None."""
-    return "n/a" if value is None else f"{value:.{digits}f}"
-
-
-def fmt_dist(value: float | None) -> str:
-    """A distance in cm below a metre, else in m."""
-    if value is None:
-        return "n/a"
-    return fmt_cm(value) if abs(value) < 1.0 else f"{value:.1f} m"
-
-
-def fmt_pct(value: float | None, digits: int = 0) -> str:
-    """A percentage; n/a for None."""
-    return "n/a" if value is None else f"{value:.{digits}f}%"
-
-
-def fmt_span(values: Sequence[float | None], fmt: Callable[[float | None], str]) -> str:
-    """``a`` or ``a-b`` (min-max) of the values that exist."""
-    ok = [v for v in values if v is not None]
-    if not ok:
-        return "n/a"
-    lo, hi = fmt(min(ok)), fmt(max(ok))
-    return lo if lo == hi else f"{lo} to {hi}"
-
-
-def fmt_seeds(n: int) -> str:
-    """``seed 0`` or ``seeds 0-{n-1}``."""
-    return "seed 0" if n == 1 else f"seeds 0-{n - 1}"
-
-
-def fmt_ms(value: float | None) -> str:
-    """Seconds shown in milliseconds; n/a for None."""
-    return "n/a" if value is None else f"{1000.0 * value:.2f} ms"
-
-
-def fmt_mm(value: float | None) -> str:
-    """Metres shown in millimetres; n/a for None."""
-    return "n/a" if value is None else f"{1000.0 * value:.1f} mm"
-
-
-
-def md_image(figs: dict[str, str], name: str, alt: str) -> list[str]:
-    """A Markdown image line for figure ``name`` (its path in ``figs``, else ``figures/name``)."""
-    return [f"![{alt}]({figs.get(name, 'figures/' + name)})", ""]

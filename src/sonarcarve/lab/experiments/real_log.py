@@ -8,9 +8,9 @@ readings each method removed and the distance to the log's reference occupancy-g
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -18,21 +18,20 @@ from scipy.spatial import cKDTree
 
 from sonarcarve.filters import MapFilter, filter_map
 from sonarcarve.lab import metrics
-from sonarcarve.lab.appendix_base import (
+from sonarcarve.lab.drawing import new_figure, save_pngs, scatter_sources
+from sonarcarve.lab.experiments.appendix_base import (
     COLORS,
     LABELS,
     METHODS,
     AppendixError,
     AppendixSettings,
-    fmt_cm,
-    fmt_num,
-    fmt_pct,
     json_float,
-    md_image,
     run_global_map,
     summary_dict,
 )
-from sonarcarve.lab.drawing import new_figure, scatter_sources
+from sonarcarve.lab.experiments.base import Artifacts, Experiment, Outputs, Page, Part, no_jobs
+from sonarcarve.lab.formatting import fmt_cm, fmt_num, fmt_pct, md_image
+from sonarcarve.lab.plan import Settings
 from sonarcarve.maps import GlobalMap, PointSource
 from sonarcarve.methods import MethodConfig
 from sonarcarve.methods.atm import atm_error_bound
@@ -42,15 +41,54 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
+    "EXPERIMENT",
     "LineSpread",
+    "RealLogResult",
     "ReferencePicture",
     "line_spread",
     "plot_real_log",
     "real_log_experiment",
-    "real_log_markdown",
     "reference_picture",
 ]
 
+
+
+@dataclass(frozen=True)
+class RealLogResult:
+    """Every method on the roboND log (``results.json``: ``appendix_real_log``).
+
+    Attributes
+    ----------
+    log : dict
+        The log: records, readings, dropped values, duration (s), path (m), sensors, median
+        range (m).
+    config : dict
+        The method configuration used (history, beam width deg, ε m, ψ deg, range quantum m).
+    spread_radius_m : float
+        Neighbourhood radius of the line spread, metres.
+    spread_min_points : int
+        Fewest neighbours for a defined spread.
+    threshold_m : float
+        The max-error threshold (ATM's bound for the log's range quantum), metres.
+    reference_cells : int
+        Occupied cells of the reference picture.
+    methods : dict
+        Per method label: points, removed share (%), points by source, line spread summary,
+        distance to the reference's occupied cells (m), fully carved and split arcs.
+    thresholded : dict
+        The same measures of each map thresholded at ``threshold_m``.
+    """
+
+    JSON_KEY: ClassVar[str] = "appendix_real_log"
+
+    log: JsonDict
+    config: JsonDict
+    spread_radius_m: float
+    spread_min_points: int
+    threshold_m: float
+    reference_cells: int
+    methods: dict[str, JsonDict]
+    thresholded: dict[str, JsonDict]
 
 
 class LineSpread(NamedTuple):
@@ -220,7 +258,7 @@ def _map_measures(gmap: GlobalMap, readings: int, settings: AppendixSettings,
     }
 
 
-def real_log_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
+def real_log_experiment(settings: AppendixSettings) -> tuple[RealLogResult, Artifacts]:
     """Every method on the bundled roboND-sonar-8 log (a real robot, 8 sensors, no truth).
 
     Per method: global-map points, share of readings removed, fully carved and split arcs, the
@@ -238,44 +276,48 @@ def real_log_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]
     picture = reference_picture()
     tree = cKDTree(picture.occupied)
     steps = np.hypot(np.diff(batch.x), np.diff(batch.y))
-    res: JsonDict = {
-        "log": {**asdict(log.report), "duration_s": float(batch.t[-1] - batch.t[0]),
-                "path_m": float(steps.sum()), "sensors": 8,
-                "range_median_m": float(np.median(batch.range))},
-        "config": {"history_size": config.history_size,
-                   "beam_width_deg": math.degrees(float(batch.beam_width[0])),
-                   "range_tolerance_m": config.range_tolerance,
-                   "min_transversal_deg": math.degrees(config.min_transversal),
-                   "range_resolution_m": config.range_resolution},
-        "spread_radius_m": settings.spread_radius,
-        "spread_min_points": settings.spread_min_points,
-        "threshold_m": threshold,
-        "reference_cells": len(picture.occupied),
-        "methods": {}, "thresholded": {},
-    }
+    res = RealLogResult(
+        log={**asdict(log.report), "duration_s": float(batch.t[-1] - batch.t[0]),
+             "path_m": float(steps.sum()), "sensors": 8,
+             "range_median_m": float(np.median(batch.range))},
+        config={"history_size": config.history_size,
+                "beam_width_deg": math.degrees(float(batch.beam_width[0])),
+                "range_tolerance_m": config.range_tolerance,
+                "min_transversal_deg": math.degrees(config.min_transversal),
+                "range_resolution_m": config.range_resolution},
+        spread_radius_m=settings.spread_radius,
+        spread_min_points=settings.spread_min_points,
+        threshold_m=threshold,
+        reference_cells=len(picture.occupied),
+        methods={}, thresholded={},
+    )
     maps: JsonDict = {}
     for method in METHODS:
         gmap, counts = run_global_map(batch, method, config)
         kept = filter_map(gmap, MapFilter(max_error=threshold)).points
         label = LABELS[method]
-        res["methods"][label] = {**_map_measures(gmap, len(batch), settings, tree),
+        res.methods[label] = {**_map_measures(gmap, len(batch), settings, tree),
                                  "fully_carved": counts["fully_carved"], "split": counts["split"]}
-        res["thresholded"][label] = _map_measures(kept, len(batch), settings, tree)
+        res.thresholded[label] = _map_measures(kept, len(batch), settings, tree)
         maps[label] = {"xy": gmap.xy, "source": gmap.source, "kept": kept.xy}
     path = np.column_stack((batch.x, batch.y))
     artifacts = {"maps": maps, "path": path, "picture": picture, "threshold": threshold}
-    return {"appendix_real_log": res}, artifacts
+    return res, artifacts
+
+
+def summarise(settings: Settings, outputs: Outputs) -> tuple[RealLogResult, Artifacts]:
+    """:func:`real_log_experiment` (the log is the same at every size; no job outputs)."""
+    return real_log_experiment(AppendixSettings.from_settings(settings))
 
 
 # ============================================================================ figure
 
 
-def plot_real_log(results: JsonDict, artifacts: JsonDict | None) -> Figure | None:
+def plot_real_log(res: RealLogResult, artifacts: JsonDict | None) -> Figure | None:
     """The roboND log: the reference picture and every method's global map, same frame."""
     art = artifacts or {}
     if not art.get("maps"):
         return None
-    res = results["appendix_real_log"]
     picture: ReferencePicture = art["picture"]
     path = np.asarray(art["path"])
     fig, axes = new_figure(2, 3, 15.0, 6.6)
@@ -299,14 +341,14 @@ def plot_real_log(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
             data = art["maps"][label]
             if which == "xy":
                 scatter_sources(ax, data["xy"], data["source"], 3.0)
-                m = res["methods"][label]
+                m = res.methods[label]
                 title = f"{label}: {m['points']} points ({m['removed_percent']:.0f}% removed)"
             else:
                 xy = np.asarray(data["kept"])
                 ax.scatter(xy[:, 0], xy[:, 1], s=3.0, c=COLORS[label], linewidths=0, zorder=3,
                            label=f"kept ({len(xy)})")
-                m = res["thresholded"][label]
-                title = (f"{label}, max error ≤ {100 * res['threshold_m']:.1f} cm: "
+                m = res.thresholded[label]
+                title = (f"{label}, max error ≤ {100 * res.threshold_m:.1f} cm: "
                          f"{m['points']} points")
             spread = m["spread"]["median"]
             ax.set_title(f"{title}\nline spread median {fmt_cm(spread)} "
@@ -324,12 +366,14 @@ def plot_real_log(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
 # ============================================================================ text
 
 
-def real_log_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
-    """The real-log subsection of the appendix section (Markdown lines); [] without results."""
-    if "appendix_real_log" not in r:
-        return []
-    res = r["appendix_real_log"]
-    log, cfg = res["log"], res["config"]
+def figure(result: RealLogResult, artifacts: Artifacts, folder: Path) -> list[Path]:
+    """The reference picture and every method's map (:func:`plot_real_log`)."""
+    return save_pngs({"appendix-real-log.png": plot_real_log(result, artifacts)}, folder)
+
+
+def markdown(res: RealLogResult, page: Page) -> list[Part]:
+    """The real-log subsection of the appendix section: the tables, then the comparison."""
+    log, cfg = res.log, res.config
     out = [
         "### The real roboND-sonar-8 log (8 sensors, no ground truth)", "",
         f"Bundled log: {log['records']} records over {log['duration_s']:.0f} s, "
@@ -337,10 +381,10 @@ def real_log_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         f"{log['no_echo']} no-echo values and {log['stale']} stale repeats "
         f"(`read_robond`); median range {log['range_median_m']:.2f} m. Methods use the library "
         f"defaults with φ = {cfg['beam_width_deg']:.0f}° (the data README) and a 1 cm range "
-        f"quantum (ATM bound, eq. 5.4: {fmt_cm(res['threshold_m'])}). *Line spread*: for each "
+        f"quantum (ATM bound, eq. 5.4: {fmt_cm(res.threshold_m)}). *Line spread*: for each "
         f"map point, the RMS perpendicular distance of the points within "
-        f"{100 * res['spread_radius_m']:.0f} cm of it from their best-fit line (PCA, n - 2 "
-        f"degrees of freedom; at least {res['spread_min_points']} points, else *isolated*): "
+        f"{100 * res.spread_radius_m:.0f} cm of it from their best-fit line (PCA, n - 2 "
+        f"degrees of freedom; at least {res.spread_min_points} points, else *isolated*): "
         "thin walls score low, smears high, no ground truth needed. *Reference distance*: "
         "distance to the nearest occupied cell of the source repository's occupancy-grid "
         "picture, which was made from the same log, so it measures agreement, not truth.", "",
@@ -348,29 +392,36 @@ def real_log_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         "isolated | reference distance median / p90 |",
         "|---|---|---|---|---|---|---|",
     ]
-    for label, m in res["methods"].items():
+    for label, m in res.methods.items():
         out.append(
             f"| {label} | {m['points']} | {fmt_num(m['removed_percent'], 0)}% | "
             f"{m['fully_carved']} / {m['split']} | {fmt_cm(m['spread']['median'])} / "
             f"{fmt_cm(m['spread']['p90'])} | {fmt_pct(m['spread']['isolated_percent'])} | "
             f"{fmt_cm(m['reference_distance']['median'])} / "
             f"{fmt_cm(m['reference_distance']['p90'])} |")
-    out += ["", f"Thresholded at max error ≤ {fmt_cm(res['threshold_m'])} "
+    out += ["", f"Thresholded at max error ≤ {fmt_cm(res.threshold_m)} "
             "(`sonarcarve process --max-error`):", "",
             "| method | points kept | removed | line spread median | isolated | "
             "reference distance median |", "|---|---|---|---|---|---|"]
-    for label, m in res["thresholded"].items():
+    for label, m in res.thresholded.items():
         out.append(
             f"| {label} | {m['points']} | {fmt_num(m['removed_percent'], 0)}% | "
             f"{fmt_cm(m['spread']['median'])} | {fmt_pct(m['spread']['isolated_percent'])} | "
             f"{fmt_cm(m['reference_distance']['median'])} |")
     out.append("")
-    out += md_image(figs, "appendix-real-log.png", "roboND log: reference picture and maps")
-    ms, th = res["methods"], res["thresholded"]
+    out += md_image(page.figures, "appendix-real-log.png",
+                    "roboND log: reference picture and maps")
+    return [Part(30, out + _real_log_sentences(res))]
+
+
+def _real_log_sentences(res: RealLogResult) -> list[str]:
+    """Sharpness and reference distance ranked, and the comparison with the paper."""
+    log = res.log
+    ms, th = res.methods, res.thresholded
     order = sorted(ms, key=lambda k: ms[k]["spread"]["median"] or math.inf)
     by_ref = sorted(ms, key=lambda k: ms[k]["reference_distance"]["median"] or math.inf)
     carve = ms["carving"]
-    out += [
+    return [
         "- Line spread, sharpest first: " + ", ".join(
             f"{k} {fmt_cm(ms[k]['spread']['median'])}" for k in order)
         + "; reference distance, closest first: " + ", ".join(
@@ -395,4 +446,7 @@ def real_log_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         "sharpest maps of this log.",
         "",
     ]
-    return out
+
+
+EXPERIMENT = Experiment("real-log", "the real roboND 8-sensor log, every method, map sharpness",
+                        "appendix", no_jobs, summarise, figure, markdown)

@@ -10,6 +10,10 @@ readings (crosstalk, floor echoes, multipath) or true (direct) ones.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar
+
 import numpy as np
 
 from sonarcarve.filters import (
@@ -22,16 +26,16 @@ from sonarcarve.filters import (
 )
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import fig13_threshold
-from sonarcarve.lab.appendix_base import (
+from sonarcarve.lab.experiments.appendix_base import (
     LABELS,
     AppendixSettings,
-    fmt_cm,
-    fmt_num,
-    fmt_seeds,
     mean_or_none,
     office_simulation,
     summary_dict,
 )
+from sonarcarve.lab.experiments.base import Artifacts, Experiment, Outputs, Page, Part, no_jobs
+from sonarcarve.lab.formatting import fmt_cm, fmt_num, fmt_seeds
+from sonarcarve.lab.plan import Settings
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.pipeline import process_readings
@@ -40,13 +44,14 @@ from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.typing import BoolArray, FloatArray, JsonDict
 
 __all__ = [
+    "EXPERIMENT",
     "FILTER_METHODS",
     "JUMP_THRESHOLD",
     "OUTLIER_NEIGHBOURS",
     "OUTLIER_RADIUS",
+    "FiltersResult",
     "filter_variants",
     "filters_experiment",
-    "filters_markdown",
 ]
 
 Variant = tuple[ReadingFilter | None, MapFilter | None]
@@ -69,6 +74,32 @@ _NOUNS = {"max_range": "the maximum range", "jump": "the jump filter",
 _KEYS = ("readings_dropped", "points_before_map_filter", "points_dropped", "points",
          "spurious_removed_by_filters", "direct_removed_by_filters", "spurious_removed",
          "direct_removed", "spurious_points")
+
+
+@dataclass(frozen=True)
+class FiltersResult:
+    """Appendix B measured (``results.json``: ``appendix_filters``).
+
+    Attributes
+    ----------
+    scenario : dict
+        The tour (``tour_m``, ``whole_tour``), seeds, mean readings and spurious share (%).
+    filters : dict
+        The filters' parameters (max range m, jump threshold m, outlier radius m and
+        neighbours, max error m).
+    variants : dict
+        Filter setting name -> its label (see :func:`filter_variants`).
+    methods : dict
+        Per method label, per filter setting: means over seeds of the counts and shares of
+        :func:`_judge` and the map's ``error`` (median, p90, mean m).
+    """
+
+    JSON_KEY: ClassVar[str] = "appendix_filters"
+
+    scenario: JsonDict
+    filters: JsonDict
+    variants: dict[str, str]
+    methods: dict[str, dict[str, JsonDict]]
 
 
 def filter_variants(config: MethodConfig) -> dict[str, tuple[str, Variant]]:
@@ -153,7 +184,7 @@ def _method_runs(batch: ReadingBatch, spurious: BoolArray, segments: FloatArray,
     return out
 
 
-def filters_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
+def filters_experiment(settings: AppendixSettings) -> tuple[FiltersResult, Artifacts]:
     """Appendix B: each reading and map filter, and all together, on the office tour.
 
     Per seed (the office experiment's simulations: same scenario, same seeds), for centerline,
@@ -165,8 +196,8 @@ def filters_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
 
     Returns
     -------
-    tuple of dict
-        ``{"appendix_filters": ...}`` and no artifacts (the section is a table).
+    tuple
+        The :class:`FiltersResult` and no artifacts (the section is a table).
     """
     config = settings.method_config()
     variants = filter_variants(config)
@@ -192,30 +223,37 @@ def filters_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
             entry["error"] = {q: mean_or_none([p["error"][q] for p in per])
                               for q in ("median", "p90", "mean")}
             methods[label][name] = entry
-    res: JsonDict = {
-        "scenario": {"world": "office", "robot": "scout2", "seeds": settings.seeds,
-                     "tour_m": runs[0]["tour_m"], "whole_tour": settings.tour_length is None,
-                     "readings": mean_or_none([r["readings"] for r in runs]),
-                     "spurious_percent": mean_or_none([r["spurious_percent"] for r in runs])},
-        "filters": {"max_range_m": PAPER_MAX_RANGE, "jump_threshold_m": JUMP_THRESHOLD,
-                    "outlier_radius_m": OUTLIER_RADIUS,
-                    "outlier_neighbours": OUTLIER_NEIGHBOURS,
-                    "max_error_m": fig13_threshold(config)},
-        "variants": {name: label for name, (label, _) in variants.items()},
-        "methods": methods,
-    }
-    return {"appendix_filters": res}, {}
+    result = FiltersResult(
+        scenario={"world": "office", "robot": "scout2", "seeds": settings.seeds,
+                  "tour_m": runs[0]["tour_m"], "whole_tour": settings.tour_length is None,
+                  "readings": mean_or_none([r["readings"] for r in runs]),
+                  "spurious_percent": mean_or_none([r["spurious_percent"] for r in runs])},
+        filters={"max_range_m": PAPER_MAX_RANGE, "jump_threshold_m": JUMP_THRESHOLD,
+                 "outlier_radius_m": OUTLIER_RADIUS,
+                 "outlier_neighbours": OUTLIER_NEIGHBOURS,
+                 "max_error_m": fig13_threshold(config)},
+        variants={name: label for name, (label, _) in variants.items()},
+        methods=methods,
+    )
+    return result, {}
+
+
+def summarise(settings: Settings, outputs: Outputs) -> tuple[FiltersResult, Artifacts]:
+    """:func:`filters_experiment` at the appendix's size for ``settings`` (no job outputs)."""
+    return filters_experiment(AppendixSettings.from_settings(settings))
+
+
+def figure(result: FiltersResult, artifacts: Artifacts, folder: Path) -> list[Path]:
+    """No figure: the section is a table."""
+    return []
 
 
 # ============================================================================ text
 
 
-def filters_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
-    """The Appendix B subsection of the appendix section (Markdown lines); [] without results."""
-    if "appendix_filters" not in r:
-        return []
-    res = r["appendix_filters"]
-    sc, f = res["scenario"], res["filters"]
+def markdown(res: FiltersResult, page: Page) -> list[Part]:
+    """The Appendix B subsection of the appendix section."""
+    sc, f = res.scenario, res.filters
     out = [
         "### Appendix B: reading filters and map filters", "",
         f"The office tour ({sc['tour_m']:.0f} m, {fmt_seeds(sc['seeds'])}"
@@ -239,10 +277,10 @@ def filters_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         "spurious points (%) | error median / p90 |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    for label, entries in res["methods"].items():
+    for label, entries in res.methods.items():
         for name, e in entries.items():
             out.append(
-                f"| {label} | {res['variants'][name]} | {fmt_num(e['readings_dropped'], 0)} | "
+                f"| {label} | {res.variants[name]} | {fmt_num(e['readings_dropped'], 0)} | "
                 f"{fmt_num(e['points_dropped'], 0)} | "
                 f"{fmt_num(e['spurious_removed_by_filters'], 1)} / "
                 f"{fmt_num(e['spurious_removed'], 1)} | "
@@ -251,13 +289,13 @@ def filters_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
                 f"{fmt_num(e['spurious_points'], 1)} | {fmt_cm(e['error']['median'])} / "
                 f"{fmt_cm(e['error']['p90'])} |")
     out += ["", *_filter_sentences(res), ""]
-    return out
+    return [Part(20, out)]
 
 
-def _filter_sentences(res: JsonDict) -> list[str]:
+def _filter_sentences(res: FiltersResult) -> list[str]:
     """The comparison with the paper's claim, and what each filter costs."""
-    carve = res["methods"].get("carving")
-    center = res["methods"].get("centerline")
+    carve = res.methods.get("carving")
+    center = res.methods.get("centerline")
     if not carve or not center:
         return []
     none, every = carve["none"], carve["all"]
@@ -307,3 +345,7 @@ def _filter_sentences(res: JsonDict) -> list[str]:
         "local map (the last 250 readings), so an isolated point finds neighbours more easily "
         "than it would there.",
     ]
+
+
+EXPERIMENT = Experiment("filters", "Appendix B: reading and map filters, judged by the truth",
+                        "appendix", no_jobs, summarise, figure, markdown)

@@ -6,36 +6,71 @@ reading's pose error (what the local map itself got wrong), for carving and comb
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from sonarcarve.lab import metrics
-from sonarcarve.lab.appendix_base import (
+from sonarcarve.lab.drawing import new_figure, save_pngs, segments_collection
+from sonarcarve.lab.experiments.appendix_base import (
     COLORS,
     LABELS,
     AppendixSettings,
+    mean_or_none,
+    office_simulation,
+    run_global_map,
+    summary_dict,
+)
+from sonarcarve.lab.experiments.base import Artifacts, Experiment, Outputs, Page, Part, no_jobs
+from sonarcarve.lab.formatting import (
     fmt_cm,
     fmt_dist,
     fmt_num,
     fmt_seeds,
     fmt_span,
     md_image,
-    mean_or_none,
-    office_simulation,
-    run_global_map,
-    summary_dict,
 )
-from sonarcarve.lab.drawing import new_figure, segments_collection
+from sonarcarve.lab.plan import Settings
 from sonarcarve.typing import FloatArray, JsonDict
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from sonarcarve.sim.motion import Trajectory
 
-__all__ = ["odometry_experiment", "odometry_markdown", "plot_odometry"]
+__all__ = ["EXPERIMENT", "OdometryResult", "odometry_experiment", "plot_odometry"]
 
+
+@dataclass(frozen=True)
+class OdometryResult:
+    """Fig. 7 measured (``results.json``: ``appendix_odometry``).
+
+    Attributes
+    ----------
+    scenario : dict
+        The tour (``tour_m``), seeds, robot and the odometry drift model.
+    distance_bin_m : float
+        Width of the distance-travelled bins, metres.
+    final_pose_error_m : float or None
+        Dead-reckoned position error at the end of the tour, mean over seeds, metres.
+    pose_error_by_distance : dict
+        The robot's position error by distance travelled (``edges``, ``median``, ``count``).
+    methods : dict
+        For carving and combined, per map (``true_poses``, ``odometry``,
+        ``odometry_corrected``, ``drift_shift``): error summary (m), points, and the median by
+        distance travelled; means over seeds.
+    """
+
+    JSON_KEY: ClassVar[str] = "appendix_odometry"
+
+    scenario: JsonDict
+    distance_bin_m: float
+    final_pose_error_m: float | None
+    pose_error_by_distance: JsonDict
+    methods: dict[str, JsonDict]
 
 
 def _pose_corrected(xy: FloatArray, t: FloatArray, truth: Trajectory,
@@ -103,7 +138,7 @@ def _odometry_run(settings: AppendixSettings, seed: int, edges: FloatArray,
     return out
 
 
-def odometry_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]:
+def odometry_experiment(settings: AppendixSettings) -> tuple[OdometryResult, Artifacts]:
     """Fig. 7: the office tour mapped from dead-reckoned poses against true poses.
 
     Carving and combined, per seed (odometry drift seeded alike, with the defaults of
@@ -124,39 +159,53 @@ def odometry_experiment(settings: AppendixSettings) -> tuple[JsonDict, JsonDict]
         return {"edges": combined["edges"], "median": combined["value"],
                 "count": combined["count"]}
 
-    res: JsonDict = {
-        "scenario": {"world": "office", "robot": "scout2", "seeds": settings.seeds,
-                     "tour_m": runs[0]["tour_m"], "drift": "with_odometry_drift defaults: "
-                     "0.01 m/sqrt(m), 0.005 rad/sqrt(m), bias 0.001 rad/m"},
-        "distance_bin_m": settings.distance_bin,
-        "final_pose_error_m": mean_or_none([r["final_pose_error_m"] for r in runs]),
-        "pose_error_by_distance": curve([r["pose_error_by_distance"] for r in runs]),
-        "methods": {},
-    }
+    res = OdometryResult(
+        scenario={"world": "office", "robot": "scout2", "seeds": settings.seeds,
+                  "tour_m": runs[0]["tour_m"], "drift": "with_odometry_drift defaults: "
+                  "0.01 m/sqrt(m), 0.005 rad/sqrt(m), bias 0.001 rad/m"},
+        distance_bin_m=settings.distance_bin,
+        final_pose_error_m=mean_or_none([r["final_pose_error_m"] for r in runs]),
+        pose_error_by_distance=curve([r["pose_error_by_distance"] for r in runs]),
+        methods={},
+    )
     for label in ("carving", "combined"):
-        res["methods"][label] = {
+        res.methods[label] = {
             name: {"error": {q: mean_or_none([r["methods"][label][name]["error"][q] for r in runs])
                              for q in ("median", "p90", "mean")},
                    "points": mean_or_none([r["methods"][label][name]["points"] for r in runs]),
                    "by_distance": curve([r["methods"][label][name]["by_distance"]
                                          for r in runs])}
             for name in ("true_poses", "odometry", "odometry_corrected", "drift_shift")}
-    return {"appendix_odometry": res}, artifacts
+    return res, artifacts
+
+
+def summarise(settings: Settings, outputs: Outputs) -> tuple[OdometryResult, Artifacts]:
+    """:func:`odometry_experiment` at the appendix's size for ``settings`` (no job outputs)."""
+    return odometry_experiment(AppendixSettings.from_settings(settings))
 
 
 # ============================================================================ figure
 
 
-def plot_odometry(results: JsonDict, artifacts: JsonDict | None) -> Figure | None:
+def plot_odometry(res: OdometryResult, artifacts: JsonDict | None) -> Figure | None:
     """Fig. 7: maps from true and from dead-reckoned poses, and error against distance."""
     art = artifacts or {}
     if not art.get("maps"):
         return None
-    res = results["appendix_odometry"]
-    world = np.asarray(art["world"])
     fig = new_figure(1, 1, 16.0, 10.0)[0]
     fig.clf()
     grid = fig.add_gridspec(2, 3)
+    _map_panels(fig, grid, res, art)
+    _distance_curves(fig.add_subplot(grid[:, 2]), res)
+    fig.suptitle(f"Fig. 7: office tour ({res.scenario['tour_m']:.0f} m) mapped without "
+                 f"correcting dead reckoning (seed 0 maps; curves: mean over "
+                 f"{fmt_seeds(res.scenario['seeds'])})")
+    return fig
+
+
+def _map_panels(fig: Figure, grid: Any, res: OdometryResult, art: JsonDict) -> None:
+    """Carving's and combined's maps from true and from dead-reckoned poses (seed 0)."""
+    world = np.asarray(art["world"])
     # One frame for all four maps (the world, the drifted path and most drifted points), so
     # that the panels share a size and a drifted map is seen against the same walls.
     drifted = np.vstack([np.asarray(art["maps"][k]["odometry"]) for k in art["maps"]])
@@ -171,7 +220,7 @@ def plot_odometry(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
             ax.scatter(xy[:, 0], xy[:, 1], s=0.6, c=COLORS[label], linewidths=0, zorder=3)
             path = np.asarray(art["true_path" if name == "true_poses" else "odometry_path"])
             ax.plot(path[:, 0], path[:, 1], c="0.3", lw=0.5, zorder=2)
-            err = res["methods"][label][name]["error"]
+            err = res.methods[label][name]["error"]
             where = "true poses" if name == "true_poses" else "dead-reckoned poses"
             ax.set_title(f"{label} from {where}: {len(xy)} points\nerror to nearest wall "
                          f"median {fmt_cm(err['median'])} (mean over seeds)", fontsize=9)
@@ -179,8 +228,11 @@ def plot_odometry(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
             ax.set_ylim(lo[1], hi[1])
             ax.set_aspect("equal")
             ax.tick_params(labelsize=7)
-    ax = fig.add_subplot(grid[:, 2])
-    pose = res["pose_error_by_distance"]
+
+
+def _distance_curves(ax: Axes, res: OdometryResult) -> None:
+    """Medians by distance travelled: pose error, drift shift, and the maps' errors."""
+    pose = res.pose_error_by_distance
     centers = 0.5 * (np.asarray(pose["edges"][1:]) + np.asarray(pose["edges"][:-1]))
 
     def line(entry: JsonDict, **style: Any) -> None:
@@ -189,7 +241,7 @@ def plot_odometry(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
 
     line(pose, c="k", ls="--", label="robot position error (dead reckoning)")
     for label in ("carving", "combined"):
-        m, color = res["methods"][label], COLORS[label]
+        m, color = res.methods[label], COLORS[label]
         line(m["drift_shift"]["by_distance"], c=color, ls=":",
              label=f"{label}: shift of points by drift")
         line(m["odometry"]["by_distance"], c=color, ls="-",
@@ -204,26 +256,25 @@ def plot_odometry(results: JsonDict, artifacts: JsonDict | None) -> Figure | Non
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
     ax.set_title("what drifts is the pose, not the local map", fontsize=9)
-    fig.suptitle(f"Fig. 7: office tour ({res['scenario']['tour_m']:.0f} m) mapped without "
-                 f"correcting dead reckoning (seed 0 maps; curves: mean over "
-                 f"{fmt_seeds(res['scenario']['seeds'])})")
-    return fig
+
+
+def figure(result: OdometryResult, artifacts: Artifacts, folder: Path) -> list[Path]:
+    """Fig. 7 measured (:func:`plot_odometry`)."""
+    return save_pngs({"appendix-odometry.png": plot_odometry(result, artifacts)}, folder)
 
 
 # ============================================================================ text
 
 
-def odometry_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
-    """The odometry subsection of the appendix section (Markdown lines); [] without results."""
-    if "appendix_odometry" not in r:
-        return []
-    res = r["appendix_odometry"]
-    sc = res["scenario"]
+def markdown(res: OdometryResult, page: Page) -> list[Part]:
+    """The odometry subsection of the appendix section: errors overall and by distance
+    travelled, the figure, the comparison with the paper."""
+    sc = res.scenario
     out = [
         "### Fig. 7: global maps from dead-reckoned poses", "",
         f"The office tour ({sc['tour_m']:.0f} m, {fmt_seeds(sc['seeds'])}) stamped with "
         f"dead-reckoned poses ({sc['drift']}; final position error "
-        f"{fmt_num(res['final_pose_error_m'], 1)} m, mean over seeds) against true poses. Errors "
+        f"{fmt_num(res.final_pose_error_m, 1)} m, mean over seeds) against true poses. Errors "
         "are to the nearest true wall; *pose error removed* moves each point by its reading's "
         "pose error (true pose composed with the inverse of the believed pose at that time), "
         "leaving what the local map itself got wrong; *shift* is how far the drift moved each "
@@ -233,7 +284,7 @@ def odometry_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         "shift by drift median |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for label, m in res["methods"].items():
+    for label, m in res.methods.items():
         out.append(
             f"| {label} | {m['true_poses']['points']:.0f} / {m['odometry']['points']:.0f} | "
             f"{fmt_cm(m['true_poses']['error']['median'])} | "
@@ -242,12 +293,19 @@ def odometry_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
             f"{fmt_cm(m['true_poses']['error']['p90'])} | "
             f"{fmt_cm(m['odometry_corrected']['error']['p90'])} | "
             f"{fmt_num(m['drift_shift']['error']['median'], 2)} m |")
-    pose = res["pose_error_by_distance"]
+    out += _distance_table(res)
+    out += md_image(page.figures, "appendix-odometry.png", "Fig. 7: maps from odometry")
+    return [Part(40, out + _odometry_sentences(res))]
+
+
+def _distance_table(res: OdometryResult) -> list[str]:
+    """Medians in the first, middle and last distance bins that hold points."""
+    pose = res.pose_error_by_distance
     edges = pose["edges"]
     picks = [k for k in range(len(edges) - 1) if pose["count"][k]]
     picks = sorted({picks[0], picks[len(picks) // 2], picks[-1]}) if picks else []
     head = " | ".join(f"{edges[k]:.0f}-{edges[k + 1]:.0f} m" for k in picks)
-    out += ["", "Median per distance-travelled bin (mean over seeds):", "",
+    out = ["", "Median per distance-travelled bin (mean over seeds):", "",
             f"| quantity | {head} |", "|---|" + "---|" * len(picks)]
 
     def row(name: str, entry: JsonDict, metres: bool = False) -> str:
@@ -256,17 +314,21 @@ def odometry_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         return f"| {name} | " + " | ".join(cells) + " |"
 
     out.append(row("robot position error (dead reckoning)", pose, metres=True))
-    for label, m in res["methods"].items():
+    for label, m in res.methods.items():
         out.append(row(f"{label}: error, odometry", m["odometry"]["by_distance"]))
         out.append(row(f"{label}: error, pose error removed",
                        m["odometry_corrected"]["by_distance"]))
         out.append(row(f"{label}: error, true poses", m["true_poses"]["by_distance"]))
     out.append("")
-    out += md_image(figs, "appendix-odometry.png", "Fig. 7: maps from odometry")
-    c = res["methods"]["combined"]
+    return out
+
+
+def _odometry_sentences(res: OdometryResult) -> list[str]:
+    """Raw against pose-corrected error, compared with the paper's Fig. 7."""
+    c = res.methods["combined"]
     shift = [v for v in c["drift_shift"]["by_distance"]["median"] if v is not None]
     corrected = [v for v in c["odometry_corrected"]["by_distance"]["median"] if v is not None]
-    out += [
+    return [
         "- Paper, Fig. 7: the 5000 m² map \"is not adjusted for dead reckoning error\". "
         f"Measured (combined): the global map's median error to the nearest wall is "
         f"{fmt_cm(c['odometry']['error']['median'])} from dead-reckoned poses against "
@@ -282,4 +344,7 @@ def odometry_markdown(r: JsonDict, figs: dict[str, str]) -> list[str]:
         "hierarchical SLAM [1].",
         "",
     ]
-    return out
+
+
+EXPERIMENT = Experiment("odometry", "Fig. 7: global maps from dead-reckoned poses", "appendix",
+                        no_jobs, summarise, figure, markdown)

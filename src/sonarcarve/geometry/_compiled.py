@@ -1,0 +1,85 @@
+"""Compiled-kernel plumbing: one decorator for every numba kernel of the product.
+
+Why not plain ``numba.njit(cache=True)``: numba keys a function's on-disk cache on the
+modification time and size of *that function's own file*. A kernel that calls a compiled function
+of another module (``methods/carving.py`` calls :func:`~sonarcarve.geometry.carve_arcs`, which
+calls the specular helpers of ``geometry/specular.py``) has the callee's machine code inlined into
+its own cache entry, so editing the callee's file would leave the caller running the old code.
+
+:func:`compiled` therefore keys every cache entry on :data:`SOURCES_STAMP`, a hash of the source
+files of every module that may hold a kernel (:data:`KERNEL_FOLDERS`): any edit to any of them
+invalidates every cached kernel at once, and an unchanged tree reuses the cache. The rule that
+keeps this sound: a compiled kernel calls only kernels defined under :data:`KERNEL_FOLDERS`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar, cast
+
+from numba import njit
+from numba.core.caching import FunctionCache, IndexDataCacheFile
+
+__all__ = ["KERNEL_FOLDERS", "SOURCES_STAMP", "compiled", "compiled_inline"]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+#: Folders of the ``sonarcarve`` package whose modules may define compiled kernels.
+KERNEL_FOLDERS = ("geometry", "methods")
+
+
+def _sources_stamp() -> str:
+    """SHA-256 over the names and contents of every ``.py`` file in :data:`KERNEL_FOLDERS`."""
+    package = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha256()
+    for folder in KERNEL_FOLDERS:
+        for path in sorted((package / folder).glob("*.py")):
+            digest.update(f"{folder}/{path.name}\0".encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+#: The cache key of every compiled kernel (see the module docstring).
+SOURCES_STAMP = _sources_stamp()
+
+
+class _SourcesKeyedCache(FunctionCache):
+    """numba's function cache with the index stamped by :data:`SOURCES_STAMP`.
+
+    Everything else (where the files go, ``NUMBA_CACHE_DIR``, the index format) is numba's; only
+    the freshness stamp, which numba takes from the function's own file, is replaced.
+    """
+
+    def __init__(self, py_func: Callable[..., Any]) -> None:
+        super().__init__(py_func)  # type: ignore[no-untyped-call]  # numba is untyped
+        self._cache_file = IndexDataCacheFile(  # type: ignore[no-untyped-call]
+            cache_path=self._cache_path, filename_base=self._impl.filename_base,
+            source_stamp=SOURCES_STAMP,
+        )
+
+
+def compiled(func: _F) -> _F:
+    """``numba.njit`` with an on-disk cache keyed on all kernel sources (module docstring).
+
+    Typed so that mypy keeps the function's own signature.
+    """
+    return _compile(func, inline=False)
+
+
+def compiled_inline(func: _F) -> _F:
+    """:func:`compiled`, inlined into its callers by numba (``inline="always"``).
+
+    For the small helpers of a hot loop: a call that passes a record such as
+    :class:`~sonarcarve.geometry.sector.Sector` costs as much as the helper's own arithmetic.
+    Inlining changes no arithmetic, so results stay bit-identical.
+    """
+    return _compile(func, inline=True)
+
+
+def _compile(func: _F, *, inline: bool) -> _F:
+    dispatcher = njit(inline="always" if inline else "never")(func)
+    # numba's Dispatcher.enable_caching does exactly this with its own FunctionCache.
+    dispatcher._cache = _SourcesKeyedCache(func)  # type: ignore[attr-defined]  # numba internal
+    return cast(_F, dispatcher)

@@ -1,0 +1,80 @@
+"""A circle around an arc, and the cheap test of that circle against a freespace sector."""
+
+from __future__ import annotations
+
+import math
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
+from sonarcarve.geometry.sector import Sector
+
+__all__ = ["UNDECIDED", "arc_bounding_circle", "circle_against_sector"]
+
+#: :func:`circle_against_sector` could not decide: the exact carving must.
+UNDECIDED = -1
+
+
+@compiled
+def arc_bounding_circle(ox: float, oy: float, r: float, lo: float,
+                        hi: float) -> tuple[float, float, float]:
+    """A circle that contains the arc ``o + r e(τ)``, ``τ ∈ [lo, hi]`` (eq. 3.1).
+
+    For a half-width ``β = (hi - lo)/2 ≤ π/2`` it is the circle on the chord: centre
+    ``o + r cos β e(mid)``, radius ``r sin β`` (every point of the arc is within half a chord of
+    the chord's middle because the sagitta ``r (1 - cos β)`` is at most ``r sin β``). Wider arcs
+    get the arc's own circle, radius ``r``. The radius is padded by ``1e-9 r`` so that tests
+    against it stay conservative under rounding.
+
+    Returns
+    -------
+    cx, cy, radius : float
+        Centre and radius, metres.
+
+    Examples
+    --------
+    >>> cx, cy, radius = arc_bounding_circle(0.0, 0.0, 1.0, -math.pi / 4, math.pi / 4)
+    >>> round(cx, 9), round(cy, 9), round(radius, 9)  # the chord x = cos 45°, half-length sin 45°
+    (0.707106781, 0.0, 0.707106782)
+    """
+    half = 0.5 * (hi - lo)
+    if half > 0.5 * math.pi:
+        return ox, oy, r * (1.0 + 1e-9)
+    mid = 0.5 * (lo + hi)
+    reach = r * math.cos(half)
+    return (ox + reach * math.cos(mid), oy + reach * math.sin(mid),
+            r * math.sin(half) + 1e-9 * r)
+
+
+@compiled_inline
+def circle_against_sector(cx: float, cy: float, rho: float, ox: float, oy: float, r: float,
+                          sector: Sector) -> int:
+    """What a sector does to an arc, judged from a circle ``(cx, cy, rho)`` that contains it.
+
+    ``UNCHANGED`` when the circle is clear of the disk or of one bounding half-plane;
+    ``FULLY_CARVED`` when it lies inside the sector (with ``β < π/2``: and every point ``p`` of
+    the arc is certain to have ``sin γ(p) ≤ sin β``, which holds when ``D = |o_i - o_j| ≤ r sin β``
+    (:mod:`~sonarcarve.geometry.specular`) or, since ``sin γ ≤ D / |p - o_j|`` (law of sines),
+    when ``D ≤ sin β`` times the circle's least distance from ``o_j``); :data:`UNDECIDED`
+    otherwise. Both verdicts are exact because the circle contains the arc ``(ox, oy, r)``.
+    """
+    radius = sector.radius
+    dx = cx - sector.fx
+    dy = cy - sector.fy
+    left = sector.u1x * dy - sector.u1y * dx  # u1 × (c - o_j): > 0 left of the f_lo ray
+    right = dx * sector.u2y - dy * sector.u2x  # (c - o_j) × u2: > 0 right of the f_hi ray
+    if left < -rho or right < -rho:
+        return UNCHANGED
+    dist2 = dx * dx + dy * dy
+    if dist2 >= (radius + rho) * (radius + rho):
+        return UNCHANGED
+    inside = left > rho and right > rho and radius > rho and dist2 < (radius - rho) ** 2
+    sin_beta = sector.sin_beta
+    if inside and sin_beta < 1.0:
+        sb2 = sin_beta * sin_beta
+        ex = ox - sector.fx
+        ey = oy - sector.fy
+        origins2 = ex * ex + ey * ey  # D²
+        if origins2 > sb2 * r * r:
+            clearance = math.sqrt(dist2) - rho
+            inside = clearance > 0.0 and origins2 <= sb2 * clearance * clearance
+    return FULLY_CARVED if inside else UNDECIDED

@@ -1,0 +1,226 @@
+"""One validation of a reading and of a method's parameters, whatever the way in.
+
+``SonarMethod.add`` / ``add_many`` and ``ReadingBatch`` refuse the same readings with the same
+messages; ``MethodConfig``, the method constructors and the CLI refuse the same parameters. A
+refused reading leaves the method exactly as it was.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.errors import ConfigError, ReadingsError, SonarcarveError
+from sonarcarve.methods import (
+    METHODS,
+    AtmMethod,
+    CarvingMethod,
+    CenterlineMethod,
+    CombinedMethod,
+    MethodConfig,
+    SonarMethod,
+    make_method,
+)
+from sonarcarve.readings import Reading, ReadingBatch
+
+GOOD = Reading(1.0, 0, 0.0, 0.0, 0.0, 2.0)
+
+# (field overrides of a reading at t = 2, the column named in the error, the problem).
+BAD_READINGS = [
+    ({"t": math.nan}, "t", "is NaN or infinite"),
+    ({"t": math.inf}, "t", "is NaN or infinite"),
+    ({"x": math.nan}, "x", "is NaN or infinite"),
+    ({"y": -math.inf}, "y", "is NaN or infinite"),
+    ({"theta": math.nan}, "theta", "is NaN or infinite"),
+    ({"range": math.inf}, "range", "is NaN or infinite"),
+    ({"range": math.nan}, "range", "is NaN or infinite"),
+    ({"range": 0.0}, "range", "must be > 0"),
+    ({"range": -1.0}, "range", "must be > 0"),
+    ({"sensor": -1}, "sensor", "must be >= 0"),
+    ({"sensor": 1.5}, "sensor", "is not a whole number"),
+    ({"sensor": 2**31}, "sensor", "must be at most 2147483647"),
+    ({"beam_width": 0.0}, "beam_width", "must lie in (0, pi) radians"),
+    ({"beam_width": math.radians(225.0)}, "beam_width", "must lie in (0, pi) radians"),
+    ({"beam_width": math.pi}, "beam_width", "must lie in (0, pi) radians"),
+    ({"beam_width": math.inf}, "beam_width", "must lie in (0, pi) radians"),
+    ({"t": 0.5}, "t", "goes backwards in time"),  # the previous reading is at t = 1
+]
+
+
+def _snapshot(method: SonarMethod) -> tuple[object, ...]:
+    local = method.local_map()
+    measures = method.measures()
+    return (method.readings, len(method.history), local.reading_id.tolist(),
+            local.xy.tolist(), measures.unprocessed_share, measures.fully_carved)
+
+
+@pytest.mark.parametrize("name", sorted(METHODS))
+@pytest.mark.parametrize(("change", "column", "problem"), BAD_READINGS)
+def test_add_refuses_a_bad_reading_and_changes_nothing(
+    name: str, change: dict[str, float], column: str, problem: str
+) -> None:
+    method = make_method(name, MethodConfig(history_size=5))
+    method.add(GOOD)
+    before = _snapshot(method)
+    bad = GOOD._replace(t=2.0)._replace(**change)
+    with pytest.raises(ReadingsError) as caught:
+        method.add(bad)
+    assert isinstance(caught.value, SonarcarveError)
+    assert str(caught.value) == f"reading 1, column {column!r} {problem}"
+    assert _snapshot(method) == before
+    method.add(GOOD._replace(t=2.0, range=1.0))  # the stream goes on, ids unbroken
+    assert method.local_map().reading_id.tolist()[-1] == 1
+
+
+def test_inf_range_no_longer_poisons_the_combined_map() -> None:
+    method = CombinedMethod(history_size=60)
+    for i in range(50):
+        method.add(Reading(0.1 * i, i % 4, 0.05 * i, 0.0, 1.5, 1.0 + 0.01 * i))
+    with pytest.raises(ReadingsError, match="column 'range' is NaN or infinite"):
+        method.add(Reading(5.0, 0, 2.5, 0.0, 1.5, math.inf))
+    points = method.finish()
+    assert len(points) > 0
+    assert np.isfinite(points.xy).all()
+
+
+def test_nan_beam_width_means_the_method_default() -> None:
+    method = CenterlineMethod(beam_width=0.3)
+    method.add(GOOD)  # beam_width NaN
+    assert method.history.beam_width[0] == 0.3
+    assert method.local_map().width.tolist() == [0.3]
+
+
+def test_equal_times_are_accepted() -> None:
+    method = CenterlineMethod()
+    method.add(GOOD)
+    method.add(GOOD._replace(sensor=1))
+    assert method.readings == 2
+
+
+def _raw_batch(**change: list[float]) -> ReadingBatch:
+    """A batch built without validation, as a caller could."""
+    columns = {"t": [2.0, 3.0, 4.0], "x": [0.0, 0.1, 0.2], "y": [0.0, 0.0, 0.0],
+               "theta": [0.0, 0.0, 0.0], "range": [1.0, 1.5, 2.0],
+               "beam_width": [math.nan] * 3, **change}
+    return ReadingBatch(sensor=np.array([0, 1, 2]),
+                        **{k: np.asarray(v, dtype=float) for k, v in columns.items()})
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"range": [1.0, 1.5, -2.0]}, "reading 3, column 'range' must be > 0"),
+    ({"theta": [0.0, math.nan, 0.0]}, "reading 2, column 'theta' is NaN or infinite"),
+    ({"t": [0.5, 3.0, 4.0]}, "reading 1, column 't' goes backwards in time"),
+    ({"t": [2.0, 3.0, 2.5]}, "reading 3, column 't' goes backwards in time"),
+    ({"beam_width": [0.3, 4.0, 0.3]}, "reading 2, column 'beam_width' must lie in (0, pi)"),
+])
+def test_add_many_validates_the_batch_once_and_changes_nothing(
+    change: dict[str, list[float]], message: str
+) -> None:
+    method = CarvingMethod(history_size=5)
+    method.add(GOOD)
+    before = _snapshot(method)
+    with pytest.raises(ReadingsError) as caught:
+        method.add_many(_raw_batch(**change))
+    assert message in str(caught.value)
+    assert _snapshot(method) == before
+    method.add_many(_raw_batch())
+    assert method.readings == 4
+
+
+def test_add_many_does_not_check_reading_by_reading(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sonarcarve.methods.base as base
+
+    def refuse(*args: object) -> None:
+        raise AssertionError("add_many re-validated a reading")
+
+    monkeypatch.setattr(base, "check_reading", refuse)
+    method = CenterlineMethod()
+    method.add_many(_raw_batch())
+    assert method.readings == 3
+
+
+# -- parameters --------------------------------------------------------------------------------
+
+BAD_PARAMETERS = [
+    ("history_size", 0), ("history_size", -3), ("history_size", 100_001), ("history_size", True),
+    ("history_size", 2.5), ("history_size", "10"),
+    ("beam_width", 0.0), ("beam_width", math.pi), ("beam_width", -0.1), ("beam_width", math.nan),
+    ("beam_width", math.inf), ("beam_width", "wide"),
+    ("range_tolerance", -0.01), ("range_tolerance", math.nan), ("range_tolerance", math.inf),
+    ("min_transversal", -0.1), ("min_transversal", 0.5 * math.pi + 1e-9),
+    ("min_transversal", math.nan),
+    ("range_resolution", -1.0), ("range_resolution", math.inf), ("range_resolution", math.nan),
+    ("max_incidence", -0.1), ("max_incidence", 1.6), ("max_incidence", math.nan),
+]
+
+
+@pytest.mark.parametrize(("field", "value"), BAD_PARAMETERS)
+def test_method_config_refuses_each_bad_field(field: str, value: object) -> None:
+    with pytest.raises(ConfigError) as caught:
+        MethodConfig(**{field: value})  # type: ignore[arg-type]
+    message = str(caught.value)
+    assert isinstance(caught.value, SonarcarveError)
+    assert isinstance(caught.value, ValueError)
+    assert message.startswith(f"{field} must ")
+    assert message.endswith(f"got {value!r}")
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("history_size", 1), ("history_size", 100_000), ("history_size", np.int64(7)),
+    ("beam_width", 1e-6), ("beam_width", 3.14), ("range_tolerance", 0.0),
+    ("min_transversal", 0.0), ("min_transversal", 0.5 * math.pi), ("range_resolution", 0.0),
+    ("max_incidence", 0.0), ("max_incidence", 0.5 * math.pi),
+])
+def test_method_config_accepts_the_edges(field: str, value: object) -> None:
+    assert getattr(MethodConfig(**{field: value}), field) == value  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("cls", "field", "value"), [
+    (CenterlineMethod, "beam_width", 4.0),
+    (CenterlineMethod, "history_size", 0),
+    (CarvingMethod, "range_tolerance", -1.0),
+    (CarvingMethod, "max_incidence", 2.0),
+    (AtmMethod, "min_transversal", 2.0),
+    (AtmMethod, "range_resolution", math.inf),
+    (CombinedMethod, "history_size", 10**6),
+    (CombinedMethod, "beam_width", 0.0),
+])
+def test_constructors_refuse_with_the_configs_message(
+    cls: type[SonarMethod], field: str, value: object
+) -> None:
+    with pytest.raises(ConfigError) as from_config:
+        MethodConfig(**{field: value})  # type: ignore[arg-type]
+    with pytest.raises(ConfigError) as from_constructor:
+        cls(**{field: value})  # type: ignore[arg-type]
+    assert str(from_constructor.value) == str(from_config.value)
+
+
+def test_make_method_refuses_an_unknown_name_and_a_dict() -> None:
+    with pytest.raises(ConfigError, match=r"^unknown method 'carving'; choose one of "):
+        make_method("carving")
+    with pytest.raises(ConfigError, match=r"^config must be a MethodConfig, got dict"):
+        make_method("carve", {"history_size": 10})  # type: ignore[arg-type]
+
+
+def test_make_method_passes_every_field_on() -> None:
+    config = MethodConfig(history_size=9, beam_width=0.3, range_tolerance=0.02,
+                          min_transversal=0.4, range_resolution=0.01, max_incidence=0.7)
+    method = make_method("combined", config)
+    assert isinstance(method, CombinedMethod)
+    assert (method.history.capacity, method.beam_width, method.range_tolerance,
+            method.min_transversal, method.range_resolution, method.max_incidence) == (
+        9, 0.3, 0.02, 0.4, 0.01, 0.7)
+
+
+def test_atm_refuses_a_history_whose_crossing_store_would_exceed_a_gibibyte() -> None:
+    # 2n rows x 4(n - 1) float32 crossings: n = 5,793 takes 1,073,697,792 bytes (under 2**30 =
+    # 1,073,741,824), n = 5,794 takes 1,074,068,544 (over).
+    assert 32 * 5793 * 5792 <= 2**30 < 32 * 5794 * 5793
+    make_method("atm", MethodConfig(history_size=5793))
+    for method in ("atm", "combined"):
+        with pytest.raises(ConfigError, match="too large for ATM"):
+            make_method(method, MethodConfig(history_size=6000))
+    assert make_method("carve", MethodConfig(history_size=6000)).history.capacity == 6000
