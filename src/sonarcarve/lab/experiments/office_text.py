@@ -8,7 +8,6 @@ import math
 
 from sonarcarve.lab.experiments.base import Page
 from sonarcarve.lab.experiments.office_result import OfficeResult
-from sonarcarve.lab.experiments.sensitivity import SensitivityResult
 from sonarcarve.lab.formatting import fmt_num, fmt_seeds, fmt_spread, md_image
 from sonarcarve.lab.plan import Settings
 from sonarcarve.typing import JsonDict
@@ -245,9 +244,13 @@ def _span(r: OfficeResult, settings: Settings) -> str:
 
 
 def _sensitivity(page: Page) -> JsonDict | None:
-    """The sensitivity experiment's tables, when it ran."""
-    result = page.results.get("sensitivity")
-    return result.sensitivity if isinstance(result, SensitivityResult) else None
+    """The sensitivity experiment's tables, when it ran.
+
+    Read by field name rather than by importing its result type, so that no experiment module
+    imports another (an import-linter contract).
+    """
+    tables = getattr(page.results.get("sensitivity"), "sensitivity", None)
+    return tables if isinstance(tables, dict) else None
 
 
 def _history_effect(sensitivity: JsonDict | None) -> str:
