@@ -157,17 +157,33 @@ def convert(
     if converter is None:
         msg = f"unknown format {fmt!r}; choose one of: roboND, rosbag"
         raise ConvertError(msg)
-    width = None
-    if beam_width is not None:
-        if not 0.0 < beam_width < 180.0:
-            msg = f"--beam-width must lie in (0, 180) degrees, got {beam_width}"
-            raise ConvertError(msg)
-        width = math.radians(beam_width)
+    width = _beam_width_radians(beam_width)
     # The data set's own files must survive a --out that names one of them.
-    inputs = sorted(directory.iterdir()) if directory is not None and directory.is_dir() else []
-    if directory is not None and directory.is_file():
-        inputs = [directory]
-    check_output_file(out, inputs=inputs, label=f"--out {out}")
+    check_output_file(out, inputs=_source_files(directory), label=f"--out {out}")
     options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates, robot=robot,
                              range_topics=tuple(range_topic or ()), odom_topic=odom_topic)
     console.print(converter(directory, out, options))
+
+
+def _beam_width_radians(beam_width: float | None) -> float | None:
+    """``--beam-width`` (degrees, in (0, 180)) in radians; None when not given.
+
+    Raises
+    ------
+    ConvertError
+        A width outside (0, 180) degrees.
+    """
+    if beam_width is None:
+        return None
+    if not 0.0 < beam_width < 180.0:
+        msg = f"--beam-width must lie in (0, 180) degrees, got {beam_width}"
+        raise ConvertError(msg)
+    return math.radians(beam_width)
+
+
+def _source_files(directory: Path | None) -> list[Path]:
+    """The data set's files: a folder's entries (sorted), the file itself, or none."""
+    inputs = sorted(directory.iterdir()) if directory is not None and directory.is_dir() else []
+    if directory is not None and directory.is_file():
+        inputs = [directory]
+    return inputs

@@ -12,7 +12,7 @@ from rich.table import Table
 from sonarcarve.cli.app import app, console, progress, summary_table
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import check_output_file
-from sonarcarve.robot import BUILTIN_ROBOTS, load_robot
+from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, load_robot
 from sonarcarve.sim.motion import Trajectory, explore, follow_waypoints, with_odometry_drift
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
@@ -73,6 +73,22 @@ def simulate_command(
 
     Example: `sonarcarve simulate --world office --robot scout2 --seed 1 --out office.csv`
     """
+    _check_motion_options(path, explore_seconds)
+    # Both outputs are checked before the (possibly long) simulation runs.
+    truth = _check_outputs(out, [path, Path(world), Path(robot)])
+    the_world = load_world(world)
+    the_robot = load_robot(robot)
+    trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
+    drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
+    physics = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
+    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, physics, drift)
+    write_simulation(result, out)
+    console.print(_summary(result, out, truth))
+
+
+def _check_motion_options(path: Path | None, explore_seconds: float | None) -> None:
+    """Raise :class:`SimulateParameterError` unless at most one of --path and --explore is
+    given and --explore, if given, is a finite number of seconds > 0."""
     if path is not None and explore_seconds is not None:
         msg = "give either --path or --explore, not both"
         raise SimulateParameterError(msg)
@@ -80,25 +96,36 @@ def simulate_command(
                                             and explore_seconds > 0.0):
         msg = f"--explore must be a positive number of seconds, got {explore_seconds}"
         raise SimulateParameterError(msg)
-    inputs = [p for p in (path, Path(world), Path(robot)) if p is not None and p.is_file()]
+
+
+def _check_outputs(out: Path, sources: list[Path | None]) -> Path:
+    """Check the readings CSV ``out`` and its truth file can be written; return the truth path.
+
+    ``sources`` are the command's input paths (None or not a file: ignored); neither output may
+    name one of them.
+    """
+    inputs = [p for p in sources if p is not None and p.is_file()]
     check_output_file(out, inputs=inputs, label=f"--out {out}")
     truth = truth_path(out)
     check_output_file(truth, inputs=inputs, label=f"the truth file {truth} (beside --out)")
-    the_world = load_world(world)
-    the_robot = load_robot(robot)
-    trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
-    drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
-    physics = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
-    firings = math.floor(trajectory.duration / the_robot.firing_period) + 1
+    return truth
+
+
+def _simulate_with_progress(world: World, robot: RobotDescription, trajectory: Trajectory,
+                            seed: int, physics: SonarPhysics,
+                            drift: Trajectory | None) -> Simulation:
+    """:func:`~sonarcarve.sim.simulate.simulate`, with a progress bar for long trajectories.
+
+    The bar appears from ``_PROGRESS_MIN_FIRINGS`` firings (one every
+    ``robot.firing_period`` seconds of ``trajectory``) on; the result is the same either way.
+    """
+    firings = math.floor(trajectory.duration / robot.firing_period) + 1
     if firings >= _PROGRESS_MIN_FIRINGS:
         with progress() as bar:
-            task = bar.add_task(f"simulating {the_world.name}", total=firings)
-            result = simulate(the_world, the_robot, trajectory, seed, physics, drift,
-                              on_progress=lambda done, _: bar.update(task, completed=done))
-    else:
-        result = simulate(the_world, the_robot, trajectory, seed, physics, drift)
-    write_simulation(result, out)
-    console.print(_summary(result, out, truth))
+            task = bar.add_task(f"simulating {world.name}", total=firings)
+            return simulate(world, robot, trajectory, seed, physics, drift,
+                            on_progress=lambda done, _: bar.update(task, completed=done))
+    return simulate(world, robot, trajectory, seed, physics, drift)
 
 
 def _trajectory(world: World, path: Path | None, explore_seconds: float | None, seed: int,

@@ -215,12 +215,11 @@ def _drop_slivers(starts: FloatArray, ends: FloatArray, flags: BoolArray, runs: 
 
 @compiled
 def _remainder_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
-                    scratch: Scratch) -> int:
+                    cuts: FloatArray, starts: FloatArray, ends: FloatArray, flags: BoolArray) -> int:
     """Pieces of ``[lo, hi]`` outside ``Z_ij^β``, written to ``scratch.starts/ends``; their count.
 
     Requires ``r > 0`` and ``hi - lo ≥ MIN_PIECE``.
     """
-    starts, ends, flags = scratch.starts, scratch.ends, scratch.flags
     # The arc as one remaining run, for the early exits.
     starts[0] = lo
     ends[0] = hi
@@ -229,7 +228,6 @@ def _remainder_core(ox: float, oy: float, r: float, lo: float, hi: float, sector
     cond = _conditions(ox, oy, r, sector)
     if cond.disk == NONE or cond.hp1 == NONE or cond.hp2 == NONE:
         return 1
-    cuts = scratch.cuts
     runs = _collect_cuts(cond, r, lo, hi, sector, cuts) - 1
     # Membership is constant between consecutive cuts: test each sub-interval's middle.
     for i in range(runs):
@@ -262,18 +260,19 @@ def _carve_point(ox: float, oy: float, r: float, m: float, sector: Sector) -> in
 
 @compiled
 def _carve_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
-                scratch: Scratch) -> tuple[int, float, float]:
+                cuts: FloatArray, starts: FloatArray, ends: FloatArray,
+                flags: BoolArray) -> tuple[int, float, float]:
     """:func:`carve_arc` for a prepared sector and supplied scratch arrays."""
     if hi - lo < MIN_PIECE:
         return _carve_point(ox, oy, r, 0.5 * (lo + hi), sector), lo, hi
-    count = _remainder_core(ox, oy, r, lo, hi, sector, scratch)
+    count = _remainder_core(ox, oy, r, lo, hi, sector, cuts, starts, ends, flags)
     if count == 0:
         return FULLY_CARVED, lo, hi
     if count >= 2:
         return SPLIT, lo, hi
-    if scratch.starts[0] == lo and scratch.ends[0] == hi:
+    if starts[0] == lo and ends[0] == hi:
         return UNCHANGED, lo, hi
-    return SHRUNK, scratch.starts[0], scratch.ends[0]
+    return SHRUNK, starts[0], ends[0]
 
 
 @compiled
@@ -339,7 +338,8 @@ def carve_arc(
     'UNCHANGED'
     """
     sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
-    return _carve_core(ox, oy, r, lo, hi, sector, new_scratch())
+    cuts, starts, ends, flags = new_scratch()
+    return _carve_core(ox, oy, r, lo, hi, sector, cuts, starts, ends, flags)
 
 
 @compiled
@@ -356,7 +356,8 @@ def _remainder_pieces(
         scratch.starts[0] = lo
         scratch.ends[0] = hi
     else:
-        count = _remainder_core(ox, oy, r, lo, hi, sector, scratch)
+        count = _remainder_core(ox, oy, r, lo, hi, sector, scratch.cuts, scratch.starts,
+                                scratch.ends, scratch.flags)
     out = np.empty((count, 2))
     for i in range(count):
         out[i, 0] = scratch.starts[i]
@@ -434,7 +435,7 @@ def carve_arcs(
     fully_carved, split : int
         Arcs removed by this call, by cause.
     """
-    scratch = new_scratch()
+    cuts, starts, ends, flags = new_scratch()
     sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
     if sector.radius <= 0.0:
         return 0, 0
@@ -451,7 +452,7 @@ def carve_arcs(
         new_hi = hi[slot]
         if fate == UNDECIDED:
             fate, new_lo, new_hi = _carve_core(x[slot], y[slot], r[slot], new_lo, new_hi,
-                                               sector, scratch)
+                                               sector, cuts, starts, ends, flags)
             if fate == UNCHANGED:
                 continue
         carved[slot] = True

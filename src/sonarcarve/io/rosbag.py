@@ -45,7 +45,7 @@ import numpy.typing as npt
 from sonarcarve.extras import require
 from sonarcarve.io.errors import InputError
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.typing import FloatArray
+from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "ODOMETRY_TYPE",
@@ -336,6 +336,52 @@ def read_rosbag(
         a ``field_of_view`` of π or more.
     """
     bag = Path(path)
+    topics, odom_name, ranges, odom, counts = _load_bag(bag, range_topics, odom_topic)
+    sensors = _number_sensors(bag, ranges, topics, robot)
+    index = {key: i for i, key in enumerate(sensors)}
+    sensor = np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
+                      dtype=np.int64)
+    t, r = np.array(ranges.t, dtype=np.float64), np.array(ranges.range, dtype=np.float64)
+    fov = np.array(ranges.fov, dtype=np.float64)
+    _check_fov(bag, ranges, fov)
+    echo = _echo_mask(ranges, r)
+    inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
+    keep = echo & inside
+    order = np.lexsort((sensor[keep], t[keep]))  # time, then sensor
+    default_width = math.nan if beam_width is None else beam_width
+    width = np.where(fov[keep][order] > 0.0, fov[keep][order], default_width)
+    batch = _world_readings(bag, robot, odom, t[keep][order], sensor[keep][order],
+                            r[keep][order], width)
+    report = RosbagReport(
+        messages=counts, sensors=sensors, odometry_topic=odom_name,
+        no_echo=int((~echo).sum()), outside_odometry=int((echo & ~inside).sum()),
+        readings=len(batch),
+    )
+    return RosbagLog(batch=batch, report=report)
+
+
+def _load_bag(bag: Path, range_topics: Sequence[str] | None, odom_topic: str | None,
+              ) -> tuple[list[str], str, _Ranges, FloatArray, dict[str, int]]:
+    """Every message :func:`read_rosbag` needs, the reader closed whatever happens.
+
+    Returns
+    -------
+    topics : list of str
+        The range topics, in sensor order.
+    odom_name : str
+        The odometry topic.
+    ranges : _Ranges
+        Range message fields, one entry per message.
+    odom : ndarray, shape (m, 4)
+        Odometry rows ``(t, x, y, yaw)``: seconds, metres, radians; m >= 1.
+    counts : dict
+        Messages per topic.
+
+    Raises
+    ------
+    RosbagError
+        As :func:`read_rosbag`, and for an odometry topic with no messages.
+    """
     reader = _open_reader(bag)
     try:
         types = _topic_types(bag, reader)
@@ -346,41 +392,53 @@ def read_rosbag(
     if odom.shape[0] == 0:
         msg = f"{bag}: topic {odom_name!r} holds no odometry messages"
         raise RosbagError(msg)
-    sensors = _number_sensors(bag, ranges, topics, robot)
-    index = {key: i for i, key in enumerate(sensors)}
-    sensor = np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
-                      dtype=np.int64)
-    t, r = np.array(ranges.t, dtype=np.float64), np.array(ranges.range, dtype=np.float64)
-    fov = np.array(ranges.fov, dtype=np.float64)
+    return topics, odom_name, ranges, odom, counts
+
+
+def _check_fov(bag: Path, ranges: _Ranges, fov: FloatArray) -> None:
+    """Raise :class:`RosbagError` for the first ``field_of_view`` (rad, shape (n,)) of π or more.
+
+    So wide a cone is not a sonar beam.
+    """
     bad_fov = np.flatnonzero(fov >= math.pi)
     if bad_fov.size:
         k = int(bad_fov[0])
         msg = (f"{bag}: topic {ranges.topic[k]!r}: field_of_view {fov[k]:g} rad is not below "
                "π, not a sonar beam")
         raise RosbagError(msg)
+
+
+def _echo_mask(ranges: _Ranges, r: FloatArray) -> BoolArray:
+    """Which ranges ``r`` (metres, shape (n,)) are echoes: finite, > 0, inside their limits."""
     with np.errstate(invalid="ignore"):  # NaN ranges compare False: they are no echo too
-        echo = (np.isfinite(r) & (r > 0.0) & (r >= np.array(ranges.min_range))
-                & (r <= np.array(ranges.max_range)))
-    inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
-    keep = echo & inside
-    order = np.lexsort((sensor[keep], t[keep]))  # time, then sensor
-    t_k, s_k = t[keep][order], sensor[keep][order]
-    x, y, heading = _robot_pose(odom, t_k)
-    mx, my, bearing = _mounts(robot, s_k)
-    default_width = math.nan if beam_width is None else beam_width
-    width = np.where(fov[keep][order] > 0.0, fov[keep][order], default_width)
-    batch = ReadingBatch.from_arrays(
-        t=t_k, sensor=s_k,
+        return np.asarray(np.isfinite(r) & (r > 0.0) & (r >= np.array(ranges.min_range))
+                          & (r <= np.array(ranges.max_range)))
+
+
+def _world_readings(bag: Path, robot: SensorMounts | None, odom: FloatArray, t: FloatArray,
+                    sensor: IntArray, r: FloatArray, width: FloatArray) -> ReadingBatch:
+    """Readings in the world frame: each sensor's mount carried along the odometry.
+
+    Parameters
+    ----------
+    bag : Path
+        Named as the readings' source.
+    robot : SensorMounts or None
+        Sensor mounts (None: every sensor at the robot origin facing its heading).
+    odom : ndarray, shape (m, 4)
+        Odometry rows ``(t, x, y, yaw)``: seconds, metres, radians.
+    t, sensor, r, width : ndarray, shape (n,)
+        Time (s, inside the odometry span), sensor index, range (m) and beam width (rad) of
+        every reading, in reading order.
+    """
+    x, y, heading = _robot_pose(odom, t)
+    mx, my, bearing = _mounts(robot, sensor)
+    return ReadingBatch.from_arrays(
+        t=t, sensor=sensor,
         x=x + np.cos(heading) * mx - np.sin(heading) * my,
         y=y + np.sin(heading) * mx + np.cos(heading) * my,
-        theta=heading + bearing, range=r[keep][order], beam_width=width, source=str(bag),
+        theta=heading + bearing, range=r, beam_width=width, source=str(bag),
     )
-    report = RosbagReport(
-        messages=counts, sensors=sensors, odometry_topic=odom_name,
-        no_echo=int((~echo).sum()), outside_odometry=int((echo & ~inside).sum()),
-        readings=len(batch),
-    )
-    return RosbagLog(batch=batch, report=report)
 
 
 def _mounts(robot: SensorMounts | None,

@@ -196,8 +196,7 @@ def record_run(
     RunRecord
     """
     n = len(batch)
-    stops = np.unique(np.asarray([] if sample_after is None else sample_after, dtype=np.int64))
-    stops = stops[(stops >= 1) & (stops <= n)]
+    stops = _snapshot_stops(sample_after, n)
     finals: list[ArcTable] = []
 
     def listener(history: SonarHistory, slots: IntArray, est: Estimates) -> None:
@@ -206,38 +205,92 @@ def record_run(
     method.add_commit_listener(listener)
     snaps: list[ArcTable] = []
     seconds = 0.0
-    # Cut the stream at every snapshot and at least every 2,000 readings (progress).
-    cuts = np.unique(np.concatenate((stops, np.arange(0, n, 2000)[1:], [n])))
     stop_set = set(stops.tolist())
     done = 0
-    for cut in cuts:
+    for cut in _stream_cuts(stops, n):
         tic = time.perf_counter()
         method.add_many(batch[done:int(cut)], first_id=done)
         seconds += time.perf_counter() - tic
         done = int(cut)
         if done in stop_set:
-            slots = method.history.slots()
-            snaps.append(ArcTable.from_estimates(method.history, slots, method.estimates(slots),
-                                                 len(snaps)))
+            snaps.append(_snapshot(method, len(snaps)))
         if on_progress is not None:
             on_progress(done)
-    counters: dict[str, int] = {}
-    for model in method.models:
-        counters.update(model.counters())
+    # Counters are taken before finish(), which flushes the history, so they cover the stream.
+    counters = _model_counters(method)
     tic = time.perf_counter()
     global_map = method.finish()
     seconds += time.perf_counter() - tic
-    final = ArcTable.concatenate(finals)
-    final = final.select(np.argsort(final.reading_id, kind="stable"))
     return RunRecord(
         method=method.name,
         samples=ArcTable.concatenate(snaps),
         sample_readings=stops,
-        final=final,
+        final=_by_reading_id(ArcTable.concatenate(finals)),
         global_map=global_map,
         counters=counters,
         seconds=seconds,
     )
+
+
+#: Longest stretch of readings fed to the method between two progress calls.
+_PROGRESS_EVERY = 2000
+
+
+def _snapshot_stops(sample_after: npt.ArrayLike | None, n: int) -> IntArray:
+    """Snapshot points of :func:`record_run`: sorted distinct counts in ``[1, n]``.
+
+    Parameters
+    ----------
+    sample_after : array-like of int, optional
+        Requested reading counts (1-based, any order, duplicates allowed); None for none.
+    n : int
+        Number of readings in the batch.
+
+    Returns
+    -------
+    ndarray of int64, shape (k,)
+        The requested counts inside ``[1, n]``, increasing, without duplicates.
+    """
+    stops = np.unique(np.asarray([] if sample_after is None else sample_after, dtype=np.int64))
+    return stops[(stops >= 1) & (stops <= n)]
+
+
+def _stream_cuts(stops: IntArray, n: int) -> IntArray:
+    """Where :func:`record_run` cuts the stream of ``n`` readings, as reading counts.
+
+    Parameters
+    ----------
+    stops : ndarray of int64, shape (k,)
+        Snapshot points (from :func:`_snapshot_stops`).
+    n : int
+        Number of readings in the batch.
+
+    Returns
+    -------
+    ndarray, shape (c,)
+        Increasing distinct counts ending with ``n``: every snapshot point and every multiple
+        of ``_PROGRESS_EVERY`` below ``n``, so progress is reported at least that often.
+    """
+    return np.unique(np.concatenate((stops, np.arange(0, n, _PROGRESS_EVERY)[1:], [n])))
+
+
+def _snapshot(method: SonarMethod, k: int) -> ArcTable:
+    """Every arc now in ``method``'s history with its current estimate, as snapshot ``k``."""
+    slots = method.history.slots()
+    return ArcTable.from_estimates(method.history, slots, method.estimates(slots), k)
+
+
+def _model_counters(method: SonarMethod) -> dict[str, int]:
+    """The event counters of all of ``method``'s models in one dict (later models win)."""
+    counters: dict[str, int] = {}
+    for model in method.models:
+        counters.update(model.counters())
+    return counters
+
+
+def _by_reading_id(table: ArcTable) -> ArcTable:
+    """``table``'s rows sorted by ``reading_id``; rows with equal ids keep their order."""
+    return table.select(np.argsort(table.reading_id, kind="stable"))
 
 
 def sample_points(record: RunRecord) -> ArcTable:

@@ -442,30 +442,81 @@ def patch_latency(
         Time first resolved, seconds; inf if never.
     """
     rp = np.asarray(reading_patch, dtype=np.int64)
-    rt = np.asarray(reading_t, dtype=np.float64)
-    st = np.asarray(sample_t, dtype=np.float64)
-    seen = np.full(n_patches, np.inf)
-    has = rp >= 0
-    np.minimum.at(seen, rp[has], rt[has])
+    seen = _first_seen(rp, np.asarray(reading_t, dtype=np.float64), n_patches)
+    ok_sample, ok_patch = _right_pairs(
+        rp, np.asarray(row_sample, dtype=np.int64), np.asarray(row_reading, dtype=np.int64),
+        np.asarray(row_error, dtype=np.float64) <= tolerance, n_patches, quorum,
+    )
+    ok_t = np.asarray(sample_t, dtype=np.float64)[ok_sample]
+    # A patch cannot be resolved before it was seen: earlier right samples do not count.
+    after = ok_t >= seen[ok_patch]
+    resolved = np.full(n_patches, np.inf)
+    np.minimum.at(resolved, ok_patch[after], ok_t[after])
+    return seen, resolved
 
-    rs = np.asarray(row_sample, dtype=np.int64)
-    patch = rp[np.asarray(row_reading, dtype=np.int64)]
-    good = np.asarray(row_error, dtype=np.float64) <= tolerance
+
+def _first_seen(reading_patch: IntArray, reading_t: FloatArray, n_patches: int) -> FloatArray:
+    """Time of the first reading on each patch (see :func:`patch_latency`).
+
+    Parameters
+    ----------
+    reading_patch : ndarray of int64, shape (readings,)
+        Patch of each reading's true reflection, -1 for none.
+    reading_t : ndarray, shape (readings,)
+        Time of each reading, seconds.
+    n_patches : int
+        Number of patches.
+
+    Returns
+    -------
+    ndarray, shape (n_patches,)
+        Earliest reading time per patch, seconds; inf for a patch no reading hit.
+    """
+    seen = np.full(n_patches, np.inf)
+    has = reading_patch >= 0
+    np.minimum.at(seen, reading_patch[has], reading_t[has])
+    return seen
+
+
+def _right_pairs(
+    reading_patch: IntArray,
+    row_sample: IntArray,
+    row_reading: IntArray,
+    row_good: npt.NDArray[np.bool_],
+    n_patches: int,
+    quorum: float,
+) -> tuple[IntArray, IntArray]:
+    """The (sample, patch) pairs at which the local map had the patch right.
+
+    Parameters
+    ----------
+    reading_patch : ndarray of int64, shape (readings,)
+        Patch of each reading's true reflection, -1 for none.
+    row_sample, row_reading : ndarray of int64, shape (rows,)
+        Sample index and reading id of every local-map point of every sample.
+    row_good : ndarray of bool, shape (rows,)
+        Whether that point is within tolerance of the true walls.
+    n_patches : int
+        Number of patches.
+    quorum : float
+        Share of a pair's points that must be good.
+
+    Returns
+    -------
+    sample, patch : ndarray of int64, shape (pairs,)
+        The pairs with at least one point, at least ``quorum`` of them good, ordered by sample
+        then patch.
+    """
+    patch = reading_patch[row_reading]
     keep = patch >= 0
-    rs, patch, good = rs[keep], patch[keep], good[keep]
+    rs, patch, good = row_sample[keep], patch[keep], row_good[keep]
     # Count points and good points per (sample, patch) pair present, via one joint key.
     key = rs * n_patches + patch
     pairs, inverse = np.unique(key, return_inverse=True)
     total = np.bincount(inverse, minlength=pairs.size)
     within = np.bincount(inverse, weights=good.astype(np.float64), minlength=pairs.size)
     ok = (within >= quorum * total) & (total > 0)
-    ok_sample = pairs[ok] // n_patches
-    ok_patch = pairs[ok] % n_patches
-    ok_t = st[ok_sample]
-    after = ok_t >= seen[ok_patch]
-    resolved = np.full(n_patches, np.inf)
-    np.minimum.at(resolved, ok_patch[after], ok_t[after])
-    return seen, resolved
+    return pairs[ok] // n_patches, pairs[ok] % n_patches
 
 
 def resolved_share_curve(delays: npt.ArrayLike, grid: npt.ArrayLike) -> FloatArray:

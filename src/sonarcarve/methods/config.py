@@ -65,40 +65,40 @@ def check_beam_width(value: object, name: str = "beam_width") -> float:
     return width
 
 
-def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
-    """ε in metres, finite and ≥ 0."""
+def _metres_at_least_zero(name: str, value: object) -> float:
     rule = "be finite and >= 0 metres"
-    tolerance = _number(name, value, rule)
-    if not (math.isfinite(tolerance) and tolerance >= 0.0):
+    metres = _number(name, value, rule)
+    if not (math.isfinite(metres) and metres >= 0.0):
         _refuse(name, rule, value)
-    return tolerance
+    return metres
 
 
-def check_min_transversal(value: object, name: str = "min_transversal") -> float:
-    """ψ in radians, in [0, π/2]."""
-    rule = "lie in [0, pi/2] radians"
-    angle = _number(name, value, rule)
-    if not 0.0 <= angle <= 0.5 * math.pi:
-        _refuse(name, rule, value)
-    return angle
-
-
-def check_range_resolution(value: object, name: str = "range_resolution") -> float:
-    """δ in metres, finite and ≥ 0."""
-    rule = "be finite and >= 0 metres"
-    resolution = _number(name, value, rule)
-    if not (math.isfinite(resolution) and resolution >= 0.0):
-        _refuse(name, rule, value)
-    return resolution
-
-
-def check_max_incidence(value: object, name: str = "max_incidence") -> float:
-    """β in radians, in [0, π/2] (π/2: specular-aware carving off, the paper)."""
+def _angle_up_to_right(name: str, value: object) -> float:
     rule = "lie in [0, pi/2] radians"
     angle = _number(name, value, rule)
     if not 0.0 <= angle <= NO_INCIDENCE_LIMIT:
         _refuse(name, rule, value)
     return angle
+
+
+def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
+    """ε in metres, finite and ≥ 0."""
+    return _metres_at_least_zero(name, value)
+
+
+def check_min_transversal(value: object, name: str = "min_transversal") -> float:
+    """ψ in radians, in [0, π/2]."""
+    return _angle_up_to_right(name, value)
+
+
+def check_range_resolution(value: object, name: str = "range_resolution") -> float:
+    """δ in metres, finite and ≥ 0."""
+    return _metres_at_least_zero(name, value)
+
+
+def check_max_incidence(value: object, name: str = "max_incidence") -> float:
+    """β in radians, in [0, π/2] (π/2: specular-aware carving off, the paper)."""
+    return _angle_up_to_right(name, value)
 
 
 @dataclass(frozen=True)

@@ -577,13 +577,47 @@ def explore(world: World, seconds: float, seed: int, speed: float = DEFAULT_SPEE
     _check_pose_count(round(seconds / dt) + 1, seconds, dt, "exploration")
     rng = np.random.default_rng(seed)
     grid = _PlanningGrid.build(world, robot_radius + _PLAN_MARGIN)
-    x, y, heading = _start_pose(world, grid, start, rng)
+    # The start pose draws from ``rng`` before the explorer does (seeded runs depend on it).
+    pose = _start_pose(world, grid, start, rng)
+    _check_start_clear(world, pose, robot_radius)
+    explorer = _Explorer(world, grid, rng, robot_radius, speed, turn_rate)
+    return _drive_explorer(explorer, pose, round(seconds / dt), dt)
+
+
+def _check_start_clear(world: World, pose: tuple[float, float, float],
+                       robot_radius: float) -> None:
+    """Raise :class:`WorldError` when ``pose`` (x, y metres, heading) is too close to a wall.
+
+    The limit is the one every explored step keeps, ``robot_radius`` + ``_STEP_MARGIN`` metres.
+    """
+    x, y, _ = pose
     if float(world.distance_to_walls((x, y))[0]) < robot_radius + _STEP_MARGIN:
         msg = (f"{world.name}: explore start ({x:g}, {y:g}) is closer than "
                f"{robot_radius + _STEP_MARGIN:g} m to a wall")
         raise WorldError(msg)
-    explorer = _Explorer(world, grid, rng, robot_radius, speed, turn_rate)
-    steps = round(seconds / dt)
+
+
+def _drive_explorer(explorer: _Explorer, pose: tuple[float, float, float], steps: int,
+                    dt: float) -> Trajectory:
+    """Run ``explorer`` for ``steps`` control periods of ``dt`` seconds from ``pose``.
+
+    Parameters
+    ----------
+    explorer : _Explorer
+        A fresh explorer (its visited-place memory is updated as it goes).
+    pose : (x, y, heading)
+        Start pose, metres and radians.
+    steps : int
+        Number of control periods.
+    dt : float
+        Control period, seconds.
+
+    Returns
+    -------
+    Trajectory
+        ``steps + 1`` poses at ``t = k * dt``, the start pose first.
+    """
+    x, y, heading = pose
     poses = np.empty((steps + 1, 3))
     poses[0] = x, y, heading
     for k in range(1, steps + 1):
@@ -660,6 +694,24 @@ def with_odometry_drift(trajectory: Trajectory, seed: int, translation_noise: fl
     WorldError
         A negative seed, a negative or non-finite noise, a non-finite bias.
     """
+    _check_drift_parameters(translation_noise, rotation_noise, heading_bias)
+    check_seed(seed)
+    rng = np.random.default_rng(seed)
+    forward, lateral, turn = _step_increments(trajectory)
+    travel = np.abs(forward)
+    # One draw for both errors: row 0 perturbs travel, row 1 the turn (the order is part of
+    # what a seed means).
+    noise = rng.standard_normal((2, forward.shape[0]))
+    forward_read = forward + translation_noise * np.sqrt(travel) * noise[0]
+    turn_read = (turn + heading_bias * travel
+                 + rotation_noise * np.sqrt(travel + HALF_WHEEL_BASE * np.abs(turn)) * noise[1])
+    x, y, heading = _integrate_steps(trajectory, forward_read, lateral, turn_read)
+    return Trajectory(trajectory.t.copy(), x, y, heading)
+
+
+def _check_drift_parameters(translation_noise: float, rotation_noise: float,
+                            heading_bias: float) -> None:
+    """Raise :class:`WorldError` for a negative or non-finite noise or a non-finite bias."""
     for name, value in (("translation_noise", translation_noise),
                         ("rotation_noise", rotation_noise)):
         if not (math.isfinite(value) and value >= 0.0):
@@ -668,22 +720,53 @@ def with_odometry_drift(trajectory: Trajectory, seed: int, translation_noise: fl
     if not math.isfinite(heading_bias):
         msg = f"heading_bias must be finite, got {heading_bias}"
         raise WorldError(msg)
-    check_seed(seed)
-    rng = np.random.default_rng(seed)
+
+
+def _step_increments(trajectory: Trajectory) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Each step between poses in the robot frame at the step's mid heading.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Poses, n of them.
+
+    Returns
+    -------
+    forward, lateral : ndarray, shape (n - 1,)
+        Motion along and across the mid heading, metres.
+    turn : ndarray, shape (n - 1,)
+        Heading change, radians.
+    """
     dx, dy = np.diff(trajectory.x), np.diff(trajectory.y)
     turn = np.diff(trajectory.heading)
     mid = trajectory.heading[:-1] + turn / 2
     forward = dx * np.cos(mid) + dy * np.sin(mid)
     lateral = -dx * np.sin(mid) + dy * np.cos(mid)
-    travel = np.abs(forward)
-    noise = rng.standard_normal((2, forward.shape[0]))
-    forward_read = forward + translation_noise * np.sqrt(travel) * noise[0]
-    turn_read = (turn + heading_bias * travel
-                 + rotation_noise * np.sqrt(travel + HALF_WHEEL_BASE * np.abs(turn)) * noise[1])
-    heading = trajectory.heading[0] + np.concatenate(([0.0], np.cumsum(turn_read)))
-    mid_read = heading[:-1] + turn_read / 2
+    return forward, lateral, turn
+
+
+def _integrate_steps(trajectory: Trajectory, forward: FloatArray, lateral: FloatArray,
+                     turn: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Dead reckoning: step increments integrated from ``trajectory``'s first pose.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Supplies the first pose only.
+    forward, lateral : ndarray, shape (n - 1,)
+        Motion along and across each step's mid heading, metres.
+    turn : ndarray, shape (n - 1,)
+        Heading change of each step, radians.
+
+    Returns
+    -------
+    x, y, heading : ndarray, shape (n,)
+        Integrated poses, metres and radians (unwrapped).
+    """
+    heading = trajectory.heading[0] + np.concatenate(([0.0], np.cumsum(turn)))
+    mid = heading[:-1] + turn / 2
     x = trajectory.x[0] + np.concatenate(([0.0], np.cumsum(
-        forward_read * np.cos(mid_read) - lateral * np.sin(mid_read))))
+        forward * np.cos(mid) - lateral * np.sin(mid))))
     y = trajectory.y[0] + np.concatenate(([0.0], np.cumsum(
-        forward_read * np.sin(mid_read) + lateral * np.cos(mid_read))))
-    return Trajectory(trajectory.t.copy(), x, y, heading)
+        forward * np.sin(mid) + lateral * np.cos(mid))))
+    return x, y, heading

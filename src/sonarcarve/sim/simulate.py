@@ -162,17 +162,44 @@ def simulate(
     firings = _firings(robot, trajectory, times, sensors)
     echoes = fire_sonars(world, robot, firings, physics, np.random.default_rng(seed), on_progress)
     heard = np.flatnonzero(echoes.heard)
+    # Echoes come from the true poses; readings carry the poses the robot believes it had.
     stamped = firings if odometry is None else _firings(robot, odometry, times, sensors)
-    readings = ReadingBatch.from_arrays(
-        t=times[heard], sensor=sensors[heard], x=stamped.x[heard], y=stamped.y[heard],
-        theta=stamped.theta[heard], range=echoes.range[heard],
-        beam_width=robot.beam_width[sensors[heard]], source=f"simulation of {world.name}",
-    )
-    truth = SonarTruth(kind=echoes.kind[heard], reflection=echoes.reflection[heard],
-                       true_range=echoes.true_range[heard], firing=heard.astype(np.int64))
-    return Simulation(readings=readings, truth=truth, world=world, robot=robot,
+    readings = _heard_readings(robot, stamped, echoes, heard, f"simulation of {world.name}")
+    return Simulation(readings=readings, truth=_heard_truth(echoes, heard), world=world,
+                      robot=robot,
                       trajectory=trajectory, firings=firings, echoes=echoes, odometry=odometry,
                       physics=physics, seed=seed)
+
+
+def _heard_readings(robot: RobotDescription, stamped: Firings, echoes: Echoes, heard: IntArray,
+                   source: str) -> ReadingBatch:
+    """The readings of the firings that heard an echo.
+
+    Parameters
+    ----------
+    robot : RobotDescription
+        Supplies each sensor's beam width, radians.
+    stamped : Firings
+        Time, sensor and sensor pose (metres, radians) to stamp each firing's reading with.
+    echoes : Echoes
+        What every firing heard; ``range`` in metres.
+    heard : ndarray of int64, shape (readings,)
+        Indices of the firings that heard something, increasing.
+    source : str
+        Description of where the readings came from.
+    """
+    sensors = stamped.sensor[heard]
+    return ReadingBatch.from_arrays(
+        t=stamped.t[heard], sensor=sensors, x=stamped.x[heard], y=stamped.y[heard],
+        theta=stamped.theta[heard], range=echoes.range[heard],
+        beam_width=robot.beam_width[sensors], source=source,
+    )
+
+
+def _heard_truth(echoes: Echoes, heard: IntArray) -> SonarTruth:
+    """The ground truth of the firings ``heard`` (indices, shape (readings,)), row per reading."""
+    return SonarTruth(kind=echoes.kind[heard], reflection=echoes.reflection[heard],
+                      true_range=echoes.true_range[heard], firing=heard.astype(np.int64))
 
 
 def _firings(robot: RobotDescription, trajectory: Trajectory, times: FloatArray,

@@ -286,27 +286,59 @@ def fire_sonars(
     traced = _trace_all(geometry, robot, firings, physics, far_range, on_progress)
     crosstalk = _crosstalk(robot, firings, physics, traced)
     floor = _floor(robot, firings, physics, draws)
-    candidates = np.column_stack([
+    candidates = _candidate_ranges(traced, crosstalk, floor, draws, physics)
+    winner = np.argmin(candidates, axis=1)  # ties go to the lower code: direct first
+    true_range = candidates[np.arange(n), winner]
+    measured = _measure(true_range + physics.range_noise * draws.noise, robot, physics)
+    heard = np.isfinite(true_range) & (measured >= robot.min_range) & (measured <= robot.max_range)
+    return Echoes(
+        range=np.where(heard, measured, np.nan),
+        true_range=np.where(heard, true_range, np.nan),
+        kind=np.where(heard, winner, NO_ECHO).astype(np.int64),
+        reflection=_reflections(traced, heard, winner),
+    )
+
+
+def _candidate_ranges(traced: _Traced, crosstalk: FloatArray, floor: FloatArray, draws: _Draws,
+                      physics: SonarPhysics) -> FloatArray:
+    """Noise-free range of every kind of echo each firing could hear, metres (inf: none).
+
+    Parameters
+    ----------
+    traced : _Traced
+        Direct and multipath ranges from the beam tracing, shape (n,).
+    crosstalk, floor : ndarray, shape (n,)
+        Crosstalk and floor echo ranges, metres (inf: none).
+    draws : _Draws
+        The uniform draws deciding whether crosstalk and multipath echoes happen.
+    physics : SonarPhysics
+        Their probabilities.
+
+    Returns
+    -------
+    ndarray, shape (n, 4)
+        Column ``k`` holds the range of the :class:`EchoKind` with code ``k``.
+    """
+    return np.column_stack([
         traced.direct_range,
         np.where(draws.crosstalk < physics.crosstalk_probability, crosstalk, np.inf),
         floor,
         np.where(draws.multipath < physics.multipath_probability, traced.multipath_range, np.inf),
     ])
-    winner = np.argmin(candidates, axis=1)  # ties go to the lower code: direct first
-    true_range = candidates[np.arange(n), winner]
-    measured = _measure(true_range + physics.range_noise * draws.noise, robot, physics)
-    heard = np.isfinite(true_range) & (measured >= robot.min_range) & (measured <= robot.max_range)
-    reflection = np.full((n, 2), np.nan)
+
+
+def _reflections(traced: _Traced, heard: BoolArray, winner: IntArray) -> FloatArray:
+    """True reflection point of each heard direct or multipath echo, shape (n, 2), metres.
+
+    NaN rows for floor and crosstalk echoes (no wall point) and for firings not ``heard``;
+    ``winner`` is the :class:`EchoKind` code of each firing's echo.
+    """
+    reflection = np.full((heard.shape[0], 2), np.nan)
     direct = heard & (winner == EchoKind.DIRECT)
     bounced = heard & (winner == EchoKind.MULTIPATH)
     reflection[direct] = traced.direct_point[direct]
     reflection[bounced] = traced.multipath_point[bounced]
-    return Echoes(
-        range=np.where(heard, measured, np.nan),
-        true_range=np.where(heard, true_range, np.nan),
-        kind=np.where(heard, winner, NO_ECHO).astype(np.int64),
-        reflection=reflection,
-    )
+    return reflection
 
 
 def _measure(r: FloatArray, robot: RobotDescription, physics: SonarPhysics) -> FloatArray:
