@@ -17,7 +17,6 @@ from sonarcarve import (
     Reading,
     ReadingBatch,
     carve_arc,
-    chord_error,
     make_method,
 )
 from sonarcarve.cli import main
@@ -253,7 +252,9 @@ def test_method_matches_the_sequential_reference(seed: int, history_size: int,
                           batch.y[survivors] + r * np.sin(mid)))
     np.testing.assert_allclose(global_map.xy, xy, atol=1e-12)
     np.testing.assert_allclose(global_map.width, hi - lo, atol=1e-12)
-    np.testing.assert_allclose(global_map.max_error, chord_error(r, hi - lo), atol=1e-12)
+    # eq. 5.2-5.3 written out: E_m = θd/2, E_s = 2 r sin(E_m/2) (not the library's chord_error)
+    np.testing.assert_allclose(global_map.max_error, 2.0 * r * np.sin((hi - lo) / 4.0),
+                               atol=1e-12)
     carved = [expected[k][3] for k in survivors]
     assert (global_map.source == PointSource.CARVED).tolist() == carved
     assert 0 < sum(carved) < len(carved)

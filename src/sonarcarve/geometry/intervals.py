@@ -200,7 +200,7 @@ def _midpoint_inside(m: float, cond: _Conditions, r: float, sector: Sector) -> b
     return inside
 
 
-@compiled
+@compiled_inline
 def _drop_slivers(starts: FloatArray, ends: FloatArray, flags: BoolArray, runs: int) -> int:
     """Ignore carved slivers (a touch is not a cut), then remaining ones; the new run count."""
     for i in range(runs):

@@ -97,7 +97,7 @@ def incidence_mode(sin_beta: float, r: float, dist2: float) -> int:
     return SOME if sin_beta < 1.0 and dist2 > rsb2 else ALL
 
 
-@compiled
+@compiled_inline
 def add_incidence_cuts(cuts: FloatArray, count: int, r: float, dist2: float, alpha: float,
                        sin_beta: float, lo: float, hi: float) -> int:
     """Append the four boundary bearings ``α ± acos c±`` of the incidence condition.

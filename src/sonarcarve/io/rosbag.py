@@ -338,9 +338,7 @@ def read_rosbag(
     bag = Path(path)
     topics, odom_name, ranges, odom, counts = _load_bag(bag, range_topics, odom_topic)
     sensors = _number_sensors(bag, ranges, topics, robot)
-    index = {key: i for i, key in enumerate(sensors)}
-    sensor = np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
-                      dtype=np.int64)
+    sensor = _sensor_of_messages(ranges, sensors)
     t, r = np.array(ranges.t, dtype=np.float64), np.array(ranges.range, dtype=np.float64)
     fov = np.array(ranges.fov, dtype=np.float64)
     _check_fov(bag, ranges, fov)
@@ -393,6 +391,13 @@ def _load_bag(bag: Path, range_topics: Sequence[str] | None, odom_topic: str | N
         msg = f"{bag}: topic {odom_name!r} holds no odometry messages"
         raise RosbagError(msg)
     return topics, odom_name, ranges, odom, counts
+
+
+def _sensor_of_messages(ranges: _Ranges, sensors: tuple[tuple[str, str], ...]) -> IntArray:
+    """Sensor index of every range message, shape (n,): its (topic, frame_id) in ``sensors``."""
+    index = {key: i for i, key in enumerate(sensors)}
+    return np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
+                    dtype=np.int64)
 
 
 def _check_fov(bag: Path, ranges: _Ranges, fov: FloatArray) -> None:

@@ -571,10 +571,7 @@ def explore(world: World, seconds: float, seed: int, speed: float = DEFAULT_SPEE
         planning grid would exceed 10 million cells (about 316 m x 316 m, 2.5 GB), or a start
         closer than ``robot_radius`` + 0.02 m to a wall.
     """
-    _check_positive(seconds=seconds, speed=speed, dt=dt, robot_radius=robot_radius,
-                    turn_rate=turn_rate)
-    check_seed(seed)
-    _check_pose_count(round(seconds / dt) + 1, seconds, dt, "exploration")
+    _check_explore_parameters(seconds, seed, speed, dt, robot_radius, turn_rate)
     rng = np.random.default_rng(seed)
     grid = _PlanningGrid.build(world, robot_radius + _PLAN_MARGIN)
     # The start pose draws from ``rng`` before the explorer does (seeded runs depend on it).
@@ -582,6 +579,19 @@ def explore(world: World, seconds: float, seed: int, speed: float = DEFAULT_SPEE
     _check_start_clear(world, pose, robot_radius)
     explorer = _Explorer(world, grid, rng, robot_radius, speed, turn_rate)
     return _drive_explorer(explorer, pose, round(seconds / dt), dt)
+
+
+def _check_explore_parameters(seconds: float, seed: int, speed: float, dt: float,
+                              robot_radius: float, turn_rate: float) -> None:
+    """Raise :class:`WorldError` for :func:`explore` parameters it cannot use.
+
+    Durations in seconds, speed in m/s, radius in metres, turn rate in rad/s must be finite and
+    > 0, the seed an integer >= 0, and ``round(seconds / dt) + 1`` at most :data:`MAX_POSES`.
+    """
+    _check_positive(seconds=seconds, speed=speed, dt=dt, robot_radius=robot_radius,
+                    turn_rate=turn_rate)
+    check_seed(seed)
+    _check_pose_count(round(seconds / dt) + 1, seconds, dt, "exploration")
 
 
 def _check_start_clear(world: World, pose: tuple[float, float, float],
