@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.typing import BoolArray, FloatArray
 
 __all__ = [
@@ -58,8 +58,8 @@ class Scratch(NamedTuple):
 @compiled
 def new_scratch() -> Scratch:
     """Fresh (uninitialised) work arrays; allocate once per batch, not per arc."""
-    return Scratch(np.empty(SCRATCH), np.empty(SCRATCH), np.empty(SCRATCH),
-                   np.empty(SCRATCH, dtype=np.bool_))
+    bearings = np.empty((3, SCRATCH))  # one allocation for the three float arrays
+    return Scratch(bearings[0], bearings[1], bearings[2], np.empty(SCRATCH, dtype=np.bool_))
 
 
 @compiled
@@ -78,7 +78,7 @@ def add_cut(cuts: FloatArray, count: int, angle: float, lo: float, hi: float) ->
     return count
 
 
-@compiled
+@compiled_inline
 def sort_prefix(values: FloatArray, count: int) -> None:
     """Insertion sort of ``values[:count]`` (at most 12 values: cheaper than a library sort)."""
     for i in range(1, count):
@@ -90,7 +90,7 @@ def sort_prefix(values: FloatArray, count: int) -> None:
         values[j + 1] = v
 
 
-@compiled
+@compiled_inline
 def merge_runs(starts: FloatArray, ends: FloatArray, flags: BoolArray, count: int) -> int:
     """Merge neighbouring runs with equal flags in place; return the new count."""
     if count == 0:

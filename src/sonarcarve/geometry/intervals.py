@@ -64,7 +64,6 @@ from sonarcarve.geometry.circular import (
     ALL,
     NONE,
     SOME,
-    Scratch,
     add_cut,
     merge_runs,
     new_scratch,
@@ -213,12 +212,16 @@ def _drop_slivers(starts: FloatArray, ends: FloatArray, flags: BoolArray, runs: 
     return merge_runs(starts, ends, flags, runs)
 
 
-@compiled
+@compiled_inline
 def _remainder_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
-                    cuts: FloatArray, starts: FloatArray, ends: FloatArray, flags: BoolArray) -> int:
-    """Pieces of ``[lo, hi]`` outside ``Z_ij^β``, written to ``scratch.starts/ends``; their count.
+                    cuts: FloatArray, starts: FloatArray, ends: FloatArray,
+                    flags: BoolArray) -> int:
+    """Pieces of ``[lo, hi]`` outside ``Z_ij^β``, written to ``starts``/``ends``; their count.
 
-    Requires ``r > 0`` and ``hi - lo ≥ MIN_PIECE``.
+    ``cuts, starts, ends, flags`` are the arrays of a :class:`~sonarcarve.geometry.circular.
+    Scratch`, passed one by one: the kernels are inlined into their callers and arrays taken
+    apart from a record cost reference counting in the hot loop. Requires ``r > 0`` and
+    ``hi - lo ≥ MIN_PIECE``.
     """
     # The arc as one remaining run, for the early exits.
     starts[0] = lo
@@ -258,11 +261,12 @@ def _carve_point(ox: float, oy: float, r: float, m: float, sector: Sector) -> in
     return UNCHANGED
 
 
-@compiled
+@compiled_inline
 def _carve_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
                 cuts: FloatArray, starts: FloatArray, ends: FloatArray,
                 flags: BoolArray) -> tuple[int, float, float]:
-    """:func:`carve_arc` for a prepared sector and supplied scratch arrays."""
+    """:func:`carve_arc` for a prepared sector and supplied scratch arrays (see
+    :func:`_remainder_core`)."""
     if hi - lo < MIN_PIECE:
         return _carve_point(ox, oy, r, 0.5 * (lo + hi), sector), lo, hi
     count = _remainder_core(ox, oy, r, lo, hi, sector, cuts, starts, ends, flags)
