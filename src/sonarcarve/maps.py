@@ -8,7 +8,7 @@ the batch axis first.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from enum import IntEnum
 from typing import Self
 
@@ -75,6 +75,16 @@ class _PointMap:
     width: FloatArray
     max_error: FloatArray
     range: FloatArray
+    confidence: FloatArray = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        # "Not modelled" by default: a NaN per point (a default cannot know n).
+        if self.confidence.shape != self.reading_id.shape:
+            if self.confidence.size:
+                msg = (f"confidence has {self.confidence.size} values for "
+                       f"{self.reading_id.size} points")
+                raise ValueError(msg)
+            object.__setattr__(self, "confidence", np.full(self.reading_id.shape, np.nan))
 
     def __len__(self) -> int:
         return int(self.reading_id.shape[0])
@@ -137,6 +147,10 @@ class LocalMap(_PointMap):
         see :mod:`sonarcarve.methods.atm` for the ATM bound).
     range : float64
         The arc's radius r, metres.
+    confidence : float64
+        Probability (0-1) that the point is a real surface (paper, section 6: certainty values),
+        for methods that model it; NaN where the method does not (the paper's methods). Built
+        without it, a map gets NaN.
     """
 
 

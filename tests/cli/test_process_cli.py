@@ -26,7 +26,7 @@ def test_process_writes_the_contract_map(
     batch = _write_ring_readings(readings)
     out = tmp_path / "map.csv"
     assert main(["process", str(readings), "--method", "centerline", "--out", str(out)]) == 0
-    assert out.read_text().splitlines()[0] == ",".join(MAP_COLUMNS)
+    assert out.read_text().splitlines()[0] == ",".join(MAP_COLUMNS) + ",confidence"
     points = read_map_csv(out)
     assert points.reading_id.tolist() == list(range(len(batch)))
     # Centerline points sit on the axis at range r: here exactly on the walls y = +-1.5.

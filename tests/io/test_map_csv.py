@@ -10,9 +10,12 @@ import pytest
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv
+from sonarcarve.io.errors import InputError
 from sonarcarve.maps import GlobalMap, PointSource
 
 HEADER = "id,t,sensor,x,y,source,width,max_error"
+#: What is written since the confidence column was appended (issue 9).
+WRITTEN_HEADER = HEADER + ",confidence"
 
 
 def _map() -> GlobalMap:
@@ -38,17 +41,34 @@ def test_written_text_by_hand(tmp_path: Path) -> None:
     path = tmp_path / "map.csv"
     write_map_csv(_map(), path)
     assert path.read_text(encoding="utf-8") == (
-        "id,t,sensor,x,y,source,width,max_error\n"
-        "0,0.0,2,1.0,-2.5,centerline,0.5,0.75\n"
-        "3,0.25,0,0.125,3.0,carved,0.25,0.0625\n"
-        "7,1.5,15,-4.0,0.5,atm,0.0,inf\n"
+        "id,t,sensor,x,y,source,width,max_error,confidence\n"
+        "0,0.0,2,1.0,-2.5,centerline,0.5,0.75,\n"
+        "3,0.25,0,0.125,3.0,carved,0.25,0.0625,\n"
+        "7,1.5,15,-4.0,0.5,atm,0.0,inf,\n"
     )
+
+
+def test_confidence_is_appended_and_read_back(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    base = _map()
+    sure = GlobalMap(**{**{name: getattr(base, name) for name in (
+        "reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range")},
+        "confidence": np.array([0.5, 1.0, np.nan])})
+    write_map_csv(sure, path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    assert lines[1] == "0,0.0,2,1.0,-2.5,centerline,0.5,0.75,0.5"
+    assert lines[3].endswith(",inf,")  # not modelled: an empty cell
+    back = read_map_csv(path)
+    np.testing.assert_array_equal(back.confidence, [0.5, 1.0, np.nan])
+    path.write_text(WRITTEN_HEADER + "\n0,0.0,2,1.0,-2.5,centerline,0.5,0.75,1.5\n")
+    with pytest.raises(InputError, match=r"line 2, column 'confidence' must lie in \[0, 1\]"):
+        read_map_csv(path)
 
 
 def test_empty_map_is_just_the_header(tmp_path: Path) -> None:
     path = tmp_path / "empty.csv"
     write_map_csv(GlobalMap.empty(), path)
-    assert path.read_text(encoding="utf-8") == HEADER + "\n"
+    assert path.read_text(encoding="utf-8") == WRITTEN_HEADER + "\n"
     back = read_map_csv(path)
     assert len(back) == 0
     assert back.xy.shape == (0, 2)

@@ -1,8 +1,10 @@
 """The map CSV written by ``sonarcarve process`` (design contract).
 
-Header ``id,t,sensor,x,y,source,width,max_error``; one row per surviving reading, ``id`` the
-reading's 0-based row in the input, ``source`` one of ``centerline|carved|atm``, ``width`` the
-final angular width (radians), ``max_error`` the bound in metres.
+Header ``id,t,sensor,x,y,source,width,max_error,confidence``; one row per surviving reading,
+``id`` the reading's 0-based row in the input, ``source`` one of ``centerline|carved|atm``,
+``width`` the final angular width (radians), ``max_error`` the bound in metres. The first eight
+columns are the original contract and keep their meaning exactly; ``confidence`` (appended) is
+the probability that the point is a real surface, empty where the method does not model it.
 """
 
 from __future__ import annotations
@@ -17,9 +19,12 @@ from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.maps import GlobalMap, PointSource
 
-__all__ = ["MAP_COLUMNS", "read_map_csv", "write_map_csv"]
+__all__ = ["APPENDED_COLUMNS", "MAP_COLUMNS", "read_map_csv", "write_map_csv"]
 
+#: The original contract's eight columns, in order.
 MAP_COLUMNS = ("id", "t", "sensor", "x", "y", "source", "width", "max_error")
+#: Columns appended since, in order (readers of the first eight ignore them).
+APPENDED_COLUMNS = ("confidence",)
 _SOURCE_BY_LABEL = {source.label: source for source in PointSource}
 #: Largest id or sensor index read back exactly (int64 and float64 agree up to 2**53).
 _MAX_INDEX = 2**53
@@ -30,19 +35,22 @@ def write_map_csv(points: GlobalMap, path: str | Path) -> None:
     labels = points.source_labels()
     with atomic_text(path) as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(MAP_COLUMNS)
+        writer.writerow(MAP_COLUMNS + APPENDED_COLUMNS)
         for i in range(len(points)):
+            confidence = float(points.confidence[i])
             writer.writerow([
                 int(points.reading_id[i]), repr(float(points.t[i])), int(points.sensor[i]),
                 repr(float(points.xy[i, 0])), repr(float(points.xy[i, 1])), labels[i],
                 repr(float(points.width[i])), repr(float(points.max_error[i])),
+                "" if math.isnan(confidence) else repr(confidence),
             ])
 
 
 def read_map_csv(path: str | Path) -> GlobalMap:
     """Read a map CSV back (``range`` is not in the file and comes back as NaN).
 
-    Columns after the first eight are ignored: the contract only ever appends new ones.
+    ``confidence`` is read when the header has it (an empty cell is NaN, "not modelled");
+    other columns after the first eight are ignored: the contract only ever appends new ones.
 
     Raises
     ------
@@ -71,6 +79,8 @@ def read_map_csv(path: str | Path) -> GlobalMap:
         msg = f"{path}: line 1, expected header {','.join(MAP_COLUMNS)}"
         raise InputError(msg)
     body = rows[1:]
+    confidence_at = header.index("confidence") if "confidence" in header else None
+    confidence = np.full(len(body), np.nan)
     numbers = np.empty((len(body), 7))
     source = np.empty(len(body), dtype=np.int8)
     for k, (line, row) in enumerate(body):
@@ -86,12 +96,23 @@ def read_map_csv(path: str | Path) -> GlobalMap:
         source[k] = _SOURCE_BY_LABEL[label]
         for j, i in enumerate((0, 1, 2, 3, 4, 6, 7)):
             numbers[k, j] = _cell(row[i], where, MAP_COLUMNS[i])
+        if confidence_at is not None and confidence_at < len(row) and row[confidence_at].strip():
+            confidence[k] = _probability(row[confidence_at], where)
     return GlobalMap(
         reading_id=numbers[:, 0].astype(np.int64), t=numbers[:, 1],
         sensor=numbers[:, 2].astype(np.int64), xy=numbers[:, 3:5].copy(),
         source=source, width=numbers[:, 5],
-        max_error=numbers[:, 6], range=np.full(len(body), np.nan),
+        max_error=numbers[:, 6], range=np.full(len(body), np.nan), confidence=confidence,
     )
+
+
+def _probability(text: str, where: str) -> float:
+    """A ``confidence`` cell: a number in [0, 1]."""
+    value = parse_number(text, where, "confidence", finite=False)
+    if not 0.0 <= value <= 1.0:
+        msg = f"{where}, column 'confidence' must lie in [0, 1], got {text.strip()!r}"
+        raise InputError(msg)
+    return value
 
 
 def _cell(text: str, where: str, column: str) -> float:

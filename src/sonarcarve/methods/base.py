@@ -54,6 +54,9 @@ class Estimates:
         :class:`~sonarcarve.geometry.ArcFate` code of each arc: ``ALIVE``, or why a dead arc
         died (``FULLY_CARVED``, ``SPLIT``), where the model knows (carving and the methods that
         run it); None for models that never remove an arc (centerline, ATM).
+    confidence : float or None
+        Probability (0-1) that the point is a real surface, for models that estimate it; None
+        otherwise (the map then holds NaN).
     """
 
     alive: BoolArray
@@ -63,6 +66,7 @@ class Estimates:
     max_error: FloatArray
     source: Int8Array
     fate: Int8Array | None = None
+    confidence: FloatArray | None = None
 
 
 #: Called with the history, the committed slots (oldest first) and their final estimates.
@@ -276,6 +280,8 @@ class SonarMethod(ABC):
             width=est.width[est.alive],
             max_error=est.max_error[est.alive],
             range=h.r[keep].copy(),
+            confidence=(np.full(len(keep), np.nan) if est.confidence is None
+                        else est.confidence[est.alive]),
         )
 
 
