@@ -27,7 +27,7 @@ __all__ = ["KERNEL_FOLDERS", "SOURCES_STAMP", "compiled", "compiled_inline"]
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 #: Folders of the ``sonarcarve`` package whose modules may define compiled kernels.
-KERNEL_FOLDERS = ("geometry", "methods")
+KERNEL_FOLDERS = ("geometry", "grids", "methods")
 
 
 def _sources_stamp() -> str:

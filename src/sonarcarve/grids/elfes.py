@@ -1,4 +1,9 @@
-"""An occupancy grid with the classic sonar cone model: the baseline most sonar users run today.
+"""The Elfes/octomap baseline: a log-odds occupancy grid with the classic sonar cone model.
+
+This is *not* ROS's ``range_sensor_layer``: it borrows that layer's angular profile and distance
+fade but updates clamped log-odds (octomap's way) with its own band and probabilities. The layer
+itself, with its unclamped Bayes update on costs and its quirks, is
+:mod:`sonarcarve.grids.range_sensor_layer`.
 
 Beyond the paper, which compares arc carving with occupancy grids only in words (section 2-B):
 this module lets the comparison be measured (``benchmarks/grid_baseline.py``).
