@@ -19,6 +19,8 @@ from sonarcarve.robot import parse_robot
 TS = get_typestore(Stores.ROS2_HUMBLE)
 RANGE = "sensor_msgs/msg/Range"
 ODOM = "nav_msgs/msg/Odometry"
+TF = "tf2_msgs/msg/TFMessage"
+INF = float("inf")
 
 # Two sonars: sensor 0 at (0.1, 0.2) facing left, sensor 1 at (0.3, -0.1) facing 45° right.
 ROBOT_YAML = """
@@ -50,9 +52,15 @@ def _header(t: float, frame: str = "") -> Any:
 
 
 def _range(topic: str, t: float, r: float, *, fov: float = 0.3, frame: str = "",
-           lo: float = 0.1, hi: float = 4.0) -> Msg:
+           lo: float = 0.1, hi: float = 4.0, radiation: int = 0) -> Msg:
     return Msg(topic, t, {"frame": frame, "range": r, "field_of_view": fov, "min_range": lo,
-                          "max_range": hi})
+                          "max_range": hi, "radiation": radiation})
+
+
+def _tf(t: float, *transforms: tuple[str, str, float, float, float],
+        topic: str = "/tf_static") -> Msg:
+    """A TFMessage: each transform ``(parent, child, x, y, yaw)``."""
+    return Msg(topic, t, {"tf": transforms})
 
 
 def _odom(t: float, x: float, y: float, yaw: float, topic: str = "/odom") -> Msg:
@@ -61,11 +69,20 @@ def _odom(t: float, x: float, y: float, yaw: float, topic: str = "/odom") -> Msg
 
 def _build(msg: Msg, msgtype: str) -> Any:
     f = msg.fields
+    geo = "geometry_msgs/msg/"
+    if msgtype == TF:
+        return TS.types[TF](transforms=[TS.types[geo + "TransformStamped"](
+            header=_header(msg.t, parent), child_frame_id=child,
+            transform=TS.types[geo + "Transform"](
+                translation=TS.types[geo + "Vector3"](x=x, y=y, z=0.1),
+                rotation=TS.types[geo + "Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2),
+                                                      w=math.cos(yaw / 2))))
+            for parent, child, x, y, yaw in f["tf"]])
     if msgtype == RANGE:
-        return TS.types[RANGE](header=_header(msg.t, f["frame"]), radiation_type=0,
+        return TS.types[RANGE](header=_header(msg.t, f["frame"]),
+                               radiation_type=f["radiation"],
                                field_of_view=f["field_of_view"], min_range=f["min_range"],
                                max_range=f["max_range"], range=f["range"])
-    geo = "geometry_msgs/msg/"
     pose = TS.types[geo + "Pose"](
         position=TS.types[geo + "Point"](x=f["x"], y=f["y"], z=0.0),
         orientation=TS.types[geo + "Quaternion"](x=0.0, y=0.0, z=math.sin(f["yaw"] / 2),
@@ -79,7 +96,8 @@ def _build(msg: Msg, msgtype: str) -> Any:
 
 
 def write_bag(path: Path, messages: Sequence[Msg], types: dict[str, str]) -> Path:
-    """Write ``messages`` (in list order, logged at 1 ms steps) as rosbag1 if ``*.bag``."""
+    """Write ``messages`` (in list order, logged at 1 ms steps): rosbag1 if ``*.bag``, a
+    rosbag2 folder with MCAP storage if the name ends in ``mcap``, else rosbag2 sqlite3."""
     if path.suffix == ".bag":
         from rosbags.rosbag1 import Writer as Writer1
 
@@ -90,9 +108,12 @@ def write_bag(path: Path, messages: Sequence[Msg], types: dict[str, str]) -> Pat
                 w1.write(conns[msg.topic], (k + 1) * 1_000_000,
                          TS.serialize_ros1(_build(msg, mtype), mtype))
         return path
+    from rosbags.rosbag2 import StoragePlugin
     from rosbags.rosbag2 import Writer as Writer2
 
-    with Writer2(path, version=8) as w2:
+    mcap = path.name.endswith("mcap")
+    with Writer2(path, version=9 if mcap else 8,
+                 storage_plugin=StoragePlugin.MCAP if mcap else StoragePlugin.SQLITE3) as w2:
         conns = {t: w2.add_connection(t, m, typestore=TS) for t, m in types.items()}
         for k, msg in enumerate(messages):
             mtype = types[msg.topic]
@@ -134,7 +155,10 @@ def _rows(batch: Any) -> list[tuple[float, ...]]:
     return [tuple(reading) for reading in batch]
 
 
-@pytest.mark.parametrize("name", ["bag2", "straight.bag"])
+FORMATS = ["ros2_sqlite3", "ros2_mcap", "ros1.bag"]
+
+
+@pytest.mark.parametrize("name", FORMATS)
 def test_straight_drive_gives_hand_computed_world_poses(tmp_path: Path, name: str) -> None:
     bag = write_bag(tmp_path / name, [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
     log = read_rosbag(bag, robot=ROBOT)
@@ -144,20 +168,121 @@ def test_straight_drive_gives_hand_computed_world_poses(tmp_path: Path, name: st
     report = log.report
     assert report.sensors == (("/sonar_2", ""), ("/sonar_10", ""))
     assert report.messages == {"/sonar_2": 5, "/sonar_10": 4, "/odom": 5}
-    assert (report.no_echo, report.outside_odometry, report.readings) == (4, 1, 4)
+    # +Inf and 4.5 > max_range: no echo; 0.05 < min_range: too close; NaN: invalid.
+    assert (report.no_echo, report.too_close, report.invalid) == (2, 1, 1)
+    assert (report.outside_odometry, report.readings) == (1, 4)
     assert report.odometry_topic == "/odom"
+    assert report.odometry_frames == ("odom", "base_link")
+    assert [s.mount for s in report.sources] == ["robot two[0]", "robot two[1]"]
 
 
-def test_topic_order_given_numbers_the_sensors(tmp_path: Path) -> None:
+def test_no_echo_beams_are_kept_with_their_poses(tmp_path: Path) -> None:
     bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
-    log = read_rosbag(bag, robot=ROBOT, range_topics=["/sonar_10", "/sonar_2"],
-                      odom_topic="/odom", beam_width=0.25)
-    # /sonar_10 is now sensor 0: its 0.5 s echo of 3.0 m sits at mount 0 and sorts first.
-    first = log.batch[0]
-    assert (first.sensor, first.range) == (0, 3.0)
-    assert first.x == pytest.approx(1.25 + 0.1)
-    assert first.y == pytest.approx(2.2)
-    assert first.beam_width == 0.25  # field_of_view 0: the given default
+    free = read_rosbag(bag, robot=ROBOT).no_echo
+    # t = 1.0, /sonar_10 (sensor 1, mount (0.3, -0.1), -45°) read 4.5 > 4.0: robot at (1.5, 2);
+    # t = 3.5, /sonar_2 (sensor 0, mount (0.1, 0.2), 90°) read +Inf: robot at (2.75, 2).
+    assert free.sensor.tolist() == [1, 0]
+    np.testing.assert_allclose(free.t, [1.0, 3.5])
+    np.testing.assert_allclose(free.x, [1.8, 2.85])
+    np.testing.assert_allclose(free.y, [1.9, 2.2])
+    np.testing.assert_allclose(free.theta, [-math.pi / 4, math.pi / 2])
+    np.testing.assert_allclose(free.max_range, [4.0, 4.0])
+    np.testing.assert_allclose(free.beam_width, [math.nan, 0.3])
+
+
+def test_rep117_infinities_and_nan(tmp_path: Path) -> None:
+    odom = [_odom(0.0, 0.0, 0.0, 0.0), _odom(1.0, 1.0, 0.0, 0.0)]
+    mounts = _tf(0.0, ("base_link", "s", 0.0, 0.0, 0.0))
+    ranges = [_range("/r", 0.1, INF, frame="s", hi=3.0), _range("/r", 0.2, -INF, frame="s"),
+              _range("/r", 0.3, math.nan, frame="s"), _range("/r", 0.4, INF, frame="s", hi=3.0),
+              _range("/r", 0.5, 2.0, frame="s")]
+    bag = write_bag(tmp_path / "bag_mcap", [*odom, mounts, *ranges],
+                    {"/r": RANGE, "/odom": ODOM, "/tf_static": TF})
+    log = read_rosbag(bag)
+    r = log.report
+    assert (r.no_echo, r.too_close, r.invalid, r.readings) == (2, 1, 1, 1)
+    assert log.batch.range.tolist() == [2.0]
+    np.testing.assert_allclose(log.no_echo.x, [0.1, 0.4])
+    np.testing.assert_allclose(log.no_echo.max_range, [3.0, 3.0])
+
+
+# TF mounts: base_link -> sonar_ring at (0.1, 0) turned 90°; the ring carries sonar_front at
+# (0.2, 0) turned -90° and sonar_left at (0, -0.15) turned 0; sonar_rear hangs off base_link
+# on /tf at (-0.25, 0.05) turned 180°. In base_link, worked by hand:
+#   front (0.1, 0.2, 0°), left (0.25, 0.0, 90°), rear (-0.25, 0.05, 180°).
+TF_MOUNTS = [
+    _tf(0.0, ("sonar_ring", "sonar_left", 0.0, -0.15, 0.0),
+        ("base_link", "sonar_ring", 0.1, 0.0, math.pi / 2)),
+    _tf(0.0, ("sonar_ring", "sonar_front", 0.2, 0.0, -math.pi / 2)),
+    _tf(0.0, ("base_link", "sonar_rear", -0.25, 0.05, math.pi), topic="/tf"),
+]
+# Robot at (2, 1) heading 90°, then (2, 3): at t = 1 it is at (2, 2), heading 90°, so a mount
+# (mx, my, b) lies at (2 - my, 2 + mx) facing 90° + b.
+TF_ODOM = [_odom(0.0, 2.0, 1.0, math.pi / 2), _odom(2.0, 2.0, 3.0, math.pi / 2)]
+# Topics in natural order a, b, c carry the rear, front and left sonars: list position and
+# TF order differ, frames decide.
+TF_RANGES = [_range("/sonar_a", 1.0, 3.0, frame="sonar_rear"),
+             _range("/sonar_b", 1.0, 1.0, frame="sonar_front", radiation=1),
+             _range("/sonar_c", 1.0, 2.0, frame="sonar_left")]
+TF_TYPES = {"/sonar_a": RANGE, "/sonar_b": RANGE, "/sonar_c": RANGE, "/odom": ODOM,
+            "/tf": TF, "/tf_static": TF}
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_tf_mounted_sensors_read_at_their_origins(tmp_path: Path, name: str) -> None:
+    bag = write_bag(tmp_path / name, [*TF_ODOM, *TF_MOUNTS, *TF_RANGES], TF_TYPES)
+    log = read_rosbag(bag)
+    b = log.batch
+    assert b.sensor.tolist() == [0, 1, 2]
+    np.testing.assert_allclose(b.range, [3.0, 1.0, 2.0])
+    np.testing.assert_allclose(b.x, [1.95, 1.8, 2.0], atol=1e-9)
+    np.testing.assert_allclose(b.y, [1.75, 2.1, 2.25], atol=1e-9)
+    np.testing.assert_allclose(np.remainder(b.theta, 2 * math.pi),
+                               [3 * math.pi / 2, math.pi / 2, math.pi], atol=1e-9)
+    sources = log.report.sources
+    assert [(s.topic, s.frame, s.mount) for s in sources] == [
+        ("/sonar_a", "sonar_rear", "tf"), ("/sonar_b", "sonar_front", "tf"),
+        ("/sonar_c", "sonar_left", "tf")]
+    assert [s.radiation for s in sources] == ["ultrasound", "infrared", "ultrasound"]
+    assert sources[2].x == pytest.approx(0.25)
+    assert sources[2].bearing == pytest.approx(math.pi / 2)
+
+
+def test_one_topic_told_apart_by_frame_id_with_tf(tmp_path: Path) -> None:
+    ranges = [Msg("/sonars", m.t, m.fields) for m in TF_RANGES]
+    bag = write_bag(tmp_path / "bag", [*TF_ODOM, *TF_MOUNTS, *ranges],
+                    {"/sonars": RANGE, "/odom": ODOM, "/tf": TF, "/tf_static": TF})
+    log = read_rosbag(bag)
+    # Frames in natural order: sonar_front, sonar_left, sonar_rear.
+    assert log.report.sensors == (("/sonars", "sonar_front"), ("/sonars", "sonar_left"),
+                                  ("/sonars", "sonar_rear"))
+    np.testing.assert_allclose(log.batch.x, [1.8, 2.0, 1.95], atol=1e-9)
+    np.testing.assert_allclose(log.batch.range, [1.0, 2.0, 3.0])
+
+
+def test_odometry_from_tf_when_no_odometry_topic(tmp_path: Path) -> None:
+    tf_odom = [_tf(t, ("odom", "base_link", 2.0 * t, 0.0, 0.0), topic="/tf") for t in (0, 1)]
+    mounts = _tf(0.0, ("base_link", "sonar_front", 0.1, 0.2, 0.0))
+    bag = write_bag(tmp_path / "bag.bag",
+                    [*tf_odom, mounts, _range("/r", 0.25, 1.0, frame="sonar_front")],
+                    {"/tf": TF, "/tf_static": TF, "/r": RANGE})
+    log = read_rosbag(bag)
+    assert log.report.odometry_topic == "/tf"
+    assert log.report.odometry_frames == ("odom", "base_link")
+    # t = 0.25: robot at (0.5, 0) heading 0; mount (0.1, 0.2).
+    assert (log.batch.x[0], log.batch.y[0]) == (pytest.approx(0.6), pytest.approx(0.2))
+
+
+def test_frame_override_names_the_base_frame(tmp_path: Path) -> None:
+    tf_odom = [_tf(t, ("odom", "chassis", 2.0 * t, 0.0, 0.0), topic="/tf") for t in (0, 1)]
+    mounts = _tf(0.0, ("chassis", "s", 0.1, 0.0, 0.0))
+    bag = write_bag(tmp_path / "bag", [*tf_odom, mounts, _range("/r", 0.5, 1.0, frame="s")],
+                    {"/tf": TF, "/tf_static": TF, "/r": RANGE})
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    _assert_one_line(err, str(bag), "no odometry", "'base_link'")
+    log = read_rosbag(bag, base_frame="chassis")
+    assert log.batch.x[0] == pytest.approx(1.1)
 
 
 def test_one_topic_with_frame_ids_turning_robot(tmp_path: Path) -> None:
@@ -181,19 +306,61 @@ def test_one_topic_with_frame_ids_turning_robot(tmp_path: Path) -> None:
     assert math.remainder(a.theta - (h + math.pi / 2), 2 * math.pi) == pytest.approx(0)
 
 
-def test_without_robot_sensors_take_the_odometry_pose(tmp_path: Path) -> None:
-    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
-    batch = read_rosbag(bag).batch
-    np.testing.assert_allclose(batch.x, 1.0 + 0.5 * batch.t)
-    np.testing.assert_allclose(batch.y, 2.0)
-    np.testing.assert_allclose(batch.theta, 0.0)
-
-
 def _assert_one_line(err: pytest.ExceptionInfo[RosbagError], *parts: str) -> None:
     text = str(err.value)
     assert "\n" not in text
     for part in parts:
         assert part in text
+
+
+def test_without_tf_or_robot_the_error_asks_for_mounts(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    _assert_one_line(err, str(bag), "no TF mount", "--robot")
+    # A frame TF does not know is named.
+    ranges = [*TF_RANGES, _range("/sonar_d", 1.0, 1.0, frame="sonar_top")]
+    bag = write_bag(tmp_path / "tf", [*TF_ODOM, *TF_MOUNTS, *ranges],
+                    {**TF_TYPES, "/sonar_d": RANGE})
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    _assert_one_line(err, "'sonar_top'", "--robot")
+
+
+def test_without_odometry_the_error_says_so(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "bag", [*TF_MOUNTS, *TF_RANGES],
+                    {k: v for k, v in TF_TYPES.items() if v != ODOM})
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    _assert_one_line(err, str(bag), "no odometry", ODOM, "/tf")
+
+
+def test_a_robot_that_does_not_fit_the_bag_is_refused(tmp_path: Path) -> None:
+    four = [_range(f"/sonar_{i}", 0.5, 1.0) for i in range(4)]
+    bag = write_bag(tmp_path / "four", [*STRAIGHT_ODOM, *four],
+                    {**{f"/sonar_{i}": RANGE for i in range(4)}, "/odom": ODOM})
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag, robot=ROBOT)
+    _assert_one_line(err, "robot 'two' has 2 sensors but the bag has 4", "does not fit")
+    # TF places the three sonars; a three-sonar robot with other mounts is refused.
+    three = parse_robot(ROBOT_YAML.replace(
+        "sensors:\n", "sensors:\n  - {x: -0.25, y: 0.05, bearing_deg: 180.0}\n").replace(
+        "name: two", "name: three"), "three")
+    tf_bag = write_bag(tmp_path / "tf", [*TF_ODOM, *TF_MOUNTS, *TF_RANGES], TF_TYPES)
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(tf_bag, robot=three)
+    _assert_one_line(err, "robot 'three' does not fit", "sensor 1", "'sonar_front'")
+
+
+def test_a_robot_that_agrees_with_tf_is_accepted(tmp_path: Path) -> None:
+    yaml = ROBOT_YAML.split("sensors:")[0] + (
+        "sensors:\n  - {x: -0.25, y: 0.05, bearing_deg: 180.0}\n"
+        "  - {x: 0.1, y: 0.2, bearing_deg: 0.0}\n  - {x: 0.26, y: 0.0, bearing_deg: 92.0}\n")
+    robot = parse_robot(yaml, "same")
+    bag = write_bag(tmp_path / "tf", [*TF_ODOM, *TF_MOUNTS, *TF_RANGES], TF_TYPES)
+    log = read_rosbag(bag, robot=robot)
+    # TF wins where it exists (the robot's 0.26 is within 5 cm, 92° within 5°).
+    np.testing.assert_allclose(log.batch.x, [1.95, 1.8, 2.0], atol=1e-9)
 
 
 def test_not_a_bag(tmp_path: Path) -> None:
@@ -212,6 +379,29 @@ def test_not_a_bag(tmp_path: Path) -> None:
     _assert_one_line(err, "missing", "no such")
 
 
+def _truncate(path: Path, keep: float) -> None:
+    data = path.read_bytes()
+    path.write_bytes(data[: int(len(data) * keep)])
+
+
+@pytest.mark.parametrize("name", ["ros1.bag", "ros2_mcap", "ros2_sqlite3"])
+@pytest.mark.parametrize("keep", [0.3, 0.7, 0.95])
+def test_truncated_bags_give_one_line(tmp_path: Path, name: str, keep: float) -> None:
+    bag = write_bag(tmp_path / name, [*TF_ODOM, *TF_MOUNTS, *TF_RANGES] * 20, TF_TYPES)
+    files = [bag] if bag.is_file() else sorted(p for p in bag.iterdir()
+                                               if p.suffix in {".mcap", ".db3"})
+    _truncate(files[0], keep)
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    _assert_one_line(err, str(bag))
+
+
+def test_a_bare_mcap_file_reads(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "run_mcap", [*TF_ODOM, *TF_MOUNTS, *TF_RANGES], TF_TYPES)
+    (mcap,) = bag.glob("*.mcap")
+    assert len(read_rosbag(mcap).batch) == 3
+
+
 def test_missing_topics_and_wrong_types(tmp_path: Path) -> None:
     only_odom = write_bag(tmp_path / "odom", STRAIGHT_ODOM, {"/odom": ODOM})
     with pytest.raises(RosbagError) as err:
@@ -220,7 +410,7 @@ def test_missing_topics_and_wrong_types(tmp_path: Path) -> None:
     only_ranges = write_bag(tmp_path / "ranges", STRAIGHT_RANGES[:2],
                             {"/sonar_2": RANGE, "/sonar_10": RANGE})
     with pytest.raises(RosbagError) as err:
-        read_rosbag(only_ranges)
+        read_rosbag(only_ranges, robot=ROBOT)
     _assert_one_line(err, str(only_ranges), ODOM)
     full = write_bag(tmp_path / "full", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
     with pytest.raises(RosbagError) as err:
@@ -234,25 +424,29 @@ def test_missing_topics_and_wrong_types(tmp_path: Path) -> None:
     _assert_one_line(err, str(full), "'/nope'", "not in the bag")
 
 
-def test_more_sensors_than_the_robot_has(tmp_path: Path) -> None:
-    one = parse_robot(ROBOT_YAML.split("  - {x: 0.3")[0], "one")
-    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
-    with pytest.raises(RosbagError) as err:
-        read_rosbag(bag, robot=one)
-    _assert_one_line(err, str(bag), "'/sonar_10'", "only 1 sensors")
-
-
-def test_cli_convert_rosbag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
+def test_cli_convert_rosbag_with_tf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bag = write_bag(tmp_path / "run_mcap", [*TF_ODOM, *TF_MOUNTS, *TF_RANGES], TF_TYPES)
     out = tmp_path / "readings.csv"
-    assert main(["convert", "rosbag", str(bag), "--robot", "p3dx-front", "--out",
+    assert main(["convert", "rosbag", str(bag), "--out", str(out)]) == 0
+    batch = read_readings_csv(out)
+    np.testing.assert_allclose(batch.x, [1.95, 1.8, 2.0], atol=1e-9)
+    text = capsys.readouterr().out
+    assert "sonar_rear" in text
+    assert "/sonar_a" in text
+    assert "infrared" in text
+    assert "readings written" in text
+
+
+def test_cli_convert_rosbag_with_robot(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
+    robot = tmp_path / "two.yaml"
+    robot.write_text(ROBOT_YAML)
+    out = tmp_path / "readings.csv"
+    assert main(["convert", "rosbag", str(bag), "--robot", str(robot), "--out",
                  str(out)]) == 0
     batch = read_readings_csv(out)
     assert batch.sensor.tolist() == [0, 1, 0, 1]
-    # p3dx-front sensor 0: (0.069, 0.136) at 90° (its YAML); heading 0 at t = 0.5, x = 1.25.
-    assert (batch.x[0], batch.y[0]) == (pytest.approx(1.25 + 0.069), pytest.approx(2.136))
-    assert batch.theta[0] == pytest.approx(math.pi / 2)
-    assert "readings written" in capsys.readouterr().out
+    assert (batch.x[0], batch.y[0]) == (pytest.approx(1.25 + 0.1), pytest.approx(2.2))
 
 
 def test_cli_convert_rosbag_errors_are_one_line(tmp_path: Path,
@@ -263,6 +457,14 @@ def test_cli_convert_rosbag_errors_are_one_line(tmp_path: Path,
                  str(out)]) == 2
     assert main(["convert", "rosbag", "--out", str(out)]) == 2
     assert main(["convert", "roboND", "--robot", "scout2", "--out", str(out)]) == 2
+    # p3dx-front has 8 sonars, the bag 2: refused, not used.
+    assert main(["convert", "rosbag", str(bag), "--robot", "p3dx-front", "--out",
+                 str(out)]) == 2
+    # No TF and no --robot.
+    assert main(["convert", "rosbag", str(bag), "--out", str(out)]) == 2
     assert not out.exists()
     err = capsys.readouterr().err
     assert "/sonar_2" in err
+    assert "does not fit" in err
+    assert "--robot" in err
+    assert all(line.startswith("sonarcarve: error:") for line in err.strip().splitlines())

@@ -16,7 +16,7 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import read_robond, write_readings_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
-from sonarcarve.io.rosbag import read_rosbag
+from sonarcarve.io.rosbag import RosbagReport, read_rosbag
 from sonarcarve.robot import load_robot
 
 __all__ = ["CONVERTERS", "ConvertOptions", "convert"]
@@ -41,7 +41,9 @@ class ConvertOptions:
     range_topics : list of str
         rosbag: Range topics in sensor order (empty: all, natural-sorted).
     odom_topic : str or None
-        rosbag: Odometry topic (None: the only one).
+        rosbag: Odometry topic (None: the only one, else TF).
+    frame : str or None
+        rosbag: the robot's base frame (None: the odometry's child frame, else base_link).
     """
 
     beam_width: float | None = None
@@ -49,11 +51,13 @@ class ConvertOptions:
     robot: str | None = None
     range_topics: tuple[str, ...] = ()
     odom_topic: str | None = None
+    frame: str | None = None
 
 
 def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
-    if opts.robot is not None or opts.range_topics or opts.odom_topic is not None:
-        msg = "--robot, --range-topic and --odom-topic apply to the rosbag format only"
+    if (opts.robot is not None or opts.range_topics or opts.odom_topic is not None
+            or opts.frame is not None):
+        msg = "--robot, --range-topic, --odom-topic and --frame apply to the rosbag format only"
         raise ConvertError(msg)
     beam_width = opts.beam_width
     log = read_robond(directory, keep_duplicates=opts.keep_duplicates,
@@ -76,26 +80,42 @@ def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
 
 def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     if source is None:
-        msg = "rosbag needs SOURCE: a rosbag1 file (*.bag) or a rosbag2 folder"
+        msg = "rosbag needs SOURCE: a rosbag1 file (*.bag), a rosbag2 folder or a *.mcap file"
         raise ConvertError(msg)
     if opts.keep_duplicates:
         msg = "--keep-duplicates applies to the roboND format only"
         raise ConvertError(msg)
     robot = load_robot(opts.robot) if opts.robot is not None else None
     log = read_rosbag(source, robot=robot, range_topics=list(opts.range_topics) or None,
-                      odom_topic=opts.odom_topic, beam_width=opts.beam_width)
+                      odom_topic=opts.odom_topic, base_frame=opts.frame,
+                      beam_width=opts.beam_width)
     write_readings_csv(log.batch, out)
     r = log.report
+    for line in _sensor_lines(r):
+        console.print(line, soft_wrap=True, highlight=False, markup=False)
     rows = [(f"messages on {topic}", f"{count:,}") for topic, count in r.messages.items()]
+    parent, child = r.odometry_frames
     return summary_table(f"ROS bag: {source}", [
         *rows,
+        ("odometry", f"{r.odometry_topic} ({parent or '?'} → {child or '?'})"),
         ("sensors", f"{len(r.sensors):,}"),
-        ("mounts", robot.name if robot is not None else "none (sensor = odometry pose)"),
-        ("no echo (dropped)", f"{r.no_echo:,}"),
+        ("no echo, +Inf (free space; not written yet)", f"{r.no_echo:,}"),
+        ("too close, -Inf (dropped)", f"{r.too_close:,}"),
+        ("invalid, NaN (dropped)", f"{r.invalid:,}"),
         ("outside odometry span (dropped)", f"{r.outside_odometry:,}"),
         ("readings written", f"{r.readings:,}"),
         ("readings CSV", str(out)),
     ])
+
+
+def _sensor_lines(report: RosbagReport) -> list[str]:
+    """Which topic and frame became which sensor, and where its mount came from: one line each.
+
+    Lines, not a table, so that narrow terminals do not cut the frame names.
+    """
+    return [f"sensor {i}: {s.topic} frame {s.frame or '(none)'} ← mount {s.mount} "
+            f"({s.x:.3f} m, {s.y:.3f} m, {math.degrees(s.bearing):.1f}°), {s.radiation}"
+            for i, s in enumerate(report.sources)]
 
 
 #: Format name (lower case) -> converter(source, out, options).
@@ -128,15 +148,22 @@ def convert(
         = False,
     robot: Annotated[str | None, typer.Option(
         metavar="NAME|ROBOT.yaml",
-        help="rosbag: sensor mounts, a built-in robot (p3dx-front, roboND-8, scout2) or a "
-             "YAML file; sensor i takes mount i. Default: sensors at the odometry pose.")]
+        help="rosbag: fallback sensor mounts when the bag's TF lacks them: a built-in robot "
+             "(p3dx-front, roboND-8, scout2) or a YAML file; sensor i takes mount i. Refused "
+             "when it does not fit the bag (sensor count, or TF mounts).")]
         = None,
     range_topic: Annotated[list[str] | None, typer.Option(
         metavar="TOPIC",
         help="rosbag: a Range topic; repeat in sensor order (default: every Range topic, "
              "natural-sorted by name; frame_ids number the sensors within a topic).")] = None,
     odom_topic: Annotated[str | None, typer.Option(
-        metavar="TOPIC", help="rosbag: the Odometry topic (default: the only one).")] = None,
+        metavar="TOPIC",
+        help="rosbag: the Odometry topic (default: the only one, else odom → base frame on "
+             "/tf).")] = None,
+    frame: Annotated[str | None, typer.Option(
+        metavar="FRAME",
+        help="rosbag: the robot's base frame, where TF mounts end and odometry points to "
+             "(default: the odometry's child_frame_id, else base_link).")] = None,
 ) -> None:
     """Convert a data set's files into the readings CSV (t,sensor,x,y,theta,range,beam_width).
 
@@ -145,13 +172,17 @@ def convert(
     values are dropped, and so are stale repeats: a value equal to the same sensor's value in
     the previous record although the robot moved (the sensor had not fired again).
 
-    rosbag: each sensor_msgs/Range echo (header stamp, s) inside [min_range, max_range] becomes
-    a reading posed by the robot pose interpolated in nav_msgs/Odometry composed with the
-    sensor's --robot mount; beam width = field_of_view when > 0.
+    rosbag (ROS 1 .bag, ROS 2 folder with sqlite3 or MCAP storage, or a bare .mcap): each
+    sensor_msgs/Range echo (header stamp, s) inside [min_range, max_range] becomes a reading
+    posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
+    composed with the sensor's mount, found in /tf_static (and /tf) by its frame_id; --robot
+    gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: +Inf (no
+    echo within range), -Inf (too close) and NaN (invalid) are counted, not written.
 
     Example: `sonarcarve convert roboND --out roboND.csv` then
     `sonarcarve process roboND.csv --out map.csv`; or
-    `sonarcarve convert rosbag run.bag --robot p3dx-front --out run.csv`.
+    `sonarcarve convert rosbag run.mcap --out run.csv` (mounts from TF), or
+    `sonarcarve convert rosbag run.bag --robot p3dx-front --out run.csv` (a bag without TF).
     """
     converter = CONVERTERS.get(fmt.lower())
     if converter is None:
@@ -161,7 +192,8 @@ def convert(
     # The data set's own files must survive a --out that names one of them.
     check_output_file(out, inputs=_source_files(directory), label=f"--out {out}")
     options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates, robot=robot,
-                             range_topics=tuple(range_topic or ()), odom_topic=odom_topic)
+                             range_topics=tuple(range_topic or ()), odom_topic=odom_topic,
+                             frame=frame)
     console.print(converter(directory, out, options))
 
 

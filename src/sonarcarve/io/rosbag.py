@@ -1,6 +1,7 @@
-"""ROS bags of sonar ranges: ``sensor_msgs/msg/Range`` + ``nav_msgs/msg/Odometry`` → readings.
+"""ROS bags of sonar ranges: ``sensor_msgs/msg/Range`` + odometry + TF → readings.
 
-Reads rosbag1 files (``*.bag``) and rosbag2 folders with the pure-Python ``rosbags`` library
+Reads rosbag1 files (``*.bag``), rosbag2 folders (sqlite3 or MCAP storage) and bare ``*.mcap``
+/ ``*.db3`` files with the pure-Python ``rosbags`` library
 (:class:`rosbags.highlevel.AnyReader`); no ROS installation is needed.
 
 Sensor numbering
@@ -14,46 +15,72 @@ Sensors are numbered ``0, 1, ...`` in this order:
    numbers: ``/sonar_2`` before ``/sonar_10``);
 2. within one topic, ``frame_id`` values in natural sorted order.
 
-Sensor ``i`` takes mount ``i`` of the :class:`~sonarcarve.robot.RobotDescription`
-(``mount_x, mount_y, bearing``), so list the topics, or name the frames, in the robot's sensor
-order. Without a robot description every sensor sits at the robot's origin facing its heading
-(use this only when the odometry already gives the sensor's own pose).
+Mounts
+------
+Where a sensor sits on the robot comes from TF, matched by frame id: the transforms of
+``/tf_static`` (and the latest of each on ``/tf``, other than the odometry's own) are chained
+from the Range message's ``header.frame_id`` up to the robot's base frame (``base_frame``; by
+default the odometry's ``child_frame_id``, else ``base_link`` or ``base_footprint``). The
+Range's beam points along the x axis of its frame (the message's convention). A sensor whose
+frame has no TF path to the base frame takes mount ``i`` of the ``robot`` description (the
+fallback for bags recorded without TF); then the robot must have exactly as many sensors as
+the bag. A robot given for a bag whose TF places every sensor must agree with TF (within
+5 cm and 5°): a robot that does not fit the bag is refused, never silently used. A sensor
+with neither is an error that says to give the mounts.
 
 Poses
 -----
-The robot pose at a reading's stamp is interpolated linearly in the Odometry messages (x, y and
-the yaw of ``pose.pose.orientation``, yaw unwrapped first so that a turn through ±π does not
-interpolate the long way round). The sensor's world pose is the robot pose composed with the
-mount: ``x = X + cos(Θ)·mx − sin(Θ)·my``, ``y = Y + sin(Θ)·mx + cos(Θ)·my``,
-``theta = Θ + bearing``.
-
+The robot pose at a reading's stamp is interpolated linearly in the odometry: a
+``nav_msgs/msg/Odometry`` topic, or, when the bag has none, the ``/tf`` transforms whose child is
+the base frame (``odom → base_link``). x, y and the yaw of the orientation are interpolated,
+yaw unwrapped first so that a turn through ±π does not interpolate the long way round. The
+sensor's world pose is the robot pose composed with the mount:
+``x = X + cos(Θ)·mx − sin(Θ)·my``, ``y = Y + sin(Θ)·mx + cos(Θ)·my``, ``theta = Θ + bearing``.
 Times are the messages' ``header.stamp`` (seconds), not the time the recorder logged them.
+
+Range values (REP 117)
+----------------------
+- finite, inside ``[min_range, max_range]``: an echo, one reading;
+- ``+Inf`` (or finite beyond ``max_range``): nothing within range, free space up to
+  ``max_range``. The readings core takes no such reading yet, so they are kept apart in
+  :attr:`RosbagLog.no_echo` with their poses, and counted;
+- ``-Inf`` (or finite below ``min_range``): an object too close to measure; counted, dropped;
+- NaN (or finite ≤ 0): invalid; counted, dropped.
+
+``field_of_view`` is the beam width φ; ``radiation_type`` (0 ultrasound, 1 infrared) is kept in
+the report.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
-from dataclasses import dataclass
+import sqlite3
+import struct
+from collections import Counter
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
-import numpy.typing as npt
 
 from sonarcarve.extras import require
 from sonarcarve.io.errors import InputError
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.typing import BoolArray, FloatArray, IntArray
+from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
+    "MOUNT_TOLERANCE",
     "ODOMETRY_TYPE",
     "RANGE_TYPE",
+    "TF_TYPE",
+    "NoEchoReadings",
     "RosbagError",
     "RosbagLog",
     "RosbagReport",
     "SensorMounts",
+    "SensorSource",
     "read_rosbag",
 ]
 
@@ -87,10 +114,45 @@ class SensorMounts(Protocol):
 RANGE_TYPE = "sensor_msgs/msg/Range"
 #: Message type of the robot pose.
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
+#: Message type of ``/tf`` and ``/tf_static``.
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+#: How far a robot description's mount may lie from the bag's TF mount: (metres, radians).
+MOUNT_TOLERANCE = (0.05, math.radians(5.0))
+#: ``radiation_type`` values of sensor_msgs/Range.
+_RADIATION = {0: "ultrasound", 1: "infrared"}
+#: Base frame names tried, in order, when neither ``base_frame`` nor the odometry names one.
+_BASE_FRAMES = ("base_link", "base_footprint")
+#: Longest chain of transforms followed from a sensor frame to the base frame.
+_MAX_TF_DEPTH = 64
 
 
 class RosbagError(InputError):
     """A bag that cannot be turned into readings; the one-line message names bag and topic."""
+
+
+@dataclass(frozen=True)
+class SensorSource:
+    """Where one sensor's readings and mount came from.
+
+    Attributes
+    ----------
+    topic, frame : str
+        The Range topic and ``header.frame_id``.
+    mount : str
+        ``tf`` (chained from ``/tf_static`` or ``/tf``) or ``robot NAME[i]`` (the fallback).
+    x, y, bearing : float
+        The mount in the base frame: metres, metres, radians.
+    radiation : str
+        ``ultrasound``, ``infrared`` or ``type N``; several values joined by ``/``.
+    """
+
+    topic: str
+    frame: str
+    mount: str
+    x: float
+    y: float
+    bearing: float
+    radiation: str
 
 
 @dataclass(frozen=True)
@@ -100,16 +162,23 @@ class RosbagReport:
     Attributes
     ----------
     messages : dict of str to int
-        Messages read per topic (Range topics and the odometry topic).
+        Messages read per topic (Range topics, the odometry topic, TF topics).
     sensors : tuple of (str, str)
         ``(topic, frame_id)`` of sensor 0, 1, ... (see the module notes for the order).
+    sources : tuple of SensorSource
+        Per sensor: topic, frame, where its mount came from, the mount, radiation type.
     odometry_topic : str
-        The topic the robot poses came from.
+        The topic the robot poses came from (an Odometry topic, or the TF topic).
+    odometry_frames : tuple of (str, str)
+        ``(parent, child)`` frames of the odometry (``odom``, ``base_link``).
     no_echo : int
-        Ranges dropped as no echo: outside ``[min_range, max_range]`` of their message, not
-        finite, or not > 0.
+        +Inf ranges, or finite ones beyond ``max_range``: nothing heard within range.
+    too_close : int
+        −Inf ranges, or finite ones below ``min_range``.
+    invalid : int
+        NaN ranges, or finite ones ≤ 0.
     outside_odometry : int
-        Echoes dropped because their stamp lies outside the time span of the odometry.
+        Echoes and no-echo messages dropped because their stamp lies outside the odometry span.
     readings : int
         Readings produced.
     """
@@ -120,6 +189,42 @@ class RosbagReport:
     no_echo: int
     outside_odometry: int
     readings: int
+    too_close: int = 0
+    invalid: int = 0
+    sources: tuple[SensorSource, ...] = ()
+    odometry_frames: tuple[str, str] = ("", "")
+
+
+@dataclass(frozen=True, eq=False)
+class NoEchoReadings:
+    """Beams that heard nothing up to ``max_range`` (REP 117 ``+Inf``): free space, no point.
+
+    Struct of arrays, shape (n,) each, in time order (ties by sensor).
+
+    Attributes
+    ----------
+    t : ndarray
+        Header stamp, seconds.
+    sensor : ndarray of int64
+        Sensor index (as in the readings).
+    x, y, theta : ndarray
+        Sensor origin (m) and axis (rad) in the odometry frame.
+    max_range : ndarray
+        How far the beam looked, metres.
+    beam_width : ndarray
+        φ, radians (NaN where the message gave none).
+    """
+
+    t: FloatArray
+    sensor: IntArray
+    x: FloatArray
+    y: FloatArray
+    theta: FloatArray
+    max_range: FloatArray
+    beam_width: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,26 +234,50 @@ class RosbagLog:
     Attributes
     ----------
     batch : ReadingBatch
-        World-frame readings (s, m, rad), sorted by time then sensor.
+        World-frame (odometry frame) echoes (s, m, rad), sorted by time then sensor.
     report : RosbagReport
-        Counts.
+        Counts and where each sensor's mount came from.
+    no_echo : NoEchoReadings
+        The +Inf readings inside the odometry span, posed like the echoes.
     """
 
     batch: ReadingBatch
     report: RosbagReport
+    no_echo: NoEchoReadings = field(default_factory=lambda: _no_echo_rows(
+        *(np.zeros(0) for _ in range(7))))
 
 
-@dataclass(frozen=True)
+@dataclass
 class _Ranges:
     """Range messages of all topics as parallel lists (one entry per message)."""
 
-    topic: list[str]
-    frame: list[str]
-    t: list[float]
-    range: list[float]
-    min_range: list[float]
-    max_range: list[float]
-    fov: list[float]
+    topic: list[str] = field(default_factory=list)
+    frame: list[str] = field(default_factory=list)
+    t: list[float] = field(default_factory=list)
+    range: list[float] = field(default_factory=list)
+    min_range: list[float] = field(default_factory=list)
+    max_range: list[float] = field(default_factory=list)
+    fov: list[float] = field(default_factory=list)
+    radiation: list[int] = field(default_factory=list)
+
+
+@dataclass
+class _Tf:
+    """Transforms read: static ones by child, dynamic ones as rows."""
+
+    static: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)
+    dynamic: list[tuple[float, str, str, float, float, float]] = field(default_factory=list)
+
+
+@dataclass
+class _Messages:
+    """Everything :func:`read_rosbag` takes from a bag."""
+
+    ranges: _Ranges
+    odom: list[tuple[float, float, float, float]]
+    odom_frames: Counter[tuple[str, str]]
+    tf: _Tf
+    counts: dict[str, int]
 
 
 def _natural_key(text: str) -> tuple[tuple[int, int | str], ...]:
@@ -166,15 +295,35 @@ def _stamp(header: Any) -> float:
 
 
 def _yaw(q: Any) -> float:
-    """Heading (rad) of a quaternion: rotation about z of the robot's x axis."""
+    """Heading (rad) of a quaternion: rotation about z of the frame's x axis."""
     w, x, y, z = float(q.w), float(q.x), float(q.y), float(q.z)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """Exceptions a damaged bag raises while it is opened or read."""
+    from rosbags.highlevel import AnyReaderError
+    from rosbags.rosbag1 import ReaderError as Reader1Error
+    from rosbags.rosbag2 import ReaderError as Reader2Error
+
+    errors: tuple[type[BaseException], ...] = (
+        AnyReaderError, Reader1Error, Reader2Error, OSError, ValueError, KeyError, IndexError,
+        EOFError, struct.error, AssertionError, sqlite3.Error)
+    try:  # rosbags reads sqlite3 storage through apsw where it is installed
+        import apsw
+    except ImportError:
+        return errors
+    return (*errors, apsw.Error)
+
+
+def _reason(err: BaseException) -> str:
+    return " ".join(str(err).split())[:200] or type(err).__name__
 
 
 def _open_reader(bag: Path) -> Any:
     """An opened AnyReader, or a one-line RosbagError."""
     require("rosbags", "ros", "ROS bags")
-    from rosbags.highlevel import AnyReader, AnyReaderError
+    from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
     if not bag.exists():
@@ -184,9 +333,8 @@ def _open_reader(bag: Path) -> Any:
     try:
         reader = AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
-    except (AnyReaderError, OSError, ValueError, KeyError) as err:
-        reason = " ".join(str(err).split()) or type(err).__name__
-        msg = f"{bag}: not a readable rosbag1 file or rosbag2 folder ({reason})"
+    except _read_errors() as err:
+        msg = f"{bag}: not a readable rosbag1 file or rosbag2 folder ({_reason(err)})"
         raise RosbagError(msg) from None
     return reader
 
@@ -213,7 +361,8 @@ def _check_type(bag: Path, types: dict[str, str], topic: str, expected: str) -> 
 
 
 def _choose_topics(bag: Path, types: dict[str, str], range_topics: Sequence[str] | None,
-                   odom_topic: str | None) -> tuple[list[str], str]:
+                   odom_topic: str | None) -> tuple[list[str], str | None]:
+    """Range topics in sensor order, and the odometry topic (None: odometry from TF)."""
     if range_topics is None:
         ranges = sorted((t for t, m in types.items() if m == RANGE_TYPE), key=_natural_key)
         if not ranges:
@@ -226,67 +375,93 @@ def _choose_topics(bag: Path, types: dict[str, str], range_topics: Sequence[str]
             raise RosbagError(msg)
         for topic in ranges:
             _check_type(bag, types, topic, RANGE_TYPE)
-    if odom_topic is None:
-        odoms = sorted(t for t, m in types.items() if m == ODOMETRY_TYPE)
-        if not odoms:
-            msg = f"{bag}: no topic of type {ODOMETRY_TYPE} (topics: {_listing(types)})"
-            raise RosbagError(msg)
-        if len(odoms) > 1:
-            msg = f"{bag}: several odometry topics ({', '.join(odoms)}); choose one"
-            raise RosbagError(msg)
-        odom_topic = odoms[0]
-    else:
+    if odom_topic is not None:
         _check_type(bag, types, odom_topic, ODOMETRY_TYPE)
-    return ranges, odom_topic
+        return ranges, odom_topic
+    odoms = sorted(t for t, m in types.items() if m == ODOMETRY_TYPE)
+    if len(odoms) > 1:
+        msg = f"{bag}: several odometry topics ({', '.join(odoms)}); choose one with --odom-topic"
+        raise RosbagError(msg)
+    return ranges, odoms[0] if odoms else None
 
 
 def _listing(types: dict[str, str]) -> str:
     return ", ".join(f"{t} [{m}]" for t, m in sorted(types.items())) or "none"
 
 
-def _read_messages(bag: Path, reader: Any, range_topics: list[str],
-                   odom_topic: str) -> tuple[_Ranges, FloatArray, dict[str, int]]:
-    """Range fields per message, odometry rows ``(t, x, y, yaw)``, and counts per topic."""
-    from rosbags.highlevel import AnyReaderError
-
-    wanted = {*range_topics, odom_topic}
-    connections = [c for c in reader.connections if c.topic in wanted]
-    ranges = _Ranges([], [], [], [], [], [], [])
-    odom: list[tuple[float, float, float, float]] = []
-    counts = dict.fromkeys([*range_topics, odom_topic], 0)
-    for connection, _, raw in reader.messages(connections=connections):
+def _iterate(bag: Path, reader: Any, connections: list[Any]) -> Iterator[tuple[Any, Any]]:
+    """``(connection, message)`` in log order; a damaged bag gives a one-line RosbagError."""
+    errors = _read_errors()
+    it = iter(reader.messages(connections=connections))
+    while True:
         try:
-            message: Any = reader.deserialize(raw, connection.msgtype)
-        except AnyReaderError as err:
-            msg = f"{bag}: topic {connection.topic!r}: cannot decode a message ({err})"
+            item = next(it, None)
+        except errors as err:
+            msg = f"{bag}: truncated or corrupt bag ({_reason(err)})"
             raise RosbagError(msg) from None
-        counts[connection.topic] += 1
-        if connection.topic == odom_topic:
+        if item is None:
+            return
+        connection, _, raw = item
+        try:
+            message = reader.deserialize(raw, connection.msgtype)
+        except errors as err:
+            msg = f"{bag}: topic {connection.topic!r}: cannot decode a message ({_reason(err)})"
+            raise RosbagError(msg) from None
+        yield connection, message
+
+
+def _read_messages(bag: Path, reader: Any, types: dict[str, str], range_topics: list[str],
+                   odom_topic: str | None) -> _Messages:
+    """Range fields per message, odometry rows ``(t, x, y, yaw)``, TF, counts per topic."""
+    tf_topics = sorted(t for t, m in types.items() if m == TF_TYPE)
+    wanted = [*range_topics, *([odom_topic] if odom_topic else []), *tf_topics]
+    connections = [c for c in reader.connections if c.topic in set(wanted)]
+    out = _Messages(_Ranges(), [], Counter(), _Tf(), dict.fromkeys(wanted, 0))
+    for connection, message in _iterate(bag, reader, connections):
+        topic = connection.topic
+        out.counts[topic] += 1
+        if topic == odom_topic:
             p = message.pose.pose
-            odom.append((_stamp(message.header), float(p.position.x), float(p.position.y),
-                         _yaw(p.orientation)))
-            continue
-        ranges.topic.append(connection.topic)
-        ranges.frame.append(str(message.header.frame_id))
-        ranges.t.append(_stamp(message.header))
-        ranges.range.append(float(message.range))
-        ranges.min_range.append(float(message.min_range))
-        ranges.max_range.append(float(message.max_range))
-        ranges.fov.append(float(message.field_of_view))
-    return ranges, np.array(odom, dtype=np.float64).reshape(-1, 4), counts
+            out.odom.append((_stamp(message.header), float(p.position.x), float(p.position.y),
+                             _yaw(p.orientation)))
+            out.odom_frames[(_frame(message.header.frame_id),
+                             _frame(message.child_frame_id))] += 1
+        elif topic in tf_topics:
+            _add_transforms(out.tf, message, static=topic.rstrip("/").endswith("tf_static"))
+        else:
+            r = out.ranges
+            r.topic.append(topic)
+            r.frame.append(_frame(message.header.frame_id))
+            r.t.append(_stamp(message.header))
+            r.range.append(float(message.range))
+            r.min_range.append(float(message.min_range))
+            r.max_range.append(float(message.max_range))
+            r.fov.append(float(message.field_of_view))
+            r.radiation.append(int(message.radiation_type))
+    return out
 
 
-def _number_sensors(bag: Path, ranges: _Ranges, range_topics: list[str],
-                    robot: SensorMounts | None) -> tuple[tuple[str, str], ...]:
+def _frame(name: object) -> str:
+    """A frame id without the leading ``/`` some ROS 1 bags carry."""
+    return str(name).lstrip("/")
+
+
+def _add_transforms(tf: _Tf, message: Any, *, static: bool) -> None:
+    for ts in message.transforms:
+        tr = ts.transform
+        row = (_frame(ts.header.frame_id), float(tr.translation.x), float(tr.translation.y),
+               _yaw(tr.rotation))
+        child = _frame(ts.child_frame_id)
+        if static:
+            tf.static[child] = row
+        else:
+            tf.dynamic.append((_stamp(ts.header), row[0], child, row[1], row[2], row[3]))
+
+
+def _number_sensors(ranges: _Ranges, range_topics: list[str]) -> tuple[tuple[str, str], ...]:
     rank = {topic: i for i, topic in enumerate(range_topics)}
-    keys = sorted(set(zip(ranges.topic, ranges.frame, strict=True)),
-                  key=lambda k: (rank[k[0]], _natural_key(k[1])))
-    if robot is not None and len(keys) > robot.n_sensors:
-        topic, frame = keys[robot.n_sensors]
-        msg = (f"{bag}: topic {topic!r} frame {frame!r} is sensor {robot.n_sensors}, but robot "
-               f"{robot.name!r} has only {robot.n_sensors} sensors")
-        raise RosbagError(msg)
-    return tuple(keys)
+    return tuple(sorted(set(zip(ranges.topic, ranges.frame, strict=True)),
+                        key=lambda k: (rank[k[0]], _natural_key(k[1]))))
 
 
 def _robot_pose(odom: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -303,21 +478,25 @@ def read_rosbag(
     robot: SensorMounts | None = None,
     range_topics: Sequence[str] | None = None,
     odom_topic: str | None = None,
+    base_frame: str | None = None,
     beam_width: float | None = None,
 ) -> RosbagLog:
-    """Read sonar ranges and odometry from a ROS bag into world-frame readings.
+    """Read sonar ranges, odometry and TF from a ROS bag into world-frame readings.
 
     Parameters
     ----------
     path : str or Path
-        A rosbag1 file (``*.bag``) or a rosbag2 folder.
+        A rosbag1 file (``*.bag``), a rosbag2 folder (sqlite3 or MCAP), or a bare ``*.mcap``.
     robot : SensorMounts, optional
-        Sensor mounts; sensor ``i`` (module notes) takes mount ``i``. Default: every sensor at
-        the robot origin facing its heading.
+        Fallback mounts for sensors whose frame TF does not place: sensor ``i`` (module notes)
+        takes mount ``i``. Checked against the bag (sensor count, and TF where it exists).
     range_topics : sequence of str, optional
         Range topics, in sensor order; default: every topic of type Range, natural-sorted.
     odom_topic : str, optional
-        Odometry topic; default: the only topic of type Odometry.
+        Odometry topic; default: the only topic of type Odometry, else TF.
+    base_frame : str, optional
+        The robot's frame (the child of the odometry); default: the odometry's
+        ``child_frame_id``, else ``base_link`` or ``base_footprint``.
     beam_width : float, optional
         φ (rad) for messages whose ``field_of_view`` is not > 0; default NaN (the method's
         default). A positive ``field_of_view`` always wins.
@@ -325,79 +504,197 @@ def read_rosbag(
     Returns
     -------
     RosbagLog
-        Readings sorted by time, ties by sensor; ranges outside ``[min_range, max_range]`` of
-        their message (no echo) or not finite, and stamps outside the odometry span, dropped.
+        Echoes sorted by time, ties by sensor, and the no-echo beams beside them (REP 117,
+        module notes); stamps outside the odometry span dropped.
 
     Raises
     ------
     RosbagError
-        One line naming the bag (and topic): missing or unreadable bag, no Range topic, no (or
-        several) odometry topics, a topic of the wrong type, more sensors than the robot has,
-        a ``field_of_view`` of π or more.
+        One line naming the bag (and topic or frame): missing, unreadable, truncated or corrupt
+        bag; no Range topic; no odometry (neither an Odometry topic nor a TF path to the base
+        frame); several odometry topics; a topic of the wrong type; a sensor without a mount
+        (neither TF nor ``robot``); a ``robot`` that does not fit the bag; a ``field_of_view``
+        of π or more.
     """
     bag = Path(path)
-    topics, odom_name, ranges, odom, counts = _load_bag(bag, range_topics, odom_topic)
-    sensors = _number_sensors(bag, ranges, topics, robot)
-    sensor = _sensor_of_messages(ranges, sensors)
-    t, r = np.array(ranges.t, dtype=np.float64), np.array(ranges.range, dtype=np.float64)
-    fov = np.array(ranges.fov, dtype=np.float64)
-    _check_fov(bag, ranges, fov)
-    echo = _echo_mask(ranges, r)
-    inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
-    keep = echo & inside
-    order = np.lexsort((sensor[keep], t[keep]))  # time, then sensor
-    default_width = math.nan if beam_width is None else beam_width
-    width = np.where(fov[keep][order] > 0.0, fov[keep][order], default_width)
-    batch = _world_readings(bag, robot, odom, t[keep][order], sensor[keep][order],
-                            r[keep][order], width)
-    report = RosbagReport(
-        messages=counts, sensors=sensors, odometry_topic=odom_name,
-        no_echo=int((~echo).sum()), outside_odometry=int((echo & ~inside).sum()),
-        readings=len(batch),
-    )
-    return RosbagLog(batch=batch, report=report)
-
-
-def _load_bag(bag: Path, range_topics: Sequence[str] | None, odom_topic: str | None,
-              ) -> tuple[list[str], str, _Ranges, FloatArray, dict[str, int]]:
-    """Every message :func:`read_rosbag` needs, the reader closed whatever happens.
-
-    Returns
-    -------
-    topics : list of str
-        The range topics, in sensor order.
-    odom_name : str
-        The odometry topic.
-    ranges : _Ranges
-        Range message fields, one entry per message.
-    odom : ndarray, shape (m, 4)
-        Odometry rows ``(t, x, y, yaw)``: seconds, metres, radians; m >= 1.
-    counts : dict
-        Messages per topic.
-
-    Raises
-    ------
-    RosbagError
-        As :func:`read_rosbag`, and for an odometry topic with no messages.
-    """
     reader = _open_reader(bag)
     try:
         types = _topic_types(bag, reader)
         topics, odom_name = _choose_topics(bag, types, range_topics, odom_topic)
-        ranges, odom, counts = _read_messages(bag, reader, topics, odom_name)
+        found = _read_messages(bag, reader, types, topics, odom_name)
     finally:
         reader.close()
-    if odom.shape[0] == 0:
-        msg = f"{bag}: topic {odom_name!r} holds no odometry messages"
+    base = _base_frame(found, base_frame)
+    odom, odom_source, odom_frames = _odometry(bag, found, odom_name, base)
+    sensors = _number_sensors(found.ranges, topics)
+    sources = _mount_sensors(bag, found, sensors, base, robot)
+    return _assemble(bag, found, sensors, sources, odom, (odom_source, odom_frames), beam_width)
+
+
+def _base_frame(found: _Messages, base_frame: str | None) -> str:
+    if base_frame is not None:
+        return base_frame.lstrip("/")
+    if found.odom_frames:
+        child = found.odom_frames.most_common(1)[0][0][1]
+        if child:
+            return child
+    children = {row[2] for row in found.tf.dynamic} | set(found.tf.static)
+    parents = {row[1] for row in found.tf.dynamic} | {v[0] for v in found.tf.static.values()}
+    for name in _BASE_FRAMES:
+        if name in children or name in parents:
+            return name
+    return _BASE_FRAMES[0]
+
+
+def _odometry(bag: Path, found: _Messages, odom_name: str | None,
+              base: str) -> tuple[FloatArray, str, tuple[str, str]]:
+    """Odometry rows ``(t, x, y, yaw)`` (m >= 1), their topic, and ``(parent, child)``."""
+    if odom_name is not None:
+        if not found.odom:
+            msg = f"{bag}: topic {odom_name!r} holds no odometry messages"
+            raise RosbagError(msg)
+        frames = found.odom_frames.most_common(1)[0][0]
+        return np.array(found.odom, dtype=np.float64).reshape(-1, 4), odom_name, frames
+    rows = [r for r in found.tf.dynamic if r[2] == base]
+    if not rows:
+        msg = (f"{bag}: no odometry: no {ODOMETRY_TYPE} topic and no transform to {base!r} on "
+               "/tf (give --odom-topic, or --frame for the robot's frame)")
         raise RosbagError(msg)
-    return topics, odom_name, ranges, odom, counts
+    parents = Counter(r[1] for r in rows)
+    parent = parents.most_common(1)[0][0]
+    odom = np.array([(r[0], r[3], r[4], r[5]) for r in rows if r[1] == parent],
+                    dtype=np.float64).reshape(-1, 4)
+    return odom, "/tf", (parent, base)
 
 
-def _sensor_of_messages(ranges: _Ranges, sensors: tuple[tuple[str, str], ...]) -> IntArray:
-    """Sensor index of every range message, shape (n,): its (topic, frame_id) in ``sensors``."""
+def _mount_in_base(frame: str, base: str, edges: dict[str, tuple[str, float, float, float]],
+                   ) -> tuple[float, float, float] | None:
+    """Pose ``(x, y, yaw)`` of ``frame`` in ``base`` by chaining ``edges`` (child → parent)."""
+    x = y = yaw = 0.0
+    current = frame
+    for _ in range(_MAX_TF_DEPTH):
+        if current == base:
+            return x, y, yaw
+        edge = edges.get(current)
+        if edge is None:
+            return None
+        parent, ex, ey, eyaw = edge
+        c, s = math.cos(eyaw), math.sin(eyaw)
+        x, y, yaw = ex + c * x - s * y, ey + s * x + c * y, eyaw + yaw
+        current = parent
+    return None
+
+
+def _mount_sensors(bag: Path, found: _Messages, sensors: tuple[tuple[str, str], ...], base: str,
+                   robot: SensorMounts | None) -> tuple[SensorSource, ...]:
+    """Each sensor's mount: TF by frame id, else the robot's mount of the same index."""
+    edges: dict[str, tuple[str, float, float, float]] = {}
+    for _, parent, child, x, y, yaw in found.tf.dynamic:  # the latest of each wins
+        if child != base:  # the odometry's own transform is no mount
+            edges[child] = (parent, x, y, yaw)
+    edges.update(found.tf.static)
+    radiation = _radiation(found.ranges, sensors)
+    tf_mounts = [_mount_in_base(frame, base, edges) if frame else None for _, frame in sensors]
+    missing = [i for i, m in enumerate(tf_mounts) if m is None]
+    if robot is not None:
+        _check_robot(bag, robot, sensors, tf_mounts, base)
+    elif missing:
+        frames = ", ".join(repr(sensors[i][1]) for i in missing[:4])
+        more = f" and {len(missing) - 4} more" if len(missing) > 4 else ""
+        msg = (f"{bag}: no TF mount for sensor frame{'s' if len(missing) > 1 else ''} "
+               f"{frames}{more} (no /tf_static or /tf path to {base!r}); give the sensor "
+               "mounts with --robot NAME|ROBOT.yaml")
+        raise RosbagError(msg)
+    out = []
+    for i, ((topic, frame), mount) in enumerate(zip(sensors, tf_mounts, strict=True)):
+        if mount is not None:
+            out.append(SensorSource(topic, frame, "tf", *mount, radiation[i]))
+        else:
+            assert robot is not None  # checked above
+            out.append(SensorSource(topic, frame, f"robot {robot.name}[{i}]",
+                                    float(robot.mount_x[i]), float(robot.mount_y[i]),
+                                    float(robot.bearing[i]), radiation[i]))
+    return tuple(out)
+
+
+def _check_robot(bag: Path, robot: SensorMounts, sensors: tuple[tuple[str, str], ...],
+                 tf_mounts: list[tuple[float, float, float] | None], base: str) -> None:
+    """Refuse a robot description that does not fit the bag (count, or TF mounts)."""
+    if robot.n_sensors != len(sensors):
+        listed = ", ".join(f"{t}{' ' + f if f else ''}" for t, f in sensors[:4])
+        more = ", ..." if len(sensors) > 4 else ""
+        msg = (f"{bag}: robot {robot.name!r} has {robot.n_sensors} sensors but the bag has "
+               f"{len(sensors)} ({listed}{more}); it does not fit this bag")
+        raise RosbagError(msg)
+    dist_tol, angle_tol = MOUNT_TOLERANCE
+    for i, mount in enumerate(tf_mounts):
+        if mount is None:
+            continue
+        x, y, yaw = mount
+        rx, ry, rb = float(robot.mount_x[i]), float(robot.mount_y[i]), float(robot.bearing[i])
+        if (math.hypot(x - rx, y - ry) > dist_tol
+                or abs(math.remainder(yaw - rb, math.tau)) > angle_tol):
+            msg = (f"{bag}: robot {robot.name!r} does not fit the bag: sensor {i} (frame "
+                   f"{sensors[i][1]!r}) is at ({x:.3f}, {y:.3f}, {math.degrees(yaw):.1f}°) in "
+                   f"{base!r} by TF, ({rx:.3f}, {ry:.3f}, {math.degrees(rb):.1f}°) in the robot")
+            raise RosbagError(msg)
+
+
+def _radiation(ranges: _Ranges, sensors: tuple[tuple[str, str], ...]) -> list[str]:
+    seen: dict[tuple[str, str], set[int]] = {key: set() for key in sensors}
+    for key, value in zip(zip(ranges.topic, ranges.frame, strict=True), ranges.radiation,
+                          strict=True):
+        seen[key].add(value)
+    return ["/".join(_RADIATION.get(v, f"type {v}") for v in sorted(seen[key]))
+            for key in sensors]
+
+
+def _assemble(bag: Path, found: _Messages, sensors: tuple[tuple[str, str], ...],
+              sources: tuple[SensorSource, ...], odom: FloatArray,
+              odometry: tuple[str, tuple[str, str]], beam_width: float | None) -> RosbagLog:
+    ranges = found.ranges
     index = {key: i for i, key in enumerate(sensors)}
-    return np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
-                    dtype=np.int64)
+    sensor = np.array([index[k] for k in zip(ranges.topic, ranges.frame, strict=True)],
+                      dtype=np.int64)
+    t, r = np.array(ranges.t, dtype=np.float64), np.array(ranges.range, dtype=np.float64)
+    lo = np.array(ranges.min_range, dtype=np.float64)
+    hi = np.array(ranges.max_range, dtype=np.float64)
+    fov = np.array(ranges.fov, dtype=np.float64)
+    _check_fov(bag, ranges, fov)
+    with np.errstate(invalid="ignore"):  # NaN compares False everywhere: it is invalid
+        invalid = np.isnan(r) | (np.isfinite(r) & (r <= 0.0))
+        no_echo = ~invalid & (r > hi)
+        too_close = ~invalid & (r < lo)
+    echo = ~(invalid | no_echo | too_close)
+    inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
+    default_width = math.nan if beam_width is None else beam_width
+    width = np.where(fov > 0.0, fov, default_width)
+    x, y, theta = _sensor_poses(odom, t, sensor, sources)
+    order = np.lexsort((sensor, t))  # time, then sensor
+    keep = order[(echo & inside)[order]]
+    batch = ReadingBatch.from_arrays(t=t[keep], sensor=sensor[keep], x=x[keep], y=y[keep],
+                                     theta=theta[keep], range=r[keep], beam_width=width[keep],
+                                     source=str(bag))
+    free = order[(no_echo & inside)[order]]
+    report = RosbagReport(
+        messages=found.counts, sensors=sensors, odometry_topic=odometry[0],
+        no_echo=int(no_echo.sum()), outside_odometry=int(((echo | no_echo) & ~inside).sum()),
+        readings=len(batch), too_close=int(too_close.sum()), invalid=int(invalid.sum()),
+        sources=sources, odometry_frames=odometry[1],
+    )
+    no_echo_rows = _no_echo_rows(t[free], sensor[free], x[free], y[free], theta[free], hi[free],
+                                 width[free])
+    return RosbagLog(batch=batch, report=report, no_echo=no_echo_rows)
+
+
+def _no_echo_rows(t: FloatArray, sensor: Any, x: FloatArray, y: FloatArray, theta: FloatArray,
+                  max_range: FloatArray, beam_width: FloatArray) -> NoEchoReadings:
+    return NoEchoReadings(
+        t=np.asarray(t, dtype=np.float64), sensor=np.asarray(sensor, dtype=np.int64),
+        x=np.asarray(x, dtype=np.float64), y=np.asarray(y, dtype=np.float64),
+        theta=np.asarray(theta, dtype=np.float64),
+        max_range=np.asarray(max_range, dtype=np.float64),
+        beam_width=np.asarray(beam_width, dtype=np.float64))
 
 
 def _check_fov(bag: Path, ranges: _Ranges, fov: FloatArray) -> None:
@@ -413,42 +710,16 @@ def _check_fov(bag: Path, ranges: _Ranges, fov: FloatArray) -> None:
         raise RosbagError(msg)
 
 
-def _echo_mask(ranges: _Ranges, r: FloatArray) -> BoolArray:
-    """Which ranges ``r`` (metres, shape (n,)) are echoes: finite, > 0, inside their limits."""
-    with np.errstate(invalid="ignore"):  # NaN ranges compare False: they are no echo too
-        return np.asarray(np.isfinite(r) & (r > 0.0) & (r >= np.array(ranges.min_range))
-                          & (r <= np.array(ranges.max_range)))
+def _sensor_poses(odom: FloatArray, t: FloatArray, sensor: IntArray,
+                  sources: tuple[SensorSource, ...]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """World (odometry-frame) pose of every message's sensor, shape (n,) each.
 
-
-def _world_readings(bag: Path, robot: SensorMounts | None, odom: FloatArray, t: FloatArray,
-                    sensor: IntArray, r: FloatArray, width: FloatArray) -> ReadingBatch:
-    """Readings in the world frame: each sensor's mount carried along the odometry.
-
-    Parameters
-    ----------
-    bag : Path
-        Named as the readings' source.
-    robot : SensorMounts or None
-        Sensor mounts (None: every sensor at the robot origin facing its heading).
-    odom : ndarray, shape (m, 4)
-        Odometry rows ``(t, x, y, yaw)``: seconds, metres, radians.
-    t, sensor, r, width : ndarray, shape (n,)
-        Time (s, inside the odometry span), sensor index, range (m) and beam width (rad) of
-        every reading, in reading order.
+    Stamps outside the odometry span get the end poses (``np.interp`` clamps); the caller drops
+    them.
     """
-    x, y, heading = _robot_pose(odom, t)
-    mx, my, bearing = _mounts(robot, sensor)
-    return ReadingBatch.from_arrays(
-        t=t, sensor=sensor,
-        x=x + np.cos(heading) * mx - np.sin(heading) * my,
-        y=y + np.sin(heading) * mx + np.cos(heading) * my,
-        theta=heading + bearing, range=r, beam_width=width, source=str(bag),
-    )
-
-
-def _mounts(robot: SensorMounts | None,
-            sensor: npt.NDArray[np.int64]) -> tuple[FloatArray, FloatArray, FloatArray]:
-    if robot is None:
-        zero = np.zeros(sensor.shape, dtype=np.float64)
-        return zero, zero, zero
-    return robot.mount_x[sensor], robot.mount_y[sensor], robot.bearing[sensor]
+    heading_x, heading_y, heading = _robot_pose(odom, t)
+    mx = np.array([s.x for s in sources], dtype=np.float64)[sensor]
+    my = np.array([s.y for s in sources], dtype=np.float64)[sensor]
+    bearing = np.array([s.bearing for s in sources], dtype=np.float64)[sensor]
+    c, s = np.cos(heading), np.sin(heading)
+    return heading_x + c * mx - s * my, heading_y + s * mx + c * my, heading + bearing

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from sonarcarve.io.atomic import atomic_path, make_output_dir
+from sonarcarve.lab.demo.animation import ANIMATION_FILE, animation_gif
 from sonarcarve.lab.demo.figures import (
     FIGURE_FILES,
     plot_door_closeup,
@@ -31,8 +32,10 @@ SUMMARY_MD = "summary.md"
 SUMMARY_JSON = "summary.json"
 
 
-def write_demo_outputs(result: DemoResult, out: str | Path) -> list[Path]:
-    """Write the figures, ``summary.md`` and ``summary.json`` into ``out``.
+def write_demo_outputs(result: DemoResult, out: str | Path, *,
+                       animation: bool = False) -> list[Path]:
+    """Write the figures, ``summary.md`` and ``summary.json`` into ``out``, and with
+    ``animation`` the door-approach GIF (:data:`~sonarcarve.lab.demo.animation.ANIMATION_FILE`).
 
     Everything is rendered in memory first; only then is ``out`` created (with its parents)
     and each file written atomically, so an error leaves no half-written output.
@@ -57,6 +60,8 @@ def write_demo_outputs(result: DemoResult, out: str | Path) -> list[Path]:
         SUMMARY_MD: summary_markdown(result).encode(),
         SUMMARY_JSON: summary_json(result).encode(),
     }
+    if animation:
+        files[ANIMATION_FILE] = animation_gif(result)
     make_output_dir(target)  # atomic_path creates no folders
     written = []
     for name, content in files.items():

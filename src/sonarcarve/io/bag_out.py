@@ -1,0 +1,491 @@
+"""ROS bags out: a method's live map and arcs as messages Foxglove and RViz show.
+
+:func:`write_map_bag` runs a method over readings and writes, beside the input messages copied
+through (optional) and the robot's odometry and TF (optional):
+
+- ``/sonarcarve/local_map``: ``sensor_msgs/msg/PointCloud2``, one point per surviving arc with
+  float32 fields ``x, y, z, source, width, max_error, confidence`` (``source`` the
+  :class:`~sonarcarve.maps.PointSource` code, ``width`` rad, ``max_error`` m, ``confidence``
+  NaN where the method does not estimate it), in the odometry frame, every ``1 / rate`` seconds
+  of log time;
+- ``/sonarcarve/arcs``: ``visualization_msgs/msg/MarkerArray``, a ``DELETEALL`` marker then one
+  ``LINE_STRIP`` per live arc (id = reading id), the arc's remaining width drawn about its
+  point, coloured by source like the figures (centerline red, carved blue, ATM green).
+
+:class:`BagWriter` is the writer underneath: one class for rosbag1 (``*.bag``, Noetic message
+definitions), rosbag2 folders (MCAP or sqlite3 storage) and bare ``*.mcap`` files, building
+messages from plain field mappings (fields not given take their zero value, so one mapping
+suits ROS 1 and ROS 2 definitions). A bag is written whole or not at all: it is built beside
+the target and moved into place when complete.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from types import TracebackType
+from typing import Any, Protocol
+
+import numpy as np
+
+from sonarcarve.extras import require
+from sonarcarve.io.errors import OutputError
+from sonarcarve.maps import LocalMap, PointSource
+from sonarcarve.readings import Reading, ReadingBatch
+from sonarcarve.typing import FloatArray, IntArray
+
+__all__ = [
+    "ARCS_TOPIC",
+    "LOCAL_MAP_FIELDS",
+    "LOCAL_MAP_TOPIC",
+    "BagFormat",
+    "BagOutReport",
+    "BagWriter",
+    "LiveMethod",
+    "arc_markers",
+    "bag_format",
+    "copy_messages",
+    "point_cloud_fields",
+    "quaternion",
+    "stamp",
+    "write_map_bag",
+]
+
+#: Topic of the local map point clouds.
+LOCAL_MAP_TOPIC = "/sonarcarve/local_map"
+#: Topic of the arc markers.
+ARCS_TOPIC = "/sonarcarve/arcs"
+#: Fields of every local map point, float32 each, in this order.
+LOCAL_MAP_FIELDS = ("x", "y", "z", "source", "width", "max_error", "confidence")
+#: Marker colours (r, g, b) by source, the figures' colours.
+_SOURCE_RGB = {
+    PointSource.CENTERLINE: (0.839, 0.153, 0.157),
+    PointSource.CARVED: (0.122, 0.467, 0.706),
+    PointSource.ATM: (0.173, 0.627, 0.173),
+}
+_POINTFIELD_FLOAT32 = 7
+_MARKER_LINE_STRIP, _MARKER_DELETEALL = 4, 3
+_ARC_SEGMENT = math.radians(2.0)  # marker polyline step along an arc
+_NUMERIC = {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+            "int64", "uint64", "float32", "float64"}
+_DTYPES = {"bool": np.bool_, "byte": np.uint8, "char": np.uint8, "float32": np.float32,
+           "float64": np.float64}
+
+
+class LiveMethod(Protocol):
+    """What :func:`write_map_bag` needs of a method (every
+    :class:`~sonarcarve.methods.base.SonarMethod` is one; io sits beside the methods and does
+    not import them)."""
+
+    @property
+    def history(self) -> Any:
+        """The ring buffer: ``slots()``, and per slot ``x``, ``y``, ``r``, ``reading_id``."""
+
+    def add(self, reading: Reading, reading_id: int | None = None) -> None:
+        """Process one reading."""
+
+    def local_map(self) -> LocalMap:
+        """The current local map."""
+
+    def estimates(self, slots: IntArray) -> Any:
+        """Per slot: ``alive``, ``xy``, ``width``, ``source``."""
+
+
+class BagFormat(Enum):
+    """What :class:`BagWriter` writes."""
+
+    ROS1 = "rosbag1 (.bag)"
+    ROS2_MCAP = "rosbag2 folder, MCAP storage"
+    ROS2_SQLITE3 = "rosbag2 folder, sqlite3 storage"
+    MCAP_FILE = "bare MCAP file (.mcap)"
+
+
+def bag_format(path: str | Path, storage: str = "mcap") -> BagFormat:
+    """The format a path asks for: ``*.bag`` rosbag1, ``*.mcap`` a bare MCAP file, anything
+    else a rosbag2 folder with ``storage`` (``mcap`` or ``sqlite3``).
+
+    >>> bag_format("run.bag").name, bag_format("run.mcap").name, bag_format("run").name
+    ('ROS1', 'MCAP_FILE', 'ROS2_MCAP')
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix == ".bag":
+        return BagFormat.ROS1
+    if suffix == ".mcap":
+        return BagFormat.MCAP_FILE
+    if storage not in {"mcap", "sqlite3"}:
+        msg = f"bag storage must be mcap or sqlite3, got {storage!r}"
+        raise OutputError(msg)
+    return BagFormat.ROS2_MCAP if storage == "mcap" else BagFormat.ROS2_SQLITE3
+
+
+def stamp(t: float) -> dict[str, int]:
+    """A ``builtin_interfaces/Time`` mapping for ``t`` seconds (>= 0)."""
+    ns = round(t * 1e9)
+    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
+
+
+def quaternion(yaw: float) -> dict[str, float]:
+    """A ``geometry_msgs/Quaternion`` mapping for a rotation of ``yaw`` radians about z."""
+    return {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2.0), "w": math.cos(yaw / 2.0)}
+
+
+class BagWriter:
+    """Write messages given as field mappings to a new bag; use as a context manager.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``*.bag``, ``*.mcap`` or a folder name (see :func:`bag_format`); must not exist.
+    storage : str
+        ``mcap`` (default) or ``sqlite3``, for rosbag2 folders.
+
+    Raises
+    ------
+    OutputError
+        The path exists, or its folder does not.
+    """
+
+    def __init__(self, path: str | Path, storage: str = "mcap") -> None:
+        require("rosbags", "ros", "ROS bags")
+        from rosbags.typesys import Stores, get_typestore
+
+        self.path = Path(path)
+        self.format = bag_format(self.path, storage)
+        if self.path.exists():
+            msg = f"{self.path}: already exists; a bag is never overwritten"
+            raise OutputError(msg)
+        if not self.path.parent.is_dir():
+            msg = f"{self.path}: folder {self.path.parent} does not exist"
+            raise OutputError(msg)
+        store = Stores.ROS1_NOETIC if self.format is BagFormat.ROS1 else Stores.ROS2_HUMBLE
+        self.typestore: Any = get_typestore(store)
+        if "tf2_msgs/msg/TFMessage" not in self.typestore.fielddefs:  # Noetic's store lacks it
+            from rosbags.typesys import get_types_from_msg
+
+            self.typestore.register(get_types_from_msg(
+                "geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+        self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", dir=self.path.parent))
+        self._writer: Any = None
+        self._connections: dict[str, Any] = {}
+        self.counts: dict[str, int] = {}
+
+    @property
+    def is_ros1(self) -> bool:
+        """True for rosbag1 output (ROS 1 serialisation and definitions)."""
+        return self.format is BagFormat.ROS1
+
+    def __enter__(self) -> BagWriter:
+        if self.is_ros1:
+            from rosbags.rosbag1 import Writer as Writer1
+
+            self._writer = Writer1(self._tmp / "bag.bag")
+        else:
+            from rosbags.rosbag2 import StoragePlugin
+            from rosbags.rosbag2 import Writer as Writer2
+
+            plugin = (StoragePlugin.SQLITE3 if self.format is BagFormat.ROS2_SQLITE3
+                      else StoragePlugin.MCAP)
+            self._writer = Writer2(self._tmp / self.path.stem, version=9,
+                                   storage_plugin=plugin)
+        self._writer.open()
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        try:
+            self._writer.close()
+            if kind is None:
+                self._move_into_place()
+        finally:
+            shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def _move_into_place(self) -> None:
+        if self.format is BagFormat.ROS1:
+            (self._tmp / "bag.bag").replace(self.path)
+        elif self.format is BagFormat.MCAP_FILE:
+            (mcap,) = (self._tmp / self.path.stem).glob("*.mcap")
+            mcap.replace(self.path)
+        else:
+            (self._tmp / self.path.stem).replace(self.path)
+
+    def connection(self, topic: str, msgtype: str, typestore: Any = None) -> Any:
+        """The connection of ``topic`` (added on first use, with ``msgtype``'s definition)."""
+        conn = self._connections.get(topic)
+        if conn is None:
+            conn = self._writer.add_connection(topic, msgtype,
+                                               typestore=typestore or self.typestore)
+            self._connections[topic] = conn
+            self.counts[topic] = 0
+        return conn
+
+    def write(self, topic: str, msgtype: str, t: float, fields: Mapping[str, Any]) -> None:
+        """Write one message built from ``fields`` (see :meth:`message`), logged at ``t`` s."""
+        message = self.message(msgtype, fields)
+        data = (self.typestore.serialize_ros1(message, msgtype) if self.is_ros1
+                else self.typestore.serialize_cdr(message, msgtype))
+        self.write_raw(topic, msgtype, t, data)
+
+    def write_raw(self, topic: str, msgtype: str, t: float, data: bytes | memoryview,
+                  typestore: Any = None) -> None:
+        """Write already serialised bytes (this bag's ROS version) logged at ``t`` s."""
+        conn = self.connection(topic, msgtype, typestore)
+        self._writer.write(conn, max(round(t * 1e9), 0), data)
+        self.counts[topic] += 1
+
+    def message(self, msgtype: str, fields: Mapping[str, Any]) -> Any:
+        """A message of ``msgtype`` in this bag's typestore: ``fields`` (nested mappings for
+        nested messages, lists of mappings for message sequences) over zero values; fields the
+        type does not have are ignored (so ROS 2 mappings suit ROS 1 types)."""
+        return _build(self.typestore, msgtype, fields)
+
+
+def _build(ts: Any, msgtype: str, fields: Mapping[str, Any] | Any) -> Any:
+    if not isinstance(fields, Mapping):
+        return fields  # already a message
+    _, defs = ts.fielddefs[msgtype]
+    values = {name: _value(ts, spec, fields[name]) if name in fields else _zero(ts, spec)
+              for name, spec in defs}
+    return ts.types[msgtype](**values)
+
+
+def _value(ts: Any, spec: Any, value: Any) -> Any:
+    kind, detail = spec
+    if kind.name == "NAME":
+        return _build(ts, detail, value)
+    if kind.name in {"ARRAY", "SEQUENCE"}:
+        (inner_kind, inner), _ = detail
+        if inner_kind.name == "NAME":
+            return [_build(ts, inner, v) for v in value]
+        if inner[0] in _NUMERIC:
+            return np.asarray(value, dtype=_DTYPES.get(inner[0], inner[0]))
+        return list(value)
+    return value
+
+
+def _zero(ts: Any, spec: Any) -> Any:
+    kind, detail = spec
+    if kind.name == "NAME":
+        return _build(ts, detail, {})
+    if kind.name in {"ARRAY", "SEQUENCE"}:
+        (inner_kind, inner), size = detail
+        n = size if kind.name == "ARRAY" else 0
+        if inner_kind.name == "NAME":
+            return [_build(ts, inner, {}) for _ in range(n)]
+        if inner[0] in _NUMERIC:
+            return np.zeros(n, dtype=_DTYPES.get(inner[0], inner[0]))
+        return [""] * n
+    base = detail[0]
+    if base == "string":
+        return ""
+    if base == "bool":
+        return False
+    return 0.0 if base.startswith("float") else 0
+
+
+@dataclass(frozen=True)
+class BagOutReport:
+    """What :func:`write_map_bag` wrote.
+
+    Attributes
+    ----------
+    path : Path
+        The bag.
+    format : BagFormat
+        Its format.
+    messages : dict of str to int
+        Messages written per topic.
+    """
+
+    path: Path
+    format: BagFormat
+    messages: dict[str, int]
+
+
+def write_map_bag(
+    path: str | Path,
+    batch: ReadingBatch,
+    method: LiveMethod,
+    *,
+    odometry: FloatArray | None = None,
+    copy_from: str | Path | None = None,
+    frame: str = "odom",
+    base_frame: str = "base_link",
+    rate: float = 2.0,
+    storage: str = "mcap",
+) -> BagOutReport:
+    """Run ``method`` over ``batch`` and write its live map and arcs as a ROS bag.
+
+    Parameters
+    ----------
+    path : str or Path
+        New bag: ``*.bag`` (ROS 1), ``*.mcap`` (bare MCAP file) or a rosbag2 folder.
+    batch : ReadingBatch
+        Readings in the odometry frame, time order.
+    method : LiveMethod
+        A fresh method (:func:`~sonarcarve.methods.make_method`); fed every reading.
+    odometry : ndarray, shape (m, 4), optional
+        Robot poses ``(t, x, y, yaw)`` (s, m, rad) written as ``/odom`` (nav_msgs/Odometry)
+        and ``/tf`` (``frame`` → ``base_frame``). Leave out when ``copy_from`` holds them.
+    copy_from : str or Path, optional
+        A bag whose messages are copied through first (all topics).
+    frame : str
+        The odometry frame: the point clouds' and markers' ``frame_id``.
+    base_frame : str
+        The robot's frame (child of the odometry).
+    rate : float
+        Local maps (and arc markers) per second of log time, > 0.
+    storage : str
+        ``mcap`` or ``sqlite3`` for rosbag2 folders.
+
+    Returns
+    -------
+    BagOutReport
+
+    Raises
+    ------
+    OutputError
+        The path exists or its folder does not; a rate that is not > 0; a copied message type
+        the output's ROS version does not know.
+    RosbagError
+        ``copy_from`` is no readable bag.
+    """
+    if not (math.isfinite(rate) and rate > 0.0):
+        msg = f"the local map rate must be > 0 per second, got {rate}"
+        raise OutputError(msg)
+    with BagWriter(path, storage) as out:
+        if copy_from is not None:
+            copy_messages(out, Path(copy_from))
+        if odometry is not None:
+            _write_odometry(out, np.asarray(odometry, dtype=np.float64).reshape(-1, 4), frame,
+                            base_frame)
+        _write_maps(out, batch, method, frame, rate)
+    return BagOutReport(path=out.path, format=out.format, messages=dict(out.counts))
+
+
+def copy_messages(out: BagWriter, source: Path, topics: Iterable[str] | None = None) -> None:
+    """Copy the messages of ``source`` (all topics, or ``topics``) into ``out``, logged at their
+    original times. Same ROS version: the bytes as they are; otherwise each message rebuilt in
+    the output's types."""
+    from sonarcarve.io.rosbag import _iterate, _open_reader
+
+    wanted = None if topics is None else set(topics)
+    reader = _open_reader(source)
+    try:
+        connections = [c for c in reader.connections if wanted is None or c.topic in wanted]
+        same = (not reader.is2) == out.is_ros1
+        if same:
+            for conn, t_ns, raw in reader.messages(connections=connections):
+                out.write_raw(conn.topic, conn.msgtype, t_ns * 1e-9, raw,
+                              typestore=reader.typestore)
+            return
+        for conn, message in _iterate(source, reader, connections):
+            if conn.msgtype not in out.typestore.fielddefs:
+                msg = (f"{source}: topic {conn.topic!r} has type {conn.msgtype}, which "
+                       f"{out.format.value} output does not know; write the same ROS version")
+                raise OutputError(msg)
+            fields = _fields_of(message)
+            out.write(conn.topic, conn.msgtype, _header_time(message), fields)
+    finally:
+        reader.close()
+
+
+def _fields_of(message: Any) -> Any:
+    """A message as nested mappings (numpy arrays and plain values kept)."""
+    names = getattr(message, "__dataclass_fields__", None)
+    if names is None:
+        if isinstance(message, list):
+            return [_fields_of(v) for v in message]
+        return message
+    return {name: _fields_of(getattr(message, name)) for name in names}
+
+
+def _header_time(message: Any) -> float:
+    header = getattr(message, "header", None)
+    if header is None:
+        return 0.0
+    return float(header.stamp.sec) + 1e-9 * float(header.stamp.nanosec)
+
+
+def _write_odometry(out: BagWriter, odometry: FloatArray, frame: str, base_frame: str) -> None:
+    for t, x, y, yaw in odometry.tolist():
+        header = {"stamp": stamp(t), "frame_id": frame}
+        pose = {"position": {"x": x, "y": y, "z": 0.0}, "orientation": quaternion(yaw)}
+        out.write("/odom", "nav_msgs/msg/Odometry", t,
+                  {"header": header, "child_frame_id": base_frame, "pose": {"pose": pose}})
+        out.write("/tf", "tf2_msgs/msg/TFMessage", t, {"transforms": [{
+            "header": header, "child_frame_id": base_frame,
+            "transform": {"translation": {"x": x, "y": y, "z": 0.0},
+                          "rotation": quaternion(yaw)}}]})
+
+
+def _write_maps(out: BagWriter, batch: ReadingBatch, method: LiveMethod, frame: str,
+                rate: float) -> None:
+    if len(batch) == 0:
+        return
+    period = 1.0 / rate
+    next_t = float(batch.t[0]) + period
+    for k, reading in enumerate(batch):
+        while reading.t >= next_t:
+            _write_snapshot(out, method, next_t, frame)
+            next_t += period
+        method.add(reading, k)
+    _write_snapshot(out, method, float(batch.t[-1]), frame)
+
+
+def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str) -> None:
+    local = method.local_map()
+    header = {"stamp": stamp(t), "frame_id": frame}
+    out.write(LOCAL_MAP_TOPIC, "sensor_msgs/msg/PointCloud2", t,
+              {"header": header, **point_cloud_fields(local)})
+    out.write(ARCS_TOPIC, "visualization_msgs/msg/MarkerArray", t,
+              {"markers": arc_markers(method, header)})
+
+
+def point_cloud_fields(local: LocalMap) -> dict[str, Any]:
+    """The PointCloud2 fields (all but the header) of a local map: float32 x, y, z = 0,
+    source, width, max_error, confidence, one point per map point."""
+    n = len(local)
+    table = np.zeros((n, len(LOCAL_MAP_FIELDS)), dtype="<f4")
+    table[:, 0], table[:, 1] = local.xy[:, 0], local.xy[:, 1]
+    table[:, 3], table[:, 4] = local.source, local.width
+    table[:, 5], table[:, 6] = local.max_error, local.confidence
+    step = 4 * len(LOCAL_MAP_FIELDS)
+    return {
+        "height": 1, "width": n, "is_bigendian": False, "point_step": step,
+        "row_step": step * n, "is_dense": True,
+        "fields": [{"name": name, "offset": 4 * i, "datatype": _POINTFIELD_FLOAT32, "count": 1}
+                   for i, name in enumerate(LOCAL_MAP_FIELDS)],
+        "data": np.frombuffer(table.tobytes(), dtype=np.uint8),
+    }
+
+
+def arc_markers(method: LiveMethod, header: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """Marker mappings: ``DELETEALL``, then one ``LINE_STRIP`` per live arc of ``method``'s
+    history: radius r about the sensor origin, the estimate's width centred on its point."""
+    h = method.history
+    slots = h.slots()
+    est = method.estimates(slots)
+    markers: list[dict[str, Any]] = [{"header": header, "ns": "arcs",
+                                      "action": _MARKER_DELETEALL}]
+    for k in np.flatnonzero(est.alive).tolist():
+        slot = int(slots[k])
+        ox, oy, r = float(h.x[slot]), float(h.y[slot]), float(h.r[slot])
+        mid = math.atan2(float(est.xy[k, 1]) - oy, float(est.xy[k, 0]) - ox)
+        half = 0.5 * float(est.width[k])
+        steps = max(2, math.ceil(2 * half / _ARC_SEGMENT) + 1)
+        tau = np.linspace(mid - half, mid + half, steps)
+        rgb = _SOURCE_RGB[PointSource(int(est.source[k]))]
+        markers.append({
+            "header": header, "ns": "arcs", "id": int(h.reading_id[slot]),
+            "type": _MARKER_LINE_STRIP, "action": 0,
+            "pose": {"orientation": {"w": 1.0}}, "scale": {"x": 0.02},
+            "color": {"r": rgb[0], "g": rgb[1], "b": rgb[2], "a": 1.0},
+            "points": [{"x": ox + r * math.cos(a), "y": oy + r * math.sin(a)}
+                       for a in tau.tolist()],
+        })
+    return markers

@@ -1,0 +1,133 @@
+"""write_map_bag and BagWriter: bags written in tmp_path, read back with rosbags' AnyReader."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+
+from sonarcarve.io.bag_out import (
+    ARCS_TOPIC,
+    LOCAL_MAP_FIELDS,
+    LOCAL_MAP_TOPIC,
+    BagFormat,
+    write_map_bag,
+)
+from sonarcarve.io.errors import OutputError
+from sonarcarve.io.rosbag import RosbagError
+from sonarcarve.methods import make_method
+from sonarcarve.readings import ReadingBatch
+
+# One sonar at the origin facing +x hears a wall 2 m away four times, 0.4 s apart.
+BATCH = ReadingBatch.from_arrays(
+    t=[0.0, 0.4, 0.8, 1.2], sensor=[0, 0, 0, 0], x=[0.0, 0.0, 0.0, 0.0], y=[0.0] * 4,
+    theta=[0.0] * 4, range=[2.0] * 4, beam_width=[0.3] * 4)
+ODOMETRY = np.array([[0.0, 0.0, 0.0, 0.0], [1.2, 0.0, 0.0, math.pi / 2]])
+
+
+def _read(path: Path) -> dict[str, list[tuple[str, Any]]]:
+    """Topic -> [(msgtype, message)] in log order."""
+    out: dict[str, list[tuple[str, Any]]] = {}
+    with AnyReader([path]) as reader:
+        for conn, _, raw in reader.messages():
+            out.setdefault(conn.topic, []).append(
+                (conn.msgtype, reader.deserialize(raw, conn.msgtype)))
+    return out
+
+
+def _cloud(message: Any) -> np.ndarray:
+    return np.frombuffer(message.data.tobytes(), dtype="<f4").reshape(message.width, -1)
+
+
+@pytest.mark.parametrize(("name", "storage", "kind"), [
+    ("map.mcap", "mcap", BagFormat.MCAP_FILE), ("map_folder", "mcap", BagFormat.ROS2_MCAP),
+    ("map_sqlite", "sqlite3", BagFormat.ROS2_SQLITE3), ("map.bag", "mcap", BagFormat.ROS1)])
+def test_map_bag_reads_back_with_types_frames_and_counts(tmp_path: Path, name: str,
+                                                         storage: str, kind: BagFormat) -> None:
+    path = tmp_path / name
+    report = write_map_bag(path, BATCH, make_method("centerline"), odometry=ODOMETRY, rate=2.0,
+                           storage=storage)
+    assert report.format is kind
+    # Period 0.5 s: maps at 0.5 (readings 0, 1), 1.0 (0-2) and the last reading, 1.2 (0-3).
+    assert report.messages == {"/odom": 2, "/tf": 2, LOCAL_MAP_TOPIC: 3, ARCS_TOPIC: 3}
+    topics = _read(path)
+    assert {t: {m for m, _ in msgs} for t, msgs in topics.items()} == {
+        "/odom": {"nav_msgs/msg/Odometry"}, "/tf": {"tf2_msgs/msg/TFMessage"},
+        LOCAL_MAP_TOPIC: {"sensor_msgs/msg/PointCloud2"},
+        ARCS_TOPIC: {"visualization_msgs/msg/MarkerArray"}}
+    clouds = [m for _, m in topics[LOCAL_MAP_TOPIC]]
+    assert [c.width for c in clouds] == [2, 3, 4]
+    assert [c.header.stamp.sec * 1e9 + c.header.stamp.nanosec for c in clouds] == [
+        5e8, 1e9, 1.2e9]
+    last = clouds[-1]
+    assert last.header.frame_id == "odom"
+    assert [f.name for f in last.fields] == list(LOCAL_MAP_FIELDS)
+    assert [f.offset for f in last.fields] == [0, 4, 8, 12, 16, 20, 24]
+    assert last.point_step == 28
+    points = _cloud(last)
+    # Centerline points at the arc centre (2, 0); error 2·r·sin(θ_d/4) (eq. 5.2, 5.3).
+    np.testing.assert_allclose(points[:, :6], np.tile(
+        [2.0, 0.0, 0.0, 0.0, 0.3, 2 * 2.0 * math.sin(0.3 / 4)], (4, 1)), rtol=1e-6)
+    assert np.all(np.isnan(points[:, 6]))
+    markers = [m for _, m in topics[ARCS_TOPIC]][-1].markers
+    assert markers[0].action == 3  # DELETEALL
+    assert [m.type for m in markers[1:]] == [4] * 4  # LINE_STRIP
+    assert [m.id for m in markers[1:]] == [0, 1, 2, 3]
+    ends = [(p.x, p.y) for p in (markers[1].points[0], markers[1].points[-1])]
+    np.testing.assert_allclose(ends, [[2 * math.cos(0.15), -2 * math.sin(0.15)],
+                                      [2 * math.cos(0.15), 2 * math.sin(0.15)]], atol=1e-9)
+    assert (markers[1].color.r, markers[1].color.b) == (pytest.approx(0.839, abs=1e-3),
+                                                        pytest.approx(0.157, abs=1e-3))
+    odom = [m for _, m in topics["/odom"]][-1]
+    assert (odom.header.frame_id, odom.child_frame_id) == ("odom", "base_link")
+    assert odom.pose.pose.orientation.z == pytest.approx(math.sin(math.pi / 4))
+    tf = next(m for _, m in topics["/tf"]).transforms[0]
+    assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
+
+
+def test_carving_shrinks_the_arcs_in_the_markers(tmp_path: Path) -> None:
+    # Arc 0: 2 m about the origin, bearings ±0.25. A sonar at (2, 1.5) looking down hears
+    # 1.3 m: its free space covers the arc's points above y ≈ 0.2 (bearings ≳ 0.1).
+    batch = ReadingBatch.from_arrays(
+        t=[0.0, 1.0], sensor=[0, 1], x=[0.0, 2.0], y=[0.0, 1.5], theta=[0.0, -math.pi / 2],
+        range=[2.0, 1.3], beam_width=[0.5, 0.5])
+    path = tmp_path / "carve.mcap"
+    write_map_bag(path, batch, make_method("carve"), rate=0.5)
+    markers = [m for _, m in _read(path)[ARCS_TOPIC]][-1].markers
+    arc0 = next(m for m in markers[1:] if m.id == 0)
+    bearings = [math.atan2(p.y, p.x) for p in arc0.points]
+    assert min(bearings) == pytest.approx(-0.25)
+    assert 0.05 < max(bearings) < 0.15  # the carved arc no longer reaches its left edge
+    assert arc0.color.b == pytest.approx(0.706, abs=1e-3)  # carved: blue
+
+
+def test_input_messages_are_copied_through(tmp_path: Path) -> None:
+    first = tmp_path / "first.mcap"
+    write_map_bag(first, BATCH, make_method("centerline"), odometry=ODOMETRY)
+    for name in ("second.mcap", "second.bag"):
+        second = tmp_path / name
+        report = write_map_bag(second, BATCH, make_method("centerline"), copy_from=first)
+        assert report.messages["/odom"] == 2
+        assert report.messages[LOCAL_MAP_TOPIC] == 3 + 3
+        odom = [m for _, m in _read(second)["/odom"]]
+        assert odom[-1].pose.pose.orientation.z == pytest.approx(math.sin(math.pi / 4))
+
+
+def test_nothing_is_written_on_error(tmp_path: Path) -> None:
+    existing = tmp_path / "exists.mcap"
+    existing.write_text("keep me")
+    with pytest.raises(OutputError, match="already exists"):
+        write_map_bag(existing, BATCH, make_method("centerline"))
+    assert existing.read_text() == "keep me"
+    with pytest.raises(OutputError, match="rate"):
+        write_map_bag(tmp_path / "a.mcap", BATCH, make_method("centerline"), rate=0.0)
+    broken = tmp_path / "broken.bag"
+    broken.write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 40)
+    with pytest.raises(RosbagError) as err:
+        write_map_bag(tmp_path / "b.mcap", BATCH, make_method("centerline"), copy_from=broken)
+    assert "\n" not in str(err.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.bag", "exists.mcap"]

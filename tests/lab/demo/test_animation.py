@@ -1,0 +1,28 @@
+"""The demo's door-approach animation: a GIF with frames, small enough for the README."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+from PIL import Image
+
+from sonarcarve.lab.demo import DemoResult, write_demo_outputs
+from sonarcarve.lab.demo.animation import ANIMATION_FILE, animation_gif
+
+
+def test_the_gif_has_frames_and_is_small(doorway: DemoResult) -> None:
+    data = animation_gif(doorway, frames=6)
+    assert len(data) < 2_000_000
+    with Image.open(io.BytesIO(data)) as gif:
+        assert gif.format == "GIF"
+        assert gif.n_frames == 7  # the start and six steps
+        first = gif.convert("RGB").tobytes()
+        gif.seek(gif.n_frames - 1)
+        assert gif.convert("RGB").tobytes() != first  # the arcs moved
+
+
+def test_demo_outputs_write_it_on_request(doorway: DemoResult, tmp_path: Path) -> None:
+    written = write_demo_outputs(doorway, tmp_path / "with", animation=True)
+    assert tmp_path / "with" / ANIMATION_FILE in written
+    assert ANIMATION_FILE not in [p.name for p in write_demo_outputs(doorway, tmp_path / "w")]
