@@ -19,7 +19,10 @@ def test_cli_writes_every_figure_and_summary(tmp_path: Path,
     out = tmp_path / "nested" / "demo"
     assert main(["demo", "--world", "doorway", "--seed", "1", "--out", str(out)]) == 0
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted([*FIGURE_FILES.values(), "summary.json", "summary.md"])
+    assert names == sorted([*FIGURE_FILES.values(), "approach.gif", "summary.json", "summary.md"])
+    with Image.open(out / "approach.gif") as gif:
+        assert gif.format == "GIF"
+        assert gif.n_frames > 10  # an animation, not a still
     for name in FIGURE_FILES.values():
         with Image.open(out / name) as png:
             assert png.format == "PNG"

@@ -26,6 +26,7 @@ from sonarcarve.lab.demo import (
     table_rows,
     write_demo_outputs,
 )
+from sonarcarve.lab.demo.animation import ANIMATION_FILE
 
 __all__ = ["demo"]
 
@@ -86,7 +87,7 @@ def demo(
 
         result = run_demo(the_world, seed, history_size=history, on_progress=on_progress)
         figures = bar.add_task("drawing figures", total=None)
-        written = write_demo_outputs(result, folder)
+        written = write_demo_outputs(result, folder, animation=True)
         bar.update(figures, total=1, completed=1)
     console.print(_table(result))
     console.print()
@@ -95,8 +96,12 @@ def demo(
     console.print(f"[bold]Wrote {len(written)} files to {out}/[/bold], look at them in order:")
     for key, name in FIGURE_FILES.items():
         console.print(f"  {name:<28} {FIGURE_TEXT[key]}", highlight=False)
-    others = [p.name for p in written if p.name not in FIGURE_FILES.values()]
-    console.print(f"  {' and '.join(others)}: this table, as text and as data", highlight=False)
+    console.print(f"  {ANIMATION_FILE:<28} that approach, animated: carving opens the door",
+                  highlight=False)
+    summaries = [p.name for p in written
+                 if p.name not in (*FIGURE_FILES.values(), ANIMATION_FILE)]
+    console.print(f"  {' and '.join(summaries)}: this table, as text and as data",
+                  highlight=False)
     console.print(f"[dim]done in {time.perf_counter() - tic:.1f} s (simulation "
                   f"{result.seconds['simulate']:.1f} s).[/dim]")
 
