@@ -1,3 +1,4 @@
+import dataclasses
 import math
 
 import numpy as np
@@ -290,3 +291,14 @@ def test_max_error_filter_by_hand() -> None:
     assert type(out.points) is LocalMap
     assert out.points.reading_id.tolist() == [10, 11]  # the threshold itself is kept
     assert (out.report.total, out.report.max_error, out.report.outliers) == (4, 2, 0)
+
+
+def test_min_confidence_filter_keeps_unknown_and_threshold() -> None:
+    base = _points(LocalMap, [[0, 0], [1, 0], [2, 0], [3, 0]], [0.1] * 4)
+    pts = dataclasses.replace(base, confidence=np.array([0.9, 0.5, 0.49, np.nan]))
+    out = filter_map(pts, MapFilter(min_confidence=0.5))
+    assert out.points.reading_id.tolist() == [10, 11, 13]  # NaN: not modelled, kept
+    assert (out.report.confidence, out.report.kept) == (1, 3)
+    assert MapFilter(min_confidence=0.5).active
+    with pytest.raises(FilterError):
+        MapFilter(min_confidence=1.5)

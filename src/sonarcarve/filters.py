@@ -53,6 +53,7 @@ __all__ = [
     "ReadingFilter",
     "ReadingFilterReport",
     "ReadingFilterStream",
+    "confidence_mask",
     "filter_map",
     "filter_readings",
     "max_error_mask",
@@ -290,6 +291,9 @@ class MapFilter:
         Radius R of the outlier test, metres.
     outlier_neighbours : int
         k: a point is kept only with at least k *other* points within R (distance <= R).
+    min_confidence : float or None
+        Drop points whose ``confidence`` (probability of a real surface, section 6) is below
+        this, in [0, 1]; points without one (NaN: the paper's methods) are kept.
 
     Raises
     ------
@@ -300,9 +304,13 @@ class MapFilter:
     max_error: float | None = None
     outlier_radius: float | None = None
     outlier_neighbours: int = 1
+    min_confidence: float | None = None
 
     def __post_init__(self) -> None:
         _check_positive("max_error", self.max_error)
+        if self.min_confidence is not None and not 0.0 <= self.min_confidence <= 1.0:
+            msg = f"min_confidence must lie in [0, 1], got {self.min_confidence!r}"
+            raise FilterError(msg)
         _check_positive("outlier_radius", self.outlier_radius)
         if self.outlier_neighbours < 1:
             msg = f"outlier_neighbours must be at least 1, got {self.outlier_neighbours}"
@@ -311,7 +319,8 @@ class MapFilter:
     @property
     def active(self) -> bool:
         """True if at least one filter is on."""
-        return self.max_error is not None or self.outlier_radius is not None
+        return (self.max_error is not None or self.outlier_radius is not None
+                or self.min_confidence is not None)
 
 
 @dataclass(frozen=True)
@@ -321,11 +330,12 @@ class MapFilterReport:
     total: int
     max_error: int = 0
     outliers: int = 0
+    confidence: int = 0
 
     @property
     def kept(self) -> int:
         """Points out."""
-        return self.total - self.max_error - self.outliers
+        return self.total - self.max_error - self.outliers - self.confidence
 
 
 @dataclass(frozen=True, eq=False)
@@ -373,8 +383,21 @@ def outlier_mask(xy: npt.ArrayLike, radius: float, neighbours: int) -> BoolArray
     return np.asarray(counts - 1 >= neighbours)  # the point itself is in its own ball
 
 
+def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
+    """True where a point's confidence is at least ``threshold`` or unknown (NaN).
+
+    Examples
+    --------
+    >>> confidence_mask([0.9, 0.3, np.nan], 0.5).tolist()
+    [True, False, True]
+    """
+    c = np.asarray(confidence, dtype=np.float64)
+    return np.asarray(np.isnan(c) | (c >= threshold))
+
+
 def filter_map(points: M, spec: MapFilter) -> FilteredMap[M]:
-    """Apply the map filters of ``spec``: max-error thresholding, then the outlier test.
+    """Apply the map filters of ``spec``: confidence, max-error thresholding, then the outlier
+    test.
 
     Parameters
     ----------
@@ -389,10 +412,15 @@ def filter_map(points: M, spec: MapFilter) -> FilteredMap[M]:
         The kept points (same type as ``points``) and how many each filter dropped.
     """
     total = len(points)
+    dropped_confidence = 0
+    if spec.min_confidence is not None:
+        keep = confidence_mask(points.confidence, spec.min_confidence)
+        dropped_confidence = total - int(keep.sum())
+        points = points.select(keep)
     dropped_error = 0
     if spec.max_error is not None:
         keep = max_error_mask(points.max_error, spec.max_error)
-        dropped_error = total - int(keep.sum())
+        dropped_error = len(points) - int(keep.sum())
         points = points.select(keep)
     dropped_outliers = 0
     if spec.outlier_radius is not None:
@@ -400,4 +428,5 @@ def filter_map(points: M, spec: MapFilter) -> FilteredMap[M]:
         dropped_outliers = len(points) - int(keep.sum())
         points = points.select(keep)
     return FilteredMap(points=points, report=MapFilterReport(
-        total=total, max_error=dropped_error, outliers=dropped_outliers))
+        total=total, max_error=dropped_error, outliers=dropped_outliers,
+        confidence=dropped_confidence))

@@ -11,6 +11,7 @@ from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.centerline import CenterlineMethod
 from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.methods.config import MethodConfig
+from sonarcarve.methods.evidence import EvidenceMethod
 
 __all__ = [
     "METHODS",
@@ -21,6 +22,7 @@ __all__ = [
     "CenterlineMethod",
     "CombinedMethod",
     "Estimates",
+    "EvidenceMethod",
     "Measures",
     "MethodConfig",
     "SonarMethod",
@@ -50,12 +52,21 @@ def _combined(config: MethodConfig) -> SonarMethod:
     )
 
 
+def _evidence(config: MethodConfig) -> SonarMethod:
+    return EvidenceMethod(
+        config.history_size, config.beam_width, config.range_tolerance, config.min_transversal,
+        config.range_resolution, config.evidence_bins, config.carve_probability,
+        config.min_confidence, config.stamp_error,
+    )
+
+
 #: Method name -> factory from a :class:`MethodConfig`.
 METHODS: dict[str, Callable[[MethodConfig], SonarMethod]] = {
     "centerline": _centerline,
     "carve": _carve,
     "atm": _atm,
     "combined": _combined,
+    "evidence": _evidence,
 }
 
 

@@ -18,16 +18,23 @@ from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE, check_history_size
 
 __all__ = [
+    "DEFAULT_CARVE_PROBABILITY",
+    "DEFAULT_EVIDENCE_BINS",
+    "DEFAULT_MIN_CONFIDENCE",
     "DEFAULT_MIN_TRANSVERSAL",
     "DEFAULT_RANGE_TOLERANCE",
     "MAX_HISTORY_SIZE",
     "MethodConfig",
     "check_beam_width",
+    "check_carve_probability",
+    "check_evidence_bins",
     "check_history_size",
     "check_max_incidence",
+    "check_min_confidence",
     "check_min_transversal",
     "check_range_resolution",
     "check_range_tolerance",
+    "check_stamp_error",
 ]
 
 #: Default range tolerance ε, metres: a newer reading's freespace ends ε short of its echo.
@@ -41,6 +48,19 @@ DEFAULT_RANGE_TOLERANCE = 0.05
 
 #: Default minimum transversal angle ψ of ATM, radians (20°; see :class:`MethodConfig`).
 DEFAULT_MIN_TRANSVERSAL = math.radians(20.0)
+
+#: Default bins per beam of evidence carving (K; 24 bins: 0.94° each for a 22.5° beam).
+DEFAULT_EVIDENCE_BINS = 24
+
+#: Most bins per beam (memory grows as history x bins).
+MAX_EVIDENCE_BINS = 256
+
+#: Default P_carve of evidence carving: a bin is carved on the evidence of one reading that
+#: would have heard a surface there with probability 0.9, or of several weaker ones.
+DEFAULT_CARVE_PROBABILITY = 0.8
+
+#: Default confidence below which evidence carving leaves a point out of its maps.
+DEFAULT_MIN_CONFIDENCE = 0.5
 
 
 def _number(name: str, value: object, rule: str) -> float:
@@ -101,6 +121,40 @@ def check_max_incidence(value: object, name: str = "max_incidence") -> float:
     return _angle_up_to_right(name, value)
 
 
+def check_evidence_bins(value: object, name: str = "evidence_bins") -> int:
+    """K, a whole number in [1, 256]."""
+    rule = f"be a whole number in [1, {MAX_EVIDENCE_BINS}]"
+    if isinstance(value, bool) or not isinstance(value, int):
+        _refuse(name, rule, value)
+        return 0  # unreachable: _refuse raises
+    if not 1 <= value <= MAX_EVIDENCE_BINS:
+        _refuse(name, rule, value)
+    return value
+
+
+def check_carve_probability(value: object, name: str = "carve_probability") -> float:
+    """P_carve, in the open interval (0, 1)."""
+    rule = "lie in (0, 1)"
+    p = _number(name, value, rule)
+    if not 0.0 < p < 1.0:
+        _refuse(name, rule, value)
+    return p
+
+
+def check_min_confidence(value: object, name: str = "min_confidence") -> float:
+    """A confidence threshold in [0, 1]."""
+    rule = "lie in [0, 1]"
+    p = _number(name, value, rule)
+    if not 0.0 <= p <= 1.0:
+        _refuse(name, rule, value)
+    return p
+
+
+def check_stamp_error(value: object, name: str = "stamp_error") -> float:
+    """Position-stamping error bound in metres, finite and ≥ 0."""
+    return _metres_at_least_zero(name, value)
+
+
 @dataclass(frozen=True)
 class MethodConfig:
     """Parameters shared by the sonar methods; each method reads the ones it needs.
@@ -136,6 +190,17 @@ class MethodConfig:
         reading does not carve the points of an older arc whose implied surface it would see
         at an incidence above β (see :mod:`sonarcarve.geometry.specular`). π/2
         (:data:`~sonarcarve.geometry.NO_INCIDENCE_LIMIT`): off, the paper.
+    evidence_bins : int, default 24
+        K, bins per beam of evidence carving (``evidence``; beyond the paper): a carved
+        interval is exact to half a bin, which the bound includes.
+    carve_probability : float, default 0.9
+        P_carve in (0, 1) of evidence carving: a bin is carved on evidence equal to one reading
+        that would have heard a surface there with this probability (or several weaker ones).
+    min_confidence : float, default 0.5
+        In [0, 1]: evidence carving leaves points below this confidence out of its maps.
+    stamp_error : float, default 0 m
+        Upper bound on a reading's position-stamping error, metres, finite and ≥ 0 (Appendix A,
+        where stamps are inferred): added to evidence carving's error bounds.
 
     Examples
     --------
@@ -153,6 +218,10 @@ class MethodConfig:
     min_transversal: float = DEFAULT_MIN_TRANSVERSAL
     range_resolution: float = POLAROID_RANGE_RESOLUTION
     max_incidence: float = NO_INCIDENCE_LIMIT
+    evidence_bins: int = DEFAULT_EVIDENCE_BINS
+    carve_probability: float = DEFAULT_CARVE_PROBABILITY
+    min_confidence: float = DEFAULT_MIN_CONFIDENCE
+    stamp_error: float = 0.0
 
     def __post_init__(self) -> None:
         check_history_size(self.history_size)
@@ -161,3 +230,7 @@ class MethodConfig:
         check_min_transversal(self.min_transversal)
         check_range_resolution(self.range_resolution)
         check_max_incidence(self.max_incidence)
+        check_evidence_bins(self.evidence_bins)
+        check_carve_probability(self.carve_probability)
+        check_min_confidence(self.min_confidence)
+        check_stamp_error(self.stamp_error)

@@ -1,0 +1,184 @@
+"""Ablation of evidence carving (``evidence``, beyond the paper) against the paper's carving.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/evidence.py
+
+For each sonar physics model (``specular``, the default, and ``amplitude``), world (office,
+t-junction, doorway, their built-in tours) and seed, the Scout2 ring is simulated once and
+mapped by every variant; the tables give means over seeds, per world and physics:
+
+* *direct kept*: share of direct echoes (truth kind ``direct``) with a point in the global map
+  (the map the method outputs by default);
+* *removed* per spurious kind (crosstalk, floor, multipath) and all spurious together: share
+  with no point in the global map;
+* *median ratio*: median true error (distance to the nearest wall) of the method's points over
+  the median of the centerline points of the *same readings*; *p90 ratio*: the map's 90th
+  percentile over centerline's whole map's;
+* *unprocessed*: mean share of the history not yet processed (Table I's measure);
+* readings/s of the run (``process_readings``; noisy on these short logs).
+
+Variants: ``carve`` (paper), ``carve β=30°`` (specular-aware), ``combined`` (paper, carving and
+ATM); evidence carving with each part alone on top of the free-space evidence (``evidence
+only``: graded evidence, split arcs kept, no ATM, no occlusion, no confidence filter;
+``+occlusion``; ``+ATM``; ``+confidence``) and ``evidence`` (all together, the library
+defaults). A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
+``lab/experiments/real_log.py``) and a throughput table times ``carve`` and ``evidence`` at
+history 250 on ``throughput.py``'s stream (median of 3 after a warm-up).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
+from sonarcarve.lab.experiments.real_log import line_spread
+from sonarcarve.lab.metrics import segment_distance
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.methods.evidence import EvidenceMethod
+from sonarcarve.pipeline import process_readings
+from sonarcarve.sim.simulate import Simulation
+from sonarcarve.sim.sonar import EchoKind
+from synthetic import corridor_stream
+
+Factory = Callable[[MethodConfig], SonarMethod]
+
+
+def _evidence(*, atm: bool, occlusion: bool, confidence: bool) -> Factory:
+    def make(config: MethodConfig) -> SonarMethod:
+        c = config if confidence else replace(config, min_confidence=0.0)
+        return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
+                              c.min_transversal, c.range_resolution, c.evidence_bins,
+                              c.carve_probability, c.min_confidence, c.stamp_error,
+                              with_atm=atm, with_occlusion=occlusion)
+    return make
+
+
+VARIANTS: dict[str, Factory] = {
+    "carve (paper)": lambda c: make_method("carve", c),
+    "carve β=30°": lambda c: make_method("carve", replace(c, max_incidence=math.radians(30.0))),
+    "combined (paper)": lambda c: make_method("combined", c),
+    "evidence only": _evidence(atm=False, occlusion=False, confidence=False),
+    "+occlusion": _evidence(atm=False, occlusion=True, confidence=False),
+    "+ATM": _evidence(atm=True, occlusion=False, confidence=False),
+    "+confidence": _evidence(atm=False, occlusion=False, confidence=True),
+    "evidence (all)": lambda c: make_method("evidence", c),
+}
+KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
+COLUMNS = ("direct_kept", "crosstalk", "floor", "multipath", "spurious", "median_ratio",
+           "p90_ratio", "unprocessed", "readings_per_s")
+
+
+def _measure(sim: Simulation, make: Factory, config: MethodConfig,
+             centerline_err: np.ndarray, centerline_p90: float) -> dict[str, float]:
+    result = process_readings(sim.readings, make(config))
+    gmap = result.global_map
+    kind = sim.truth.kind
+    kept = np.zeros(len(kind), dtype=bool)
+    kept[gmap.reading_id] = True
+    err = segment_distance(gmap.xy, sim.world.segments)[0]
+    row = {"direct_kept": 100.0 * float(np.mean(kept[kind == EchoKind.DIRECT]))}
+    for k in KINDS:
+        sel = kind == k
+        row[k.label] = 100.0 * float(np.mean(~kept[sel])) if sel.any() else math.nan
+    row["spurious"] = 100.0 * float(np.mean(~kept[kind != EchoKind.DIRECT]))
+    same = float(np.median(centerline_err[gmap.reading_id]))
+    row["median_ratio"] = float(np.median(err)) / same
+    row["p90_ratio"] = float(np.percentile(err, 90.0)) / centerline_p90
+    row["unprocessed"] = 100.0 * result.mean_unprocessed_share
+    row["readings_per_s"] = result.readings_per_second
+    return row
+
+
+def _table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
+    print(f"\n{title}\n")
+    print("| variant | direct kept (%) | crosstalk removed (%) | floor removed (%) | "
+          "multipath removed (%) | spurious removed (%) | median / centerline's | "
+          "p90 / centerline's | unprocessed (%) | readings/s |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for name, runs in rows.items():
+        m = {c: float(np.nanmean([r[c] for r in runs])) for c in COLUMNS}
+        print(f"| {name} | {m['direct_kept']:.1f} | {m['crosstalk']:.1f} | {m['floor']:.1f} | "
+              f"{m['multipath']:.1f} | {m['spurious']:.1f} | {m['median_ratio']:.2f} | "
+              f"{m['p90_ratio']:.2f} | {m['unprocessed']:.1f} | {m['readings_per_s']:,.0f} |")
+
+
+def _robond(config: MethodConfig) -> None:
+    from sonarcarve.io.roboND import read_robond
+
+    batch = read_robond().batch
+    cfg = replace(config, range_resolution=0.01)
+    print("\nroboND-sonar-8 log (real, no truth): line spread (25 cm, 5 points), as in "
+          "RESULTS\n")
+    print("| variant | points | line spread median (cm) | p90 (cm) | isolated (%) |")
+    print("|---|---:|---:|---:|---:|")
+    for name, make in VARIANTS.items():
+        gmap = process_readings(batch, make(cfg)).global_map
+        spread = line_spread(gmap.xy, 0.25, 5).spread
+        ok = np.isfinite(spread)
+        print(f"| {name} | {len(gmap)} | {100 * np.median(spread[ok]):.1f} | "
+              f"{100 * np.percentile(spread[ok], 90):.1f} | {100 * np.mean(~ok):.0f} |")
+
+
+def _throughput(history: int = 250, repeats: int = 3) -> None:
+    batch = corridor_stream(20_000, noise=0.01, spurious_share=0.05, seed=0).batch
+
+    def run(name: str, readings: ReadingBatch) -> float:
+        method = make_method(name, MethodConfig(history_size=history))
+        tic = time.perf_counter()
+        method.add_many(readings)
+        method.finish()
+        return time.perf_counter() - tic
+
+    print(f"\nthroughput: history {history}, ring corridor, {len(batch):,} readings, median "
+          f"of {repeats} runs\n")
+    print("| method | readings/s |")
+    print("|---|---:|")
+    rates = {}
+    for name in ("carve", "combined", "evidence"):
+        run(name, batch[:2000])
+        rates[name] = len(batch) / statistics.median(run(name, batch) for _ in range(repeats))
+        print(f"| {name} | {rates[name]:,.0f} |")
+    print(f"\nevidence / carve: {rates['evidence'] / rates['carve']:.2f}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Simulate, measure and print the tables."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--worlds", nargs="+", default=["office", "t-junction", "doorway"])
+    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1 per world")
+    parser.add_argument("--physics", nargs="+", default=["specular", "amplitude"])
+    parser.add_argument("--skip-robond", action="store_true")
+    parser.add_argument("--skip-throughput", action="store_true")
+    args = parser.parse_args(argv)
+    config = MethodConfig()
+    for physics in args.physics:
+        overrides = () if physics == "specular" else (("echo_model", physics),)
+        for world in args.worlds:
+            rows: dict[str, list[dict[str, float]]] = {name: [] for name in VARIANTS}
+            for seed in range(args.seeds):
+                sim = run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
+                center = process_readings(sim.readings, make_method("centerline", config))
+                c_err = np.full(len(sim.readings), np.nan)
+                c_err[center.global_map.reading_id] = segment_distance(
+                    center.global_map.xy, sim.world.segments)[0]
+                c_p90 = float(np.nanpercentile(c_err, 90.0))
+                for name, make in VARIANTS.items():
+                    rows[name].append(_measure(sim, make, config, c_err, c_p90))
+            _table(f"{world}, physics {physics}: {args.seeds} seeds, mean over seeds", rows)
+    if not args.skip_robond:
+        _robond(config)
+    if not args.skip_throughput:
+        _throughput()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

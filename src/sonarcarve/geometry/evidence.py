@@ -1,0 +1,533 @@
+"""Evidence carving: free-space *evidence* on arcs instead of a veto (beyond the paper).
+
+The paper's carving (eq. 3.5) removes every point of an older arc ``C_i`` that lies in the
+freespace sector ``F_j`` of *one* newer reading. Real beams miss surfaces: a smooth wall met at a
+glancing angle returns nothing, the beam's edges are weak and far surfaces are quiet, so one
+reading's "freespace" is only evidence, of a strength that depends on where the point is. Here
+each arc carries an *evidence profile* over its bearing: ``K`` equal bins across its full beam
+``[θ_i - φ_i/2, θ_i + φ_i/2]``, bin ``k`` represented by its centre point ``p_k`` (bearing
+``τ_k = θ1_i + (k + ½) Δ_i``, ``Δ_i = φ_i / K``).
+
+The model of a newer reading ``j`` at a point ``p`` (``v = p - o_j``, ``d = |v|``):
+
+* ``p`` in ``j``'s beam: ``v · a_j ≥ d cos(φ_j/2)`` (``a_j`` the unit axis; exact);
+* beam directivity: ``B(p) = 1 - (1 - g) u²`` with ``u = sin δ / sin(φ_j/2)``, ``δ`` the
+  off-axis angle of ``p`` and ``g`` the relative sensitivity at the beam edge (``edge_gain``);
+* incidence: the echo of ``i`` at ``p`` implies a surface through ``p`` whose normal points at
+  ``o_i``; ``j`` meets it at ``γ`` with ``cos γ = |e_i(τ_k) · v| / d`` (the angle of
+  :mod:`~sonarcarve.geometry.specular`). ``I(γ) = 1`` for ``γ ≤ γ0``, the floor ``ρ`` (rough
+  surfaces, corners) for ``γ ≥ γ1``, linear in ``cos γ`` between;
+* spreading and absorption: ``A(d) = 1 / (1 + d / L)``;
+* ``P_detect(j, p) = P_max · B · I · A``: the probability that ``j`` would have heard a surface
+  at ``p``.
+
+Evidence that ``p`` is empty from ``j`` is ``w = -log(1 - P_detect)`` when ``d < r_j - ε`` (eq.
+3.2 with the range tolerance ε); the log-odds of independent misses add. Bin ``k`` is *carved*
+once its evidence reaches ``T = -log(1 - P_carve)``: one strong reading or several weak ones.
+A reading whose echo circle passes through ``p`` (``|d - r_j| ≤ ε_s``) *supports* it instead
+(``+ P_detect``), and the same crossing supports the new arc's bin at ``p``'s bearing (the
+support is mutual: each arc heard something at ``p``).
+
+Occlusion (multipath): sound does not pass through walls. A bin of an older arc that is
+*established* (support at least ``S_est``, free evidence below ``T/2``) and lies in ``F_j``
+while ``j`` could easily have missed it (``P_detect < ½``, a glancing look) means ``j``'s echo did
+not come from behind it: the bins of the new arc ``j`` behind that point (within the point's
+angular half-bin seen from ``o_j``) are carved. A multipath echo reads too long, behind a wall
+that its beam met at a glancing angle, and is carved this way; a head-on look through an
+established point (``P_detect ≥ ½``) instead carves the point (the newer reading is
+authoritative, as in the paper).
+
+What is exact and what is binned: membership of a bin centre in a beam, a disk and the support
+annulus, and the incidence angle, are exact; the profile is piecewise constant over bins, so a
+carved interval's ends are known to half a bin: :func:`evidence_estimates` widens every error
+bound by ``Δ_i / 2`` on each side (``E_s = 2 r sin((w + Δ)/4)`` for a width ``w``, eq. 5.3).
+
+ATM (section 6, integration): transversal crossings (eq. 2.1, ψ) are found in the same pass for
+the pairs the evidence pass does not cull, stored per arc as bearings relative to its axis, and
+*counted only inside the surviving bins*; a crossing inside a surviving piece confirms it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.bounds import arc_bounding_circle
+from sonarcarve.geometry.circles import common_chord
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
+
+__all__ = [
+    "EVIDENCE_ALIVE",
+    "EVIDENCE_CARVED",
+    "EvidenceParams",
+    "detect_probability",
+    "evidence_add",
+    "evidence_estimates",
+    "evidence_threshold",
+]
+
+#: Status codes of an arc in the evidence model.
+EVIDENCE_ALIVE = 0
+EVIDENCE_CARVED = 1  # every bin carved
+
+
+class EvidenceParams(NamedTuple):
+    """The sensor model of evidence carving (module docstring), SI units, radians.
+
+    Attributes
+    ----------
+    tolerance : float
+        ε, metres: the freespace of a reading of range r ends at ``r - ε``.
+    support_tolerance : float
+        ε_s, metres: a reading whose range is within ε_s of ``|p - o_j|`` supports ``p``.
+    edge_gain : float
+        g in (0, 1]: sensitivity at the beam edge relative to the axis.
+    incidence_full : float
+        γ0, radians: below it a surface is heard fully.
+    incidence_zero : float
+        γ1 > γ0, radians: above it only the floor ``rough`` is left.
+    rough : float
+        ρ in [0, 1]: detection at glancing incidence (rough walls, edges, corners).
+    max_detect : float
+        P_max in (0, 1): detection on the axis, head-on, at zero range.
+    range_scale : float
+        L, metres: detection halves at ``d = L`` (spreading and absorption).
+    threshold : float
+        T > 0: evidence (log-odds of misses) that carves a bin.
+    establish : float
+        S_est: support that makes a bin established (occludes what lies behind it).
+    cos_psi : float
+        cos ψ of ATM's minimum transversal angle (crossings kept when ``|cos γ| ≤ cos ψ``).
+    protect : float
+        Factor in [0, 1] on a newer reading's evidence against an established bin.
+    """
+
+    tolerance: float
+    support_tolerance: float
+    edge_gain: float
+    incidence_full: float
+    incidence_zero: float
+    rough: float
+    max_detect: float
+    range_scale: float
+    threshold: float
+    establish: float
+    cos_psi: float
+    protect: float
+
+
+def evidence_threshold(carve_probability: float) -> float:
+    """``T = -log(1 - P_carve)``: the evidence of one reading with ``P_detect = P_carve``.
+
+    Examples
+    --------
+    >>> round(evidence_threshold(0.9), 4)
+    2.3026
+    """
+    return -math.log1p(-carve_probability)
+
+
+@compiled_inline
+def _incidence_gain(cos_gamma: float, cos_full: float, cos_zero: float, rough: float) -> float:
+    if cos_gamma >= cos_full:
+        return 1.0
+    if cos_gamma <= cos_zero:
+        return rough
+    return rough + (1.0 - rough) * (cos_gamma - cos_zero) / (cos_full - cos_zero)
+
+
+@compiled
+def detect_probability(vx: float, vy: float, ex: float, ey: float, axis_x: float, axis_y: float,
+                       sin_half: float, edge_gain: float, cos_full: float, cos_zero: float,
+                       rough: float, max_detect: float, range_scale: float) -> float:
+    """``P_detect`` of a reading at a point ``p`` inside its beam (module docstring).
+
+    ``v = p - o_j`` (metres), ``e`` the unit direction of ``p`` from the older arc's origin,
+    ``axis`` the reading's unit axis, ``sin_half = sin(φ_j/2)``; ``cos_full = cos γ0``,
+    ``cos_zero = cos γ1``.
+
+    Examples
+    --------
+    Head-on on the axis at 1 m, with P_max = 0.95, L = 20 m:
+
+    >>> p = detect_probability(1.0, 0.0, 1.0, 0.0, 1.0, 0.0, math.sin(0.2), 0.5,
+    ...                        math.cos(0.2), math.cos(0.5), 0.05, 0.95, 20.0)
+    >>> round(p, 4)  # 0.95 / (1 + 1/20)
+    0.9048
+    """
+    d = math.sqrt(vx * vx + vy * vy)
+    if d <= 0.0:
+        return max_detect
+    sin_off = abs(vx * axis_y - vy * axis_x) / d
+    u = min(sin_off / sin_half, 1.0)
+    beam = 1.0 - (1.0 - edge_gain) * u * u
+    cos_gamma = abs(ex * vx + ey * vy) / d
+    inc = _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+    return max_detect * beam * inc / (1.0 + d / range_scale)
+
+
+@compiled_inline
+def _store_crossing(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+                    slot: int, value: float) -> None:
+    if counts[slot] < bearings.shape[1]:
+        bearings[slot, counts[slot]] = value
+        counts[slot] += 1
+
+
+@compiled_inline
+def _crossings(j: int, i: int, x: FloatArray, y: FloatArray, r: FloatArray,
+               cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+               cos_psi: float, bearings: npt.NDArray[np.float32],
+               counts: npt.NDArray[np.int32]) -> int:
+    """ATM's transversal crossings of arcs ``j`` and ``i`` (as ``methods/atm.py``), stored."""
+    xj = x[j]
+    yj = y[j]
+    rj = r[j]
+    ri = r[i]
+    dx = x[i] - xj
+    dy = y[i] - yj
+    d2 = dx * dx + dy * dy
+    if abs(rj * rj + ri * ri - d2) > 2.0 * rj * ri * cos_psi or d2 == 0.0:
+        return 0
+    a, h = common_chord(d2, rj, ri)
+    d = math.sqrt(d2)
+    ux = dx / d
+    uy = dy / d
+    kept = 0
+    cj = cos_axis[j]
+    sj = sin_axis[j]
+    for sign in (1.0, -1.0):
+        px = a * ux - sign * h * uy
+        py = a * uy + sign * h * ux
+        along_j = px * cj + py * sj
+        if along_j < rj * cos_half[j]:
+            continue
+        qx = px - dx
+        qy = py - dy
+        along_i = qx * cos_axis[i] + qy * sin_axis[i]
+        if along_i < ri * cos_half[i]:
+            continue
+        _store_crossing(bearings, counts, j, math.atan2(cj * py - sj * px, along_j))
+        _store_crossing(bearings, counts, i,
+                        math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i))
+        kept += 1
+    return kept
+
+
+@compiled_inline
+def _bin_of(rel: float, half: float, width: float, bins: int) -> int:
+    """Bin index of a bearing ``rel`` relative to the axis (clamped to the beam)."""
+    k = math.floor((rel + half) / width)
+    return min(max(k, 0), bins - 1)
+
+
+@compiled
+def evidence_add(
+    slot: int, older: SlotArray,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    status: Int8Array, touched: BoolArray, occluded: FloatArray,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    params: EvidenceParams, with_atm: bool,
+) -> tuple[int, int, int]:
+    """Add reading ``slot``: initialise its profile, then weigh it against every ``older`` arc.
+
+    Parameters
+    ----------
+    slot : int
+        The new arc's row.
+    older : ndarray of int64, shape (m,)
+        Live older rows, oldest first.
+    x, y, r, theta, beam_width : ndarray, shape (n,)
+        The history's rows (metres, radians).
+    bx, by, ex, ey : ndarray, shape (n, K)
+        Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
+    free, support : ndarray, shape (n, K)
+        Evidence of empty space and support per bin (updated in place).
+    circle : ndarray, shape (n, 3)
+        A circle containing each full arc (a cheap first test).
+    cos_axis, sin_axis, cos_half : ndarray, shape (n,)
+        Axis direction and ``cos(φ/2)`` per row (filled for ``slot``).
+    status : ndarray of int8, shape (n,)
+        ``EVIDENCE_ALIVE`` or ``EVIDENCE_CARVED``.
+    touched : ndarray of bool, shape (n,)
+        The arc has received evidence (processed, Table I).
+    occluded : ndarray, shape (n,)
+        Share of the arc's bins carved by occlusion when it arrived (the multipath flag).
+    bearings, counts : ndarray
+        ATM's crossing store (bearings relative to the axis), as in ``methods/atm.py``.
+    params : EvidenceParams
+        The sensor model.
+    with_atm : bool
+        Find ATM crossings too.
+
+    Returns
+    -------
+    fully_carved, crossings, occluded_bins : int
+        Arcs whose last bin was carved by this reading; ATM crossings kept; bins of the new arc
+        carved by occlusion.
+    """
+    bins = bx.shape[1]
+    xj = x[slot]
+    yj = y[slot]
+    rj = r[slot]
+    phi_j = beam_width[slot]
+    half_j = 0.5 * phi_j
+    step_j = phi_j / bins
+    cj = math.cos(theta[slot])
+    sj = math.sin(theta[slot])
+    cos_axis[slot] = cj
+    sin_axis[slot] = sj
+    cos_half[slot] = math.cos(half_j)
+    for k in range(bins):
+        tau = theta[slot] - half_j + (k + 0.5) * step_j
+        ex[slot, k] = math.cos(tau)
+        ey[slot, k] = math.sin(tau)
+        bx[slot, k] = xj + rj * ex[slot, k]
+        by[slot, k] = yj + rj * ey[slot, k]
+        free[slot, k] = 0.0
+        support[slot, k] = 0.0
+    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
+    circle[slot, 0] = c0
+    circle[slot, 1] = c1
+    circle[slot, 2] = c2
+    status[slot] = EVIDENCE_ALIVE
+    touched[slot] = False
+    occluded[slot] = 0.0
+    counts[slot] = 0
+
+    threshold = params.threshold
+    free_r = rj - params.tolerance
+    reach = rj + params.support_tolerance
+    sin_half_j = math.sin(half_j)
+    cos_half_j = cos_half[slot]
+    cos_full = math.cos(params.incidence_full)
+    cos_zero = math.cos(params.incidence_zero)
+    fully = 0
+    crossings = 0
+    occluding = 0
+    for i in older:
+        if status[i] != EVIDENCE_ALIVE:
+            continue
+        # Cull: the arc's circle beyond the reach of j's echo circle, or behind j.
+        dcx = circle[i, 0] - xj
+        dcy = circle[i, 1] - yj
+        rho = circle[i, 2]
+        dc2 = dcx * dcx + dcy * dcy
+        if dc2 >= (reach + rho) * (reach + rho):
+            continue
+        if dcx * cj + dcy * sj < -rho:
+            continue
+        if with_atm:
+            crossings += _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
+                                    params.cos_psi, bearings, counts)
+        step_i = beam_width[i] / bins
+        alive_bins = 0
+        for k in range(bins):
+            f = free[i, k]
+            if f >= threshold:
+                continue
+            vx = bx[i, k] - xj
+            vy = by[i, k] - yj
+            d2 = vx * vx + vy * vy
+            if d2 >= reach * reach:
+                alive_bins += 1
+                continue
+            d = math.sqrt(d2)
+            along = vx * cj + vy * sj
+            if along < d * cos_half_j or d <= 0.0:
+                alive_bins += 1
+                continue
+            p = detect_probability(vx, vy, ex[i, k], ey[i, k], cj, sj, sin_half_j,
+                                   params.edge_gain, cos_full, cos_zero, params.rough,
+                                   params.max_detect, params.range_scale)
+            if d < free_r:
+                touched[i] = True
+                established = (support[i, k] >= params.establish and f < 0.5 * threshold)
+                if established and d < free_r - params.tolerance:
+                    # An established surface j looked past at a glancing angle: the bins of j
+                    # behind it cannot hold j's echo (sound does not pass through walls).
+                    rel = math.atan2(cj * vy - sj * vx, along)
+                    spread = 0.5 * step_i * r[i] / d
+                    k0 = _bin_of(rel - spread, half_j, step_j, bins)
+                    k1 = _bin_of(rel + spread, half_j, step_j, bins)
+                    for kk in range(k0, k1 + 1):
+                        if free[slot, kk] < threshold:
+                            free[slot, kk] = threshold
+                            occluding += 1
+                    touched[slot] = True
+                f += -math.log1p(-p) * (params.protect if established else 1.0)
+                free[i, k] = f
+                if f < threshold:
+                    alive_bins += 1
+            else:
+                alive_bins += 1
+                if abs(d - rj) <= params.support_tolerance:
+                    touched[i] = True
+                    touched[slot] = True
+                    support[i, k] += p
+                    rel = math.atan2(cj * vy - sj * vx, along)
+                    support[slot, _bin_of(rel, half_j, step_j, bins)] += p
+        if alive_bins == 0:
+            status[i] = EVIDENCE_CARVED
+            fully += 1
+    occluded[slot] = occluding / bins
+    if occluding >= bins:
+        status[slot] = EVIDENCE_CARVED
+        fully += 1
+    return fully, crossings, occluding
+
+
+@compiled
+def evidence_estimates(
+    slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
+    beam_width: FloatArray, free: FloatArray, support: FloatArray, status: Int8Array,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
+    atm_bound: float, with_atm: bool,
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
+           FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
+
+    The surviving bins form runs; with several (a *split* arc), the run with the most support
+    plus ATM crossings is kept (ties: the longest, then the first). The point is the middle of
+    that run (eq. 3.6), or the median of the ATM crossings inside it where that bound is
+    smaller. The bound covers every surviving run (the echo may be in any of them), widened by
+    half a bin on each side: ``2 r sin(e/2)`` with ``e`` the largest angle from the point to the
+    far end of the surviving hull plus ``Δ/2`` (eq. 5.3).
+
+    Returns
+    -------
+    has_piece : bool
+        At least one bin survives.
+    bearing : float
+        Bearing of the point, radians (unwrapped near the axis).
+    width : float
+        Width of the kept run, radians.
+    max_error : float
+        Bound, metres.
+    piece_support : float
+        Largest support of a bin in the kept run.
+    is_atm : bool
+        The point is an ATM median.
+    piece_crossings : float
+        ATM crossings inside the kept run.
+    piece_free : float
+        Mean free evidence over the kept run, in units of ``T``.
+    runs : float
+        Number of surviving runs.
+    hull_share : float
+        Surviving hull width over the full beam.
+    """
+    n = slots.shape[0]
+    bins = free.shape[1]
+    has_piece = np.zeros(n, dtype=np.bool_)
+    bearing = np.zeros(n)
+    width = np.zeros(n)
+    max_error = np.zeros(n)
+    piece_support = np.zeros(n)
+    is_atm = np.zeros(n, dtype=np.bool_)
+    piece_crossings = np.zeros(n)
+    piece_free = np.zeros(n)
+    run_count = np.zeros(n)
+    hull_share = np.zeros(n)
+    in_bin = np.zeros(bins)
+    values = np.zeros(bearings.shape[1])
+    for q in range(n):
+        s = slots[q]
+        phi = beam_width[s]
+        half = 0.5 * phi
+        step = phi / bins
+        lo_axis = theta[s] - half
+        if status[s] != EVIDENCE_ALIVE:
+            bearing[q] = theta[s]
+            width[q] = phi
+            max_error[q] = 2.0 * r[s] * math.sin(0.25 * phi)
+            continue
+        for k in range(bins):
+            in_bin[k] = 0.0
+        c = counts[s] if with_atm else 0
+        for m in range(c):
+            in_bin[_bin_of(float(bearings[s, m]), half, step, bins)] += 1.0
+        best_score = -1.0
+        best_start = -1
+        best_end = -1
+        first = -1
+        last = -1
+        runs = 0
+        k = 0
+        while k < bins:
+            if free[s, k] >= threshold:
+                k += 1
+                continue
+            start = k
+            score = 0.0
+            top = 0.0
+            while k < bins and free[s, k] < threshold:
+                score += in_bin[k]
+                top = max(top, support[s, k])
+                k += 1
+            score += top
+            runs += 1
+            if first < 0:
+                first = start
+            last = k
+            better = score > best_score or (
+                score == best_score and k - start > best_end - best_start)
+            if better:
+                best_score = score
+                best_start = start
+                best_end = k
+        if runs == 0:
+            bearing[q] = theta[s]
+            width[q] = phi
+            max_error[q] = 2.0 * r[s] * math.sin(0.25 * phi)
+            continue
+        has_piece[q] = True
+        lo = lo_axis + best_start * step
+        hi = lo_axis + best_end * step
+        hull_lo = lo_axis + first * step
+        hull_hi = lo_axis + last * step
+        mid = 0.5 * (lo + hi)
+        width[q] = hi - lo
+        top = 0.0
+        mean_free = 0.0
+        for kk in range(best_start, best_end):
+            top = max(top, support[s, kk])
+            mean_free += free[s, kk]
+        piece_support[q] = top
+        piece_free[q] = mean_free / ((best_end - best_start) * threshold)
+        run_count[q] = runs
+        hull_share[q] = (hull_hi - hull_lo) / phi
+        e = max(mid - hull_lo, hull_hi - mid) + 0.5 * step
+        carved_bound = 2.0 * r[s] * math.sin(0.5 * min(e, math.pi))
+        bearing[q] = mid
+        max_error[q] = carved_bound
+        # ATM crossings inside the kept run only.
+        kept = 0
+        for m in range(c):
+            b = float(bearings[s, m])
+            kb = _bin_of(b, half, step, bins)
+            if best_start <= kb < best_end:
+                values[kept] = b
+                kept += 1
+        piece_crossings[q] = kept
+        if kept > 0:
+            ordered = np.sort(values[:kept])
+            median = theta[s] + 0.5 * (ordered[(kept - 1) // 2] + ordered[kept // 2])
+            if runs == 1:
+                bound = atm_bound
+            else:
+                ea = max(median - hull_lo, hull_hi - median) + 0.5 * step
+                bound = 2.0 * r[s] * math.sin(0.5 * min(ea, math.pi))
+            if bound < carved_bound:
+                bearing[q] = median
+                max_error[q] = bound
+                is_atm[q] = True
+    return (has_piece, bearing, width, max_error, piece_support, is_atm, piece_crossings,
+            piece_free, run_count, hull_share)

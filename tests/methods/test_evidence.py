@@ -1,0 +1,118 @@
+"""Evidence carving (``evidence``): constructed cases and its own laws (beyond the paper)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve import MethodConfig, make_method
+from sonarcarve.errors import ConfigError
+from sonarcarve.methods import EvidenceMethod
+from sonarcarve.methods.evidence import EvidenceModel
+from sonarcarve.readings import Reading
+
+PHI = math.radians(22.5)
+
+
+def _reading(t: float, x: float, y: float, theta: float, r: float, sensor: int = 0) -> Reading:
+    return Reading(t=t, sensor=sensor, x=x, y=y, theta=theta, range=r, beam_width=PHI)
+
+
+def _ids(method: EvidenceMethod | object) -> set[int]:
+    local = method.local_map()  # type: ignore[attr-defined]
+    return set(local.reading_id.tolist())
+
+
+def test_glancing_newer_beam_does_not_delete_a_true_echo() -> None:
+    # A wall at x = 1 seen head-on from the origin, then looked past at ~40° incidence by a
+    # reading from (0, 0.9) that heard nothing before 3 m (carve_arc's doctest case).
+    first = _reading(0.0, 0.0, 0.0, 0.0, 1.0)
+    glancing = _reading(0.1, 0.0, 0.9, -0.7, 3.0, sensor=1)
+    paper = make_method("carve")
+    evidence = make_method("evidence")
+    for method in (paper, evidence):
+        method.add(first)
+        method.add(glancing)
+    assert 0 not in _ids(paper)  # the paper's veto deletes the true echo
+    assert 0 in _ids(evidence)
+
+
+def test_crosstalk_echo_in_open_space_is_removed() -> None:
+    # Facing a wall 3 m away; one phantom at 1 m (crosstalk), then the same sensor again.
+    method = make_method("evidence")
+    readings = [_reading(0.05 * k, 0.0, 0.02 * k, 0.0, 3.0) for k in range(3)]
+    readings.append(_reading(0.15, 0.0, 0.06, 0.0, 1.0))
+    readings += [_reading(0.2 + 0.05 * k, 0.0, 0.08 + 0.02 * k, 0.0, 3.0) for k in range(3)]
+    for reading in readings:
+        method.add(reading)
+    ids = _ids(method)
+    assert 3 not in ids
+    assert {0, 1, 2, 4, 5, 6} <= ids
+
+
+def test_multipath_echo_behind_an_established_wall_is_flagged() -> None:
+    # A wall at x = 2 heard head-on from three places (each echo supports the others), then an
+    # echo that reads 3.5 m straight through it: it must come from behind the wall.
+    method = make_method("evidence")
+    assert isinstance(method, EvidenceMethod)
+    for k, y in enumerate((0.0, 0.1, -0.1, 0.05, -0.05)):
+        method.add(_reading(0.05 * k, 0.0, y, 0.0, 2.0, sensor=k))
+    method.add(_reading(0.3, 0.0, 0.0, 0.0, 3.5, sensor=5))
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    slot = int(method.history.slots()[-1])
+    assert model.occluded[slot] > 0.5  # the flag: most of its beam lies behind the wall
+    ids = _ids(method)
+    assert 5 not in ids
+    assert {0, 1, 2, 3, 4} <= ids  # the wall stays
+
+
+def test_split_arc_keeps_a_piece_with_an_honest_bound() -> None:
+    # An arc whose middle is seen through head-on by a closer, narrower look keeps a piece.
+    method = make_method("evidence", MethodConfig(min_confidence=0.0))
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 3.0))
+    method.add(_reading(0.05, 0.5, 0.0, 0.0, 4.0, sensor=1))
+    local = method.local_map()
+    assert 0 in local.reading_id.tolist()
+    row = local.reading_id.tolist().index(0)
+    assert local.width[row] < PHI
+    # The bound covers every surviving piece (the echo may be in either) plus half a bin: at
+    # most the chord from one end of the beam to the other, widened by half a bin.
+    assert 0.0 < local.max_error[row] <= 2.0 * 3.0 * math.sin((PHI + PHI / 48.0) / 2.0)
+
+
+def test_evidence_never_grows_back_and_confidence_is_a_probability() -> None:
+    rng = np.random.default_rng(3)
+    method = make_method("evidence", MethodConfig(history_size=60))
+    assert isinstance(method, EvidenceMethod)
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    before = model.free.copy()
+    for k in range(300):
+        theta = 2 * math.pi * (k % 8) / 8
+        method.add(_reading(0.01 * k, 0.01 * k, 0.0, theta, float(rng.uniform(0.5, 4.0)), k % 8))
+        live = method.history.slots()[:-1]
+        assert np.all(model.free[live] >= before[live] - 1e-12)  # carving never widens
+        before = model.free.copy()
+    local = method.local_map()
+    assert np.all((local.confidence >= 0.5) & (local.confidence <= 1.0))
+
+
+@pytest.mark.parametrize(("field", "value"), [("evidence_bins", 0), ("carve_probability", 1.0),
+                                          ("min_confidence", -0.1), ("stamp_error", -1.0)])
+def test_config_refuses_bad_evidence_parameters(field: str, value: float) -> None:
+    with pytest.raises(ConfigError, match=field):
+        MethodConfig(**{field: value})
+
+
+def test_stamp_error_widens_every_bound() -> None:
+    readings = [_reading(0.05 * k, 0.0, 0.05 * k, 0.0, 2.0, k) for k in range(4)]
+    maps = []
+    for stamp in (0.0, 0.1):
+        method = make_method("evidence", MethodConfig(stamp_error=stamp))
+        for reading in readings:
+            method.add(reading)
+        maps.append(method.local_map())
+    np.testing.assert_allclose(maps[1].max_error, maps[0].max_error + 0.1)
