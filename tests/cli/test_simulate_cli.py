@@ -74,9 +74,27 @@ def test_explore(tmp_path: Path) -> None:
     assert readings.t[-1] == pytest.approx(20.0, abs=0.05)
 
 
+def test_physics_amplitude_is_a_different_sonar(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    spec, amp, again = tmp_path / "s.csv", tmp_path / "a.csv", tmp_path / "b.csv"
+    assert run("--world", "doorway", "--seed", "3", "--out", str(spec)) == 0
+    for out in (amp, again):
+        assert run("--world", "doorway", "--seed", "3", "--physics", "amplitude",
+                   "--out", str(out)) == 0
+    assert amp.read_bytes() == again.read_bytes()
+    assert amp.read_bytes() != spec.read_bytes()
+    assert len(read_readings_csv(amp)) > 50
+    default = tmp_path / "d.csv"
+    assert run("--world", "doorway", "--seed", "3", "--physics", "specular",
+               "--out", str(default)) == 0
+    assert default.read_bytes() == spec.read_bytes()
+    capsys.readouterr()
+
+
 @pytest.mark.parametrize(
     ("args", "problem"),
     [
+        (["--world", "doorway", "--physics", "sonic"], "'specular', 'amplitude'"),
         (["--world", "atlantis"], "unknown world 'atlantis'"),
         (["--world", "doorway", "--robot", "nomad"], "unknown robot 'nomad'"),
         (["--world", "doorway", "--path", "nowhere.csv"], "no such file"),

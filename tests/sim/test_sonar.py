@@ -289,3 +289,29 @@ def test_same_seed_same_echoes_other_seed_differs() -> None:
 def test_bad_physics_parameters_are_refused(change: dict[str, float]) -> None:
     with pytest.raises(SonarPhysicsError, match=next(iter(change))):
         SonarPhysics(**change)  # type: ignore[arg-type]
+
+
+def test_echo_model_is_chosen_by_name_and_defaults_to_specular() -> None:
+    from sonarcarve.sim.amplitude import AmplitudeModel
+    from sonarcarve.sim.sonar import DEFAULT_PHYSICS
+
+    assert DEFAULT_PHYSICS.echo_model == "specular"
+    assert DEFAULT_PHYSICS.amplitude == AmplitudeModel()
+    chosen = replace(SonarPhysics(), echo_model="amplitude")
+    assert chosen.echo_model == "amplitude"
+    # The 60 degree mirror wall is silent to both; the head-on wall at 3 m heard by both.
+    assert fire_once(LONG_WALL, 0.0, 0.0, math.radians(60),
+                     replace(CLEAN, echo_model="amplitude")).kind[0] == NO_ECHO
+    assert fire_once(LONG_WALL, 0.0, 0.0, 0.0,
+                     replace(CLEAN, echo_model="amplitude")).range[0] == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("name", ["Amplitude", "arc", ""])
+def test_unknown_echo_model_names_the_choices(name: str) -> None:
+    with pytest.raises(SonarPhysicsError, match=r"echo_model.*'specular', 'amplitude'"):
+        SonarPhysics(echo_model=name)
+
+
+def test_amplitude_field_must_be_an_amplitude_model() -> None:
+    with pytest.raises(SonarPhysicsError, match="amplitude"):
+        SonarPhysics(amplitude=3.0)  # type: ignore[arg-type]

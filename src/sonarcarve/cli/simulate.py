@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -59,13 +60,23 @@ def simulate_command(
     clean: Annotated[bool, typer.Option(
         "--clean", help="Perfect sensors on smooth walls: no noise, no quantisation, no "
                         "crosstalk, floor or multipath echoes.")] = False,
+    physics: Annotated[str, typer.Option(
+        "--physics", metavar="MODEL",
+        help="How echoes are decided. specular (default): rays across the nominal beam; a "
+             "smooth wall echoes only within a critical angle (17.5°) of its normal, corners "
+             "always; spurious echoes by fixed rates. amplitude: a sonar equation; the "
+             "transducer's beam pattern (main lobe and side lobes, so strong reflectors are "
+             "heard outside the nominal beam), spreading and absorption with range, mirror, "
+             "diffuse and corner echoes against a noisy detection threshold (weak glancing "
+             "walls are missed, near ones heard at wide angles).")] = "specular",
 ) -> None:
     """Simulate a sonar log with ground truth: drive a robot through a world, record echoes.
 
     The robot's sensors fire one at a time in its firing order. Each ray of a beam echoes from a
     smooth wall only near normal incidence (or from a corner or wall end), so oblique walls are
     mirrors, as with real ultrasonic sensors; on top come range noise, quantisation and the
-    spurious echoes of real rings (crosstalk, floor bounce, multipath).
+    spurious echoes of real rings (crosstalk, floor bounce, multipath). `--physics amplitude`
+    decides every echo by its received level instead (beam pattern, range losses, threshold).
 
     Writes NAME.csv (readings CSV: `t,sensor,x,y,theta,range,beam_width`; seconds, metres,
     radians) and NAME.truth.json (the walls, and per reading its kind and true reflection
@@ -74,14 +85,14 @@ def simulate_command(
     Example: `sonarcarve simulate --world office --robot scout2 --seed 1 --out office.csv`
     """
     _check_motion_options(path, explore_seconds)
+    chosen = _physics(physics, clean)
     # Both outputs are checked before the (possibly long) simulation runs.
     truth = _check_outputs(out, [path, Path(world), Path(robot)])
     the_world = load_world(world)
     the_robot = load_robot(robot)
     trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
     drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
-    physics = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
-    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, physics, drift)
+    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift)
     write_simulation(result, out)
     console.print(_summary(result, out, truth))
 
@@ -96,6 +107,13 @@ def _check_motion_options(path: Path | None, explore_seconds: float | None) -> N
                                             and explore_seconds > 0.0):
         msg = f"--explore must be a positive number of seconds, got {explore_seconds}"
         raise SimulateParameterError(msg)
+
+
+def _physics(echo_model: str, clean: bool) -> SonarPhysics:
+    """The sensor model of ``--physics`` and ``--clean``; a one-line error for an unknown model
+    (:class:`~sonarcarve.sim.sonar.SonarPhysicsError`, naming the choices)."""
+    base = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
+    return base if echo_model == base.echo_model else replace(base, echo_model=echo_model)
 
 
 def _check_outputs(out: Path, sources: list[Path | None]) -> Path:

@@ -50,7 +50,8 @@ class Scenario:
     beam_width_deg : float, optional
         Override every sensor's beam width, degrees.
     physics : tuple of (name, value)
-        Overrides of :class:`~sonarcarve.sim.sonar.SonarPhysics` fields.
+        Overrides of :class:`~sonarcarve.sim.sonar.SonarPhysics` fields: numbers, or a string
+        for ``echo_model`` (``("echo_model", "amplitude")`` simulates the amplitude sonar).
     robot : str
         Robot name.
     odometry_drift : bool
@@ -65,7 +66,7 @@ class Scenario:
     max_length: float | None = None
     speed: float = DEFAULT_SPEED
     beam_width_deg: float | None = None
-    physics: tuple[tuple[str, float], ...] = ()
+    physics: tuple[tuple[str, float | str], ...] = ()
     robot: str = "scout2"
     odometry_drift: bool = False
 

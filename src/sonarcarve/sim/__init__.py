@@ -1,6 +1,7 @@
 """A sonar simulator with ground truth: worlds, sonar physics and motion (robots are
 :mod:`sonarcarve.robot`, shared with the product for sensor mounts)."""
 
+from sonarcarve.sim.amplitude import AmplitudeModel
 from sonarcarve.sim.generate import corridor_opening_world, doorway_world, random_world
 from sonarcarve.sim.motion import (
     ROBOT_RADIUS,
@@ -12,6 +13,7 @@ from sonarcarve.sim.motion import (
 from sonarcarve.sim.simulate import Simulation, SonarTruth, simulate
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
+    ECHO_MODELS,
     NO_ECHO,
     Echoes,
     EchoKind,
@@ -24,8 +26,10 @@ from sonarcarve.sim.world import World, WorldError, builtin_worlds, load_world
 
 __all__ = [
     "DEFAULT_PHYSICS",
+    "ECHO_MODELS",
     "NO_ECHO",
     "ROBOT_RADIUS",
+    "AmplitudeModel",
     "EchoKind",
     "Echoes",
     "Firings",

@@ -19,25 +19,43 @@ On top of that come the failures the paper met on its Scout2 (Appendix B), each 
 
 Every echo carries its truth: its :class:`EchoKind` and, where there is one, its reflection
 point (a wall point for direct echoes, the second wall point for multipath ones).
+
+That is the ``"specular"`` echo model (:attr:`SonarPhysics.echo_model`, the default). The
+``"amplitude"`` model (:mod:`sonarcarve.sim.amplitude`) replaces the critical angle and the
+echo probabilities by received levels against a detection threshold: walls answer by their
+mirror image (heard when their normal falls in the transducer's beam pattern, main lobe or side
+lobes, loudly enough for the range), by diffuse scattering ray by ray, and corners and wall
+ends by retro-reflection or diffraction; multipath and crosstalk paths are followed the same way
+and heard when loud enough. Floor echoes keep their episodes and probability in both models.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from enum import IntEnum
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial import cKDTree
+from scipy.special import ndtri
 
-from sonarcarve.errors import SonarcarveError
 from sonarcarve.robot import RobotDescription
+from sonarcarve.sim.amplitude import (
+    AmplitudeModel,
+    SonarPhysicsError,
+    diffuse_echo_db,
+    mirror_echo_db,
+    path_echo_db,
+    point_echo_db,
+)
 from sonarcarve.sim.world import World
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "DEFAULT_PHYSICS",
+    "ECHO_MODELS",
     "NO_ECHO",
     "EchoKind",
     "Echoes",
@@ -58,9 +76,12 @@ _CHUNK_FIRINGS = 256
 #: Distance (m) by which a bounced ray starts off its first wall, so it does not re-hit it.
 _BOUNCE_OFFSET = 1e-7
 
+#: The echo models :attr:`SonarPhysics.echo_model` accepts.
+ECHO_MODELS = ("specular", "amplitude")
 
-class SonarPhysicsError(SonarcarveError, ValueError):
-    """Sonar physics parameters out of their valid range."""
+#: Amplitude model: candidate echoes more than this many noise deviations below the threshold
+#: are dropped before the (costly) line-of-sight test; they would be heard once in 10⁹.
+_PRUNE_SIGMAS = 6.0
 
 
 class EchoKind(IntEnum):
@@ -131,6 +152,17 @@ class SonarPhysics:
         to be heard, when it arrives before any direct echo.
     sound_speed : float
         Speed of sound, m/s (343: dry air at 20 °C); converts firing gaps to ranges.
+    echo_model : str
+        ``"specular"`` (the default): rays across the beam, smooth walls echo within
+        ``critical_angle``, spurious echoes by their probabilities. ``"amplitude"``: echo
+        levels from the transducer's beam pattern, spreading, absorption and the walls'
+        reflection against a noisy detection threshold, parameters in ``amplitude``
+        (:mod:`sonarcarve.sim.amplitude`). The amplitude model ignores ``rays_per_beam``,
+        ``specular``, ``critical_angle``, ``corner_radius`` and ``corner_echoes``, and uses
+        ``crosstalk_probability`` and ``multipath_probability`` only as switches (0: off):
+        loudness decides which of those echoes are heard.
+    amplitude : AmplitudeModel
+        Parameters of the amplitude model (unused by the specular one).
     """
 
     rays_per_beam: int = 31
@@ -151,8 +183,15 @@ class SonarPhysics:
     floor_half_angle: float = math.radians(60.0)
     multipath_probability: float = 0.5
     sound_speed: float = 343.0
+    echo_model: str = "specular"
+    amplitude: AmplitudeModel = field(default_factory=AmplitudeModel)
 
     def __post_init__(self) -> None:
+        if self.echo_model not in ECHO_MODELS:
+            choices = ", ".join(repr(name) for name in ECHO_MODELS)
+            _bad("echo_model", self.echo_model, f"must be one of {choices}")
+        if not isinstance(self.amplitude, AmplitudeModel):
+            _bad("amplitude", self.amplitude, "must be an AmplitudeModel")
         if self.rays_per_beam < 1:
             _bad("rays_per_beam", self.rays_per_beam, "must be at least 1")
         if self.crosstalk_lookback < 0:
@@ -283,10 +322,11 @@ def fire_sonars(
     draws = _Draws.make(gen, firings, physics)
     geometry = _WallGeometry.make(world)
     far_range = robot.max_range + physics.sound_speed * _max_gap(firings, physics) / 2.0
-    traced = _trace_all(geometry, robot, firings, physics, far_range, on_progress)
-    crosstalk = _crosstalk(robot, firings, physics, traced)
+    model = _ECHO_MODEL_TRACERS[physics.echo_model]
+    traced, crosstalk, multipath = model(geometry, robot, firings, physics, far_range, draws,
+                                         gen, on_progress)
     floor = _floor(robot, firings, physics, draws)
-    candidates = _candidate_ranges(traced, crosstalk, floor, draws, physics)
+    candidates = np.column_stack([traced.direct_range, crosstalk, floor, multipath])
     winner = np.argmin(candidates, axis=1)  # ties go to the lower code: direct first
     true_range = candidates[np.arange(n), winner]
     measured = _measure(true_range + physics.range_noise * draws.noise, robot, physics)
@@ -299,32 +339,46 @@ def fire_sonars(
     )
 
 
-def _candidate_ranges(traced: _Traced, crosstalk: FloatArray, floor: FloatArray, draws: _Draws,
-                      physics: SonarPhysics) -> FloatArray:
-    """Noise-free range of every kind of echo each firing could hear, metres (inf: none).
+#: Ranges a model's tracing yields: the beams (direct and multipath echoes, late-echo raw
+#: material), then the crosstalk and multipath echo heard by each firing (inf: none).
+_ModelEchoes = tuple["_Traced", FloatArray, FloatArray]
 
-    Parameters
-    ----------
-    traced : _Traced
-        Direct and multipath ranges from the beam tracing, shape (n,).
-    crosstalk, floor : ndarray, shape (n,)
-        Crosstalk and floor echo ranges, metres (inf: none).
-    draws : _Draws
-        The uniform draws deciding whether crosstalk and multipath echoes happen.
-    physics : SonarPhysics
-        Their probabilities.
 
-    Returns
-    -------
-    ndarray, shape (n, 4)
-        Column ``k`` holds the range of the :class:`EchoKind` with code ``k``.
-    """
-    return np.column_stack([
-        traced.direct_range,
-        np.where(draws.crosstalk < physics.crosstalk_probability, crosstalk, np.inf),
-        floor,
-        np.where(draws.multipath < physics.multipath_probability, traced.multipath_range, np.inf),
-    ])
+def _specular_echoes(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+                     physics: SonarPhysics, far_range: float, draws: _Draws,
+                     rng: np.random.Generator,
+                     on_progress: Callable[[int, int], None] | None) -> _ModelEchoes:
+    """The specular model: ray tracing, then crosstalk and multipath by their probabilities."""
+    traced = _Traced.empty(len(firings), physics.rays_per_beam)
+    _trace_all(traced, len(geometry.world),
+               lambda lo, hi: _trace_chunk(geometry, robot, firings[lo:hi], physics, far_range,
+                                           traced, lo),
+               on_progress)
+    crosstalk = _crosstalk(robot, firings, physics, traced)
+    return (traced,
+            np.where(draws.crosstalk < physics.crosstalk_probability, crosstalk, np.inf),
+            np.where(draws.multipath < physics.multipath_probability, traced.multipath_range,
+                     np.inf))
+
+
+def _amplitude_echoes(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+                      physics: SonarPhysics, far_range: float, draws: _Draws,
+                      rng: np.random.Generator,
+                      on_progress: Callable[[int, int], None] | None) -> _ModelEchoes:
+    """The amplitude model: every candidate echo heard or not by its level (module doc)."""
+    # Drawn after every draw the specular model makes, so theirs keep their order.
+    key = int(rng.integers(0, 2**63 - 1))
+    corners = _Corners.make(geometry, physics.amplitude.right_corner_tolerance)
+    traced = _Traced.empty(len(firings), 0)
+    _trace_all(traced, len(geometry.world),
+               lambda lo, hi: _trace_amplitude_chunk(geometry, corners, robot, firings[lo:hi],
+                                                     physics, traced, lo, key),
+               on_progress)
+    crosstalk = _crosstalk_amplitude(geometry, robot, firings, physics, far_range, key)
+    return traced, crosstalk, traced.multipath_range
+
+
+_ECHO_MODEL_TRACERS = {"specular": _specular_echoes, "amplitude": _amplitude_echoes}
 
 
 def _reflections(traced: _Traced, heard: BoolArray, winner: IntArray) -> FloatArray:
@@ -509,20 +563,25 @@ class _Traced:
     echo_distance: FloatArray
     echo_point: FloatArray
 
+    @classmethod
+    def empty(cls, n: int, rays: int) -> _Traced:
+        """Nothing heard yet by ``n`` firings of ``rays`` late-echo rays each."""
+        return cls(
+            direct_range=np.full(n, np.inf), direct_point=np.full((n, 2), np.nan),
+            multipath_range=np.full(n, np.inf), multipath_point=np.full((n, 2), np.nan),
+            echo_distance=np.full((n, rays), np.inf), echo_point=np.full((n, rays, 2), np.nan),
+        )
 
-def _trace_all(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
-               physics: SonarPhysics, far_range: float,
+
+def _trace_all(out: _Traced, walls: int, trace_chunk: Callable[[int, int], None],
                on_progress: Callable[[int, int], None] | None) -> _Traced:
-    n, rays = len(firings), physics.rays_per_beam
-    out = _Traced(
-        direct_range=np.full(n, np.inf), direct_point=np.full((n, 2), np.nan),
-        multipath_range=np.full(n, np.inf), multipath_point=np.full((n, 2), np.nan),
-        echo_distance=np.full((n, rays), np.inf), echo_point=np.full((n, rays, 2), np.nan),
-    )
+    """Fill ``out`` batch by batch: ``trace_chunk(lo, hi)`` traces firings ``lo:hi`` into it
+    (skipped when the world has no ``walls``)."""
+    n = out.direct_range.shape[0]
     for lo in range(0, n, _CHUNK_FIRINGS):
         hi = min(lo + _CHUNK_FIRINGS, n)
-        if len(geometry.world):
-            _trace_chunk(geometry, robot, firings[lo:hi], physics, far_range, out, lo)
+        if walls:
+            trace_chunk(lo, hi)
         if on_progress is not None:
             on_progress(hi, n)
     return out
@@ -696,6 +755,371 @@ def _floor(robot: RobotDescription, firings: Firings, physics: SonarPhysics,
     facing = np.isfinite(draws.tilt) & (off <= physics.floor_half_angle)
     heard = facing & (draws.floor_gate < physics.floor_probability)
     return np.asarray(np.where(heard, np.maximum(draws.floor_range, 0.0), np.inf))
+
+
+# --------------------------------------------------------------------------- amplitude model
+
+
+#: Codes of the amplitude model's candidate echo families, keying their noise draws.
+_MIRROR, _DIFFUSE, _CORNER, _MULTIPATH, _FOLDED, _CROSSTALK = 1, 2, 3, 4, 5, 6
+
+
+@dataclass(frozen=True, eq=False)
+class _Corners:
+    """The corners and free wall ends of a world (``_WallGeometry.scatter``), with what the
+    amplitude model needs: which are right-angled two-wall corners (retro-reflectors seen from
+    inside) and the directions ``u1``, ``u2`` (m, 2) of their two walls away from the corner.
+    """
+
+    points: FloatArray
+    right: BoolArray
+    u1: FloatArray
+    u2: FloatArray
+
+    @classmethod
+    def make(cls, geometry: _WallGeometry, tolerance: float, tol: float = 1e-9) -> _Corners:
+        points = geometry.scatter
+        m = points.shape[0]
+        u1, u2 = np.full((m, 2), np.nan), np.full((m, 2), np.nan)
+        right = np.zeros(m, dtype=bool)
+        seg = geometry.world.segments
+        if m == 0 or seg.shape[0] == 0:
+            return cls(points, right, u1, u2)
+        ends = np.concatenate([seg[:, :2], seg[:, 2:]])
+        others = np.concatenate([seg[:, 2:], seg[:, :2]])  # the far end of the same wall
+        touching = _touching_count(seg, points, tol)
+        for i, near in enumerate(cKDTree(ends).query_ball_point(points, tol)):
+            if len(near) != 2 or touching[i] != 2:
+                continue
+            away = others[near] - points[i]
+            away /= np.hypot(away[:, 0], away[:, 1])[:, None]
+            if abs(float(away[0] @ away[1])) <= math.sin(tolerance) + 1e-12:
+                right[i] = True
+                u1[i], u2[i] = away
+        return cls(points, right, u1, u2)
+
+
+def _noise(key: int, firing: IntArray, family: int, source: IntArray) -> FloatArray:
+    """Standard normal draws, one per (firing, family, source) triple, from a counter-based
+    hash of ``key``: the same whatever the batching or the other candidates (splitmix64)."""
+    h = _splitmix(np.asarray(firing, dtype=np.uint64).reshape(-1) + np.uint64(key))
+    h = _splitmix(h ^ np.uint64(family))
+    h = _splitmix(h + np.asarray(source, dtype=np.uint64).reshape(-1))
+    u = ((h >> np.uint64(11)).astype(np.float64) + 0.5) * 2.0**-53
+    return np.asarray(ndtri(u))
+
+
+def _splitmix(x: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint64]:
+    # Array arithmetic on uint64 wraps modulo 2**64, as the algorithm wants.
+    z = x + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return np.asarray(z ^ (z >> np.uint64(31)))
+
+
+def _heard(level: FloatArray, key: int, firing: IntArray, family: int, source: IntArray,
+           amplitude: AmplitudeModel) -> BoolArray:
+    """Which candidate echoes (levels in dB, shape (k,)) beat the threshold plus their noise."""
+    if level.size == 0:
+        return np.zeros(0, dtype=bool)
+    z = _noise(key, firing, family, source) if amplitude.noise_db > 0.0 else 0.0
+    return np.asarray(level + amplitude.noise_db * z >= amplitude.threshold_db)
+
+
+def _wrap(angle: FloatArray) -> FloatArray:
+    """Angles folded into [-π, π]."""
+    return np.asarray(np.angle(np.exp(1j * angle)))
+
+
+def _in_sight(world: World, origin: FloatArray, target: FloatArray, limit: float) -> BoolArray:
+    """Whether nothing stops the straight line from each origin (k, 2) before its target."""
+    if origin.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    gap = target - origin
+    length = np.hypot(gap[:, 0], gap[:, 1])
+    seen, _ = world.cast_rays(origin, np.arctan2(gap[:, 1], gap[:, 0]), max_range=limit)
+    return np.asarray(seen >= length * (1.0 - 1e-9) - 1e-9)
+
+
+def _keep_first(firing: IntArray, rng_: FloatArray, point: FloatArray, f: int) -> tuple[
+        FloatArray, FloatArray]:
+    """Per firing (0..f-1) the candidate with the smallest range: range (f,), point (f, 2)."""
+    best = np.full(f, np.inf)
+    where = np.full((f, 2), np.nan)
+    if firing.size == 0:
+        return best, where
+    order = np.lexsort((rng_, firing))
+    first = order[np.r_[True, np.diff(firing[order]) != 0]]
+    best[firing[first]] = rng_[first]
+    where[firing[first]] = point[first]
+    return best, where
+
+
+def _trace_amplitude_chunk(geometry: _WallGeometry, corners: _Corners, robot: RobotDescription,
+                           chunk: Firings, physics: SonarPhysics, out: _Traced, offset: int,
+                           key: int) -> None:
+    """The amplitude model's direct and multipath echoes for one batch of firings.
+
+    Candidates: each wall's mirror echo, each fan ray's diffuse echo, each corner's or wall
+    end's echo (retro-reflection or diffraction), each bounce path's multipath echo; the
+    nearest heard direct and multipath echo per firing are written into ``out`` rows.
+    """
+    amp, c = physics.amplitude, physics.sound_speed
+    f = len(chunk)
+    box = (float(chunk.x.min()), float(chunk.y.min()), float(chunk.x.max()), float(chunk.y.max()))
+    near_world, near_index, _ = geometry.near(*box, margin=robot.max_range)
+    origin = np.column_stack((chunk.x, chunk.y))
+    firing_ids = offset + np.arange(f)
+    low = amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db
+    limit = robot.max_range + 1.0
+    found: list[tuple[IntArray, FloatArray, FloatArray]] = []
+
+    # Mirror echoes: the foot of the perpendicular from the sensor to each wall.
+    seg = near_world.segments
+    a, edge = seg[:, :2], seg[:, 2:] - seg[:, :2]
+    t = np.einsum("fwj,wj->fw", origin[:, None, :] - a[None], edge) / np.sum(edge * edge, axis=1)
+    foot = a[None] + t[..., None] * edge[None]
+    gap = foot - origin[:, None, :]
+    d = np.hypot(gap[..., 0], gap[..., 1])
+    beta = _wrap(np.arctan2(gap[..., 1], gap[..., 0]) - chunk.theta[:, None])
+    ok = (t >= 0.0) & (t <= 1.0) & (d >= robot.min_range) & (d <= robot.max_range)
+    ok &= np.abs(beta) <= math.pi / 2
+    fi, wi = np.nonzero(ok)
+    level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
+    keep = level >= low
+    fi, wi, level = fi[keep], wi[keep], level[keep]
+    seen = _in_sight(near_world, origin[fi], foot[fi, wi], limit)
+    fi, wi, level = fi[seen], wi[seen], level[seen]
+    heard = _heard(level, key, firing_ids[fi], _MIRROR, near_index[wi], amp)
+    found.append((fi[heard], d[fi[heard], wi[heard]], foot[fi[heard], wi[heard]]))
+
+    # Diffuse echoes and first hits of the fan's rays.
+    rays = amp.fan_rays
+    spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
+        else np.zeros(1)
+    angle = (chunk.theta[:, None] + spread[None, :]).reshape(-1)
+    start = np.repeat(origin, rays, axis=0)
+    distance, wall = _cast(near_world, near_index, start, angle, robot.max_range)
+    direction = np.column_stack((np.cos(angle), np.sin(angle)))
+    hit = np.isfinite(distance)
+    point = start + np.where(hit, distance, 0.0)[:, None] * direction
+    normal = geometry.normals[np.maximum(wall, 0)]
+    if amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0:
+        which = np.flatnonzero(hit & (distance >= robot.min_range))
+        incidence = np.arccos(np.minimum(np.abs(np.sum(direction[which] * normal[which],
+                                                       axis=1)), 1.0))
+        level = diffuse_echo_db(amp, distance[which], np.tile(spread, f)[which], incidence, c)
+        heard = _heard(level, key, firing_ids[which // rays], _DIFFUSE, which % rays, amp)
+        which = which[heard]
+        found.append((which // rays, distance[which], point[which]))
+
+    # Corners and wall ends: diffraction from any angle, retro-reflection from inside a
+    # right-angled corner.
+    box_keep = np.flatnonzero(
+        (corners.points[:, 0] >= box[0] - robot.max_range)
+        & (corners.points[:, 0] <= box[2] + robot.max_range)
+        & (corners.points[:, 1] >= box[1] - robot.max_range)
+        & (corners.points[:, 1] <= box[3] + robot.max_range))
+    if box_keep.size:
+        cp = corners.points[box_keep]
+        v = origin[:, None, :] - cp[None]  # corner to sensor
+        dist = np.hypot(v[..., 0], v[..., 1])
+        alpha = _wrap(np.arctan2(-v[..., 1], -v[..., 0]) - chunk.theta[:, None])
+        ok = (dist >= robot.min_range) & (dist <= robot.max_range)
+        ok &= np.abs(alpha) <= math.pi / 2
+        fi, ci = np.nonzero(ok)
+        r, al = dist[fi, ci], alpha[fi, ci]
+        level = point_echo_db(amp, r, al, amp.edge_db, c)
+        g = box_keep[ci]
+        retro = corners.right[g] & _inside_wedge(v[fi, ci], corners.u1[g], corners.u2[g])
+        level = np.where(retro, np.maximum(level, mirror_echo_db(amp, r, al, 2, c)), level)
+        keep = level >= low
+        fi, ci, level = fi[keep], ci[keep], level[keep]
+        seen = _in_sight(near_world, origin[fi], cp[ci], limit)
+        fi, ci, level = fi[seen], ci[seen], level[seen]
+        heard = _heard(level, key, firing_ids[fi], _CORNER, box_keep[ci], amp)
+        found.append((fi[heard], dist[fi[heard], ci[heard]], cp[ci[heard]]))
+
+    firing = np.concatenate([x[0] for x in found])
+    ranges = np.concatenate([x[1] for x in found])
+    points = np.concatenate([x[2].reshape(-1, 2) for x in found])
+    best, where = _keep_first(firing, ranges, points, f)
+    rows = slice(offset, offset + f)
+    out.direct_range[rows] = best
+    out.direct_point[rows] = where
+
+    if physics.multipath_probability > 0.0:
+        bounce = np.flatnonzero(hit)
+        _multipath_amplitude(geometry, near_world, near_index, robot, physics, chunk, origin,
+                             direction, wall, point, bounce, rays, out, offset, key)
+
+
+def _inside_wedge(v: FloatArray, u1: FloatArray, u2: FloatArray) -> BoolArray:
+    """Whether each direction v (k, 2) lies strictly inside the angle from u1 to u2 (< π)."""
+    def cross(p: FloatArray, q: FloatArray) -> FloatArray:
+        return np.asarray(p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0])
+
+    turn = cross(u1, u2)
+    with np.errstate(invalid="ignore"):
+        inside = (cross(u1, v) * turn > 0.0) & (cross(v, u2) * turn > 0.0)
+    return np.asarray(inside & np.isfinite(turn))
+
+
+def _multipath_amplitude(geometry: _WallGeometry, world: World, index: IntArray,
+                         robot: RobotDescription, physics: SonarPhysics, chunk: Firings,
+                         origin: FloatArray, direction: FloatArray, wall: IntArray,
+                         point: FloatArray, bounce: IntArray, rays: int, out: _Traced,
+                         offset: int, key: int) -> None:
+    """Bounce paths S → A → B → A → S: wall B seen in the mirror of wall A, too far.
+
+    Two ways back: B's diffuse echo of each fan ray's mirrored ray (range: the folded ray's
+    length, two specular reflections at A), and B's mirror echo seen from the sensor's image in
+    A, solved exactly for each distinct pair (A, B) the fan meets (the foot F of the
+    perpendicular from the image onto B, the crossing P of that line with A; range
+    |image − F|, three specular reflections). In a world of right angles the second never
+    happens: the image's perpendicular to B runs parallel to A.
+    """
+    amp, c = physics.amplitude, physics.sound_speed
+    if bounce.size == 0:
+        return
+    f = len(chunk)
+    normal = geometry.normals[wall[bounce]]
+    d = direction[bounce]
+    mirrored = d - 2.0 * np.sum(d * normal, axis=1)[:, None] * normal
+    start = point[bounce] + _BOUNCE_OFFSET * mirrored
+    first = np.hypot(*(point[bounce] - origin[bounce // rays]).T)
+    second, wall2 = _cast(world, index, start, np.arctan2(mirrored[:, 1], mirrored[:, 0]),
+                          robot.max_range)
+    total = first + _BOUNCE_OFFSET + second
+    good = (wall2 >= 0) & (wall2 != wall[bounce])
+    found: list[tuple[IntArray, FloatArray, FloatArray]] = []
+    if amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0:
+        fold = np.flatnonzero(good & (total >= robot.min_range) & (total <= robot.max_range))
+        end = start[fold] + second[fold, None] * mirrored[fold]
+        incidence = np.arccos(np.minimum(np.abs(np.sum(
+            mirrored[fold] * geometry.normals[wall2[fold]], axis=1)), 1.0))
+        spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
+            else np.zeros(1)
+        ray = bounce[fold] % rays
+        level = (diffuse_echo_db(amp, total[fold], spread[ray], incidence, c)
+                 + 2.0 * amp.specular_db)
+        heard = _heard(level, key, offset + bounce[fold] // rays, _FOLDED, ray, amp)
+        found.append((bounce[fold][heard] // rays, total[fold][heard], end[heard]))
+    pairs = np.unique(np.column_stack((bounce[good] // rays, wall[bounce][good], wall2[good])),
+                      axis=0)
+    if pairs.shape[0]:
+        found.append(_retrace_paths(geometry, world, robot, physics, chunk, origin, pairs,
+                                    offset, key))
+    firing = np.concatenate([x[0] for x in found]) if found else np.zeros(0, dtype=np.int64)
+    ranges = np.concatenate([x[1] for x in found]) if found else np.zeros(0)
+    points = np.concatenate([x[2].reshape(-1, 2) for x in found]) if found else np.zeros((0, 2))
+    best, where = _keep_first(firing, ranges, points, f)
+    rows = slice(offset, offset + f)
+    out.multipath_range[rows] = best
+    out.multipath_point[rows] = where
+
+
+def _retrace_paths(geometry: _WallGeometry, world: World, robot: RobotDescription,
+                   physics: SonarPhysics, chunk: Firings, origin: FloatArray, pairs: IntArray,
+                   offset: int, key: int) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Heard mirror echoes of wall B seen in wall A, for (firing, A, B) rows of ``pairs``:
+    firing rows, ranges, points on B."""
+    amp, c = physics.amplitude, physics.sound_speed
+    fi, wa, wb = pairs[:, 0], pairs[:, 1], pairs[:, 2]
+    seg = geometry.world.segments
+    o = origin[fi]
+    a_a, e_a, n_a = seg[wa, :2], seg[wa, 2:] - seg[wa, :2], geometry.normals[wa]
+    a_b, e_b = seg[wb, :2], seg[wb, 2:] - seg[wb, :2]
+    image = o - 2.0 * np.sum((o - a_a) * n_a, axis=1)[:, None] * n_a
+    t_b = np.sum((image - a_b) * e_b, axis=1) / np.sum(e_b * e_b, axis=1)
+    foot = a_b + t_b[:, None] * e_b
+    line = foot - image
+    across = np.sum(line * n_a, axis=1)
+    # A line parallel to A never crosses it: no path.
+    s = np.sum((a_a - image) * n_a, axis=1) / np.where(np.abs(across) > 1e-12, across, np.inf)
+    cross_a = image + s[:, None] * line
+    t_a = np.sum((cross_a - a_a) * e_a, axis=1) / np.sum(e_a * e_a, axis=1)
+    length = np.hypot(line[:, 0], line[:, 1])
+    ok = ((t_b >= 0.0) & (t_b <= 1.0) & (s > 0.0) & (s < 1.0) & (t_a >= 0.0) & (t_a <= 1.0)
+          & (length >= robot.min_range) & (length <= robot.max_range))
+    gap = cross_a - o
+    beta = _wrap(np.arctan2(gap[:, 1], gap[:, 0]) - chunk.theta[fi])
+    ok &= np.abs(beta) <= math.pi / 2
+    keep = np.flatnonzero(ok)
+    level = path_echo_db(amp, 2.0 * length[keep], beta[keep], beta[keep], 3, c)
+    keep = keep[level >= amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db]
+    limit = robot.max_range + 1.0
+    leg2 = foot[keep] - cross_a[keep]
+    leg2_unit = leg2 / np.maximum(np.hypot(leg2[:, 0], leg2[:, 1]), 1e-300)[:, None]
+    seen = (_in_sight(world, o[keep], cross_a[keep] - _BOUNCE_OFFSET * leg2_unit, limit)
+            & _in_sight(world, cross_a[keep] + _BOUNCE_OFFSET * leg2_unit, foot[keep], limit))
+    keep = keep[seen]
+    level = path_echo_db(amp, 2.0 * length[keep], beta[keep], beta[keep], 3, c)
+    source = wa[keep] * len(geometry.world) + wb[keep]
+    heard = keep[_heard(level, key, offset + fi[keep], _MULTIPATH, source, amp)]
+    return fi[heard], length[heard], foot[heard]
+
+
+def _crosstalk_amplitude(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+                         physics: SonarPhysics, far_range: float, key: int) -> FloatArray:
+    """Apparent range of the first loud enough late echo of a recent ping (inf: none).
+
+    The ping of firing j reaches sensor k, which fires ``lag`` firings later, by specular
+    reflection off a wall: the image of j's sensor in the wall, seen from k's sensor, gives the
+    path (length P, reflection point X); k reads P/2 − c (t_k − t_j)/2 and hears it when the
+    level (directivity at both sensors, 20 log spreading of the path) is loud enough. Diffuse
+    and edge echoes travel 14 m or more as small targets (40 log): far below the threshold.
+    """
+    n = len(firings)
+    best = np.full(n, np.inf)
+    if physics.crosstalk_probability <= 0.0 or len(geometry.world) == 0:
+        return best
+    amp, c = physics.amplitude, physics.sound_speed
+    low = amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db
+    for lag in range(1, min(physics.crosstalk_lookback, n - 1) + 1):
+        for lo in range(lag, n, _CHUNK_FIRINGS):
+            k = np.arange(lo, min(lo + _CHUNK_FIRINGS, n))
+            j = k - lag
+            xs = np.concatenate((firings.x[k], firings.x[j]))
+            ys = np.concatenate((firings.y[k], firings.y[j]))
+            world, index, _ = geometry.near(float(xs.min()), float(ys.min()), float(xs.max()),
+                                            float(ys.max()), margin=far_range)
+            if len(world) == 0:
+                continue
+            seg = world.segments
+            a, edge, normal = seg[:, :2], seg[:, 2:] - seg[:, :2], geometry.normals[index]
+            emit = np.column_stack((firings.x[j], firings.y[j]))
+            recv = np.column_stack((firings.x[k], firings.y[k]))
+            side_e = np.einsum("fwj,wj->fw", emit[:, None, :] - a[None], normal)
+            side_r = np.einsum("fwj,wj->fw", recv[:, None, :] - a[None], normal)
+            image = emit[:, None, :] - 2.0 * side_e[..., None] * normal[None]
+            line = recv[:, None, :] - image
+            across = np.einsum("fwj,wj->fw", line, normal)
+            # A path parallel to the wall never meets it (s = 0: no path either).
+            s = -np.einsum("fwj,wj->fw", image - a[None], normal) / np.where(
+                np.abs(across) > 1e-12, across, np.inf)
+            x = image + s[..., None] * line
+            t = np.einsum("fwj,wj->fw", x - a[None], edge) / np.sum(edge * edge, axis=1)
+            path = np.hypot(line[..., 0], line[..., 1])
+            apparent = path / 2.0 - c * (firings.t[k] - firings.t[j])[:, None] / 2.0
+            ok = ((side_e * side_r > 0.0) & (t >= 0.0) & (t <= 1.0)
+                  & (apparent >= robot.min_range) & (apparent <= robot.max_range))
+            fi, wi = np.nonzero(ok)
+            xp = x[fi, wi]
+            to_e, to_r = xp - emit[fi], xp - recv[fi]
+            emit_angle = _wrap(np.arctan2(to_e[:, 1], to_e[:, 0]) - firings.theta[j[fi]])
+            recv_angle = _wrap(np.arctan2(to_r[:, 1], to_r[:, 0]) - firings.theta[k[fi]])
+            level = path_echo_db(amp, path[fi, wi], emit_angle, recv_angle, 1, c)
+            keep = np.flatnonzero((level >= low)
+                                  & (np.abs(recv_angle) <= physics.crosstalk_acceptance))
+            limit = far_range + 1.0
+            keep = keep[_in_sight(world, emit[fi[keep]], xp[keep], limit)
+                        & _in_sight(world, recv[fi[keep]], xp[keep], limit)]
+            heard = keep[_heard(level[keep], key, k[fi[keep]], _CROSSTALK + 8 * lag,
+                                index[wi[keep]], amp)]
+            r = apparent[fi[heard], wi[heard]]
+            np.minimum.at(best, k[fi[heard]], r)
+    return best
 
 
 def _bad(name: str, value: object, problem: str) -> None:
