@@ -2,24 +2,51 @@
 
 matplotlib is imported inside each function (never at import time), every function takes an
 optional ``ax`` and returns the artists it drew, so callers own their figures.
+
+A user's own map (what ``sonarcarve plot`` draws) is built from :func:`plot_map` (points by
+source), :func:`plot_error_bounds` (each point's ``max_error`` as a circle), :func:`plot_map_arcs`
+(each point's final arc), :func:`plot_path` (the sensor origins over time) and
+:func:`plot_grid` (a ROS map_server map underneath), put together by :func:`plot_user_map`.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
+from sonarcarve.extras import require
+from sonarcarve.io.atomic import atomic_path
+from sonarcarve.io.errors import InputError, finite_number, load_yaml
 from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from sonarcarve.maps import GlobalMap, LocalMap
+    from sonarcarve.readings import ReadingBatch
 
-__all__ = ["SOURCE_COLORS", "new_axes", "plot_arc", "plot_freespace", "plot_map", "plot_walls"]
+__all__ = [
+    "FIGURE_FORMATS",
+    "SOURCE_COLORS",
+    "GridImage",
+    "MapOrigins",
+    "map_origins",
+    "new_axes",
+    "plot_arc",
+    "plot_error_bounds",
+    "plot_freespace",
+    "plot_grid",
+    "plot_map",
+    "plot_map_arcs",
+    "plot_path",
+    "plot_user_map",
+    "read_grid_image",
+    "save_figure",
+]
 
 #: One colour per point source, the same in every figure.
 SOURCE_COLORS = {
@@ -160,3 +187,313 @@ def write_carving_explainer(path: str) -> None:
     figure = ax.get_figure(root=True)
     if figure is not None:
         figure.savefig(path, dpi=110)
+
+
+# -- a user's own map (``sonarcarve plot``) -------------------------------------------------------
+
+#: Samples per arc drawn by :func:`plot_map_arcs` (a 22.5° arc of 5 m: 7 cm chords).
+_ARC_SAMPLES = 24
+#: Largest difference, seconds, between a map point's time and its reading's for the two to
+#: be the same reading (:func:`map_origins`).
+_SAME_TIME = 1e-6
+
+
+class GridImage(NamedTuple):
+    """A ROS map_server map as an image (design, "Grids").
+
+    Attributes
+    ----------
+    image : ndarray of uint8, shape (h, w)
+        Pixel values as a map_server image stores them (0 occupied, 205 unknown, 254 free in a
+        trinary map), row 0 at the top (largest y).
+    resolution : float
+        Metres per pixel.
+    origin : tuple of float
+        World position (x, y) of the lower-left corner of the lower-left pixel, metres.
+    """
+
+    image: npt.NDArray[np.uint8]
+    resolution: float
+    origin: tuple[float, float]
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """Left, right, bottom, top in metres (matplotlib's ``extent``)."""
+        h, w = self.image.shape
+        x0, y0 = self.origin
+        return x0, x0 + w * self.resolution, y0, y0 + h * self.resolution
+
+
+def read_grid_image(path: str | Path) -> GridImage:
+    """Read a ROS map_server map (``NAME.yaml`` beside its image) for drawing.
+
+    Minimal on purpose: ``image`` (relative to the YAML's folder), ``resolution`` and
+    ``origin`` ``[x, y, yaw]`` are read; ``negate: 1`` is undone so that dark is occupied in
+    every map; a rotated map (yaw ≠ 0) is refused.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the problem (missing file or key, bad value, an image
+        that cannot be read).
+    """
+    yaml_path = Path(path)
+    data = load_yaml(yaml_path)
+    if not isinstance(data, dict):
+        msg = f"{yaml_path}: expected a map_server YAML mapping (image, resolution, origin)"
+        raise InputError(msg)
+    missing = [key for key in ("image", "resolution", "origin") if key not in data]
+    if missing:
+        msg = f"{yaml_path}: missing {', '.join(missing)} (a map_server map needs all three)"
+        raise InputError(msg)
+    resolution = finite_number(data["resolution"])
+    if resolution is None or resolution <= 0:
+        msg = f"{yaml_path}: resolution must be a number > 0 (metres per pixel)"
+        raise InputError(msg)
+    origin = data["origin"]
+    values = ([finite_number(v) for v in origin] if isinstance(origin, list) else [])
+    if len(values) != 3 or any(v is None for v in values):
+        msg = f"{yaml_path}: origin must be [x, y, yaw], three numbers"
+        raise InputError(msg)
+    x0, y0, yaw = (float(v) for v in values if v is not None)
+    if yaw != 0.0:
+        msg = f"{yaml_path}: a rotated map (origin yaw {yaw:g}) is not supported"
+        raise InputError(msg)
+    image_path = yaml_path.parent / str(data["image"])
+    pil = require("PIL.Image", "plot", "Image maps")
+    try:
+        with pil.open(image_path) as picture:
+            image = np.asarray(picture.convert("L"), dtype=np.uint8)
+    except FileNotFoundError:
+        msg = f"{yaml_path}: image {image_path} does not exist"
+        raise InputError(msg) from None
+    except (OSError, ValueError) as err:
+        msg = f"{yaml_path}: cannot read image {image_path} ({err})"
+        raise InputError(msg) from None
+    if data.get("negate") in (1, True):
+        image = np.asarray(255 - image, dtype=np.uint8)
+    return GridImage(image, resolution, (x0, y0))
+
+
+def plot_grid(grid: GridImage, ax: Axes | None = None, **style: Any) -> list[Any]:
+    """Draw a map_server map in grey underneath everything else (occupied dark, free light)."""
+    ax = ax or new_axes()
+    options: dict[str, Any] = {"cmap": "gray", "vmin": 0, "vmax": 255, "origin": "upper",
+                               "interpolation": "nearest", "zorder": 0, "alpha": 0.6} | style
+    return [ax.imshow(grid.image, extent=grid.extent, **options)]
+
+
+class MapOrigins(NamedTuple):
+    """Where each map point's reading was heard from (see :func:`map_origins`).
+
+    Attributes
+    ----------
+    xy : ndarray, shape (n, 2)
+        Sensor origin of each point's reading, world frame, metres.
+    range : ndarray, shape (n,)
+        The reading's range r, metres.
+    """
+
+    xy: npt.NDArray[np.float64]
+    range: npt.NDArray[np.float64]
+
+
+def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
+                source: str = "readings") -> MapOrigins:
+    """Look up each map point's reading (``id`` = row of the readings it was made from).
+
+    Raises
+    ------
+    InputError
+        An ``id`` beyond the readings, or a point whose ``t`` or ``sensor`` differs from its
+        reading's: the map was not made from these readings (``source`` names them).
+    """
+    ids = points.reading_id
+    n = len(readings)
+    if len(ids) and int(ids.max()) >= n:
+        bad = int(np.argmax(ids >= n))
+        msg = (f"map point {bad} has id {int(ids[bad])} but {source} has {n} rows: "
+               "not the readings this map was made from")
+        raise InputError(msg)
+    # Times are compared loosely: a tool that rewrote one of the files may round them.
+    same = (np.abs(readings.t[ids] - points.t) <= _SAME_TIME) & (
+        readings.sensor[ids] == points.sensor)
+    if not np.all(same):
+        bad = int(np.argmin(same))
+        rid = int(ids[bad])
+        msg = (f"map point {bad} (id {rid}, t {float(points.t[bad])!r}, sensor "
+               f"{int(points.sensor[bad])}) does not match row {rid} of {source} (t "
+               f"{float(readings.t[rid])!r}, sensor {int(readings.sensor[rid])}): not the "
+               "readings this map was made from")
+        raise InputError(msg)
+    return MapOrigins(np.column_stack((readings.x[ids], readings.y[ids])), readings.range[ids])
+
+
+def _source_colors(source: npt.NDArray[np.int8]) -> list[str]:
+    return [SOURCE_COLORS[PointSource(int(code))] for code in source]
+
+
+def plot_error_bounds(points: LocalMap | GlobalMap, ax: Axes | None = None,
+                      **style: Any) -> list[Any]:
+    """Draw each point's ``max_error`` as a circle of that radius about it, coloured by source.
+
+    The bound (eq. 5.3 for arcs) says the true reflection lies within the circle. Points with
+    an infinite bound (ATM with ψ = 0) get no circle.
+    """
+    from matplotlib.collections import EllipseCollection
+
+    ax = ax or new_axes()
+    keep = np.isfinite(points.max_error)
+    if not np.any(keep):
+        return []
+    diameters = 2.0 * points.max_error[keep]
+    options: dict[str, Any] = {"facecolors": "none", "linewidths": 0.6, "alpha": 0.6,
+                               "zorder": 2} | style
+    circles = EllipseCollection(diameters, diameters, np.zeros(len(diameters)), units="xy",
+                                offsets=points.xy[keep], offset_transform=ax.transData,
+                                edgecolors=_source_colors(points.source[keep]), **options)
+    ax.add_collection(circles)
+    ax.autoscale_view()
+    return [circles]
+
+
+def plot_map_arcs(points: LocalMap | GlobalMap, origins: MapOrigins, ax: Axes | None = None,
+                  **style: Any) -> list[Any]:
+    """Draw each point's final arc, coloured by source.
+
+    The arc of a point is the circle of its reading's range about the sensor origin, over the
+    point's final angular width ``width`` centred on the point's bearing from the origin (the
+    carved interval of eq. 3.6 for carved points, the whole beam for centerline ones).
+    """
+    from matplotlib.collections import LineCollection
+
+    ax = ax or new_axes()
+    keep = np.isfinite(origins.range)
+    if not np.any(keep):
+        return []
+    o, r = origins.xy[keep], origins.range[keep]
+    delta = points.xy[keep] - o
+    bearing = np.arctan2(delta[:, 1], delta[:, 0])
+    half = 0.5 * points.width[keep]
+    tau = bearing[:, None] + half[:, None] * np.linspace(-1.0, 1.0, _ARC_SAMPLES)[None, :]
+    strips = np.stack((o[:, :1] + r[:, None] * np.cos(tau), o[:, 1:] + r[:, None] * np.sin(tau)),
+                      axis=-1)
+    options: dict[str, Any] = {"linewidths": 0.8, "alpha": 0.7, "zorder": 2} | style
+    lines = LineCollection(list(strips), colors=_source_colors(points.source[keep]), **options)
+    ax.add_collection(lines)
+    ax.autoscale_view()
+    return [lines]
+
+
+def plot_path(readings: ReadingBatch, ax: Axes | None = None, **style: Any) -> list[Any]:
+    """Draw the robot's path: the origins of each sensor's readings in time order, one line
+    per sensor (a ring of sonars draws a band of parallel lines)."""
+    from matplotlib.collections import LineCollection
+
+    ax = ax or new_axes()
+    lines = [np.column_stack((readings.x[mask], readings.y[mask]))
+             for mask in (readings.sensor == s for s in np.unique(readings.sensor))]
+    options: dict[str, Any] = {"colors": "0.3", "linewidths": 0.7, "zorder": 1,
+                               "label": "sensor paths"} | style
+    collection = LineCollection([line for line in lines if len(line) > 1], **options)
+    ax.add_collection(collection)
+    ax.autoscale_view()
+    return [collection]
+
+
+def plot_user_map(
+    points: LocalMap | GlobalMap,
+    ax: Axes | None = None,
+    *,
+    readings: ReadingBatch | None = None,
+    grid: GridImage | None = None,
+    error_bounds: bool = False,
+    arcs: bool = False,
+    title: str | None = None,
+) -> list[Any]:
+    """A map made from one's own data: points by source, optionally over a grid map, with the
+    sensor paths, error circles and final arcs.
+
+    Parameters
+    ----------
+    points : LocalMap or GlobalMap
+        The map (e.g. :func:`~sonarcarve.io.read_map_csv` of ``sonarcarve process`` output).
+    readings : ReadingBatch, optional
+        The readings the map was made from (needed for ``arcs``); draws the sensor paths.
+    grid : GridImage, optional
+        Drawn underneath (:func:`read_grid_image`).
+    error_bounds : bool
+        Draw each point's ``max_error`` circle (:func:`plot_error_bounds`).
+    arcs : bool
+        Draw each point's final arc (:func:`plot_map_arcs`); needs ``readings``.
+    title : str, optional
+        Default: the counts of points by source (and of readings).
+
+    Raises
+    ------
+    ValueError
+        ``arcs`` without ``readings``.
+    InputError
+        The map was not made from ``readings`` (:func:`map_origins`).
+    """
+    if arcs and readings is None:
+        msg = "drawing arcs needs the readings the map was made from"
+        raise ValueError(msg)
+    origins = map_origins(points, readings) if readings is not None else None
+    ax = ax or new_axes(8.0, 7.0)
+    ax.set_aspect("equal")
+    artists: list[Any] = []
+    if grid is not None:
+        artists += plot_grid(grid, ax)
+    if readings is not None:
+        artists += plot_path(readings, ax)
+    if arcs and origins is not None:
+        artists += plot_map_arcs(points, origins, ax)
+    if error_bounds:
+        artists += plot_error_bounds(points, ax)
+    artists += plot_map(points, ax, size=6.0, legend=False)
+    if artists:
+        ax.legend(loc="best", fontsize="small", markerscale=2)
+    if title is None:
+        counts = ", ".join(f"{points.count(source):,} {source.label}" for source in PointSource)
+        title = f"{len(points):,} points ({counts})"
+        if readings is not None:
+            title += f" from {len(readings):,} readings"
+    ax.set_title(title, fontsize="medium")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    return artists
+
+
+#: Figure formats :func:`save_figure` writes, by file suffix.
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def save_figure(ax: Axes, path: str | Path, *, dpi: int = 150) -> None:
+    """Write the figure of ``ax`` atomically (format from the suffix: .png, .svg or .pdf) and
+    close it.
+
+    Raises
+    ------
+    ValueError
+        Another suffix.
+    OutputError
+        The file cannot be written (the message names it and the reason).
+    """
+    import matplotlib.pyplot as plt
+
+    target = Path(path)
+    kind = target.suffix.lower().removeprefix(".")
+    figure = ax.get_figure(root=True)
+    try:
+        if kind not in FIGURE_FORMATS:
+            msg = f"{target}: expected a .png, .svg or .pdf file name"
+            raise ValueError(msg)
+        if figure is None:  # an axes always has a figure; mypy does not know
+            msg = "the axes belong to no figure"
+            raise ValueError(msg)
+        with atomic_path(target, suffix=f".{kind}") as tmp:
+            figure.savefig(tmp, format=kind, dpi=dpi)
+    finally:
+        if figure is not None:
+            plt.close(figure)

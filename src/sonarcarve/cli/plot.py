@@ -1,0 +1,104 @@
+"""``sonarcarve plot``: draw a map made with ``sonarcarve process``, without writing code."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.extras import require
+from sonarcarve.filters import confidence_mask
+from sonarcarve.io import read_map_csv
+from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.readings_csv import read_readings_csv
+from sonarcarve.plotting import (
+    FIGURE_FORMATS,
+    map_origins,
+    new_axes,
+    plot_user_map,
+    read_grid_image,
+    save_figure,
+)
+
+__all__ = ["plot"]
+
+
+class PlotUsageError(SonarcarveError):
+    """Options of ``sonarcarve plot`` that do not go together or are out of range."""
+
+
+@app.command()
+def plot(
+    map_csv: Annotated[Path, typer.Argument(
+        metavar="MAP.csv",
+        help="A map CSV as `sonarcarve process` writes it "
+             "(`id,t,sensor,x,y,source,width,max_error[,confidence]`).")],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", metavar="FIGURE.png",
+        help="Where to write the figure: .png, .svg or .pdf. Its folder must exist.")],
+    readings: Annotated[Path | None, typer.Option(
+        "--readings", "-r", metavar="READINGS.csv",
+        help="The readings the map was made from: draws the robot's path (each sensor's "
+             "origins over time) and lets --arcs draw each point's arc.")] = None,
+    grid: Annotated[Path | None, typer.Option(
+        "--grid", "-g", metavar="GRID.yaml",
+        help="A ROS map_server map (YAML beside its image) drawn underneath, in grey.")] = None,
+    error_bars: Annotated[bool, typer.Option(
+        "--error-bars",
+        help="Draw each point's error bound max_error as a circle of that radius.")] = False,
+    arcs: Annotated[bool, typer.Option(
+        "--arcs",
+        help="Draw each point's final arc (its reading's range about the sensor, `width` "
+             "wide, centred on the point); needs --readings.")] = False,
+    confidence_min: Annotated[float | None, typer.Option(
+        "--confidence-min", metavar="C",
+        help="Keep only points whose confidence is at least C, in [0, 1]; points without a "
+             "confidence (methods that do not model it) are kept.")] = None,
+    title: Annotated[str | None, typer.Option(
+        help="The figure's title (default: the counts of points by source).")] = None,
+) -> None:
+    """Draw a map CSV to a figure: points coloured by source, the robot's path, a grid map.
+
+    Points are coloured by the model that placed them (centerline, carved, atm); on request
+    each point's error bound (--error-bars) and final arc (--arcs, with --readings) are drawn
+    too. Axes are in metres, with equal scale.
+
+    Examples:
+
+    - `sonarcarve plot map.csv --out map.png`: the points alone.
+    - `sonarcarve plot map.csv --readings readings.csv --arcs --out map.png`: with the path
+      and each point's arc.
+    - `sonarcarve plot map.csv --grid building.yaml --error-bars --out map.png`: over a ROS map.
+    """
+    if arcs and readings is None:
+        msg = "--arcs needs --readings, the readings CSV the map was made from"
+        raise PlotUsageError(msg)
+    if confidence_min is not None and not 0.0 <= confidence_min <= 1.0:
+        msg = f"--confidence-min must lie in [0, 1], got {confidence_min:g}"
+        raise PlotUsageError(msg)
+    if out.suffix.lower().removeprefix(".") not in FIGURE_FORMATS:
+        msg = f"--out {out}: expected a .png, .svg or .pdf file name"
+        raise PlotUsageError(msg)
+    inputs = [path for path in (map_csv, readings, grid) if path is not None]
+    check_output_file(out, inputs=inputs, label=f"--out {out}")
+    require("matplotlib", "plot", "Figures")
+    points = read_map_csv(map_csv)
+    total = len(points)
+    if confidence_min is not None:
+        points = points.select(confidence_mask(points.confidence, confidence_min))
+    batch = read_readings_csv(readings) if readings is not None else None
+    image = read_grid_image(grid) if grid is not None else None
+    if batch is not None:
+        map_origins(points, batch, source=str(readings))  # refuses another log's readings
+    ax = new_axes(8.0, 7.0)
+    plot_user_map(points, ax, readings=batch, grid=image, error_bounds=error_bars, arcs=arcs,
+                  title=title)
+    save_figure(ax, out)
+    rows = [("points in map", f"{total:,}")]
+    if confidence_min is not None:
+        rows.append((f"dropped: confidence < {confidence_min:g}", f"{total - len(points):,}"))
+    rows += [("points drawn", f"{len(points):,}"), ("figure written to", str(out))]
+    console.print(summary_table("sonarcarve plot", rows))

@@ -1,0 +1,133 @@
+"""``sonarcarve view``: a run as a Rerun recording, opened in the viewer when there is one."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.extras import require
+from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.readings_csv import read_readings_csv
+from sonarcarve.io.rerun_out import DEFAULT_EVERY, write_rerun
+from sonarcarve.methods import make_method
+from sonarcarve.typing import FloatArray
+
+__all__ = ["find_viewer", "open_viewer", "view"]
+
+#: The suffix of the truth file ``sonarcarve simulate`` writes beside its readings.
+_TRUTH_SUFFIX = ".truth.json"
+
+
+class ViewUsageError(SonarcarveError):
+    """A ``sonarcarve view`` option out of range."""
+
+
+@app.command()
+def view(
+    readings: Annotated[Path, typer.Argument(
+        metavar="READINGS.csv",
+        help="Readings CSV (`t,sensor,x,y,theta,range[,beam_width]`), e.g. from "
+             "`sonarcarve simulate` or `sonarcarve convert`.")],
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", metavar="RUN.rrd",
+        help="Where to save the recording. Default: beside the readings, NAME.rrd.",
+        show_default=False)] = None,
+    method: Annotated[str, typer.Option(
+        "--method", "-m", metavar="NAME",
+        help="centerline | carve | atm | combined.")] = "combined",
+    world: Annotated[str | None, typer.Option(
+        "--world", "-w", metavar="WORLD",
+        help="Draw this world's walls (built-in name, random:SEED, walls .json, ROS map "
+             ".yaml). Default: the walls of NAME.truth.json beside a simulated log, if "
+             "any.")] = None,
+    every: Annotated[int, typer.Option(
+        metavar="READINGS",
+        help="Log the local map, the carved arcs and the path every this many "
+             "readings.")] = DEFAULT_EVERY,
+    open_: Annotated[bool, typer.Option(
+        "--open/--no-open",
+        help="Open the recording in the Rerun viewer when one can be started (a display "
+             "and the `rerun` program).")] = True,
+) -> None:
+    """Record a run for the Rerun viewer: robot path, each reading's arc, the map growing.
+
+    The readings are mapped with one method; the recording (a `.rrd` file) has, on a `time`
+    timeline in the readings' seconds, the sensor origins and their paths, each new reading's
+    beam, every arc in the history as carved so far and the local map coloured by source
+    (point size: the error bound), the global map at the end, and the true walls of a
+    simulated run. It opens in the viewer when one can be started; otherwise the command says
+    where it saved it (open it later with `rerun RUN.rrd`).
+
+    Example: `sonarcarve view run.csv --method carve --out run.rrd`
+    """
+    if every < 1:
+        msg = f"--every must be at least 1 reading, got {every}"
+        raise ViewUsageError(msg)
+    target = out if out is not None else readings.with_suffix(".rrd")
+    check_output_file(target, inputs=[readings], label=f"--out {target}")
+    sonar = make_method(method)
+    require("rerun", "viz", "Rerun recordings")
+    walls = _walls(readings, world)
+    batch = read_readings_csv(readings)
+    global_map = write_rerun(target, batch, sonar, walls=walls, every=every)
+    viewer = find_viewer() if open_ else None
+    rows = [("readings", f"{len(batch):,}"), ("points in global map", f"{len(global_map):,}"),
+            ("true walls", f"{len(walls):,}" if walls is not None else "none"),
+            ("recording saved to", str(target))]
+    if viewer is not None:
+        open_viewer(viewer, target)
+        rows.append(("opened in", str(viewer)))
+    console.print(summary_table(f"sonarcarve view --method {method}", rows))
+    if viewer is None:
+        reason = "" if open_ else " (--no-open)"
+        console.print(f"no viewer opened{reason}; open the recording with `rerun {target}`")
+
+
+def _walls(readings: Path, world: str | None) -> FloatArray | None:
+    """The walls of ``--world``, else of the truth file beside a simulated log, else None.
+
+    The simulator is imported only here, only when there is a world to read.
+    """
+    if world is not None:
+        from sonarcarve.sim.world import load_world
+
+        return load_world(world).segments
+    stem = readings.name[: -len(readings.suffix)] if readings.suffix else readings.name
+    truth = readings.with_name(stem + _TRUTH_SUFFIX)
+    if not truth.is_file():
+        return None
+    from sonarcarve.sim.truth import read_truth_json
+
+    return read_truth_json(truth).world.segments
+
+
+def find_viewer() -> Path | None:
+    """The ``rerun`` program, if a viewer window could be opened here; otherwise None.
+
+    Needs a display (``DISPLAY`` or ``WAYLAND_DISPLAY``, or macOS / Windows) and the ``rerun``
+    program on the ``PATH`` or beside this Python. Nothing is started, so this never hangs.
+    """
+    has_display = (sys.platform in ("darwin", "win32") or bool(os.environ.get("DISPLAY"))
+                   or bool(os.environ.get("WAYLAND_DISPLAY")))
+    if not has_display:
+        return None
+    beside = Path(sys.executable).parent / ("rerun.exe" if sys.platform == "win32" else "rerun")
+    if beside.is_file() and os.access(beside, os.X_OK):
+        return beside
+    found = shutil.which("rerun")
+    return Path(found) if found is not None else None
+
+
+def open_viewer(viewer: Path, recording: Path) -> None:
+    """Start ``viewer`` on ``recording`` in the background, detached from this process."""
+    subprocess.Popen([str(viewer), str(recording)], stdin=subprocess.DEVNULL,
+                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                     start_new_session=True)

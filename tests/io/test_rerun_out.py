@@ -1,0 +1,111 @@
+"""Rerun recordings: written whole, read back with rerun's own loader."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from sonarcarve.io.rerun_out import write_rerun
+from sonarcarve.methods import make_method
+from sonarcarve.pipeline import process_readings
+from sonarcarve.readings import ReadingBatch, ReadingsError
+
+rerun_chunk = pytest.importorskip("rerun.chunk")
+
+N = 23
+
+
+def _readings() -> ReadingBatch:
+    """Two sensors on a robot driving along +x past a wall at y = 2."""
+    sensor = np.arange(N) % 2
+    return ReadingBatch.from_arrays(t=0.1 * np.arange(N), sensor=sensor, x=0.05 * np.arange(N),
+                                    y=np.zeros(N), theta=np.where(sensor == 0, math.pi / 2, 1.2),
+                                    range=np.where(sensor == 0, 2.0, 2.0 / math.sin(1.2)))
+
+
+def _chunks(path: Path) -> dict[str, list[Any]]:
+    """Chunks of the recording by entity path, as rerun's own reader gives them."""
+    by_entity: dict[str, list[Any]] = {}
+    for chunk in rerun_chunk.RrdReader(path).stream().to_chunks():
+        by_entity.setdefault(str(chunk.entity_path), []).append(chunk)
+    return by_entity
+
+
+def _rows(chunks: list[Any]) -> int:
+    return sum(chunk.num_rows for chunk in chunks)
+
+
+def test_recording_reads_back_with_every_entity_on_the_time_timeline(tmp_path: Path) -> None:
+    path = tmp_path / "run.rrd"
+    walls = np.array([[-1.0, 2.0, 3.0, 2.0]])
+    global_map = write_rerun(path, _readings(), make_method("combined"), walls=walls, every=5)
+    chunks = _chunks(path)
+    for entity in ("reading", "robot/sensors", "robot/path", "arcs", "map", "global_map",
+                   "walls"):
+        assert f"/world/{entity}" in chunks, entity
+    assert _rows(chunks["/world/reading"]) == N
+    assert _rows(chunks["/world/robot/sensors"]) == N
+    assert _rows(chunks["/world/map"]) == math.ceil(N / 5)  # every 5 readings and the last
+    assert _rows(chunks["/world/arcs"]) == math.ceil(N / 5)
+    (walls_chunk,) = chunks["/world/walls"]
+    assert walls_chunk.is_static
+    for chunk in chunks["/world/map"]:
+        assert {"time", "reading"} <= set(chunk.timeline_names)
+    # The global map logged at the end is the one process would write.
+    expected = process_readings(_readings(), make_method("combined")).global_map
+    np.testing.assert_array_equal(global_map.xy, expected.xy)
+    batch = chunks["/world/global_map"][0].to_record_batch()
+    positions = batch.column("Points2D:positions").to_pylist()[0]
+    np.testing.assert_allclose(np.array(positions), expected.xy, rtol=1e-6)  # float32 on disk
+
+
+def test_times_are_the_readings_seconds(tmp_path: Path) -> None:
+    path = tmp_path / "run.rrd"
+    write_rerun(path, _readings(), make_method("carve"))
+    (chunk,) = _chunks(path)["/world/reading"]
+    times = chunk.to_record_batch().column("time").to_numpy()
+    # A duration timeline, stored in nanoseconds.
+    np.testing.assert_allclose(times.astype("int64") / 1e9, 0.1 * np.arange(N), atol=1e-9)
+
+
+def test_a_bad_reading_or_every_writes_nothing(tmp_path: Path) -> None:
+    path = tmp_path / "run.rrd"
+    with pytest.raises(ValueError, match="every must be at least 1"):
+        write_rerun(path, _readings(), make_method("carve"), every=0)
+    readings = _readings()
+    readings.range[3] = -1.0  # a batch is a value; this one is broken on purpose
+    with pytest.raises(ReadingsError):
+        write_rerun(path, readings, make_method("carve"))
+    assert list(tmp_path.iterdir()) == []
+
+
+class _Failing:
+    """A method that breaks halfway through the log."""
+
+    def __init__(self) -> None:
+        self.inner = make_method("carve")
+
+    def add(self, reading: Any, reading_id: int | None = None) -> None:
+        if reading_id == N // 2:
+            msg = "broken halfway"
+            raise RuntimeError(msg)
+        self.inner.add(reading, reading_id)
+
+    def local_map(self) -> Any:
+        return self.inner.local_map()
+
+    def finish(self) -> Any:
+        return self.inner.finish()
+
+
+def test_a_run_failing_halfway_leaves_an_existing_file_as_it_was(tmp_path: Path) -> None:
+    path = tmp_path / "run.rrd"
+    path.write_bytes(b"old")
+    with pytest.raises(RuntimeError, match="broken halfway"):
+        write_rerun(path, _readings(), _Failing(), every=1)
+    assert path.read_bytes() == b"old"
+    assert list(tmp_path.iterdir()) == [path]
