@@ -31,7 +31,9 @@ def test_glancing_newer_beam_does_not_delete_a_true_echo() -> None:
     first = _reading(0.0, 0.0, 0.0, 0.0, 1.0)
     glancing = _reading(0.1, 0.0, 0.9, -0.7, 3.0, sensor=1)
     paper = make_method("carve")
-    evidence = make_method("evidence")
+    # The carving alone (confidence filter off): a lone echo never heard again loses
+    # confidence as it matures whether or not a glancing beam passed it.
+    evidence = make_method("evidence", MethodConfig(min_confidence=0.0))
     for method in (paper, evidence):
         method.add(first)
         method.add(glancing)
@@ -40,11 +42,14 @@ def test_glancing_newer_beam_does_not_delete_a_true_echo() -> None:
 
 
 def test_crosstalk_echo_in_open_space_is_removed() -> None:
-    # Facing a wall 3 m away; one phantom at 1 m (crosstalk), then the same sensor again.
+    # Facing a wall 3 m away, heard by several sensors (distinct viewpoints confirm it); one
+    # phantom at 1 m (crosstalk) among them; the ring goes on for a second (its confidence
+    # matures: a fresh point is shown at once).
     method = make_method("evidence")
-    readings = [_reading(0.05 * k, 0.0, 0.02 * k, 0.0, 3.0) for k in range(3)]
+    readings = [_reading(0.05 * k, 0.0, 0.02 * k, 0.0, 3.0, k + 1) for k in range(3)]
     readings.append(_reading(0.15, 0.0, 0.06, 0.0, 1.0))
-    readings += [_reading(0.2 + 0.05 * k, 0.0, 0.08 + 0.02 * k, 0.0, 3.0) for k in range(3)]
+    readings += [_reading(0.2 + 0.05 * k, 0.0, 0.08 + 0.02 * k, 0.0, 3.0, k % 6 + 1)
+                 for k in range(30)]
     for reading in readings:
         method.add(reading)
     ids = _ids(method)
@@ -116,3 +121,27 @@ def test_stamp_error_widens_every_bound() -> None:
             method.add(reading)
         maps.append(method.local_map())
     np.testing.assert_allclose(maps[1].max_error, maps[0].max_error + 0.1)
+
+
+def test_repeated_looks_from_one_place_are_not_distinct_viewpoints() -> None:
+    # The same sensor from (almost) the same place hears the same range again: support, but not
+    # from a distinct viewpoint; another sensor hearing it does confirm it.
+    method = make_method("evidence")
+    assert isinstance(method, EvidenceMethod)
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+    method.add(_reading(0.05, 0.0, 0.01, 0.0, 2.0, sensor=0))
+    first = int(method.history.slots()[0])
+    assert model.support[first].max() > 0.0
+    assert model.viewpoints[first] == 0.0
+    method.add(_reading(0.1, 0.0, 0.1, 0.0, 2.0, sensor=1))
+    assert model.viewpoints[first] > 0.0
+
+
+def test_a_fresh_point_has_the_fresh_confidence() -> None:
+    method = make_method("evidence")
+    assert isinstance(method, EvidenceMethod)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0))
+    fresh = method.confidence_model.fresh
+    np.testing.assert_allclose(method.local_map().confidence, 1.0 / (1.0 + math.exp(-fresh)))

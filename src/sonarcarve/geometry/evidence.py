@@ -104,6 +104,10 @@ class EvidenceParams(NamedTuple):
         cos ψ of ATM's minimum transversal angle (crossings kept when ``|cos γ| ≤ cos ψ``).
     protect : float
         Factor in [0, 1] on a newer reading's evidence against an established bin.
+    viewpoint_spacing : float
+        Metres: a reading of the same sensor counts as a distinct viewpoint of an arc only when
+        its origin is at least this far from the arc's (repeated looks from one place at one
+        phantom do not confirm it).
     """
 
     tolerance: float
@@ -118,6 +122,7 @@ class EvidenceParams(NamedTuple):
     establish: float
     cos_psi: float
     protect: float
+    viewpoint_spacing: float
 
 
 def evidence_threshold(carve_probability: float) -> float:
@@ -229,6 +234,7 @@ def _bin_of(rel: float, half: float, width: float, bins: int) -> int:
 def evidence_add(
     slot: int, older: SlotArray,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -246,6 +252,17 @@ def evidence_add(
         Live older rows, oldest first.
     x, y, r, theta, beam_width : ndarray, shape (n,)
         The history's rows (metres, radians).
+    sensor : ndarray of int64, shape (n,)
+        The history's sensor index per row.
+    viewpoints : ndarray, shape (n,)
+        Support from distinct viewpoints per arc: the sum, over newer or older readings of
+        another sensor or from an origin at least ``viewpoint_spacing`` away whose echo circle
+        passes through the arc, of the largest ``P_detect`` of that support (updated in place).
+    looked : ndarray, shape (n,)
+        "Looked through" evidence per arc: ``-log(1 - P)`` summed over distinct viewpoints
+        whose free sector covers a bin still alive, ``P`` the largest detection over those bins
+        *without* the incidence factor (a phantom in open space has no surface to be glancing
+        at; how much this says about a real surface is left to the confidence fit).
     bx, by, ex, ey : ndarray, shape (n, K)
         Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
     free, support : ndarray, shape (n, K)
@@ -300,13 +317,25 @@ def evidence_add(
     status[slot] = EVIDENCE_ALIVE
     touched[slot] = False
     occluded[slot] = 0.0
+    viewpoints[slot] = 0.0
+    looked[slot] = 0.0
     counts[slot] = 0
+    spacing2 = params.viewpoint_spacing * params.viewpoint_spacing
 
     threshold = params.threshold
     free_r = rj - params.tolerance
     reach = rj + params.support_tolerance
     sin_half_j = math.sin(half_j)
     cos_half_j = cos_half[slot]
+    cos_half_j2 = cos_half_j * cos_half_j
+    reach2 = reach * reach
+    edge_loss = 1.0 - params.edge_gain
+    inv_scale = 1.0 / params.range_scale
+    # Unit vectors of the beam's two edges (lower, upper).
+    u1x = cj * cos_half_j + sj * sin_half_j
+    u1y = sj * cos_half_j - cj * sin_half_j
+    u2x = cj * cos_half_j - sj * sin_half_j
+    u2y = sj * cos_half_j + cj * sin_half_j
     cos_full = math.cos(params.incidence_full)
     cos_zero = math.cos(params.incidence_zero)
     fully = 0
@@ -315,20 +344,26 @@ def evidence_add(
     for i in older:
         if status[i] != EVIDENCE_ALIVE:
             continue
-        # Cull: the arc's circle beyond the reach of j's echo circle, or behind j.
+        # Cull: the arc's circle beyond the reach of j's echo circle, or clear of one of the
+        # two half-planes whose intersection is j's beam (φ < π; as geometry/bounds.py).
         dcx = circle[i, 0] - xj
         dcy = circle[i, 1] - yj
         rho = circle[i, 2]
         dc2 = dcx * dcx + dcy * dcy
         if dc2 >= (reach + rho) * (reach + rho):
             continue
-        if dcx * cj + dcy * sj < -rho:
+        if u1x * dcy - u1y * dcx < -rho or dcx * u2y - dcy * u2x < -rho:
             continue
         if with_atm:
             crossings += _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
                                     params.cos_psi, bearings, counts)
         step_i = beam_width[i] / bins
         alive_bins = 0
+        ox = x[i] - xj
+        oy = y[i] - yj
+        distinct = sensor[i] != sensor[slot] or ox * ox + oy * oy >= spacing2
+        top_support = 0.0
+        top_looked = 0.0
         for k in range(bins):
             f = free[i, k]
             if f >= threshold:
@@ -336,19 +371,24 @@ def evidence_add(
             vx = bx[i, k] - xj
             vy = by[i, k] - yj
             d2 = vx * vx + vy * vy
-            if d2 >= reach * reach:
+            along = vx * cj + vy * sj
+            # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
+            if d2 >= reach2 or along <= 0.0 or along * along < d2 * cos_half_j2:
                 alive_bins += 1
                 continue
             d = math.sqrt(d2)
-            along = vx * cj + vy * sj
-            if along < d * cos_half_j or d <= 0.0:
+            if d >= free_r and abs(d - rj) > params.support_tolerance:
                 alive_bins += 1
                 continue
-            p = detect_probability(vx, vy, ex[i, k], ey[i, k], cj, sj, sin_half_j,
-                                   params.edge_gain, cos_full, cos_zero, params.rough,
-                                   params.max_detect, params.range_scale)
+            # detect_probability, inlined: beam and range (p_any), then incidence.
+            u = min(abs(vx * sj - vy * cj) / (d * sin_half_j), 1.0)
+            p_beam = params.max_detect * (1.0 - edge_loss * u * u) / (1.0 + d * inv_scale)
+            cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) / d
+            p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, params.rough)
             if d < free_r:
                 touched[i] = True
+                if distinct:
+                    top_looked = max(top_looked, p_beam)
                 established = (support[i, k] >= params.establish and f < 0.5 * threshold)
                 if established and d < free_r - params.tolerance:
                     # An established surface j looked past at a glancing angle: the bins of j
@@ -368,12 +408,17 @@ def evidence_add(
                     alive_bins += 1
             else:
                 alive_bins += 1
-                if abs(d - rj) <= params.support_tolerance:
-                    touched[i] = True
-                    touched[slot] = True
-                    support[i, k] += p
-                    rel = math.atan2(cj * vy - sj * vx, along)
-                    support[slot, _bin_of(rel, half_j, step_j, bins)] += p
+                touched[i] = True
+                touched[slot] = True
+                support[i, k] += p
+                top_support = max(top_support, p)
+                rel = math.atan2(cj * vy - sj * vx, along)
+                support[slot, _bin_of(rel, half_j, step_j, bins)] += p
+        if distinct:
+            viewpoints[i] += top_support
+            viewpoints[slot] += top_support
+            if top_looked > 0.0:
+                looked[i] += -math.log1p(-top_looked)
         if alive_bins == 0:
             status[i] = EVIDENCE_CARVED
             fully += 1

@@ -16,10 +16,12 @@ Per arc (see the geometry module for the equations):
   covering every surviving run (honest: the echo may lie in any of them);
 * ATM crossings counted only inside the kept run; a crossing confirms the run and, when its
   bound is smaller, places the point (``source = atm``);
-* a confidence per point, ``σ(logit(prior) + a_s min(S, 2) + a_x min(X, 3) - a_f F - a_r (runs
-  - 1))`` with S the run's support, X its crossings, F its mean free evidence in units of T;
-  points below ``min_confidence`` are left out of the maps (the default map), so "removed"
-  means: not in the map the method outputs.
+* a confidence per point: a logistic model of the evidence the arc has gathered (support,
+  support from distinct viewpoints, crossings, free and looked-through evidence, runs,
+  occlusion, range, width; :class:`ConfidenceModel`), its weights fitted on the simulator's
+  truth of one world (``benchmarks/fit_confidence.py``); points below ``min_confidence`` are
+  left out of the maps (the default map), so "removed" means: not in the map the method
+  outputs.
 
 ``processed`` (Table I) is: received evidence (free, support or occlusion) or has a crossing.
 """
@@ -54,7 +56,8 @@ from sonarcarve.methods.config import (
 )
 from sonarcarve.typing import SlotArray
 
-__all__ = ["ConfidenceModel", "EvidenceMethod", "EvidenceModel", "SensorModel"]
+__all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
+           "SensorModel"]
 
 
 @dataclass(frozen=True)
@@ -77,37 +80,83 @@ class SensorModel:
     support_tolerance: float = 0.05
     establish: float = 1.0
     protect: float = 0.5
+    viewpoint_spacing: float = 0.25
+
+
+#: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
+#: docstring): each is known when the arc is committed, and for the local map at any time.
+CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
+                       "occluded", "unheard", "range", "width")
 
 
 @dataclass(frozen=True)
 class ConfidenceModel:
-    """Logistic confidence of a point (module docstring); coefficients per unit of evidence."""
+    """Logistic confidence of a point: ``σ(fresh + m (intercept + Σ w_f x_f - fresh))``, ``m``
+    the maturity.
 
-    prior: float = 0.7
-    support_weight: float = 1.0
-    crossing_weight: float = 0.5
-    free_weight: float = 2.5
-    split_weight: float = 0.5
-    occluded_weight: float = 3.0
-    unheard_weight: float = 2.0
-    unheard_time: float = 1.0
+    The features (:data:`CONFIDENCE_FEATURES`, see :meth:`EvidenceMethod.features`) are the
+    evidence an arc has gathered: ``support`` (largest bin support in the kept run, capped at
+    3), ``viewpoints`` (support from distinct viewpoints, capped at 3), ``crossings`` (ATM
+    crossings in the kept run, capped at 3), ``free`` (mean free evidence over the kept run in
+    units of T), ``looked`` (looked-through evidence from distinct viewpoints in units of T,
+    capped at 3), ``split`` (surviving runs - 1, capped at 3), ``occluded`` (share of the beam
+    carved by occlusion), ``unheard`` (never supported, times the maturity), ``range``
+    (metres) and ``width`` (kept run over the full beam).
 
-    def confidence(self, support: np.ndarray, crossings: np.ndarray, free: np.ndarray,
-                   runs: np.ndarray, occluded: np.ndarray, age: np.ndarray) -> np.ndarray:
-        """Probability that each point is a real surface.
+    Maturity: the features are fitted on arcs as they leave the history, when the ring has
+    looked again many times; a fresh arc has had no chance to be supported or seen through. So
+    the logit moves from ``fresh`` (the log-odds of the share of direct echoes among the
+    training arcs: what is known of an arc before any evidence) to the fitted one as the arc
+    ages, linearly over ``maturity_time`` seconds (about one cycle of a Scout-class ring): a
+    fresh point is shown at once, so no latency is added.
 
-        ``age`` is the time since the reading, seconds: a real surface is heard again by the
-        next cycles of the ring (support), so a point never supported loses confidence over
-        ``unheard_time`` (a fresh point keeps the prior: no latency).
-        """
-        unheard = (support <= 0.0) * np.clip(age / self.unheard_time, 0.0, 1.0)
-        logit = (math.log(self.prior / (1.0 - self.prior))
-                 - self.unheard_weight * unheard
-                 + self.support_weight * np.minimum(support, 2.0)
-                 + self.crossing_weight * np.minimum(crossings, 3.0)
-                 - self.free_weight * free
-                 - self.split_weight * np.maximum(runs - 1.0, 0.0)
-                 - self.occluded_weight * occluded)
+    The default weights were fitted by logistic regression on the simulator's truth (direct
+    echo or spurious) of the arcs with a surviving piece when they left the history, on ONE
+    world and physics (office tour, specular physics, seeds 0-2, library defaults otherwise)::
+
+        .venv/bin/python benchmarks/fit_confidence.py
+
+    and are checked on the other worlds and on the amplitude physics by
+    ``benchmarks/evidence.py``.
+    """
+
+    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,631 arcs.
+    intercept: float = -3.013
+    support: float = 0.265
+    viewpoints: float = 1.844
+    crossings: float = 1.069
+    free: float = -0.125
+    looked: float = 0.298
+    split: float = -0.841
+    occluded: float = -0.373
+    unheard: float = -0.240
+    range: float = -0.042
+    width: float = 0.554
+    fresh: float = 2.412  # log-odds of the 91.8 % direct share of the training arcs
+    maturity_time: float = 1.0
+
+    def weights(self) -> np.ndarray:
+        """The weights in :data:`CONFIDENCE_FEATURES` order, shape (F,)."""
+        return np.array([getattr(self, name) for name in CONFIDENCE_FEATURES])
+
+    @classmethod
+    def from_weights(cls, intercept: float, weights: np.ndarray, fresh: float,
+                     maturity_time: float = 1.0) -> ConfidenceModel:
+        """The model with ``weights`` (shape (F,), :data:`CONFIDENCE_FEATURES` order)."""
+        named = {name: float(w) for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True)}
+        return cls(intercept=float(intercept), fresh=float(fresh),
+                   maturity_time=maturity_time, **named)
+
+    def maturity(self, age: np.ndarray) -> np.ndarray:
+        """``clip(age / maturity_time, 0, 1)``, ``age`` in seconds."""
+        return np.asarray(np.clip(age / self.maturity_time, 0.0, 1.0))
+
+    def confidence(self, features: np.ndarray, maturity: np.ndarray | float = 1.0,
+                   ) -> np.ndarray:
+        """Probability that each point is a real surface; ``features`` shape (n, F),
+        ``maturity`` in [0, 1] (:meth:`maturity`)."""
+        fitted = self.intercept + features @ self.weights()
+        logit = self.fresh + maturity * (fitted - self.fresh)
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
 
 
@@ -152,6 +201,7 @@ class EvidenceModel(ArcModel):
             threshold=self.threshold,
             establish=sensor.establish if with_occlusion else math.inf,
             cos_psi=math.cos(min_transversal), protect=sensor.protect,
+            viewpoint_spacing=sensor.viewpoint_spacing,
         )
         size = history.storage_size
         self.bx = np.zeros((size, bins))
@@ -167,6 +217,8 @@ class EvidenceModel(ArcModel):
         self.status = np.zeros(size, dtype=np.int8)
         self.touched = np.zeros(size, dtype=bool)
         self.occluded = np.zeros(size)
+        self.viewpoints = np.zeros(size)
+        self.looked = np.zeros(size)
         columns = max(1, 4 * (history.capacity - 1)) if with_atm else 1
         self.bearings = np.zeros((size, columns), dtype=np.float32)
         self.counts = np.zeros(size, dtype=np.int32)
@@ -178,7 +230,8 @@ class EvidenceModel(ArcModel):
         """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs."""
         h = self.history
         fully, crossings, occluding = evidence_add(
-            slot, older, h.x, h.y, h.r, h.theta, h.beam_width, self.bx, self.by, self.ex,
+            slot, older, h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints,
+            self.looked, self.bx, self.by, self.ex,
             self.ey, self.free, self.support, self.circle, self.cos_axis, self.sin_axis,
             self.cos_half, self.status, self.touched, self.occluded, self.bearings,
             self.counts, self.params, self.with_atm,
@@ -290,16 +343,43 @@ class EvidenceMethod(SonarMethod):
                               with_atm=self.with_atm, with_occlusion=self.with_occlusion,
                               sensor=self.sensor),)
 
+    def features(self, slots: SlotArray,
+                 raw: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
+        """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`).
+        """
+        model = self.models[0]
+        assert isinstance(model, EvidenceModel)
+        raw = model.raw(slots) if raw is None else raw
+        _, _, width, _, support, _, crossings, free, runs, _ = raw
+        h = self.history
+        unheard = (support <= 0.0) * self.maturity(slots)
+        return np.column_stack([
+            np.minimum(support, 3.0),
+            np.minimum(model.viewpoints[slots], 3.0),
+            np.minimum(crossings, 3.0),
+            free,
+            np.minimum(model.looked[slots] / model.threshold, 3.0),
+            np.minimum(np.maximum(runs - 1.0, 0.0), 3.0),
+            model.occluded[slots],
+            unheard,
+            h.r[slots],
+            width / h.beam_width[slots],
+        ])
+
+    def maturity(self, slots: SlotArray) -> np.ndarray:
+        """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,)."""
+        age = self._last_t - self.history.t[slots] if self._readings else np.zeros(len(slots))
+        return self.confidence_model.maturity(age)
+
     def estimates(self, slots: SlotArray) -> Estimates:
         """The model's points with their confidence; low-confidence points are not alive."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots)
-        has, _, _, _, support, _, crossings, free, runs, _ = raw
+        has = raw[0]
         base = model.estimates_from_raw(slots, raw)
-        age = self._last_t - self.history.t[slots] if self._readings else np.zeros(len(slots))
-        confidence = self.confidence_model.confidence(
-            support, crossings, free, runs, model.occluded[slots], age)
+        confidence = self.confidence_model.confidence(self.features(slots, raw),
+                                                      self.maturity(slots))
         alive = has & (confidence >= self.config.min_confidence)
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,

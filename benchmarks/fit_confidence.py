@@ -1,0 +1,189 @@
+"""Fit evidence carving's confidence by logistic regression on the simulator's truth.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/fit_confidence.py
+
+Training data: ONE world and physics (default: the office tour, specular physics, seeds 0-2).
+Each arc that leaves the history with a surviving piece is one sample: its features at that
+moment (:meth:`~sonarcarve.methods.evidence.EvidenceMethod.features`, the order of
+:data:`~sonarcarve.methods.evidence.CONFIDENCE_FEATURES`) and its label, 1 for a direct echo and
+0 for a spurious one (crosstalk, floor, multipath). The weights minimise the mean log-loss plus
+a small ridge (``--ridge``) by Newton's method (numpy only). A ``min_confidence`` is then
+chosen by one rule on the same training data: the largest threshold, on a 0.05 grid, that keeps
+at least ``--keep`` (90 %) of *all* direct echoes (fully carved ones count as lost); shares are
+printed for it and for 0.5 (the library default: the decision of a calibrated probability).
+
+Printed: the weights as ``ConfidenceModel`` keyword arguments, the threshold, and a reliability
+table (predicted confidence against the observed share of direct echoes, per decile of
+confidence) on the training data and on each held-out world and physics (``--check``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonarcarve import MethodConfig
+from sonarcarve.geometry.fate import UNCHANGED
+from sonarcarve.history import SonarHistory
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceMethod
+from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.typing import SlotArray
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Committed arcs with a surviving piece: features (n, F), labels (n,), and per run the
+    number of direct echoes (kept or not)."""
+
+    features: np.ndarray
+    maturity: np.ndarray
+    direct: np.ndarray
+    kind: np.ndarray
+    total_direct: int
+    total_by_kind: dict[int, int]
+
+
+def collect(world: str, physics: str, seeds: range,
+            model: ConfidenceModel | None = None) -> Samples:
+    """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs."""
+    rows: list[np.ndarray] = []
+    maturities: list[np.ndarray] = []
+    kinds: list[np.ndarray] = []
+    total_direct = 0
+    total_by_kind: dict[int, int] = {}
+    overrides = () if physics == "specular" else (("echo_model", physics),)
+    config = MethodConfig(min_confidence=0.0)
+    for seed in seeds:
+        sim = run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
+        method = EvidenceMethod(
+            config.history_size, config.beam_width, config.range_tolerance,
+            config.min_transversal, config.range_resolution, config.evidence_bins,
+            config.carve_probability, 0.0, config.stamp_error, confidence_model=model)
+        kind = sim.truth.kind
+
+        def listener(history: SonarHistory, slots: SlotArray, est: Estimates,
+                     method: EvidenceMethod = method, kind: np.ndarray = kind) -> None:
+            has = est.fate == UNCHANGED
+            if has.any():
+                rows.append(method.features(slots[has]))
+                maturities.append(method.maturity(slots[has]))
+                kinds.append(kind[history.reading_id[slots[has]]])
+
+        method.add_commit_listener(listener)
+        method.add_many(sim.readings)
+        method.finish()
+        total_direct += int(np.count_nonzero(kind == EchoKind.DIRECT))
+        for k in np.unique(kind):
+            count = int(np.count_nonzero(kind == k))
+            total_by_kind[int(k)] = total_by_kind.get(int(k), 0) + count
+    all_kinds = np.concatenate(kinds)
+    direct = (all_kinds == EchoKind.DIRECT).astype(float)
+    return Samples(np.vstack(rows), np.concatenate(maturities), direct, all_kinds, total_direct,
+                   total_by_kind)
+
+
+def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
+        steps: int = 50) -> tuple[float, np.ndarray]:
+    """Intercept and weights minimising mean log-loss + ``ridge/2 |w|²`` (Newton's method)."""
+    a = np.column_stack([np.ones(len(features)), features])
+    w = np.zeros(a.shape[1])
+    penalty = np.full(a.shape[1], ridge)
+    penalty[0] = 0.0  # the intercept is not shrunk
+    for _ in range(steps):
+        p = 1.0 / (1.0 + np.exp(-(a @ w)))
+        grad = a.T @ (p - labels) / len(a) + penalty * w
+        hess = (a * (p * (1.0 - p))[:, None]).T @ a / len(a) + np.diag(penalty) + 1e-9 * np.eye(
+            a.shape[1])
+        step = np.linalg.solve(hess, grad)
+        w -= step
+        if np.max(np.abs(step)) < 1e-10:
+            break
+    return float(w[0]), w[1:]
+
+
+def threshold_keeping(confidence: np.ndarray, samples: Samples, keep: float) -> float:
+    """Largest threshold on a 0.05 grid keeping ≥ ``keep`` of all direct echoes."""
+    best = 0.0
+    for t in np.arange(0.0, 1.0, 0.05):
+        kept = np.count_nonzero((confidence >= t) & (samples.direct == 1.0))
+        if kept >= keep * samples.total_direct:
+            best = float(round(t, 2))
+    return best
+
+
+def report(title: str, samples: Samples, model: ConfidenceModel,
+           thresholds: tuple[float, ...]) -> None:
+    """Reliability table and the kept/removed shares at each of ``thresholds``."""
+    conf = model.confidence(samples.features, samples.maturity)
+    young = np.count_nonzero(samples.maturity < 1.0)
+    print(f"\n{title}: {len(conf)} arcs with a piece at commit ({young} not mature)\n")
+    print("| confidence | arcs | mean confidence | direct share |")
+    print("|---|---:|---:|---:|")
+    edges = np.linspace(0.0, 1.0, 11)
+    for lo, hi in itertools.pairwise(edges):
+        sel = (conf >= lo) & ((conf < hi) | (hi == 1.0))
+        if sel.any():
+            print(f"| {lo:.1f}-{hi:.1f} | {np.count_nonzero(sel)} | {conf[sel].mean():.2f} | "
+                  f"{samples.direct[sel].mean():.2f} |")
+    loss = -np.mean(samples.direct * np.log(np.clip(conf, 1e-12, 1.0))
+                    + (1 - samples.direct) * np.log(np.clip(1 - conf, 1e-12, 1.0)))
+    print(f"\nlog-loss {loss:.3f}")
+    for threshold in thresholds:
+        kept = conf >= threshold
+        direct_kept = np.count_nonzero(kept & (samples.direct == 1.0)) / samples.total_direct
+        parts = [f"direct kept {100 * direct_kept:.1f} %"]
+        for k in (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH):
+            total = samples.total_by_kind.get(int(k), 0)
+            if total:
+                removed = 1.0 - np.count_nonzero(kept & (samples.kind == k)) / total
+                parts.append(f"{k.label} removed {100 * removed:.1f} % (of {total})")
+        print(f"- min_confidence {threshold:.2f}: {'; '.join(parts)}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Fit on one world and physics, print the weights, check on the others."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--world", default="office")
+    parser.add_argument("--physics", default="specular")
+    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1")
+    parser.add_argument("--ridge", type=float, default=1e-3)
+    parser.add_argument("--keep", type=float, default=0.90)
+    parser.add_argument("--check", nargs="*", default=[
+        "t-junction/specular", "doorway/specular", "office/amplitude", "t-junction/amplitude",
+        "doorway/amplitude"], help="held-out world/physics pairs")
+    args = parser.parse_args(argv)
+    train = collect(args.world, args.physics, range(args.seeds))
+    mature = train.maturity >= 1.0
+    intercept, weights = fit(train.features[mature], train.direct[mature], args.ridge)
+    share = float(train.direct.mean())
+    fresh = float(np.log(share / (1.0 - share)))
+    model = ConfidenceModel.from_weights(intercept, weights, fresh)
+    threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
+                                  args.keep)
+    print(f"fitted on {args.world}, {args.physics} physics, seeds 0-{args.seeds - 1}: "
+          f"{len(train.direct)} arcs ({int(train.direct.sum())} direct)\n")
+    print("ConfidenceModel(")
+    print(f"    intercept={intercept:.3f},")
+    print(f"    fresh={fresh:.3f},")
+    for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True):
+        print(f"    {name}={w:.3f},")
+    print(")")
+    print(f"min_confidence (largest keeping ≥ {100 * args.keep:.0f} % of direct): {threshold:.2f}")
+    thresholds = (0.5, threshold)
+    report(f"train: {args.world}/{args.physics}", train, model, thresholds)
+    for pair in args.check:
+        world, physics = pair.split("/")
+        report(f"held out: {world}/{physics}", collect(world, physics, range(args.seeds)),
+               model, thresholds)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
