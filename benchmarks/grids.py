@@ -1,0 +1,276 @@
+"""The carved grid against ROS's range sensor layer (and the Elfes/octomap grid), on the simulator.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/grids.py            # tables, and docs/figures/grids-office.png
+
+For the ``office``, ``t-junction`` and ``doorway`` tours (Scout2 ring, seeds 0-2), at 0.05 and
+0.10 m cells, each grid maps the whole log and its trinary map (:func:`~sonarcarve.grids.trinary`)
+is measured against the true walls (:mod:`sonarcarve.lab.grid_measures`): occupied precision and
+recall (within one cell of a wall), phantoms (truly free cells marked occupied), seen wall length
+covered. Grids: :class:`~sonarcarve.grids.CarvedGrid` (defaults), the faithful
+:class:`~sonarcarve.grids.RangeSensorLayer` with ROS's defaults, the same with the ``phi`` and
+``clear_on_max_reading`` that maximise F1 (harmonic mean of precision and recall) on the office
+at that resolution (the sweep is printed), and :class:`~sonarcarve.grids.OccupancyGrid` (Elfes /
+octomap). Each grid's origin is shifted by a seeded random fraction of a cell.
+
+Then Fig. 2's door: a 0.85 m door approached at 0°, 20°, -35° and 45° from the wall normal,
+aiming 0 and ±0.15 m off its centre, seeds 0-2 (36 approaches, as the openings experiment);
+when the robot is first 1 m short of the door, is it passable in the grid, i.e. a stretch of at
+least 0.46 m (Scout2 + 5 cm) of the door line with no occupied cell square within 0.25 m (and,
+strictly, with only free cells)? And CPU per reading of each grid on the office log at both
+resolutions, one run after a warm-up, all in one process (ratios in one run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from sonarcarve.grids import (
+    CarvedGrid,
+    OccupancyGrid,
+    OccupancyMap,
+    RangeSensorLayer,
+    RangeSensorLayerParams,
+    trinary,
+)
+from sonarcarve.lab.analyses import GAP_DEPTH, first_reading_within, passage_clearance
+from sonarcarve.lab.grid_measures import GridMeasures, grid_free_width, grid_measures
+from sonarcarve.lab.metrics import gap_region
+from sonarcarve.lab.scenarios import Scenario, build_world, run_simulation
+from sonarcarve.readings import ReadingBatch
+from sonarcarve.sim.simulate import Simulation
+from sonarcarve.sim.sonar import EchoKind
+
+Bounds = tuple[float, float, float, float]
+Factory = Callable[[float, Bounds], OccupancyMap]
+
+MARGIN = 0.5
+PHIS = (0.6, 1.2, 2.0, 3.0, 5.0)
+DOOR_WIDTH = 0.85
+HEADINGS_DEG = (0.0, 20.0, -35.0, 45.0)
+OFFSETS = (0.0, 0.15, -0.15)
+FIGURE = Path("docs/figures/grids-office.png")
+
+
+@dataclass(frozen=True)
+class GridKind:
+    label: str
+    make: Factory
+
+
+def _carved(h: float, b: Bounds) -> OccupancyMap:
+    return CarvedGrid(h, b)
+
+
+def _layer(params: RangeSensorLayerParams) -> Factory:
+    def make(h: float, b: Bounds) -> OccupancyMap:
+        return RangeSensorLayer(h, b, params)
+    return make
+
+
+def _elfes(h: float, b: Bounds) -> OccupancyMap:
+    return OccupancyGrid(h, b)
+
+
+def _bounds(world_bounds: Bounds, h: float, seed: int) -> Bounds:
+    shift = np.random.default_rng(seed).uniform(0.0, h, 2)
+    xmin, ymin, xmax, ymax = world_bounds
+    return (xmin - MARGIN - shift[0], ymin - MARGIN - shift[1], xmax + MARGIN, ymax + MARGIN)
+
+
+def _fill(make: Factory, h: float, sim: Simulation, seed: int,
+          batch: ReadingBatch | None = None) -> OccupancyMap:
+    grid = make(h, _bounds(sim.world.bounds, h, seed))
+    assert isinstance(grid, CarvedGrid | RangeSensorLayer | OccupancyGrid)
+    grid.add_many(sim.readings if batch is None else batch)
+    return grid
+
+
+def _measure(grid: OccupancyMap, sim: Simulation) -> GridMeasures:
+    direct = sim.truth.kind == EchoKind.DIRECT
+    return grid_measures(grid, sim.world.segments, sim.truth.reflection[direct],
+                         sim.world.bounds)
+
+
+def _mean(rows: Sequence[GridMeasures]) -> GridMeasures:
+    means = [float(np.nanmean([r[k] for r in rows])) for k in range(5)]
+    return GridMeasures(means[0], means[1], means[2], means[3], round(means[4]))
+
+
+def _f1(m: GridMeasures) -> float:
+    return 2 * m.precision * m.recall / (m.precision + m.recall)
+
+
+def _sweep(office: Sequence[Simulation], h: float) -> RangeSensorLayerParams:
+    print(f"\nrange sensor layer sweep: office, seeds 0-{len(office) - 1}, {h:.2f} m; mean "
+          "over seeds\n")
+    print("| phi (m) | clear_on_max_reading | precision | recall | F1 | phantoms (%) |")
+    print("|---:|---|---:|---:|---:|---:|")
+    best, best_f1 = RangeSensorLayerParams(), -1.0
+    for phi in PHIS:
+        for clear in (False, True):
+            params = RangeSensorLayerParams(phi=phi, clear_on_max_reading=clear)
+            m = _mean([_measure(_fill(_layer(params), h, sim, s), sim)
+                       for s, sim in enumerate(office)])
+            f1 = _f1(m)
+            print(f"| {phi:g} | {clear} | {m.precision:.3f} | {m.recall:.3f} | {f1:.3f} | "
+                  f"{100 * m.phantoms:.3f} |")
+            if f1 > best_f1:
+                best, best_f1 = params, f1
+    print(f"\nbest at {h:.2f} m: phi {best.phi:g}, clear_on_max_reading "
+          f"{best.clear_on_max_reading}")
+    return best
+
+
+def _kinds(best: RangeSensorLayerParams) -> list[GridKind]:
+    return [GridKind("carved grid", _carved),
+            GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
+            GridKind(f"RangeSensorLayer, phi {best.phi:g}, clear_on_max_reading "
+                     f"{str(best.clear_on_max_reading).lower()}", _layer(best)),
+            GridKind("Elfes/octomap grid", _elfes)]
+
+
+def _measures_table(sims: dict[str, list[Simulation]], h: float,
+                    kinds: Sequence[GridKind]) -> dict[tuple[str, str], GridMeasures]:
+    out = {}
+    print(f"\ngrid measures at {h:.2f} m, seeds 0-{len(next(iter(sims.values()))) - 1}, "
+          "mean over seeds\n")
+    print("| world | grid | precision | recall | phantoms (%) | wall covered (%) | "
+          "occupied cells |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for world, runs in sims.items():
+        for kind in kinds:
+            m = _mean([_measure(_fill(kind.make, h, sim, s), sim) for s, sim in enumerate(runs)])
+            out[(world, kind.label)] = m
+            print(f"| {world} | {kind.label} | {m.precision:.3f} | {m.recall:.3f} | "
+                  f"{100 * m.phantoms:.3f} | {100 * m.wall_covered:.1f} | "
+                  f"{m.occupied_cells:,.0f} |")
+    return out
+
+
+def _door_table(seeds: int, resolutions: Sequence[float],
+                kinds_by_h: dict[float, list[GridKind]]) -> dict[tuple[float, str], float]:
+    world = build_world(f"doorway:{DOOR_WIDTH:g}")
+    gap = world.openings[0]
+    region = gap_region(gap[0], gap[1], GAP_DEPTH)
+    runs = []
+    for seed in range(seeds):
+        for heading in HEADINGS_DEG:
+            for offset in OFFSETS:
+                aim = 0.5 * (gap[0] + gap[1]) + np.array([offset, 0.0])
+                hd = math.radians(heading)
+                direction = np.array([math.sin(hd), math.cos(hd)])
+                path = tuple((float(p[0]), float(p[1]))
+                             for p in (aim - 4.3 * direction, aim - 0.8 * direction))
+                sim = run_simulation(Scenario(f"doorway:{DOOR_WIDTH:g}", seed, path=path))
+                stop = first_reading_within(sim, gap, 1.0)
+                runs.append((seed, sim, stop))
+    clearance = passage_clearance(runs[0][1].robot.robot_radius)
+    print(f"\nFig. 2 door: {DOOR_WIDTH:g} m, {len(runs)} approaches (headings "
+          f"{', '.join(f'{h:g}' for h in HEADINGS_DEG)}°, offsets "
+          f"{', '.join(f'{o:g}' for o in OFFSETS)} m, seeds 0-{seeds - 1}); grid when the robot "
+          f"is first 1 m short; passable: a stretch >= {clearance:.2f} m with no occupied cell "
+          f"within {GAP_DEPTH:g} m of the door line (strict: only free cells)\n")
+    print("| resolution (m) | grid | passable (%) | passable, strict (%) | free width (m), mean |")
+    print("|---:|---|---:|---:|---:|")
+    out = {}
+    for h in resolutions:
+        for kind in kinds_by_h[h]:
+            widths, strict = [], []
+            for seed, sim, stop in runs:
+                grid = _fill(kind.make, h, sim, seed, sim.readings[:stop])
+                cells = trinary(grid)
+                widths.append(grid_free_width(grid, region, cells=cells))
+                strict.append(grid_free_width(grid, region, strict=True, cells=cells))
+            share = 100.0 * float(np.mean([w >= clearance for w in widths]))
+            out[(h, kind.label)] = share
+            print(f"| {h:.2f} | {kind.label} | {share:.0f} | "
+                  f"{100.0 * float(np.mean([w >= clearance for w in strict])):.0f} | "
+                  f"{np.mean(widths):.2f} |")
+    return out
+
+
+def _cpu_table(sim: Simulation, resolutions: Sequence[float],
+               kinds_by_h: dict[float, list[GridKind]]) -> None:
+    batch = sim.readings
+    print(f"\nCPU per reading: office seed 0, {len(batch):,} readings, whole log in one "
+          "add_many then the trinary map read once; one run after a warm-up, one process\n")
+    print("| resolution (m) | grid | µs per reading | ratio to the layer (defaults) |")
+    print("|---:|---|---:|---:|")
+    for h in resolutions:
+        times = {}
+        for kind in kinds_by_h[h]:
+            trinary(_fill(kind.make, h, sim, 0, batch[:300]))  # compile
+            tic = time.perf_counter()
+            trinary(_fill(kind.make, h, sim, 0))
+            times[kind.label] = (time.perf_counter() - tic) / len(batch) * 1e6
+        ref = times["RangeSensorLayer, ROS defaults"]
+        for label, us in times.items():
+            print(f"| {h:.2f} | {label} | {us:.1f} | {us / ref:.2f} |")
+
+
+def _figure(sim: Simulation, h: float, path: Path) -> None:
+    import matplotlib as mpl
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    grids = [("carved grid", _fill(_carved, h, sim, 0)),
+             ("RangeSensorLayer (ROS defaults)",
+              _fill(_layer(RangeSensorLayerParams()), h, sim, 0))]
+    fig, axes = plt.subplots(1, 2, figsize=(16, 6.2), constrained_layout=True)
+    cmap = ListedColormap(["#ffffff", "#c8c8c8", "#000000"])  # free, unknown, occupied
+    for ax, (title, grid) in zip(axes, grids, strict=True):
+        cells = trinary(grid)
+        image = np.select([cells == 0, cells == -1], [0, 1], 2)
+        x0, y0, x1, y1 = grid.extent
+        ax.imshow(image, origin="lower", extent=(x0, x1, y0, y1), cmap=cmap, vmin=0, vmax=2,
+                  interpolation="nearest")
+        for seg in sim.world.segments:
+            ax.plot(seg[[0, 2]], seg[[1, 3]], color="#d62728", lw=0.7)
+        m = _measure(grid, sim)
+        ax.set_title(f"{title}: precision {m.precision:.2f}, recall {m.recall:.2f}")
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+    fig.suptitle(f"office, Scout2 tour seed 0, {len(sim.readings):,} readings, {h:.2f} m cells; "
+                 "black occupied, white free, grey unknown, red the true walls")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    print(f"\nfigure written to {path}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Simulate, measure, print the tables and write the figure."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--worlds", nargs="+", default=["office", "t-junction", "doorway"])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--resolutions", type=float, nargs="+", default=[0.05, 0.10])
+    parser.add_argument("--figure", type=Path, default=FIGURE)
+    args = parser.parse_args(argv)
+    tic = time.perf_counter()
+    sims = {w: [run_simulation(Scenario(w, s)) for s in range(args.seeds)] for w in args.worlds}
+    office = sims.get("office") or [run_simulation(Scenario("office", s))
+                                    for s in range(args.seeds)]
+    kinds_by_h = {h: _kinds(_sweep(office, h)) for h in args.resolutions}
+    for h in args.resolutions:
+        _measures_table(sims, h, kinds_by_h[h])
+    _door_table(args.seeds, args.resolutions, kinds_by_h)
+    _cpu_table(office[0], args.resolutions, kinds_by_h)
+    if str(args.figure):
+        _figure(office[0], args.resolutions[0], args.figure)
+    print(f"\nruntime: {time.perf_counter() - tic:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

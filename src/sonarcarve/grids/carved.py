@@ -1,0 +1,776 @@
+"""The carved grid: an occupancy grid whose occupied band follows arc carving over time.
+
+The paper (section 4) proposes that "a new distribution can be used for each reading, computed
+from the carved results": this module is that distribution, written into a log-odds grid.
+
+Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ`` does two things:
+
+- **free space**, final at once: every cell whose centre lies in the beam (``|α| <= φ/2`` off
+  the axis) at a distance ``d < r - b`` gets ``l += γ(α) f(d) · logit(p_miss)``, with the
+  angular profile ``γ(α) = 1 - (2α/φ)²`` of Elfes' cone (1 on the axis, 0 at the beam's edges),
+  ROS ``range_sensor_layer``'s distance fade ``f(d) = (1 - tanh(2 (d - d_f))) / 2`` (``d_f`` =
+  :attr:`CarvedGridParams.fade_range`, 1.2 m: on specular walls a long reading is often an
+  echo that missed the wall, and its far free space is not to be trusted) and the band
+  half-width ``b = (h + ε) / 2`` (cell side h, range tolerance ε) as in
+  :class:`~sonarcarve.grids.elfes.OccupancyGrid`;
+- **occupied band**, live while the reading's arc is in the carving method's history: the cells
+  whose centre lies within ``b`` of the circle of radius r and whose bearing lies within the arc's
+  *carved* interval ``[θ1', θ2']`` (widened by half a cell, ``h / 2r``, so that an interval
+  carved narrower than a cell still marks the cell it points at) get
+
+  ``l_k = c · s · logit(p_hit)``,  ``s = min(1, L / (r (θ2' - θ1')))``
+
+  where ``s`` spreads the echo over the carved interval, ``L`` =
+  :attr:`CarvedGridParams.spread_length` (0.2 m, at least the cell side): an uncarved 22.5° arc
+  at 3 m (1.18 m long) gives each of its cells 0.17 of a hit, an arc carved down to 0.2 m or
+  less a whole hit
+  and ``c`` is the method's confidence in the point
+  (:attr:`~sonarcarve.methods.Estimates.confidence`; 1 where the method does not model it,
+  NaN). An arc carving removed (fully carved, split, or below the method's confidence)
+  contributes nothing.
+
+Following carving over time: the grid keeps two arrays, ``base`` (free space and the final
+contributions of arcs that have left the history, clamped to ``[logit(p_min), logit(p_max)]``
+after every update, octomap's way) and ``live`` (the sum of the current contributions of the
+arcs still in the history, unclamped), and reads ``l = clamp(base + live)``. For each live arc it
+remembers what it drew (origin, range, interval, value): when carving narrows the arc, the old
+contribution is subtracted from ``live`` and the new one added, so the cells outside the new
+interval lose exactly the log-odds they had gained and the cells inside gain (``s`` grows); when
+the arc leaves the history its contribution is subtracted from ``live`` and added to ``base``,
+final, in reading order (just before the free space of the reading that pushed it out), so the
+map does not depend on how the readings were batched.
+
+Memory: ``base`` (float32) and ``live`` (float64), 12 bytes a cell, plus 7 numbers per history
+slot and the carving method's own state (bounded by its history): bounded by the map size plus
+the history, never by the length of the log (the method's global map, which does grow, is
+discarded after each batch: the grid is the map).
+
+``live`` is brought up to date lazily, when the map is read (:attr:`CarvedGrid.log_odds`,
+:meth:`~CarvedGrid.probabilities`, :meth:`~CarvedGrid.trinary`...): one call of the method's
+estimates over the history per read, not per reading.
+
+The three grids of :mod:`sonarcarve.grids` share a small protocol (:class:`OccupancyMap`):
+``resolution``, ``bounds``, ``extent``, ``shape``, ``cell_centers()`` and ``probabilities()``;
+:func:`trinary` turns any of them into the ROS ``nav_msgs/OccupancyGrid`` convention (occupied
+100, free 0, unknown -1) with that grid's own thresholds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple, Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.grids.elfes import MAX_CELLS, ROS_FADE_RANGE, GridError, OccupancyGrid
+from sonarcarve.grids.range_sensor_layer import (
+    FREE_SPACE,
+    LETHAL_OBSTACLE,
+    RangeSensorLayer,
+)
+from sonarcarve.history import SonarHistory
+from sonarcarve.maps import GlobalMapBuilder
+from sonarcarve.methods import MethodConfig, SonarMethod, make_method
+from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
+from sonarcarve.readings import Reading, ReadingBatch
+from sonarcarve.typing import BoolArray, FloatArray, SlotArray
+
+__all__ = [
+    "DEFAULT_MAX_INCIDENCE",
+    "DEFAULT_SPREAD_LENGTH",
+    "FREE",
+    "OCCUPIED",
+    "UNKNOWN",
+    "CarvedGrid",
+    "CarvedGridParams",
+    "OccupancyMap",
+    "trinary",
+]
+
+#: Trinary cell values, as in ROS ``nav_msgs/OccupancyGrid``.
+OCCUPIED = 100
+FREE = 0
+UNKNOWN = -1
+
+Int8Grid = npt.NDArray[np.int8]
+
+#: Length over which one echo counts as a whole hit, metres
+#: (:attr:`CarvedGridParams.spread_length`).
+#: Measured (``benchmarks/grids.py``, office, seeds 0-1, 0.05 and 0.10 m cells, fade 1.2 m, β 30°):
+#: occupied precision / recall 0.81 / 0.84 at 0.05 m with 0.1, 0.72 / 0.95 with 0.2, 0.64 / 0.96
+#: with 0.3; 0.2 is the shortest that keeps recall above the range sensor layer's at both
+#: resolutions.
+DEFAULT_SPREAD_LENGTH = 0.2
+#: Critical angle of the default method's specular-aware carving, radians (30°; the
+#: recommendation of ``docs/RESULTS.md``). Paper carving (π/2) loses 45 % of the office's true
+#: echoes to glancing free space, and the grid's recall with them (0.20 at 0.05 m against 0.53).
+DEFAULT_MAX_INCIDENCE = math.radians(30.0)
+
+_TWO_PI = 2.0 * math.pi
+
+
+def _logit(p: float) -> float:
+    return math.log(p / (1.0 - p))
+
+
+@runtime_checkable
+class OccupancyMap(Protocol):
+    """What every grid of :mod:`sonarcarve.grids` offers: geometry and probabilities.
+
+    Cell ``(i, j)`` (row i along y, column j along x) is the square of side ``resolution`` whose
+    centre is ``(xmin + (j + 1/2) h, ymin + (i + 1/2) h)`` for ``(xmin, ymin)`` the first two
+    numbers of ``bounds``.
+    """
+
+    @property
+    def resolution(self) -> float:
+        """Cell side, metres."""
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` as given, metres."""
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` covered by the cells, metres."""
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, columns)``."""
+
+    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
+        """Centres of the columns and of the rows, metres."""
+
+    def probabilities(self) -> FloatArray:
+        """Occupancy probability of every cell, shape :attr:`shape`."""
+
+
+def trinary(grid: OccupancyMap) -> Int8Grid:
+    """Occupied (100), free (0) or unknown (-1) for every cell, shape ``grid.shape``.
+
+    Each grid with its own rule: :class:`CarvedGrid` with its
+    :attr:`CarvedGridParams.occupied_threshold` and ``free_threshold``;
+    :class:`~sonarcarve.grids.RangeSensorLayer` as it writes its master costmap
+    (:meth:`~sonarcarve.grids.RangeSensorLayer.costs`: lethal above ``mark_threshold``, free
+    below ``clear_threshold``); :class:`~sonarcarve.grids.OccupancyGrid` (Elfes) occupied above
+    its default threshold (0.65) and free below 0.196 (map_saver's ``free_thresh``); any other
+    :class:`OccupancyMap` by probability with those two thresholds.
+
+    Examples
+    --------
+    >>> g = CarvedGrid(0.1, (0.0, 0.0, 1.0, 1.0))
+    >>> trinary(g)[0, :3].tolist()  # nothing seen yet
+    [-1, -1, -1]
+    """
+    if isinstance(grid, CarvedGrid):
+        return grid.trinary()
+    if isinstance(grid, RangeSensorLayer):
+        costs = grid.costs()
+        out = np.full(costs.shape, UNKNOWN, dtype=np.int8)
+        out[costs == LETHAL_OBSTACLE] = OCCUPIED
+        out[costs == FREE_SPACE] = FREE
+        return out
+    if isinstance(grid, OccupancyGrid):
+        return _classify(grid.probabilities(), CarvedGridParams.occupied_threshold,
+                         CarvedGridParams.free_threshold)
+    return _classify(np.asarray(grid.probabilities(), dtype=np.float64),
+                     CarvedGridParams.occupied_threshold, CarvedGridParams.free_threshold)
+
+
+def _classify(p: FloatArray, occupied: float, free: float) -> Int8Grid:
+    out = np.full(p.shape, UNKNOWN, dtype=np.int8)
+    out[p > occupied] = OCCUPIED
+    out[p < free] = FREE
+    return out
+
+
+def _check_probability(name: str, value: object, lo: float, hi: float) -> float:
+    ok = (not isinstance(value, bool) and isinstance(value, int | float)
+          and math.isfinite(value) and lo < value < hi)
+    if not ok:
+        msg = f"carved grid: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
+        raise GridError(msg)
+    return float(value)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class CarvedGridParams:
+    """Parameters of the carved grid's sensor model (module docstring).
+
+    Attributes
+    ----------
+    p_hit : float
+        Probability a whole hit gives a cell (an arc carved down to one cell, confidence 1), in
+        (0.5, 1); octomap's 0.7.
+    p_miss : float
+        Probability one reading's free space gives an on-axis cell, in (0, 0.5); octomap's 0.4.
+    p_min, p_max : float
+        Clamp of the final log-odds, ``p_min < 0.5 < p_max``; octomap's 0.12 and 0.97.
+    occupied_threshold, free_threshold : float
+        :meth:`CarvedGrid.trinary` calls a cell occupied above the first and free below the
+        second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196 (ROS
+        map_saver's ``free_thresh``).
+    range_tolerance : float
+        ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm.
+    spread : bool
+        Spread each echo over its carved interval (``s`` in the module docstring); False gives
+        every cell of the carved band a whole hit (Elfes' rule, on the carved interval).
+    spread_length : float
+        ``L``, metres >= 0: an arc carved to this length or shorter gives its cells a whole hit
+        (the cell side where larger); :data:`DEFAULT_SPREAD_LENGTH`.
+    fade_range : float
+        ``d_f``, metres > 0, of the free-space fade; ``inf``: no fade. Default ROS's 1.2 m.
+
+    Raises
+    ------
+    GridError
+        A value out of its range.
+    """
+
+    p_hit: float = 0.7
+    p_miss: float = 0.4
+    p_min: float = 0.12
+    p_max: float = 0.97
+    occupied_threshold: float = 0.65
+    free_threshold: float = 0.196
+    range_tolerance: float = DEFAULT_RANGE_TOLERANCE
+    spread: bool = True
+    spread_length: float = DEFAULT_SPREAD_LENGTH
+    fade_range: float = ROS_FADE_RANGE
+
+    def __post_init__(self) -> None:
+        _check_probability("p_hit", self.p_hit, 0.5, 1.0)
+        _check_probability("p_miss", self.p_miss, 0.0, 0.5)
+        _check_probability("p_min", self.p_min, 0.0, 0.5)
+        _check_probability("p_max", self.p_max, 0.5, 1.0)
+        _check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
+        _check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
+        tol = self.range_tolerance
+        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (
+                math.isfinite(tol) and tol >= 0.0):
+            msg = f"carved grid: range_tolerance must be a finite number >= 0 metres, got {tol!r}"
+            raise GridError(msg)
+        for name in ("spread_length", "fade_range"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not (
+                    value >= 0.0 if name == "spread_length" else value > 0.0) or (
+                    name == "spread_length" and not math.isfinite(value)):
+                rule = "a finite number >= 0" if name == "spread_length" else "> 0 (inf: none)"
+                msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
+                raise GridError(msg)
+        if not isinstance(self.spread, bool):
+            msg = f"carved grid: spread must be True or False, got {self.spread!r}"
+            raise GridError(msg)
+
+
+# -- compiled kernels -----------------------------------------------------------------------------
+
+@compiled_inline
+def _cell_range(lo: float, hi: float, origin: float, h: float, n: int) -> tuple[int, int]:
+    """Indices ``k0..k1`` of the cells whose centres may lie in ``[lo, hi]`` (one cell of
+    slack each side; the exact test is the caller's)."""
+    k0 = max(0, math.floor((lo - origin) / h - 0.5) - 1)
+    k1 = min(n - 1, math.ceil((hi - origin) / h - 0.5) + 1)
+    return k0, k1
+
+
+@compiled_inline
+def _sector_box(x: float, y: float, t1: float, t2: float, r_in: float,
+                r_out: float) -> tuple[float, float, float, float]:
+    """Bounding box of the annular sector ``r_in <= d <= r_out``, bearings ``[t1, t2]``."""
+    xlo = min(x + r_in * math.cos(t1), x + r_in * math.cos(t2),
+              x + r_out * math.cos(t1), x + r_out * math.cos(t2))
+    xhi = max(x + r_in * math.cos(t1), x + r_in * math.cos(t2),
+              x + r_out * math.cos(t1), x + r_out * math.cos(t2))
+    ylo = min(y + r_in * math.sin(t1), y + r_in * math.sin(t2),
+              y + r_out * math.sin(t1), y + r_out * math.sin(t2))
+    yhi = max(y + r_in * math.sin(t1), y + r_in * math.sin(t2),
+              y + r_out * math.sin(t1), y + r_out * math.sin(t2))
+    # The outer circle's extreme points at the cardinal bearings inside the interval.
+    for k in range(4):
+        a = 0.5 * math.pi * k
+        a += _TWO_PI * math.ceil((t1 - a) / _TWO_PI)
+        if a <= t2:
+            if k == 0:
+                xhi = x + r_out
+            elif k == 1:
+                yhi = y + r_out
+            elif k == 2:
+                xlo = x - r_out
+            else:
+                ylo = y - r_out
+    return xlo, ylo, xhi, yhi
+
+
+@compiled_inline
+def _arc_value(r: float, lo: float, hi: float, weight: float, h: float, l_hit: float,
+               spread: float, unit: float) -> float:
+    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``."""
+    if not weight > 0.0:
+        return 0.0
+    s = 1.0
+    if spread > 0.0:
+        length = r * (hi - lo)
+        if length > unit:
+            s = unit / length
+    return weight * s * l_hit
+
+
+@compiled_inline
+def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, l_min: float, l_max: float,
+              xmin: float, ymin: float, h: float, x: float, y: float, r: float, lo: float,
+              hi: float, value: float, band: float) -> None:
+    """Add ``value`` to the cells of the arc's band (clamped into ``[l_min, l_max]`` if
+    ``clamp``): centre within ``band`` of the circle, bearing within ``[lo, hi]`` widened by
+    ``h / 2r``."""
+    if value == 0.0:
+        return
+    ny, nx = grid.shape
+    widen = 0.5 * h / r
+    t1 = lo - widen
+    t2 = hi + widen
+    mid = 0.5 * (t1 + t2)
+    half = 0.5 * (t2 - t1)
+    r_in = max(0.0, r - band)
+    r_out = r + band
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        for j in range(j0, j1 + 1):
+            dx = xmin + (j + 0.5) * h - x
+            d = math.sqrt(dx * dx + dy * dy)
+            if abs(d - r) > band:
+                continue
+            off = math.atan2(dy, dx) - mid
+            off -= _TWO_PI * math.floor((off + math.pi) / _TWO_PI)
+            if abs(off) > half:
+                continue
+            if clamp:
+                grid[i, j] = min(l_max, max(l_min, grid[i, j] + value))
+            else:
+                grid[i, j] += value
+
+
+@compiled_inline
+def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: float, x: float,
+                y: float, theta: float, r: float, half: float, band: float, l_miss: float,
+                l_min: float, l_max: float, fade: float) -> None:
+    """One reading's free space: ``γ(α) · logit(p_miss)`` on the beam's cells nearer than
+    ``r - band``, clamped."""
+    reach = r - band
+    if reach <= 0.0:
+        return
+    ny, nx = base.shape
+    c, s, cos_half = math.cos(theta), math.sin(theta), math.cos(half)
+    xlo, ylo, xhi, yhi = _sector_box(x, y, theta - half, theta + half, 0.0, reach)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        for j in range(j0, j1 + 1):
+            dx = xmin + (j + 0.5) * h - x
+            d2 = dx * dx + dy * dy
+            if d2 >= reach * reach:
+                continue
+            along = dx * c + dy * s
+            if along < math.sqrt(d2) * cos_half:
+                continue
+            a = math.atan2(dy * c - dx * s, along)
+            w = 1.0 - (a / half) ** 2
+            if fade < math.inf:
+                w *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
+            base[i, j] = min(l_max, max(l_min, base[i, j] + w * l_miss))
+
+
+@compiled
+def _fold_kernel(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: float,
+                 x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
+                 half: FloatArray, first_seq: int, capacity: int,
+                 fx: FloatArray, fy: FloatArray, fr: FloatArray, flo: FloatArray,
+                 fhi: FloatArray, fweight: FloatArray, fseq: npt.NDArray[np.int64],
+                 band: float, l_hit: float, l_miss: float, l_min: float, l_max: float,
+                 spread: float, unit: float, fade: float) -> None:
+    """The final updates of a batch in reading order: before the free space of reading
+    ``seq``, the final band of every arc it pushed out of the history (``fseq + capacity <=
+    seq``)."""
+    p = 0
+    nf = fseq.shape[0]
+    for k in range(x.shape[0]):
+        seq = first_seq + k
+        while p < nf and fseq[p] + capacity <= seq:
+            value = _arc_value(fr[p], flo[p], fhi[p], fweight[p], h, l_hit, spread, unit)
+            _draw_arc(base, True, l_min, l_max, xmin, ymin, h, fx[p], fy[p], fr[p], flo[p],
+                      fhi[p], value, band)
+            p += 1
+        _free_space(base, xmin, ymin, h, x[k], y[k], theta[k], r[k], half[k], band, l_miss,
+                    l_min, l_max, fade)
+    while p < nf:
+        value = _arc_value(fr[p], flo[p], fhi[p], fweight[p], h, l_hit, spread, unit)
+        _draw_arc(base, True, l_min, l_max, xmin, ymin, h, fx[p], fy[p], fr[p], flo[p],
+                  fhi[p], value, band)
+        p += 1
+
+
+@compiled
+def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
+                   slots: SlotArray, seqs: npt.NDArray[np.int64], xmin: float, ymin: float,
+                   h: float, band: float) -> None:
+    """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        if drawn_seq[slot] != seqs[k]:
+            continue
+        _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, drawn[slot, 0], drawn[slot, 1],
+                  drawn[slot, 2], drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], band)
+        drawn_seq[slot] = -1
+
+
+@compiled
+def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
+                 slots: SlotArray, seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
+                 r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
+                 xmin: float, ymin: float, h: float, band: float, l_hit: float,
+                 spread: float, unit: float) -> int:
+    """Redraw every live arc whose interval or weight changed; returns how many."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        value = _arc_value(r[k], lo[k], hi[k], weight[k], h, l_hit, spread, unit)
+        if (drawn_seq[slot] == seqs[k] and drawn[slot, 3] == lo[k] and drawn[slot, 4] == hi[k]
+                and drawn[slot, 5] == value):
+            continue
+        if drawn_seq[slot] >= 0:
+            _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, drawn[slot, 0], drawn[slot, 1],
+                      drawn[slot, 2], drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], band)
+        _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, x[k], y[k], r[k], lo[k], hi[k], value,
+                  band)
+        drawn[slot, 0] = x[k]
+        drawn[slot, 1] = y[k]
+        drawn[slot, 2] = r[k]
+        drawn[slot, 3] = lo[k]
+        drawn[slot, 4] = hi[k]
+        drawn[slot, 5] = value
+        drawn_seq[slot] = seqs[k]
+        changed += 1
+    return changed
+
+
+class _Finals(NamedTuple):
+    """Arcs that left the history in a batch, in order: where to draw their final band."""
+
+    x: FloatArray
+    y: FloatArray
+    r: FloatArray
+    lo: FloatArray
+    hi: FloatArray
+    weight: FloatArray
+    seq: npt.NDArray[np.int64]
+
+
+# -- the grid -------------------------------------------------------------------------------------
+
+class CarvedGrid:
+    """Log-odds occupancy grid whose occupied bands are the carved arcs (module docstring).
+
+    Parameters
+    ----------
+    resolution : float
+        Cell side h, metres (> 0).
+    bounds : tuple of 4 floats
+        ``(xmin, ymin, xmax, ymax)`` of the mapped rectangle, metres; the grid has
+        ``ceil((xmax - xmin) / h)`` columns and ``ceil((ymax - ymin) / h)`` rows.
+    method : SonarMethod, optional
+        The carving method the grid runs, fresh (no readings yet); it becomes the grid's own.
+        Default: carving with specular-aware carving at 30°, ``make_method("carve",
+        MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))`` (paper carving is
+        ``make_method("carve")``; see :data:`DEFAULT_MAX_INCIDENCE`). Any method works
+        whose estimates put each point in the middle of its angular interval
+        (:class:`~sonarcarve.methods.Estimates` ``xy`` and ``width``); its ``confidence``, where
+        given, weighs the occupied band.
+    params : CarvedGridParams, optional
+        The sensor model (default: :class:`CarvedGridParams` defaults).
+
+    Attributes
+    ----------
+    readings : int
+        Readings folded in so far.
+
+    Raises
+    ------
+    GridError
+        A resolution or bounds that are not finite, not positive, or need more than
+        :data:`~sonarcarve.grids.elfes.MAX_CELLS` cells; a method that has readings already.
+
+    Examples
+    --------
+    >>> g = CarvedGrid(0.1, (0.0, 0.0, 2.0, 1.0))
+    >>> g.add(Reading(t=0.0, sensor=0, x=0.05, y=0.55, theta=0.0, range=1.0))
+    >>> p = g.probabilities()
+    >>> float(p[5, 10].round(3)), float(p[5, 5].round(3))  # on the arc (spread), free space
+    (0.606, 0.406)
+    >>> trinary(g)[5, [0, 5, 10, 15]].tolist()  # origin, free, arc, beyond: all still unsure
+    [-1, -1, -1, -1]
+    """
+
+    def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
+                 method: SonarMethod | None = None, params: CarvedGridParams | None = None
+                 ) -> None:
+        h = resolution
+        if isinstance(h, bool) or not isinstance(h, int | float) or not math.isfinite(h) or h <= 0:
+            msg = f"carved grid: resolution must be a finite number > 0 metres, got {h!r}"
+            raise GridError(msg)
+        try:
+            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
+        except (TypeError, ValueError):
+            msg = f"carved grid: bounds must be 4 numbers (xmin, ymin, xmax, ymax), got {bounds!r}"
+            raise GridError(msg) from None
+        if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)):
+            msg = f"carved grid: bounds must be finite, got {bounds!r}"
+            raise GridError(msg)
+        if not (xmax > xmin and ymax > ymin):
+            msg = f"carved grid: bounds need xmax > xmin and ymax > ymin, got {bounds!r}"
+            raise GridError(msg)
+        nx = max(1, math.ceil((xmax - xmin) / h - 1e-9))
+        ny = max(1, math.ceil((ymax - ymin) / h - 1e-9))
+        if nx * ny > MAX_CELLS:
+            msg = (f"carved grid: {nx} x {ny} cells of {h:g} m exceed the limit of "
+                   f"{MAX_CELLS:,} (MAX_CELLS); use a coarser resolution or smaller bounds")
+            raise GridError(msg)
+        if method is None:
+            method = make_method("carve", MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
+        elif method.readings:
+            msg = (f"carved grid: the method must be fresh, it has {method.readings} readings "
+                   f"already")
+            raise GridError(msg)
+        self._resolution = float(h)
+        self._bounds = (xmin, ymin, xmax, ymax)
+        self._params = params if params is not None else CarvedGridParams()
+        self._method = method
+        p = self._params
+        self._l_hit, self._l_miss = _logit(p.p_hit), _logit(p.p_miss)
+        self._l_min, self._l_max = _logit(p.p_min), _logit(p.p_max)
+        self._spread = 1.0 if p.spread else 0.0
+        self._unit = max(p.spread_length, self._resolution)
+        self._base = np.zeros((ny, nx), dtype=np.float32)
+        self._live = np.zeros((ny, nx), dtype=np.float64)
+        size = method.history.storage_size
+        # Per slot, what was drawn into ``live``: x, y, r, lo, hi, value; and the arc's
+        # sequence number (its position in the stream of arcs), -1 for nothing.
+        self._drawn = np.zeros((size, 6), dtype=np.float64)
+        self._drawn_seq = np.full(size, -1, dtype=np.int64)
+        self._pending: list[tuple[FloatArray, ...]] = []
+        self._next_final = 0  # sequence number of the next arc to leave the history
+        self._stale = False
+        self.readings = 0
+        method.add_commit_listener(self._on_commit)
+
+    def __repr__(self) -> str:
+        ny, nx = self.shape
+        return (f"CarvedGrid({self._resolution:g} m, {nx} x {ny} cells, "
+                f"bounds={self._bounds}, {self.readings} readings)")
+
+    @classmethod
+    def around(cls, extent: tuple[float, float, float, float], resolution: float,
+               margin: float = 0.5, method: SonarMethod | None = None,
+               params: CarvedGridParams | None = None) -> CarvedGrid:
+        """A grid over ``extent = (xmin, ymin, xmax, ymax)`` grown by ``margin`` metres on
+        every side.
+
+        Raises
+        ------
+        GridError
+            A negative or non-finite margin; a flat extent and no margin.
+        """
+        if not (math.isfinite(margin) and margin >= 0.0):
+            msg = f"carved grid: margin must be a finite number >= 0 metres, got {margin!r}"
+            raise GridError(msg)
+        xmin, ymin, xmax, ymax = extent
+        return cls(resolution, (xmin - margin, ymin - margin, xmax + margin, ymax + margin),
+                   method, params)
+
+    # -- geometry ----------------------------------------------------------------------------
+
+    @property
+    def resolution(self) -> float:
+        """Cell side h, metres."""
+        return self._resolution
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` as given, metres (see :attr:`extent`)."""
+        return self._bounds
+
+    @property
+    def params(self) -> CarvedGridParams:
+        """The sensor model."""
+        return self._params
+
+    @property
+    def method(self) -> SonarMethod:
+        """The carving method the grid runs (read it, do not feed it)."""
+        return self._method
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, columns)`` = cells along y, along x."""
+        ny, nx = self._base.shape
+        return int(ny), int(nx)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` actually covered by the cells, metres."""
+        ny, nx = self.shape
+        xmin, ymin = self._bounds[0], self._bounds[1]
+        return xmin, ymin, xmin + nx * self._resolution, ymin + ny * self._resolution
+
+    @property
+    def band(self) -> float:
+        """Half-width b of the occupied band, metres: ``(h + ε) / 2``."""
+        return 0.5 * (self._resolution + self._params.range_tolerance)
+
+    @property
+    def nbytes(self) -> int:
+        """Memory of the grid's own state (both cell arrays and the per-slot record), bytes;
+        the method's history and state come on top, fixed by its history size."""
+        return int(self._base.nbytes + self._live.nbytes + self._drawn.nbytes
+                   + self._drawn_seq.nbytes)
+
+    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
+        """``(xs, ys)``: centres of the columns, shape (columns,), and rows, shape (rows,)."""
+        ny, nx = self.shape
+        h = self._resolution
+        xs = self._bounds[0] + (np.arange(nx, dtype=np.float64) + 0.5) * h
+        ys = self._bounds[1] + (np.arange(ny, dtype=np.float64) + 0.5) * h
+        return np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
+
+    # -- updates -----------------------------------------------------------------------------
+
+    def add(self, reading: Reading) -> None:
+        """Fold one reading in (validated as by the method's ``add``)."""
+        self.add_many(ReadingBatch.from_readings([reading]))
+
+    def add_many(self, batch: ReadingBatch) -> None:
+        """Fold every reading of ``batch`` in, in order.
+
+        The method checks the whole batch first (:meth:`SonarMethod.add_many`): a bad batch
+        raises :class:`~sonarcarve.readings.ReadingsError` and changes nothing.
+        """
+        n = len(batch)
+        if not n:
+            return
+        method = self._method
+        history = method.history
+        first_seq = history.appended
+        method.add_many(batch)
+        history.flush_retired()  # every arc that left the history is final now
+        # The method's global map grows with the log; the grid is the map, so drop it.
+        method._global = GlobalMapBuilder()  # no public way to discard it
+        finals = self._take_pending()
+        half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
+        _fold_kernel(self._base, self._bounds[0], self._bounds[1], self._resolution,
+                     np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
+                     np.ascontiguousarray(batch.theta), np.ascontiguousarray(batch.range),
+                     np.ascontiguousarray(half), first_seq, history.capacity, finals.x,
+                     finals.y, finals.r, finals.lo, finals.hi, finals.weight, finals.seq,
+                     self.band, self._l_hit, self._l_miss,
+                     self._l_min, self._l_max, self._spread, self._unit,
+                     self._params.fade_range)
+        self.readings += n
+        self._stale = True
+
+    def _on_commit(self, history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
+        """Arcs leaving the history: their live contribution out, their final one pending."""
+        seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
+        self._next_final += len(slots)
+        _undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs,
+                       self._bounds[0], self._bounds[1], self._resolution, self.band)
+        x, y, r = history.x[slots], history.y[slots], history.r[slots]
+        lo, hi, weight = _intervals(x, y, est)
+        self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
+                              seqs.astype(np.float64)))
+
+    def _take_pending(self) -> _Finals:
+        if self._pending:
+            cols = [np.concatenate(c) for c in zip(*self._pending, strict=True)]
+        else:
+            cols = [np.zeros(0) for _ in range(7)]
+        self._pending = []
+        return _Finals(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5],
+                       cols[6].astype(np.int64))
+
+    def _sync(self) -> None:
+        """Bring ``live`` up to date with the method's current carved intervals."""
+        if not self._stale:
+            return
+        history = self._method.history
+        slots = history.slots()
+        if len(slots):
+            est = self._method.estimates(slots)
+            x, y, r = history.x[slots], history.y[slots], history.r[slots]
+            lo, hi, weight = _intervals(x, y, est)
+            seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
+            _sync_kernel(self._live, self._drawn, self._drawn_seq, np.ascontiguousarray(slots),
+                         seqs, x, y, r, lo, hi, weight, self._bounds[0], self._bounds[1],
+                         self._resolution, self.band, self._l_hit, self._spread,
+                         self._unit)
+        self._stale = False
+
+    # -- reading the map ---------------------------------------------------------------------
+
+    @property
+    def log_odds(self) -> FloatArray:
+        """Each cell's log-odds of occupancy, ``clamp(base + live)``, shape :attr:`shape`
+        (a new float64 array)."""
+        self._sync()
+        return np.asarray(np.clip(self._base + self._live, self._l_min, self._l_max))
+
+    @property
+    def live_log_odds(self) -> FloatArray:
+        """The live arcs' summed contribution (unclamped), shape :attr:`shape` (a copy)."""
+        self._sync()
+        return self._live.copy()
+
+    def probabilities(self) -> FloatArray:
+        """Occupancy probability of every cell, shape :attr:`shape`: ``1 / (1 + exp(-l))``."""
+        return np.asarray(1.0 / (1.0 + np.exp(-self.log_odds)))
+
+    def trinary(self) -> Int8Grid:
+        """:data:`OCCUPIED` (100) above :attr:`CarvedGridParams.occupied_threshold`,
+        :data:`FREE` (0) below ``free_threshold``, else :data:`UNKNOWN` (-1)."""
+        return _classify(self.probabilities(), self._params.occupied_threshold,
+                         self._params.free_threshold)
+
+    def occupied_mask(self, threshold: float | None = None) -> BoolArray:
+        """Cells whose probability is above ``threshold`` (default
+        :attr:`CarvedGridParams.occupied_threshold`), shape :attr:`shape`."""
+        limit = self._params.occupied_threshold if threshold is None else _check_probability(
+            "threshold", threshold, 0.0, 1.0)
+        return np.asarray(self.log_odds > _logit(limit))
+
+    def occupied_points(self, threshold: float | None = None) -> FloatArray:
+        """Centres of the occupied cells (:meth:`occupied_mask`), shape (n, 2), row-major."""
+        rows, cols = np.nonzero(self.occupied_mask(threshold))
+        xs, ys = self.cell_centers()
+        return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
+
+
+def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
+    """``(lo, hi, weight)`` of arcs from their estimates: the point's bearing ± width/2, and
+    the confidence (1 where NaN or not modelled; 0 where the arc is not alive)."""
+    bearing = np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x)
+    half = 0.5 * est.width
+    weight = np.ones(len(x)) if est.confidence is None else np.where(
+        np.isnan(est.confidence), 1.0, np.clip(est.confidence, 0.0, 1.0))
+    weight = np.where(est.alive, weight, 0.0)
+    dead = ~(weight > 0.0) | np.isnan(bearing) | np.isnan(half)
+    bearing = np.where(dead, 0.0, bearing)
+    half = np.where(dead, 0.0, half)
+    weight = np.where(dead, 0.0, weight)
+    return (np.ascontiguousarray(bearing - half), np.ascontiguousarray(bearing + half),
+            np.ascontiguousarray(weight, dtype=np.float64))

@@ -1,0 +1,80 @@
+"""``sonarcarve grid``: map_server files from a readings CSV; one-line errors, exit 2."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sonarcarve.cli.grid  # noqa: F401  # registers the command on the app
+from sonarcarve.cli import main
+from sonarcarve.io.map_server import read_map_server
+from sonarcarve.io.readings_csv import write_readings_csv
+from sonarcarve.readings import Reading, ReadingBatch
+
+
+@pytest.fixture
+def readings(tmp_path: Path) -> Path:
+    """A robot driving along a wall 1 m to its left, its sensor facing the wall."""
+    batch = ReadingBatch.from_readings(
+        Reading(t=0.1 * k, sensor=0, x=0.05 * k, y=0.0, theta=math.pi / 2, range=1.0)
+        for k in range(60))
+    path = tmp_path / "readings.csv"
+    write_readings_csv(batch, path)
+    return path
+
+
+@pytest.mark.parametrize("model", ["carved", "range-sensor-layer", "elfes"])
+def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> None:
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(readings), "--model", model, "--resolution", "0.1",
+                 "--out", str(out)]) == 0
+    m = read_map_server(out)
+    assert m.resolution == 0.1
+    rows, cols = m.cells.shape
+    # The readings' extent (x 0..2.95 plus the arcs' ends, y 0..1) plus the 0.5 m margin.
+    assert m.origin[0] < -0.5 + 1e-9
+    assert m.origin[1] == pytest.approx(-0.5)
+    assert m.origin[1] + rows * 0.1 == pytest.approx(1.5, abs=0.1)
+    xs = m.origin[0] + (np.arange(cols) + 0.5) * 0.1
+    ys = m.origin[1] + (np.arange(rows) + 0.5) * 0.1
+    occupied_y = ys[np.nonzero(m.cells == 100)[0]]
+    assert occupied_y.size
+    assert np.all(np.abs(occupied_y - 1.0) <= 0.15)  # the wall
+    assert np.any(m.cells == 0)
+    assert xs.size == cols
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--model", "octomap"], "--model must be one of carved | range-sensor-layer | elfes"),
+    (["--resolution", "0"], "--resolution must be a finite number > 0"),
+    (["--resolution", "abc"], "'abc' is not a number"),
+    (["--margin", "-1"], "--margin must be a finite number >= 0"),
+])
+def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str],
+                                         args: list[str], message: str) -> None:
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(readings), "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("sonarcarve: error: ")
+    assert message in err
+    assert not out.exists()
+    assert not out.with_suffix(".pgm").exists()
+
+
+def test_bad_paths_are_one_line_errors(readings: Path, tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["grid", str(tmp_path / "none.csv"), "--out", str(tmp_path / "g.yaml")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    missing = tmp_path / "no" / "g.yaml"
+    assert main(["grid", str(readings), "--out", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "does not exist" in err
+    assert main(["grid", str(readings), "--out", str(tmp_path / "g.txt")]) == 2
+    assert ".yaml" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["readings.csv"]
