@@ -140,3 +140,24 @@ def test_only_refuses_to_rewrite_the_results_markdown(
     assert "without --only" in capsys.readouterr().err
     assert not md.exists()
 
+
+
+def test_a_local_cluster_gives_the_numbers_of_this_process(tmp_path: Path) -> None:
+    import faulthandler
+    import sys
+
+    faulthandler.dump_traceback_later(120, exit=True, file=sys.__stderr__)
+    try:
+        runs = {}
+        for workers in ("1", "2"):
+            out = tmp_path / workers
+            assert main(["experiments", "--quick", "--only", "t-junction", "--workers", workers,
+                         "--out", str(out)]) == 0
+            runs[workers] = json.loads((out / "results.json").read_text())
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+    assert runs["2"]["meta"]["settings"]["jobs"] == 2
+    for res in runs.values():
+        for key in ("command", "meta"):
+            res.pop(key)
+    assert runs["1"] == runs["2"]

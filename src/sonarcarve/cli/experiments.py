@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Annotated
 
@@ -26,6 +25,7 @@ from sonarcarve.lab.report import (
     result_json,
     write_outputs,
 )
+from sonarcarve.lab.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
 
 __all__ = ["experiments"]
 
@@ -54,8 +54,18 @@ def experiments(
         help=f"Run only this experiment (repeatable): {', '.join(EXPERIMENTS)}.")] = None,
     seeds: Annotated[int | None, typer.Option(
         metavar="N", help="Simulation seeds per scenario (default 3, or 1 with --quick).")] = None,
-    jobs: Annotated[int | None, typer.Option(
-        metavar="N", help="Worker processes (default: all CPUs; 1 with --quick).")] = None,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", "-w", metavar="N",
+        help="Dask worker processes of a local cluster on this machine (default: all CPUs; 1 "
+             "with --quick); 1 runs everything in this process, without Dask.")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", metavar="ADDRESS", envvar="DASK_SCHEDULER_ADDRESS",
+        help="Run on an existing Dask cluster instead: its scheduler's address, e.g. "
+             "tcp://HOST:8786 (`dask scheduler` there, `dask worker tcp://HOST:8786` on each "
+             "machine; default $DASK_SCHEDULER_ADDRESS). The numbers do not change.")] = None,
+    connect_timeout: Annotated[float, typer.Option(
+        "--connect-timeout", metavar="SECONDS",
+        help="How long to wait for --scheduler to answer.")] = DEFAULT_CONNECT_TIMEOUT,
     figures: Annotated[str | None, typer.Option(
         metavar="FOLDER", help="Also copy the PNGs into this folder (e.g. docs/figures).")] = None,
     results_md: Annotated[Path | None, typer.Option(
@@ -69,8 +79,9 @@ def experiments(
         # A partial run would replace the whole generated section with a partial one.
         msg = "--results-md rewrites the whole results section: run it without --only"
         raise ExperimentError(msg)
-    workers = jobs if jobs is not None else (1 if quick else max(1, os.cpu_count() or 1))
-    settings = Settings.make(quick=quick, seeds=seeds, jobs=workers)
+    spec = RunnerSpec.from_env(1 if quick and workers is None else workers, scheduler,
+                               connect_timeout)
+    Settings.make(quick=quick, seeds=seeds)  # refuse bad settings before starting workers
     # A run takes minutes: refuse an output it could not write before, not after.
     # Folders arrive as str, so that an empty --out is refused instead of meaning ".".
     folder = check_output_dir(out, label=f"--out {out}")
@@ -78,8 +89,10 @@ def experiments(
                                                                  label=f"--figures {figures}")
     if results_md is not None:
         _check_results_md(results_md)
-    command = _command(folder, quick, names, seeds, jobs, figures_dir, results_md)
-    with progress(label_width=10, elapsed=True) as bar:
+    command = _command(folder, quick, names, seeds, workers, scheduler, figures_dir,
+                       results_md)
+    with open_runner(spec) as runner, progress(label_width=10, elapsed=True) as bar:
+        settings = Settings.make(quick=quick, seeds=seeds, jobs=runner.workers)
         tasks: dict[str, TaskID] = {}
 
         def on_progress(stage: str, done: int, total: int) -> None:
@@ -87,10 +100,11 @@ def experiments(
                 tasks[stage] = bar.add_task(stage, total=total)
             bar.update(tasks[stage], completed=done, total=total)
 
-        results = run_experiments(settings, names or None, on_progress)
+        results = run_experiments(settings, names or None, on_progress, runner)
     written = write_outputs(results, folder, command=command, figures_dir=figures_dir,
                             results_md=results_md)
-    console.print(f"experiments done in {results.seconds:.0f} s: {len(written)} files in {out}")
+    console.print(f"experiments done in {results.seconds:.0f} s on {spec.describe()}: "
+                  f"{len(written)} files in {out}")
     keys = {k: v for result in results.results.values() for k, v in result_json(result).items()}
     for key, label in (("table1", "Table I (unprocessed %)"), ("fully_carved", "fully carved"),
                        ("openings", "openings passable (%)")):
@@ -109,8 +123,8 @@ def _short(entry: dict[str, object]) -> str:
     return ", ".join(parts[:6])
 
 
-def _command(out: Path, quick: bool, names: list[str], seeds: int | None, jobs: int | None,
-             figures: Path | None, results_md: Path | None) -> str:
+def _command(out: Path, quick: bool, names: list[str], seeds: int | None, workers: int | None,
+             scheduler: str | None, figures: Path | None, results_md: Path | None) -> str:
     """The command line that reproduces this run."""
     parts = ["sonarcarve experiments"]
     if quick:
@@ -118,8 +132,10 @@ def _command(out: Path, quick: bool, names: list[str], seeds: int | None, jobs: 
     parts += [f"--only {n}" for n in names]
     if seeds is not None:
         parts.append(f"--seeds {seeds}")
-    if jobs is not None:
-        parts.append(f"--jobs {jobs}")
+    if workers is not None:
+        parts.append(f"--workers {workers}")
+    if scheduler is not None:
+        parts.append(f"--scheduler {scheduler}")
     parts.append(f"--out {out}")
     if figures is not None:
         parts.append(f"--figures {figures}")

@@ -20,7 +20,10 @@ a typed result, draws its figures and writes its part of ``docs/RESULTS.md``:
   ``summarise``.
 
 :func:`run_experiments` makes each distinct simulation once, shares it between every job that
-needs it (in worker processes with ``Settings.jobs > 1``) and summarises each experiment;
+needs it and summarises each experiment. The simulations and jobs run on a
+:class:`~sonarcarve.lab.runner.Runner`: this process, a local Dask cluster of
+``Settings.jobs`` workers, or any Dask scheduler; every job is a pure function of its inputs
+and its output is keyed by the job, so the numbers are the same on any of them;
 :func:`sonarcarve.lab.report.write_outputs` writes ``results.json``, the figures and the
 Markdown. ``sonarcarve experiments`` and ``make experiments`` go through :data:`EXPERIMENTS`
 alone.
@@ -28,10 +31,8 @@ alone.
 
 from __future__ import annotations
 
-import multiprocessing
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,10 +47,10 @@ from sonarcarve.lab.experiments import (
     t_junction,
 )
 from sonarcarve.lab.experiments.base import Artifacts, Experiment
-from sonarcarve.lab.experiments.jobs import run_one
+from sonarcarve.lab.experiments.jobs import run_job
 from sonarcarve.lab.plan import Job, Settings
+from sonarcarve.lab.runner import ProgressCallback, Ref, Runner, RunnerSpec, Task, open_runner
 from sonarcarve.lab.scenarios import ExperimentError, Scenario, run_simulation
-from sonarcarve.sim.simulate import Simulation
 from sonarcarve.typing import JsonDict
 
 __all__ = [
@@ -68,10 +69,6 @@ EXPERIMENTS: dict[str, Experiment[Any]] = {
                         sensitivity.EXPERIMENT, polling.EXPERIMENT, filters.EXPERIMENT,
                         real_log.EXPERIMENT, odometry.EXPERIMENT)
 }
-
-#: ``on_progress(stage, done, total)`` with stage ``"simulating"`` or ``"mapping"``.
-ProgressCallback = Callable[[str, int, int], None]
-
 
 @dataclass
 class ExperimentResults:
@@ -108,22 +105,30 @@ def run_experiments(
     settings: Settings,
     only: Sequence[str] | None = None,
     on_progress: ProgressCallback | None = None,
+    runner: Runner | None = None,
 ) -> ExperimentResults:
     """Run the chosen experiments (all by default) and summarise them.
 
     Parameters
     ----------
     settings : Settings
-        Sizes, seeds and worker count.
+        Sizes and seeds; ``settings.jobs`` is the worker count recorded with the results and,
+        without ``runner``, the size of the local Dask cluster (1: this process, no Dask).
     only : sequence of str, optional
         Experiment names (keys of :data:`EXPERIMENTS`).
     on_progress : callable, optional
         ``on_progress(stage, done, total)`` with stage ``"simulating"`` or ``"mapping"``.
+    runner : Runner, optional
+        Where the simulations and method runs go (:func:`~sonarcarve.lab.runner.open_runner`:
+        this process, a local cluster or a Dask scheduler); left open. The results do not
+        depend on it.
 
     Raises
     ------
     ExperimentError
         For an unknown experiment name.
+    SchedulerUnreachableError
+        When the runner's scheduler does not answer.
     """
     names = list(EXPERIMENTS) if not only else list(only)
     for name in names:
@@ -133,41 +138,39 @@ def run_experiments(
     tic = time.perf_counter()
     plans = {name: EXPERIMENTS[name].plan(settings) for name in names}
     jobs = [job for name in names for job in plans[name]]
-    sims, outputs = _run_jobs(settings, jobs, on_progress or (lambda stage, done, total: None))
-    run = ExperimentResults(settings, simulations=len(sims), jobs=len(jobs),
-                            readings_simulated=sum(len(sim.readings) for sim in sims.values()))
+    report = on_progress or (lambda stage, done, total: None)
+    if runner is None:
+        with open_runner(RunnerSpec(workers=settings.jobs)) as own:
+            outputs, readings = _run_jobs(own, jobs, report)
+    else:
+        outputs, readings = _run_jobs(runner, jobs, report)
+    run = ExperimentResults(settings, simulations=len(readings), jobs=len(jobs),
+                            readings_simulated=sum(readings.values()))
     for name in names:
-        own = {job.key: outputs[job.key] for job in plans[name]}
-        run.results[name], run.artifacts[name] = EXPERIMENTS[name].summarise(settings, own)
+        own_outputs = {job.key: outputs[job.key] for job in plans[name]}
+        run.results[name], run.artifacts[name] = EXPERIMENTS[name].summarise(settings,
+                                                                             own_outputs)
     run.seconds = time.perf_counter() - tic
     return run
 
 
-def _run_jobs(settings: Settings, jobs: list[Job], report: ProgressCallback) -> tuple[
-        dict[Scenario, Simulation], dict[tuple[Any, ...], JsonDict]]:
-    """Simulate every distinct scenario once, then run every job on its simulation."""
+def _run_jobs(runner: Runner, jobs: list[Job], report: ProgressCallback) -> tuple[
+        dict[tuple[Any, ...], JsonDict], dict[Scenario, int]]:
+    """Simulate every distinct scenario once, then run every job on its simulation.
+
+    Returns each job's output by job key and each simulation's number of readings; the
+    simulations themselves stay where they were made (on the workers, with Dask).
+    """
     scenarios = list(dict.fromkeys(job.scenario for job in jobs))
-    pool = None
-    if settings.jobs > 1:
-        pool = ProcessPoolExecutor(max_workers=settings.jobs,
-                                   mp_context=multiprocessing.get_context("spawn"))
-    try:
-        sims: dict[Scenario, Simulation] = {}
-        report("simulating", 0, len(scenarios))
-        sim_list = (pool.map(run_simulation, scenarios, chunksize=1) if pool is not None
-                    else map(run_simulation, scenarios))
-        for i, (scenario, sim) in enumerate(zip(scenarios, sim_list, strict=True)):
-            sims[scenario] = sim
-            report("simulating", i + 1, len(scenarios))
-        report("mapping", 0, len(jobs))
-        args = [(job, sims[job.scenario]) for job in jobs]
-        out_list = (pool.map(run_one, args, chunksize=1) if pool is not None
-                    else map(run_one, args))
-        outputs: dict[tuple[Any, ...], JsonDict] = {}
-        for i, (job, out) in enumerate(zip(jobs, out_list, strict=True)):
-            outputs[job.key] = out
-            report("mapping", i + 1, len(jobs))
-    finally:
-        if pool is not None:
-            pool.shutdown()
-    return sims, outputs
+    index = {scenario: i for i, scenario in enumerate(scenarios)}
+    tasks = [Task(run_simulation, (scenario,), "simulating", gather=False)
+             for scenario in scenarios]
+    tasks += [Task(run_job, (job, Ref(index[job.scenario])), "mapping") for job in jobs]
+    outputs: dict[tuple[Any, ...], JsonDict] = {}
+    readings: dict[Scenario, int] = {}
+    first = len(scenarios)
+    for i, out in runner.run(tasks, on_progress=report):
+        job = jobs[i - first]
+        outputs[job.key] = out
+        readings[job.scenario] = int(out["readings"])
+    return outputs, readings

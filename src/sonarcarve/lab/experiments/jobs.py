@@ -1,6 +1,7 @@
 """Running one job: a method over its simulation, recorded, then analysed.
 
-Module-level functions only, so that :func:`run_one` pickles to worker processes.
+Module-level functions only, so that :func:`run_job` pickles (by name) to Dask workers; it is a
+pure function of the job and its simulation, so it gives the same output on any worker.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from sonarcarve.methods import make_method
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.typing import JsonDict
 
-__all__ = ["run_job", "run_one"]
+__all__ = ["run_job"]
 
 
 def run_job(job: Job, sim: Simulation) -> JsonDict:
@@ -30,11 +31,6 @@ def run_job(job: Job, sim: Simulation) -> JsonDict:
     out["seconds"] = record.seconds
     out["readings"] = n
     return out
-
-
-def run_one(args: tuple[Job, Simulation]) -> JsonDict:
-    """:func:`run_job` of a ``(job, simulation)`` pair (for ``Executor.map``)."""
-    return run_job(*args)
 
 
 def _sample_stops(n: int, every: int, analysis: str, sim: Simulation,

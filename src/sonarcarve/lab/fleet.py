@@ -1,0 +1,215 @@
+"""Fleets of logs: map many readings CSVs (or ROS bags) in parallel, one map per log.
+
+:func:`map_logs` sends one task per log to a :class:`~sonarcarve.lab.runner.Runner` (this
+process, a local Dask cluster or a scheduler's); each task reads its log, maps it with one method
+(as ``sonarcarve process`` does) and writes ``OUT_DIR/<log name>.map.csv`` atomically. A log that
+fails (unreadable, bad values, a crash of its worker) gets its one-line error in the summary
+and does not stop the others. The summary (:class:`FleetRow` per log, in the order given) is
+written to ``OUT_DIR/summary.csv``.
+
+Mapping a log is a pure function of the log's content and the parameters, so the maps are the
+same bytes whatever runs them. The task reads and writes the files itself: on a cluster the
+logs and ``OUT_DIR`` must be on storage every worker sees (a shared file system).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from collections.abc import Sequence
+from dataclasses import astuple, dataclass, fields
+from pathlib import Path
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.filters import MapFilter, ReadingFilter
+from sonarcarve.io import read_readings_csv, read_rosbag, write_map_csv
+from sonarcarve.io.atomic import atomic_text, make_output_dir
+from sonarcarve.lab.runner import ProgressCallback, Runner, SerialRunner, Task, TaskFailure
+from sonarcarve.methods import MethodConfig, make_method
+from sonarcarve.pipeline import process_readings
+
+__all__ = ["FleetError", "FleetRow", "map_log", "map_logs", "map_name", "write_summary"]
+
+#: File name of the summary table in the output folder.
+SUMMARY_NAME = "summary.csv"
+
+#: Endings of ROS bags (a rosbag2 folder is recognised as a folder).
+_BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+
+
+class FleetError(SonarcarveError):
+    """A fleet request that cannot start: no logs, or two logs with one output name."""
+
+
+@dataclass(frozen=True)
+class FleetRow:
+    """One log's line of the summary.
+
+    Attributes
+    ----------
+    log : str
+        The input path, as given.
+    map : str
+        The map written (empty when the log failed).
+    readings : int
+        Readings mapped.
+    points : int
+        Points in the global map.
+    fully_carved, split : int
+        Arcs fully carved, and split (dropped).
+    unprocessed : float
+        Mean share of unprocessed history rows, percent (the paper's Table I measure).
+    seconds : float
+        The method's wall time on the log (not part of the result's identity).
+    error : str
+        Empty, or the one-line reason the log has no map.
+    """
+
+    log: str
+    map: str = ""
+    readings: int = 0
+    points: int = 0
+    fully_carved: int = 0
+    split: int = 0
+    unprocessed: float = 0.0
+    seconds: float = 0.0
+    error: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """True when the log was mapped."""
+        return not self.error
+
+
+def map_name(log: str | Path) -> str:
+    """The map's file name for ``log``: its name without the ending, plus ``.map.csv``.
+
+    Examples
+    --------
+    >>> map_name("/data/robot-7/2024-05-01.csv")
+    '2024-05-01.map.csv'
+    >>> map_name("run.bag")
+    'run.map.csv'
+    """
+    path = Path(log)
+    return f"{path.stem if path.suffix else path.name}.map.csv"
+
+
+def map_log(log: str, out: str, method: str, config: MethodConfig,
+            reading_filter: ReadingFilter | None = None,
+            map_filter: MapFilter | None = None) -> FleetRow:
+    """Map one log and write its global map to ``out``; never raises for a bad log.
+
+    Parameters
+    ----------
+    log : str
+        A readings CSV, or a ROS bag (``*.bag``, ``*.mcap``, a rosbag2 folder).
+    out : str
+        Where to write the map CSV (atomically: a failed log leaves nothing behind).
+    method : str
+        Method name (``combined``, ``carve``, ``atm``, ``centerline``, ...).
+    config : MethodConfig
+        The method's parameters.
+    reading_filter, map_filter : optional
+        As for :func:`~sonarcarve.pipeline.process_readings`.
+
+    Returns
+    -------
+    FleetRow
+        The log's summary line; ``error`` holds the reason when it failed.
+    """
+    try:
+        path = Path(log)
+        if path.is_dir() or path.suffix.lower() in _BAG_SUFFIXES:
+            batch = read_rosbag(path).batch
+        else:
+            batch = read_readings_csv(path)
+        tic = time.perf_counter()
+        result = process_readings(batch, make_method(method, config),
+                                  reading_filter=reading_filter, map_filter=map_filter)
+        seconds = time.perf_counter() - tic
+        write_map_csv(result.global_map, out)
+    except Exception as err:  # one bad log must not stop the fleet: report it, go on
+        text = " ".join(str(err).split())
+        reason = text if isinstance(err, SonarcarveError) and text else (
+            f"{type(err).__name__}: {text}" if text else type(err).__name__)
+        return FleetRow(log, error=reason)
+    return FleetRow(log, out, result.readings, len(result.global_map), result.fully_carved,
+                    result.split, 100.0 * result.mean_unprocessed_share, seconds)
+
+
+def map_logs(
+    logs: Sequence[str | Path],
+    out_dir: str | Path,
+    method: str = "combined",
+    config: MethodConfig | None = None,
+    *,
+    runner: Runner | None = None,
+    reading_filter: ReadingFilter | None = None,
+    map_filter: MapFilter | None = None,
+    on_progress: ProgressCallback | None = None,
+) -> list[FleetRow]:
+    """Map every log in parallel, one map per log in ``out_dir``, and write the summary.
+
+    Parameters
+    ----------
+    logs : sequence of path
+        Readings CSVs or ROS bags.
+    out_dir : path
+        Output folder (created); gets ``<name>.map.csv`` per log (:func:`map_name`) and
+        ``summary.csv``.
+    method, config, reading_filter, map_filter
+        As for ``sonarcarve process``; the config defaults to ``MethodConfig()``.
+    runner : Runner, optional
+        Where the logs are mapped (default: this process).
+    on_progress : callable, optional
+        ``on_progress("mapping", done, total)``.
+
+    Returns
+    -------
+    list of FleetRow
+        One per log, in the order of ``logs``; failed logs carry their error.
+
+    Raises
+    ------
+    FleetError
+        No logs, a log given twice, or two logs that would write the same map name.
+    """
+    if not logs:
+        msg = "no logs to map"
+        raise FleetError(msg)
+    method_config = MethodConfig() if config is None else config
+    make_method(method, method_config)  # an unknown method fails now, not once per log
+    folder = make_output_dir(out_dir, label=f"--out-dir {out_dir}")
+    names: dict[str, str] = {}
+    for log in logs:
+        name = map_name(log)
+        if name in names:
+            msg = (f"{names[name]} and {log} would both write {name}; map them into "
+                   "different folders or rename one")
+            raise FleetError(msg)
+        names[name] = str(log)
+    outs = [str(folder / map_name(log)) for log in logs]
+    tasks = [Task(map_log, (str(log), out, method, method_config, reading_filter, map_filter),
+                  "mapping") for log, out in zip(logs, outs, strict=True)]
+    rows: dict[int, FleetRow] = {}
+    own = runner if runner is not None else SerialRunner()
+    for i, value in own.run(tasks, on_progress=on_progress, capture_errors=True):
+        # A TaskFailure: the worker itself died on this log, more than Dask allows.
+        rows[i] = (FleetRow(str(logs[i]), error=value.message)
+                   if isinstance(value, TaskFailure) else value)
+    ordered = [rows[i] for i in range(len(tasks))]
+    write_summary(ordered, folder / SUMMARY_NAME)
+    return ordered
+
+
+def write_summary(rows: Sequence[FleetRow], path: str | Path) -> None:
+    """Write the summary table (one line per log, the :class:`FleetRow` fields) atomically."""
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow([f.name for f in fields(FleetRow)])
+    for row in rows:
+        writer.writerow([repr(v) if isinstance(v, float) else v for v in astuple(row)])
+    with atomic_text(path) as handle:
+        handle.write(text.getvalue())

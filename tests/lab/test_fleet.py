@@ -1,0 +1,100 @@
+"""Fleets of logs: one map per log, the same maps on a Dask cluster as in this process, and a
+bad log reported in the summary without stopping the others."""
+
+from __future__ import annotations
+
+import csv
+import faulthandler
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from sonarcarve.io import write_readings_csv
+from sonarcarve.lab.fleet import FleetError, map_logs, map_name
+from sonarcarve.lab.runner import DaskRunner, RunnerSpec
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+
+TIME_LIMIT = 120
+
+
+@pytest.fixture
+def time_limit() -> Iterator[None]:
+    faulthandler.dump_traceback_later(TIME_LIMIT, exit=True, file=sys.__stderr__)
+    yield
+    faulthandler.cancel_dump_traceback_later()
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    folder = tmp_path_factory.mktemp("logs")
+    paths = []
+    for seed in (0, 1, 2):
+        path = folder / f"robot-{seed}.csv"
+        write_readings_csv(run_simulation(Scenario("office", seed, max_length=4.0)).readings,
+                           path)
+        paths.append(path)
+    bad = folder / "broken.csv"
+    bad.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,oops\n")
+    return [paths[0], bad, paths[1], paths[2]]
+
+
+def _maps(folder: Path) -> dict[str, str]:
+    return {p.name: p.read_text() for p in sorted(folder.glob("*.map.csv"))}
+
+
+def _summary(folder: Path) -> list[dict[str, str]]:
+    with (folder / "summary.csv").open() as handle:
+        return [{k: v for k, v in row.items() if k not in ("seconds", "map")}
+                for row in csv.DictReader(handle)]
+
+
+@pytest.fixture(scope="module")
+def serial(logs: list[Path], tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("serial")
+    rows = map_logs(logs, out, "carve")
+    assert [row.ok for row in rows] == [True, False, True, True]
+    return out
+
+
+def test_each_log_gets_a_map_and_a_summary_line(logs: list[Path], serial: Path) -> None:
+    assert sorted(_maps(serial)) == ["robot-0.map.csv", "robot-1.map.csv", "robot-2.map.csv"]
+    summary = _summary(serial)
+    assert [row["log"] for row in summary] == [str(p) for p in logs]
+    broken = summary[1]
+    assert broken["error"]
+    assert "\n" not in broken["error"]
+    assert int(summary[0]["points"]) > 0
+    assert all(row["error"] == "" for i, row in enumerate(summary) if i != 1)
+
+
+def test_a_cluster_fleet_equals_the_serial_one(
+    logs: list[Path], serial: Path, tmp_path: Path, time_limit: None
+) -> None:
+    with DaskRunner(RunnerSpec(workers=2)) as runner:
+        rows = map_logs(logs, tmp_path, "carve", runner=runner)
+    assert [row.ok for row in rows] == [True, False, True, True]
+    assert _maps(tmp_path) == _maps(serial)
+    assert _summary(tmp_path) == _summary(serial)
+
+
+def test_bad_requests_fail_before_mapping(logs: list[Path], tmp_path: Path) -> None:
+    with pytest.raises(FleetError, match="no logs"):
+        map_logs([], tmp_path)
+    with pytest.raises(FleetError, match="both write"):
+        map_logs([logs[0], replace_parent(logs[0], tmp_path)], tmp_path / "out")
+    assert map_name("a/b.csv") == "b.map.csv"
+
+
+def replace_parent(path: Path, folder: Path) -> Path:
+    copy = folder / path.name
+    copy.write_bytes(path.read_bytes())
+    return copy
+
+
+def test_unknown_method_fails_once(logs: list[Path], tmp_path: Path) -> None:
+    from sonarcarve.errors import ConfigError
+
+    with pytest.raises(ConfigError):
+        map_logs(logs[:1], tmp_path, "nope")
