@@ -10,6 +10,13 @@ from sonarcarve.sim.motion import (
     follow_waypoints,
     with_odometry_drift,
 )
+from sonarcarve.sim.scene import (
+    CHANGING_SCENES,
+    ChangingScene,
+    DynamicObstacle,
+    Scene,
+    changing_scene,
+)
 from sonarcarve.sim.simulate import Simulation, SonarTruth, simulate
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
@@ -25,14 +32,18 @@ from sonarcarve.sim.sonar import (
 from sonarcarve.sim.world import World, WorldError, builtin_worlds, load_world
 
 __all__ = [
+    "CHANGING_SCENES",
     "DEFAULT_PHYSICS",
     "ECHO_MODELS",
     "NO_ECHO",
     "ROBOT_RADIUS",
     "AmplitudeModel",
+    "ChangingScene",
+    "DynamicObstacle",
     "EchoKind",
     "Echoes",
     "Firings",
+    "Scene",
     "Simulation",
     "SonarPhysics",
     "SonarPhysicsError",
@@ -41,6 +52,7 @@ __all__ = [
     "World",
     "WorldError",
     "builtin_worlds",
+    "changing_scene",
     "corridor_opening_world",
     "doorway_world",
     "explore",

@@ -11,6 +11,7 @@ import numpy as np
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import RobotDescription
 from sonarcarve.sim.motion import Trajectory
+from sonarcarve.sim.scene import Scene
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
     Echoes,
@@ -41,12 +42,16 @@ class SonarTruth:
         Noise-free range of the echo, metres (before noise and quantisation).
     firing : ndarray of int64, shape (n,)
         Row of the reading's firing in :attr:`Simulation.firings`.
+    obstacle : ndarray of int64, shape (n,)
+        Index in :attr:`Simulation.scene` of the obstacle the echo came from; -1 for a static
+        wall, an echo without a reflection point (floor, crosstalk), or no scene.
     """
 
     kind: IntArray
     reflection: FloatArray
     true_range: FloatArray
     firing: IntArray
+    obstacle: IntArray
 
     def __len__(self) -> int:
         return int(self.kind.shape[0])
@@ -86,6 +91,8 @@ class Simulation:
         The sensor model used.
     seed : int
         The seed: the same seed and inputs give the same simulation.
+    scene : Scene or None
+        The obstacles that appeared, vanished or moved during the run, if any.
     """
 
     readings: ReadingBatch
@@ -98,6 +105,7 @@ class Simulation:
     odometry: Trajectory | None
     physics: SonarPhysics
     seed: int
+    scene: Scene | None = None
 
     def kind_counts(self) -> dict[str, int]:
         """Readings per echo kind (``direct``, ``crosstalk``, ``floor``, ``multipath``)."""
@@ -120,6 +128,7 @@ def simulate(
     odometry: Trajectory | None = None,
     *,
     on_progress: Callable[[int, int], None] | None = None,
+    scene: Scene | None = None,
 ) -> Simulation:
     """Fire the robot's sonar ring along a trajectory and record what it hears.
 
@@ -145,6 +154,9 @@ def simulate(
         odometry drift would record) while echoes still come from the true poses.
     on_progress : callable, optional
         ``on_progress(done, total)`` in firings, called as the simulation advances.
+    scene : Scene, optional
+        Obstacles that appear, vanish or move (:mod:`sonarcarve.sim.scene`); each reading's
+        truth names the obstacle it came from (:attr:`SonarTruth.obstacle`).
 
     Returns
     -------
@@ -160,7 +172,8 @@ def simulate(
     seed = check_seed(seed)
     times, sensors = robot.firing_schedule(float(trajectory.t[0]), float(trajectory.t[-1]))
     firings = _firings(robot, trajectory, times, sensors)
-    echoes = fire_sonars(world, robot, firings, physics, np.random.default_rng(seed), on_progress)
+    echoes = fire_sonars(world, robot, firings, physics, np.random.default_rng(seed), on_progress,
+                         scene=scene)
     heard = np.flatnonzero(echoes.heard)
     # Echoes come from the true poses; readings carry the poses the robot believes it had.
     stamped = firings if odometry is None else _firings(robot, odometry, times, sensors)
@@ -168,7 +181,7 @@ def simulate(
     return Simulation(readings=readings, truth=_heard_truth(echoes, heard), world=world,
                       robot=robot,
                       trajectory=trajectory, firings=firings, echoes=echoes, odometry=odometry,
-                      physics=physics, seed=seed)
+                      physics=physics, seed=seed, scene=scene)
 
 
 def _heard_readings(robot: RobotDescription, stamped: Firings, echoes: Echoes, heard: IntArray,
@@ -199,7 +212,8 @@ def _heard_readings(robot: RobotDescription, stamped: Firings, echoes: Echoes, h
 def _heard_truth(echoes: Echoes, heard: IntArray) -> SonarTruth:
     """The ground truth of the firings ``heard`` (indices, shape (readings,)), row per reading."""
     return SonarTruth(kind=echoes.kind[heard], reflection=echoes.reflection[heard],
-                      true_range=echoes.true_range[heard], firing=heard.astype(np.int64))
+                      true_range=echoes.true_range[heard], firing=heard.astype(np.int64),
+                      obstacle=echoes.obstacle[heard])
 
 
 def _firings(robot: RobotDescription, trajectory: Trajectory, times: FloatArray,

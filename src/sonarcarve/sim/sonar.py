@@ -27,11 +27,17 @@ mirror image (heard when their normal falls in the transducer's beam pattern, ma
 lobes, loudly enough for the range), by diffuse scattering ray by ray, and corners and wall
 ends by retro-reflection or diffraction; multipath and crosstalk paths are followed the same way
 and heard when loud enough. Floor echoes keep their episodes and probability in both models.
+
+With a :class:`~sonarcarve.sim.scene.Scene` (``fire_sonars(..., scene=)``), each firing is traced
+against the walls plus the scene's obstacles present at its time, where they are at that time;
+everything else is the same (and without a scene, bit for bit what it was).
 """
 
 from __future__ import annotations
 
 import math
+import weakref
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from enum import IntEnum
@@ -50,6 +56,7 @@ from sonarcarve.sim.amplitude import (
     path_echo_db,
     point_echo_db,
 )
+from sonarcarve.sim.scene import Scene
 from sonarcarve.sim.world import World
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
@@ -269,12 +276,16 @@ class Echoes:
     reflection : ndarray, shape (n, 2)
         True reflection point in the world frame, metres; NaN for floor and crosstalk echoes
         and where nothing was heard.
+    obstacle : ndarray of int64, shape (n,)
+        Index of the :class:`~sonarcarve.sim.scene.Scene` obstacle the echo came from (its
+        reflection point lies on it), -1 for a static wall, no reflection point, or no scene.
     """
 
     range: FloatArray
     true_range: FloatArray
     kind: IntArray
     reflection: FloatArray
+    obstacle: IntArray
 
     def __len__(self) -> int:
         return int(self.range.shape[0])
@@ -292,6 +303,8 @@ def fire_sonars(
     physics: SonarPhysics | None = None,
     rng: np.random.Generator | None = None,
     on_progress: Callable[[int, int], None] | None = None,
+    *,
+    scene: Scene | None = None,
 ) -> Echoes:
     """Simulate every firing: trace its beam, add spurious echoes, keep the first one heard.
 
@@ -310,6 +323,10 @@ def fire_sonars(
         a fixed order, so a seed fixes the output whatever the batching.
     on_progress : callable, optional
         Called as ``on_progress(done, total)`` (firings traced so far) after each batch.
+    scene : Scene, optional
+        Obstacles that appear, vanish or move (:mod:`sonarcarve.sim.scene`): each firing meets
+        the walls plus the obstacles present at its time, at their position then. No draw
+        depends on the scene, so a seed gives the same noise with or without one.
 
     Returns
     -------
@@ -320,10 +337,10 @@ def fire_sonars(
     gen = np.random.default_rng(0) if rng is None else rng
     n = len(firings)
     draws = _Draws.make(gen, firings, physics)
-    geometry = _WallGeometry.make(world)
+    scenery = _Scenery.make(world, scene, firings)
     far_range = robot.max_range + physics.sound_speed * _max_gap(firings, physics) / 2.0
     model = _ECHO_MODEL_TRACERS[physics.echo_model]
-    traced, crosstalk, multipath = model(geometry, robot, firings, physics, far_range, draws,
+    traced, crosstalk, multipath = model(scenery, robot, firings, physics, far_range, draws,
                                          gen, on_progress)
     floor = _floor(robot, firings, physics, draws)
     candidates = np.column_stack([traced.direct_range, crosstalk, floor, multipath])
@@ -331,11 +348,15 @@ def fire_sonars(
     true_range = candidates[np.arange(n), winner]
     measured = _measure(true_range + physics.range_noise * draws.noise, robot, physics)
     heard = np.isfinite(true_range) & (measured >= robot.min_range) & (measured <= robot.max_range)
+    reflection = _reflections(traced, heard, winner)
+    obstacle = (np.full(n, -1, dtype=np.int64) if scene is None
+                else scene.obstacle_hit(reflection, firings.t))
     return Echoes(
         range=np.where(heard, measured, np.nan),
         true_range=np.where(heard, true_range, np.nan),
         kind=np.where(heard, winner, NO_ECHO).astype(np.int64),
-        reflection=_reflections(traced, heard, winner),
+        reflection=reflection,
+        obstacle=obstacle,
     )
 
 
@@ -344,16 +365,18 @@ def fire_sonars(
 _ModelEchoes = tuple["_Traced", FloatArray, FloatArray]
 
 
-def _specular_echoes(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+def _specular_echoes(scenery: _Scenery, robot: RobotDescription, firings: Firings,
                      physics: SonarPhysics, far_range: float, draws: _Draws,
                      rng: np.random.Generator,
                      on_progress: Callable[[int, int], None] | None) -> _ModelEchoes:
     """The specular model: ray tracing, then crosstalk and multipath by their probabilities."""
     traced = _Traced.empty(len(firings), physics.rays_per_beam)
-    _trace_all(traced, len(geometry.world),
-               lambda lo, hi: _trace_chunk(geometry, robot, firings[lo:hi], physics, far_range,
-                                           traced, lo),
-               on_progress)
+
+    def trace(lo: int, hi: int) -> None:
+        for a, b, geometry in scenery.pieces(lo, hi):
+            _trace_chunk(geometry, robot, firings[a:b], physics, far_range, traced, a)
+
+    _trace_all(traced, scenery.walls, trace, on_progress)
     crosstalk = _crosstalk(robot, firings, physics, traced)
     return (traced,
             np.where(draws.crosstalk < physics.crosstalk_probability, crosstalk, np.inf),
@@ -361,20 +384,23 @@ def _specular_echoes(geometry: _WallGeometry, robot: RobotDescription, firings: 
                      np.inf))
 
 
-def _amplitude_echoes(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+def _amplitude_echoes(scenery: _Scenery, robot: RobotDescription, firings: Firings,
                       physics: SonarPhysics, far_range: float, draws: _Draws,
                       rng: np.random.Generator,
                       on_progress: Callable[[int, int], None] | None) -> _ModelEchoes:
     """The amplitude model: every candidate echo heard or not by its level (module doc)."""
     # Drawn after every draw the specular model makes, so theirs keep their order.
     key = int(rng.integers(0, 2**63 - 1))
-    corners = _Corners.make(geometry, physics.amplitude.right_corner_tolerance)
+    tolerance = physics.amplitude.right_corner_tolerance
     traced = _Traced.empty(len(firings), 0)
-    _trace_all(traced, len(geometry.world),
-               lambda lo, hi: _trace_amplitude_chunk(geometry, corners, robot, firings[lo:hi],
-                                                     physics, traced, lo, key),
-               on_progress)
-    crosstalk = _crosstalk_amplitude(geometry, robot, firings, physics, far_range, key)
+
+    def trace(lo: int, hi: int) -> None:
+        for a, b, geometry in scenery.pieces(lo, hi):
+            _trace_amplitude_chunk(geometry, scenery.corners(geometry, tolerance), robot,
+                                   firings[a:b], physics, traced, a, key)
+
+    _trace_all(traced, scenery.walls, trace, on_progress)
+    crosstalk = _crosstalk_amplitude(scenery, robot, firings, physics, far_range, key)
     return traced, crosstalk, traced.multipath_range
 
 
@@ -495,6 +521,76 @@ class _WallGeometry:
             return np.zeros(points.shape[0], dtype=bool)
         distance, _ = self.tree.query(points, k=1, distance_upper_bound=radius * (1 + 1e-12))
         return np.asarray(np.isfinite(distance))
+
+
+#: Geometries of a scene's runs kept built at once (a moving obstacle makes one per firing).
+_SCENERY_CACHE = 512
+
+
+class _Scenery:
+    """The walls each firing meets: the world's, or the world's plus a scene's obstacles.
+
+    :meth:`pieces` cuts a range of firings into runs that meet the same walls, each with its
+    :class:`_WallGeometry` (built once per run, the last :data:`_SCENERY_CACHE` kept). Without
+    a scene there is one run, and one geometry, the world's, built up front.
+    """
+
+    def __init__(self, world: World, scene: Scene | None, times: FloatArray,
+                 starts: IntArray) -> None:
+        self.world = world
+        self.scene = scene
+        self.times = times
+        self.starts = starts
+        obstacle_walls = 0 if scene is None else sum(o.segments.shape[0] for o in scene.obstacles)
+        #: Most walls any firing can meet (0: no firing meets any).
+        self.walls = len(world) + obstacle_walls
+        self._built: OrderedDict[int, _WallGeometry] = OrderedDict()
+        self._corners: weakref.WeakKeyDictionary[_WallGeometry, _Corners] = (
+            weakref.WeakKeyDictionary())
+        if scene is None:
+            self._built[0] = _WallGeometry.make(world)
+
+    @classmethod
+    def make(cls, world: World, scene: Scene | None, firings: Firings) -> _Scenery:
+        if scene is None:
+            return cls(world, None, firings.t, np.zeros(1, dtype=np.int64))
+        return cls(world, scene, firings.t, scene.epochs(firings.t))
+
+    def pieces(self, lo: int, hi: int) -> list[tuple[int, int, _WallGeometry]]:
+        """Firings ``lo:hi`` as runs ``(a, b, geometry)`` that meet the same walls."""
+        if self.scene is None:
+            return [(lo, hi, self._built[0])]
+        first = int(np.searchsorted(self.starts, lo, side="right")) - 1
+        out = []
+        run = first
+        while run < self.starts.shape[0] and self.starts[run] < hi:
+            a = max(lo, int(self.starts[run]))
+            b = min(hi, int(self.starts[run + 1]) if run + 1 < self.starts.shape[0] else hi)
+            geometry = self._geometry(run)
+            if len(geometry.world):
+                out.append((a, b, geometry))
+            run += 1
+        return out
+
+    def corners(self, geometry: _WallGeometry, tolerance: float) -> _Corners:
+        """The amplitude model's corners of ``geometry``, made once per geometry."""
+        found = self._corners.get(geometry)
+        if found is None:
+            found = self._corners[geometry] = _Corners.make(geometry, tolerance)
+        return found
+
+    def _geometry(self, run: int) -> _WallGeometry:
+        found = self._built.get(run)
+        if found is not None:
+            self._built.move_to_end(run)
+            return found
+        assert self.scene is not None  # a static world's one geometry is always built
+        made = _WallGeometry.make(self.scene.world_at(self.world,
+                                                      float(self.times[self.starts[run]])))
+        self._built[run] = made
+        if len(self._built) > _SCENERY_CACHE:
+            self._built.popitem(last=False)
+        return made
 
 
 def _scatter_points(seg: FloatArray, tol: float = 1e-9) -> FloatArray:
@@ -1060,7 +1156,7 @@ def _retrace_paths(geometry: _WallGeometry, world: World, robot: RobotDescriptio
     return fi[heard], length[heard], foot[heard]
 
 
-def _crosstalk_amplitude(geometry: _WallGeometry, robot: RobotDescription, firings: Firings,
+def _crosstalk_amplitude(scenery: _Scenery, robot: RobotDescription, firings: Firings,
                          physics: SonarPhysics, far_range: float, key: int) -> FloatArray:
     """Apparent range of the first loud enough late echo of a recent ping (inf: none).
 
@@ -1072,13 +1168,15 @@ def _crosstalk_amplitude(geometry: _WallGeometry, robot: RobotDescription, firin
     """
     n = len(firings)
     best = np.full(n, np.inf)
-    if physics.crosstalk_probability <= 0.0 or len(geometry.world) == 0:
+    if physics.crosstalk_probability <= 0.0 or scenery.walls == 0:
         return best
     amp, c = physics.amplitude, physics.sound_speed
     low = amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db
     for lag in range(1, min(physics.crosstalk_lookback, n - 1) + 1):
-        for lo in range(lag, n, _CHUNK_FIRINGS):
-            k = np.arange(lo, min(lo + _CHUNK_FIRINGS, n))
+        pieces = (piece for lo in range(lag, n, _CHUNK_FIRINGS)
+                  for piece in scenery.pieces(lo, min(lo + _CHUNK_FIRINGS, n)))
+        for first, stop, geometry in pieces:
+            k = np.arange(first, stop)
             j = k - lag
             xs = np.concatenate((firings.x[k], firings.x[j]))
             ys = np.concatenate((firings.y[k], firings.y[j]))
