@@ -1,4 +1,4 @@
-"""process_readings: the whole-log run behind ``sonarcarve process``.
+"""process_readings and process_chunks: the whole-log run behind ``sonarcarve process``.
 
 The centerline method is used wherever points must be known by hand: its point is
 ``origin + r (cos θ, sin θ)`` (eq. 3.3).
@@ -7,18 +7,19 @@ The centerline method is used wherever points must be known by hand: its point i
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
 import pytest
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.filters import FilterError, MapFilter, ReadingFilter
+from sonarcarve.filters import FilterError, MapFilter, ReadingFilter, filter_readings
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import CarvingMethod, CenterlineMethod, Estimates
 from sonarcarve.methods.centerline import CenterlineModel
-from sonarcarve.pipeline import ProcessError, process_readings
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.pipeline import ProcessError, process_chunks, process_readings
+from sonarcarve.readings import ReadingBatch, ReadingsError
 from sonarcarve.typing import SlotArray
 
 
@@ -222,3 +223,90 @@ def test_bad_filter_parameters_are_sonarcarve_errors() -> None:
     with pytest.raises(FilterError) as info:
         MapFilter(outlier_radius=0.0)
     assert isinstance(info.value, SonarcarveError)
+
+
+# -- a log in batches ---------------------------------------------------------------------------
+
+
+def _noisy_log(n: int, seed: int) -> ReadingBatch:
+    """Four sensors, ranges with spikes (jumps), some too near or too far."""
+    rng = np.random.default_rng(seed)
+    r = rng.uniform(0.5, 2.0, n)
+    r[rng.random(n) < 0.15] = rng.uniform(0.05, 8.0)
+    return ReadingBatch.from_arrays(t=np.arange(n) * 0.05, sensor=rng.integers(0, 4, n),
+                                    x=0.02 * np.arange(n), y=rng.normal(0, 0.1, n),
+                                    theta=rng.uniform(-3, 3, n), range=r)
+
+
+def _cuts(n: int, rng: np.random.Generator) -> list[slice]:
+    edges = np.unique(np.concatenate(([0, n], rng.integers(0, n + 1, rng.integers(1, 12)))))
+    # Empty batches too, first and last.
+    return [slice(0, 0), *(slice(a, b) for a, b in itertools.pairwise(edges.tolist())),
+            slice(n, n)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("spec", [
+    None,
+    ReadingFilter(jump_threshold=0.4),
+    ReadingFilter(max_range=3.0, min_range=0.2, jump_threshold=0.4),
+    ReadingFilter(max_range=3.0),
+])
+def test_batches_give_what_the_whole_log_gives(seed: int, spec: ReadingFilter | None) -> None:
+    batch = _noisy_log(131, seed)
+    whole_calls: list[int] = []
+    whole = process_readings(batch, CarvingMethod(history_size=12), sample_every=5,
+                             on_progress=whole_calls.append, reading_filter=spec)
+    cut_calls: list[int] = []
+    cuts = _cuts(len(batch), np.random.default_rng(seed))
+    cut = process_chunks((batch[part] for part in cuts), CarvingMethod(history_size=12),
+                         sample_every=5, on_progress=cut_calls.append, reading_filter=spec)
+    assert cut_calls == whole_calls
+    assert cut.readings == whole.readings
+    assert cut.reading_filter == whole.reading_filter
+    assert cut.mean_unprocessed_share == whole.mean_unprocessed_share
+    assert (cut.fully_carved, cut.split) == (whole.fully_carved, whole.split)
+    for field in ("reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range"):
+        np.testing.assert_array_equal(getattr(cut.global_map, field),
+                                      getattr(whole.global_map, field))
+    if spec is not None and spec.jump_threshold is not None:
+        assert whole.reading_filter is not None
+        assert whole.reading_filter.jumps > 0
+    # ... and the whole log is what the library's batch filter and the method make of it.
+    by_hand = CarvingMethod(history_size=12)
+    ids = np.arange(len(batch))
+    if spec is not None:
+        kept = filter_readings(batch, spec)
+        batch, ids = kept.batch, kept.ids
+    for reading, reading_id in zip(batch, ids.tolist(), strict=True):
+        by_hand.add(reading, reading_id)
+    np.testing.assert_array_equal(whole.global_map.xy, by_hand.finish().xy)
+
+
+def test_jump_filter_across_a_cut_compares_with_the_sensors_last_reading() -> None:
+    # Sensor 0: 1.0 | 3.0 (jumps) 3.0 (agrees with the 3.0 that jumped); sensor 1 starts after
+    # the cut; the cut falls between rows 0 and 1, and row 2 of sensor 1 is its first reading.
+    batch = ReadingBatch.from_arrays(t=[0, 1, 2, 3], sensor=[0, 0, 1, 0], x=[0] * 4, y=[0] * 4,
+                                     theta=[0] * 4, range=[1.0, 3.0, 9.0, 3.0])
+    result = process_chunks([batch[:1], batch[1:]], CenterlineMethod(history_size=4),
+                            reading_filter=ReadingFilter(jump_threshold=0.5))
+    assert result.global_map.reading_id.tolist() == [0, 2, 3]
+    assert result.reading_filter is not None
+    assert result.reading_filter.jumps == 1
+
+
+def test_a_bad_batch_names_the_reading_by_its_id() -> None:
+    good = _row(6)
+    backwards = ReadingBatch(**{**{name: getattr(good, name) for name in (
+        "sensor", "x", "y", "theta", "range", "beam_width")}, "t": good.t[::-1].copy()})
+    with pytest.raises(ReadingsError, match=r"reading 7, column 't' goes backwards in time"):
+        process_chunks([good, backwards], CenterlineMethod(history_size=4), sample_every=2)
+
+
+def test_process_chunks_checks_its_arguments_as_process_readings_does() -> None:
+    with pytest.raises(ProcessError, match="sample_every"):
+        process_chunks([_row(3)], CenterlineMethod(history_size=4), sample_every=0)
+    method = CenterlineMethod(history_size=4)
+    process_chunks(iter([_row(3)]), method)
+    with pytest.raises(ProcessError, match="fresh method"):
+        process_chunks([_row(3)], method)

@@ -5,6 +5,7 @@ the centerline model, the Arc Transversal Median (ATM), arc carving and their co
 a ring-buffer history of sonar arcs, with local and global maps and the paper's measures.
 """
 
+from sonarcarve._version import __version__
 from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
 from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
 from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
@@ -31,8 +32,6 @@ from sonarcarve.methods import (
 from sonarcarve.pipeline import ProcessResult, process_readings
 from sonarcarve.polling import PolledLog, SonarPoller, naive_stamps, poll_readings
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
-
-__version__ = "0.1.0"
 
 __all__ = [
     "DEFAULT_BEAM_WIDTH",

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import (
+    DropReason,
     MapFilter,
     MapFilterReport,
     ReadingFilter,
@@ -20,12 +21,14 @@ from sonarcarve.filters import (
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods.base import SonarMethod
 from sonarcarve.readings import ReadingBatch
+from sonarcarve.typing import IntArray
 
-__all__ = ["ProcessError", "ProcessResult", "process_readings"]
+__all__ = ["ProcessError", "ProcessResult", "process_chunks", "process_readings"]
 
 
 class ProcessError(SonarcarveError, ValueError):
-    """A bad argument to :func:`process_readings` (a sampling step < 1, a used method)."""
+    """A bad argument to :func:`process_readings` or :func:`process_chunks` (a sampling step
+    < 1, a used method)."""
 
 
 @dataclass(frozen=True)
@@ -97,6 +100,42 @@ def process_readings(
     ProcessError
         ``sample_every`` < 1, or a method that has already been fed readings.
     """
+    return process_chunks([batch], method, sample_every=sample_every, on_progress=on_progress,
+                          reading_filter=reading_filter, map_filter=map_filter)
+
+
+def process_chunks(
+    chunks: Iterable[ReadingBatch],
+    method: SonarMethod,
+    *,
+    sample_every: int | None = None,
+    on_progress: Callable[[int], None] | None = None,
+    reading_filter: ReadingFilter | None = None,
+    map_filter: MapFilter | None = None,
+) -> ProcessResult:
+    """:func:`process_readings` over a log that comes in consecutive batches.
+
+    The result is the same as :func:`process_readings` on the batches joined, however the log
+    is cut: reading ids count rows from the first batch's first row, the jump filter compares a
+    sensor's reading with its previous one across batch boundaries, and the unprocessed share
+    is sampled at the same readings. Only one batch (and the method's state) is held at a time,
+    so a log read with :func:`~sonarcarve.io.readings_csv.iter_readings_csv` is mapped in
+    bounded memory (the global map aside).
+
+    Parameters
+    ----------
+    chunks : iterable of ReadingBatch
+        The log in time order, cut anywhere. A batch is validated as it is fed to the method
+        (against the time of the reading before it); an error raised by the iterable itself
+        (a bad line of a file) passes through.
+    method, sample_every, on_progress, reading_filter, map_filter
+        As :func:`process_readings`.
+
+    Raises
+    ------
+    ProcessError
+        ``sample_every`` < 1, or a method that has already been fed readings.
+    """
     if sample_every is not None and sample_every < 1:
         # 0 would silently mean the default, and a negative step would process nothing.
         msg = f"sample_every must be at least 1 reading, got {sample_every}"
@@ -105,44 +144,35 @@ def process_readings(
         msg = (f"process_readings needs a fresh method; this {method.name} method has "
                f"already been fed {method.readings} readings")
         raise ProcessError(msg)
-    ids = None
-    filter_report = None
-    if reading_filter is not None:
-        filtered = filter_readings(batch, reading_filter)
-        ids, filter_report = filtered.ids, filtered.report
-        batch = filtered.batch
     every = max(1, method.history.capacity // 10) if sample_every is None else sample_every
-    shares: list[float] = []
-    seconds = 0.0
-    for start in range(0, len(batch), every):
-        chunk = batch[start : start + every]
-        tic = time.perf_counter()
-        if ids is None:
-            method.add_many(chunk, first_id=start)
-        else:
-            for reading, reading_id in zip(chunk, ids[start : start + every].tolist(), strict=True):
-                method.add(reading, reading_id)
-        seconds += time.perf_counter() - tic
-        if start + len(chunk) >= method.history.capacity:
-            shares.append(method.measures().unprocessed_share)
-        if on_progress is not None:  # progress counts input rows, dropped ones included
-            done = start + len(chunk)
-            on_progress(done if ids is None else int(ids[done - 1]) + 1)
-    if on_progress is not None and filter_report is not None:
-        on_progress(filter_report.total)
+    run = _Run(method, every, on_progress)
+    chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
+    rows = 0
+    for chunk in chunks:
+        ids = np.arange(rows, rows + len(chunk), dtype=np.int64)
+        rows += len(chunk)
+        if chunk_filter is not None:
+            keep = chunk_filter.keep(chunk)
+            chunk, ids = chunk[keep], ids[keep]
+        run.feed(chunk, ids)
+    run.flush()
+    filter_report = None
+    if chunk_filter is not None:
+        filter_report = chunk_filter.report
+        if on_progress is not None:
+            on_progress(filter_report.total)
     measures = method.measures()
-    if not shares:
-        shares.append(measures.unprocessed_share)
+    shares = run.shares or [measures.unprocessed_share]
     tic = time.perf_counter()
     global_map = method.finish()
-    seconds += time.perf_counter() - tic
+    seconds = run.seconds + time.perf_counter() - tic
     map_report = None
     if map_filter is not None:
         kept = filter_map(global_map, map_filter)
         global_map, map_report = kept.points, kept.report
     return ProcessResult(
         global_map=global_map,
-        readings=len(batch),
+        readings=run.readings,
         mean_unprocessed_share=float(np.mean(shares)),
         fully_carved=measures.fully_carved,
         split=measures.split,
@@ -150,3 +180,124 @@ def process_readings(
         reading_filter=filter_report,
         map_filter=map_report,
     )
+
+
+class _Run:
+    """Feeds readings to a method in steps of exactly ``every`` readings, whatever the batches
+    they come in, sampling the unprocessed share and reporting progress after each step."""
+
+    def __init__(self, method: SonarMethod, every: int,
+                 on_progress: Callable[[int], None] | None) -> None:
+        self.method = method
+        self.every = every
+        self.on_progress = on_progress
+        self.shares: list[float] = []
+        self.seconds = 0.0
+        self.readings = 0
+        self._held: list[tuple[ReadingBatch, IntArray]] = []  # less than one step
+        self._held_count = 0
+
+    def feed(self, batch: ReadingBatch, ids: IntArray) -> None:
+        """Queue ``batch`` (reading ids ``ids``); run every whole step."""
+        start = 0
+        if self._held:
+            start = min(len(batch), self.every - self._held_count)
+            self._hold(batch[:start], ids[:start])
+            if self._held_count < self.every:
+                return
+            self.flush()
+        while len(batch) - start >= self.every:
+            self._step(batch[start : start + self.every], ids[start : start + self.every])
+            start += self.every
+        self._hold(batch[start:], ids[start:])
+
+    def flush(self) -> None:
+        """Run what is queued as one step (the last, shorter step of the log)."""
+        if self._held:
+            held, self._held, self._held_count = self._held, [], 0
+            batch = held[0][0] if len(held) == 1 else _join([b for b, _ in held])
+            self._step(batch, np.concatenate([i for _, i in held]))
+
+    def _hold(self, batch: ReadingBatch, ids: IntArray) -> None:
+        if len(batch):
+            self._held.append((batch, ids))
+            self._held_count += len(batch)
+
+    def _step(self, batch: ReadingBatch, ids: IntArray) -> None:
+        method = self.method
+        tic = time.perf_counter()
+        first_id, last_id = int(ids[0]), int(ids[-1])
+        if last_id - first_id == len(ids) - 1:  # no gap (ids increase): one call
+            method.add_many(batch, first_id=first_id)
+        else:
+            # Runs of consecutive ids go in one call; the reading filter left gaps between them.
+            cuts = np.flatnonzero(np.diff(ids) != 1) + 1
+            for run in np.split(np.arange(len(ids)), cuts):
+                first, stop = int(run[0]), int(run[-1]) + 1
+                if stop - first == 1:
+                    method.add(batch[first], int(ids[first]))
+                else:
+                    method.add_many(batch[first:stop], first_id=int(ids[first]))
+        self.seconds += time.perf_counter() - tic
+        self.readings += len(batch)
+        if self.readings >= method.history.capacity:
+            self.shares.append(method.measures().unprocessed_share)
+        if self.on_progress is not None:  # progress counts input rows, dropped ones included
+            self.on_progress(last_id + 1)
+
+
+def _join(batches: list[ReadingBatch]) -> ReadingBatch:
+    """Batches one after the other, unchecked (each was checked where it came from)."""
+    return ReadingBatch(*(np.concatenate([getattr(b, f.name) for b in batches])
+                          for f in fields(ReadingBatch)))
+
+
+class _ChunkFilter:
+    """:func:`~sonarcarve.filters.filter_readings` over a log cut into batches.
+
+    Each batch is filtered together with, in front of it, the last reading that passed the
+    range filters of every sensor it shares with the log so far, so that the jump filter
+    compares across the cut exactly as it would on the whole log.
+    """
+
+    def __init__(self, spec: ReadingFilter) -> None:
+        self.spec = spec
+        self._previous: dict[int, float] = {}  # sensor -> its last range-filtered range
+        self._reasons = np.zeros(len(DropReason), dtype=np.int64)
+
+    def keep(self, batch: ReadingBatch) -> IntArray:
+        """Rows of ``batch`` kept (the log's next rows)."""
+        if self.spec.jump_threshold is None:
+            lead_sensor, lead_range = np.zeros(0, np.int64), np.zeros(0)
+        else:
+            sensors = np.unique(batch.sensor).tolist()
+            lead = [(s, self._previous[s]) for s in sensors if s in self._previous]
+            lead_sensor = np.array([s for s, _ in lead], dtype=np.int64)
+            lead_range = np.array([r for _, r in lead], dtype=np.float64)
+        m = len(lead_sensor)
+        zeros = np.zeros(m)
+        joined = ReadingBatch(
+            t=np.concatenate([zeros, batch.t]), sensor=np.concatenate([lead_sensor, batch.sensor]),
+            x=np.concatenate([zeros, batch.x]), y=np.concatenate([zeros, batch.y]),
+            theta=np.concatenate([zeros, batch.theta]),
+            range=np.concatenate([lead_range, batch.range]),
+            beam_width=np.concatenate([zeros, batch.beam_width]),
+        )
+        reasons = filter_readings(joined, self.spec).reasons[m:]
+        self._reasons += np.bincount(reasons.astype(np.int64), minlength=len(DropReason))
+        passed = np.flatnonzero((reasons == DropReason.KEPT) | (reasons == DropReason.JUMP))
+        if self.spec.jump_threshold is not None and passed.size:
+            # Each sensor's last reading that passed the range filters, jumped or not.
+            last = len(passed) - 1 - np.unique(batch.sensor[passed][::-1], return_index=True)[1]
+            rows = passed[last]
+            self._previous.update(zip(batch.sensor[rows].tolist(), batch.range[rows].tolist(),
+                                      strict=True))
+        return np.flatnonzero(reasons == DropReason.KEPT).astype(np.int64)
+
+    @property
+    def report(self) -> ReadingFilterReport:
+        """Counts since the first batch."""
+        c = self._reasons
+        return ReadingFilterReport(total=int(c.sum()), too_far=int(c[DropReason.TOO_FAR]),
+                                   too_near=int(c[DropReason.TOO_NEAR]),
+                                   jumps=int(c[DropReason.JUMP]))

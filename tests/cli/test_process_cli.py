@@ -5,7 +5,10 @@ import numpy as np
 import pytest
 
 from sonarcarve.cli import main
-from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_readings_csv
+from sonarcarve.filters import ReadingFilter
+from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv, write_readings_csv
+from sonarcarve.methods import MethodConfig, make_method
+from sonarcarve.pipeline import process_readings
 from sonarcarve.readings import ReadingBatch
 
 
@@ -88,3 +91,35 @@ def test_version_and_help(capsys: pytest.CaptureFixture[str]) -> None:
     assert "sonarcarve" in capsys.readouterr().out
     assert main(["process", "--help"]) == 0
     assert "--method" in capsys.readouterr().out
+
+
+def _long_log(path: Path, n: int = 25_000) -> ReadingBatch:
+    """Longer than the progress bar's threshold: the file is read in several blocks."""
+    return _write_ring_readings(path, n)
+
+
+def test_long_log_streams_to_the_same_map_as_the_library(tmp_path: Path) -> None:
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    batch = _long_log(readings)
+    assert main(["process", str(readings), "--method", "centerline", "--history", "30",
+                 "--jump-threshold", "5", "--out", str(out)]) == 0
+    expected = process_readings(batch, make_method("centerline", MethodConfig(history_size=30)),
+                                reading_filter=ReadingFilter(jump_threshold=5.0))
+    write_map_csv(expected.global_map, tmp_path / "expected.csv")
+    assert out.read_bytes() == (tmp_path / "expected.csv").read_bytes()
+
+
+def test_bad_line_late_in_a_long_log_is_one_line_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _long_log(readings)
+    lines = readings.read_text().splitlines()
+    lines[24_321] = lines[24_321].rsplit(",", 1)[0] + ",-1.5"
+    readings.write_text("\n".join(lines) + "\n")
+    out.write_text("precious\n")
+    assert main(["process", str(readings), "--method", "centerline", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"sonarcarve: error: {readings}: line 24322, column 'range' must be > 0\n")
+    assert out.read_text() == "precious\n"
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".map.csv")] == []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import math
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.errors import InputError
+from sonarcarve.io.map_csv import APPENDED_COLUMNS, BLOCK_ROWS
 from sonarcarve.maps import GlobalMap, PointSource
 
 HEADER = "id,t,sensor,x,y,source,width,max_error"
@@ -158,3 +160,86 @@ def test_trailing_blank_lines_are_harmless(tmp_path: Path) -> None:
     path = tmp_path / "map.csv"
     path.write_text(HEADER + "\n" + GOOD + "\n\n")
     assert read_map_csv(path).reading_id.tolist() == [0]
+
+
+# -- the block-wise writer against the row-by-row writer it replaced ---------------------------
+
+
+def _reference_write(points: GlobalMap, path: Path) -> None:
+    """The writer before issue 11: csv.writer, one row at a time, repr of every float."""
+    labels = points.source_labels()
+    with path.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(MAP_COLUMNS + APPENDED_COLUMNS)
+        for i in range(len(points)):
+            confidence = float(points.confidence[i])
+            writer.writerow([
+                int(points.reading_id[i]), repr(float(points.t[i])), int(points.sensor[i]),
+                repr(float(points.xy[i, 0])), repr(float(points.xy[i, 1])), labels[i],
+                repr(float(points.width[i])), repr(float(points.max_error[i])),
+                "" if math.isnan(confidence) else repr(confidence),
+            ])
+
+
+AWKWARD = np.array([0.0, -0.0, math.inf, 5e-324, -5e-324, 1.7976931348623157e308, 1e16, 1e-5,
+                    1e-4, 9999999999999998.0, 0.1, 1 / 3, 123456789012345678.0, 1e22, 2.5e-7,
+                    100.0, 1e15, 2.0**-1074 * 3, 2.0**53 + 2, -1e300, math.pi])
+
+
+def _random_map(n: int, seed: int) -> GlobalMap:
+    rng = np.random.default_rng(seed)
+
+    def floats() -> np.ndarray:
+        values = rng.normal(size=n) * 10.0 ** rng.integers(-8, 9, n)
+        pick = rng.random(n) < 0.3
+        values[pick] = rng.choice(AWKWARD, int(pick.sum()))
+        return values
+
+    confidence = rng.random(n)
+    confidence[rng.random(n) < 0.4] = np.nan
+    confidence[rng.random(n) < 0.1] = rng.choice([0.0, 1.0, -0.0, 5e-324], 1)
+    return GlobalMap(
+        reading_id=np.sort(rng.choice(10 * n + 10, n, replace=False)).astype(np.int64)
+        * rng.choice([1, 2**40]),
+        t=floats(), sensor=rng.integers(0, 2**31 - 1, n), xy=np.column_stack((floats(), floats())),
+        source=rng.integers(0, len(PointSource), n).astype(np.int8),
+        width=floats(), max_error=floats(), range=floats(), confidence=confidence,
+    )
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_written_bytes_are_the_reference_writers(tmp_path: Path, seed: int) -> None:
+    points = _random_map(500, seed)
+    expected = tmp_path / "reference.csv"
+    _reference_write(points, expected)
+    for block_rows in (1, 7, 500, BLOCK_ROWS):
+        path = tmp_path / f"map-{block_rows}.csv"
+        write_map_csv(points, path, block_rows=block_rows)
+        assert path.read_bytes() == expected.read_bytes(), block_rows
+
+
+def test_every_awkward_float_in_every_float_column(tmp_path: Path) -> None:
+    n = len(AWKWARD)
+    points = GlobalMap(reading_id=np.arange(n, dtype=np.int64), t=AWKWARD,
+                       sensor=np.zeros(n, np.int64), xy=np.column_stack((AWKWARD, -AWKWARD)),
+                       source=np.zeros(n, np.int8), width=AWKWARD, max_error=-AWKWARD,
+                       range=np.ones(n), confidence=np.where(AWKWARD < 1, AWKWARD, np.nan))
+    expected, path = tmp_path / "reference.csv", tmp_path / "map.csv"
+    _reference_write(points, expected)
+    write_map_csv(points, path, block_rows=4)
+    assert path.read_bytes() == expected.read_bytes()
+    lines = path.read_text().splitlines()
+    assert lines[2] == "1,-0.0,0,-0.0,0.0,centerline,-0.0,0.0,-0.0"  # signed zeros kept
+    assert lines[4].split(",")[1] == "5e-324"
+
+
+def test_unknown_source_code_and_bad_block_rows_are_refused(tmp_path: Path) -> None:
+    points = _map()
+    bad = GlobalMap(**{**{name: getattr(points, name) for name in (
+        "reading_id", "t", "sensor", "xy", "width", "max_error", "range")},
+        "source": np.array([0, 3, 1], dtype=np.int8)})
+    with pytest.raises(ValueError, match="3 is not a valid PointSource"):
+        write_map_csv(bad, tmp_path / "bad.csv")
+    assert not (tmp_path / "bad.csv").exists()
+    with pytest.raises(ValueError, match="block_rows"):
+        write_map_csv(points, tmp_path / "map.csv", block_rows=0)

@@ -1,10 +1,20 @@
+import csv
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sonarcarve.io import InputError, read_readings_csv, write_readings_csv
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.io.errors import parse_number
+from sonarcarve.io.readings_csv import (
+    BLOCK_SIZE,
+    READINGS_COLUMNS,
+    _check_header,
+    count_data_lines,
+    iter_readings_csv,
+)
+from sonarcarve.readings import ReadingBatch, ReadingsError
 
 HEADER = "t,sensor,x,y,theta,range\n"
 
@@ -90,3 +100,218 @@ def test_extra_columns_are_ignored_but_must_be_on_every_line(tmp_path: Path) -> 
     path = tmp_path / "r.csv"
     path.write_text("t,sensor,x,y,theta,range,note\n0,0,0,0,0,1,hello\n1,0,0,0,0,2,\n")
     assert read_readings_csv(path).range.tolist() == [1.0, 2.0]
+
+
+# -- streaming: blocks of any size give the same batch and the same errors ----------------------
+
+BLOCK_SIZES = (1, 2, 17, 64, 1000, BLOCK_SIZE)
+
+
+def _reference_read(path: Path) -> ReadingBatch:
+    """The reader before streaming (issue 11), kept as the reference: the whole file through
+    the csv module, one ``parse_number`` per cell, then one validation."""
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            reader = csv.reader(handle)
+            rows = [(reader.line_num, row) for row in reader]
+    except (OSError, UnicodeDecodeError, csv.Error) as err:
+        raise InputError(f"{path}: cannot read as CSV ({err})") from None
+    while rows and not rows[-1][1]:
+        rows.pop()
+    if not rows:
+        raise InputError(f"{path}: empty file, expected a header")
+    header = [name.strip() for name in rows[0][1]]
+    _check_header(path, header)
+    body = rows[1:]
+    for line, row in body:
+        if not row:
+            raise InputError(f"{path}: line {line} is blank (blank lines are allowed only at "
+                             "the end)")
+        if len(row) != len(header):
+            fields = f"{len(row)} field{'' if len(row) == 1 else 's'}"
+            raise InputError(f"{path}: line {line} has {fields}, the header has {len(header)}")
+    wanted = [*READINGS_COLUMNS, *(["beam_width"] if "beam_width" in header else [])]
+    columns = {}
+    for name in wanted:
+        values = np.empty(len(body))
+        for k, (line, row) in enumerate(body):
+            text = row[header.index(name)]
+            values[k] = (math.nan if name == "beam_width" and not text.strip()
+                         else parse_number(text, f"{path}: line {line}", name, finite=False))
+        columns[name] = values
+    try:
+        return ReadingBatch.from_arrays(**columns, source=str(path), first_line=2)
+    except ReadingsError as err:
+        raise InputError(str(err)) from None
+
+
+def _assert_same(a: ReadingBatch, b: ReadingBatch) -> None:
+    for name in ("t", "sensor", "x", "y", "theta", "range", "beam_width"):
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+
+
+def _log_text(n: int, seed: int, *, width: bool = True) -> list[str]:
+    """Data lines of a valid log: awkward floats, blank beam widths, an extra column."""
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(0, 0.1, n))
+    lines = []
+    for k in range(n):
+        cells = [repr(float(t[k])), str(int(rng.integers(0, 16))), repr(float(rng.normal())),
+                 f"{rng.normal():.3e}", repr(float(rng.uniform(-3, 3))),
+                 repr(float(rng.uniform(0.1, 5)))]
+        if width:
+            cells.append("" if k % 5 == 0 else repr(float(rng.uniform(0.1, 0.5))))
+        cells.append("note")
+        lines.append(",".join(cells))
+    return lines
+
+
+def _write(path: Path, header: str, lines: list[str], newline: str = "\n",
+           tail: str = "\n") -> Path:
+    path.write_bytes((newline.join([header, *lines]) + tail.replace("\n", newline)).encode())
+    return path
+
+
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+@pytest.mark.parametrize("tail", ["", "\n", "\n\n\n"])
+def test_blocks_of_any_size_read_the_same_batch(tmp_path: Path, newline: str, tail: str) -> None:
+    path = _write(tmp_path / "r.csv", "t,sensor,x,y,theta,range,beam_width,note",
+                  _log_text(120, 3), newline, tail)
+    expected = _reference_read(path)
+    for size in BLOCK_SIZES:
+        _assert_same(read_readings_csv(path, block_size=size), expected)
+        batches = list(iter_readings_csv(path, block_size=size))
+        assert all(len(b) for b in batches)
+        assert sum(len(b) for b in batches) == 120
+        if size <= 64:
+            assert len(batches) > 10  # really streamed
+    assert count_data_lines(path) == 120
+    assert count_data_lines(path, block_size=3) == 120
+
+
+def test_quoted_fields_and_lone_carriage_returns_go_through_the_csv_module(
+    tmp_path: Path,
+) -> None:
+    lines = _log_text(40, 4)
+    # Quotes from line 31 on, one with a line break inside (the line count grows by one).
+    lines[29] = lines[29].replace(",note", ',"two\nlines"')
+    lines[35] = '"' + lines[35].replace(",", '","') + '"'
+    path = _write(tmp_path / "quoted.csv", "t,sensor,x,y,theta,range,beam_width,note", lines)
+    expected = _reference_read(path)
+    for size in BLOCK_SIZES:
+        _assert_same(read_readings_csv(path, block_size=size), expected)
+    mac = _write(tmp_path / "mac.csv", "t,sensor,x,y,theta,range,beam_width,note", lines[:20],
+                 "\r")
+    for size in BLOCK_SIZES:
+        _assert_same(read_readings_csv(mac, block_size=size), _reference_read(mac))
+    # A bad line after the quoted one is named by its line in the file.
+    lines[37] = lines[37].replace(",note", ",note,extra")
+    path = _write(tmp_path / "quoted.csv", "t,sensor,x,y,theta,range,beam_width,note", lines)
+    for size in BLOCK_SIZES:
+        with pytest.raises(InputError, match=r"line 40 has 9 fields, the header has 8$"):
+            read_readings_csv(path, block_size=size)
+
+
+def _damage(lines: list[str], kind: str, k: int) -> list[str]:
+    """``lines`` with one problem on data line ``k``."""
+    cells = lines[k].split(",")
+    damaged = list(lines)
+    if kind == "blank":
+        damaged.insert(k, "")
+        return damaged
+    if kind == "spaces":
+        damaged[k] = "   "
+    elif kind == "short":
+        damaged[k] = ",".join(cells[:-1])
+    elif kind == "long":
+        damaged[k] = lines[k] + ",7"
+    else:
+        column, text = {"t_text": (0, "soon"), "t_nan": (0, "nan"), "backwards": (0, "-1"),
+                        "sensor_half": (1, "2.5"), "sensor_huge": (1, "1e12"),
+                        "sensor_negative": (1, "-3"), "x_text": (2, "1,5".replace(",", ";")),
+                        "y_inf": (3, "-inf"), "range_zero": (5, "0"),
+                        "range_text": (5, ""), "width_wide": (6, "3.5"),
+                        "width_text": (6, "wide")}[kind]
+        cells[column] = text
+        damaged[k] = ",".join(cells)
+    return damaged
+
+
+KINDS = ("blank", "spaces", "short", "long", "t_text", "t_nan", "backwards", "sensor_half",
+         "sensor_huge", "sensor_negative", "x_text", "y_inf", "range_zero", "range_text",
+         "width_wide", "width_text")
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_one_bad_line_gives_the_reference_message_whatever_the_blocks(
+    tmp_path: Path, kind: str,
+) -> None:
+    rng = np.random.default_rng(len(kind))
+    lines = _log_text(60, 5)
+    first = 1 if kind == "backwards" else 0  # the first line has no earlier time
+    for k in (first, int(rng.integers(1, 59)), 59):
+        path = _write(tmp_path / "bad.csv", "t,sensor,x,y,theta,range,beam_width,note",
+                      _damage(lines, kind, k))
+        with pytest.raises(InputError) as reference:
+            _reference_read(path)
+        for size in BLOCK_SIZES:
+            with pytest.raises(InputError) as caught:
+                read_readings_csv(path, block_size=size)
+            assert str(caught.value) == str(reference.value), (kind, k, size)
+            assert f"line {k + 2}" in str(caught.value)
+
+
+def test_several_bad_lines_name_the_first(tmp_path: Path) -> None:
+    # Line 3 breaks a rule, line 5 has a cell that is no number and line 6 too few fields: the
+    # streaming reader names line 3 (the reader before it named line 6, then line 5).
+    path = tmp_path / "bad.csv"
+    path.write_text(HEADER + "0,0,0,0,0,1\n1,0,0,0,0,-1\n2,0,0,0,0,1\n3,0,x,0,0,1\n4,0\n")
+    for size in BLOCK_SIZES:
+        with pytest.raises(InputError, match=r"line 3, column 'range' must be > 0$"):
+            read_readings_csv(path, block_size=size)
+    # On one line, the old order: a cell that is no number (columns in order t, sensor, ...)
+    # before a broken rule.
+    path.write_text(HEADER + "0,0,0,0,0,1\n1,0.5,y,0,0,-1\n")
+    with pytest.raises(InputError, match=r"line 3, column 'x' is not a number: 'y'$"):
+        read_readings_csv(path, block_size=8)
+
+
+def test_time_going_backwards_across_blocks(tmp_path: Path) -> None:
+    rows = [f"{k},0,0,0,0,1" for k in range(50)]
+    rows[37] = "1,0,0,0,0,1"
+    path = tmp_path / "r.csv"
+    path.write_text(HEADER + "\n".join(rows) + "\n")
+    for size in (1, 30, 100, BLOCK_SIZE):
+        batches = iter_readings_csv(path, block_size=size)
+        with pytest.raises(InputError, match=r"line 39, column 't' goes backwards in time$"):
+            for _ in batches:
+                pass
+
+
+def test_not_utf8_names_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.csv"
+    path.write_bytes((HEADER + "0,0,0,0,0,1\n").encode() + b"1,0,0,0,0,1 caf\xe9\n")
+    for size in BLOCK_SIZES:
+        with pytest.raises(InputError) as caught:
+            read_readings_csv(path, block_size=size)
+        assert str(caught.value) == (f"{path}: line 3, cannot read as CSV: not UTF-8 text "
+                                     "(byte 0xe9)")
+
+
+def test_header_only_and_blank_files(tmp_path: Path) -> None:
+    path = tmp_path / "r.csv"
+    path.write_text(HEADER + "\n\n")
+    assert len(read_readings_csv(path)) == 0
+    assert list(iter_readings_csv(path)) == []
+    assert count_data_lines(path) == 0
+    path.write_text("\r\n\n")
+    with pytest.raises(InputError, match="empty file"):
+        read_readings_csv(path, block_size=1)
+    assert count_data_lines(path) == 0
+    assert count_data_lines(tmp_path / "absent.csv") == 0
+    path.write_bytes(b"\xef\xbb\xbf" + HEADER.encode() + b"0,0,0,0,0,1")  # no final break
+    for size in BLOCK_SIZES:
+        assert read_readings_csv(path, block_size=size).range.tolist() == [1.0]
+    assert count_data_lines(path) == 1
+    with pytest.raises(ValueError, match="block_size"):
+        read_readings_csv(path, block_size=0)

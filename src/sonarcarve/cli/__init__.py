@@ -24,7 +24,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     from sonarcarve.cli.main import main as run
 
+    # Importing the submodule ``main`` rebinds this package's attribute ``main`` to it; put the
+    # function back, so that ``from sonarcarve.cli import main`` gives it after a first run too.
+    globals()["main"] = _MAIN
     return run(argv)
+
+
+_MAIN = main
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -210,7 +210,7 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
 
 def _show_version(value: bool) -> None:
     if value:
-        from sonarcarve import __version__
+        from sonarcarve._version import __version__  # not the package: nothing else to load
 
         console.print(f"sonarcarve {__version__}")
         raise typer.Exit()

@@ -14,12 +14,12 @@ from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
-from sonarcarve.io import read_readings_csv, write_map_csv
+from sonarcarve.io import write_map_csv
 from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
-from sonarcarve.pipeline import ProcessResult, process_readings
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.pipeline import ProcessResult, process_chunks
 
 __all__ = ["process"]
 
@@ -127,8 +127,9 @@ def process(
                                           outlier_neighbours, max_error)
     sonar = make_method(method, config)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
-    batch = read_readings_csv(readings)
-    result = _run(batch, sonar, method, reading_filter, map_filter)
+    # The file is read, checked and mapped a block at a time; a bad line stops the run with
+    # nothing written, as the map is written only at the end.
+    result = _run(readings, sonar, method, reading_filter, map_filter)
     write_map_csv(result.global_map, out)
     console.print(_summary(method, result, out))
 
@@ -159,16 +160,18 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
         raise
 
 
-def _run(batch: ReadingBatch, sonar: SonarMethod, label: str,
+def _run(readings: Path, sonar: SonarMethod, label: str,
          reading_filter: ReadingFilter | None, map_filter: MapFilter | None) -> ProcessResult:
-    """Process ``batch`` with ``sonar``, with a progress bar for long logs."""
-    if len(batch) < _PROGRESS_MIN_READINGS:
-        return process_readings(batch, sonar, reading_filter=reading_filter,
-                                map_filter=map_filter)
+    """Map the file ``readings`` with ``sonar``, with a progress bar for long logs."""
+    chunks = iter_readings_csv(readings)
+    rows = count_data_lines(readings)  # the bar's total, from the line breaks alone
+    if rows < _PROGRESS_MIN_READINGS:
+        return process_chunks(chunks, sonar, reading_filter=reading_filter,
+                              map_filter=map_filter)
     with progress() as bar:
-        task = bar.add_task(label, total=len(batch))
-        return process_readings(batch, sonar, on_progress=lambda n: bar.update(task, completed=n),
-                                reading_filter=reading_filter, map_filter=map_filter)
+        task = bar.add_task(label, total=rows)
+        return process_chunks(chunks, sonar, on_progress=lambda n: bar.update(task, completed=n),
+                              reading_filter=reading_filter, map_filter=map_filter)
 
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,

@@ -18,32 +18,68 @@ import numpy as np
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.maps import GlobalMap, PointSource
+from sonarcarve.typing import Int8Array
 
-__all__ = ["APPENDED_COLUMNS", "MAP_COLUMNS", "read_map_csv", "write_map_csv"]
+__all__ = ["APPENDED_COLUMNS", "BLOCK_ROWS", "MAP_COLUMNS", "read_map_csv", "write_map_csv"]
 
 #: The original contract's eight columns, in order.
 MAP_COLUMNS = ("id", "t", "sensor", "x", "y", "source", "width", "max_error")
 #: Columns appended since, in order (readers of the first eight ignore them).
 APPENDED_COLUMNS = ("confidence",)
 _SOURCE_BY_LABEL = {source.label: source for source in PointSource}
+#: Labels by source code (``PointSource`` values are 0, 1, 2, ...).
+_LABELS = tuple(PointSource(code).label for code in range(len(PointSource)))
+#: Rows formatted at a time by :func:`write_map_csv`.
+BLOCK_ROWS = 8_192
 #: Largest id or sensor index read back exactly (int64 and float64 agree up to 2**53).
 _MAX_INDEX = 2**53
 
 
-def write_map_csv(points: GlobalMap, path: str | Path) -> None:
-    """Write a map in the contract format, atomically."""
-    labels = points.source_labels()
+def write_map_csv(points: GlobalMap, path: str | Path, *, block_rows: int = BLOCK_ROWS) -> None:
+    """Write a map in the contract format, atomically.
+
+    Floats are written as Python's ``repr`` (the shortest text that reads back to the same
+    float: ``0.1``, ``-0.0``, ``inf``, ``5e-324``), ids and sensors as integers, a NaN
+    confidence as an empty cell. The text is built a column at a time, ``block_rows`` rows at
+    a time, so memory stays bounded whatever the map's size.
+    """
+    if block_rows < 1:
+        msg = f"block_rows must be at least 1, got {block_rows}"
+        raise ValueError(msg)
+    _check_sources(points.source)
     with atomic_text(path) as handle:
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(MAP_COLUMNS + APPENDED_COLUMNS)
-        for i in range(len(points)):
-            confidence = float(points.confidence[i])
-            writer.writerow([
-                int(points.reading_id[i]), repr(float(points.t[i])), int(points.sensor[i]),
-                repr(float(points.xy[i, 0])), repr(float(points.xy[i, 1])), labels[i],
-                repr(float(points.width[i])), repr(float(points.max_error[i])),
-                "" if math.isnan(confidence) else repr(confidence),
-            ])
+        handle.write(",".join(MAP_COLUMNS + APPENDED_COLUMNS) + "\n")
+        for start in range(0, len(points), block_rows):
+            handle.write(_rows_text(points, slice(start, start + block_rows)))
+
+
+def _rows_text(points: GlobalMap, rows: slice) -> str:
+    """Rows ``rows`` of the map CSV, each ending with a line break."""
+    columns = (
+        map(str, points.reading_id[rows].tolist()),
+        map(repr, points.t[rows].tolist()),
+        map(str, points.sensor[rows].tolist()),
+        map(repr, points.xy[rows, 0].tolist()),
+        map(repr, points.xy[rows, 1].tolist()),
+        map(_LABELS.__getitem__, points.source[rows].tolist()),
+        map(repr, points.width[rows].tolist()),
+        map(repr, points.max_error[rows].tolist()),
+        map(_confidence_text, points.confidence[rows].tolist()),
+    )
+    # Fields joined by commas as they are: csv.writer would quote none of them (no field holds
+    # a comma, a quote or a line break), so the text is the same.
+    return "\n".join(map(",".join, zip(*columns, strict=True))) + "\n"
+
+
+def _confidence_text(value: float) -> str:
+    return "" if math.isnan(value) else repr(value)
+
+
+def _check_sources(source: Int8Array) -> None:
+    """Every code a :class:`PointSource` (as the labels are looked up by position)."""
+    bad = (source < 0) | (source >= len(_LABELS))
+    if bad.any():
+        PointSource(int(source[np.argmax(bad)]))  # raises ValueError naming the code
 
 
 def read_map_csv(path: str | Path) -> GlobalMap:

@@ -8,66 +8,447 @@ every line must have as many fields as the header, no column name may appear twi
 blank line is an error unless only blank lines follow it (a trailing newline or two at the end
 of a file is common and harmless; a blank line in the middle usually marks two logs pasted
 together). A UTF-8 byte-order mark, as spreadsheet programs write, is accepted.
+
+Reading streams: :func:`iter_readings_csv` yields the file as validated batches of a few
+megabytes each, so a log of any length is read in bounded memory, and
+:func:`read_readings_csv` joins them. A block of plain lines (no quotes, no NUL, line breaks
+``\\n`` or ``\\r\\n``) is split and converted column by column (``float`` over a column, no
+per-row Python code); anything else (quoted fields, a lone ``\\r``) is read by the :mod:`csv`
+module from that block on. Both give the same values and errors. The error names the first bad
+line of the file (its first problem in the order: field count, a non-numeric cell in column
+order, then the checks of :meth:`~sonarcarve.readings.ReadingBatch.validate`), whatever the
+block size.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import IO, NoReturn
 
 import numpy as np
 
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.readings import ReadingBatch, ReadingsError
+from sonarcarve.typing import FloatArray, IntArray
 
-__all__ = ["READINGS_COLUMNS", "read_readings_csv", "write_readings_csv"]
+__all__ = [
+    "BLOCK_SIZE",
+    "READINGS_COLUMNS",
+    "count_data_lines",
+    "iter_readings_csv",
+    "read_readings_csv",
+    "write_readings_csv",
+]
 
 #: Required columns, in the order they are written.
 READINGS_COLUMNS = ("t", "sensor", "x", "y", "theta", "range")
 _OPTIONAL = "beam_width"
+#: Bytes read at a time by :func:`iter_readings_csv` (about 15,000 rows of a typical log).
+BLOCK_SIZE = 1 << 20
+_BOM = b"\xef\xbb\xbf"
+_ROW_BYTES = 64  # a typical row's length, to size the csv module's batches like the blocks
 
 
-def read_readings_csv(path: str | Path) -> ReadingBatch:
-    """Read and validate a readings CSV.
+def read_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> ReadingBatch:
+    """Read and validate a readings CSV (:func:`iter_readings_csv`'s batches joined).
+
+    ``block_size`` (bytes read at a time) changes neither the result nor the error.
 
     Raises
     ------
     InputError
-        One line naming the file, the line and the column of the first problem: a missing file
+        One line naming the file, the line and the column of the first bad line: a missing file
         or column, a duplicated column name, a line with more or fewer fields than the header,
         a blank line before the last data line, a non-numeric, NaN or infinite value, a sensor
         that is not a whole number, range <= 0, beam width outside (0, π), time going
         backwards.
     """
+    batches = list(iter_readings_csv(path, block_size=block_size))
+    if len(batches) == 1:
+        return batches[0]
+    return ReadingBatch.concatenate(batches) if batches else ReadingBatch.empty()
+
+
+def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Iterator[ReadingBatch]:
+    """The readings of a CSV as validated batches of about ``block_size`` bytes of text each.
+
+    Each batch is validated with the file's line numbers and the time of the batch before it,
+    so the batches joined are what :func:`read_readings_csv` returns, and a bad line raises as
+    the iteration reaches it (after the batches before it have been yielded).
+
+    Parameters
+    ----------
+    path : str or Path
+        The readings CSV.
+    block_size : int
+        Bytes read at a time (at least 1; a longer line is read whole).
+
+    Yields
+    ------
+    ReadingBatch
+        The next rows of the file, in order; never empty.
+
+    Raises
+    ------
+    InputError
+        As :func:`read_readings_csv`.
+    """
     path = Path(path)
+    if block_size < 1:
+        msg = f"block_size must be at least 1 byte, got {block_size}"
+        raise ValueError(msg)
     try:
-        # utf-8-sig: a byte-order mark (Excel's "CSV UTF-8") would otherwise glue onto "t".
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            reader = csv.reader(handle)
-            rows = [(reader.line_num, row) for row in reader]
+        handle = path.open("rb")
     except FileNotFoundError:
         msg = f"{path}: no such file"
         raise InputError(msg) from None
-    except (OSError, UnicodeDecodeError, csv.Error) as err:
-        msg = f"{path}: cannot read as CSV ({err})"
+    except OSError as err:
+        msg = f"{path}: cannot read as CSV ({err.strerror or err})"
         raise InputError(msg) from None
-    while rows and not rows[-1][1]:
-        rows.pop()  # blank lines at the end
-    if not rows:
-        msg = f"{path}: empty file, expected a header {','.join(READINGS_COLUMNS)}"
-        raise InputError(msg)
-    header = [name.strip() for name in rows[0][1]]
-    _check_header(path, header)
-    body = rows[1:]
-    _check_shape(path, body, len(header))
-    wanted = [*READINGS_COLUMNS, *([_OPTIONAL] if _OPTIONAL in header else [])]
-    columns = {name: _column(path, body, header.index(name), name) for name in wanted}
+    with handle:
+        yield from _Reader(path, _Blocks(path, handle, block_size), block_size).batches()
+
+
+def count_data_lines(path: str | Path, *, block_size: int = BLOCK_SIZE) -> int:
+    """The number of data rows of a readings CSV, counted from its line breaks without parsing.
+
+    Exact for a file :func:`iter_readings_csv` reads without error whose line breaks are ``\\n``
+    or ``\\r\\n`` and whose fields hold none (the common case): meant as the total of a progress
+    bar. Blank lines at the end are not counted. 0 for a missing or unreadable file.
+    """
+    breaks = 0
+    tail = 0  # line breaks after the last byte of content
+    content = False
     try:
-        return ReadingBatch.from_arrays(**columns, source=str(path), first_line=2)
-    except ReadingsError as err:
-        raise InputError(str(err)) from None
+        with Path(path).open("rb") as handle:
+            while block := handle.read(block_size):
+                breaks += block.count(b"\n")
+                stripped = block.rstrip(b"\r\n")
+                if stripped:
+                    content = True
+                    tail = block.count(b"\n", len(stripped))
+                else:
+                    tail += block.count(b"\n")
+    except OSError:
+        return 0
+    # Lines up to the last with content: breaks - tail + 1; the header is one of them.
+    return breaks - tail if content else 0
+
+
+# --------------------------------------------------------------------------------------------
+# Blocks of lines
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Block:
+    """Whole lines of the file, decoded; ``text`` ends with its last line's break, if any."""
+
+    first_line: int  # line number of the first line (lines counted by "\n")
+    raw: bytes
+    text: str
+
+
+class _Blocks:
+    """A binary file as :class:`_Block` s of whole lines, ``block_size`` bytes or so each.
+
+    Blank lines at the end of a block are held back and put in front of the next block, so
+    that blank lines at the end of the file, which are harmless, are never seen at all: a block
+    ends with content, and blank lines are only ever met with content after them.
+    """
+
+    def __init__(self, path: Path, handle: IO[bytes], block_size: int) -> None:
+        self.path = path
+        self.handle = handle
+        self.block_size = block_size
+        self.line = 1
+
+    def __iter__(self) -> Iterator[_Block]:
+        pending = b""
+        first = True
+        while True:
+            try:
+                data = self.handle.read(self.block_size)
+            except OSError as err:
+                msg = f"{self.path}: cannot read as CSV ({err.strerror or err})"
+                raise InputError(msg) from None
+            buffer = pending + data
+            if first and (buffer.startswith(_BOM) or not _BOM.startswith(buffer[:3])):
+                buffer = buffer.removeprefix(_BOM)  # once the first 3 bytes are known
+                first = False
+            if not data:  # end of file: what is left is the last line(s), blank lines dropped
+                content = buffer.rstrip(b"\r\n")
+                if content:
+                    yield self._block(content)
+                return
+            cut = buffer.rfind(b"\n") + 1
+            content = buffer[:cut].rstrip(b"\r\n")
+            if not content:  # only blank lines so far: keep them for later
+                pending = buffer
+                continue
+            end = len(content) + (2 if buffer.startswith(b"\r\n", len(content)) else 1)
+            pending = buffer[end:]
+            yield self._block(buffer[:end])
+
+    def _block(self, raw: bytes) -> _Block:
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as err:
+            line = self.line + raw.count(b"\n", 0, err.start)
+            msg = (f"{self.path}: line {line}, cannot read as CSV: not UTF-8 text "
+                   f"(byte 0x{raw[err.start]:02x})")
+            raise InputError(msg) from None
+        block = _Block(self.line, raw, text)
+        self.line += raw.count(b"\n")
+        return block
+
+
+def _plain(block: _Block) -> str | None:
+    """The block's lines joined by ``\\n`` (no final break) if it can be split on commas and
+    line breaks alone, as :mod:`csv` would split it; None otherwise."""
+    text = block.text
+    if "\r" in text:
+        text = text.replace("\r\n", "\n")
+        if "\r" in text:
+            return None  # a lone carriage return ends a line for the csv module
+    if '"' in text or "\0" in text:
+        return None  # quoting, or a NUL, which the csv module refuses
+    return text.removesuffix("\n")
+
+
+# --------------------------------------------------------------------------------------------
+# Rows to batches
+# --------------------------------------------------------------------------------------------
+
+
+class _Reader:
+    """Turns blocks into validated batches: header first, then plain blocks split in bulk,
+    and from the first block that is not plain on, the csv module.
+
+    The generators only yield finished batches: the conversion happens in plain methods, so
+    the text and the cells of a block are freed before the caller gets its batch.
+    """
+
+    def __init__(self, path: Path, blocks: _Blocks, block_size: int) -> None:
+        self.path = path
+        self.blocks = iter(blocks)
+        self.rows_per_batch = max(1, block_size // _ROW_BYTES)
+        self.previous_t = -math.inf
+        self.width = 0
+        self.indices: dict[str, int] = {}
+
+    def batches(self) -> Iterator[ReadingBatch]:
+        first = next(self.blocks, None)
+        if first is None:
+            msg = f"{self.path}: empty file, expected a header {','.join(READINGS_COLUMNS)}"
+            raise InputError(msg)
+        plain = _plain(first)
+        if plain is None:
+            yield from self._csv_batches(first, header=True)
+            return
+        header, _, body = plain.partition("\n")
+        self._header(header.split(","))
+        if body:
+            raw = first.raw[first.raw.index(b"\n") + 1 :]
+            yield self._plain_batch(_Block(2, raw, ""), body)
+        del first, plain, body
+        while (block := next(self.blocks, None)) is not None:
+            plain = _plain(block)
+            if plain is None:
+                yield from self._csv_batches(block, header=False)
+                return
+            batch = self._plain_batch(block, plain)
+            del block, plain
+            yield batch
+
+    def _header(self, names: list[str]) -> None:
+        header = [name.strip() for name in names]
+        _check_header(self.path, header)
+        self.width = len(header)
+        wanted = [*READINGS_COLUMNS, *([_OPTIONAL] if _OPTIONAL in header else [])]
+        self.indices = {name: header.index(name) for name in wanted}
+
+    # -- plain blocks: split in bulk --------------------------------------------------------
+
+    def _plain_batch(self, block: _Block, text: str) -> ReadingBatch:
+        """The rows of a plain block (``text``: its lines joined by ``\\n``)."""
+        bad = np.flatnonzero(_fields_per_line(block.raw) != self.width)
+        problem = None
+        if bad.size:
+            stop = int(bad[0])
+            lines = text.split("\n")
+            problem = _shape_problem(self.path, block.first_line + stop, lines[stop], self.width)
+            text = "\n".join(lines[:stop])
+        fields = text.replace("\n", ",").split(",") if text else []
+        columns = {name: fields[i :: self.width] for name, i in self.indices.items()}
+        first = block.first_line
+        return self._batch(columns, lambda k: first + k, problem)
+
+    # -- everything else: the csv module ------------------------------------------------------
+
+    def _csv_batches(self, block: _Block, *, header: bool) -> Iterator[ReadingBatch]:
+        """The rest of the file from ``block`` on, row by row through :mod:`csv`."""
+        base = block.first_line - 1
+        reader = csv.reader(self._lines(block))
+        del block
+        try:
+            if header:
+                self._header(next(reader, []))
+            rows: list[list[str]] = []
+            lines: list[int] = []
+            blank: list[int] = []  # blank lines not yet known to be followed by content
+            for row in reader:
+                if not row:
+                    blank.append(base + reader.line_num)
+                    continue
+                if blank:
+                    self._rows_batch(rows, lines, _blank(self.path, blank[0]))  # raises
+                rows.append(row)
+                lines.append(base + reader.line_num)
+                if len(rows) >= self.rows_per_batch:
+                    batch = self._rows_batch(rows, lines, None)
+                    rows, lines = [], []
+                    yield batch
+        except csv.Error as err:
+            msg = f"{self.path}: line {base + reader.line_num}, cannot read as CSV ({err})"
+            raise InputError(msg) from None
+        if rows:
+            yield self._rows_batch(rows, lines, None)
+
+    def _lines(self, block: _Block) -> Iterator[str]:
+        """The physical lines from ``block`` on, as the csv module wants them."""
+        current: _Block | None = block
+        while current is not None:
+            yield from io.StringIO(current.text, newline="")
+            current = next(self.blocks, None)
+
+    def _rows_batch(self, rows: list[list[str]], lines: list[int],
+                    problem: str | None) -> ReadingBatch:
+        for k, row in enumerate(rows):
+            if len(row) != self.width:
+                problem = _shape_problem(self.path, lines[k], "", self.width, fields=len(row))
+                rows = rows[:k]
+                break
+        columns = {name: [row[i] for row in rows] for name, i in self.indices.items()}
+        return self._batch(columns, lines.__getitem__, problem)
+
+    # -- both ---------------------------------------------------------------------------------
+
+    def _batch(self, columns: dict[str, list[str]], line_of: Callable[[int], int],
+               problem: str | None) -> ReadingBatch:
+        """Convert and validate rows that have the right number of fields; raise at the first
+        bad one, or else with ``problem`` (about the line after them) if there is one."""
+        try:
+            arrays = {name: _floats(cells, optional=name == _OPTIONAL)
+                      for name, cells in columns.items()}
+            batch = self._validated(arrays, line_of(0) if columns["t"] else 1)
+        except (ValueError, ReadingsError) as err:
+            self._first_problem(columns, line_of, err)
+        if problem is not None:
+            raise InputError(problem)
+        if len(batch):
+            self.previous_t = float(batch.t[-1])
+        return batch
+
+    def _validated(self, arrays: dict[str, FloatArray], first_line: int) -> ReadingBatch:
+        """The batch of ``arrays``; :class:`ReadingsError` if any row breaks a rule."""
+        batch = ReadingBatch.from_arrays(**arrays, source=str(self.path), first_line=first_line)
+        if len(batch) and batch.t[0] < self.previous_t:  # the only rule across batches
+            batch[:1].validate(str(self.path), first_line, previous_t=self.previous_t)
+        return batch
+
+    def _first_problem(self, columns: dict[str, list[str]], line_of: Callable[[int], int],
+                       err: Exception) -> NoReturn:
+        """Raise the error of the first bad row (the slow way: only once, on a bad file)."""
+        stop, message = len(columns["t"]), str(err)
+        for name, cells in columns.items():  # the first cell that is no number, column order
+            for k in range(stop):
+                text = cells[k]
+                if name == _OPTIONAL and not text.strip():
+                    continue
+                try:
+                    parse_number(text, f"{self.path}: line {line_of(k)}", name, finite=False)
+                except InputError as bad_cell:
+                    stop, message = k, str(bad_cell)
+                    break
+        arrays = {name: _floats(cells[:stop], optional=name == _OPTIONAL)
+                  for name, cells in columns.items()}
+        bad = _first_false(stop, lambda k: self._valid(arrays, k))
+        if bad < stop:  # a row before the unparseable one breaks a rule: its first rule
+            if bad > 0:
+                self.previous_t = float(arrays["t"][bad - 1])
+            try:
+                self._validated({name: values[bad : bad + 1] for name, values in arrays.items()},
+                                line_of(bad))
+            except ReadingsError as rule:
+                message = str(rule)
+        raise InputError(message) from None
+
+    def _valid(self, arrays: dict[str, FloatArray], stop: int) -> bool:
+        try:
+            self._validated({name: values[:stop] for name, values in arrays.items()}, 1)
+        except ReadingsError:
+            return False
+        return True
+
+
+def _floats(cells: Sequence[str], *, optional: bool) -> FloatArray:
+    """``float`` of every cell (an empty ``beam_width`` cell is NaN: the method's default)."""
+    try:
+        return np.fromiter(map(float, cells), dtype=np.float64, count=len(cells))
+    except ValueError:
+        if not optional:
+            raise
+    return np.array([float(text) if text.strip() else math.nan for text in cells],
+                    dtype=np.float64).reshape(-1)
+
+
+def _first_false(n: int, valid: Callable[[int], bool]) -> int:
+    """The least k < n with ``valid(k + 1)`` false (the first bad row), n if none; ``valid``
+    says whether the first k rows are all good, which stays false once false."""
+    if valid(n):
+        return n
+    low, high = 0, n  # valid(low) holds, valid(high) does not
+    while high - low > 1:
+        middle = (low + high) // 2
+        if valid(middle):
+            low = middle
+        else:
+            high = middle
+    return low
+
+
+def _fields_per_line(raw: bytes) -> IntArray:
+    """Number of comma-separated fields of each line of a plain block (no final break)."""
+    buffer = np.frombuffer(raw, dtype=np.uint8)
+    if buffer.size and buffer[-1] == ord("\n"):
+        buffer = buffer[:-1]
+    ends = np.flatnonzero(buffer == ord("\n"))
+    commas = np.flatnonzero(buffer == ord(","))
+    before_end = np.searchsorted(commas, ends)
+    per_line = np.diff(np.concatenate(([0], before_end, [commas.size])))
+    return (per_line + 1).astype(np.int64)
+
+
+def _shape_problem(path: Path, line: int, text: str, width: int,
+                   fields: int | None = None) -> str:
+    """The message for a line whose number of fields is not the header's."""
+    if fields is None:
+        fields = len(text.split(",")) if text else 0
+    if fields == 0:
+        return _blank(path, line)
+    count = f"{fields} field{'' if fields == 1 else 's'}"
+    return f"{path}: line {line} has {count}, the header has {width}"
+
+
+def _blank(path: Path, line: int) -> str:
+    return f"{path}: line {line} is blank (blank lines are allowed only at the end)"
 
 
 def _check_header(path: Path, header: list[str]) -> None:
@@ -81,30 +462,6 @@ def _check_header(path: Path, header: list[str]) -> None:
     if missing:
         msg = f"{path}: line 1, missing column(s) {', '.join(missing)} (header: {','.join(header)})"
         raise InputError(msg)
-
-
-def _check_shape(path: Path, body: list[tuple[int, list[str]]], width: int) -> None:
-    """Every data line has the header's number of fields; no blank line among them."""
-    for line, row in body:
-        if not row:
-            msg = f"{path}: line {line} is blank (blank lines are allowed only at the end)"
-            raise InputError(msg)
-        if len(row) != width:
-            fields = f"{len(row)} field{'' if len(row) == 1 else 's'}"
-            msg = f"{path}: line {line} has {fields}, the header has {width}"
-            raise InputError(msg)
-
-
-def _column(path: Path, body: list[tuple[int, list[str]]], index: int, name: str) -> np.ndarray:
-    values = np.empty(len(body))
-    for k, (line, row) in enumerate(body):
-        text = row[index]
-        if name == _OPTIONAL and not text.strip():
-            values[k] = math.nan  # unknown beam width: the method's default applies
-            continue
-        # NaN and infinities pass here: validation names them with the row's context.
-        values[k] = parse_number(text, f"{path}: line {line}", name, finite=False)
-    return values
 
 
 def write_readings_csv(batch: ReadingBatch, path: str | Path) -> None:
