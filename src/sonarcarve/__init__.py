@@ -2,36 +2,101 @@
 
 Implements *Arc Carving: Obtaining Accurate, Low Latency Maps from Ultrasonic Range Sensors*:
 the centerline model, the Arc Transversal Median (ATM), arc carving and their combination, over
-a ring-buffer history of sonar arcs, with local and global maps and the paper's measures.
+a ring-buffer history of sonar arcs, with local and global maps and the paper's measures; and
+beyond it, evidence carving and occupancy grids (the carved grid, ROS's range-sensor layer).
+
+The names below are loaded on first use (PEP 562), so ``import sonarcarve`` and the command
+line's ``--version`` and ``--help`` start without numpy, scipy or numba.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from sonarcarve._version import __version__
-from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
-from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
-from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
-from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
-from sonarcarve.io import (
-    read_map_csv,
-    read_readings_csv,
-    read_rosbag,
-    write_map_csv,
-    write_readings_csv,
-)
-from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
-from sonarcarve.methods import (
-    METHODS,
-    AtmMethod,
-    CarvingMethod,
-    CenterlineMethod,
-    CombinedMethod,
-    Measures,
-    MethodConfig,
-    SonarMethod,
-    make_method,
-)
-from sonarcarve.pipeline import ProcessResult, process_readings
-from sonarcarve.polling import PolledLog, SonarPoller, naive_stamps, poll_readings
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
+
+if TYPE_CHECKING:
+    from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
+    from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
+    from sonarcarve.grids import (
+        CarvedGrid,
+        GridError,
+        OccupancyGrid,
+        RangeSensorLayer,
+        SonarConeModel,
+    )
+    from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
+    from sonarcarve.io import (
+        read_map_csv,
+        read_readings_csv,
+        read_rosbag,
+        write_map_csv,
+        write_readings_csv,
+    )
+    from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
+    from sonarcarve.methods import (
+        METHODS,
+        AtmMethod,
+        CarvingMethod,
+        CenterlineMethod,
+        CombinedMethod,
+        EvidenceMethod,
+        Measures,
+        MethodConfig,
+        SonarMethod,
+        make_method,
+    )
+    from sonarcarve.pipeline import ProcessResult, process_readings
+    from sonarcarve.polling import PolledLog, SonarPoller, naive_stamps, poll_readings
+    from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "ArcFate": "sonarcarve.geometry",
+    "AtmMethod": "sonarcarve.methods",
+    "CarvedGrid": "sonarcarve.grids",
+    "CarvingMethod": "sonarcarve.methods",
+    "CenterlineMethod": "sonarcarve.methods",
+    "CombinedMethod": "sonarcarve.methods",
+    "EvidenceMethod": "sonarcarve.methods",
+    "DEFAULT_BEAM_WIDTH": "sonarcarve.readings",
+    "DEFAULT_HISTORY_SIZE": "sonarcarve.history",
+    "GlobalMap": "sonarcarve.maps",
+    "GridError": "sonarcarve.grids",
+    "LocalMap": "sonarcarve.maps",
+    "METHODS": "sonarcarve.methods",
+    "MapFilter": "sonarcarve.filters",
+    "Measures": "sonarcarve.methods",
+    "MethodConfig": "sonarcarve.methods",
+    "OccupancyGrid": "sonarcarve.grids",
+    "PointSource": "sonarcarve.maps",
+    "PolledLog": "sonarcarve.polling",
+    "ProcessResult": "sonarcarve.pipeline",
+    "RangeSensorLayer": "sonarcarve.grids",
+    "Reading": "sonarcarve.readings",
+    "ReadingBatch": "sonarcarve.readings",
+    "ReadingFilter": "sonarcarve.filters",
+    "ReadingsError": "sonarcarve.readings",
+    "SonarConeModel": "sonarcarve.grids",
+    "SonarHistory": "sonarcarve.history",
+    "SonarMethod": "sonarcarve.methods",
+    "SonarPoller": "sonarcarve.polling",
+    "arc_remainder": "sonarcarve.geometry",
+    "carve_arc": "sonarcarve.geometry",
+    "chord_error": "sonarcarve.maps",
+    "filter_map": "sonarcarve.filters",
+    "filter_readings": "sonarcarve.filters",
+    "make_method": "sonarcarve.methods",
+    "naive_stamps": "sonarcarve.polling",
+    "poll_readings": "sonarcarve.polling",
+    "process_readings": "sonarcarve.pipeline",
+    "read_map_csv": "sonarcarve.io",
+    "read_readings_csv": "sonarcarve.io",
+    "read_rosbag": "sonarcarve.io",
+    "write_map_csv": "sonarcarve.io",
+    "write_readings_csv": "sonarcarve.io",
+}
 
 __all__ = [
     "DEFAULT_BEAM_WIDTH",
@@ -39,9 +104,11 @@ __all__ = [
     "METHODS",
     "ArcFate",
     "AtmMethod",
+    "CarvedGrid",
     "CarvingMethod",
     "CenterlineMethod",
     "CombinedMethod",
+    "EvidenceMethod",
     "GlobalMap",
     "GridError",
     "LocalMap",
@@ -52,6 +119,7 @@ __all__ = [
     "PointSource",
     "PolledLog",
     "ProcessResult",
+    "RangeSensorLayer",
     "Reading",
     "ReadingBatch",
     "ReadingFilter",
@@ -76,3 +144,18 @@ __all__ = [
     "write_map_csv",
     "write_readings_csv",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        msg = f"module 'sonarcarve' has no attribute {name!r}"
+        raise AttributeError(msg) from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

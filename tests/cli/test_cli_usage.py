@@ -16,7 +16,8 @@ import typer
 from sonarcarve.cli import main
 from sonarcarve.cli.app import LAZY_COMMANDS, app
 
-COMMANDS = ("process", "simulate", "convert", "worlds", "demo", "experiments")
+COMMANDS = ("process", "simulate", "convert", "worlds", "demo", "experiments", "grid", "plot",
+            "view", "sweep")
 
 
 @pytest.mark.parametrize(("args", "words"), [
@@ -172,9 +173,6 @@ def test_version_is_the_projects() -> None:
     assert sonarcarve.__version__ == __version__
 
 
-@pytest.mark.xfail(strict=True, reason="sonarcarve/__init__.py imports the whole library (numba, "
-                   "numpy, scipy) and every `sonarcarve.cli` import runs it first; it needs lazy "
-                   "exports (PEP 562 __getattr__) for a cold start without them (issue 11)")
 @pytest.mark.parametrize("args", [["--version"], ["--help"]])
 def test_version_and_help_load_no_numerics(args: list[str]) -> None:
     code = (f"import sys\nfrom sonarcarve.cli import main\nassert main({args!r}) == 0\n"

@@ -40,6 +40,18 @@ lazy_command("convert", "sonarcarve.cli.convert",
 lazy_command("worlds", "sonarcarve.cli.worlds",
              "List the simulator's worlds: size, walls, area, gaps (doors, openings), tour "
              "length.")
+lazy_command("grid", "sonarcarve.cli.grid",
+             "Map READINGS.csv into an occupancy grid and write it as a ROS map_server map.")
+lazy_command("plot", "sonarcarve.cli.plot",
+             "Draw a map CSV to a figure: points coloured by source, the robot's path, a grid "
+             "map.")
+lazy_command("view", "sonarcarve.cli.view",
+             "Record a run for the Rerun viewer: robot path, each reading's arc, the map "
+             "growing.")
+lazy_command("sweep", "sonarcarve.cli.sweep",
+             "Sweep method and simulation parameters over worlds and seeds: one tidy table "
+             "(runs.csv, one row per run, every parameter and measure) and a figure of each "
+             "measure against each parameter.")
 lazy_command("experiments", "sonarcarve.cli.experiments",
              "Regenerate the paper's experiments (section 5) on the simulator, plus what the "
              "paper could not measure without ground truth.")
