@@ -131,10 +131,62 @@ class SonarHistory:
         self._appended = sequence + 1
         return slot
 
+    def room(self) -> int:
+        """Arcs :meth:`append_many` can store before a retired row must be committed (≥ 0)."""
+        return self._committed + self.storage_size - self._appended
+
+    def commit_for_room(self) -> None:
+        """Hand the retired arcs to ``on_evict`` when :meth:`room` is 0, as :meth:`append`
+        would before reusing their rows (same blocks, same moments)."""
+        if self.room() <= 0:
+            self._evict_upto(self._appended - self.capacity)
+
+    def append_many(self, x: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
+                    r: npt.NDArray[np.float64], theta: npt.NDArray[np.float64],
+                    t: npt.NDArray[np.float64], sensor: npt.NDArray[np.int64],
+                    beam_width: npt.NDArray[np.float64], first_id: int) -> int:
+        """Store ``len(x)`` arcs at once (at most :meth:`room`), ids from ``first_id``; return
+        the sequence number of the first (its slot is that modulo ``storage_size``).
+
+        The vectorised twin of :meth:`append` for a batch of validated readings: the rows are
+        written exactly as :meth:`append` writes them, but no arc retires through ``on_evict``
+        here (the caller calls :meth:`commit_for_room` between batches), so the models must
+        then process the arcs in order, as if they had been appended one by one.
+        """
+        n = len(x)
+        if n > self.room():
+            msg = f"append_many of {n} arcs with room for {self.room()}"
+            raise ValueError(msg)
+        first = self._appended
+        start = first % self.storage_size
+        head = min(n, self.storage_size - start)  # rows up to the end of the storage, then 0..
+        half = 0.5 * beam_width
+        for rows, part in ((slice(start, start + head), slice(0, head)),
+                           (slice(0, n - head), slice(head, n))):
+            self.x[rows] = x[part]
+            self.y[rows] = y[part]
+            self.r[rows] = r[part]
+            self.theta[rows] = theta[part]
+            self.theta1[rows] = theta[part] - half[part]
+            self.theta2[rows] = theta[part] + half[part]
+            self.t[rows] = t[part]
+            self.beam_width[rows] = beam_width[part]
+            self.sensor[rows] = sensor[part]
+            self.reading_id[rows] = np.arange(first_id + part.start, first_id + part.stop)
+        self._appended = first + n
+        return first
+
     def slots(self) -> npt.NDArray[np.int64]:
         """Live slots from oldest to newest, shape (len(self),) (a read-only view)."""
         first = (self._appended - len(self)) % self.storage_size
         return self._wrapped[first : first + len(self)]
+
+    def window(self, sequence: int) -> npt.NDArray[np.int64]:
+        """Slots of the arcs that were live right after arc ``sequence`` was appended, oldest
+        first, ending with that arc's own slot (a read-only view)."""
+        count = min(sequence + 1, self.capacity)
+        first = (sequence + 1 - count) % self.storage_size
+        return self._wrapped[first : first + count]
 
     def flush_retired(self) -> None:
         """Hand every retired, uncommitted arc to ``on_evict``."""

@@ -43,7 +43,15 @@ import numpy.typing as npt
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import common_chord
-from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.index import (
+    ArcIndex,
+    arc_box,
+    index_insert,
+    index_remove,
+    make_index,
+    query_box,
+)
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
@@ -55,13 +63,25 @@ from sonarcarve.methods.config import (
 )
 from sonarcarve.typing import FloatArray, SlotArray
 
-__all__ = ["MAX_ATM_STATE_BYTES", "AtmMethod", "AtmModel", "atm_error_bound"]
+__all__ = [
+    "MAX_ATM_STATE_BYTES",
+    "MIN_INDEXED_TRANSVERSAL",
+    "AtmMethod",
+    "AtmModel",
+    "atm_error_bound",
+]
 
 
 #: Most memory ATM's crossing store may take, bytes (1 GiB). It keeps room for every crossing an
 #: arc can have, ``2n × 4(n - 1)`` float32 values for a history of ``n`` arcs (about 32 n² bytes:
 #: 2 MB at the paper's 250, 128 MB at 2,000), so ATM refuses histories above about 5,790 arcs.
 MAX_ATM_STATE_BYTES = 2**30
+
+
+#: Smallest ψ (radians) for which ATM uses its spatial index: below it the crossings of
+#: nearly tangent circles are too ill-conditioned to be sure they fall in the padded boxes of
+#: :mod:`sonarcarve.geometry.index` (with ψ ≥ 1e-4 they are off by at most about 1e-12 r).
+MIN_INDEXED_TRANSVERSAL = 1e-4
 
 
 def _check_state_size(nbytes: int) -> None:
@@ -103,7 +123,7 @@ def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
     return range_resolution * (1.0 / math.sin(min_transversal) + 1.0 / math.tan(min_transversal))
 
 
-@compiled
+@compiled_inline
 def _add_arc(
     x: FloatArray,
     y: FloatArray,
@@ -113,11 +133,13 @@ def _add_arc(
     cos_half: FloatArray,
     slot: int,
     older: SlotArray,
+    found: int,
     cos_psi: float,
     bearings: npt.NDArray[np.float32],
     counts: npt.NDArray[np.int32],
 ) -> int:
-    """Intersect the arc in ``slot`` with every ``older`` arc and store the kept crossings.
+    """Intersect the arc in ``slot`` with the ``older[:found]`` arcs and store the kept
+    crossings.
 
     Kept: ``|cos γ| ≤ cos ψ`` (transversal angle ≥ ψ) and inside both full beams (eq. 2.1). Each
     kept crossing is appended to both rows of ``bearings`` as a bearing relative to that arc's
@@ -133,7 +155,8 @@ def _add_arc(
     xj, yj, rj = x[slot], y[slot], r[slot]
     cj, sj, hj = cos_axis[slot], sin_axis[slot], cos_half[slot]
     kept = 0
-    for i in older:
+    for k in range(found):
+        i = older[k]
         ri = r[i]
         dx = x[i] - xj
         dy = y[i] - yj
@@ -167,6 +190,49 @@ def _add_arc(
                 bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
                 counts[i] += 1
             kept += 1
+    return kept
+
+
+@compiled
+def _add_arcs(
+    first: int, count: int, capacity: int,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    theta1: FloatArray, theta2: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    index: ArcIndex, candidates: SlotArray, use_index: bool,
+) -> int:
+    """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
+    order: reset each one's crossings and intersect it with the live arcs before it
+    (:func:`_add_arc`). Returns the crossings kept.
+
+    With ``use_index`` only the arcs the index returns for the new arc's box
+    (:func:`~sonarcarve.geometry.index.query_box`) are intersected: a kept crossing lies on both
+    full beams, so both boxes contain it. ``index`` holds the live arcs (ATM removes none).
+    Off (ψ < :data:`MIN_INDEXED_TRANSVERSAL`), every live arc is: the crossings of nearly
+    tangent circles are too ill-conditioned for the boxes' padding.
+    """
+    storage = x.shape[0]
+    kept = 0
+    for sequence in range(first, first + count):
+        slot = sequence % storage
+        if sequence >= capacity:
+            index_remove(index, (sequence - capacity) % storage)  # it has left the history
+        counts[slot] = 0
+        cos_axis[slot] = math.cos(theta[slot])
+        sin_axis[slot] = math.sin(theta[slot])
+        cos_half[slot] = math.cos(0.5 * beam_width[slot])
+        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+        found = query_box(index, xmin, xmax, ymin, ymax, candidates) if use_index else -1
+        if found < 0:
+            found = 0
+            for older in range(max(0, sequence - capacity + 1), sequence):
+                candidates[found] = older % storage
+                found += 1
+        kept += _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates, found,
+                         cos_psi, bearings, counts)
+        if use_index:
+            index_insert(index, slot, xmin, xmax, ymin, ymax)
     return kept
 
 
@@ -220,6 +286,8 @@ class AtmModel(ArcModel):
     :func:`atm_error_bound` for ATM points, ``chord_error(r, φ)`` (eq. 5.3) for fallbacks.
     """
 
+    block_safe = True
+
     def __init__(self, history: SonarHistory, min_transversal: float, range_resolution: float):
         super().__init__(history)
         self.min_transversal = check_min_transversal(min_transversal)
@@ -234,18 +302,26 @@ class AtmModel(ArcModel):
         self._cos_axis = np.zeros(history.storage_size)
         self._sin_axis = np.zeros(history.storage_size)
         self._cos_half = np.zeros(history.storage_size)
+        self._use_index = self.min_transversal >= MIN_INDEXED_TRANSVERSAL
+        self.index = make_index(history.storage_size)
+        self._candidates = np.zeros(history.storage_size, dtype=np.int64)
         self._kept = 0
 
     def on_add(self, slot: int, older: SlotArray) -> None:
-        """Reset ``slot``'s crossings, then intersect its arc with every ``older`` live arc."""
+        """Reset ``slot``'s crossings, then intersect its arc with the older live arcs.
+
+        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
+        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
+        """
+        self.on_add_many(self.history.appended - 1, 1)
+
+    def on_add_many(self, first: int, count: int) -> None:
+        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
         h = self.history
-        self.counts[slot] = 0
-        self._cos_axis[slot] = math.cos(h.theta[slot])
-        self._sin_axis[slot] = math.sin(h.theta[slot])
-        self._cos_half[slot] = math.cos(0.5 * h.beam_width[slot])
-        self._kept += _add_arc(
-            h.x, h.y, h.r, self._cos_axis, self._sin_axis, self._cos_half, slot,
-            np.ascontiguousarray(older), self._cos_psi, self.bearings, self.counts,
+        self._kept += _add_arcs(
+            first, count, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1, h.theta2,
+            self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi, self.bearings,
+            self.counts, self.index, self._candidates, self._use_index,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:

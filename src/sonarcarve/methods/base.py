@@ -109,6 +109,11 @@ class ArcModel(ABC):
     they are committed to the global map.
     """
 
+    #: The model reads no history row newer than the arc it is adding, so that
+    #: :meth:`SonarMethod.add_many` may store a whole block of arcs first and then run
+    #: :meth:`on_add_many` over it. Models that do not say so get one reading at a time.
+    block_safe: ClassVar[bool] = False
+
     def __init__(self, history: SonarHistory) -> None:
         self.history = history
 
@@ -116,6 +121,19 @@ class ArcModel(ABC):
     def on_add(self, slot: int, older: SlotArray) -> None:
         """Initialise the state of the new arc in ``slot`` and let it act on the ``older`` live
         arcs (oldest first)."""
+
+    def on_add_many(self, first: int, count: int) -> None:
+        """:meth:`on_add` for the arcs of sequence numbers ``first .. first + count - 1``, in
+        order, each against the live arcs before it (already stored by
+        :meth:`~sonarcarve.history.SonarHistory.append_many`).
+
+        This default calls :meth:`on_add` once per arc; models with a compiled kernel override
+        it with one call for the whole block (no Python between arcs).
+        """
+        h = self.history
+        for sequence in range(first, first + count):
+            live = h.window(sequence)
+            self.on_add(int(live[-1]), live[:-1])
 
     @abstractmethod
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -159,6 +177,7 @@ class SonarMethod(ABC):
         self._last_t = -math.inf  # time of the newest reading: times never go backwards
         self._finished = False
         self._listeners: list[CommitListener] = []
+        self._local: LocalMap | None = None  # local_map() until the next reading
         self.models: tuple[ArcModel, ...] = self._make_models()
 
     @abstractmethod
@@ -196,8 +215,31 @@ class SonarMethod(ABC):
         self._check_open()
         start = self._readings if first_id is None else first_id
         batch.validate(first_id=start, previous_t=self._last_t)
-        for offset, reading in enumerate(batch):
-            self._add_checked(reading, start + offset)
+        n = len(batch)
+        if n == 0:
+            return
+        if not all(model.block_safe for model in self.models):
+            for offset, reading in enumerate(batch):
+                self._add_checked(reading, start + offset)
+            return
+        width = np.where(np.isnan(batch.beam_width), self.beam_width, batch.beam_width)
+        h = self.history
+        done = 0
+        # Blocks of at most the history's room: the arcs that retire between blocks are
+        # committed exactly when add() would commit them (SonarHistory.commit_for_room).
+        while done < n:
+            h.commit_for_room()
+            stop = min(n, done + h.room())
+            part = slice(done, stop)
+            first = h.append_many(batch.x[part], batch.y[part], batch.range[part],
+                                  batch.theta[part], batch.t[part], batch.sensor[part],
+                                  width[part], start + done)
+            for model in self.models:
+                model.on_add_many(first, stop - done)
+            done = stop
+        self._readings += n
+        self._last_t = float(batch.t[-1])
+        self._local = None
 
     def _check_open(self) -> None:
         if self._finished:
@@ -212,6 +254,7 @@ class SonarMethod(ABC):
             model.on_add(slot, older)
         self._readings += 1
         self._last_t = reading.t
+        self._local = None
 
     # -- maps and measures --------------------------------------------------------------------
 
@@ -220,8 +263,18 @@ class SonarMethod(ABC):
         return self._combine(tuple(model.estimates(slots) for model in self.models))
 
     def local_map(self) -> LocalMap:
-        """One point per surviving arc in the history, oldest first (eq. 3.6)."""
-        return self._points(self.history.slots(), LocalMap)
+        """One point per surviving arc in the history, oldest first (eq. 3.6).
+
+        Asked again with no reading added in between, it returns the same map without
+        recomputing or copying anything (its arrays are read-only for that reason).
+        """
+        if self._local is None:
+            local = self._points(self.history.slots(), LocalMap)
+            for value in vars(local).values():
+                if isinstance(value, np.ndarray):
+                    value.flags.writeable = False
+            self._local = local
+        return self._local
 
     def global_map(self) -> GlobalMap:
         """Final points of the arcs that have left the history so far, in reading order."""

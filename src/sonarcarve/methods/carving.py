@@ -20,8 +20,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle, carve_arcs
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle
 from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry.bounds import UNDECIDED, circle_against_sector
+from sonarcarve.geometry.circular import new_scratch
+from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
+from sonarcarve.geometry.index import (
+    ArcIndex,
+    arc_box,
+    index_insert,
+    index_remove,
+    make_index,
+    query_sector,
+)
+from sonarcarve.geometry.intervals import _carve_core
+from sonarcarve.geometry.sector import make_sector
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
@@ -40,29 +53,82 @@ _ALIVE = int(ArcFate.ALIVE)
 
 
 @compiled
-def _add_arc(
-    slot: int, older: SlotArray,
+def _add_arcs(
+    first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
-    lo: FloatArray, hi: FloatArray, bounds: FloatArray,
-    status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, status: Int8Array, carved: BoolArray,
+    tolerance: float, max_incidence: float, index: ArcIndex, candidates: SlotArray,
 ) -> tuple[int, int]:
-    """Initialise row ``slot`` as its full beam (section 3), then carve ``older`` by it (3.5).
+    """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
+    order: initialise each as its full beam (section 3), carve the live arcs before it by its
+    freespace (eq. 3.5), then enter it in ``index``.
 
-    One compiled call per reading: the Python overhead of doing this field by field was larger
-    than the carving itself. (Compiled with :func:`~sonarcarve.geometry._compiled.compiled`, whose
-    cache is keyed on the geometry sources too: this kernel inlines :func:`carve_arcs`.)
+    ``index`` holds exactly the live, alive arcs: the arc leaving the history and the arcs
+    carving removes are taken out. Each reading carves only the arcs the index returns for its
+    sector (:func:`~sonarcarve.geometry.index.query_sector`), the same arcs the all-pairs
+    :func:`~sonarcarve.geometry.carve_arcs` would change, with the same step, so the results
+    are identical. One compiled call
+    per block: Python between readings cost more than the carving.
     """
-    lo[slot] = theta1[slot]
-    hi[slot] = theta2[slot]
-    cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
-    bounds[slot, 0] = cx
-    bounds[slot, 1] = cy
-    bounds[slot, 2] = radius
-    status[slot] = _ALIVE
-    carved[slot] = False
-    return carve_arcs(older, x, y, r, lo, hi, bounds, status, carved,
-                      x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
-                      max_incidence)
+    storage = x.shape[0]
+    cuts, starts, ends, flags = new_scratch()
+    fully = 0
+    split = 0
+    for sequence in range(first, first + count):
+        slot = sequence % storage
+        if sequence >= capacity:
+            index_remove(index, (sequence - capacity) % storage)  # it has left the history
+        lo[slot] = theta1[slot]
+        hi[slot] = theta2[slot]
+        cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], theta1[slot],
+                                             theta2[slot])
+        bounds[slot, 0] = cx
+        bounds[slot, 1] = cy
+        bounds[slot, 2] = radius
+        status[slot] = _ALIVE
+        carved[slot] = False
+        sector = make_sector(x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
+                             max_incidence)
+        if sector.radius > 0.0:
+            found = query_sector(index, sector, candidates)
+            if found < 0:  # a huge sector: every live arc before this one
+                found = 0
+                for older in range(max(0, sequence - capacity + 1), sequence):
+                    candidates[found] = older % storage
+                    found += 1
+            for k in range(found):
+                # The step of carve_arcs, arc by arc (written out: numba runs it 20 times
+                # slower as an inlined helper taking the arrays).
+                i = candidates[k]
+                if status[i] != _ALIVE:
+                    continue
+                fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i],
+                                             y[i], r[i], sector)
+                if fate == UNCHANGED:
+                    continue
+                new_lo = lo[i]
+                new_hi = hi[i]
+                if fate == UNDECIDED:
+                    fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi,
+                                                       sector, cuts, starts, ends, flags)
+                    if fate == UNCHANGED:
+                        continue
+                carved[i] = True
+                if fate == SHRUNK:
+                    lo[i] = new_lo
+                    hi[i] = new_hi
+                    bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
+                        x[i], y[i], r[i], new_lo, new_hi)
+                else:
+                    status[i] = fate
+                    index_remove(index, i)
+                    if fate == FULLY_CARVED:
+                        fully += 1
+                    else:
+                        split += 1
+        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+        index_insert(index, slot, xmin, xmax, ymin, ymax)
+    return fully, split
 
 
 class CarvingModel(ArcModel):
@@ -90,7 +156,12 @@ class CarvingModel(ArcModel):
     bounds : ndarray of float64, shape (history.storage_size, 3)
         A circle ``(cx, cy, radius)`` containing each carved arc
         (:func:`~sonarcarve.geometry.arc_bounding_circle`): a cheap first test in carving.
+    index : ArcIndex
+        The live arcs that carving has not removed, by place
+        (:mod:`sonarcarve.geometry.index`): a reading carves only those near its sector.
     """
+
+    block_safe = True
 
     def __init__(self, history: SonarHistory, range_tolerance: float,
                  max_incidence: float = NO_INCIDENCE_LIMIT) -> None:
@@ -103,19 +174,27 @@ class CarvingModel(ArcModel):
         self.bounds = np.zeros((size, 3))
         self.status = np.full(size, _ALIVE, dtype=np.int8)
         self.carved = np.zeros(size, dtype=bool)
+        self.index = make_index(size)
+        self._candidates = np.zeros(size, dtype=np.int64)
         self._fully_carved = 0
         self._split = 0
 
     def on_add(self, slot: int, older: SlotArray) -> None:
-        """Start the new arc as its full beam and carve the ``older`` live arcs by its freespace.
+        """Start the new arc as its full beam and carve the older live arcs by its freespace.
 
-        Only live rows are touched: ``older`` holds the live slots before ``slot``.
+        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
+        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them): the spatial index finds
+        the arcs to carve among them.
         """
+        self.on_add_many(self.history.appended - 1, 1)
+
+    def on_add_many(self, first: int, count: int) -> None:
+        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
         h = self.history
-        fully, split = _add_arc(
-            slot, older, h.x, h.y, h.r, h.theta1, h.theta2,
+        fully, split = _add_arcs(
+            first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
             self.lo, self.hi, self.bounds, self.status, self.carved, self.range_tolerance,
-            self.max_incidence,
+            self.max_incidence, self.index, self._candidates,
         )
         self._fully_carved += fully
         self._split += split

@@ -18,6 +18,8 @@ class CenterlineModel(ArcModel):
     0 %). The model keeps no state.
     """
 
+    block_safe = True
+
     def on_add(self, slot: int, older: SlotArray) -> None:
         """Nothing to do: the centerline point depends on the arc alone."""
 

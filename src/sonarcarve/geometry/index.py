@@ -1,0 +1,295 @@
+"""A spatial index over the live arcs of a history: which arcs can a reading touch?
+
+Carving and ATM are ``O(mn)`` when every new reading is checked against every arc of the history
+(paper, section 5-C). Most of those checks are wasted: a reading's freespace sector (eq. 3.2), or
+its arc for ATM (eq. 2.1), only reaches the arcs near it. This index finds those arcs without any
+trigonometry, so the exact kernels run on a few candidates instead of the whole history.
+
+The index is a uniform grid of square cells of side ``cell_size`` over the plane, hashed into a
+fixed number of buckets (the plane is unbounded, the table is not). Each arc is entered, once,
+in every cell that its *full beam's* bounding box (:func:`arc_box`, padded) overlaps; an arc
+whose box spans more than :data:`MAX_CELLS` cells (a huge range) goes to one *overflow* list
+that every query visits. Buckets are intrusive doubly linked lists over per-arc entries, so that
+inserting and removing an arc costs one step per cell (at most :data:`MAX_CELLS`), independent
+of the history's length, and the index never allocates after it is made.
+
+Why the result is exact. The full beam contains every carved interval of the arc (carving only
+shrinks, section 3), so the box contains the arc at every moment of its life. A query visits
+every cell that meets the query region (a sector, or a box), hence every arc that has a point in
+it; an arc it misses is farther than the padding (:func:`box_pad`, about 1e-7 of the
+coordinates' size) from the region, far beyond the rounding of the closed forms, which then
+carve nothing of it / keep no crossing with it, exactly as the all-pairs kernels would. Queries
+return each arc once (a per-arc stamp), in no particular order; carving treats arcs
+independently, and ATM's medians do not depend on the order of an arc's crossings.
+
+The all-pairs kernels stay (:func:`~sonarcarve.geometry.carve_arcs`), as the reference for the
+tests and for ``benchmarks/speed.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.sector import Sector
+from sonarcarve.typing import IntArray
+
+__all__ = [
+    "DEFAULT_CELL_SIZE",
+    "MAX_CELLS",
+    "MAX_QUERY_CELLS",
+    "ArcIndex",
+    "arc_box",
+    "box_pad",
+    "index_insert",
+    "index_remove",
+    "make_index",
+    "query_box",
+    "query_sector",
+]
+
+#: Side of a grid cell, metres: about the chord of a 3 m sonar arc of 22.5°, so that most arcs
+#: enter a handful of cells and a reading's sector spans tens.
+DEFAULT_CELL_SIZE = 1.0
+
+#: Most cells an arc is entered in; an arc whose box spans more goes to the overflow list.
+MAX_CELLS = 16
+
+#: Most cells a query visits; a larger region (a huge range) scans the live arcs instead.
+MAX_QUERY_CELLS = 1024
+
+_I32 = npt.NDArray[np.int32]
+
+
+class ArcIndex(NamedTuple):
+    """The index's arrays (all fixed-size; see the module docstring).
+
+    Attributes
+    ----------
+    head : ndarray of int32, shape (buckets + 1,)
+        First entry of each bucket's list, -1 if empty; the last is the overflow list.
+    next, prev : ndarray of int32, shape (storage * MAX_CELLS,)
+        Links of entry ``slot * MAX_CELLS + k`` (the arc's ``k``-th cell) in its bucket's list;
+        ``prev`` is -2 - bucket for the first entry of a list.
+    entries : ndarray of int32, shape (storage,)
+        Entries in use by each slot's arc: 0 if the arc is not indexed.
+    stamp : ndarray of int64, shape (storage,)
+        Last query that returned each slot (so a query returns an arc once).
+    bucket_stamp : ndarray of int64, shape (buckets + 1,)
+        Last query that visited each bucket.
+    tick : ndarray of int64, shape (1,)
+        Queries made so far.
+    cell_size : ndarray of float64, shape (1,)
+        Side of a cell, metres.
+    """
+
+    head: _I32
+    next: _I32
+    prev: _I32
+    entries: _I32
+    stamp: IntArray
+    bucket_stamp: IntArray
+    tick: IntArray
+    cell_size: npt.NDArray[np.float64]
+
+
+def make_index(storage: int, cell_size: float = DEFAULT_CELL_SIZE) -> ArcIndex:
+    """An empty index for a history of ``storage`` rows (``SonarHistory.storage_size``).
+
+    The table has a power of two of buckets, at least twice the live arcs' typical cell count.
+    """
+    buckets = 1 << max(6, math.ceil(math.log2(max(storage, 1))) + 1)
+    return ArcIndex(
+        head=np.full(buckets + 1, -1, dtype=np.int32),
+        next=np.full(storage * MAX_CELLS, -1, dtype=np.int32),
+        prev=np.full(storage * MAX_CELLS, -1, dtype=np.int32),
+        entries=np.zeros(storage, dtype=np.int32),
+        stamp=np.full(storage, -1, dtype=np.int64),
+        bucket_stamp=np.full(buckets + 1, -1, dtype=np.int64),
+        tick=np.zeros(1, dtype=np.int64),
+        cell_size=np.full(1, float(cell_size)),
+    )
+
+
+@compiled_inline
+def box_pad(ox: float, oy: float, r: float) -> float:
+    """Padding of boxes and regions, metres: far above the rounding of the closed forms."""
+    return 1e-7 * (1.0 + abs(ox) + abs(oy) + r)
+
+
+@compiled_inline
+def arc_box(ox: float, oy: float, r: float, lo: float,
+            hi: float) -> tuple[float, float, float, float]:
+    """Box ``(xmin, xmax, ymin, ymax)`` of the arc ``o + r e(τ)``, ``τ ∈ [lo, hi]``, padded.
+
+    The extremes are at the ends and where ``τ`` crosses a multiple of π/2.
+    """
+    c1 = math.cos(lo)
+    s1 = math.sin(lo)
+    c2 = math.cos(hi)
+    s2 = math.sin(hi)
+    xmin = min(c1, c2)
+    xmax = max(c1, c2)
+    ymin = min(s1, s2)
+    ymax = max(s1, s2)
+    quarter = 0.5 * math.pi
+    k = math.ceil(lo / quarter)
+    while k * quarter <= hi:
+        m = k % 4
+        if m == 0:
+            xmax = 1.0
+        elif m == 1:
+            ymax = 1.0
+        elif m == 2:
+            xmin = -1.0
+        else:
+            ymin = -1.0
+        k += 1
+    pad = box_pad(ox, oy, r)
+    return (ox + r * xmin - pad, ox + r * xmax + pad, oy + r * ymin - pad, oy + r * ymax + pad)
+
+
+@compiled_inline
+def _bucket(ix: int, iy: int, mask: int) -> int:
+    return ((ix * 73856093) ^ (iy * 19349663)) & mask
+
+
+@compiled_inline
+def _link(index: ArcIndex, entry: int, bucket: int) -> None:
+    first = index.head[bucket]
+    index.next[entry] = first
+    index.prev[entry] = -2 - bucket
+    if first >= 0:
+        index.prev[first] = entry
+    index.head[bucket] = entry
+
+
+@compiled
+def index_insert(index: ArcIndex, slot: int, xmin: float, xmax: float, ymin: float,
+                 ymax: float) -> None:
+    """Enter the arc of ``slot`` in the cells its box overlaps (or the overflow list)."""
+    size = index.cell_size[0]
+    mask = index.head.shape[0] - 2
+    ix0 = math.floor(xmin / size)
+    ix1 = math.floor(xmax / size)
+    iy0 = math.floor(ymin / size)
+    iy1 = math.floor(ymax / size)
+    base = slot * MAX_CELLS
+    if (ix1 - ix0 + 1) * (iy1 - iy0 + 1) > MAX_CELLS:
+        _link(index, base, mask + 1)
+        index.entries[slot] = 1
+        return
+    k = 0
+    for ix in range(int(ix0), int(ix1) + 1):
+        for iy in range(int(iy0), int(iy1) + 1):
+            _link(index, base + k, _bucket(ix, iy, mask))
+            k += 1
+    index.entries[slot] = k
+
+
+@compiled
+def index_remove(index: ArcIndex, slot: int) -> None:
+    """Take the arc of ``slot`` out of the index (nothing if it is not in it)."""
+    base = slot * MAX_CELLS
+    for entry in range(base, base + index.entries[slot]):
+        after = index.next[entry]
+        before = index.prev[entry]
+        if before >= 0:
+            index.next[before] = after
+        else:
+            index.head[-2 - before] = after
+        if after >= 0:
+            index.prev[after] = before
+    index.entries[slot] = 0
+
+
+@compiled_inline
+def _visit(index: ArcIndex, bucket: int, tick: int, out: IntArray, count: int) -> int:
+    """Append the arcs of ``bucket`` not yet returned by query ``tick`` to ``out``."""
+    if index.bucket_stamp[bucket] == tick:
+        return count
+    index.bucket_stamp[bucket] = tick
+    entry = index.head[bucket]
+    while entry >= 0:
+        slot = entry // MAX_CELLS
+        if index.stamp[slot] != tick:
+            index.stamp[slot] = tick
+            out[count] = slot
+            count += 1
+        entry = index.next[entry]
+    return count
+
+
+@compiled
+def query_box(index: ArcIndex, xmin: float, xmax: float, ymin: float, ymax: float,
+              out: IntArray) -> int:
+    """Slots of the indexed arcs whose cells meet the box, written to ``out``; their count.
+
+    Returns -1 (``out`` untouched) when the box spans more than :data:`MAX_QUERY_CELLS` cells:
+    the caller scans the live arcs instead.
+    """
+    size = index.cell_size[0]
+    mask = index.head.shape[0] - 2
+    ix0 = math.floor(xmin / size)
+    ix1 = math.floor(xmax / size)
+    iy0 = math.floor(ymin / size)
+    iy1 = math.floor(ymax / size)
+    if (ix1 - ix0 + 1) * (iy1 - iy0 + 1) > MAX_QUERY_CELLS:
+        return -1
+    index.tick[0] += 1
+    tick = index.tick[0]
+    count = 0
+    for ix in range(int(ix0), int(ix1) + 1):
+        for iy in range(int(iy0), int(iy1) + 1):
+            count = _visit(index, _bucket(ix, iy, mask), tick, out, count)
+    return _visit(index, mask + 1, tick, out, count)
+
+
+@compiled
+def query_sector(index: ArcIndex, sector: Sector, out: IntArray) -> int:
+    """Slots of the indexed arcs whose cells meet ``sector`` (radius > 0), written to ``out``;
+    their count, or -1 for a sector spanning more than :data:`MAX_QUERY_CELLS` cells.
+
+    A cell is visited when its circumscribed circle, padded, is neither clear of the disk nor
+    of one of the wedge's half-planes (the tests of
+    :func:`~sonarcarve.geometry.bounds.circle_against_sector`).
+    """
+    fx = sector.fx
+    fy = sector.fy
+    radius = sector.radius
+    pad = box_pad(fx, fy, radius)
+    # The sector's box: the origin, both edge ends and the axis directions inside the wedge.
+    xmin, xmax, ymin, ymax = arc_box(fx, fy, radius, sector.a1, sector.a2)
+    xmin = min(xmin, fx - pad)
+    xmax = max(xmax, fx + pad)
+    ymin = min(ymin, fy - pad)
+    ymax = max(ymax, fy + pad)
+    size = index.cell_size[0]
+    mask = index.head.shape[0] - 2
+    ix0 = math.floor(xmin / size)
+    ix1 = math.floor(xmax / size)
+    iy0 = math.floor(ymin / size)
+    iy1 = math.floor(ymax / size)
+    if (ix1 - ix0 + 1) * (iy1 - iy0 + 1) > MAX_QUERY_CELLS:
+        return -1
+    index.tick[0] += 1
+    tick = index.tick[0]
+    rho = 0.5 * math.sqrt(2.0) * size * (1.0 + 1e-9) + pad
+    reach2 = (radius + rho) * (radius + rho)
+    count = 0
+    for ix in range(int(ix0), int(ix1) + 1):
+        dx = (ix + 0.5) * size - fx
+        for iy in range(int(iy0), int(iy1) + 1):
+            dy = (iy + 0.5) * size - fy
+            if sector.u1x * dy - sector.u1y * dx < -rho:
+                continue
+            if dx * sector.u2y - dy * sector.u2x < -rho:
+                continue
+            if dx * dx + dy * dy >= reach2:
+                continue
+            count = _visit(index, _bucket(ix, iy, mask), tick, out, count)
+    return _visit(index, mask + 1, tick, out, count)
