@@ -12,6 +12,7 @@ from rosbags.highlevel import AnyReader
 
 from sonarcarve.io.bag_out import (
     ARCS_TOPIC,
+    GRID_TOPIC,
     LOCAL_MAP_FIELDS,
     LOCAL_MAP_TOPIC,
     BagFormat,
@@ -131,3 +132,37 @@ def test_nothing_is_written_on_error(tmp_path: Path) -> None:
         write_map_bag(tmp_path / "b.mcap", BATCH, make_method("centerline"), copy_from=broken)
     assert "\n" not in str(err.value)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.bag", "exists.mcap"]
+
+
+class _StubGrid:
+    """A 2 x 3 grid at 0.5 m from (-1, -0.5) whose cells are set by hand: what the bag must
+    carry, laid out as ROS's OccupancyGrid (row-major from the lower-left corner)."""
+
+    resolution = 0.5
+    bounds = (-1.0, -0.5, 0.5, 0.5)
+
+    def __init__(self) -> None:
+        self.readings = 0
+
+    def add(self, reading: object) -> None:
+        self.readings += 1
+
+    def trinary(self) -> np.ndarray:
+        # Row 0 (lower, y in [-0.5, 0)): unknown, free, occupied; row 1: all free.
+        return np.array([[-1, 0, 100], [0, 0, 0]], dtype=np.int8)
+
+
+@pytest.mark.parametrize("name", ["grid.mcap", "grid.bag"])
+def test_a_grid_is_written_as_occupancy_grids(tmp_path: Path, name: str) -> None:
+    grid = _StubGrid()
+    report = write_map_bag(tmp_path / name, BATCH, make_method("centerline"), rate=2.0,
+                           grid=grid)
+    assert grid.readings == 4
+    assert report.messages[GRID_TOPIC] == 3  # with every local map
+    (msgtype, last), *_ = reversed(_read(tmp_path / name)[GRID_TOPIC])
+    assert msgtype == "nav_msgs/msg/OccupancyGrid"
+    assert last.header.frame_id == "odom"
+    assert (last.info.width, last.info.height) == (3, 2)
+    assert last.info.resolution == pytest.approx(0.5)
+    assert (last.info.origin.position.x, last.info.origin.position.y) == (-1.0, -0.5)
+    assert last.data.tolist() == [-1, 0, 100, 0, 0, 0]

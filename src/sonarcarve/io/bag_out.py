@@ -10,7 +10,10 @@ through (optional) and the robot's odometry and TF (optional):
   of log time;
 - ``/sonarcarve/arcs``: ``visualization_msgs/msg/MarkerArray``, a ``DELETEALL`` marker then one
   ``LINE_STRIP`` per live arc (id = reading id), the arc's remaining width drawn about its
-  point, coloured by source like the figures (centerline red, carved blue, ATM green).
+  point, coloured by source like the figures (centerline red, carved blue, ATM green);
+- ``/sonarcarve/grid``: ``nav_msgs/msg/OccupancyGrid``, when a grid is given (for example
+  :class:`~sonarcarve.grids.CarvedGrid`): its trinary cells (occupied 100, free 0, unknown -1),
+  at the same times as the local map.
 
 :class:`BagWriter` is the writer underneath: one class for rosbag1 (``*.bag``, Noetic message
 definitions), rosbag2 folders (MCAP or sqlite3 storage) and bare ``*.mcap`` files, building
@@ -41,15 +44,18 @@ from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "ARCS_TOPIC",
+    "GRID_TOPIC",
     "LOCAL_MAP_FIELDS",
     "LOCAL_MAP_TOPIC",
     "BagFormat",
     "BagOutReport",
     "BagWriter",
+    "LiveGrid",
     "LiveMethod",
     "arc_markers",
     "bag_format",
     "copy_messages",
+    "occupancy_grid_fields",
     "point_cloud_fields",
     "quaternion",
     "stamp",
@@ -58,6 +64,8 @@ __all__ = [
 
 #: Topic of the local map point clouds.
 LOCAL_MAP_TOPIC = "/sonarcarve/local_map"
+#: The occupancy grid, when one is written.
+GRID_TOPIC = "/sonarcarve/grid"
 #: Topic of the arc markers.
 ARCS_TOPIC = "/sonarcarve/arcs"
 #: Fields of every local map point, float32 each, in this order.
@@ -94,6 +102,28 @@ class LiveMethod(Protocol):
 
     def estimates(self, slots: IntArray) -> Any:
         """Per slot: ``alive``, ``xy``, ``width``, ``source``."""
+
+
+class LiveGrid(Protocol):
+    """What :func:`write_map_bag` needs of a grid: fed readings, read as trinary cells.
+
+    Cell ``(i, j)`` of :meth:`trinary` (row i along y from ``bounds[1]``, column j along x from
+    ``bounds[0]``) is the square of side ``resolution``: the layout of ROS's OccupancyGrid.
+    """
+
+    @property
+    def resolution(self) -> float:
+        """Cell side, metres."""
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)``, metres."""
+
+    def add(self, reading: Reading) -> None:
+        """Update the grid with one reading."""
+
+    def trinary(self) -> Any:
+        """Occupied 100, free 0, unknown -1 per cell, int8, shape (rows, columns)."""
 
 
 class BagFormat(Enum):
@@ -317,6 +347,7 @@ def write_map_bag(
     base_frame: str = "base_link",
     rate: float = 2.0,
     storage: str = "mcap",
+    grid: LiveGrid | None = None,
 ) -> BagOutReport:
     """Run ``method`` over ``batch`` and write its live map and arcs as a ROS bag.
 
@@ -341,6 +372,9 @@ def write_map_bag(
         Local maps (and arc markers) per second of log time, > 0.
     storage : str
         ``mcap`` or ``sqlite3`` for rosbag2 folders.
+    grid : LiveGrid, optional
+        A fresh occupancy grid fed the same readings and written as ``/sonarcarve/grid``
+        (``nav_msgs/OccupancyGrid``) with every local map.
 
     Returns
     -------
@@ -363,7 +397,7 @@ def write_map_bag(
         if odometry is not None:
             _write_odometry(out, np.asarray(odometry, dtype=np.float64).reshape(-1, 4), frame,
                             base_frame)
-        _write_maps(out, batch, method, frame, rate)
+        _write_maps(out, batch, method, frame, rate, grid)
     return BagOutReport(path=out.path, format=out.format, messages=dict(out.counts))
 
 
@@ -424,26 +458,47 @@ def _write_odometry(out: BagWriter, odometry: FloatArray, frame: str, base_frame
 
 
 def _write_maps(out: BagWriter, batch: ReadingBatch, method: LiveMethod, frame: str,
-                rate: float) -> None:
+                rate: float, grid: LiveGrid | None) -> None:
     if len(batch) == 0:
         return
     period = 1.0 / rate
     next_t = float(batch.t[0]) + period
     for k, reading in enumerate(batch):
         while reading.t >= next_t:
-            _write_snapshot(out, method, next_t, frame)
+            _write_snapshot(out, method, next_t, frame, grid)
             next_t += period
         method.add(reading, k)
-    _write_snapshot(out, method, float(batch.t[-1]), frame)
+        if grid is not None:
+            grid.add(reading)
+    _write_snapshot(out, method, float(batch.t[-1]), frame, grid)
 
 
-def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str) -> None:
+def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str,
+                    grid: LiveGrid | None) -> None:
     local = method.local_map()
     header = {"stamp": stamp(t), "frame_id": frame}
     out.write(LOCAL_MAP_TOPIC, "sensor_msgs/msg/PointCloud2", t,
               {"header": header, **point_cloud_fields(local)})
     out.write(ARCS_TOPIC, "visualization_msgs/msg/MarkerArray", t,
               {"markers": arc_markers(method, header)})
+    if grid is not None:
+        out.write(GRID_TOPIC, "nav_msgs/msg/OccupancyGrid", t,
+                  {"header": header, **occupancy_grid_fields(grid, t)})
+
+
+def occupancy_grid_fields(grid: LiveGrid, t: float) -> dict[str, Any]:
+    """The OccupancyGrid fields (all but the header) of ``grid``: ``info`` (resolution, width,
+    height, origin at the grid's lower-left corner) and ``data``, row-major from that corner."""
+    cells = np.asarray(grid.trinary(), dtype=np.int8)
+    rows, columns = cells.shape
+    return {
+        "info": {"map_load_time": stamp(t), "resolution": float(grid.resolution),
+                 "width": int(columns), "height": int(rows),
+                 "origin": {"position": {"x": float(grid.bounds[0]),
+                                         "y": float(grid.bounds[1]), "z": 0.0},
+                            "orientation": quaternion(0.0)}},
+        "data": np.ascontiguousarray(cells).reshape(-1),
+    }
 
 
 def point_cloud_fields(local: LocalMap) -> dict[str, Any]:
