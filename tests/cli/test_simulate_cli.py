@@ -113,3 +113,40 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(
     assert problem in err
     assert len(err.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["run.mcap", "run.bag", "run_folder"])
+def test_bag_output_is_what_a_robot_records_with_the_truth_beside(tmp_path: Path,
+                                                                   name: str) -> None:
+    pytest.importorskip("rosbags")
+    from sonarcarve.io import read_rosbag
+
+    csv_out, bag = tmp_path / "run.csv", tmp_path / name
+    assert run("--world", "doorway", "--seed", "2", "--out", str(csv_out)) == 0
+    (tmp_path / "run.truth.json").rename(tmp_path / "csv.truth.json")
+    assert run("--world", "doorway", "--seed", "2", "--out", str(bag)) == 0
+    # The truth of the bag is the CSV run's, under the bag's name without its ending.
+    assert (tmp_path / f"{bag.stem}.truth.json").read_bytes() == (
+        tmp_path / "csv.truth.json").read_bytes()
+    readings, log = read_readings_csv(csv_out), read_rosbag(bag)
+    assert [s.frame for s in log.report.sources] == [f"sonar_{i}" for i in range(16)]
+    assert [s.mount for s in log.report.sources] == ["tf"] * 16  # from /tf_static
+    np.testing.assert_array_equal(log.batch.sensor, readings.sensor)
+    np.testing.assert_allclose(log.batch.range, readings.range, rtol=1e-7)  # float32
+    np.testing.assert_allclose(log.batch.x, readings.x, atol=1e-12)
+    # Every firing is a message: the heard ones are the readings, the others +Inf (REP 117).
+    assert log.report.readings + log.report.no_echo == sum(
+        n for topic, n in log.report.messages.items() if topic.startswith("/sonar/"))
+
+
+def test_bag_output_refuses_to_overwrite_and_unknown_endings(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    old = tmp_path / "old.mcap"
+    old.write_bytes(b"precious")
+    assert run("--world", "doorway", "--out", str(old)) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert old.read_bytes() == b"precious"
+    assert run("--world", "doorway", "--out", str(tmp_path / "run.txt")) == 2
+    assert "unknown ending '.txt'" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.mcap"]

@@ -14,7 +14,6 @@ from typing import Any
 
 import pytest
 
-from sonarcarve.lab.runner import DaskRunner, RunnerSpec
 from sonarcarve.lab.sweep import (
     SweepError,
     SweepSpec,
@@ -24,6 +23,7 @@ from sonarcarve.lab.sweep import (
     read_finished,
     run_sweep,
 )
+from sonarcarve.runner import DaskRunner, RunnerSpec
 
 TIME_LIMIT = 180
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated
 
@@ -12,12 +12,13 @@ import typer
 from rich.table import Table
 
 from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.cli.options import FrameOpt, OdomTopicOpt, RangeTopicOpt, RobotOpt, bag_options
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.fleet import BagOptions
 from sonarcarve.io import read_robond, write_readings_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
-from sonarcarve.io.rosbag import RosbagReport, read_rosbag
-from sonarcarve.robot import load_robot
+from sonarcarve.io.rosbag import RosbagReport
 
 __all__ = ["CONVERTERS", "ConvertOptions", "convert"]
 
@@ -36,27 +37,17 @@ class ConvertOptions:
         φ in radians, or None for the format's default.
     keep_duplicates : bool
         roboND: keep repeats while standing.
-    robot : str or None
-        rosbag: built-in robot name or YAML file giving the sensor mounts.
-    range_topics : list of str
-        rosbag: Range topics in sensor order (empty: all, natural-sorted).
-    odom_topic : str or None
-        rosbag: Odometry topic (None: the only one, else TF).
-    frame : str or None
-        rosbag: the robot's base frame (None: the odometry's child frame, else base_link).
+    bag : BagOptions
+        rosbag: how to read the bag (robot, topics, base frame; shared with ``process``).
     """
 
     beam_width: float | None = None
     keep_duplicates: bool = False
-    robot: str | None = None
-    range_topics: tuple[str, ...] = ()
-    odom_topic: str | None = None
-    frame: str | None = None
+    bag: BagOptions = field(default_factory=BagOptions)
 
 
 def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
-    if (opts.robot is not None or opts.range_topics or opts.odom_topic is not None
-            or opts.frame is not None):
+    if opts.bag.given:
         msg = "--robot, --range-topic, --odom-topic and --frame apply to the rosbag format only"
         raise ConvertError(msg)
     beam_width = opts.beam_width
@@ -85,10 +76,7 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     if opts.keep_duplicates:
         msg = "--keep-duplicates applies to the roboND format only"
         raise ConvertError(msg)
-    robot = load_robot(opts.robot) if opts.robot is not None else None
-    log = read_rosbag(source, robot=robot, range_topics=list(opts.range_topics) or None,
-                      odom_topic=opts.odom_topic, base_frame=opts.frame,
-                      beam_width=opts.beam_width)
+    log = replace(opts.bag, beam_width=opts.beam_width).read(source)
     write_readings_csv(log.batch, out)
     r = log.report
     for line in _sensor_lines(r):
@@ -146,24 +134,10 @@ def convert(
         help="roboND: keep values that repeat while the robot stands still (they add "
              "identical arcs).")]
         = False,
-    robot: Annotated[str | None, typer.Option(
-        metavar="NAME|ROBOT.yaml",
-        help="rosbag: fallback sensor mounts when the bag's TF lacks them: a built-in robot "
-             "(p3dx-front, roboND-8, scout2) or a YAML file; sensor i takes mount i. Refused "
-             "when it does not fit the bag (sensor count, or TF mounts).")]
-        = None,
-    range_topic: Annotated[list[str] | None, typer.Option(
-        metavar="TOPIC",
-        help="rosbag: a Range topic; repeat in sensor order (default: every Range topic, "
-             "natural-sorted by name; frame_ids number the sensors within a topic).")] = None,
-    odom_topic: Annotated[str | None, typer.Option(
-        metavar="TOPIC",
-        help="rosbag: the Odometry topic (default: the only one, else odom → base frame on "
-             "/tf).")] = None,
-    frame: Annotated[str | None, typer.Option(
-        metavar="FRAME",
-        help="rosbag: the robot's base frame, where TF mounts end and odometry points to "
-             "(default: the odometry's child_frame_id, else base_link).")] = None,
+    robot: RobotOpt = None,
+    range_topic: RangeTopicOpt = None,
+    odom_topic: OdomTopicOpt = None,
+    frame: FrameOpt = None,
 ) -> None:
     """Convert a data set's files into the readings CSV (t,sensor,x,y,theta,range,beam_width).
 
@@ -191,9 +165,8 @@ def convert(
     width = _beam_width_radians(beam_width)
     # The data set's own files must survive a --out that names one of them.
     check_output_file(out, inputs=_source_files(directory), label=f"--out {out}")
-    options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates, robot=robot,
-                             range_topics=tuple(range_topic or ()), odom_topic=odom_topic,
-                             frame=frame)
+    options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates,
+                             bag=bag_options(robot, range_topic, odom_topic, frame))
     console.print(converter(directory, out, options))
 
 

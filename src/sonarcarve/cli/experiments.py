@@ -25,7 +25,7 @@ from sonarcarve.lab.report import (
     result_json,
     write_outputs,
 )
-from sonarcarve.lab.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
+from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
 
 __all__ = ["experiments"]
 

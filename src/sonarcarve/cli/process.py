@@ -1,27 +1,58 @@
-"""``sonarcarve process``: map a readings CSV with one method and write the global map."""
+"""``sonarcarve process``: map a log (readings CSV or ROS bag) with one method and write the
+global map, a ROS bag or a Rerun recording; or map a fleet of logs into a folder.
+
+OUT's ending picks the writer from :data:`OUTPUTS` (a dispatch table, not a chain of tests):
+``.csv`` the global map CSV (the contract), ``.bag`` / ``.mcap`` / no ending (a rosbag2 folder)
+a ROS bag, ``.rrd`` a Rerun recording. ``--out-dir`` maps every INPUT on the runner
+(:mod:`sonarcarve.fleet`, :mod:`sonarcarve.runner`).
+"""
 
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NamedTuple
 
 import typer
+from rich.progress import TaskID
 from rich.table import Table
+from rich.text import Text
 
-from sonarcarve.cli.app import app, console, progress, summary_table
+from sonarcarve.cli.app import app, console, err_console, progress, summary_table
+from sonarcarve.cli.options import (
+    FrameOpt,
+    OdomTopicOpt,
+    RangeTopicOpt,
+    RobotOpt,
+    bag_options,
+    check_new_bag,
+)
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
+from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag, map_logs
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
-from sonarcarve.io import write_map_csv
+from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.bag_out import ARCS_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
+from sonarcarve.io.rerun_out import write_rerun
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
-from sonarcarve.pipeline import ProcessResult, process_chunks
+from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
+from sonarcarve.readings import ReadingBatch
+from sonarcarve.runner import RunnerSpec, open_runner
 
-__all__ = ["process"]
+__all__ = ["EXIT_SOME_LOGS_FAILED", "OUTPUTS", "Output", "process"]
+
+#: Exit code of a fleet run (``--out-dir``) in which at least one log failed (bad input's code).
+EXIT_SOME_LOGS_FAILED = 2
+
+#: Local maps per second of log time in a bag output, unless --map-rate says otherwise.
+_DEFAULT_MAP_RATE = 2.0
 
 #: Logs shorter than this finish before a progress bar would be worth drawing.
 _PROGRESS_MIN_READINGS = 20_000
@@ -29,20 +60,75 @@ _PROGRESS_MIN_READINGS = 20_000
 
 class ParameterError(SonarcarveError):
     """A filter option outside its valid range (method parameters are checked by
-    :class:`~sonarcarve.methods.MethodConfig`)."""
+    :class:`~sonarcarve.methods.MethodConfig`), or options that do not go together."""
+
+
+@dataclass(frozen=True)
+class _Job:
+    """One INPUT mapped to one OUT: what every writer of :data:`OUTPUTS` gets."""
+
+    source: Path
+    out: Path
+    method: str
+    config: MethodConfig
+    reading_filter: ReadingFilter | None
+    map_filter: MapFilter | None
+    bag: BagOptions
+    map_rate: float
+
+    def sonar(self) -> SonarMethod:
+        """A fresh method."""
+        return make_method(self.method, self.config)
+
+
+class Output(NamedTuple):
+    """One kind of ``--out``: how to check the target before any work, and the writer (which
+    returns the summary's rows)."""
+
+    label: str
+    check: Callable[[_Job], object]
+    write: Callable[[_Job], list[tuple[str, str]]]
 
 
 # The command's options, one alias each, so that the command's signature reads as a list.
-_ReadingsArg = Annotated[Path, typer.Argument(
-    metavar="READINGS.csv",
+_InputsArg = Annotated[list[Path], typer.Argument(
+    metavar="READINGS.csv|BAG",
     help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
          "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
          "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
          "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
-         "absent: --beam-width applies).")]
-_OutOpt = Annotated[Path, typer.Option(
-    "--out", "-o", metavar="MAP.csv",
-    help="Where to write the global map CSV. Its folder must exist; never the input.")]
+         "absent: --beam-width applies). Or a ROS bag: `*.bag` (ROS 1), `*.mcap`, `*.db3` or "
+         "a rosbag2 folder, read as `sonarcarve convert rosbag` reads it (Range + odometry + "
+         "TF; see the bag options). Several logs need --out-dir.")]
+_OutOpt = Annotated[Path | None, typer.Option(
+    "--out", "-o", metavar="OUT",
+    help="Where to write, for one INPUT; the ending picks what: `.csv` the global map CSV; "
+         "`.mcap`, `.bag` or no ending (a rosbag2 folder) a ROS bag with the input bag's "
+         "topics copied through plus /sonarcarve/local_map (PointCloud2) and "
+         "/sonarcarve/arcs (MarkerArray); `.rrd` a Rerun recording. Its folder must exist; "
+         "never the input; a bag is never overwritten. Bag and .rrd outputs, and bag inputs, "
+         "hold the whole log in memory; CSV to CSV streams.",
+    show_default=False)]
+_OutDirOpt = Annotated[Path | None, typer.Option(
+    "--out-dir", metavar="FOLDER",
+    help="Map every INPUT (CSVs or bags) in parallel into this folder (created): one "
+         "NAME.map.csv per log and summary.csv. A log that fails gets its one-line error in "
+         "the summary and does not stop the others; the exit code is 0 when every log was "
+         "mapped, 2 when any failed.", rich_help_panel="Fleets of logs", show_default=False)]
+_WorkersOpt = Annotated[int | None, typer.Option(
+    "--workers", "-w", metavar="N",
+    help="--out-dir: Dask worker processes of a local cluster (default: one per log, at most "
+         "one per CPU); 1 maps in this process, without Dask.",
+    rich_help_panel="Fleets of logs", show_default=False)]
+_SchedulerOpt = Annotated[str | None, typer.Option(
+    "--scheduler", metavar="ADDRESS",
+    help="--out-dir: map on an existing Dask cluster, its scheduler's address, e.g. "
+         "tcp://HOST:8786 (default $DASK_SCHEDULER_ADDRESS); the logs and FOLDER must be on "
+         "storage every worker sees.", rich_help_panel="Fleets of logs", show_default=False)]
+_MapRateOpt = Annotated[float | None, typer.Option(
+    metavar="PER_SECOND",
+    help=f"Bag output: local maps (and arc markers) per second of log time [default: "
+         f"{_DEFAULT_MAP_RATE:g}].", show_default=False)]
 _MethodOpt = Annotated[str, typer.Option(
     "--method", "-m", metavar="NAME",
     help="centerline | carve | atm | combined. `combined` runs carving and ATM on one history "
@@ -88,8 +174,9 @@ _MaxErrorOpt = Annotated[float | None, typer.Option(
 
 @app.command()
 def process(
-    readings: _ReadingsArg,
-    out: _OutOpt,
+    inputs: _InputsArg,
+    out: _OutOpt = None,
+    out_dir: _OutDirOpt = None,
     method: _MethodOpt = "combined",
     history: _HistoryOpt = DEFAULT_HISTORY_SIZE,
     beam_width: _BeamWidthOpt = 22.5,
@@ -102,8 +189,22 @@ def process(
     outlier_radius: _OutlierRadiusOpt = None,
     outlier_neighbours: _NeighboursOpt = 1,
     max_error: _MaxErrorOpt = None,
-) -> None:
+    map_rate: _MapRateOpt = None,
+    robot: RobotOpt = None,
+    range_topic: RangeTopicOpt = None,
+    odom_topic: OdomTopicOpt = None,
+    frame: FrameOpt = None,
+    workers: _WorkersOpt = None,
+    scheduler: _SchedulerOpt = None,
+) -> int:
     """Map READINGS.csv with one method and write its global map to --out.
+
+    INPUT is a readings CSV or a ROS bag (file or rosbag2 folder); the ending of --out picks
+    the output: `.csv` the global map, `.mcap` / `.bag` / a folder name a ROS bag for Foxglove
+    or RViz, `.rrd` a Rerun recording. A readings CSV mapped to a CSV is streamed in blocks;
+    a bag input or a bag or `.rrd` output holds the whole log in memory. With --out-dir,
+    every INPUT is mapped in parallel to FOLDER/NAME.map.csv with a summary (summary.csv);
+    the exit code is then 2 if any log failed, 0 if all were mapped.
 
     The map CSV has one row per surviving reading: `id,t,sensor,x,y,source,width,max_error`
     (`source` is the model that placed the point: centerline, carved or atm; `width` the final
@@ -121,17 +222,184 @@ def process(
     Example: `sonarcarve process readings.csv --method carve --out map.csv`
 
     Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
+
+    Example: `sonarcarve process run.mcap --out run-map.mcap` (then open run-map.mcap in
+    Foxglove)
+
+    Example: `sonarcarve process logs/*.csv logs/*.bag --out-dir maps --workers 4`
     """
     config = _config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
-    sonar = make_method(method, config)
-    check_output_file(out, inputs=[readings], label=f"--out {out}")
-    # The file is read, checked and mapped a block at a time; a bad line stops the run with
-    # nothing written, as the map is written only at the end.
-    result = _run(readings, sonar, method, reading_filter, map_filter)
-    write_map_csv(result.global_map, out)
-    console.print(_summary(method, result, out))
+    make_method(method, config)  # an unknown method fails before any file is touched
+    bag = bag_options(robot, range_topic, odom_topic, frame)
+    if out_dir is not None:
+        _check_fleet_options(out, map_rate)
+        return _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
+                      workers, scheduler)
+    if out is None:
+        msg = "missing option '--out' (or --out-dir FOLDER for one map per log)"
+        raise ParameterError(msg)
+    source = _single_input(inputs, workers, scheduler)
+    output = _output_kind(out)
+    if not is_bag(source) and bag.given:
+        msg = (f"{source} is a readings CSV; --robot, --range-topic, --odom-topic and --frame "
+               "apply to ROS bag inputs only")
+        raise ParameterError(msg)
+    if output.label != "csv" and (reading_filter is not None or map_filter is not None):
+        msg = (f"--out {out}: the filters (--max-range, --min-range, --jump-threshold, "
+               "--max-error, --outlier-radius) apply to a map CSV output only")
+        raise ParameterError(msg)
+    if map_rate is not None and output.label != "bag":
+        msg = f"--map-rate applies to a bag output only, not to --out {out}"
+        raise ParameterError(msg)
+    rate = _DEFAULT_MAP_RATE if map_rate is None else map_rate
+    if not (math.isfinite(rate) and rate > 0.0):
+        msg = f"--map-rate must be a number > 0 (local maps per second), got {rate}"
+        raise ParameterError(msg)
+    job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate)
+    output.check(job)  # before the (possibly long) run: a bad --out wastes no time
+    console.print(summary_table(f"sonarcarve process --method {method}", output.write(job)))
+    return 0
+
+
+def _single_input(inputs: Sequence[Path], workers: int | None, scheduler: str | None) -> Path:
+    """The one INPUT of a ``--out`` run; the fleet options refused."""
+    if len(inputs) != 1:
+        msg = (f"--out takes one INPUT, got {len(inputs)}; map several logs with "
+               "--out-dir FOLDER")
+        raise ParameterError(msg)
+    if workers is not None or scheduler is not None:
+        msg = "--workers and --scheduler apply to --out-dir (a fleet of logs) only"
+        raise ParameterError(msg)
+    return inputs[0]
+
+
+def _check_fleet_options(out: Path | None, map_rate: float | None) -> None:
+    if out is not None:
+        msg = "give either --out (one log) or --out-dir (one map per log), not both"
+        raise ParameterError(msg)
+    if map_rate is not None:
+        msg = "--map-rate applies to a bag output (--out NAME.mcap) only, not to --out-dir"
+        raise ParameterError(msg)
+
+
+def _output_kind(out: Path) -> Output:
+    """The entry of :data:`OUTPUTS` for the ending of ``out``; a one-line error naming the
+    endings for any other."""
+    output = OUTPUTS.get(out.suffix.lower())
+    if output is None:
+        msg = (f"--out {out}: unknown ending {out.suffix!r}; use .csv (map), .mcap or .bag or "
+               "no ending (ROS bag), or .rrd (Rerun recording)")
+        raise ParameterError(msg)
+    return output
+
+
+def _check_file(job: _Job) -> None:
+    check_output_file(job.out, inputs=[job.source], label=f"--out {job.out}")
+
+
+def _check_bag(job: _Job) -> None:
+    check_new_bag(job.out, inputs=[job.source], label=f"--out {job.out}")
+
+
+def _write_csv(job: _Job) -> list[tuple[str, str]]:
+    """The global map CSV. A readings CSV is read, checked and mapped a block at a time; a bad
+    line stops the run with nothing written, as the map is written only at the end."""
+    sonar = job.sonar()
+    if is_bag(job.source):
+        result = process_readings(job.bag.read(job.source).batch, sonar,
+                                  reading_filter=job.reading_filter, map_filter=job.map_filter)
+    else:
+        result = _run(job.source, sonar, job.method, job.reading_filter, job.map_filter)
+    write_map_csv(result.global_map, job.out)
+    return _summary_rows(result, job.out)
+
+
+def _write_bag(job: _Job) -> list[tuple[str, str]]:
+    """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
+    if is_bag(job.source):
+        log = job.bag.read(job.source)
+        batch, (parent, child) = log.batch, log.report.odometry_frames
+        copy_from: Path | None = job.source
+    else:
+        batch, parent, child, copy_from = read_readings_csv(job.source), "", "", None
+    report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
+                           frame=parent or "odom", base_frame=child or "base_link",
+                           rate=job.map_rate)
+    ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC)
+    copied = sum(n for topic, n in report.messages.items() if topic not in ours)
+    return [("readings in", f"{len(batch):,}"),
+            ("messages copied from the input", f"{copied:,}"),
+            *((f"messages on {topic}", f"{report.messages.get(topic, 0):,}") for topic in ours),
+            ("bag written to", f"{report.path} ({report.format.value})")]
+
+
+def _write_rrd(job: _Job) -> list[tuple[str, str]]:
+    """A Rerun recording of the run (no walls: a log has no ground truth)."""
+    batch = _read_whole(job)
+    global_map = write_rerun(job.out, batch, job.sonar())
+    return [("readings in", f"{len(batch):,}"), ("points out", f"{len(global_map):,}"),
+            ("recording written to", str(job.out))]
+
+
+def _read_whole(job: _Job) -> ReadingBatch:
+    return job.bag.read(job.source).batch if is_bag(job.source) else read_readings_csv(job.source)
+
+
+#: Ending of ``--out`` (lower case; "" a rosbag2 folder) -> what is written there.
+OUTPUTS: dict[str, Output] = {
+    ".csv": Output("csv", _check_file, _write_csv),
+    ".mcap": Output("bag", _check_bag, _write_bag),
+    ".bag": Output("bag", _check_bag, _write_bag),
+    "": Output("bag", _check_bag, _write_bag),
+    ".rrd": Output("rrd", _check_file, _write_rrd),
+}
+
+
+def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodConfig,
+           reading_filter: ReadingFilter | None, map_filter: MapFilter | None,
+           bag: BagOptions, workers: int | None, scheduler: str | None) -> int:
+    """Map every log into ``out_dir`` on the runner; print the summary; the exit code."""
+    count = workers if workers is not None else max(1, min(len(inputs), os.cpu_count() or 1))
+    spec = RunnerSpec.from_env(count, scheduler)
+    with open_runner(spec) as runner, progress(label_width=8, elapsed=True) as bar:
+        tasks: dict[str, TaskID] = {}
+
+        def on_progress(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = bar.add_task(stage, total=total)
+            bar.update(tasks[stage], completed=done, total=total)
+
+        rows = map_logs(inputs, out_dir, method, config, runner=runner,
+                        reading_filter=reading_filter, map_filter=map_filter, bag=bag,
+                        on_progress=on_progress)
+    console.print(_fleet_table(method, rows, spec))
+    failed = sum(not row.ok for row in rows)
+    console.print(f"summary written to {Path(out_dir) / SUMMARY_NAME}", highlight=False)
+    if failed:
+        err_console.print(f"sonarcarve: error: {failed} of {len(rows)} logs failed; the "
+                          "summary gives each one's reason", highlight=False, soft_wrap=True)
+        return EXIT_SOME_LOGS_FAILED
+    return 0
+
+
+def _fleet_table(method: str, rows: Sequence[FleetRow], spec: RunnerSpec) -> Table:
+    """One line per log: its counts and map, or its error (summary.csv has every column)."""
+    ok = sum(row.ok for row in rows)
+    table = Table(title=f"sonarcarve process --method {method}: {ok} of {len(rows)} logs "
+                        f"mapped on {spec.describe()}")
+    table.add_column("log", overflow="fold")
+    for name in ("readings", "points", "seconds"):
+        table.add_column(name, justify="right")
+    table.add_column("map, or why not", overflow="fold")
+    for row in rows:
+        if row.ok:
+            table.add_row(row.log, f"{row.readings:,}", f"{row.points:,}", f"{row.seconds:.2f}",
+                          Path(row.map).name)
+        else:
+            table.add_row(row.log, "", "", "", Text(row.error, style="red"))
+    return table
 
 
 def _config(history: int, beam_width_deg: float, tolerance: float, transversal_deg: float,
@@ -197,7 +465,7 @@ def _filters(max_range: float | None, min_range: float | None, jump: float | Non
     return (readings if readings.active else None), (points if points.active else None)
 
 
-def _summary(method: str, result: ProcessResult, out: Path) -> Table:
+def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
     rows: list[tuple[str, str]] = []
     dropped = result.reading_filter
     if dropped is None:
@@ -221,4 +489,4 @@ def _summary(method: str, result: ProcessResult, out: Path) -> Table:
               f"{100 * result.mean_unprocessed_share:.1f}"),
              ("readings per second", f"{result.readings_per_second:,.0f}"),
              ("map written to", str(out))]
-    return summary_table(f"sonarcarve process --method {method}", rows)
+    return rows

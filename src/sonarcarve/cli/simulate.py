@@ -1,27 +1,35 @@
-"""``sonarcarve simulate``: drive a simulated robot through a world and log its sonar readings."""
+"""``sonarcarve simulate``: drive a simulated robot through a world and log its sonar readings.
+
+The ending of ``--out`` picks what is written, from :data:`LOG_FORMATS`: a readings CSV, or
+the ROS bag a real robot would have recorded (``.mcap``, ``.bag``, or a rosbag2 folder: no
+ending); the truth file goes beside either.
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NamedTuple
 
 import typer
 from rich.table import Table
 
 from sonarcarve.cli.app import app, console, progress, summary_table
+from sonarcarve.cli.options import check_new_bag
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.atomic import atomic_path, check_output_file
 from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, load_robot
+from sonarcarve.sim.bag import write_simulation_bag
 from sonarcarve.sim.motion import Trajectory, explore, follow_waypoints, with_odometry_drift
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
-from sonarcarve.sim.truth import truth_path, write_simulation
+from sonarcarve.sim.truth import TRUTH_SUFFIX, truth_path, write_simulation, write_truth_json
 from sonarcarve.sim.waypoints import read_waypoints
 from sonarcarve.sim.world import World, WorldError, load_world
 
-__all__ = ["simulate_command"]
+__all__ = ["LOG_FORMATS", "LogFormat", "simulate_command"]
 
 #: Runs shorter than this (firings) finish before a progress bar would be worth drawing.
 _PROGRESS_MIN_FIRINGS = 5_000
@@ -31,6 +39,52 @@ class SimulateParameterError(SonarcarveError):
     """A ``simulate`` option outside its valid range or in conflict with another."""
 
 
+class LogFormat(NamedTuple):
+    """One kind of ``--out``: where its truth file goes, how to check the target before the
+    simulation runs, and the writer (log and truth together, or neither)."""
+
+    label: str
+    truth: Callable[[Path], Path]
+    check: Callable[[Path, list[Path], str], object]
+    write: Callable[[Simulation, Path, Path], None]
+
+
+def _check_csv(out: Path, inputs: list[Path], label: str) -> None:
+    check_output_file(out, inputs=inputs, label=label)
+
+
+def _check_bag(out: Path, inputs: list[Path], label: str) -> None:
+    check_new_bag(out, inputs=inputs, label=label)
+
+
+def _write_csv(sim: Simulation, out: Path, truth: Path) -> None:
+    """The readings CSV and the truth file together (``truth`` is
+    :func:`~sonarcarve.sim.truth.truth_path` of ``out``, where they go)."""
+    write_simulation(sim, out)
+
+
+def _bag_truth(out: Path) -> Path:
+    """``run.mcap`` / ``run.bag`` / the folder ``run`` -> ``run.truth.json`` beside it."""
+    return out.with_name(out.stem + TRUTH_SUFFIX)
+
+
+def _write_bag(sim: Simulation, out: Path, truth: Path) -> None:
+    # The truth file is renamed into place only when the bag (itself built in a temporary
+    # folder and moved) is complete: never a truth file without its bag.
+    with atomic_path(truth, suffix=".json") as tmp:
+        write_truth_json(tmp, sim.world, sim.truth.kind, sim.truth.reflection)
+        write_simulation_bag(out, sim)
+
+
+#: Ending of ``--out`` (lower case; "" a rosbag2 folder) -> what is written there.
+LOG_FORMATS: dict[str, LogFormat] = {
+    ".csv": LogFormat("readings", truth_path, _check_csv, _write_csv),
+    ".mcap": LogFormat("bag", _bag_truth, _check_bag, _write_bag),
+    ".bag": LogFormat("bag", _bag_truth, _check_bag, _write_bag),
+    "": LogFormat("bag", _bag_truth, _check_bag, _write_bag),
+}
+
+
 @app.command("simulate")
 def simulate_command(
     world: Annotated[str, typer.Option(
@@ -38,9 +92,12 @@ def simulate_command(
         help="Built-in world (office, doorway, t-junction, narrow-hallway), random:SEED, a "
              "walls .json file or a ROS map .yaml.")],
     out: Annotated[Path, typer.Option(
-        "--out", "-o", metavar="NAME.csv",
-        help="Readings CSV to write; the truth goes beside it as NAME.truth.json. Its folder "
-             "must exist. Both files are replaced together or not at all.")],
+        "--out", "-o", metavar="NAME.csv|NAME.mcap",
+        help="Readings CSV to write, or, ending in .mcap or .bag or with no ending (a rosbag2 "
+             "folder), the ROS bag a real robot would record: sensor_msgs/Range per sensor "
+             "(+Inf when nothing was heard), Odometry, TF and TF static. The truth goes "
+             "beside it as NAME.truth.json. Its folder must exist. Both are written together "
+             "or not at all; a bag is never overwritten.")],
     robot: Annotated[str, typer.Option(
         "--robot", "-r", metavar="ROBOT",
         help=f"Sonar ring: {', '.join(BUILTIN_ROBOTS)}, or a robot YAML file.")] = "scout2",
@@ -81,20 +138,26 @@ def simulate_command(
     Writes NAME.csv (readings CSV: `t,sensor,x,y,theta,range,beam_width`; seconds, metres,
     radians) and NAME.truth.json (the walls, and per reading its kind and true reflection
     point). Both are checked before the simulation runs and renamed into place together.
+    With --out NAME.mcap (or .bag, or a folder) the log is a ROS bag instead, topics
+    /sonar/<i> (frame sonar_<i>), /odom, /tf and /tf_static: `sonarcarve process NAME.mcap`
+    maps it to the same map as the CSV (ranges to float32 precision).
 
     Example: `sonarcarve simulate --world office --robot scout2 --seed 1 --out office.csv`
+
+    Example: `sonarcarve simulate --world office --out office.mcap` (open it in Foxglove)
     """
     _check_motion_options(path, explore_seconds)
     chosen = _physics(physics, clean)
+    log_format = _log_format(out)
     # Both outputs are checked before the (possibly long) simulation runs.
-    truth = _check_outputs(out, [path, Path(world), Path(robot)])
+    truth = _check_outputs(out, log_format, [path, Path(world), Path(robot)])
     the_world = load_world(world)
     the_robot = load_robot(robot)
     trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
     drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
     result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift)
-    write_simulation(result, out)
-    console.print(_summary(result, out, truth))
+    log_format.write(result, out, truth)
+    console.print(_summary(result, out, truth, log_format.label))
 
 
 def _check_motion_options(path: Path | None, explore_seconds: float | None) -> None:
@@ -116,15 +179,26 @@ def _physics(echo_model: str, clean: bool) -> SonarPhysics:
     return base if echo_model == base.echo_model else replace(base, echo_model=echo_model)
 
 
-def _check_outputs(out: Path, sources: list[Path | None]) -> Path:
-    """Check the readings CSV ``out`` and its truth file can be written; return the truth path.
+def _log_format(out: Path) -> LogFormat:
+    """The entry of :data:`LOG_FORMATS` for the ending of ``out``; a one-line error naming the
+    endings for any other."""
+    log_format = LOG_FORMATS.get(out.suffix.lower())
+    if log_format is None:
+        msg = (f"--out {out}: unknown ending {out.suffix!r}; use .csv (readings), .mcap or "
+               ".bag or no ending (ROS bag)")
+        raise SimulateParameterError(msg)
+    return log_format
+
+
+def _check_outputs(out: Path, log_format: LogFormat, sources: list[Path | None]) -> Path:
+    """Check the log ``out`` and its truth file can be written; return the truth path.
 
     ``sources`` are the command's input paths (None or not a file: ignored); neither output may
     name one of them.
     """
     inputs = [p for p in sources if p is not None and p.is_file()]
-    check_output_file(out, inputs=inputs, label=f"--out {out}")
-    truth = truth_path(out)
+    log_format.check(out, inputs, f"--out {out}")
+    truth = log_format.truth(out)
     check_output_file(truth, inputs=inputs, label=f"the truth file {truth} (beside --out)")
     return truth
 
@@ -158,11 +232,11 @@ def _trajectory(world: World, path: Path | None, explore_seconds: float | None, 
     return follow_waypoints(world.tour)
 
 
-def _summary(result: Simulation, out: Path, truth: Path) -> Table:
+def _summary(result: Simulation, out: Path, truth: Path, label: str) -> Table:
     rows = [("seconds simulated", f"{result.trajectory.duration:,.1f}"),
             ("metres travelled", f"{result.trajectory.path_length:,.1f}"),
             ("firings", f"{len(result.firings):,}"),
             ("readings (echoes heard)", f"{len(result.readings):,}")]
     rows += [(f"  {kind}", f"{count:,}") for kind, count in result.kind_counts().items()]
-    rows += [("readings written to", str(out)), ("truth written to", str(truth))]
+    rows += [(f"{label} written to", str(out)), ("truth written to", str(truth))]
     return summary_table(f"sonarcarve simulate: {result.world.name}, {result.robot.name}", rows)

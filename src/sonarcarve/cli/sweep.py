@@ -9,7 +9,6 @@ import typer
 from rich.progress import TaskID
 
 from sonarcarve.cli.app import app, console, progress, summary_table
-from sonarcarve.lab.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
 from sonarcarve.lab.sweep import (
     PARAMETERS,
     SweepError,
@@ -19,6 +18,7 @@ from sonarcarve.lab.sweep import (
     parse_values,
     run_sweep,
 )
+from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
 
 __all__ = ["sweep"]
 

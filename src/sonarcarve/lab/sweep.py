@@ -3,7 +3,7 @@
 A :class:`SweepSpec` names the grid (from a small YAML file, :func:`load_sweep_spec`, or the
 command line); :func:`run_sweep` simulates each distinct scenario once, runs every method at
 every grid point on it (analysed as the sensitivity experiment's runs are:
-:func:`~sonarcarve.lab.analyses.analyse_sweep`) on a :class:`~sonarcarve.lab.runner.Runner`,
+:func:`~sonarcarve.lab.analyses.analyse_sweep`) on a :class:`~sonarcarve.runner.Runner`,
 and writes into its folder:
 
 * ``runs.jsonl``: one line per finished run, appended (one ``write`` of a whole line) as each
@@ -41,10 +41,10 @@ from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path, atomic_text, make_output_dir
 from sonarcarve.lab.experiments.jobs import run_job
 from sonarcarve.lab.plan import ALL_METHODS, Job
-from sonarcarve.lab.runner import ProgressCallback, Ref, Runner, SerialRunner, Task
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import METHODS, MethodConfig
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
+from sonarcarve.runner import ProgressCallback, Ref, Runner, SerialRunner, Task
 from sonarcarve.sim.motion import DEFAULT_SPEED
 from sonarcarve.typing import JsonDict
 

@@ -21,7 +21,7 @@ a typed result, draws its figures and writes its part of ``docs/RESULTS.md``:
 
 :func:`run_experiments` makes each distinct simulation once, shares it between every job that
 needs it and summarises each experiment. The simulations and jobs run on a
-:class:`~sonarcarve.lab.runner.Runner`: this process, a local Dask cluster of
+:class:`~sonarcarve.runner.Runner`: this process, a local Dask cluster of
 ``Settings.jobs`` workers, or any Dask scheduler; every job is a pure function of its inputs
 and its output is keyed by the job, so the numbers are the same on any of them;
 :func:`sonarcarve.lab.report.write_outputs` writes ``results.json``, the figures and the
@@ -49,8 +49,8 @@ from sonarcarve.lab.experiments import (
 from sonarcarve.lab.experiments.base import Artifacts, Experiment
 from sonarcarve.lab.experiments.jobs import run_job
 from sonarcarve.lab.plan import Job, Settings
-from sonarcarve.lab.runner import ProgressCallback, Ref, Runner, RunnerSpec, Task, open_runner
 from sonarcarve.lab.scenarios import ExperimentError, Scenario, run_simulation
+from sonarcarve.runner import ProgressCallback, Ref, Runner, RunnerSpec, Task, open_runner
 from sonarcarve.typing import JsonDict
 
 __all__ = [
@@ -119,7 +119,7 @@ def run_experiments(
     on_progress : callable, optional
         ``on_progress(stage, done, total)`` with stage ``"simulating"`` or ``"mapping"``.
     runner : Runner, optional
-        Where the simulations and method runs go (:func:`~sonarcarve.lab.runner.open_runner`:
+        Where the simulations and method runs go (:func:`~sonarcarve.runner.open_runner`:
         this process, a local cluster or a Dask scheduler); left open. The results do not
         depend on it.
 

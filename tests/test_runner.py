@@ -13,7 +13,7 @@ import pytest
 
 from sonarcarve.cli import main
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.lab.runner import (
+from sonarcarve.runner import (
     DaskRunner,
     Ref,
     RunnerError,

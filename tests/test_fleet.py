@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from sonarcarve.fleet import FleetError, map_logs, map_name
 from sonarcarve.io import write_readings_csv
-from sonarcarve.lab.fleet import FleetError, map_logs, map_name
-from sonarcarve.lab.runner import DaskRunner, RunnerSpec
 from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.runner import DaskRunner, RunnerSpec
 
 TIME_LIMIT = 120
 

@@ -1,6 +1,9 @@
 """Fleets of logs: map many readings CSVs (or ROS bags) in parallel, one map per log.
 
-:func:`map_logs` sends one task per log to a :class:`~sonarcarve.lab.runner.Runner` (this
+:func:`read_log` reads one log whole, a readings CSV or a ROS bag (:func:`is_bag` tells them
+apart; :class:`BagOptions` says how to read a bag, as ``sonarcarve convert rosbag`` does).
+
+:func:`map_logs` sends one task per log to a :class:`~sonarcarve.runner.Runner` (this
 process, a local Dask cluster or a scheduler's); each task reads its log, maps it with one method
 (as ``sonarcarve process`` does) and writes ``OUT_DIR/<log name>.map.csv`` atomically. A log that
 fails (unreadable, bad values, a crash of its worker) gets its one-line error in the summary
@@ -25,17 +28,99 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import MapFilter, ReadingFilter
 from sonarcarve.io import read_readings_csv, read_rosbag, write_map_csv
 from sonarcarve.io.atomic import atomic_text, make_output_dir
-from sonarcarve.lab.runner import ProgressCallback, Runner, SerialRunner, Task, TaskFailure
+from sonarcarve.io.rosbag import RosbagLog
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.pipeline import process_readings
+from sonarcarve.readings import ReadingBatch
+from sonarcarve.robot import load_robot
+from sonarcarve.runner import ProgressCallback, Runner, SerialRunner, Task, TaskFailure
 
-__all__ = ["FleetError", "FleetRow", "map_log", "map_logs", "map_name", "write_summary"]
+__all__ = [
+    "BAG_SUFFIXES",
+    "SUMMARY_NAME",
+    "BagOptions",
+    "FleetError",
+    "FleetRow",
+    "is_bag",
+    "map_log",
+    "map_logs",
+    "map_name",
+    "read_log",
+    "write_summary",
+]
 
 #: File name of the summary table in the output folder.
 SUMMARY_NAME = "summary.csv"
 
-#: Endings of ROS bags (a rosbag2 folder is recognised as a folder).
-_BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+#: Endings of ROS bag files (a rosbag2 folder is recognised as a folder).
+BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+
+
+def is_bag(path: str | Path) -> bool:
+    """True when ``path`` names a ROS bag: a folder (rosbag2) or a ``*.bag``, ``*.mcap`` or
+    ``*.db3`` file; anything else is read as a readings CSV.
+
+    >>> is_bag("run.mcap"), is_bag("run.BAG"), is_bag("readings.csv")
+    (True, True, False)
+    """
+    target = Path(path)
+    return target.suffix.lower() in BAG_SUFFIXES or target.is_dir()
+
+
+@dataclass(frozen=True)
+class BagOptions:
+    """How to read a ROS bag log: the options of ``sonarcarve convert rosbag``.
+
+    Plain values only (a robot by name or file, not a loaded description), so that a task
+    carrying them pickles to any worker.
+
+    Attributes
+    ----------
+    robot : str or None
+        Fallback sensor mounts: a built-in robot name or a robot YAML file
+        (:func:`~sonarcarve.robot.load_robot`).
+    range_topics : tuple of str
+        Range topics in sensor order (empty: every Range topic, natural-sorted).
+    odom_topic : str or None
+        Odometry topic (None: the only one, else TF).
+    frame : str or None
+        The robot's base frame (None: the odometry's child frame, else base_link).
+    beam_width : float or None
+        φ in radians for messages without a ``field_of_view`` (None: the method's).
+    """
+
+    robot: str | None = None
+    range_topics: tuple[str, ...] = ()
+    odom_topic: str | None = None
+    frame: str | None = None
+    beam_width: float | None = None
+
+    @property
+    def given(self) -> bool:
+        """True when any option differs from its default (a CSV log can use none of them)."""
+        return self != BagOptions()
+
+    def read(self, path: str | Path) -> RosbagLog:
+        """Read the bag ``path`` with these options
+        (:func:`~sonarcarve.io.rosbag.read_rosbag`; its errors are one line)."""
+        robot = load_robot(self.robot) if self.robot is not None else None
+        return read_rosbag(path, robot=robot, range_topics=list(self.range_topics) or None,
+                           odom_topic=self.odom_topic, base_frame=self.frame,
+                           beam_width=self.beam_width)
+
+
+def read_log(path: str | Path, bag: BagOptions | None = None) -> ReadingBatch:
+    """The readings of one log, whole: a ROS bag (:func:`is_bag`, read with ``bag``) or a
+    readings CSV (``bag`` unused).
+
+    Raises
+    ------
+    ReadingsError, RosbagError, RobotError
+        A log (or robot file) that cannot be read: one line naming it.
+    """
+    if is_bag(path):
+        return (bag if bag is not None else BagOptions()).read(path).batch
+    return read_readings_csv(path)
 
 
 class FleetError(SonarcarveError):
@@ -98,7 +183,8 @@ def map_name(log: str | Path) -> str:
 
 def map_log(log: str, out: str, method: str, config: MethodConfig,
             reading_filter: ReadingFilter | None = None,
-            map_filter: MapFilter | None = None) -> FleetRow:
+            map_filter: MapFilter | None = None,
+            bag: BagOptions | None = None) -> FleetRow:
     """Map one log and write its global map to ``out``; never raises for a bad log.
 
     Parameters
@@ -113,6 +199,8 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
         The method's parameters.
     reading_filter, map_filter : optional
         As for :func:`~sonarcarve.pipeline.process_readings`.
+    bag : BagOptions, optional
+        How to read a bag log (:func:`read_log`).
 
     Returns
     -------
@@ -120,11 +208,7 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
         The log's summary line; ``error`` holds the reason when it failed.
     """
     try:
-        path = Path(log)
-        if path.is_dir() or path.suffix.lower() in _BAG_SUFFIXES:
-            batch = read_rosbag(path).batch
-        else:
-            batch = read_readings_csv(path)
+        batch = read_log(log, bag)
         tic = time.perf_counter()
         result = process_readings(batch, make_method(method, config),
                                   reading_filter=reading_filter, map_filter=map_filter)
@@ -148,6 +232,7 @@ def map_logs(
     runner: Runner | None = None,
     reading_filter: ReadingFilter | None = None,
     map_filter: MapFilter | None = None,
+    bag: BagOptions | None = None,
     on_progress: ProgressCallback | None = None,
 ) -> list[FleetRow]:
     """Map every log in parallel, one map per log in ``out_dir``, and write the summary.
@@ -163,6 +248,8 @@ def map_logs(
         As for ``sonarcarve process``; the config defaults to ``MethodConfig()``.
     runner : Runner, optional
         Where the logs are mapped (default: this process).
+    bag : BagOptions, optional
+        How to read the bag logs (:func:`read_log`); every bag takes the same options.
     on_progress : callable, optional
         ``on_progress("mapping", done, total)``.
 
@@ -191,8 +278,8 @@ def map_logs(
             raise FleetError(msg)
         names[name] = str(log)
     outs = [str(folder / map_name(log)) for log in logs]
-    tasks = [Task(map_log, (str(log), out, method, method_config, reading_filter, map_filter),
-                  "mapping") for log, out in zip(logs, outs, strict=True)]
+    tasks = [Task(map_log, (str(log), out, method, method_config, reading_filter, map_filter,
+                            bag), "mapping") for log, out in zip(logs, outs, strict=True)]
     rows: dict[int, FleetRow] = {}
     own = runner if runner is not None else SerialRunner()
     for i, value in own.run(tasks, on_progress=on_progress, capture_errors=True):

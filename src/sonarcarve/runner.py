@@ -1,7 +1,8 @@
-"""The lab's one runner: pure tasks on this process or on a Dask cluster, same results.
+"""One runner for every parallel job: pure tasks on this process or on a Dask cluster, same
+results.
 
 The experiments (:func:`~sonarcarve.lab.experiments.run_experiments`), parameter sweeps
-(:mod:`sonarcarve.lab.sweep`) and fleets of logs (:mod:`sonarcarve.lab.fleet`) hand their work
+(:mod:`sonarcarve.lab.sweep`) and fleets of logs (:mod:`sonarcarve.fleet`) hand their work
 to a :class:`Runner` as a list of :class:`Task` values: a module-level function and its
 arguments, where an argument may be a :class:`Ref` to an earlier task's result (a simulation
 shared by every method run on it). Every task is a pure function of its inputs, so the results
@@ -20,7 +21,8 @@ Two back ends, picked by :func:`open_runner` from a :class:`RunnerSpec`:
   with a worker, so a worker that dies loses and duplicates nothing.
 
 Dask is imported here only when a :class:`DaskRunner` starts (``pip install
-'sonarcarve[lab]'``).
+'sonarcarve[lab]'``); the product (``sonarcarve process LOGS... --out-dir``) runs on it without
+the lab.
 """
 
 from __future__ import annotations
@@ -309,11 +311,14 @@ class DaskRunner(_Closing):
             # Dask's default MALLOC_TRIM_THRESHOLD_ (64 kB) makes glibc hand memory back after
             # every large free; the simulator allocates and frees large arrays all the time
             # and ran 2-4 times slower with it, so the local workers keep glibc's default.
+            # Without a dashboard the scheduler still serves HTTP (health checks), on 8787 by
+            # default, and warns when another cluster holds that port: any free port instead.
             config = importlib.import_module("dask").config
             with config.set({f"{_PRE_SPAWN}.MALLOC_TRIM_THRESHOLD_": None}):
                 self._cluster = LocalCluster(
                     n_workers=spec.workers, threads_per_worker=1, processes=True,
-                    host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL)
+                    host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL,
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
             self._client = Client(self._cluster, set_as_default=False)
             return
         try:

@@ -1,0 +1,82 @@
+"""Options more than one command takes, declared once: how to read a ROS bag, bag outputs.
+
+``sonarcarve convert rosbag`` and ``sonarcarve process`` read bags the same way; each takes
+the four options below in its signature and turns them into a
+:class:`~sonarcarve.fleet.BagOptions` with :func:`bag_options`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from sonarcarve.fleet import BagOptions
+from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.errors import OutputError
+from sonarcarve.robot import load_robot
+
+__all__ = [
+    "BAG_PANEL",
+    "FrameOpt",
+    "OdomTopicOpt",
+    "RangeTopicOpt",
+    "RobotOpt",
+    "bag_options",
+    "check_new_bag",
+]
+
+#: The help panel the bag options are listed under.
+BAG_PANEL = "ROS bag input"
+
+RobotOpt = Annotated[str | None, typer.Option(
+    metavar="NAME|ROBOT.yaml",
+    help="Bag input: fallback sensor mounts when the bag's TF lacks them: a built-in robot "
+         "(p3dx-front, roboND-8, scout2) or a YAML file; sensor i takes mount i. Refused "
+         "when it does not fit the bag (sensor count, or TF mounts).",
+    rich_help_panel=BAG_PANEL)]
+RangeTopicOpt = Annotated[list[str] | None, typer.Option(
+    metavar="TOPIC",
+    help="Bag input: a Range topic; repeat in sensor order (default: every Range topic, "
+         "natural-sorted by name; frame_ids number the sensors within a topic).",
+    rich_help_panel=BAG_PANEL)]
+OdomTopicOpt = Annotated[str | None, typer.Option(
+    metavar="TOPIC",
+    help="Bag input: the Odometry topic (default: the only one, else odom → base frame on "
+         "/tf).",
+    rich_help_panel=BAG_PANEL)]
+FrameOpt = Annotated[str | None, typer.Option(
+    metavar="FRAME",
+    help="Bag input: the robot's base frame, where TF mounts end and odometry points to "
+         "(default: the odometry's child_frame_id, else base_link).",
+    rich_help_panel=BAG_PANEL)]
+
+
+def bag_options(robot: str | None, range_topic: list[str] | None, odom_topic: str | None,
+                frame: str | None, beam_width: float | None = None) -> BagOptions:
+    """The bag options as given on the command line; a ``--robot`` that does not load fails
+    here, once, with its one-line error (not once per log)."""
+    if robot is not None:
+        load_robot(robot)
+    return BagOptions(robot=robot, range_topics=tuple(range_topic or ()),
+                      odom_topic=odom_topic, frame=frame, beam_width=beam_width)
+
+
+def check_new_bag(path: Path, *, inputs: Iterable[Path] = (), label: str) -> Path:
+    """Check, before any work, that a bag can be written at ``path`` (a ``*.bag`` or
+    ``*.mcap`` file or a rosbag2 folder): it must not exist (a bag is never overwritten) and
+    its folder must accept new files.
+
+    Raises
+    ------
+    OutputError
+        One line naming ``label`` and the reason.
+    """
+    # The file checks first: an existing folder, a device or "." get their own words.
+    target = check_output_file(path, inputs=[p for p in inputs if p.is_file()], label=label)
+    if target.exists() or target.is_symlink():
+        msg = f"{label}: already exists; a bag is never overwritten, remove it or pick another name"
+        raise OutputError(msg)
+    return target

@@ -1,0 +1,207 @@
+"""`sonarcarve process INPUT --out OUT`: bag inputs, and the output picked by OUT's ending
+(map CSV, ROS bag, Rerun recording); bad requests are one line, exit 2 and write nothing."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from sonarcarve.cli import main
+from sonarcarve.io import read_map_csv, read_readings_csv, write_readings_csv
+from sonarcarve.io.bag_out import ARCS_TOPIC, LOCAL_MAP_TOPIC
+from sonarcarve.methods import make_method
+from sonarcarve.pipeline import process_readings
+from sonarcarve.readings import ReadingBatch
+
+AnyReader = pytest.importorskip("rosbags.highlevel").AnyReader
+
+# What simulate writes and process reads back, for every test: a short, seeded doorway run.
+SIM = ["simulate", "--world", "doorway", "--seed", "3"]
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The same simulation written as a readings CSV (r.csv) and as a bag (run.mcap)."""
+    folder = tmp_path_factory.mktemp("runs")
+    assert main([*SIM, "--out", str(folder / "r.csv")]) == 0
+    assert main([*SIM, "--out", str(folder / "run.mcap")]) == 0
+    return folder
+
+
+def _topics(path: Path) -> dict[str, tuple[str, int]]:
+    """Topic -> (message type, message count), read back with rosbags' AnyReader."""
+    with AnyReader([path]) as reader:
+        return {c.topic: (c.msgtype, c.msgcount) for c in reader.connections}
+
+
+def _frames(path: Path, topic: str) -> set[str]:
+    with AnyReader([path]) as reader:
+        conns = [c for c in reader.connections if c.topic == topic]
+        return {reader.deserialize(raw, conn.msgtype).header.frame_id
+                for conn, _, raw in reader.messages(connections=conns)}
+
+
+def test_simulated_bag_maps_to_the_csv_paths_map(runs: Path, tmp_path: Path) -> None:
+    """simulate → bag → process equals simulate → CSV → process: same ids, sensors and
+    sources; positions to float32 precision (Range.range and field_of_view are float32)."""
+    assert (runs / "run.truth.json").read_bytes() == (runs / "r.truth.json").read_bytes()
+    from_csv, from_bag = tmp_path / "csv-map.csv", tmp_path / "bag-map.csv"
+    assert main(["process", str(runs / "r.csv"), "--out", str(from_csv)]) == 0
+    assert main(["process", str(runs / "run.mcap"), "--out", str(from_bag)]) == 0
+    a, b = read_map_csv(from_csv), read_map_csv(from_bag)
+    assert len(a) > 50
+    assert b.reading_id.tolist() == a.reading_id.tolist()
+    assert b.sensor.tolist() == a.sensor.tolist()
+    assert b.source_labels() == a.source_labels()
+    np.testing.assert_allclose(b.t, a.t, rtol=0.0, atol=1e-9)  # nanosecond stamps
+    # Most points agree to 1e-6 m; a circle intersection (ATM) or a carved end magnifies the
+    # float32 rounding of a range (~2e-7 m) or a beam width a few times.
+    error = np.hypot(*(b.xy - a.xy).T)
+    assert np.mean(error < 1e-6) > 0.95
+    assert error.max() < 5e-5
+
+
+def test_the_bag_path_is_the_csv_path_with_float32_ranges(runs: Path, tmp_path: Path) -> None:
+    """The CSV rounded to what a Range message holds maps to the same map (to 1e-9 m: the
+    poses and stamps still differ in the last bit, through nanoseconds and quaternions)."""
+    csv = read_readings_csv(runs / "r.csv")
+    rounded = ReadingBatch.from_arrays(
+        t=csv.t, sensor=csv.sensor, x=csv.x, y=csv.y, theta=csv.theta,
+        range=csv.range.astype(np.float32).astype(np.float64),
+        beam_width=csv.beam_width.astype(np.float32).astype(np.float64))
+    write_readings_csv(rounded, tmp_path / "r32.csv")
+    for method in ("combined", "carve"):
+        from_csv, from_bag = tmp_path / f"csv-{method}.csv", tmp_path / f"bag-{method}.csv"
+        assert main(["process", str(tmp_path / "r32.csv"), "-m", method, "--out",
+                     str(from_csv)]) == 0
+        assert main(["process", str(runs / "run.mcap"), "-m", method, "--out",
+                     str(from_bag)]) == 0
+        a, b = read_map_csv(from_csv), read_map_csv(from_bag)
+        assert b.reading_id.tolist() == a.reading_id.tolist(), method
+        assert b.source_labels() == a.source_labels(), method
+        np.testing.assert_allclose(b.xy, a.xy, rtol=0.0, atol=1e-9, err_msg=method)
+        np.testing.assert_allclose(b.width, a.width, rtol=0.0, atol=1e-9, err_msg=method)
+
+
+def test_bag_output_holds_the_input_topics_and_the_map_topics(runs: Path,
+                                                              tmp_path: Path) -> None:
+    out = tmp_path / "mapped.mcap"
+    assert main(["process", str(runs / "run.mcap"), "--out", str(out), "--map-rate", "4"]) == 0
+    given, written = _topics(runs / "run.mcap"), _topics(out)
+    for topic, (kind, count) in given.items():  # copied through, every message
+        assert written[topic] == (kind, count), topic
+    assert written[LOCAL_MAP_TOPIC][0] == "sensor_msgs/msg/PointCloud2"
+    assert written[ARCS_TOPIC][0] == "visualization_msgs/msg/MarkerArray"
+    # 7.5 s of log at 4 maps per second (doorway tour, read from the /odom stamps).
+    with AnyReader([runs / "run.mcap"]) as reader:
+        odom = [c for c in reader.connections if c.topic == "/odom"]
+        stamps = [t for _, t, _ in reader.messages(connections=odom)]
+    span = (stamps[-1] - stamps[0]) * 1e-9
+    assert abs(written[LOCAL_MAP_TOPIC][1] - span * 4) <= 2
+    assert written[ARCS_TOPIC][1] == written[LOCAL_MAP_TOPIC][1]
+    assert _frames(out, LOCAL_MAP_TOPIC) == {"odom"}  # the input's odometry frame
+
+
+@pytest.mark.parametrize("name", ["map.bag", "map_folder"])
+def test_csv_input_to_a_ros1_bag_or_a_rosbag2_folder(runs: Path, tmp_path: Path,
+                                                     name: str) -> None:
+    out = tmp_path / name
+    assert main(["process", str(runs / "r.csv"), "--method", "carve", "--out", str(out)]) == 0
+    topics = _topics(out)
+    assert set(topics) == {LOCAL_MAP_TOPIC, ARCS_TOPIC}  # a CSV has no messages to copy
+    assert topics[LOCAL_MAP_TOPIC][1] > 0
+    assert out.is_dir() == (name == "map_folder")
+
+
+def test_rrd_output_holds_the_same_global_map(runs: Path, tmp_path: Path) -> None:
+    rerun_chunk = pytest.importorskip("rerun.chunk")
+    out, csv_map = tmp_path / "run.rrd", tmp_path / "map.csv"
+    assert main(["process", str(runs / "run.mcap"), "--method", "atm", "--out", str(out)]) == 0
+    assert main(["process", str(runs / "run.mcap"), "--method", "atm", "--out",
+                 str(csv_map)]) == 0
+    chunks = [c for c in rerun_chunk.RrdReader(out).stream().to_chunks()
+              if str(c.entity_path) == "/world/global_map"]
+    positions = chunks[0].to_record_batch().column("Points2D:positions").to_pylist()[0]
+    np.testing.assert_allclose(np.array(positions), read_map_csv(csv_map).xy, rtol=1e-6)
+
+
+def test_csv_to_csv_still_equals_the_library(tmp_path: Path) -> None:
+    """The streamed path is untouched: a hand-made two-wall log maps as process_readings."""
+    k = np.arange(40)
+    batch = ReadingBatch.from_arrays(t=0.1 * k, sensor=k % 2, x=0.05 * k, y=np.zeros(40),
+                                     theta=np.where(k % 2 == 0, math.pi / 2, -math.pi / 2),
+                                     range=np.full(40, 1.5))
+    write_readings_csv(batch, tmp_path / "r.csv")
+    assert main(["process", str(tmp_path / "r.csv"), "--method", "centerline", "--out",
+                 str(tmp_path / "m.csv")]) == 0
+    expected = process_readings(batch, make_method("centerline")).global_map
+    got = read_map_csv(tmp_path / "m.csv")
+    np.testing.assert_allclose(got.xy, expected.xy)
+    np.testing.assert_allclose(np.abs(got.xy[:, 1]), 1.5)
+
+
+def _bad_requests(runs: Path, tmp_path: Path) -> list[tuple[list[str], str, str]]:
+    """(arguments, OUT name, words of the one-line error)."""
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"\x89MCAP0\r\n" + b"\x00garbage" * 20)
+    truncated = tmp_path / "truncated.mcap"
+    truncated.write_bytes((runs / "run.mcap").read_bytes()[:3000])
+    csv, bag = str(runs / "r.csv"), str(runs / "run.mcap")
+    return [
+        ([str(corrupt)], "out.csv", str(corrupt)),
+        ([str(truncated)], "out.mcap", str(truncated)),
+        ([str(truncated)], "out.rrd", str(truncated)),
+        ([str(tmp_path / "absent.bag")], "out.mcap", "absent.bag"),
+        ([bag, "--range-topic", "/nope"], "out.csv", "/nope"),
+        ([csv], "out.png", "unknown ending '.png'"),
+        ([csv, "--robot", "scout2"], "out.csv", "apply to ROS bag inputs only"),
+        ([bag, "--robot", "no-such-robot"], "out.csv", "unknown robot 'no-such-robot'"),
+        ([csv, "--max-error", "0.1"], "out.mcap", "apply to a map CSV output only"),
+        ([csv, "--map-rate", "2"], "out.csv", "--map-rate applies to a bag output only"),
+        ([bag, "--map-rate", "0"], "out.mcap", "--map-rate must be a number > 0"),
+        ([csv, csv], "out.csv", "--out takes one INPUT, got 2"),
+        ([csv, "--workers", "2"], "out.csv", "apply to --out-dir"),
+        ([bag, "--method", "nonsense"], "out.mcap", "unknown method 'nonsense'"),
+    ]
+
+
+def test_bad_requests_are_one_line_exit_2_and_write_nothing(
+    runs: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for args, name, words in _bad_requests(runs, tmp_path):
+        out = tmp_path / "outs" / name
+        out.parent.mkdir(exist_ok=True)
+        assert main(["process", *args, "--out", str(out)]) == 2, args
+        err = capsys.readouterr().err
+        assert words in err, (args, err)
+        assert err.count("\n") == 1, err
+        assert err.startswith("sonarcarve: error: "), err
+        assert list(out.parent.iterdir()) == [], (args, "nothing written, no temporary left")
+
+
+def test_an_existing_bag_is_never_overwritten(runs: Path, tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    for name in ("old.mcap", "old_folder"):
+        out = tmp_path / name
+        if name.endswith(".mcap"):
+            out.write_bytes(b"precious")
+        else:
+            out.mkdir()
+            (out / "keep").write_text("precious")
+        assert main(["process", str(runs / "r.csv"), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert ("already exists" if name.endswith(".mcap") else "is a directory") in err
+    assert (tmp_path / "old.mcap").read_bytes() == b"precious"
+    assert (tmp_path / "old_folder" / "keep").read_text() == "precious"
+
+
+def test_missing_out_names_both_choices(tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["process", str(tmp_path / "r.csv")]) == 2
+    err: Any = capsys.readouterr().err
+    assert "missing option '--out'" in err
+    assert "--out-dir" in err
