@@ -12,7 +12,7 @@ import pytest
 
 from sonarcarve.cli import main
 from sonarcarve.io import read_map_csv, read_readings_csv, write_readings_csv
-from sonarcarve.io.bag_out import ARCS_TOPIC, LOCAL_MAP_TOPIC
+from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC
 from sonarcarve.methods import make_method
 from sonarcarve.pipeline import process_readings
 from sonarcarve.readings import ReadingBatch
@@ -112,7 +112,9 @@ def test_csv_input_to_a_ros1_bag_or_a_rosbag2_folder(runs: Path, tmp_path: Path,
     out = tmp_path / name
     assert main(["process", str(runs / "r.csv"), "--method", "carve", "--out", str(out)]) == 0
     topics = _topics(out)
-    assert set(topics) == {LOCAL_MAP_TOPIC, ARCS_TOPIC}  # a CSV has no messages to copy
+    # A CSV has no messages to copy; the carved grid comes with every local map.
+    assert set(topics) == {LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC}
+    assert topics[GRID_TOPIC] == ("nav_msgs/msg/OccupancyGrid", topics[LOCAL_MAP_TOPIC][1])
     assert topics[LOCAL_MAP_TOPIC][1] > 0
     assert out.is_dir() == (name == "map_folder")
 

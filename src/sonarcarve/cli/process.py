@@ -22,6 +22,7 @@ from rich.table import Table
 from rich.text import Text
 
 from sonarcarve.cli.app import app, console, err_console, progress, summary_table
+from sonarcarve.cli.grid import readings_extent
 from sonarcarve.cli.options import (
     FrameOpt,
     OdomTopicOpt,
@@ -34,10 +35,11 @@ from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag, map_logs
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
+from sonarcarve.grids import CarvedGrid
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
-from sonarcarve.io.bag_out import ARCS_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
+from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.io.rerun_out import write_rerun
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
@@ -75,6 +77,7 @@ class _Job:
     map_filter: MapFilter | None
     bag: BagOptions
     map_rate: float
+    grid_resolution: float
 
     def sonar(self) -> SonarMethod:
         """A fresh method."""
@@ -125,6 +128,13 @@ _SchedulerOpt = Annotated[str | None, typer.Option(
     help="--out-dir: map on an existing Dask cluster, its scheduler's address, e.g. "
          "tcp://HOST:8786 (default $DASK_SCHEDULER_ADDRESS); the logs and FOLDER must be on "
          "storage every worker sees.", rich_help_panel="Fleets of logs", show_default=False)]
+#: Cell side of the carved grid a bag output carries as /sonarcarve/grid, metres.
+_DEFAULT_BAG_GRID = 0.10
+_GridResolutionOpt = Annotated[float | None, typer.Option(
+    metavar="METRES",
+    help=f"Bag output: the side of the cells of the carved grid published as /sonarcarve/grid "
+         f"(nav_msgs/OccupancyGrid) with every local map; 0: no grid [default: "
+         f"{_DEFAULT_BAG_GRID:g}].", show_default=False)]
 _MapRateOpt = Annotated[float | None, typer.Option(
     metavar="PER_SECOND",
     help=f"Bag output: local maps (and arc markers) per second of log time [default: "
@@ -190,6 +200,7 @@ def process(
     outlier_neighbours: _NeighboursOpt = 1,
     max_error: _MaxErrorOpt = None,
     map_rate: _MapRateOpt = None,
+    grid_resolution: _GridResolutionOpt = None,
     robot: RobotOpt = None,
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
@@ -254,13 +265,27 @@ def process(
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
         raise ParameterError(msg)
     rate = _DEFAULT_MAP_RATE if map_rate is None else map_rate
+    cell = _bag_grid_resolution(grid_resolution, output.label, out)
     if not (math.isfinite(rate) and rate > 0.0):
         msg = f"--map-rate must be a number > 0 (local maps per second), got {rate}"
         raise ParameterError(msg)
-    job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate)
+    job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate, cell)
     output.check(job)  # before the (possibly long) run: a bad --out wastes no time
     console.print(summary_table(f"sonarcarve process --method {method}", output.write(job)))
     return 0
+
+
+def _bag_grid_resolution(given: float | None, output: str, out: Path) -> float:
+    """The carved grid's cell side for a bag output (0: none); refused for other outputs."""
+    if given is None:
+        return _DEFAULT_BAG_GRID if output == "bag" else 0.0
+    if output != "bag":
+        msg = f"--grid-resolution applies to a bag output only, not to --out {out}"
+        raise ParameterError(msg)
+    if not (math.isfinite(given) and given >= 0.0):
+        msg = f"--grid-resolution must be a number >= 0 (metres; 0: no grid), got {given}"
+        raise ParameterError(msg)
+    return given
 
 
 def _single_input(inputs: Sequence[Path], workers: int | None, scheduler: str | None) -> Path:
@@ -324,10 +349,12 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
         copy_from: Path | None = job.source
     else:
         batch, parent, child, copy_from = read_readings_csv(job.source), "", "", None
+    grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
+            CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
     report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
                            frame=parent or "odom", base_frame=child or "base_link",
-                           rate=job.map_rate)
-    ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC)
+                           rate=job.map_rate, grid=grid)
+    ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC)
     copied = sum(n for topic, n in report.messages.items() if topic not in ours)
     return [("readings in", f"{len(batch):,}"),
             ("messages copied from the input", f"{copied:,}"),
