@@ -13,6 +13,12 @@ every grid's occupied cells (0.10 m, and 0.05 m with ``--resolutions 0.1 0.05``)
 (or from when the robot could first see the place again) until the map is right again (gone:
 no unexplained point within 0.25 m of where the obstacle was, for good; appeared: a point within
 0.25 m of it away from the walls), and the phantom share over time.
+
+``--no-echo`` records and feeds the firings that heard nothing too (range inf, free space up to
+the robot's max range) and adds the range sensor layer with +Inf clearing
+(``inf_is_max_reading`` and ``clear_on_max_reading``)::
+
+    .venv/bin/python benchmarks/changing_scenes.py --no-echo --no-figure
 """
 
 from __future__ import annotations
@@ -24,7 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from sonarcarve.lab.changing_scenes import (
+    GRID_KINDS,
     METHOD_NAMES,
+    NO_ECHO_GRID_KINDS,
     SceneRun,
     plot_changing_scene,
     run_changing_scene,
@@ -58,11 +66,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--resolutions", type=float, nargs="+", default=[0.1])
     parser.add_argument("--figure", type=Path, default=FIGURE)
     parser.add_argument("--no-figure", action="store_true")
+    parser.add_argument("--no-echo", action="store_true",
+                        help="also feed the firings that heard nothing (free space)")
     args = parser.parse_args(argv)
     seeds = range(args.seeds)
+    grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
+    if args.no_echo:
+        print("\nWith no-echo readings (every firing that heard nothing: free space up to the "
+              "robot's max range).")
     for h_index, h in enumerate(args.resolutions):
         methods = METHOD_NAMES if h_index == 0 else ()
-        runs = {name: [run_changing_scene(name, seed, h, methods=methods) for seed in seeds]
+        runs = {name: [run_changing_scene(name, seed, h, methods=methods, grids=grids,
+                                          no_echo=args.no_echo) for seed in seeds]
                 for name in SCENES}
         _print_tables(runs, h, seeds, with_methods=h_index == 0)
         if h_index == 0 and not args.no_figure:

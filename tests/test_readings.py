@@ -3,7 +3,13 @@ import math
 import numpy as np
 import pytest
 
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
+from sonarcarve.readings import (
+    DEFAULT_BEAM_WIDTH,
+    Reading,
+    ReadingBatch,
+    ReadingsError,
+    check_reading,
+)
 
 
 def _batch(**overrides: object) -> ReadingBatch:
@@ -40,6 +46,12 @@ def test_slicing_and_masks_give_batches() -> None:
         ({"range": [1.0, 0.0, 3.0]}, "row 1, column 'range' must be > 0"),
         ({"range": [1.0, -2.0, 3.0]}, "row 1, column 'range' must be > 0"),
         ({"range": [1.0, 2.0, math.nan]}, "row 2, column 'range' is NaN or infinite"),
+        ({"range": [1.0, 2.0, -math.inf]}, "row 2, column 'range' is NaN or infinite"),
+        ({"range": [1.0, math.inf, 3.0]},
+         "row 1, column 'range' is infinite but 'max_range' is not given"),
+        ({"range": [1.0, 2.0, 3.0], "max_range": [math.nan, 1.5, math.nan]},
+         "row 1, column 'range' exceeds 'max_range'"),
+        ({"max_range": [math.nan, 0.0, math.nan]}, "row 1, column 'max_range' must be a finite"),
         ({"x": [math.inf, 0.0, 0.0]}, "row 0, column 'x' is NaN or infinite"),
         ({"t": [0.0, 0.5, 0.2]}, "row 2, column 't' goes backwards in time"),
         ({"beam_width": [0.3, math.pi, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
@@ -83,3 +95,36 @@ def test_whole_float_sensors_are_accepted_up_to_the_limit() -> None:
     batch = _batch(sensor=[0.0, 15.0, float(MAX_SENSOR)])
     assert batch.sensor.dtype == np.int64
     assert batch.sensor.tolist() == [0, 15, MAX_SENSOR]
+
+
+def test_no_echo_readings_need_a_max_range() -> None:
+    batch = _batch(range=[1.0, math.inf, 3.0], max_range=[math.nan, 4.0, math.nan])
+    assert batch.no_echo.tolist() == [False, True, False]
+    assert batch[1].no_echo
+    assert not batch[0].no_echo
+    assert batch[1].max_range == 4.0
+    assert ReadingBatch.from_readings(list(batch)).max_range.tobytes() == batch.max_range.tobytes()
+    filled = _batch(range=[1.0, math.inf, 3.0], max_range=[math.nan, 4.0, math.nan]
+                    ).with_max_range(5.0)
+    np.testing.assert_array_equal(filled.max_range, [5.0, 4.0, 5.0])
+
+
+def test_check_reading_speaks_like_the_batch() -> None:
+    check_reading(Reading(0.0, 0, 0.0, 0.0, 0.0, math.inf, math.nan, 3.0), 0)
+    check_reading(Reading(0.0, 0, 0.0, 0.0, 0.0, 2.0, math.nan, 3.0), 0)
+    for reading, problem in [
+        (Reading(0.0, 0, 0.0, 0.0, 0.0, math.inf), "is infinite but 'max_range' is not given"),
+        (Reading(0.0, 0, 0.0, 0.0, 0.0, 4.0, math.nan, 3.0), "exceeds 'max_range'"),
+        (Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0, math.nan, -1.0), "'max_range' must be a finite"),
+        (Reading(0.0, 0, 0.0, 0.0, 0.0, -math.inf), "'range' is NaN or infinite"),
+    ]:
+        with pytest.raises(ReadingsError, match=f"reading 7, column .*{problem}"):
+            check_reading(reading, 7)
+
+
+def test_a_batch_built_directly_has_unknown_max_ranges() -> None:
+    batch = _batch()
+    direct = ReadingBatch(t=batch.t, sensor=batch.sensor, x=batch.x, y=batch.y,
+                          theta=batch.theta, range=batch.range, beam_width=batch.beam_width)
+    assert direct.max_range.shape == (len(batch),)
+    assert np.isnan(direct.max_range).all()

@@ -2,16 +2,20 @@
 
 A reading is one echo heard by one sensor: time ``t`` (s), ``sensor`` index, the sensor's origin
 ``(x, y)`` (m) and axis ``theta`` (rad, counter-clockwise from +x) in the world frame, the measured
-``range`` r (m) and the beam width φ (rad). A reading with no echo is not an arc and never appears
-here. The beam width may be NaN, meaning "the method's default" (22.5°, the Polaroid transducer
-of the paper, section 2).
+``range`` r (m) and the beam width φ (rad). The beam width may be NaN, meaning "the method's
+default" (22.5°, the Polaroid transducer of the paper, section 2).
+
+A *no-echo* reading (REP 117's +Inf: the sensor heard nothing) has ``range = inf`` and says the
+whole beam was empty up to ``max_range``, the distance the sensor listened to (metres; NaN when
+unknown). It is free space only: no arc, no point. ``range`` may be +inf only when the reading's
+``max_range`` is finite and > 0, and a finite range may not exceed a known ``max_range``.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import NamedTuple, NoReturn, overload
 
 import numpy as np
@@ -43,6 +47,9 @@ _NOT_WHOLE = "is not a whole number"
 _TOO_LARGE = f"must be at most {MAX_SENSOR}"
 _BAD_BEAM = "must lie in (0, pi) radians"
 _BACKWARDS = "goes backwards in time"
+_NO_MAX_RANGE = "is infinite but 'max_range' is not given"
+_BAD_MAX_RANGE = "must be a finite number > 0 metres, or NaN (unknown)"
+_BEYOND_MAX_RANGE = "exceeds 'max_range'"
 
 
 class Reading(NamedTuple):
@@ -63,9 +70,12 @@ class Reading(NamedTuple):
     theta : float
         Sensor axis, radians counter-clockwise from +x.
     range : float
-        Measured range r, metres (> 0).
+        Measured range r, metres (> 0); ``inf`` for a no-echo reading (then ``max_range`` must
+        be known).
     beam_width : float
         Beam width φ, radians in (0, π); NaN means the method's default.
+    max_range : float
+        How far the sensor listened, metres (> 0); NaN: unknown.
     """
 
     t: float
@@ -75,13 +85,20 @@ class Reading(NamedTuple):
     theta: float
     range: float
     beam_width: float = math.nan
+    max_range: float = math.nan
+
+    @property
+    def no_echo(self) -> bool:
+        """The sensor heard nothing (``range`` is +inf): free space up to ``max_range``."""
+        return self.range == math.inf
 
 
 @dataclass(frozen=True, eq=False)
 class ReadingBatch:
     """Many readings as a struct of arrays, each of shape (n,), in stream order.
 
-    Build one with :meth:`from_arrays` (validates) or :meth:`from_readings`.
+    Build one with :meth:`from_arrays` (validates) or :meth:`from_readings`. ``max_range`` may
+    be left out when constructing one directly: every row's is then unknown (NaN).
     """
 
     t: FloatArray
@@ -91,6 +108,11 @@ class ReadingBatch:
     theta: FloatArray
     range: FloatArray
     beam_width: FloatArray
+    max_range: FloatArray = field(default_factory=lambda: _NO_VALUES)
+
+    def __post_init__(self) -> None:
+        if self.max_range is _NO_VALUES:
+            object.__setattr__(self, "max_range", np.full(self.t.shape, math.nan))
 
     @classmethod
     def from_arrays(
@@ -103,6 +125,7 @@ class ReadingBatch:
         theta: npt.ArrayLike,
         range: npt.ArrayLike,
         beam_width: npt.ArrayLike | None = None,
+        max_range: npt.ArrayLike | None = None,
         source: str = "readings",
         first_line: int | None = None,
     ) -> ReadingBatch:
@@ -114,10 +137,13 @@ class ReadingBatch:
             Naming ``source`` and the first offending row (0-based) and column; with
             ``first_line`` (the file line of row 0) it names the file line instead. A sensor
             must be a whole number in [0, :data:`MAX_SENSOR`].
+
+        ``max_range`` (metres, NaN: unknown) defaults to unknown for every row.
         """
         t_arr = np.asarray(t, dtype=np.float64).reshape(-1)
         n = t_arr.shape[0]
         width = np.full(n, math.nan) if beam_width is None else beam_width
+        limit = np.full(n, math.nan) if max_range is None else max_range
         batch = cls(
             t=t_arr,
             sensor=_sensor_indices(sensor, _Where(source, first_line)),
@@ -126,6 +152,7 @@ class ReadingBatch:
             theta=np.asarray(theta, dtype=np.float64).reshape(-1),
             range=np.asarray(range, dtype=np.float64).reshape(-1),
             beam_width=np.asarray(width, dtype=np.float64).reshape(-1),
+            max_range=np.asarray(limit, dtype=np.float64).reshape(-1),
         )
         batch.validate(source, first_line)
         return batch
@@ -134,10 +161,10 @@ class ReadingBatch:
     def from_readings(cls, readings: Iterable[Reading], source: str = "readings") -> ReadingBatch:
         """Validated batch from :class:`Reading` values."""
         rows = list(readings)
-        columns = [np.array(c) for c in zip(*rows, strict=True)] if rows else [np.zeros(0)] * 7
-        t, sensor, x, y, theta, r, width = columns
+        columns = [np.array(c) for c in zip(*rows, strict=True)] if rows else [np.zeros(0)] * 8
+        t, sensor, x, y, theta, r, width, limit = columns
         return cls.from_arrays(t=t, sensor=sensor, x=x, y=y, theta=theta, range=r,
-                               beam_width=width, source=source)
+                               beam_width=width, max_range=limit, source=source)
 
     @classmethod
     def empty(cls) -> ReadingBatch:
@@ -169,14 +196,26 @@ class ReadingBatch:
                 size = getattr(self, f.name).size
                 msg = f"{source}: column {f.name!r} has {size} rows, expected {n}"
                 raise ReadingsError(msg)
-        for name in ("t", "x", "y", "theta", "range"):
+        for name in ("t", "x", "y", "theta"):
             _first_bad(where, name, ~np.isfinite(getattr(self, name)), _NOT_FINITE)
-        _first_bad(where, "range", self.range <= 0.0, _NOT_POSITIVE)
+        r = self.range
+        not_finite = ~np.isfinite(r)
+        if not_finite.any():  # +inf is a no-echo reading, allowed where max_range is known
+            no_echo = r == math.inf
+            _first_bad(where, "range", not_finite & ~no_echo, _NOT_FINITE)
+            _first_bad(where, "range", no_echo & ~(self.max_range > 0.0), _NO_MAX_RANGE)
+        _first_bad(where, "range", r <= 0.0, _NOT_POSITIVE)
         _first_bad(where, "sensor", self.sensor < 0, _NEGATIVE)
         _first_bad(where, "sensor", self.sensor > MAX_SENSOR, _TOO_LARGE)
         width = self.beam_width
         known = ~np.isnan(width)
         _first_bad(where, "beam_width", known & ~((width > 0.0) & (width < math.pi)), _BAD_BEAM)
+        limit = self.max_range
+        known = ~np.isnan(limit)
+        if known.any():
+            _first_bad(where, "max_range", known & ~((limit > 0.0) & (limit < math.inf)),
+                       _BAD_MAX_RANGE)
+            _first_bad(where, "range", (r > limit) & (r < math.inf), _BEYOND_MAX_RANGE)
         if n > 0:
             earlier = np.concatenate([[previous_t], self.t[:-1]])
             _first_bad(where, "t", self.t < earlier, _BACKWARDS)
@@ -196,12 +235,24 @@ class ReadingBatch:
             return Reading(
                 float(self.t[index]), int(self.sensor[index]), float(self.x[index]),
                 float(self.y[index]), float(self.theta[index]), float(self.range[index]),
-                float(self.beam_width[index]),
+                float(self.beam_width[index]), float(self.max_range[index]),
             )
         return ReadingBatch(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
 
     def __iter__(self) -> Iterator[Reading]:
         return (self[i] for i in range(len(self)))
+
+    @property
+    def no_echo(self) -> npt.NDArray[np.bool_]:
+        """Rows that heard nothing (``range`` is +inf), shape (n,)."""
+        return np.asarray(self.range == math.inf)
+
+    def with_max_range(self, default: float) -> ReadingBatch:
+        """A copy where unknown (NaN) ``max_range`` values are ``default`` metres (a run-wide
+        max range, e.g. the sensor's), not validated (:meth:`validate` checks it)."""
+        limit = np.where(np.isnan(self.max_range), float(default), self.max_range)
+        return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
+                               "max_range": limit})
 
     def with_beam_width(self, default: float) -> ReadingBatch:
         """A copy where unknown (NaN) beam widths are replaced by ``default`` radians."""
@@ -216,6 +267,8 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     ``t``, ``x``, ``y``, ``theta`` and ``range`` must be finite, ``range > 0``, ``sensor`` a
     whole number in [0, :data:`MAX_SENSOR`], ``beam_width`` in (0, π) or NaN (the method's
     default), and ``t`` not earlier than ``previous_t`` (the previous reading's time).
+    ``max_range`` is NaN (unknown) or finite and > 0; ``range`` may be +inf (no echo) when it
+    is known, and a finite ``range`` may not exceed it.
 
     Cheap: one chain of scalar comparisons in the common case (it runs once per echo); only a
     reading that fails it is examined field by field for the message.
@@ -233,10 +286,11 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     ...
     sonarcarve.errors.ReadingsError: reading 17, column 'range' must be > 0
     """
-    t, sensor, x, y, theta, r, width = reading
+    t, sensor, x, y, theta, r, width, limit = reading
     if (previous_t <= t < math.inf and 0.0 < r < math.inf and math.isfinite(x)
             and math.isfinite(y) and math.isfinite(theta) and type(sensor) is int
-            and 0 <= sensor <= MAX_SENSOR and (width != width or 0.0 < width < math.pi)):
+            and 0 <= sensor <= MAX_SENSOR and (width != width or 0.0 < width < math.pi)
+            and (limit != limit or r <= limit < math.inf)):
         return
     _explain_bad_reading(reading, _Where("", None, reading_id), previous_t)
 
@@ -246,10 +300,16 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
 
     (The fast test in :func:`check_reading` also sends here a whole float or numpy sensor.)
     """
-    for name in ("t", "x", "y", "theta", "range"):
+    for name in ("t", "x", "y", "theta"):
         value = getattr(reading, name)
         if not math.isfinite(value):
             _raise(where, 0, name, _NOT_FINITE)
+    limit = reading.max_range
+    if not math.isfinite(reading.range):
+        if reading.range != math.inf:
+            _raise(where, 0, "range", _NOT_FINITE)
+        if not limit > 0.0:
+            _raise(where, 0, "range", _NO_MAX_RANGE)
     if reading.range <= 0.0:
         _raise(where, 0, "range", _NOT_POSITIVE)
     sensor = reading.sensor
@@ -266,8 +326,17 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
     width = reading.beam_width
     if not (math.isnan(width) or 0.0 < width < math.pi):
         _raise(where, 0, "beam_width", _BAD_BEAM)
+    if not (math.isnan(limit) or 0.0 < limit < math.inf):
+        _raise(where, 0, "max_range", _BAD_MAX_RANGE)
+    if reading.range > limit and reading.range < math.inf:
+        _raise(where, 0, "range", _BEYOND_MAX_RANGE)
     if reading.t < previous_t:
         _raise(where, 0, "t", _BACKWARDS)
+
+
+#: The default of :attr:`ReadingBatch.max_range`: replaced by NaN per row on construction.
+_NO_VALUES: FloatArray = np.zeros(0)
+_NO_VALUES.flags.writeable = False
 
 
 class _Where(NamedTuple):

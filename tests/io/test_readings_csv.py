@@ -49,7 +49,16 @@ def test_beam_width_column_is_optional_and_may_be_blank(tmp_path: Path) -> None:
         ("t,sensor,x,y,theta\n0,0,0,0,0\n", "line 1, missing column(s) range"),
         (HEADER + "0,0,0,0,0,abc\n", "line 2, column 'range' is not a number: 'abc'"),
         (HEADER + "0,0,0,0,0,1\n1,0,0,0,0,nan\n", "line 3, column 'range' is NaN or infinite"),
-        (HEADER + "0,0,0,0,0,inf\n", "line 2, column 'range' is NaN or infinite"),
+        (HEADER + "0,0,0,0,0,inf\n",
+         "line 2, column 'range' is infinite but 'max_range' is not given"),
+        (HEADER + "0,0,0,0,0,-inf\n", "line 2, column 'range' is NaN or infinite"),
+        (HEADER.rstrip() + ",max_range\n0,0,0,0,0,1,0.5\n",
+         "line 2, column 'range' exceeds 'max_range'"),
+        (HEADER.rstrip() + ",max_range\n0,0,0,0,0,inf,\n",
+         "line 2, column 'range' is infinite but 'max_range' is not given"),
+        (HEADER.rstrip() + ",max_range\n0,0,0,0,0,inf,inf\n",
+         "line 2, column 'max_range' must be a"),
+        (HEADER.rstrip() + ",max_range\n0,0,0,0,0,1,-3\n", "line 2, column 'max_range' must be a"),
         (HEADER + "0,0,0,0,0,-1\n", "line 2, column 'range' must be > 0"),
         (HEADER + "1,0,0,0,0,1\n0.5,0,0,0,0,1\n", "line 3, column 't' goes backwards in time"),
         (HEADER + "0,1.5,0,0,0,1\n", "line 2, column 'sensor' is not a whole number"),
@@ -130,13 +139,14 @@ def _reference_read(path: Path) -> ReadingBatch:
         if len(row) != len(header):
             fields = f"{len(row)} field{'' if len(row) == 1 else 's'}"
             raise InputError(f"{path}: line {line} has {fields}, the header has {len(header)}")
-    wanted = [*READINGS_COLUMNS, *(["beam_width"] if "beam_width" in header else [])]
+    wanted = [*READINGS_COLUMNS, *(name for name in ("beam_width", "max_range")
+                                   if name in header)]
     columns = {}
     for name in wanted:
         values = np.empty(len(body))
         for k, (line, row) in enumerate(body):
             text = row[header.index(name)]
-            values[k] = (math.nan if name == "beam_width" and not text.strip()
+            values[k] = (math.nan if name in ("beam_width", "max_range") and not text.strip()
                          else parse_number(text, f"{path}: line {line}", name, finite=False))
         columns[name] = values
     try:
@@ -146,7 +156,7 @@ def _reference_read(path: Path) -> ReadingBatch:
 
 
 def _assert_same(a: ReadingBatch, b: ReadingBatch) -> None:
-    for name in ("t", "sensor", "x", "y", "theta", "range", "beam_width"):
+    for name in ("t", "sensor", "x", "y", "theta", "range", "beam_width", "max_range"):
         assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
 
 
@@ -315,3 +325,43 @@ def test_header_only_and_blank_files(tmp_path: Path) -> None:
     assert count_data_lines(path) == 1
     with pytest.raises(ValueError, match="block_size"):
         read_readings_csv(path, block_size=0)
+
+
+def test_no_echo_rows_round_trip_with_max_range(tmp_path: Path) -> None:
+    batch = ReadingBatch.from_arrays(
+        t=[0.0, 0.1, 0.2], sensor=[0, 1, 2], x=[0.0, 0.5, 1.0], y=[0.0, 0.0, 0.25],
+        theta=[0.0, 1.0, 2.0], range=[1.5, math.inf, 2.0], max_range=[math.nan, 5.0, 6.0])
+    path = tmp_path / "run.csv"
+    write_readings_csv(batch, path)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "t,sensor,x,y,theta,range,max_range"  # beam_width unknown: left out
+    assert lines[1].endswith(",1.5,")
+    assert lines[2].endswith(",inf,5.0")
+    _assert_same(read_readings_csv(path), batch)
+    _assert_same(read_readings_csv(path, block_size=7), batch)
+
+
+def test_both_optional_columns_in_any_order(tmp_path: Path) -> None:
+    path = tmp_path / "run.csv"
+    path.write_text("max_range,t,sensor,x,y,theta,range,beam_width\n"
+                    "4,0,0,0,0,0,inf,0.3\n,1,0,0,0,0,2,\n")
+    batch = read_readings_csv(path)
+    assert batch.no_echo.tolist() == [True, False]
+    np.testing.assert_array_equal(batch.max_range, [4.0, math.nan])
+    np.testing.assert_array_equal(batch.beam_width, [0.3, math.nan])
+    write_readings_csv(batch, tmp_path / "out.csv")
+    assert (tmp_path / "out.csv").read_text().splitlines()[0] == (
+        "t,sensor,x,y,theta,range,beam_width,max_range")
+
+
+def test_run_wide_max_range_fills_unknown_ones(tmp_path: Path) -> None:
+    path = tmp_path / "run.csv"
+    path.write_text(HEADER + "0,0,0,0,0,inf\n1,0,0,0,0,2\n")
+    with pytest.raises(InputError, match="line 2, column 'range' is infinite but 'max_range'"):
+        read_readings_csv(path)
+    batch = read_readings_csv(path, max_range=5.0)
+    np.testing.assert_array_equal(batch.max_range, [5.0, 5.0])
+    path.write_text(HEADER.rstrip() + ",max_range\n0,0,0,0,0,inf,3\n1,0,0,0,0,inf,\n")
+    np.testing.assert_array_equal(read_readings_csv(path, max_range=5.0).max_range, [3.0, 5.0])
+    with pytest.raises(ValueError, match="max_range must be a finite number > 0"):
+        read_readings_csv(path, max_range=0.0)

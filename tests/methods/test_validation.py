@@ -34,7 +34,9 @@ BAD_READINGS = [
     ({"x": math.nan}, "x", "is NaN or infinite"),
     ({"y": -math.inf}, "y", "is NaN or infinite"),
     ({"theta": math.nan}, "theta", "is NaN or infinite"),
-    ({"range": math.inf}, "range", "is NaN or infinite"),
+    ({"range": math.inf}, "range", "is infinite but 'max_range' is not given"),
+    ({"range": -math.inf}, "range", "is NaN or infinite"),
+    ({"range": 2.0, "max_range": 1.5}, "range", "exceeds 'max_range'"),
     ({"range": math.nan}, "range", "is NaN or infinite"),
     ({"range": 0.0}, "range", "must be > 0"),
     ({"range": -1.0}, "range", "must be > 0"),
@@ -78,7 +80,8 @@ def test_inf_range_no_longer_poisons_the_combined_map() -> None:
     method = CombinedMethod(history_size=60)
     for i in range(50):
         method.add(Reading(0.1 * i, i % 4, 0.05 * i, 0.0, 1.5, 1.0 + 0.01 * i))
-    with pytest.raises(ReadingsError, match="column 'range' is NaN or infinite"):
+    with pytest.raises(ReadingsError,
+                       match="column 'range' is infinite but 'max_range' is not given"):
         method.add(Reading(5.0, 0, 2.5, 0.0, 1.5, math.inf))
     points = method.finish()
     assert len(points) > 0

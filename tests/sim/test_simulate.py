@@ -153,3 +153,32 @@ def test_bad_truth_files_fail_with_one_line(tmp_path: Path, text: str, problem: 
         read_truth_json(path)
     assert "\n" not in str(info.value)
     assert str(path) in str(info.value)
+
+
+def test_no_echo_records_every_firing_and_keeps_the_echoes() -> None:
+    robot = load_robot("scout2")
+    echoes_only = simulate(ROOM, robot, loop(10.0), seed=2)
+    every = simulate(ROOM, robot, loop(10.0), seed=2, no_echo=True)
+    assert len(every.readings) == len(every.firings)
+    silent = every.readings.no_echo
+    np.testing.assert_array_equal(silent, every.echoes.kind == NO_ECHO)
+    np.testing.assert_array_equal(every.truth.no_echo, silent)
+    assert np.all(every.readings.max_range[silent] == robot.max_range)
+    assert np.all(np.isnan(every.readings.max_range[~silent]))
+    heard = every.readings[~silent]
+    for name in ("t", "sensor", "x", "y", "theta", "range", "beam_width"):
+        np.testing.assert_array_equal(getattr(heard, name), getattr(echoes_only.readings, name))
+    assert every.truth.counts()["none"] == int(silent.sum())
+    assert "none" not in echoes_only.truth.counts()
+    assert set(np.array(every.truth.labels)[silent].tolist()) == {"none"}
+
+
+def test_no_echo_files_round_trip(tmp_path: Path) -> None:
+    sim = simulate(ROOM, load_robot("scout2"), loop(5.0), seed=3, no_echo=True)
+    path = tmp_path / "run.csv"
+    write_simulation(sim, path)
+    back = read_readings_csv(path)
+    np.testing.assert_array_equal(back.range, sim.readings.range)
+    np.testing.assert_array_equal(back.max_range, sim.readings.max_range)
+    truth = read_truth_json(truth_path(path))
+    np.testing.assert_array_equal(truth.kind, sim.truth.kind)

@@ -142,3 +142,12 @@ def test_missing_file(tmp_path: Path) -> None:
     path = tmp_path / "absent.truth.json"
     with pytest.raises(InputError, match="no such file"):
         read_truth_json(path)
+
+
+def test_no_echo_readings_are_kind_none(tmp_path: Path) -> None:
+    path = tmp_path / "run.truth.json"
+    write_truth_json(path, BOX, [EchoKind.DIRECT, -1], [[1.0, 2.5], [math.nan, math.nan]])
+    assert '{"id": 1, "kind": "none", "reflection": null}' in path.read_text(encoding="utf-8")
+    truth = read_truth_json(path)
+    assert truth.kind.tolist() == [0, -1]
+    assert np.isnan(truth.reflection[1]).all()

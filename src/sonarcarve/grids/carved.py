@@ -29,6 +29,10 @@ Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ
   NaN). An arc carving removed (fully carved, split, or below the method's confidence)
   contributes nothing.
 
+A **no-echo** reading (``range`` = +inf, :attr:`~sonarcarve.readings.Reading.no_echo`) has
+free space only: its beam's cells nearer than its ``max_range`` get the free-space update above
+(same profile and fade), and it draws no band; the method carves the live arcs with it.
+
 Following carving over time: the grid keeps two arrays, ``base`` (free space and the final
 contributions of arcs that have left the history, clamped to ``[logit(p_min), logit(p_max)]``
 after every update, octomap's way) and ``live`` (the sum of the current contributions of the
@@ -391,18 +395,18 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
 @compiled
 def _fold_kernel(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: float,
                  x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
-                 half: FloatArray, first_seq: int, capacity: int,
+                 half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
                  fx: FloatArray, fy: FloatArray, fr: FloatArray, flo: FloatArray,
                  fhi: FloatArray, fweight: FloatArray, fseq: npt.NDArray[np.int64],
                  band: float, l_hit: float, l_miss: float, l_min: float, l_max: float,
                  spread: float, unit: float, fade: float) -> None:
-    """The final updates of a batch in reading order: before the free space of reading
-    ``seq``, the final band of every arc it pushed out of the history (``fseq + capacity <=
-    seq``)."""
+    """The final updates of a batch in reading order: before the free space of reading ``k``
+    (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
+    final band of every arc it pushed out of the history (``fseq + capacity <= seq``)."""
     p = 0
     nf = fseq.shape[0]
     for k in range(x.shape[0]):
-        seq = first_seq + k
+        seq = seqs[k]
         while p < nf and fseq[p] + capacity <= seq:
             value = _arc_value(fr[p], flo[p], fhi[p], fweight[p], h, l_hit, spread, unit)
             _draw_arc(base, True, l_min, l_max, xmin, ymin, h, fx[p], fy[p], fr[p], flo[p],
@@ -673,10 +677,18 @@ class CarvedGrid:
         method._global = GlobalMapBuilder()  # no public way to discard it
         finals = self._take_pending()
         half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
+        r = batch.range
+        no_echo = r == math.inf
+        if no_echo.any():  # free up to max_range, and no arc of its own in the history
+            echo = (~no_echo).astype(np.int64)
+            seqs = first_seq + np.cumsum(echo) - 1
+            r = np.where(no_echo, batch.max_range + self.band, r)
+        else:
+            seqs = first_seq + np.arange(n, dtype=np.int64)
         _fold_kernel(self._base, self._bounds[0], self._bounds[1], self._resolution,
                      np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
-                     np.ascontiguousarray(batch.theta), np.ascontiguousarray(batch.range),
-                     np.ascontiguousarray(half), first_seq, history.capacity, finals.x,
+                     np.ascontiguousarray(batch.theta), np.ascontiguousarray(r),
+                     np.ascontiguousarray(half), seqs, history.capacity, finals.x,
                      finals.y, finals.r, finals.lo, finals.hi, finals.weight, finals.seq,
                      self.band, self._l_hit, self._l_miss,
                      self._l_min, self._l_max, self._spread, self._unit,

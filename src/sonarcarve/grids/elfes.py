@@ -313,14 +313,33 @@ class OccupancyGrid:
         self.add_many(ReadingBatch.from_readings([reading]))
 
     def add_many(self, batch: ReadingBatch) -> None:
-        """Fold every reading of ``batch`` into the grid, in order (clamping after each)."""
+        """Fold every reading of ``batch`` into the grid, in order (clamping after each).
+
+        A no-echo reading (``range`` = +inf) is free space only: every cell of its cone up to
+        its ``max_range`` gets the miss update (same angular profile and fade), no hit band.
+        """
         if not len(batch):
             return
         phi = np.where(np.isnan(batch.beam_width), self.model.beam_width, batch.beam_width)
         l_hit, l_miss, l_min, l_max = self.model.log_odds
-        _update_kernel(self.log_odds, self.bounds[0], self.bounds[1], self.resolution,
-                       batch.x, batch.y, batch.theta, batch.range, phi, self.band,
-                       self.model.fade_range, l_hit, l_miss, l_min, l_max)
+        no_echo = batch.range == math.inf
+        if not no_echo.any():
+            _update_kernel(self.log_odds, self.bounds[0], self.bounds[1], self.resolution,
+                           batch.x, batch.y, batch.theta, batch.range, phi, self.band,
+                           self.model.fade_range, l_hit, l_miss, l_min, l_max)
+            self.readings += len(batch)
+            return
+        # Runs of echoes and of no-echo readings, in order. A no-echo run is the same update
+        # at range max_range - b (so that the cone reaches max_range) with the hit taken as a
+        # miss: the whole cone is free, there is no band.
+        r = np.where(no_echo, batch.max_range - self.band, batch.range)
+        edges = np.flatnonzero(np.diff(no_echo.astype(np.int8))) + 1
+        for part in np.split(np.arange(len(batch)), edges):
+            free_only = bool(no_echo[part[0]])
+            _update_kernel(self.log_odds, self.bounds[0], self.bounds[1], self.resolution,
+                           batch.x[part], batch.y[part], batch.theta[part], r[part], phi[part],
+                           self.band, self.model.fade_range, l_miss if free_only else l_hit,
+                           l_miss, l_min, l_max)
         self.readings += len(batch)
 
     @property

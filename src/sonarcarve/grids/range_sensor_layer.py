@@ -643,7 +643,14 @@ class RangeSensorLayer:
         self.add_many(ReadingBatch.from_readings([reading]))
 
     def add_many(self, batch: ReadingBatch) -> None:
-        """Fold every reading of ``batch`` in, in order (REP 117 handling: module docstring)."""
+        """Fold every reading of ``batch`` in, in order (REP 117 handling: module docstring).
+
+        A no-echo reading (``range`` = +inf) is handled as ROS handles +Inf: dropped by a
+        variable-range sensor, unless :attr:`RangeSensorLayerParams.inf_is_max_reading`, which
+        makes it a reading at the layer's ``max_range`` that clears the cone (no mark) when
+        ``clear_on_max_reading`` is on. The reading's own ``max_range`` is not used: the layer's
+        limits are its parameters (module docstring, item 2).
+        """
         self._fold(batch.x, batch.y, batch.theta, batch.range, batch.beam_width, batch.t)
 
     def add_range(self, x: float, y: float, theta: float, range: float,

@@ -1,7 +1,14 @@
 """The readings CSV, the interchange format of the design (``t,sensor,x,y,theta,range``).
 
-One row per echo; an optional ``beam_width`` column (radians). Units: seconds, metres, radians
-counter-clockwise from +x. Column order is free on reading; extra columns are ignored.
+One row per reading; two optional columns: ``beam_width`` (radians) and ``max_range`` (metres,
+how far the sensor listened), either alone or both. Units: seconds, metres, radians
+counter-clockwise from +x. Column order is free on reading; extra columns are ignored. The
+writer's order is ``t,sensor,x,y,theta,range``, then ``beam_width`` and ``max_range`` when some
+row's value is known. An empty optional cell is unknown (NaN).
+
+No-echo rows: ``range`` = ``inf`` marks a beam that heard nothing up to the row's ``max_range``
+(or the run-wide ``max_range`` given to the reader, for rows that leave it empty): free space,
+no point. ``inf`` with no max range known is an error, as is a finite range beyond it.
 
 Reading is strict, so that a damaged file fails loudly instead of mapping the wrong numbers:
 every line must have as many fields as the header, no column name may appear twice, and a
@@ -32,6 +39,7 @@ from typing import IO, NoReturn
 
 import numpy as np
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.readings import ReadingBatch, ReadingsError
@@ -48,17 +56,20 @@ __all__ = [
 
 #: Required columns, in the order they are written.
 READINGS_COLUMNS = ("t", "sensor", "x", "y", "theta", "range")
-_OPTIONAL = "beam_width"
+#: Optional columns, in the order they are written (each only when some value is known).
+_OPTIONAL = ("beam_width", "max_range")
 #: Bytes read at a time by :func:`iter_readings_csv` (about 15,000 rows of a typical log).
 BLOCK_SIZE = 1 << 20
 _BOM = b"\xef\xbb\xbf"
 _ROW_BYTES = 64  # a typical row's length, to size the csv module's batches like the blocks
 
 
-def read_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> ReadingBatch:
+def read_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
+                      max_range: float | None = None) -> ReadingBatch:
     """Read and validate a readings CSV (:func:`iter_readings_csv`'s batches joined).
 
-    ``block_size`` (bytes read at a time) changes neither the result nor the error.
+    ``block_size`` (bytes read at a time) changes neither the result nor the error;
+    ``max_range`` is as for :func:`iter_readings_csv`.
 
     Raises
     ------
@@ -67,15 +78,16 @@ def read_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Read
         or column, a duplicated column name, a line with more or fewer fields than the header,
         a blank line before the last data line, a non-numeric, NaN or infinite value, a sensor
         that is not a whole number, range <= 0, beam width outside (0, π), time going
-        backwards.
+        backwards, ``range`` = ``inf`` with no max range known, a range beyond the max range.
     """
-    batches = list(iter_readings_csv(path, block_size=block_size))
+    batches = list(iter_readings_csv(path, block_size=block_size, max_range=max_range))
     if len(batches) == 1:
         return batches[0]
     return ReadingBatch.concatenate(batches) if batches else ReadingBatch.empty()
 
 
-def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Iterator[ReadingBatch]:
+def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
+                      max_range: float | None = None) -> Iterator[ReadingBatch]:
     """The readings of a CSV as validated batches of about ``block_size`` bytes of text each.
 
     Each batch is validated with the file's line numbers and the time of the batch before it,
@@ -88,6 +100,9 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Iter
         The readings CSV.
     block_size : int
         Bytes read at a time (at least 1; a longer line is read whole).
+    max_range : float, optional
+        Run-wide max range, metres (finite, > 0): the ``max_range`` of every row that does not
+        give its own (no column, or an empty cell), so that ``inf`` rows are no-echo readings.
 
     Yields
     ------
@@ -98,11 +113,17 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Iter
     ------
     InputError
         As :func:`read_readings_csv`.
+    ConfigError
+        A ``max_range`` that is not a finite number > 0.
     """
     path = Path(path)
     if block_size < 1:
         msg = f"block_size must be at least 1 byte, got {block_size}"
         raise ValueError(msg)
+    if max_range is not None and not (isinstance(max_range, int | float)
+                                      and 0.0 < max_range < math.inf):
+        msg = f"max_range must be a finite number > 0 metres, got {max_range!r}"
+        raise ConfigError(msg)
     try:
         handle = path.open("rb")
     except FileNotFoundError:
@@ -112,7 +133,8 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE) -> Iter
         msg = f"{path}: cannot read as CSV ({err.strerror or err})"
         raise InputError(msg) from None
     with handle:
-        yield from _Reader(path, _Blocks(path, handle, block_size), block_size).batches()
+        reader = _Reader(path, _Blocks(path, handle, block_size), block_size, max_range)
+        yield from reader.batches()
 
 
 def count_data_lines(path: str | Path, *, block_size: int = BLOCK_SIZE) -> int:
@@ -235,8 +257,10 @@ class _Reader:
     the text and the cells of a block are freed before the caller gets its batch.
     """
 
-    def __init__(self, path: Path, blocks: _Blocks, block_size: int) -> None:
+    def __init__(self, path: Path, blocks: _Blocks, block_size: int,
+                 max_range: float | None = None) -> None:
         self.path = path
+        self.max_range = max_range
         self.blocks = iter(blocks)
         self.rows_per_batch = max(1, block_size // _ROW_BYTES)
         self.previous_t = -math.inf
@@ -271,7 +295,7 @@ class _Reader:
         header = [name.strip() for name in names]
         _check_header(self.path, header)
         self.width = len(header)
-        wanted = [*READINGS_COLUMNS, *([_OPTIONAL] if _OPTIONAL in header else [])]
+        wanted = [*READINGS_COLUMNS, *(name for name in _OPTIONAL if name in header)]
         self.indices = {name: header.index(name) for name in wanted}
 
     # -- plain blocks: split in bulk --------------------------------------------------------
@@ -345,7 +369,7 @@ class _Reader:
         """Convert and validate rows that have the right number of fields; raise at the first
         bad one, or else with ``problem`` (about the line after them) if there is one."""
         try:
-            arrays = {name: _floats(cells, optional=name == _OPTIONAL)
+            arrays = {name: _floats(cells, optional=name in _OPTIONAL)
                       for name, cells in columns.items()}
             batch = self._validated(arrays, line_of(0) if columns["t"] else 1)
         except (ValueError, ReadingsError) as err:
@@ -358,6 +382,11 @@ class _Reader:
 
     def _validated(self, arrays: dict[str, FloatArray], first_line: int) -> ReadingBatch:
         """The batch of ``arrays``; :class:`ReadingsError` if any row breaks a rule."""
+        if self.max_range is not None:  # the run-wide max range where a row gives none
+            given = arrays.get("max_range")
+            arrays = {**arrays, "max_range": (
+                np.full(arrays["t"].shape, self.max_range) if given is None
+                else np.where(np.isnan(given), self.max_range, given))}
         batch = ReadingBatch.from_arrays(**arrays, source=str(self.path), first_line=first_line)
         if len(batch) and batch.t[0] < self.previous_t:  # the only rule across batches
             batch[:1].validate(str(self.path), first_line, previous_t=self.previous_t)
@@ -370,14 +399,14 @@ class _Reader:
         for name, cells in columns.items():  # the first cell that is no number, column order
             for k in range(stop):
                 text = cells[k]
-                if name == _OPTIONAL and not text.strip():
+                if name in _OPTIONAL and not text.strip():
                     continue
                 try:
                     parse_number(text, f"{self.path}: line {line_of(k)}", name, finite=False)
                 except InputError as bad_cell:
                     stop, message = k, str(bad_cell)
                     break
-        arrays = {name: _floats(cells[:stop], optional=name == _OPTIONAL)
+        arrays = {name: _floats(cells[:stop], optional=name in _OPTIONAL)
                   for name, cells in columns.items()}
         bad = _first_false(stop, lambda k: self._valid(arrays, k))
         if bad < stop:  # a row before the unparseable one breaks a rule: its first rule
@@ -399,7 +428,8 @@ class _Reader:
 
 
 def _floats(cells: Sequence[str], *, optional: bool) -> FloatArray:
-    """``float`` of every cell (an empty ``beam_width`` cell is NaN: the method's default)."""
+    """``float`` of every cell (an empty optional cell is NaN: the method's default beam width,
+    an unknown max range)."""
     try:
         return np.fromiter(map(float, cells), dtype=np.float64, count=len(cells))
     except ValueError:
@@ -465,9 +495,13 @@ def _check_header(path: Path, header: list[str]) -> None:
 
 
 def write_readings_csv(batch: ReadingBatch, path: str | Path) -> None:
-    """Write ``batch`` as a readings CSV (atomically); ``beam_width`` only where known."""
+    """Write ``batch`` as a readings CSV (atomically); ``beam_width`` and ``max_range`` only
+    when some row's value is known (an unknown one is an empty cell); a no-echo row's range
+    is written ``inf``."""
     with_width = not bool(np.all(np.isnan(batch.beam_width)))
-    header = [*READINGS_COLUMNS, *([_OPTIONAL] if with_width else [])]
+    with_limit = not bool(np.all(np.isnan(batch.max_range)))
+    header = [*READINGS_COLUMNS, *(["beam_width"] if with_width else []),
+              *(["max_range"] if with_limit else [])]
     with atomic_text(path) as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(header)
@@ -476,6 +510,8 @@ def write_readings_csv(batch: ReadingBatch, path: str | Path) -> None:
                    _fmt(reading.theta), _fmt(reading.range)]
             if with_width:
                 row.append("" if math.isnan(reading.beam_width) else _fmt(reading.beam_width))
+            if with_limit:
+                row.append("" if math.isnan(reading.max_range) else _fmt(reading.max_range))
             writer.writerow(row)
 
 

@@ -246,6 +246,25 @@ class RosbagLog:
     no_echo: NoEchoReadings = field(default_factory=lambda: _no_echo_rows(
         *(np.zeros(0) for _ in range(7))))
 
+    def with_no_echo(self) -> ReadingBatch:
+        """The echoes and the no-echo readings in one batch, sorted by time then sensor (ties:
+        echoes first): a no-echo row has ``range`` = inf and its ``max_range``, the methods
+        and grids take it as free space only. Row positions (reading ids) are those of the
+        merged batch, not of :attr:`batch`."""
+        e, f = self.batch, self.no_echo
+        t = np.concatenate([e.t, f.t])
+        sensor = np.concatenate([e.sensor, f.sensor])
+        order = np.lexsort((sensor, t))
+        return ReadingBatch.from_arrays(
+            t=t[order], sensor=sensor[order],
+            x=np.concatenate([e.x, f.x])[order], y=np.concatenate([e.y, f.y])[order],
+            theta=np.concatenate([e.theta, f.theta])[order],
+            range=np.concatenate([e.range, np.full(len(f), np.inf)])[order],
+            beam_width=np.concatenate([e.beam_width, f.beam_width])[order],
+            max_range=np.concatenate([e.max_range, f.max_range])[order],
+            source="bag readings with no-echo readings",
+        )
+
 
 @dataclass
 class _Ranges:

@@ -57,6 +57,7 @@ from sonarcarve.grids import (
     CarvedGrid,
     OccupancyGrid,
     RangeSensorLayer,
+    RangeSensorLayerParams,
     trinary,
 )
 from sonarcarve.lab.drawing import segments_collection
@@ -127,12 +128,26 @@ def _elfes(h: float, bounds: Bounds) -> Grid:
     return OccupancyGrid(h, bounds)
 
 
+def _layer_clearing(h: float, bounds: Bounds) -> Grid:
+    # +Inf as a max-range reading that clears (the Scout2's max range), ROS's opt-in.
+    return RangeSensorLayer(h, bounds, RangeSensorLayerParams(
+        max_range=load_robot("scout2").max_range, inf_is_max_reading=True,
+        clear_on_max_reading=True))
+
+
 #: The grids measured: label -> factory ``(resolution, bounds) -> grid`` (defaults each). A
 #: new grid joins every table and figure by an entry here.
 GRID_KINDS: dict[str, Callable[[float, Bounds], Grid]] = {
     "carved grid": _carved,
     "range sensor layer": _layer,
     "elfes grid": _elfes,
+}
+
+#: Grids that only differ from :data:`GRID_KINDS` on no-echo readings, measured with them:
+#: the range sensor layer with ``inf_is_max_reading`` and ``clear_on_max_reading`` (+Inf
+#: clears the cone up to the robot's max range; ROS's default drops +Inf).
+NO_ECHO_GRID_KINDS: dict[str, Callable[[float, Bounds], Grid]] = {
+    "range sensor layer, +Inf clears": _layer_clearing,
 }
 
 
@@ -392,28 +407,34 @@ class SceneRun:
         raise KeyError(msg)
 
 
-def simulate_changing_scene(name: str, seed: int, robot: str = "scout2") -> tuple[
-        ChangingScene, Simulation]:
+def simulate_changing_scene(name: str, seed: int, robot: str = "scout2", *,
+                            no_echo: bool = False) -> tuple[ChangingScene, Simulation]:
     """A built-in changing scene (:func:`~sonarcarve.sim.scene.changing_scene`) driven at the
-    default speed and simulated with the default physics."""
+    default speed and simulated with the default physics; ``no_echo`` also records the firings
+    that heard nothing (:func:`~sonarcarve.sim.simulate.simulate`)."""
     cs = changing_scene(name)
     sim = simulate(cs.world, load_robot(robot), follow_waypoints(cs.waypoints), seed,
-                   scene=cs.scene)
+                   scene=cs.scene, no_echo=no_echo)
     return cs, sim
 
 
 def run_changing_scene(name: str, seed: int, resolution: float = 0.1,
                        methods: Sequence[str] = METHOD_NAMES,
                        grids: Sequence[str] = tuple(GRID_KINDS),
-                       period: float = SNAPSHOT_PERIOD) -> SceneRun:
-    """Simulate a changing scene and measure every map on it (module docstring)."""
-    cs, sim = simulate_changing_scene(name, seed)
+                       period: float = SNAPSHOT_PERIOD, *, no_echo: bool = False) -> SceneRun:
+    """Simulate a changing scene and measure every map on it (module docstring).
+
+    ``no_echo`` feeds the maps the no-echo readings too (free space up to the robot's max
+    range); ``grids`` may then also name :data:`NO_ECHO_GRID_KINDS`.
+    """
+    cs, sim = simulate_changing_scene(name, seed, no_echo=no_echo)
+    kinds = GRID_KINDS | NO_ECHO_GRID_KINDS
     changes = scene_changes(sim)
     xmin, ymin, xmax, ymax = sim.world.bounds
     bounds = (xmin - 0.5, ymin - 0.5, xmax + 0.5, ymax + 0.5)
     maps: list[tuple[str, float, _Map]] = [
         (m, POINT_TOLERANCE, _MethodMap(make_method(m))) for m in methods]
-    maps += [(g, grid_tolerance(resolution), _GridMap(GRID_KINDS[g](resolution, bounds)))
+    maps += [(g, grid_tolerance(resolution), _GridMap(kinds[g](resolution, bounds)))
              for g in grids]
     t0, t1 = float(sim.trajectory.t[0]), float(sim.trajectory.t[-1])
     times = np.asarray(t0 + period * np.arange(1, math.floor((t1 - t0) / period + 1e-9) + 1),

@@ -6,6 +6,13 @@ A *model* (centerline, carving, ATM) keeps its own per-row state beside a shared
 into one point per surviving arc. Running carving and ATM on one history is then just a method
 with two models (paper, section 5-A: "arc carving and ATM can be run in parallel using the same
 data, without interfering with each other").
+
+A *no-echo* reading (``range`` = +inf, :attr:`~sonarcarve.readings.Reading.no_echo`) is free
+space only: it never enters the history, never yields a point, and still consumes its reading
+id (ids are input rows). Each model sees it through :meth:`ArcModel.on_no_echo`: carving carves
+the older arcs with its beam up to ``max_range - ε`` (eq. 3.2 with ``R = max_range - ε``; the
+paper's Appendix B treats max-range readings as "no return"), evidence carving adds its
+free-space evidence, centerline and ATM ignore it (it is counted in :attr:`Measures.no_echo`).
 """
 
 from __future__ import annotations
@@ -91,6 +98,8 @@ class Measures:
         Arcs removed because carving emptied them, since the start.
     split : int
         Arcs removed because carving would have split them, since the start.
+    no_echo : int
+        No-echo readings among ``readings`` (free space only, never in the history).
     """
 
     readings: int
@@ -99,6 +108,7 @@ class Measures:
     widths: FloatArray = field(repr=False)
     fully_carved: int = 0
     split: int = 0
+    no_echo: int = 0
 
 
 class ArcModel(ABC):
@@ -134,6 +144,14 @@ class ArcModel(ABC):
         for sequence in range(first, first + count):
             live = h.window(sequence)
             self.on_add(int(live[-1]), live[:-1])
+
+    def on_no_echo(self, reading: Reading, beam_width: float) -> None:
+        """Let a no-echo reading (``range`` = +inf, free up to ``reading.max_range`` metres,
+        beam width ``beam_width`` radians) act on the live arcs of the history; it adds no arc.
+
+        This default ignores it (centerline, ATM: a beam that heard nothing places no point).
+        """
+        del reading, beam_width  # nothing to do: deliberately not abstract
 
     @abstractmethod
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -174,6 +192,7 @@ class SonarMethod(ABC):
         self.history = SonarHistory(history_size, on_evict=self._commit)
         self._global = GlobalMapBuilder()
         self._readings = 0
+        self._no_echo = 0  # no-echo readings among them
         self._last_t = -math.inf  # time of the newest reading: times never go backwards
         self._finished = False
         self._listeners: list[CommitListener] = []
@@ -211,6 +230,9 @@ class SonarMethod(ABC):
         The batch is validated once, vectorised, before any reading is processed (the rules of
         :meth:`add`, and its first time not before the previous reading's): a bad batch raises
         :class:`~sonarcarve.readings.ReadingsError` naming the reading and changes nothing.
+
+        No-echo rows are handled one by one between the blocks of ordinary readings before and
+        after them (each still consumes its id), so the result is that of :meth:`add` per row.
         """
         self._check_open()
         start = self._readings if first_id is None else first_id
@@ -222,6 +244,23 @@ class SonarMethod(ABC):
             for offset, reading in enumerate(batch):
                 self._add_checked(reading, start + offset)
             return
+        no_echo = np.flatnonzero(batch.range == math.inf)
+        if not no_echo.size:
+            self._add_block(batch, start)
+            return
+        done = 0
+        for row in no_echo.tolist():
+            if row > done:
+                self._add_block(batch[done:row], start + done)
+            self._add_no_echo(batch[row])
+            done = row + 1
+        if done < n:
+            self._add_block(batch[done:], start + done)
+
+    def _add_block(self, batch: ReadingBatch, start: int) -> None:
+        """Ordinary (echo) readings, validated, through the models' block kernels; ids from
+        ``start``."""
+        n = len(batch)
         width = np.where(np.isnan(batch.beam_width), self.beam_width, batch.beam_width)
         h = self.history
         done = 0
@@ -247,12 +286,25 @@ class SonarMethod(ABC):
             raise RuntimeError(msg)
 
     def _add_checked(self, reading: Reading, reading_id: int) -> None:
+        if reading.range == math.inf:
+            self._add_no_echo(reading)
+            return
         width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
         slot = self.history.append(reading, reading_id, width)
         older = self.history.slots()[:-1]
         for model in self.models:
             model.on_add(slot, older)
         self._readings += 1
+        self._last_t = reading.t
+        self._local = None
+
+    def _add_no_echo(self, reading: Reading) -> None:
+        """A validated no-echo reading: free space for the models, no arc (module docstring)."""
+        width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
+        for model in self.models:
+            model.on_no_echo(reading, width)
+        self._readings += 1
+        self._no_echo += 1
         self._last_t = reading.t
         self._local = None
 
@@ -302,6 +354,7 @@ class SonarMethod(ABC):
             widths=est.width[est.alive],
             fully_carved=counters.get("fully_carved", 0),
             split=counters.get("split", 0),
+            no_echo=self._no_echo,
         )
 
     @property

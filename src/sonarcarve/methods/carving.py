@@ -14,6 +14,10 @@ within ``β`` of the normal (``Z_ij^β``, see :mod:`sonarcarve.geometry`): on sm
 that meets a wall at a glancing angle hears nothing, so its freespace is no evidence against
 echoes from that wall. The default, :data:`~sonarcarve.geometry.NO_INCIDENCE_LIMIT` (π/2), is
 the paper.
+
+A no-echo reading (range +inf, :mod:`sonarcarve.methods.base`) carves the older live arcs with
+its freespace up to ``max_range - ε`` exactly as a reading of range ``max_range`` would (eq. 3.2
+with ``R = max_range - ε``), and adds no arc.
 """
 
 from __future__ import annotations
@@ -44,7 +48,7 @@ from sonarcarve.methods.config import (
     check_max_incidence,
     check_range_tolerance,
 )
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
@@ -131,6 +135,61 @@ def _add_arcs(
     return fully, split
 
 
+@compiled
+def _carve_free(
+    fx: float, fy: float, fr: float, f_lo: float, f_hi: float, appended: int, capacity: int,
+    x: FloatArray, y: FloatArray, r: FloatArray,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, status: Int8Array, carved: BoolArray,
+    tolerance: float, max_incidence: float, index: ArcIndex, candidates: SlotArray,
+) -> tuple[int, int]:
+    """Carve the live arcs (the ``appended`` arcs so far, the newest ``capacity`` of them live)
+    by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
+    to ``fr`` metres (its sector ends at ``fr - tolerance``). The carving step of
+    :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``."""
+    storage = x.shape[0]
+    cuts, starts, ends, flags = new_scratch()
+    fully = 0
+    split = 0
+    sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
+    if sector.radius <= 0.0:
+        return fully, split
+    found = query_sector(index, sector, candidates)
+    if found < 0:  # a huge sector: every live arc
+        found = 0
+        for older in range(max(0, appended - capacity), appended):
+            candidates[found] = older % storage
+            found += 1
+    for k in range(found):
+        i = candidates[k]
+        if status[i] != _ALIVE:
+            continue
+        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
+                                     sector)
+        if fate == UNCHANGED:
+            continue
+        new_lo = lo[i]
+        new_hi = hi[i]
+        if fate == UNDECIDED:
+            fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
+                                               starts, ends, flags)
+            if fate == UNCHANGED:
+                continue
+        carved[i] = True
+        if fate == SHRUNK:
+            lo[i] = new_lo
+            hi[i] = new_hi
+            bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
+                x[i], y[i], r[i], new_lo, new_hi)
+        else:
+            status[i] = fate
+            index_remove(index, i)
+            if fate == FULLY_CARVED:
+                fully += 1
+            else:
+                split += 1
+    return fully, split
+
+
 class CarvingModel(ArcModel):
     """Per-arc carved intervals over a shared history (section 5-A).
 
@@ -195,6 +254,19 @@ class CarvingModel(ArcModel):
             first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
             self.lo, self.hi, self.bounds, self.status, self.carved, self.range_tolerance,
             self.max_incidence, self.index, self._candidates,
+        )
+        self._fully_carved += fully
+        self._split += split
+
+    def on_no_echo(self, reading: Reading, beam_width: float) -> None:
+        """Carve the live arcs by the no-echo reading's beam up to ``max_range - ε``."""
+        h = self.history
+        half = 0.5 * beam_width
+        fully, split = _carve_free(
+            reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
+            h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.status,
+            self.carved, self.range_tolerance, self.max_incidence, self.index,
+            self._candidates,
         )
         self._fully_carved += fully
         self._split += split

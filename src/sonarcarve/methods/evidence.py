@@ -24,6 +24,9 @@ Per arc (see the geometry module for the equations):
   outputs.
 
 ``processed`` (Table I) is: received evidence (free, support or occlusion) or has a crossing.
+
+A no-echo reading adds its free-space evidence up to ``max_range - ε``
+(:func:`~sonarcarve.geometry.evidence.evidence_free`) and no arc.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from sonarcarve.geometry.evidence import (
     EvidenceParams,
     evidence_add,
     evidence_estimates,
+    evidence_free,
     evidence_threshold,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
@@ -54,6 +58,7 @@ from sonarcarve.methods.config import (
     DEFAULT_RANGE_TOLERANCE,
     MethodConfig,
 )
+from sonarcarve.readings import Reading
 from sonarcarve.typing import SlotArray
 
 __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
@@ -239,6 +244,17 @@ class EvidenceModel(ArcModel):
         self._fully += fully
         self._crossings += crossings
         self._occluded_bins += occluding
+
+    def on_no_echo(self, reading: Reading, beam_width: float) -> None:
+        """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
+        """
+        h = self.history
+        self._fully += evidence_free(
+            reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
+            np.ascontiguousarray(h.slots()), h.x, h.y, h.beam_width, h.sensor, self.looked,
+            self.bx, self.by, self.ex, self.ey, self.free, self.support, self.circle,
+            self.status, self.touched, self.params,
+        )
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots``."""

@@ -1,4 +1,9 @@
-"""Drive a robot through a world and record its sonar readings, each with its ground truth."""
+"""Drive a robot through a world and record its sonar readings, each with its ground truth.
+
+By default only the firings that heard an echo become readings. With ``no_echo=True`` every
+firing does: one that heard nothing is a *no-echo* reading (``range`` = inf, ``max_range`` =
+the robot's), whose truth kind is :data:`~sonarcarve.sim.sonar.NO_ECHO` (label ``none``).
+"""
 
 from __future__ import annotations
 
@@ -14,6 +19,7 @@ from sonarcarve.sim.motion import Trajectory
 from sonarcarve.sim.scene import Scene
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
+    NO_ECHO,
     Echoes,
     EchoKind,
     Firings,
@@ -21,9 +27,12 @@ from sonarcarve.sim.sonar import (
     fire_sonars,
 )
 from sonarcarve.sim.world import World, check_seed
-from sonarcarve.typing import FloatArray, IntArray
+from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
-__all__ = ["Simulation", "SonarTruth", "simulate"]
+__all__ = ["NO_ECHO_LABEL", "Simulation", "SonarTruth", "simulate"]
+
+#: Truth label of a no-echo reading (kind code :data:`~sonarcarve.sim.sonar.NO_ECHO`).
+NO_ECHO_LABEL = "none"
 
 
 
@@ -34,7 +43,8 @@ class SonarTruth:
     Attributes
     ----------
     kind : ndarray of int64, shape (n,)
-        :class:`~sonarcarve.sim.sonar.EchoKind` code: what produced the reading.
+        :class:`~sonarcarve.sim.sonar.EchoKind` code: what produced the reading;
+        :data:`~sonarcarve.sim.sonar.NO_ECHO` (-1) for a no-echo reading.
     reflection : ndarray, shape (n, 2)
         True reflection point in the world frame, metres; NaN rows for floor and crosstalk
         echoes, which have none.
@@ -58,14 +68,24 @@ class SonarTruth:
 
     @property
     def labels(self) -> list[str]:
-        """Kind of each reading as text: ``direct``, ``crosstalk``, ``floor``, ``multipath``."""
-        names = [kind.label for kind in EchoKind]
+        """Kind of each reading as text: ``direct``, ``crosstalk``, ``floor``, ``multipath``,
+        or ``none`` (no echo)."""
+        names = {int(kind): kind.label for kind in EchoKind} | {NO_ECHO: NO_ECHO_LABEL}
         return [names[code] for code in self.kind.tolist()]
 
+    @property
+    def no_echo(self) -> BoolArray:
+        """Readings that heard nothing (kind :data:`~sonarcarve.sim.sonar.NO_ECHO`)."""
+        return np.asarray(self.kind == NO_ECHO)
+
     def counts(self) -> dict[str, int]:
-        """Readings per kind, every kind listed (zero included), in :class:`EchoKind` order."""
+        """Readings per kind, every kind listed (zero included), in :class:`EchoKind` order;
+        ``none`` last, only when there are no-echo readings."""
         found = Counter(self.kind.tolist())
-        return {kind.label: int(found.get(int(kind), 0)) for kind in EchoKind}
+        counts = {kind.label: int(found.get(int(kind), 0)) for kind in EchoKind}
+        if NO_ECHO in found:
+            counts[NO_ECHO_LABEL] = int(found[NO_ECHO])
+        return counts
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,8 +95,9 @@ class Simulation:
     Attributes
     ----------
     readings : ReadingBatch
-        One row per echo heard, in time order; origin and axis from the true trajectory, or
-        from ``odometry`` when one was given (what the robot believes).
+        One row per echo heard (per firing with ``no_echo``), in time order; origin and axis
+        from the true trajectory, or from ``odometry`` when one was given (what the robot
+        believes).
     truth : SonarTruth
         Per reading: kind, true reflection point, true range, firing row.
     world, robot, trajectory : World, RobotDescription, Trajectory
@@ -129,6 +150,7 @@ def simulate(
     *,
     on_progress: Callable[[int, int], None] | None = None,
     scene: Scene | None = None,
+    no_echo: bool = False,
 ) -> Simulation:
     """Fire the robot's sonar ring along a trajectory and record what it hears.
 
@@ -157,6 +179,10 @@ def simulate(
     scene : Scene, optional
         Obstacles that appear, vanish or move (:mod:`sonarcarve.sim.scene`); each reading's
         truth names the obstacle it came from (:attr:`SonarTruth.obstacle`).
+    no_echo : bool
+        Also record the firings that heard nothing, as no-echo readings: ``range`` = inf,
+        ``max_range`` = ``robot.max_range`` (free space up to there), truth kind
+        :data:`~sonarcarve.sim.sonar.NO_ECHO`. Off (the default): echoes only, as before.
 
     Returns
     -------
@@ -174,7 +200,8 @@ def simulate(
     firings = _firings(robot, trajectory, times, sensors)
     echoes = fire_sonars(world, robot, firings, physics, np.random.default_rng(seed), on_progress,
                          scene=scene)
-    heard = np.flatnonzero(echoes.heard)
+    heard = (np.arange(len(firings), dtype=np.int64) if no_echo
+             else np.flatnonzero(echoes.heard))
     # Echoes come from the true poses; readings carry the poses the robot believes it had.
     stamped = firings if odometry is None else _firings(robot, odometry, times, sensors)
     readings = _heard_readings(robot, stamped, echoes, heard, f"simulation of {world.name}")
@@ -197,15 +224,23 @@ def _heard_readings(robot: RobotDescription, stamped: Firings, echoes: Echoes, h
     echoes : Echoes
         What every firing heard; ``range`` in metres.
     heard : ndarray of int64, shape (readings,)
-        Indices of the firings that heard something, increasing.
+        Indices of the firings to record, increasing: those that heard something, or all
+        (a firing that heard nothing becomes a no-echo reading, range inf, ``max_range`` the
+        robot's).
     source : str
         Description of where the readings came from.
     """
     sensors = stamped.sensor[heard]
+    silent = echoes.kind[heard] == NO_ECHO
+    r = echoes.range[heard]
+    limit = None
+    if silent.any():
+        r = np.where(silent, np.inf, r)
+        limit = np.where(silent, robot.max_range, np.nan)
     return ReadingBatch.from_arrays(
         t=stamped.t[heard], sensor=sensors, x=stamped.x[heard], y=stamped.y[heard],
-        theta=stamped.theta[heard], range=echoes.range[heard],
-        beam_width=robot.beam_width[sensors], source=source,
+        theta=stamped.theta[heard], range=r, beam_width=robot.beam_width[sensors],
+        max_range=limit, source=source,
     )
 
 

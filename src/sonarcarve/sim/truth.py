@@ -10,7 +10,9 @@ The file holds the world's walls and, per reading, what produced it::
      ]}
 
 ``id`` is the reading's 0-based row in the CSV; ``kind`` one of ``direct``, ``crosstalk``,
-``floor``, ``multipath``; ``reflection`` the true reflection point in metres (world frame), or
+``floor``, ``multipath``, or ``none`` for a no-echo reading (a firing that heard nothing,
+``range`` = inf in the CSV; files written before no-echo readings existed have none);
+``reflection`` the true reflection point in metres (world frame), or
 ``null`` where there is none (floor and crosstalk echoes). One reading per line, so the file
 diffs and greps well.
 """
@@ -27,7 +29,7 @@ import numpy.typing as npt
 from sonarcarve.io.atomic import atomic_paths, atomic_text
 from sonarcarve.io.errors import InputError, finite_number
 from sonarcarve.io.readings_csv import write_readings_csv
-from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.sonar import NO_ECHO, EchoKind
 from sonarcarve.sim.world import World, WorldError
 
 if TYPE_CHECKING:
@@ -45,7 +47,8 @@ __all__ = [
 #: What replaces ``.csv`` in a readings file name to name its truth file.
 TRUTH_SUFFIX = ".truth.json"
 
-_KIND_CODES = {kind.label: int(kind) for kind in EchoKind}
+_KIND_CODES = {kind.label: int(kind) for kind in EchoKind} | {"none": NO_ECHO}
+_KIND_LABELS = {code: label for label, code in _KIND_CODES.items()}
 
 
 class GroundTruth(NamedTuple):
@@ -84,7 +87,7 @@ def write_truth_json(path: str | Path, world: World, kind: npt.ArrayLike,
     world : World
         Its segments are written.
     kind : array-like of int, shape (n,)
-        Echo kind codes per reading.
+        Echo kind codes per reading (:data:`~sonarcarve.sim.sonar.NO_ECHO`: no echo).
     reflection : array-like, shape (n, 2)
         Reflection points per reading, metres; rows with NaN are written as ``null``.
     """
@@ -93,9 +96,8 @@ def write_truth_json(path: str | Path, world: World, kind: npt.ArrayLike,
     if points.shape[0] != codes.shape[0]:
         msg = f"{path}: {codes.shape[0]} kinds but {points.shape[0]} reflection points"
         raise ValueError(msg)
-    labels = [kind.label for kind in EchoKind]
     lines = [
-        json.dumps({"id": i, "kind": labels[code],
+        json.dumps({"id": i, "kind": _KIND_LABELS[code],
                     "reflection": None if np.isnan(p).any() else [float(p[0]), float(p[1])]})
         for i, (code, p) in enumerate(zip(codes.tolist(), points, strict=True))
     ]
