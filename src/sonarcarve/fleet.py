@@ -87,6 +87,10 @@ class BagOptions:
         The robot's base frame (None: the odometry's child frame, else base_link).
     beam_width : float or None
         φ in radians for messages without a ``field_of_view`` (None: the method's).
+    no_echo : bool
+        Keep the bag's no-echo readings (REP 117 +Inf, or a range at max_range: nothing heard
+        up to max_range) as free-space readings (:meth:`RosbagLog.with_no_echo`); their rows
+        then count in the reading ids.
     """
 
     robot: str | None = None
@@ -94,6 +98,7 @@ class BagOptions:
     odom_topic: str | None = None
     frame: str | None = None
     beam_width: float | None = None
+    no_echo: bool = False
 
     @property
     def given(self) -> bool:
@@ -108,6 +113,11 @@ class BagOptions:
                            odom_topic=self.odom_topic, base_frame=self.frame,
                            beam_width=self.beam_width)
 
+    def readings(self, log: RosbagLog) -> ReadingBatch:
+        """The readings of a bag read with these options: the echoes, and with
+        :attr:`no_echo` the no-echo readings merged in time order."""
+        return log.with_no_echo() if self.no_echo else log.batch
+
 
 def read_log(path: str | Path, bag: BagOptions | None = None) -> ReadingBatch:
     """The readings of one log, whole: a ROS bag (:func:`is_bag`, read with ``bag``) or a
@@ -119,7 +129,8 @@ def read_log(path: str | Path, bag: BagOptions | None = None) -> ReadingBatch:
         A log (or robot file) that cannot be read: one line naming it.
     """
     if is_bag(path):
-        return (bag if bag is not None else BagOptions()).read(path).batch
+        options = bag if bag is not None else BagOptions()
+        return options.readings(options.read(path))
     return read_readings_csv(path)
 
 

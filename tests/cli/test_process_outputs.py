@@ -207,3 +207,44 @@ def test_missing_out_names_both_choices(tmp_path: Path,
     err: Any = capsys.readouterr().err
     assert "missing option '--out'" in err
     assert "--out-dir" in err
+
+
+def test_no_echo_readings_from_a_csv_or_a_bag_give_the_same_map(runs: Path,
+                                                                tmp_path: Path) -> None:
+    """Silent firings as free space, two ways: `simulate --no-echo` writes them into the CSV
+    (range inf, max_range), a bag always holds them (+Inf) and `process --no-echo` reads them.
+    Both give one map, with the same ids (rows of the merged log) and sources; and the silent
+    firings carve: the map differs from the echoes-only one."""
+    csv_log = tmp_path / "silent.csv"
+    assert main([*SIM, "--no-echo", "--out", str(csv_log)]) == 0
+    header, *rows = csv_log.read_text().splitlines()
+    assert header == "t,sensor,x,y,theta,range,beam_width,max_range"
+    silent = [row for row in rows if row.split(",")[5] == "inf"]
+    assert silent
+    assert all(float(row.split(",")[7]) > 0 for row in silent)
+    from_csv, from_bag, echoes_only = (tmp_path / n for n in ("a.csv", "b.csv", "c.csv"))
+    assert main(["process", str(csv_log), "--method", "carve", "--out", str(from_csv)]) == 0
+    assert main(["process", str(runs / "run.mcap"), "--no-echo", "--method", "carve",
+                 "--out", str(from_bag)]) == 0
+    assert main(["process", str(runs / "r.csv"), "--method", "carve",
+                 "--out", str(echoes_only)]) == 0
+
+    def ids_sources(path: Path) -> list[tuple[str, str]]:
+        return [(r.split(",")[0], r.split(",")[5]) for r in path.read_text().splitlines()[1:]]
+
+    assert ids_sources(from_csv) == ids_sources(from_bag)
+    assert len(ids_sources(from_csv)) > 0
+    assert ids_sources(from_csv) != ids_sources(echoes_only)
+
+
+def test_no_echo_is_refused_where_it_does_not_apply(runs: Path, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["process", str(runs / "r.csv"), "--no-echo", "--out",
+                 str(tmp_path / "m.csv")]) == 2
+    assert main([*SIM, "--no-echo", "--out", str(tmp_path / "x.mcap")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2
+    assert "--no-echo apply to ROS bag inputs only" in lines[0]
+    assert "--no-echo applies to a readings CSV output" in lines[1]
+    assert not (tmp_path / "m.csv").exists()
+    assert not (tmp_path / "x.mcap").exists()

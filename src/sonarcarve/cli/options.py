@@ -21,6 +21,7 @@ from sonarcarve.robot import load_robot
 __all__ = [
     "BAG_PANEL",
     "FrameOpt",
+    "NoEchoOpt",
     "OdomTopicOpt",
     "RangeTopicOpt",
     "RobotOpt",
@@ -54,14 +55,23 @@ FrameOpt = Annotated[str | None, typer.Option(
     rich_help_panel=BAG_PANEL)]
 
 
+NoEchoOpt = Annotated[bool, typer.Option(
+    "--no-echo",
+    help="Bag input: keep the no-echo readings (REP 117 +Inf: nothing heard up to max_range) "
+         "as free space: carving and the grids clear with them; they add no point.",
+    rich_help_panel=BAG_PANEL)]
+
+
 def bag_options(robot: str | None, range_topic: list[str] | None, odom_topic: str | None,
-                frame: str | None, beam_width: float | None = None) -> BagOptions:
+                frame: str | None, beam_width: float | None = None,
+                no_echo: bool = False) -> BagOptions:
     """The bag options as given on the command line; a ``--robot`` that does not load fails
     here, once, with its one-line error (not once per log)."""
     if robot is not None:
         load_robot(robot)
     return BagOptions(robot=robot, range_topics=tuple(range_topic or ()),
-                      odom_topic=odom_topic, frame=frame, beam_width=beam_width)
+                      odom_topic=odom_topic, frame=frame, beam_width=beam_width,
+                      no_echo=no_echo)
 
 
 def check_new_bag(path: Path, *, inputs: Iterable[Path] = (), label: str) -> Path:

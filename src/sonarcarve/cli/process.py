@@ -25,6 +25,7 @@ from sonarcarve.cli.app import app, console, err_console, progress, summary_tabl
 from sonarcarve.cli.grid import readings_extent
 from sonarcarve.cli.options import (
     FrameOpt,
+    NoEchoOpt,
     OdomTopicOpt,
     RangeTopicOpt,
     RobotOpt,
@@ -205,6 +206,7 @@ def process(
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
     frame: FrameOpt = None,
+    no_echo: NoEchoOpt = False,
     workers: _WorkersOpt = None,
     scheduler: _SchedulerOpt = None,
 ) -> int:
@@ -243,7 +245,7 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
     make_method(method, config)  # an unknown method fails before any file is touched
-    bag = bag_options(robot, range_topic, odom_topic, frame)
+    bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     if out_dir is not None:
         _check_fleet_options(out, map_rate)
         return _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
@@ -254,8 +256,8 @@ def process(
     source = _single_input(inputs, workers, scheduler)
     output = _output_kind(out)
     if not is_bag(source) and bag.given:
-        msg = (f"{source} is a readings CSV; --robot, --range-topic, --odom-topic and --frame "
-               "apply to ROS bag inputs only")
+        msg = (f"{source} is a readings CSV; --robot, --range-topic, --odom-topic, --frame "
+               "and --no-echo apply to ROS bag inputs only")
         raise ParameterError(msg)
     if output.label != "csv" and (reading_filter is not None or map_filter is not None):
         msg = (f"--out {out}: the filters (--max-range, --min-range, --jump-threshold, "
@@ -333,7 +335,7 @@ def _write_csv(job: _Job) -> list[tuple[str, str]]:
     line stops the run with nothing written, as the map is written only at the end."""
     sonar = job.sonar()
     if is_bag(job.source):
-        result = process_readings(job.bag.read(job.source).batch, sonar,
+        result = process_readings(job.bag.readings(job.bag.read(job.source)), sonar,
                                   reading_filter=job.reading_filter, map_filter=job.map_filter)
     else:
         result = _run(job.source, sonar, job.method, job.reading_filter, job.map_filter)
@@ -345,7 +347,7 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
     """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
     if is_bag(job.source):
         log = job.bag.read(job.source)
-        batch, (parent, child) = log.batch, log.report.odometry_frames
+        batch, (parent, child) = job.bag.readings(log), log.report.odometry_frames
         copy_from: Path | None = job.source
     else:
         batch, parent, child, copy_from = read_readings_csv(job.source), "", "", None
@@ -371,7 +373,9 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
 
 
 def _read_whole(job: _Job) -> ReadingBatch:
-    return job.bag.read(job.source).batch if is_bag(job.source) else read_readings_csv(job.source)
+    if is_bag(job.source):
+        return job.bag.readings(job.bag.read(job.source))
+    return read_readings_csv(job.source)
 
 
 #: Ending of ``--out`` (lower case; "" a rosbag2 folder) -> what is written there.

@@ -126,6 +126,11 @@ def simulate_command(
              "heard outside the nominal beam), spreading and absorption with range, mirror, "
              "diffuse and corner echoes against a noisy detection threshold (weak glancing "
              "walls are missed, near ones heard at wide angles).")] = "specular",
+    no_echo: Annotated[bool, typer.Option(
+        "--no-echo",
+        help="CSV output: also record the firings that heard nothing, as rows with range inf "
+             "and the robot's max_range (free space for the methods and grids). A bag always "
+             "holds them, as REP 117 +Inf Range messages.")] = False,
 ) -> None:
     """Simulate a sonar log with ground truth: drive a robot through a world, record echoes.
 
@@ -149,13 +154,18 @@ def simulate_command(
     _check_motion_options(path, explore_seconds)
     chosen = _physics(physics, clean)
     log_format = _log_format(out)
+    if no_echo and log_format.label != "readings":
+        msg = (f"--no-echo applies to a readings CSV output; the bag {out} always holds the "
+               "silent firings as +Inf Range messages (read them with process --no-echo)")
+        raise SimulateParameterError(msg)
     # Both outputs are checked before the (possibly long) simulation runs.
     truth = _check_outputs(out, log_format, [path, Path(world), Path(robot)])
     the_world = load_world(world)
     the_robot = load_robot(robot)
     trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
     drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
-    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift)
+    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift,
+                                     no_echo)
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
 
@@ -205,7 +215,7 @@ def _check_outputs(out: Path, log_format: LogFormat, sources: list[Path | None])
 
 def _simulate_with_progress(world: World, robot: RobotDescription, trajectory: Trajectory,
                             seed: int, physics: SonarPhysics,
-                            drift: Trajectory | None) -> Simulation:
+                            drift: Trajectory | None, no_echo: bool = False) -> Simulation:
     """:func:`~sonarcarve.sim.simulate.simulate`, with a progress bar for long trajectories.
 
     The bar appears from ``_PROGRESS_MIN_FIRINGS`` firings (one every
@@ -216,8 +226,9 @@ def _simulate_with_progress(world: World, robot: RobotDescription, trajectory: T
         with progress() as bar:
             task = bar.add_task(f"simulating {world.name}", total=firings)
             return simulate(world, robot, trajectory, seed, physics, drift,
-                            on_progress=lambda done, _: bar.update(task, completed=done))
-    return simulate(world, robot, trajectory, seed, physics, drift)
+                            on_progress=lambda done, _: bar.update(task, completed=done),
+                            no_echo=no_echo)
+    return simulate(world, robot, trajectory, seed, physics, drift, no_echo=no_echo)
 
 
 def _trajectory(world: World, path: Path | None, explore_seconds: float | None, seed: int,
