@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: demo test lint experiments bench clean
+.PHONY: demo test lint experiments bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -26,11 +26,14 @@ test: $(TEST_STAMP)  ## lint, type-check, check the import contracts, run the te
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest -n 2 -m "not slow" -q
+	$(BIN)/python -m pytest -n 2 -m "not slow and not fuzz" -q
 
 experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESULTS.md numbers and docs/figures
 	$(BIN)/sonarcarve experiments --out docs/experiments --figures docs/figures --results-md docs/RESULTS.md
 	$(BIN)/python -m pytest -m slow -q
+
+fuzz: $(TEST_STAMP)  ## thousands of mutated inputs per family through the real CLI (no crash, hang, leftover or changed file)
+	FUZZ_CASES=5000 $(BIN)/python -m pytest -n 2 -m fuzz -q tests/fuzz
 
 bench: $(STAMP)  ## every benchmark: throughput, simulator speed, import time, parameter choices (tables for docs/RESULTS.md)
 	$(BIN)/python benchmarks/import_time.py

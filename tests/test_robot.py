@@ -174,11 +174,57 @@ def test_robot_file_problems_use_the_shared_wording(tmp_path: Path) -> None:
 
 def test_firing_schedule_refuses_more_than_max_firings() -> None:
     robot = load_robot("scout2")  # fires every 0.04 s
-    # One week: 604,800 s / 0.04 s = 15,120,000 intervals, 15,120,001 firings > 1e7.
+    # One week: 604,800 s / 0.04 s = 15,120,000 intervals, 15,120,001 firings > 1e6.
     with pytest.raises(RobotError) as info:
         robot.firing_schedule(0.0, 604_800.0)
     assert str(info.value) == ("scout2: firing every 0.04 s from t = 0 s to 604800 s takes "
-                               "1.512e+07 firings, more than the limit of 10,000,000 "
+                               "1.512e+07 firings, more than the limit of 1,000,000 "
                                "(MAX_FIRINGS)")
     with pytest.raises(RobotError, match="MAX_FIRINGS"):
         robot.firing_schedule(0.0, math.inf)
+
+
+@pytest.mark.parametrize(
+    ("line", "field", "problem"),
+    [
+        ("firing_period: 1.0e-9", "firing_period", "must lie in [0.0001, 3600] s, got 1e-09"),
+        ("firing_period: 1.0e+9", "firing_period", "must lie in [0.0001, 3600] s, got 1e+09"),
+        ("max_range: 1.0e+300", "max_range", "must be at most 1000 m, got 1e+300"),
+        ("firing_order: [99999999999999999999, 1]", "firing_order",
+         "must list sensor indices in 0..1"),
+    ],
+)
+def test_absurd_numbers_get_one_line_with_the_documented_range(
+        tmp_path: Path, line: str, field: str, problem: str) -> None:
+    key = line.split(":")[0]
+    text = "\n".join(row for row in GOOD_YAML.splitlines() if not row.startswith(key + ":"))
+    path = tmp_path / "r.yaml"
+    path.write_text(text + "\n" + line + "\n")
+    with pytest.raises(RobotError) as info:
+        load_robot(path)
+    assert str(info.value) == f"{path}: field {field!r} {problem}"
+
+
+def test_firing_order_longer_than_any_ring_is_refused_before_it_is_built(tmp_path: Path) -> None:
+    path = tmp_path / "r.yaml"
+    path.write_text(GOOD_YAML + "firing_order: [" + "0, " * 2000 + "1]\n")
+    with pytest.raises(RobotError, match="has 2001 entries, more than the limit of 1024"):
+        load_robot(path)
+
+
+def test_a_yaml_bomb_is_refused_fast(tmp_path: Path) -> None:
+    levels = "".join(f"{k}: &{k} [{', '.join([f'*{p}'] * 9)}]\n"
+                     for p, k in zip("abcdefgh", "bcdefghi", strict=True))
+    path = tmp_path / "bomb.yaml"
+    path.write_text('a: &a ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]\n'
+                    + levels + "name: *i\n")
+    with pytest.raises(RobotError) as info:
+        load_robot(path)
+    assert str(info.value) == f"{path}: invalid YAML (aliases expand to more than 100,000 nodes)"
+
+
+def test_a_robot_file_larger_than_any_ring_is_refused_unread(tmp_path: Path) -> None:
+    path = tmp_path / "r.yaml"
+    path.write_text(GOOD_YAML + "firing_order: [" + "0, " * 2_000_000 + "1]\n")
+    with pytest.raises(RobotError, match="larger than the limit of 262,144 bytes"):
+        load_robot(path)

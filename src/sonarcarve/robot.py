@@ -31,12 +31,15 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.io.errors import finite_number, parse_yaml, read_text
+from sonarcarve.io.errors import MAX_YAML_BYTES, finite_number, parse_yaml, read_text, shorten
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "BUILTIN_ROBOTS",
+    "FIRING_PERIOD_RANGE",
     "MAX_FIRINGS",
+    "MAX_LENGTH",
+    "MAX_SENSORS",
     "RobotDescription",
     "RobotError",
     "load_robot",
@@ -46,9 +49,16 @@ __all__ = [
 
 #: Names of the robots shipped with the package (``sonarcarve/robots/<name>.yaml``).
 BUILTIN_ROBOTS = ("p3dx-front", "roboND-8", "scout2")
-#: Most firings :meth:`RobotDescription.firing_schedule` makes (80 MB of times and sensors;
-#: 111 hours of a ring firing every 0.04 s).
-MAX_FIRINGS = 10_000_000
+#: Most firings :meth:`RobotDescription.firing_schedule` makes: 11 hours of a ring firing every
+#: 0.04 s. The simulator holds every ray of every firing at once (31 rays, about 1 kB a
+#: firing), so this bounds a simulation's memory to about a gigabyte.
+MAX_FIRINGS = 1_000_000
+#: Most sensors on one ring (real rings have 8 to 48).
+MAX_SENSORS = 1024
+#: Documented ranges of a robot's numbers, checked when a description is built (file or API):
+#: firing period in seconds, lengths in metres (ranges, body radius, sensor mounts).
+FIRING_PERIOD_RANGE = (1e-4, 3600.0)
+MAX_LENGTH = 1000.0
 
 _TOP_FIELDS = {
     "name", "description", "robot_radius", "range_resolution", "min_range", "max_range",
@@ -119,8 +129,14 @@ class RobotDescription:
         for field in ("mount_y", "bearing", "beam_width"):
             if getattr(self, field).shape != (n,):
                 _fail(where, field, f"has {getattr(self, field).size} values, expected {n}")
+        if n > MAX_SENSORS:
+            _fail(where, "sensors", f"has {n} sensors, more than the limit of {MAX_SENSORS}")
         if not np.all(np.isfinite(np.concatenate([self.mount_x, self.mount_y, self.bearing]))):
             _fail(where, "sensors", "positions and bearings must be finite")
+        if np.any(np.abs(np.concatenate([self.mount_x, self.mount_y])) > MAX_LENGTH):
+            _fail(where, "sensors", f"positions must lie within ±{MAX_LENGTH:g} m of the centre")
+        if np.any(np.abs(self.bearing) > 2.0 * math.pi):
+            _fail(where, "sensors", "bearings must lie in [-360, 360] degrees")
         if not np.all((self.beam_width > 0.0) & (self.beam_width < math.pi)):
             _fail(where, "beam_width", "must lie in (0, 180) degrees")
         if order.size == 0 or np.any((order < 0) | (order >= n)):
@@ -131,6 +147,14 @@ class RobotDescription:
         _check_positive(where, "min_range", self.min_range, strict=False)
         _check_positive(where, "max_range", self.max_range, strict=True)
         _check_positive(where, "robot_radius", self.robot_radius, strict=False)
+        low, high = FIRING_PERIOD_RANGE
+        if not low <= self.firing_period <= high:
+            _fail(where, "firing_period", f"must lie in [{low:g}, {high:g}] s, got "
+                                          f"{self.firing_period:g}")
+        for field in ("range_resolution", "min_range", "max_range", "robot_radius"):
+            if getattr(self, field) > MAX_LENGTH:
+                _fail(where, field, f"must be at most {MAX_LENGTH:g} m, got "
+                                    f"{getattr(self, field):g}")
         if not self.min_range < self.max_range:
             _fail(where, "min_range", f"{self.min_range} must be below max_range {self.max_range}")
 
@@ -218,7 +242,7 @@ def load_robot(spec: str | Path) -> RobotDescription:
         msg = (f"unknown robot {text_spec!r}; built-in robots: {', '.join(BUILTIN_ROBOTS)} "
                "(or give a YAML file)")
         raise RobotError(msg)
-    return parse_robot(read_text(path, RobotError), str(path))
+    return parse_robot(read_text(path, RobotError, MAX_YAML_BYTES), str(path))
 
 
 def parse_robot(text: str, source: str = "robot") -> RobotDescription:
@@ -229,10 +253,14 @@ def parse_robot(text: str, source: str = "robot") -> RobotDescription:
         raise RobotError(msg)
     unknown = sorted(set(map(str, data)) - _TOP_FIELDS)
     if unknown:
-        _fail(source, unknown[0], f"unknown field (known: {', '.join(sorted(_TOP_FIELDS))})")
+        _fail(source, shorten(unknown[0], 40),
+              f"unknown field (known: {', '.join(sorted(_TOP_FIELDS))})")
     sensors = data.get("sensors")
     if not isinstance(sensors, list) or not sensors:
         _fail(source, "sensors", "must be a non-empty list of {x, y, bearing_deg}")
+    if len(sensors) > MAX_SENSORS:
+        _fail(source, "sensors", f"has {len(sensors)} sensors, more than the limit of "
+                                 f"{MAX_SENSORS}")
     default_width = _number(source, "beam_width_deg", data.get("beam_width_deg", 22.5))
     mounts = [_sensor(source, i, entry, default_width) for i, entry in enumerate(sensors)]
     order = data.get("firing_order", list(range(len(mounts))))
@@ -240,6 +268,11 @@ def parse_robot(text: str, source: str = "robot") -> RobotDescription:
         isinstance(i, int) and not isinstance(i, bool) for i in order
     ):
         _fail(source, "firing_order", "must be a list of sensor indices")
+    if len(order) > MAX_SENSORS:
+        _fail(source, "firing_order", f"has {len(order)} entries, more than the limit of "
+                                      f"{MAX_SENSORS}")
+    if any(not 0 <= i < len(mounts) for i in order):  # before numpy, which overflows on 10**20
+        _fail(source, "firing_order", f"must list sensor indices in 0..{len(mounts) - 1}")
     fields = {name: _number(source, name, _required(source, data, name)) for name in
               ("robot_radius", "range_resolution", "min_range", "max_range", "firing_period")}
     return RobotDescription(
@@ -262,7 +295,7 @@ def _sensor(source: str, index: int, entry: object,
         _fail(source, field, "must be a mapping {x, y, bearing_deg[, beam_width_deg]}")
     unknown = sorted(set(map(str, entry)) - _SENSOR_FIELDS)
     if unknown:
-        _fail(source, f"{field}.{unknown[0]}",
+        _fail(source, f"{field}.{shorten(unknown[0], 40)}",
               f"unknown field (known: {', '.join(sorted(_SENSOR_FIELDS))})")
     values = [_number(source, f"{field}.{name}", _required(source, entry, name, field))
               for name in ("x", "y", "bearing_deg")]
@@ -282,8 +315,7 @@ def _required(source: str, data: dict[Any, Any], name: str, parent: str = "") ->
 def _number(source: str, field: str, value: object) -> float:
     number = finite_number(value)
     if number is None:
-        text = repr(value)
-        _fail(source, field, f"must be a finite number, got {text[:40]}")
+        _fail(source, field, f"must be a finite number, got {shorten(repr(value), 40)}")
     return number
 
 

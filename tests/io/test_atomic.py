@@ -135,3 +135,72 @@ def test_check_and_make_output_dir(tmp_path: Path) -> None:
             check_output_dir(path, label="--out")
     assert make_output_dir(nested).is_dir()
     assert make_output_dir(nested).is_dir()  # already there: fine
+
+
+@pytest.mark.parametrize("check", ["check", "write"])
+def test_a_trailing_slash_a_dangling_link_or_a_name_too_long_change_nothing(
+        tmp_path: Path, check: str) -> None:
+    old = tmp_path / "old.csv"
+    old.write_text("old\n")
+    dangling = tmp_path / "dangling.csv"
+    dangling.symlink_to("missing.csv")
+    cases = {
+        f"{old}/": "ends in '/', expected a file name",
+        str(dangling): "is a symbolic link to missing.csv, which does not exist",
+        str(tmp_path / ("x" * 300 + ".csv")): "File name too long",
+    }
+    for path, problem in cases.items():
+        with pytest.raises(OutputError) as caught:
+            _check_or_write(check, path)
+        assert problem in str(caught.value)
+        assert "\n" not in str(caught.value)
+    assert old.read_text() == "old\n"
+    assert dangling.is_symlink()
+    assert _names(tmp_path) == ["dangling.csv", "old.csv"]
+
+
+def _check_or_write(check: str, path: str) -> None:
+    if check == "check":
+        check_output_file(path)
+        return
+    with atomic_text(path) as handle:
+        handle.write("new\n")
+
+
+def test_a_link_to_a_file_is_followed_and_stays_a_link(tmp_path: Path) -> None:
+    real = tmp_path / "real.csv"
+    real.write_text("old\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to("real.csv")
+    assert check_output_file(link) == real
+    with atomic_text(link) as handle:
+        handle.write("new\n")
+    assert link.is_symlink()
+    assert real.read_text() == "new\n"
+
+
+def test_the_next_write_removes_temporaries_of_dead_writers_only(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    target = tmp_path / "out.csv"
+    # A pid that has certainly exited: a child we waited for.
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    stale = tmp_path / f".out.csv.sc-{dead}-abcd1234.tmp"
+    stale.write_text("half a file")
+    live = tmp_path / f".out.csv.sc-{os.getppid()}-abcd1234.tmp"  # a running process
+    live.write_text("being written")
+    other = tmp_path / f".other.csv.sc-{dead}-abcd1234.tmp"  # another target's
+    other.write_text("x")
+    with atomic_text(target) as handle:
+        handle.write("new\n")
+    assert _names(tmp_path) == sorted([live.name, other.name, "out.csv"])
+
+
+def test_a_long_target_name_gets_a_temporary_name_that_fits(tmp_path: Path) -> None:
+    target = tmp_path / ("m" * 240 + ".csv")
+    with atomic_text(target) as handle:
+        handle.write("x\n")
+    assert target.read_text() == "x\n"

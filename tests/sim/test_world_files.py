@@ -184,7 +184,11 @@ def test_ros_map_bad_files(tmp_path: Path) -> None:
         "just text": "top level must be a mapping",
         yaml.safe_dump({"image": "map.pgm", "origin": [0, 0, 0]}): "missing key 'resolution'",
         yaml.safe_dump({"image": "map.pgm", "resolution": -1, "origin": [0, 0, 0]}):
-            "resolution must be > 0",
+            "resolution must lie in (0, 100] metres per pixel, got -1",
+        yaml.safe_dump({"image": "map.pgm", "resolution": 1e300, "origin": [0, 0, 0]}):
+            "resolution must lie in (0, 100] metres per pixel, got 1e+300",
+        yaml.safe_dump({"image": "map.pgm", "resolution": 0.1, "origin": [1e300, 0, 0]}):
+            "origin must lie within ±100000 m",
         yaml.safe_dump({"image": "map.pgm", "resolution": ".nan", "origin": [0, 0, 0]}):
             "resolution must be a finite number",
         yaml.safe_dump({"image": "map.pgm", "resolution": 0.1, "origin": [0, "a"]}):
@@ -223,3 +227,26 @@ def test_a_ros_map_without_occupied_cells_has_no_walls(tmp_path: Path) -> None:
                                "(occupied_thresh 0.65, negate 0, mode trinary)")
 
 
+
+
+def test_world_json_with_absurd_coordinates_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "w.json"
+    path.write_text('{"segments": [[0, 0, 1e300, 1e300], [0, 1, 1, 1]]}')
+    with pytest.raises(WorldError) as info:
+        load_world(path)
+    assert str(info.value) == (f"{path}: segments[0] [0, 0, 1e+300, 1e+300] lies beyond "
+                               "±100000 m (MAX_WORLD_COORDINATE) from the origin in x or y")
+
+
+def test_world_json_yaml_bomb_and_size_cap(tmp_path: Path) -> None:
+    bomb = tmp_path / "map.yaml"
+    levels = "".join(f"{k}: &{k} [{', '.join([f'*{p}'] * 9)}]\n"
+                     for p, k in zip("abcdefgh", "bcdefghi", strict=True))
+    bomb.write_text("a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + levels + "image: *i\n")
+    with pytest.raises(WorldError, match=r"aliases expand to more than 100,000 nodes\)$"):
+        load_world(bomb)
+    big = tmp_path / "big.json"
+    with big.open("w") as handle:
+        handle.write('{"segments": [' + "[0, 0, 1, 1], " * 1_200_000 + "[0, 0, 1, 1]]}")
+    with pytest.raises(WorldError, match="larger than the limit of 16,777,216 bytes"):
+        load_world(big)

@@ -9,13 +9,16 @@
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
 type names (``INTEGER``, ``FLOAT``) instead of ``<float>``/``<list[str]>``, flags show no type,
-and float defaults print without trailing zeros (``20`` for 20.0).
+and float defaults print without trailing zeros (``20`` for 20.0). Every parameter refuses a
+value ending in ``/`` that names an existing file (``--out map.csv/``): the path type would drop
+the slash and the command would replace the file.
 """
 
 from __future__ import annotations
 
 import importlib
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
 
 import typer
@@ -48,8 +51,29 @@ def lazy_command(name: str, module: str, summary: str) -> None:
     LAZY_COMMANDS[name] = (module, summary)
 
 
+def _refuse_file_with_slash(param: Any, ctx: Any, value: Any) -> None:
+    """Refuse ``out.csv/`` when ``out.csv`` is a file: the path type would drop the slash.
+
+    pathlib turns ``out.csv/`` into ``out.csv``, so a command would read or replace the file
+    the user wrote as a folder. A name ending in ``/`` must be a folder, or not exist yet.
+    """
+    for raw in value if isinstance(value, list | tuple) else [value]:
+        if isinstance(raw, str) and raw.endswith("/") and raw.rstrip("/"):
+            try:
+                names_a_file = Path(raw).exists() and not Path(raw).is_dir()
+            except OSError:
+                names_a_file = False
+            if names_a_file:
+                msg = f"{raw!r} ends in '/' but {raw.rstrip('/')} is a file, not a folder"
+                raise typer.BadParameter(msg, ctx=ctx, param=param)
+
+
 class _Argument(TyperArgument):
     """An argument whose usage reads ``READINGS.csv`` / ``[FOLDER]``, with no type column."""
+
+    def process_value(self, ctx: Any, value: Any) -> Any:
+        _refuse_file_with_slash(self, ctx, value)
+        return super().process_value(ctx, value)
 
     def _usage_display_name(self) -> str:
         name = self.display_name_raw if self.required else f"[{self.display_name_raw}]"
@@ -65,6 +89,10 @@ _TYPE_NAMES = {"int": "INTEGER", "float": "FLOAT", "str": "TEXT", "Path": "PATH"
 
 class _Option(TyperOption):
     """An option showing its metavar (or ``FLOAT``...), nothing for a flag, ``20`` for 20.0."""
+
+    def process_value(self, ctx: Any, value: Any) -> Any:
+        _refuse_file_with_slash(self, ctx, value)
+        return super().process_value(ctx, value)
 
     def display_type_rich(self, ctx: Any) -> str | None:
         if self.metavar is not None:

@@ -128,9 +128,17 @@ def _plain_words(detail: dict[str, Any]) -> str | None:
     return f"{detail['input']!r} {problem}"
 
 
+#: Longest error line printed, characters: a message quoting a 100 kB header stays readable.
+MAX_MESSAGE_CHARS = 300
+
+
 def _error(message: str) -> None:
-    # One physical line, whatever the message holds.
-    print(f"sonarcarve: error: {' '.join(message.splitlines())}", file=sys.stderr)
+    # One physical line, whatever the message holds, cut in the middle if it quotes too much.
+    line = " ".join(message.splitlines())
+    if len(line) > MAX_MESSAGE_CHARS:
+        keep = MAX_MESSAGE_CHARS - 5
+        line = f"{line[:keep - keep // 3]} ... {line[len(line) - keep // 3:]}"
+    print(f"sonarcarve: error: {line}", file=sys.stderr)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -7,12 +7,22 @@ one line *before* it spends minutes computing what it would write there.
 
 Every failure is an :class:`~sonarcarve.io.errors.OutputError` with a one-line message naming
 the path and the reason. Missing parent directories of a file are never created: a typo in a
-path is an error, not a new folder.
+path is an error, not a new folder. A file name ending in ``/`` is refused (``out.csv/`` names a
+folder, and pathlib would silently drop the slash), and so is a symbolic link to nothing; a link
+to an existing file is followed: the file it points to is replaced, the link stays.
+
+Temporary files are named ``.NAME.sc-PID-XXXXXXXX.SUFFIX`` beside the target (``NAME`` cut to 100
+characters so the temporary name fits where the target's does). A process killed while writing
+(``kill -9``, a power cut) cannot remove its own; so every write to a target first removes the
+temporaries of that target whose process ``PID`` is no longer running (:func:`remove_stale`).
+A live writer's temporary is never touched, so two commands writing beside each other are safe.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 import tempfile
 from collections.abc import Iterable, Iterator
 from contextlib import ExitStack, contextmanager
@@ -28,7 +38,13 @@ __all__ = [
     "check_output_dir",
     "check_output_file",
     "make_output_dir",
+    "remove_stale",
 ]
+
+#: Characters of the target's name kept in its temporary file's name.
+_NAME_KEEP = 100
+#: What marks a temporary file of ours after ``.NAME.``: ``sc-PID-``.
+_TEMP_TAG = "sc-"
 
 
 def check_output_file(path: str | Path, *, inputs: Iterable[str | Path] = (),
@@ -55,12 +71,11 @@ def check_output_file(path: str | Path, *, inputs: Iterable[str | Path] = (),
     OutputError
         One line naming the path and the reason.
     """
-    target = Path(path)
-    where = label if label is not None else str(target)
+    where = label if label is not None else str(path)
     if str(path).strip() in ("", "."):  # typer turns an empty path into "."
         msg = f"{where}: empty, expected a file name"
         raise OutputError(msg)
-    _check_file_target(target, where)
+    target = _file_target(path, where)
     for source in inputs:
         if _same_file(target, Path(source)):
             msg = f"{where}: is the input file {source}; write the output to another file"
@@ -135,11 +150,11 @@ def atomic_path(path: str | Path, suffix: str = "") -> Iterator[Path]:
         new files, or an :class:`OSError` occurred while writing or renaming (the message names
         ``path`` and the reason; the original error is chained).
     """
-    target = Path(path)
-    _check_file_target(target, f"cannot write {target}")
+    target = _file_target(path, f"cannot write {path}")
+    remove_stale(target)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix or ".tmp",
-                                        dir=target.parent)
+        fd, tmp_name = tempfile.mkstemp(prefix=_temp_prefix(target) + f"{os.getpid()}-",
+                                        suffix=suffix or ".tmp", dir=_parent(target))
     except OSError as err:
         msg = f"cannot write {target}: cannot create a file in {_parent(target)} ({_reason(err)})"
         raise OutputError(msg) from err
@@ -174,9 +189,7 @@ def atomic_paths(*paths: str | Path) -> Iterator[tuple[Path, ...]]:
     OutputError
         As :func:`atomic_path`, for any of the targets.
     """
-    targets = [Path(path) for path in paths]
-    for target in targets:
-        _check_file_target(target, f"cannot write {target}")
+    targets = [_file_target(path, f"cannot write {path}") for path in paths]
     with ExitStack() as stack:
         temps = tuple(stack.enter_context(atomic_path(target, suffix=target.suffix))
                       for target in targets)
@@ -204,6 +217,75 @@ def atomic_text(path: str | Path) -> Iterator[IO[str]]:
     """
     with atomic_path(path) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         yield handle
+
+
+def remove_stale(path: str | Path) -> list[Path]:
+    """Remove the temporary files of ``path`` left by writers that are no longer running.
+
+    Only files named as :func:`atomic_path` names them (``.NAME.sc-PID-XXXXXXXX.SUFFIX``)
+    whose ``PID`` is not a running process are removed; a live writer's file stays. Never
+    fails: a file that cannot be removed is left for the next write.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    target = Path(path)
+    prefix = _temp_prefix(target)
+    pattern = re.compile(re.escape(prefix) + r"(\d+)-[A-Za-z0-9_]+")
+    removed = []
+    try:
+        entries = list(os.scandir(_parent(target)))
+    except OSError:
+        return []
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if match is None or _running(int(match.group(1))):
+            continue
+        with contextlib.suppress(OSError):
+            Path(entry.path).unlink()
+            removed.append(Path(entry.path))
+    return removed
+
+
+def _temp_prefix(target: Path) -> str:
+    return f".{target.name[:_NAME_KEEP]}.{_TEMP_TAG}"
+
+
+def _running(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, OSError):
+        return True  # someone else's live process (or a number we cannot judge): leave it
+    return True
+
+
+def _file_target(path: str | Path, where: str) -> Path:
+    """``path`` checked as a file to write, a link to a file followed; else one OutputError."""
+    text = os.fspath(path)
+    if text.endswith(("/", os.sep)) or (os.altsep and text.endswith(os.altsep)):
+        msg = f"{where}: ends in '/', expected a file name"
+        raise OutputError(msg)
+    target = Path(text)
+    try:
+        if target.is_symlink():
+            if not target.exists():
+                msg = (f"{where}: is a symbolic link to {target.readlink()}, which does not "
+                       "exist")
+                raise OutputError(msg)
+            target = Path(os.path.realpath(target))
+        _check_file_target(target, where)
+    except OutputError:
+        raise
+    except OSError as err:  # a name longer than the file system allows, a loop of links, ...
+        msg = f"{where}: {_reason(err)}"
+        raise OutputError(msg) from None
+    return target
 
 
 def _check_file_target(target: Path, where: str) -> None:

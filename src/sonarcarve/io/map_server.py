@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, NoReturn
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.io.atomic import atomic_paths
-from sonarcarve.io.errors import InputError, OutputError, finite_number, load_yaml
+from sonarcarve.io.errors import InputError, OutputError, finite_number, load_yaml, shorten
 
 __all__ = [
     "FREE_THRESH",
@@ -43,6 +43,8 @@ __all__ = [
 PIXEL_OCCUPIED = 0
 PIXEL_FREE = 254
 PIXEL_UNKNOWN = 205
+#: Largest PGM image read back, bytes (a 16384 x 16384 grid).
+MAX_PGM_BYTES = 2**28 + 64
 #: Thresholds written to the YAML (map_saver's): they read the three pixels back exactly.
 OCCUPIED_THRESH = 0.65
 FREE_THRESH = 0.196
@@ -158,9 +160,35 @@ def write_map_server(cells: npt.ArrayLike, resolution: float, origin: tuple[floa
     return yaml_path, pgm_path
 
 
-def _fail(path: Path, problem: str) -> None:
+def _fail(path: Path, problem: str) -> NoReturn:
     msg = f"{path}: {problem}"
     raise InputError(msg)
+
+
+def _read_pgm(yaml_path: Path, image: str) -> npt.NDArray[np.uint8]:
+    """The pixels of a binary 8-bit PGM (P5, maxval 255), shape (rows, cols), top row first."""
+    where = f"image {shorten(image, 120)}"
+    image_path = yaml_path.parent / image
+    try:
+        with image_path.open("rb") as handle:
+            data = handle.read(MAX_PGM_BYTES + 1)  # bounded: a device or a huge file fails
+    except FileNotFoundError:
+        _fail(yaml_path, f"{where}: no such file")
+    except IsADirectoryError:
+        _fail(yaml_path, f"{where}: is a directory")
+    except OSError as err:
+        _fail(yaml_path, f"{where}: cannot read ({err.strerror or err})")
+    if len(data) > MAX_PGM_BYTES:
+        _fail(yaml_path, f"{where}: larger than the limit of {MAX_PGM_BYTES:,} bytes")
+    parts = data.split(maxsplit=4)
+    if (len(parts) < 5 or parts[0] != b"P5" or parts[3] != b"255"
+            or not (parts[1].isdigit() and parts[2].isdigit())):
+        _fail(yaml_path, f"{where}: not a binary 8-bit PGM")
+    cols, rows = int(parts[1]), int(parts[2])
+    body = data[len(data) - rows * cols:] if rows * cols else b""
+    if rows * cols > len(data) or len(body) != rows * cols:
+        _fail(yaml_path, f"{where}: {cols} x {rows} pixels but {len(data):,} bytes (truncated?)")
+    return np.frombuffer(body, dtype=np.uint8).reshape(rows, cols)
 
 
 def read_map_server(path: str | Path) -> MapServerMap:
@@ -181,20 +209,16 @@ def read_map_server(path: str | Path) -> MapServerMap:
             _fail(yaml_path, f"missing key {key!r}")
     origin = meta["origin"]
     if not isinstance(origin, list) or len(origin) != 3:
-        _fail(yaml_path, f"origin must be [x, y, yaw], got {origin!r}")
+        _fail(yaml_path, f"origin must be [x, y, yaw], got {shorten(repr(origin), 40)}")
     numbers = [finite_number(v) for v in (meta["resolution"], meta["occupied_thresh"],
                                           meta["free_thresh"], *origin)]
     if any(v is None for v in numbers):
         _fail(yaml_path, "resolution, thresholds and origin must be finite numbers")
     h, occ, free, ox, oy, yaw = (float(v) for v in numbers)  # type: ignore[arg-type]
+    if not h > 0.0:
+        _fail(yaml_path, f"resolution must be > 0, got {h:g}")
     image = str(meta["image"])
-    data = (yaml_path.parent / image).read_bytes()
-    parts = data.split(maxsplit=4)
-    if len(parts) < 4 or parts[0] != b"P5" or parts[3] != b"255":
-        _fail(yaml_path, f"image {image}: not a binary 8-bit PGM")
-    cols, rows = int(parts[1]), int(parts[2])
-    body = data[len(data) - rows * cols:]
-    pixels = np.frombuffer(body, dtype=np.uint8).reshape(rows, cols)[::-1]
+    pixels = _read_pgm(yaml_path, image)[::-1]
     cells = np.full(pixels.shape, _UNKNOWN, dtype=np.int8)
     cells[pixels == PIXEL_OCCUPIED] = _OCCUPIED
     cells[pixels == PIXEL_FREE] = _FREE

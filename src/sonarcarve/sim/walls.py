@@ -25,7 +25,16 @@ import numpy.typing as npt
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
-__all__ = ["World", "WorldError", "check_seed", "geometry_problem"]
+__all__ = ["MAX_WALLS", "MAX_WORLD_COORDINATE", "World", "WorldError", "check_seed",
+           "geometry_problem"]
+
+#: Largest |x| or |y| of a wall, tour waypoint or opening, metres: 100 km, as for waypoints
+#: (:data:`sonarcarve.sim.motion.MAX_COORDINATE`); any building fits, and squared distances
+#: stay far from overflow and keep millimetres exact.
+MAX_WORLD_COORDINATE = 1e5
+#: Most walls in a world: a large building traced from a 4096 x 4096 map has a few hundred
+#: thousand; ray casting cost grows with the count.
+MAX_WALLS = 1_000_000
 
 
 #: Ray/wall (or point/wall) pairs evaluated at once; bounds the temporaries to a few tens of MB.
@@ -127,6 +136,10 @@ class World:
             raise WorldError(msg)
         if not np.all(np.isfinite(openings)):
             msg = f"{self.name}: opening coordinates must be finite"
+            raise WorldError(msg)
+        if np.any(np.abs(openings) > MAX_WORLD_COORDINATE):
+            msg = (f"{self.name}: opening coordinates must lie within "
+                   f"±{MAX_WORLD_COORDINATE:g} m (MAX_WORLD_COORDINATE)")
             raise WorldError(msg)
         object.__setattr__(self, "openings", openings)
         problem = geometry_problem(seg, self.tour, against_walls=False)
@@ -282,10 +295,21 @@ def geometry_problem(segments: FloatArray, tour: FloatArray | None, *,
                       against_walls: bool = True) -> str | None:
     """What is wrong with the walls and the tour, as the tail of a message, or None.
 
-    Checks that no wall has zero length and that a tour has two distinct waypoints; with
-    ``against_walls`` (and walls to check against), also that the tour stays inside the walls'
-    bounding box and meets no wall.
+    Checks that there are at most :data:`MAX_WALLS` walls, that every coordinate lies within
+    ±:data:`MAX_WORLD_COORDINATE` metres, that no wall has zero length and that a tour has two
+    distinct waypoints; with ``against_walls`` (and walls to check against), also that the tour
+    stays inside the walls' bounding box and meets no wall.
     """
+    if segments.shape[0] > MAX_WALLS:
+        return f"{segments.shape[0]:,} walls, more than the limit of {MAX_WALLS:,} (MAX_WALLS)"
+    for key, points in (("segments", segments), ("tour", tour)):
+        if points is None:
+            continue
+        far = np.flatnonzero(np.any(np.abs(points) > MAX_WORLD_COORDINATE, axis=1))
+        if far.size:
+            row = ", ".join(f"{v:g}" for v in points[far[0]])
+            return (f"{key}[{far[0]}] [{row}] lies beyond ±{MAX_WORLD_COORDINATE:g} m "
+                    "(MAX_WORLD_COORDINATE) from the origin in x or y")
     lengths = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
     short = np.flatnonzero(lengths <= _TINY)
     if short.size:

@@ -26,7 +26,15 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.io.errors import InputError, finite_number, parse_json, parse_number, read_text
+from sonarcarve.io.errors import (
+    MAX_CONFIG_BYTES,
+    InputError,
+    finite_number,
+    parse_json,
+    parse_number,
+    read_text,
+    shorten,
+)
 from sonarcarve.sim.motion import MAX_COORDINATE
 
 __all__ = ["read_waypoints"]
@@ -48,7 +56,7 @@ def read_waypoints(path: str | Path) -> npt.NDArray[np.float64]:
     if suffix not in {".csv", ".json"}:
         msg = f"{path}: waypoint files must end in .csv (header x,y) or .json ([[x, y], ...])"
         raise InputError(msg)
-    text = read_text(path, InputError)
+    text = read_text(path, InputError, MAX_CONFIG_BYTES)
     points = _from_csv(path, text) if suffix == ".csv" else _from_json(path, text)
     if points.shape[0] < 2:
         msg = f"{path}: a path needs at least 2 waypoints, found {points.shape[0]}"
@@ -70,7 +78,8 @@ def _from_csv(path: Path, text: str) -> npt.NDArray[np.float64]:
     header_line, header = rows[0]
     names = [cell.strip() for cell in header]
     if "x" not in names or "y" not in names:
-        msg = f"{path}: line {header_line}, header must name columns x and y, got {','.join(names)}"
+        msg = (f"{path}: line {header_line}, header must name columns x and y, got "
+               f"{shorten(','.join(names))}")
         raise InputError(msg)
     ix, iy = names.index("x"), names.index("y")
     points = [[_cell(path, number, row, ix, "x"), _cell(path, number, row, iy, "y")]
@@ -83,7 +92,7 @@ def _cell(path: Path, line: int, row: list[str], index: int, name: str) -> float
     value = parse_number(text, f"{path}: line {line}", name)
     if abs(value) > MAX_COORDINATE:
         msg = (f"{path}: line {line}, column {name!r} must lie within ±{MAX_COORDINATE:g} m, "
-               f"got {text!r}")
+               f"got {shorten(repr(text))}")
         raise InputError(msg)
     return value
 
@@ -110,5 +119,4 @@ def _from_json(path: Path, text: str) -> npt.NDArray[np.float64]:
 
 
 def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    return shorten(repr(value), 60)

@@ -20,11 +20,24 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.io.atomic import atomic_text
-from sonarcarve.io.errors import finite_number, load_json, load_yaml
-from sonarcarve.sim.walls import World, WorldError, geometry_problem
+from sonarcarve.io.errors import finite_number, load_json, load_yaml, shorten
+from sonarcarve.sim.walls import MAX_WORLD_COORDINATE, World, WorldError, geometry_problem
 from sonarcarve.typing import BoolArray, FloatArray
 
-__all__ = ["read_ros_map", "read_world_json", "segments_from_occupancy", "write_world_json"]
+__all__ = [
+    "MAX_MAP_PIXELS",
+    "MAX_MAP_RESOLUTION",
+    "read_ros_map",
+    "read_world_json",
+    "segments_from_occupancy",
+    "write_world_json",
+]
+
+#: Most pixels of a ROS map image read as a world (a 5792 x 5792 image): the boundary tracing
+#: holds several arrays of this size. Larger maps: crop or coarsen them first.
+MAX_MAP_PIXELS = 2**25
+#: Largest ``resolution`` of a ROS map read as a world, metres per pixel.
+MAX_MAP_RESOLUTION = 100.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -57,6 +70,7 @@ def read_world_json(path: str | Path) -> World:
     description = data.get("description", "")
     if not isinstance(name, str) or not isinstance(description, str):
         _fail(path, "'name' and 'description' must be strings")
+    name = shorten(name, 200)
     if not segments.shape[0]:
         _fail(path, "no walls: 'segments' is empty (give [x1, y1, x2, y2] walls)")
     problem = geometry_problem(segments, tour)
@@ -131,8 +145,11 @@ def _number_array(value: Any, row_shape: tuple[int], key: str, expected: str,
 
 
 def _short(value: Any) -> str:
-    text = json.dumps(value)
-    return text if len(text) <= 40 else text[:37] + "..."
+    try:
+        text = json.dumps(value)
+    except (TypeError, ValueError):  # YAML values: dates, sets, very long integers
+        text = repr(value)
+    return shorten(text, 40)
 
 
 def _fail(where: str | Path, what: str) -> NoReturn:
@@ -164,19 +181,23 @@ def read_ros_map(path: str | Path) -> World:
         if key not in meta:
             _fail(path, f"missing key {key!r}")
     resolution = _yaml_number(meta, "resolution", path)
-    if resolution <= 0.0:
-        _fail(path, f"resolution must be > 0, got {resolution}")
+    if not 0.0 < resolution <= MAX_MAP_RESOLUTION:
+        _fail(path, f"resolution must lie in (0, {MAX_MAP_RESOLUTION:g}] metres per pixel, got "
+                    f"{resolution:g}")
     origin = meta["origin"]
     if (not isinstance(origin, list) or len(origin) not in (2, 3)
             or any(finite_number(v) is None for v in origin)):
         _fail(path, f"origin must be [x, y, yaw] finite numbers, got {_short(origin)}")
+    if any(abs(float(v)) > MAX_WORLD_COORDINATE for v in origin):
+        _fail(path, f"origin must lie within ±{MAX_WORLD_COORDINATE:g} m (and yaw within it "
+                    f"too), got {_short(origin)}")
     thresh = _yaml_number(meta, "occupied_thresh", path, 0.65)
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
-        _fail(path, f"negate must be 0 or 1, got {negate!r}")
+        _fail(path, f"negate must be 0 or 1, got {_short(negate)}")
     mode = meta.get("mode", "trinary")
     if mode not in ("trinary", "scale", "raw"):
-        _fail(path, f"mode must be trinary, scale or raw, got {mode!r}")
+        _fail(path, f"mode must be trinary, scale or raw, got {_short(mode)}")
     image_path = path.parent / str(meta["image"])
     pixels = _read_grey_image(image_path, path)
     if mode == "raw":
@@ -199,13 +220,18 @@ def _read_grey_image(image_path: Path, path: Path) -> FloatArray:
 
     try:
         with Image.open(image_path) as image:
+            width, height = image.size  # from the header: nothing decoded yet
+            if width * height > MAX_MAP_PIXELS:
+                _fail(path, f"image {image_path}: {width} x {height} pixels, more than the "
+                            f"limit of {MAX_MAP_PIXELS:,} (MAX_MAP_PIXELS); crop or coarsen it")
             return np.asarray(image.convert("L"), dtype=np.float64)
     except FileNotFoundError:
         _fail(path, f"image {image_path}: no such file")
     except IsADirectoryError:
         _fail(path, f"image {image_path}: is a directory")
     except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) as err:
-        _fail(path, f"image {image_path}: cannot read ({' '.join(str(err).split())})")
+        _fail(path, f"image {shorten(str(image_path), 120)}: cannot read "
+                    f"({shorten(' '.join(str(err).split()), 120)})")
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:

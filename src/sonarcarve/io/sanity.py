@@ -1,0 +1,110 @@
+"""Likely mistakes named: readings that parse but are probably in the wrong units or layout.
+
+A log in degrees, in millimetres, or a ``--beam-width`` given in radians runs without error and
+gives a map 8-10 times worse; these checks name the likely cause in one line each, for the
+command line to print as a warning (exit code still 0). A table that does not parse at all gets
+a hint from :func:`csv_shape_hint` (semicolons, tabs, a header in capitals).
+
+Nothing here changes the readings or refuses them: the numbers may be right.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sonarcarve.readings import ReadingBatch
+
+__all__ = ["beam_width_mistake", "csv_shape_hint", "likely_mistakes"]
+
+#: A log whose finite ranges have this median or more, metres, is probably not in metres:
+#: ultrasonic sensors reach 3-10 m; 100 is centimetres, 1000 millimetres.
+SUSPECT_MEDIAN_RANGE = 100.0
+#: A ``--beam-width`` (degrees) below this is probably radians: sonar beams are 7-60 degrees,
+#: and 22.5 degrees is 0.39 radians.
+SUSPECT_BEAM_WIDTH_DEG = 2.0
+
+_COLUMNS = ("t", "sensor", "x", "y", "theta", "range")
+
+
+def likely_mistakes(batch: ReadingBatch) -> list[str]:
+    """One line per probable unit mistake in ``batch`` (empty when it looks right).
+
+    - ``theta`` beyond ±2π: probably degrees;
+    - ranges with a median of :data:`SUSPECT_MEDIAN_RANGE` m or more: probably centimetres or
+      millimetres;
+    - a ``beam_width`` below 1 degree: probably another unit (beams are 7-60 degrees).
+
+    Examples
+    --------
+    >>> batch = ReadingBatch.from_arrays(t=[0, 1], sensor=[0, 0], x=[0, 0], y=[0, 0],
+    ...                                  theta=[90.0, 180.0], range=[2.0, 3.0])
+    >>> likely_mistakes(batch)
+    ['theta reaches 180 rad, beyond ±2π: is it in degrees? (readings CSV theta is radians)']
+    >>> likely_mistakes(ReadingBatch.from_arrays(t=[0], sensor=[0], x=[0], y=[0], theta=[0.5],
+    ...                                          range=[2.0]))
+    []
+    """
+    found: list[str] = []
+    if len(batch.theta):
+        biggest = float(np.max(np.abs(batch.theta)))
+        if biggest > 2.0 * math.pi + 1e-9:
+            found.append(f"theta reaches {biggest:g} rad, beyond ±2π: is it in degrees? "
+                         "(readings CSV theta is radians)")
+    ranges = batch.range[np.isfinite(batch.range)]
+    if ranges.size:
+        median = float(np.median(ranges))
+        if median >= SUSPECT_MEDIAN_RANGE:
+            unit = "millimetres" if median >= 10 * SUSPECT_MEDIAN_RANGE else "centimetres"
+            found.append(f"the median range is {median:g} m: is it in {unit}? "
+                         "(readings CSV range is metres)")
+    widths = batch.beam_width[np.isfinite(batch.beam_width)]
+    if widths.size and float(np.min(widths)) < math.radians(1.0):
+        found.append(f"beam_width is as small as {float(np.min(widths)):g} rad "
+                     f"({math.degrees(float(np.min(widths))):.2g} degrees): sonar beams are "
+                     "7-60 degrees; is it in another unit?")
+    return found
+
+
+def beam_width_mistake(degrees: float) -> str | None:
+    """A warning if a beam width given in degrees (``--beam-width``) looks like radians.
+
+    Examples
+    --------
+    >>> beam_width_mistake(0.39)
+    '--beam-width 0.39 is in degrees: did you mean 22.3 (0.39 radians)?'
+    >>> beam_width_mistake(22.5) is None
+    True
+    """
+    if 0.0 < degrees < SUSPECT_BEAM_WIDTH_DEG:
+        return (f"--beam-width {degrees:g} is in degrees: did you mean "
+                f"{math.degrees(degrees):.3g} ({degrees:g} radians)?")
+    return None
+
+
+def csv_shape_hint(first_line: str) -> str | None:
+    """A hint for a readings CSV whose header does not parse, from its first line; or None.
+
+    Examples
+    --------
+    >>> csv_shape_hint("t;sensor;x;y;theta;range")
+    "the file looks separated by ';': the readings CSV is comma-separated"
+    >>> csv_shape_hint("t\\tsensor\\tx\\ty\\ttheta\\trange")
+    'the file looks separated by tabs: the readings CSV is comma-separated'
+    >>> csv_shape_hint("T,Sensor,X,Y,Theta,Range")
+    'column names are case-sensitive: write the header in lower case (t,sensor,x,y,theta,range)'
+    >>> csv_shape_hint("t,sensor,x,y,theta,range") is None
+    True
+    """
+    line = first_line.lstrip("\ufeff").strip()
+    commas = line.count(",")
+    for separator, name in ((";", "';'"), ("\t", "tabs"), ("|", "'|'")):
+        if line.count(separator) >= 3 and line.count(separator) > commas:
+            return f"the file looks separated by {name}: the readings CSV is comma-separated"
+    names = [cell.strip().strip('"') for cell in line.split(",")]
+    lower = {name.lower() for name in names}
+    if set(_COLUMNS) <= lower and not set(_COLUMNS) <= set(names):
+        return ("column names are case-sensitive: write the header in lower case "
+                "(t,sensor,x,y,theta,range)")
+    return None

@@ -1,0 +1,59 @@
+"""Hard stops lose nothing: ``kill -9`` while ``process`` writes leaves the old map or the new one.
+
+The kill lands while the temporary file exists (polled), at a seeded random delay after; the
+next run must then remove the dead writer's temporary (:func:`sonarcarve.io.atomic.remove_stale`).
+"""
+
+from __future__ import annotations
+
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sonarcarve.io.readings_csv import write_readings_csv
+from sonarcarve.readings import ReadingBatch
+
+SONARCARVE = [sys.executable, "-c", "import sys; from sonarcarve.cli import main; "
+                                    "sys.exit(main())"]
+
+
+def _temps(folder: Path) -> list[Path]:
+    return [p for p in folder.iterdir() if p.name.startswith(".map.csv.")]
+
+
+def test_kill_9_while_writing(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    n = 150_000
+    batch = ReadingBatch.from_arrays(
+        t=np.arange(n) * 0.01, sensor=np.arange(n) % 16, x=rng.uniform(0, 5, n),
+        y=rng.uniform(0, 5, n), theta=rng.uniform(-3, 3, n), range=rng.uniform(0.5, 4, n))
+    readings = tmp_path / "r.csv"
+    write_readings_csv(batch, readings)
+    out = tmp_path / "map.csv"
+    argv = [*SONARCARVE, "process", str(readings), "--method", "centerline", "--out", str(out)]
+    subprocess.run(argv, check=True, capture_output=True, timeout=120)
+    new = out.read_bytes()
+    old = b"old map\n"
+    chooser = random.Random(14)
+    kills = 0
+    for _ in range(3):
+        out.write_bytes(old)
+        child = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 60
+        while not _temps(tmp_path) and child.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.001)
+        time.sleep(chooser.uniform(0.0, 0.05))
+        if child.poll() is None:
+            child.send_signal(signal.SIGKILL)
+            kills += 1
+        child.wait(timeout=60)
+        assert out.read_bytes() in (old, new)  # never a partial file
+    assert kills  # at least one kill landed mid-write
+    subprocess.run(argv, check=True, capture_output=True, timeout=120)
+    assert out.read_bytes() == new
+    assert _temps(tmp_path) == []  # the dead writers' temporaries are gone

@@ -1,0 +1,76 @@
+"""Every crash the fuzzing of issue 14 found, kept as a case: inputs made by code, not files.
+
+Each gave a traceback, a hang or a changed file before; each must now give exactly one
+``sonarcarve: error:`` line, exit code 2 and leave the old output as it was.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+SCOUT = (Path(__file__).parents[2] / "src/sonarcarve/robots/scout2.yaml").read_bytes()
+BOX = b'{"segments": [[0,0,6,0],[6,0,6,5],[6,5,0,5],[0,5,0,0]], "tour": [[1,1],[2,1]]}'
+READINGS = b"t,sensor,x,y,theta,range\n0,0,0,0,0,1\n0.1,1,0,0,1,2\n"
+
+
+def _bomb(last: bytes) -> bytes:
+    levels = b"".join(f"{k}: &{k} [{', '.join([f'*{p}'] * 9)}]\n".encode()
+                      for p, k in zip("abcdefgh", "bcdefghi", strict=True))
+    return b'a: &a ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]\n' + levels + last
+
+
+SIM = ["simulate", "--clean", "--out", "out.csv"]
+CASES: dict[str, tuple[dict[str, bytes], list[str], str]] = {
+    "robot yaml bomb (name)": ({"r.yaml": _bomb(b"name: *i\n"), "w.json": BOX},
+                               [*SIM, "--world", "w.json", "--robot", "r.yaml"], "alias"),
+    "map.yaml bomb (image)": ({"m.yaml": _bomb(b"image: *i\nresolution: 0.1\norigin: [0,0,0]\n")},
+                              [*SIM, "--world", "m.yaml"], "alias"),
+    "map.yaml bomb (resolution)": ({"m.yaml": _bomb(b"image: m.pgm\nresolution: *i\n"
+                                                    b"origin: [0,0,0]\n")},
+                                   [*SIM, "--world", "m.yaml"], "alias"),
+    "robot firing_order 10**20": ({"r.yaml": SCOUT.replace(b"firing_order: [0,",
+                                                          b"firing_order: [99999999999999999999,"),
+                                   "w.json": BOX},
+                                  [*SIM, "--world", "w.json", "--robot", "r.yaml"],
+                                  "firing_order"),
+    "robot firing_order of 2 million": ({"r.yaml": SCOUT.replace(
+        b"firing_order: [0,", b"firing_order: [" + b"0," * 2_000_000), "w.json": BOX},
+        [*SIM, "--world", "w.json", "--robot", "r.yaml"], "larger than the limit"),
+    "world 1e300 with tour": ({"w.json": b'{"segments": [[0,0,1e300,0],[0,3,1e300,3]], '
+                                         b'"tour": [[1,1.5],[5,1.5]]}'},
+                              [*SIM, "--world", "w.json"], "MAX_WORLD_COORDINATE"),
+    "world 1e300 explored": ({"w.json": b'{"segments": [[0,0,1e300,1e300],[0,1,1e300,-1e300]]}'},
+                             [*SIM, "--world", "w.json", "--explore", "5"],
+                             "MAX_WORLD_COORDINATE"),
+    "waypoints 100 km": ({"p.csv": b"x,y\n0,0\n100000,0\n"},
+                         [*SIM, "--world", "doorway", "--path", "p.csv"], "MAX_FIRINGS"),
+    "readings header of 100 kB": ({"r.csv": b"t,sensor,x,y,theta," + b"r" * 100_000
+                                   + b"\n1,0,0,0,0,1\n"},
+                                  ["process", "r.csv", "--out", "out.csv"], "missing column"),
+    "--out name too long": ({"r.csv": READINGS},
+                            ["process", "r.csv", "--out", "x" * 300 + ".csv"], "too long"),
+    "--out with a trailing slash": ({"r.csv": READINGS},
+                                    ["process", "r.csv", "--out", "out.csv/"], "ends in '/'"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_regression(name: str, tmp_path: Path, run_cli: Callable[..., tuple[int, str]]) -> None:
+    files, argv, words = CASES[name]
+    code, err = run_cli(tmp_path, files, argv, "out.csv")
+    assert code == 2
+    assert words in err
+
+
+def test_out_through_a_dangling_link(tmp_path: Path,
+                                     run_cli: Callable[..., tuple[int, str]]) -> None:
+    tmp_path.mkdir(exist_ok=True)
+    (tmp_path / "link.csv").symlink_to("nowhere.csv")
+    code, err = run_cli(tmp_path, {"r.csv": READINGS},
+                        ["process", "r.csv", "--out", "link.csv"], None)
+    assert code == 2
+    assert "is a symbolic link to nowhere.csv, which does not exist" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "r.csv"]

@@ -1,0 +1,59 @@
+"""Likely mistakes named: unit and layout warnings for readings that parse."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.io.sanity import beam_width_mistake, csv_shape_hint, likely_mistakes
+from sonarcarve.readings import ReadingBatch
+
+
+def _batch(theta: float = 0.5, rng: float = 2.0, width: float = 0.39) -> ReadingBatch:
+    n = 5
+    return ReadingBatch.from_arrays(t=np.arange(n), sensor=np.zeros(n, int), x=np.zeros(n),
+                                    y=np.zeros(n), theta=np.full(n, theta),
+                                    range=np.full(n, rng), beam_width=np.full(n, width))
+
+
+def test_a_clean_log_has_no_warning() -> None:
+    assert likely_mistakes(_batch()) == []
+
+
+@pytest.mark.parametrize(
+    ("batch", "words"),
+    [
+        (_batch(theta=90.0), "is it in degrees?"),
+        (_batch(theta=-7.0), "is it in degrees?"),
+        (_batch(rng=350.0), "is it in centimetres?"),
+        (_batch(rng=3500.0), "is it in millimetres?"),
+        (_batch(width=math.radians(0.39)), "is it in another unit?"),
+    ],
+)
+def test_each_likely_mistake_is_one_line(batch: ReadingBatch, words: str) -> None:
+    (warning,) = likely_mistakes(batch)
+    assert words in warning
+    assert "\n" not in warning
+
+
+def test_beam_width_in_radians_given_as_degrees() -> None:
+    assert beam_width_mistake(0.39) is not None
+    assert beam_width_mistake(15.0) is None
+
+
+@pytest.mark.parametrize(
+    ("line", "words"),
+    [
+        ("t;sensor;x;y;theta;range;beam_width", "separated by ';'"),
+        ("t\tsensor\tx\ty\ttheta\trange", "separated by tabs"),
+        ("\ufeffT,SENSOR,X,Y,THETA,RANGE", "case-sensitive"),
+        ("t,sensor,x,y,theta,range", None),
+        ("", None),
+        ("1;2", None),
+    ],
+)
+def test_csv_shape_hint(line: str, words: str | None) -> None:
+    hint = csv_shape_hint(line)
+    assert (hint is None) if words is None else (hint is not None and words in hint)
