@@ -51,7 +51,16 @@ def test_slicing_and_masks_give_batches() -> None:
          "row 1, column 'range' is infinite but 'max_range' is not given"),
         ({"range": [1.0, 2.0, 3.0], "max_range": [math.nan, 1.5, math.nan]},
          "row 1, column 'range' exceeds 'max_range'"),
-        ({"max_range": [math.nan, 0.0, math.nan]}, "row 1, column 'max_range' must be a finite"),
+        ({"max_range": [math.nan, 0.0, math.nan]}, "row 1, column 'max_range' must be a number"),
+        # Huge but finite values: they would overflow the geometry or never leave its loops.
+        ({"theta": [0.0, 1e20, 0.0]}, "row 1, column 'theta' must lie within ±1,000,000 rad"),
+        ({"theta": [0.0, 0.0, -1.7e308]}, "row 2, column 'theta' must lie within ±1,000,000 rad"),
+        ({"x": [0.0, 1e300, 0.0]}, "row 1, column 'x' must lie within ±1,000,000 m"),
+        ({"y": [0.0, -1.0000001e6, 0.0]}, "row 1, column 'y' must lie within ±1,000,000 m"),
+        ({"t": [0.0, 0.5, 2e12]}, "row 2, column 't' must lie within ±1e12 s"),
+        ({"range": [1.0, 1.7e308, 3.0]}, "row 1, column 'range' must be at most 10,000 m"),
+        ({"max_range": [math.nan, 2e4, math.nan]},
+         "row 1, column 'max_range' must be a number in (0, 10,000] metres"),
         ({"x": [math.inf, 0.0, 0.0]}, "row 0, column 'x' is NaN or infinite"),
         ({"t": [0.0, 0.5, 0.2]}, "row 2, column 't' goes backwards in time"),
         ({"beam_width": [0.3, math.pi, 0.3]}, "row 1, column 'beam_width' must lie in (0, pi)"),
@@ -115,11 +124,32 @@ def test_check_reading_speaks_like_the_batch() -> None:
     for reading, problem in [
         (Reading(0.0, 0, 0.0, 0.0, 0.0, math.inf), "is infinite but 'max_range' is not given"),
         (Reading(0.0, 0, 0.0, 0.0, 0.0, 4.0, math.nan, 3.0), "exceeds 'max_range'"),
-        (Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0, math.nan, -1.0), "'max_range' must be a finite"),
+        (Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0, math.nan, -1.0), "'max_range' must be a number"),
         (Reading(0.0, 0, 0.0, 0.0, 0.0, -math.inf), "'range' is NaN or infinite"),
     ]:
         with pytest.raises(ReadingsError, match=f"reading 7, column .*{problem}"):
             check_reading(reading, 7)
+
+
+@pytest.mark.parametrize("field", ["t", "x", "y", "theta", "range", "max_range"])
+@pytest.mark.parametrize("size", [1e20, 1.7e308, -1e300])
+def test_bounds_are_the_same_for_one_reading_and_a_batch(field: str, size: float) -> None:
+    fields = {"t": 0.0, "sensor": 0, "x": 0.0, "y": 0.0, "theta": 0.0, "range": 1.0,
+              "beam_width": math.nan, "max_range": math.nan, field: size}
+    batch = ReadingBatch(**{name: np.array([value]) for name, value in fields.items()})
+    with pytest.raises(ReadingsError) as batch_error:
+        batch.validate("readings", first_id=7)
+    with pytest.raises(ReadingsError) as one_error:
+        check_reading(Reading(**fields), 7)
+    assert str(one_error.value) == str(batch_error.value)
+    assert str(one_error.value).startswith(f"reading 7, column '{field}'")
+
+
+def test_values_at_the_bounds_are_accepted() -> None:
+    batch = _batch(t=[-1e12, 0.0, 1e12], x=[1e6, -1e6, 0.0], theta=[1e6, -1e6, 0.0],
+                   range=[1e4, 1.0, math.inf], max_range=[1e4, math.nan, 1e4])
+    for k, reading in enumerate(batch):
+        check_reading(reading, k)
 
 
 def test_a_batch_built_directly_has_unknown_max_ranges() -> None:

@@ -27,7 +27,11 @@ from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "DEFAULT_BEAM_WIDTH",
+    "MAX_ANGLE",
+    "MAX_POSITION",
+    "MAX_READING_RANGE",
     "MAX_SENSOR",
+    "MAX_TIME",
     "Reading",
     "ReadingBatch",
     "ReadingsError",
@@ -39,6 +43,25 @@ __all__ = [
 #: float64, which is how a CSV column is first parsed.
 MAX_SENSOR = 2**31 - 1
 
+# Bounds on the numbers of a reading, so that no finite value can overflow or stall the geometry.
+# Positions and ranges go through squares, products and sums in float64: with |x|, |y| <= 1e6 m
+# and r <= 1e4 m every intermediate stays below ~1e13, where float64 still resolves far less than
+# a millimetre (it keeps millimetres exact up to ~1e9 m of magnitude), whereas a coordinate of
+# 1e300 squares to inf and a range of 1.7e308 gives inf - inf = NaN map points. Angles are
+# unwrapped and reduced by multiples of 2π (floor((θ - lo) / 2π), crossings of multiples of
+# π/2), which needs them bounded: at 1e20 rad the multiple overflows an integer and an angle
+# has no digits left below 2π. 1e6 rad (159,000 turns: an unwrapped heading of a robot
+# circling one way for days) keeps 1e-10 rad of precision; 1e12 s (31,700 years) likewise for
+# times, and keeps t exact to the microsecond.
+#: Largest |x|, |y| of a sensor origin, metres.
+MAX_POSITION = 1e6
+#: Largest range and max range, metres (ultrasonic sensors reach 3-10 m).
+MAX_READING_RANGE = 1e4
+#: Largest |theta|, radians.
+MAX_ANGLE = 1e6
+#: Largest |t|, seconds.
+MAX_TIME = 1e12
+
 # The problems a reading can have, worded once for the batch and the single-reading checks.
 _NOT_FINITE = "is NaN or infinite"
 _NOT_POSITIVE = "must be > 0"
@@ -48,7 +71,15 @@ _TOO_LARGE = f"must be at most {MAX_SENSOR}"
 _BAD_BEAM = "must lie in (0, pi) radians"
 _BACKWARDS = "goes backwards in time"
 _NO_MAX_RANGE = "is infinite but 'max_range' is not given"
-_BAD_MAX_RANGE = "must be a finite number > 0 metres, or NaN (unknown)"
+_BAD_MAX_RANGE = f"must be a number in (0, {MAX_READING_RANGE:,.0f}] metres, or NaN (unknown)"
+_TOO_FAR = f"must be at most {MAX_READING_RANGE:,.0f} m"
+#: The bound of each column that has one, and the message of a value beyond it.
+_BOUNDS = {
+    "t": (MAX_TIME, "must lie within ±1e12 s"),
+    "x": (MAX_POSITION, f"must lie within ±{MAX_POSITION:,.0f} m"),
+    "y": (MAX_POSITION, f"must lie within ±{MAX_POSITION:,.0f} m"),
+    "theta": (MAX_ANGLE, f"must lie within ±{MAX_ANGLE:,.0f} rad"),
+}
 _BEYOND_MAX_RANGE = "exceeds 'max_range'"
 
 
@@ -196,8 +227,10 @@ class ReadingBatch:
                 size = getattr(self, f.name).size
                 msg = f"{source}: column {f.name!r} has {size} rows, expected {n}"
                 raise ReadingsError(msg)
-        for name in ("t", "x", "y", "theta"):
-            _first_bad(where, name, ~np.isfinite(getattr(self, name)), _NOT_FINITE)
+        for name, (bound, beyond) in _BOUNDS.items():
+            values = getattr(self, name)
+            _first_bad(where, name, ~np.isfinite(values), _NOT_FINITE)
+            _first_bad(where, name, np.abs(values) > bound, beyond)
         r = self.range
         not_finite = ~np.isfinite(r)
         if not_finite.any():  # +inf is a no-echo reading, allowed where max_range is known
@@ -205,6 +238,7 @@ class ReadingBatch:
             _first_bad(where, "range", not_finite & ~no_echo, _NOT_FINITE)
             _first_bad(where, "range", no_echo & ~(self.max_range > 0.0), _NO_MAX_RANGE)
         _first_bad(where, "range", r <= 0.0, _NOT_POSITIVE)
+        _first_bad(where, "range", (r > MAX_READING_RANGE) & (r < math.inf), _TOO_FAR)
         _first_bad(where, "sensor", self.sensor < 0, _NEGATIVE)
         _first_bad(where, "sensor", self.sensor > MAX_SENSOR, _TOO_LARGE)
         width = self.beam_width
@@ -213,7 +247,7 @@ class ReadingBatch:
         limit = self.max_range
         known = ~np.isnan(limit)
         if known.any():
-            _first_bad(where, "max_range", known & ~((limit > 0.0) & (limit < math.inf)),
+            _first_bad(where, "max_range", known & ~((limit > 0.0) & (limit <= MAX_READING_RANGE)),
                        _BAD_MAX_RANGE)
             _first_bad(where, "range", (r > limit) & (r < math.inf), _BEYOND_MAX_RANGE)
         if n > 0:
@@ -264,11 +298,14 @@ class ReadingBatch:
 def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.inf) -> None:
     """Check one reading as :meth:`ReadingBatch.validate` checks a row, with the same messages.
 
-    ``t``, ``x``, ``y``, ``theta`` and ``range`` must be finite, ``range > 0``, ``sensor`` a
-    whole number in [0, :data:`MAX_SENSOR`], ``beam_width`` in (0, π) or NaN (the method's
+    ``t``, ``x``, ``y``, ``theta`` and ``range`` must be finite and within their bounds
+    (|t| <= :data:`MAX_TIME` s, |x|, |y| <= :data:`MAX_POSITION` m, |theta| <=
+    :data:`MAX_ANGLE` rad, ``0 < range <=`` :data:`MAX_READING_RANGE` m), ``sensor`` a whole
+    number in [0, :data:`MAX_SENSOR`], ``beam_width`` in (0, π) or NaN (the method's
     default), and ``t`` not earlier than ``previous_t`` (the previous reading's time).
-    ``max_range`` is NaN (unknown) or finite and > 0; ``range`` may be +inf (no echo) when it
-    is known, and a finite ``range`` may not exceed it.
+    ``max_range`` is NaN (unknown) or in (0, :data:`MAX_READING_RANGE`]; ``range`` may be
+    +inf (no echo) when it is known,
+    and a finite ``range`` may not exceed it.
 
     Cheap: one chain of scalar comparisons in the common case (it runs once per echo); only a
     reading that fails it is examined field by field for the message.
@@ -285,12 +322,17 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     Traceback (most recent call last):
     ...
     sonarcarve.errors.ReadingsError: reading 17, column 'range' must be > 0
+    >>> check_reading(Reading(0.0, 0, 0.0, 0.0, 1e20, 1.0), 18)
+    Traceback (most recent call last):
+    ...
+    sonarcarve.errors.ReadingsError: reading 18, column 'theta' must lie within ±1,000,000 rad
     """
     t, sensor, x, y, theta, r, width, limit = reading
-    if (previous_t <= t < math.inf and 0.0 < r < math.inf and math.isfinite(x)
-            and math.isfinite(y) and math.isfinite(theta) and type(sensor) is int
+    if (previous_t <= t and -MAX_TIME <= t <= MAX_TIME and 0.0 < r <= MAX_READING_RANGE
+            and -MAX_POSITION <= x <= MAX_POSITION and -MAX_POSITION <= y <= MAX_POSITION
+            and -MAX_ANGLE <= theta <= MAX_ANGLE and type(sensor) is int
             and 0 <= sensor <= MAX_SENSOR and (width != width or 0.0 < width < math.pi)
-            and (limit != limit or r <= limit < math.inf)):
+            and (limit != limit or r <= limit <= MAX_READING_RANGE)):
         return
     _explain_bad_reading(reading, _Where("", None, reading_id), previous_t)
 
@@ -300,10 +342,12 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
 
     (The fast test in :func:`check_reading` also sends here a whole float or numpy sensor.)
     """
-    for name in ("t", "x", "y", "theta"):
+    for name, (bound, beyond) in _BOUNDS.items():
         value = getattr(reading, name)
         if not math.isfinite(value):
             _raise(where, 0, name, _NOT_FINITE)
+        if abs(value) > bound:
+            _raise(where, 0, name, beyond)
     limit = reading.max_range
     if not math.isfinite(reading.range):
         if reading.range != math.inf:
@@ -312,6 +356,8 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
             _raise(where, 0, "range", _NO_MAX_RANGE)
     if reading.range <= 0.0:
         _raise(where, 0, "range", _NOT_POSITIVE)
+    if MAX_READING_RANGE < reading.range < math.inf:
+        _raise(where, 0, "range", _TOO_FAR)
     sensor = reading.sensor
     try:
         whole = math.isfinite(sensor) and sensor == math.floor(sensor)
@@ -326,7 +372,7 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
     width = reading.beam_width
     if not (math.isnan(width) or 0.0 < width < math.pi):
         _raise(where, 0, "beam_width", _BAD_BEAM)
-    if not (math.isnan(limit) or 0.0 < limit < math.inf):
+    if not (math.isnan(limit) or 0.0 < limit <= MAX_READING_RANGE):
         _raise(where, 0, "max_range", _BAD_MAX_RANGE)
     if reading.range > limit and reading.range < math.inf:
         _raise(where, 0, "range", _BEYOND_MAX_RANGE)

@@ -78,3 +78,28 @@ def test_bad_paths_are_one_line_errors(readings: Path, tmp_path: Path,
     assert main(["grid", str(readings), "--out", str(tmp_path / "g.txt")]) == 2
     assert ".yaml" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["readings.csv"]
+
+
+def test_ranges_in_millimetres_warn_one_line_and_exit_0(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    batch = ReadingBatch.from_readings(
+        Reading(t=0.1 * k, sensor=0, x=0.05 * k, y=0.0, theta=math.pi / 2, range=1000.0)
+        for k in range(20))
+    path = tmp_path / "millimetres.csv"
+    write_readings_csv(batch, path)
+    assert main(["grid", str(path), "--resolution", "10", "--out",
+                 str(tmp_path / "grid.yaml")]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "sonarcarve: warning: the median range is 1000 m: is it in millimetres? (readings CSV "
+        "range is metres)"]
+
+
+def test_a_semicolon_separated_file_gets_a_hint(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "semicolons.csv"
+    path.write_text("t;sensor;x;y;theta;range\n0;0;0;0;0;1\n")
+    assert main(["grid", str(path), "--out", str(tmp_path / "grid.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("sonarcarve: error: ")
+    assert "the file looks separated by ';': the readings CSV is comma-separated" in err

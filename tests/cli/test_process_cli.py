@@ -52,7 +52,19 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
     negative.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,-3\n")
     corrupt = tmp_path / "corrupt.csv"
     corrupt.write_bytes(b"\x00\xff\xfe garbage \x89PNG")
+    semicolons = tmp_path / "semicolons.csv"
+    semicolons.write_text("t;sensor;x;y;theta;range\n0;0;0;0;0;1\n")
+    huge_theta = tmp_path / "huge_theta.csv"
+    huge_theta.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,1\n0.1,0,0,0,1e20,1\n")
+    degrees_then_bad = tmp_path / "degrees_then_bad.csv"  # no warning before the error line
+    degrees_then_bad.write_text("t,sensor,x,y,theta,range\n0,0,0,0,90,1\n0.1,0,0,0,180,-1\n")
     return [
+        ([str(semicolons)], "line 1, missing column(s) t, sensor, x, y, theta, range (header: "
+                            "t;sensor;x;y;theta;range); the file looks separated by ';'"),
+        ([str(huge_theta)], "line 3, column 'theta' must lie within ±1,000,000 rad"),
+        ([str(degrees_then_bad)], "line 3, column 'range' must be > 0"),
+        ([str(degrees_then_bad), "--beam-width", "0.39"], "line 3, column 'range' must be > 0"),
+        (["/dev/zero"], "/dev/zero: not text (NUL byte at line 1)"),
         ([str(nan_file)], "NaN or infinite"),
         ([str(missing_col)], "missing column"),
         ([str(unsorted)], "backwards in time"),
@@ -84,6 +96,37 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(
         assert "Traceback" not in err
         assert out.read_text() == "precious\n", "an existing output must be left untouched"
         assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".map.csv")) == []
+
+
+@pytest.mark.parametrize("ending", [".csv", ".rrd"])
+def test_likely_unit_mistakes_warn_one_line_each_and_exit_0(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], ending: str
+) -> None:
+    if ending == ".rrd":
+        pytest.importorskip("rerun")
+    batch = _write_ring_readings(tmp_path / "radians.csv")
+    degrees = tmp_path / "degrees.csv"
+    write_readings_csv(ReadingBatch.from_arrays(
+        t=batch.t, sensor=batch.sensor, x=batch.x, y=batch.y, theta=np.degrees(batch.theta),
+        range=batch.range), degrees)
+    out = tmp_path / f"map{ending}"
+    assert main(["process", str(degrees), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert err.splitlines() == ["sonarcarve: warning: theta reaches 90 rad, beyond ±2π: is it "
+                                "in degrees? (readings CSV theta is radians)"]
+    assert main(["process", str(tmp_path / "radians.csv"), "--out", str(out),
+                 "--beam-width", "0.39"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "sonarcarve: warning: --beam-width 0.39 is in degrees: did you mean 22.3 (0.39 "
+        "radians)?"]
+    assert main(["process", str(tmp_path / "radians.csv"), "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""
+    unwrapped = tmp_path / "unwrapped.csv"  # radians beyond 2π by small steps: no mistake
+    write_readings_csv(ReadingBatch.from_arrays(
+        t=batch.t, sensor=batch.sensor, x=batch.x, y=batch.y,
+        theta=batch.theta + np.linspace(0.0, 12.0, len(batch)), range=batch.range), unwrapped)
+    assert main(["process", str(unwrapped), "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""
 
 
 def test_version_and_help(capsys: pytest.CaptureFixture[str]) -> None:

@@ -8,6 +8,7 @@ ever fails is kept in ``test_regressions.py``.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import random
@@ -50,6 +51,23 @@ def _written(write: Callable[[Path], object], name: str) -> bytes:
         path = Path(folder) / name
         write(path)
         return path.read_bytes()
+
+
+@functools.cache
+def _bags() -> dict[str, bytes]:
+    """A 1 s drive of scout2 in a box (23 echoes) as a ROS 1 bag and as an MCAP file."""
+    from sonarcarve.robot import load_robot
+    from sonarcarve.sim.bag import write_simulation_bag
+    from sonarcarve.sim.motion import Trajectory
+    from sonarcarve.sim.simulate import simulate
+    from sonarcarve.sim.world import World
+
+    box = World(np.array(WORLD["segments"][:4], dtype=float), name="box")
+    t = np.linspace(0.0, 1.0, 11)
+    drive = Trajectory(t, 1.0 + 0.5 * t, np.full(t.size, 1.0), np.full(t.size, 0.3))
+    sim = simulate(box, load_robot("scout2"), drive, seed=1)
+    return {name: _written(lambda path: write_simulation_bag(path, sim), name)
+            for name in ("run.bag", "run.mcap")}
 
 
 def _pgm() -> bytes:
@@ -95,22 +113,42 @@ def _families() -> dict[str, Callable[[random.Random, Callable[..., bytes]], Cas
         return ({"w.json": world, name: mutate(text, rng)},
                 [*SIM, "--world", "w.json", "--robot", "roboND-8", "--path", name], "out.csv")
 
+    def rosbag(rng: random.Random, mutate: Callable[..., bytes]) -> Case:
+        name = rng.choice(["run.bag", "run.mcap"])
+        command = rng.choice([["convert", "rosbag"], ["process"]])
+        return ({name: mutate(_bags()[name], rng)}, [*command, name, "--out", "out.csv"],
+                "out.csv")
+
     return {"readings": readings, "world_json": world_json, "robot_yaml": robot_yaml,
-            "map_yaml": map_yaml, "waypoints": waypoints}
+            "map_yaml": map_yaml, "waypoints": waypoints, "rosbag": rosbag}
 
 
 FAMILIES = _families()
 #: Cases per family in ``make test``: about 250 in all, well under a minute.
-QUICK = {"readings": 100, "world_json": 40, "robot_yaml": 40, "map_yaml": 35, "waypoints": 35}
+QUICK = {"readings": 100, "world_json": 40, "robot_yaml": 40, "map_yaml": 35, "waypoints": 35,
+         "rosbag": 40}
+#: Crashes the fuzzer finds that are still open, by family: the exception that escapes and
+#: why. Every case still runs; the family's test is marked xfail (visibly, not skipped) if one
+#: of these was met and nothing else went wrong, and passes once it is fixed (then remove it).
+OPEN_CRASHES: dict[str, tuple[type[BaseException], str]] = {}
 
 
 def _fuzz(family: str, cases: int, seed: int, tmp_path: Path, run_cli: Callable[..., object],
           mutator: Callable[..., bytes]) -> None:
     make = FAMILIES[family]
     rng = random.Random(f"{family}:{seed}")
+    known, reason = OPEN_CRASHES.get(family, (None, ""))
+    met = 0
     for i in range(cases):
         files, argv, out = make(rng, mutator)
-        run_cli(tmp_path / f"case{i}", files, argv, out)
+        try:
+            run_cli(tmp_path / f"case{i}", files, argv, out)
+        except BaseException as err:
+            if known is None or not isinstance(err, known):
+                raise
+            met += 1
+    if met:
+        pytest.xfail(f"{met} of {cases} cases: {reason}")
 
 
 @pytest.mark.parametrize("family", sorted(FAMILIES))

@@ -6,10 +6,16 @@ Each gave a traceback, a hang or a changed file before; each must now give exact
 
 from __future__ import annotations
 
+import math
+import os
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+
+from sonarcarve.geometry.index import arc_box
 
 SCOUT = (Path(__file__).parents[2] / "src/sonarcarve/robots/scout2.yaml").read_bytes()
 BOX = b'{"segments": [[0,0,6,0],[6,0,6,5],[6,5,0,5],[0,5,0,0]], "tour": [[1,1],[2,1]]}'
@@ -54,6 +60,24 @@ CASES: dict[str, tuple[dict[str, bytes], list[str], str]] = {
                             ["process", "r.csv", "--out", "x" * 300 + ".csv"], "too long"),
     "--out with a trailing slash": ({"r.csv": READINGS},
                                     ["process", "r.csv", "--out", "out.csv/"], "ends in '/'"),
+    "readings theta 1e20 (hung carve, atm, combined)": (
+        {"r.csv": READINGS + b"0.2,0,0,0,1e20,1\n"}, ["process", "r.csv", "--out", "out.csv"],
+        "line 4, column 'theta' must lie within ±1,000,000 rad"),
+    "readings theta -1.7e308": ({"r.csv": READINGS + b"0.2,0,0,0,-1.7e308,1\n"},
+                                ["process", "r.csv", "--method", "atm", "--out", "out.csv"],
+                                "line 4, column 'theta' must lie within ±1,000,000 rad"),
+    "readings range 1.7e308 (NaN points, RuntimeWarnings)": (
+        {"r.csv": READINGS + b"0.2,0,0,0,0,1.7e308\n"}, ["process", "r.csv", "--out", "out.csv"],
+        "line 4, column 'range' must be at most 10,000 m"),
+    "readings x 1e300": ({"r.csv": READINGS + b"0.2,0,1e300,0,0,1\n"},
+                         ["process", "r.csv", "--out", "out.csv"],
+                         "line 4, column 'x' must lie within ±1,000,000 m"),
+    "readings from /dev/zero (read until memory ran out)": (
+        {}, ["process", "/dev/zero", "--out", "out.csv"],
+        "/dev/zero: not text (NUL byte at line 1)"),
+    "readings without line breaks": ({"r.csv": b"t,sensor" + b"x" * (2**20 + 5)},
+                                     ["grid", "r.csv", "--out", "out.csv"],
+                                     "line 1 is longer than 1 MiB: not a readings CSV"),
 }
 
 
@@ -74,3 +98,30 @@ def test_out_through_a_dangling_link(tmp_path: Path,
     assert code == 2
     assert "is a symbolic link to nowhere.csv, which does not exist" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "r.csv"]
+
+
+@pytest.mark.parametrize("method", ["carve", "atm", "combined"])
+def test_huge_theta_ends_within_a_timeout(method: str, tmp_path: Path) -> None:
+    """theta = 1e20 hung these methods (arc_box's loop over multiples of π/2 never ended); run
+    in a process of its own, so that a hang fails the test instead of stalling the suite."""
+    (tmp_path / "r.csv").write_bytes(READINGS + b"0.2,0,0,0,1e20,1\n0.3,0,0,0,0.5,1\n")
+    argv = ["process", "r.csv", "--method", method, "--out", "out.csv"]
+    done = subprocess.run(
+        [sys.executable, "-c", "import sys; from sonarcarve.cli import main; "
+                               "sys.exit(main(sys.argv[1:]))", *argv],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False,
+        env={**os.environ, "COLUMNS": "200"})
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [
+        "sonarcarve: error: r.csv: line 4, column 'theta' must lie within ±1,000,000 rad"]
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.parametrize("lo", [1e20, -1e20, 1.7e308, -1.7e308, 2.0**53 * math.pi / 2])
+def test_arc_box_ends_for_any_angle(lo: float) -> None:
+    """The loop itself is bounded, even for angles validation refuses (it never ended at
+    1e20), and its box still holds the arc's ends."""
+    xmin, xmax, ymin, ymax = arc_box(0.0, 0.0, 1.0, lo, lo + 0.4)
+    for angle in (lo, lo + 0.4):
+        assert xmin <= math.cos(angle) <= xmax
+        assert ymin <= math.sin(angle) <= ymax

@@ -9,6 +9,7 @@ from sonarcarve.io import InputError, read_readings_csv, write_readings_csv
 from sonarcarve.io.errors import parse_number
 from sonarcarve.io.readings_csv import (
     BLOCK_SIZE,
+    MAX_LINE_BYTES,
     READINGS_COLUMNS,
     _check_header,
     count_data_lines,
@@ -75,6 +76,15 @@ def test_beam_width_column_is_optional_and_may_be_blank(tmp_path: Path) -> None:
         (HEADER + "0,-2,0,0,0,1\n", "line 2, column 'sensor' must be >= 0"),
         ("", "empty file"),
         ("\n\n", "empty file"),
+        # Huge but finite values, which used to hang the methods or give NaN map points.
+        (HEADER + "0,0,0,0,1e20,1\n", "line 2, column 'theta' must lie within ±1,000,000 rad"),
+        (HEADER + "0,0,0,0,0,1.7e308\n", "line 2, column 'range' must be at most 10,000 m"),
+        (HEADER + "0,0,1e300,0,0,1\n", "line 2, column 'x' must lie within ±1,000,000 m"),
+        # A header that would parse with another separator or case says so.
+        ("t;sensor;x;y;theta;range\n0;0;0;0;0;1\n",
+         "(header: t;sensor;x;y;theta;range); the file looks separated by ';'"),
+        ("t\tsensor\tx\ty\ttheta\trange\n", "the file looks separated by tabs"),
+        ("T,Sensor,X,Y,Theta,Range\n0,0,0,0,0,1\n", "column names are case-sensitive"),
     ],
 )
 def test_bad_input_names_file_line_and_column(tmp_path: Path, body: str, message: str) -> None:
@@ -93,8 +103,48 @@ def test_missing_and_binary_files(tmp_path: Path) -> None:
         read_readings_csv(tmp_path / "nope.csv")
     binary = tmp_path / "bin.csv"
     binary.write_bytes(b"\xff\xfe\x00\x01garbage")
-    with pytest.raises(InputError, match="cannot read"):
+    with pytest.raises(InputError, match=r"bin.csv: not text \(NUL byte at line 1\)"):
         read_readings_csv(binary)
+
+
+@pytest.mark.parametrize("size", [1, 7, 64, BLOCK_SIZE])
+def test_a_nul_byte_is_refused_after_the_lines_before_it(tmp_path: Path, size: int) -> None:
+    path = tmp_path / "nul.csv"
+    path.write_bytes((HEADER + "0,0,0,0,0,1\n" * 3).encode() + b"1,0,0\x00,0,0,1\n" * 9)
+    with pytest.raises(InputError, match=r"nul.csv: not text \(NUL byte at line 5\)$"):
+        read_readings_csv(path, block_size=size)
+    bad_first = tmp_path / "bad_first.csv"  # an earlier bad line is still the one named
+    bad_first.write_bytes((HEADER + "0,0,0,0,0,-1\n").encode() + b"\x00\n")
+    with pytest.raises(InputError, match="line 2, column 'range' must be > 0"):
+        read_readings_csv(bad_first, block_size=size)
+
+
+@pytest.mark.parametrize("size", [1, 2, 5, BLOCK_SIZE])
+def test_a_nul_byte_after_a_byte_order_mark_is_refused(tmp_path: Path, size: int) -> None:
+    path = tmp_path / "bom.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + HEADER.encode() + b"0,0,0,0,0,1\n\x00\n")
+    with pytest.raises(InputError, match=r"not text \(NUL byte at line 3\)$"):
+        read_readings_csv(path, block_size=size)
+
+
+def test_dev_zero_fails_at_once() -> None:
+    with pytest.raises(InputError, match=r"^/dev/zero: not text \(NUL byte at line 1\)$"):
+        read_readings_csv("/dev/zero")
+    assert count_data_lines("/dev/zero") == 0
+
+
+@pytest.mark.parametrize("size", [4096, BLOCK_SIZE, 3 * BLOCK_SIZE])
+def test_a_line_longer_than_the_limit_is_refused(tmp_path: Path, size: int) -> None:
+    path = tmp_path / "long.csv"
+    path.write_bytes((HEADER + "0,0,0,0,0,1\n").encode() + b"9" * (MAX_LINE_BYTES + 1))
+    with pytest.raises(InputError, match=r"long\.csv: line 3 is longer than 1 MiB: not a readings"):
+        read_readings_csv(path, block_size=min(size, MAX_LINE_BYTES))
+    path.write_bytes(b"t" * (MAX_LINE_BYTES + 1) + b"\n" + b"0,0,0,0,0,1\n")
+    with pytest.raises(InputError, match="line 1 is longer than 1 MiB"):
+        read_readings_csv(path, block_size=min(size, MAX_LINE_BYTES))
+    path.write_bytes(HEADER.encode() + b"0" * (MAX_LINE_BYTES - 1) + b",0,0,0,0,1\n")
+    with pytest.raises(InputError, match="line 2 is longer than 1 MiB"):
+        read_readings_csv(path, block_size=min(size, MAX_LINE_BYTES))
 
 
 def test_byte_order_mark_and_trailing_blank_lines_are_accepted(tmp_path: Path) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
@@ -22,6 +23,7 @@ from sonarcarve.grids import (
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.map_server import write_map_server
 from sonarcarve.io.readings_csv import read_readings_csv
+from sonarcarve.io.sanity import likely_mistakes
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, ReadingBatch
 
 __all__ = ["GRID_MODELS", "build_grid", "grid", "readings_extent"]
@@ -119,6 +121,9 @@ def grid(
     GRID.pgm beside it (trinary: occupied 0, free 254, unknown 205), both or neither. The grid
     covers the sensors and their arcs plus --margin.
 
+    Readings in probably wrong units (theta in degrees, ranges in centimetres or millimetres)
+    give one `sonarcarve: warning:` line each on stderr; the exit code is still 0.
+
     Example: `sonarcarve grid readings.csv --model carved --resolution 0.05 --out grid.yaml`
     """
     if model not in GRID_MODELS:
@@ -133,6 +138,8 @@ def grid(
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
     rows, cols = built.shape
+    for line in likely_mistakes(batch):  # after the writing: a failed run prints one line only
+        print(f"sonarcarve: warning: {line}", file=sys.stderr)
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}"),
         ("cells", f"{cols} x {rows} of {built.resolution:g} m"),

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+import sys
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, NamedTuple
 
@@ -43,6 +44,7 @@ from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.io.rerun_out import write_rerun
+from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
 from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
@@ -79,6 +81,8 @@ class _Job:
     bag: BagOptions
     map_rate: float
     grid_resolution: float
+    #: Likely mistakes the writer found in the readings, printed as warnings if the run succeeds.
+    warnings: list[str] = field(default_factory=list)
 
     def sonar(self) -> SonarMethod:
         """A fresh method."""
@@ -223,6 +227,10 @@ def process(
     (`source` is the model that placed the point: centerline, carved or atm; `width` the final
     angular width in radians; `max_error` the error bound in metres).
 
+    A run that succeeds on probably wrong units (theta in degrees, ranges in centimetres or
+    millimetres, --beam-width in radians) prints one `sonarcarve: warning:` line for each on
+    stderr; the exit code is still 0.
+
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
     rows; map filters (--max-error, then --outlier-radius) drop points from the global map.
@@ -245,11 +253,15 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
     make_method(method, config)  # an unknown method fails before any file is touched
+    beam_warning = beam_width_mistake(beam_width)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     if out_dir is not None:
         _check_fleet_options(out, map_rate)
-        return _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
+        code = _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
                       workers, scheduler)
+        if code == 0:
+            _warn([beam_warning])
+        return code
     if out is None:
         msg = "missing option '--out' (or --out-dir FOLDER for one map per log)"
         raise ParameterError(msg)
@@ -273,8 +285,29 @@ def process(
         raise ParameterError(msg)
     job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate, cell)
     output.check(job)  # before the (possibly long) run: a bad --out wastes no time
-    console.print(summary_table(f"sonarcarve process --method {method}", output.write(job)))
+    rows = output.write(job)
+    _warn([beam_warning, *job.warnings])  # only now: a failed run prints its error line alone
+    console.print(summary_table(f"sonarcarve process --method {method}", rows))
     return 0
+
+
+def _warn(lines: Iterable[str | None]) -> None:
+    """Each likely mistake as one line ``sonarcarve: warning: ...`` on stderr (not through
+    rich, which would wrap a long line or read brackets as markup)."""
+    for line in lines:
+        if line is not None:
+            print(f"sonarcarve: warning: {line}", file=sys.stderr)
+
+
+def _first_checked(chunks: Iterable[ReadingBatch], found: list[str]) -> Iterator[ReadingBatch]:
+    """``chunks`` unchanged; the likely mistakes of the first (about 15,000 readings, enough
+    to see a unit) added to ``found``, so that a streamed log costs no extra pass."""
+    first = True
+    for batch in chunks:
+        if first:
+            found.extend(likely_mistakes(batch))
+            first = False
+        yield batch
 
 
 def _bag_grid_resolution(given: float | None, output: str, out: Path) -> float:
@@ -335,10 +368,13 @@ def _write_csv(job: _Job) -> list[tuple[str, str]]:
     line stops the run with nothing written, as the map is written only at the end."""
     sonar = job.sonar()
     if is_bag(job.source):
-        result = process_readings(job.bag.readings(job.bag.read(job.source)), sonar,
-                                  reading_filter=job.reading_filter, map_filter=job.map_filter)
+        batch = job.bag.readings(job.bag.read(job.source))
+        job.warnings.extend(likely_mistakes(batch))
+        result = process_readings(batch, sonar, reading_filter=job.reading_filter,
+                                  map_filter=job.map_filter)
     else:
-        result = _run(job.source, sonar, job.method, job.reading_filter, job.map_filter)
+        result = _run(job.source, sonar, job.method, job.reading_filter, job.map_filter,
+                      job.warnings)
     write_map_csv(result.global_map, job.out)
     return _summary_rows(result, job.out)
 
@@ -351,6 +387,7 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
         copy_from: Path | None = job.source
     else:
         batch, parent, child, copy_from = read_readings_csv(job.source), "", "", None
+    job.warnings.extend(likely_mistakes(batch))
     grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
             CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
     report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
@@ -367,6 +404,7 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
 def _write_rrd(job: _Job) -> list[tuple[str, str]]:
     """A Rerun recording of the run (no walls: a log has no ground truth)."""
     batch = _read_whole(job)
+    job.warnings.extend(likely_mistakes(batch))
     global_map = write_rerun(job.out, batch, job.sonar())
     return [("readings in", f"{len(batch):,}"), ("points out", f"{len(global_map):,}"),
             ("recording written to", str(job.out))]
@@ -460,9 +498,11 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,
-         reading_filter: ReadingFilter | None, map_filter: MapFilter | None) -> ProcessResult:
-    """Map the file ``readings`` with ``sonar``, with a progress bar for long logs."""
-    chunks = iter_readings_csv(readings)
+         reading_filter: ReadingFilter | None, map_filter: MapFilter | None,
+         warnings: list[str]) -> ProcessResult:
+    """Map the file ``readings`` with ``sonar``, with a progress bar for long logs; the likely
+    mistakes of its first block added to ``warnings``."""
+    chunks = _first_checked(iter_readings_csv(readings), warnings)
     rows = count_data_lines(readings)  # the bar's total, from the line breaks alone
     if rows < _PROGRESS_MIN_READINGS:
         return process_chunks(chunks, sonar, reading_filter=reading_filter,

@@ -126,7 +126,10 @@ def arc_box(ox: float, oy: float, r: float, lo: float,
             hi: float) -> tuple[float, float, float, float]:
     """Box ``(xmin, xmax, ymin, ymax)`` of the arc ``o + r e(τ)``, ``τ ∈ [lo, hi]``, padded.
 
-    The extremes are at the ends and where ``τ`` crosses a multiple of π/2.
+    The extremes are at the ends and where ``τ`` crosses a multiple of π/2: at most four
+    crossings matter (four consecutive multiples already reach every side), so the loop runs at
+    most four times whatever the angles; an unbounded ``while`` never ended for ``lo`` = 1e20,
+    where ``ceil(lo / (π/2))`` overflows int64 (and ``k + 1 == k`` in float64 beyond 2**53).
     """
     c1 = math.cos(lo)
     s1 = math.sin(lo)
@@ -138,7 +141,9 @@ def arc_box(ox: float, oy: float, r: float, lo: float,
     ymax = max(s1, s2)
     quarter = 0.5 * math.pi
     k = math.ceil(lo / quarter)
-    while k * quarter <= hi:
+    for _ in range(4):
+        if k * quarter > hi:
+            break
         m = k % 4
         if m == 0:
             xmax = 1.0

@@ -32,6 +32,8 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
+import stat
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,12 +43,14 @@ import numpy as np
 
 from sonarcarve.errors import ConfigError
 from sonarcarve.io.atomic import atomic_text
-from sonarcarve.io.errors import InputError, parse_number
-from sonarcarve.readings import ReadingBatch, ReadingsError
+from sonarcarve.io.errors import InputError, parse_number, shorten
+from sonarcarve.io.sanity import csv_shape_hint
+from sonarcarve.readings import MAX_READING_RANGE, ReadingBatch, ReadingsError
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "BLOCK_SIZE",
+    "MAX_LINE_BYTES",
     "READINGS_COLUMNS",
     "count_data_lines",
     "iter_readings_csv",
@@ -60,6 +64,10 @@ READINGS_COLUMNS = ("t", "sensor", "x", "y", "theta", "range")
 _OPTIONAL = ("beam_width", "max_range")
 #: Bytes read at a time by :func:`iter_readings_csv` (about 15,000 rows of a typical log).
 BLOCK_SIZE = 1 << 20
+#: Longest line read, bytes: a readings row is about 64 bytes and a header a few hundred, so a
+#: longer line means the file is no readings CSV (a binary file, a log without line breaks),
+#: and it is refused at once instead of being read whole into memory.
+MAX_LINE_BYTES = 1 << 20
 _BOM = b"\xef\xbb\xbf"
 _ROW_BYTES = 64  # a typical row's length, to size the csv module's batches like the blocks
 
@@ -78,7 +86,11 @@ def read_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
         or column, a duplicated column name, a line with more or fewer fields than the header,
         a blank line before the last data line, a non-numeric, NaN or infinite value, a sensor
         that is not a whole number, range <= 0, beam width outside (0, π), time going
-        backwards, ``range`` = ``inf`` with no max range known, a range beyond the max range.
+        backwards, ``range`` = ``inf`` with no max range known, a range beyond the max range,
+        a value beyond the bounds of :func:`~sonarcarve.readings.check_reading`; a file that is
+        not text (a NUL byte) or has a line longer than :data:`MAX_LINE_BYTES`. A missing
+        column's message adds a hint when the header looks separated by ``;`` or tabs, or in
+        capitals (:func:`~sonarcarve.io.sanity.csv_shape_hint`).
     """
     batches = list(iter_readings_csv(path, block_size=block_size, max_range=max_range))
     if len(batches) == 1:
@@ -121,8 +133,9 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
         msg = f"block_size must be at least 1 byte, got {block_size}"
         raise ValueError(msg)
     if max_range is not None and not (isinstance(max_range, int | float)
-                                      and 0.0 < max_range < math.inf):
-        msg = f"max_range must be a finite number > 0 metres, got {max_range!r}"
+                                      and 0.0 < max_range <= MAX_READING_RANGE):
+        msg = (f"max_range must be a finite number > 0 metres, at most "
+               f"{MAX_READING_RANGE:,.0f}, got {max_range!r}")
         raise ConfigError(msg)
     try:
         handle = path.open("rb")
@@ -142,14 +155,20 @@ def count_data_lines(path: str | Path, *, block_size: int = BLOCK_SIZE) -> int:
 
     Exact for a file :func:`iter_readings_csv` reads without error whose line breaks are ``\\n``
     or ``\\r\\n`` and whose fields hold none (the common case): meant as the total of a progress
-    bar. Blank lines at the end are not counted. 0 for a missing or unreadable file.
+    bar. Blank lines at the end are not counted. 0 for a missing or unreadable file, for one
+    that is not a regular file (a device or a pipe: counting would never end, or consume it)
+    and for one with a NUL byte (which the reader refuses).
     """
     breaks = 0
     tail = 0  # line breaks after the last byte of content
     content = False
     try:
         with Path(path).open("rb") as handle:
+            if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+                return 0
             while block := handle.read(block_size):
+                if b"\0" in block:
+                    return 0
                 breaks += block.count(b"\n")
                 stripped = block.rstrip(b"\r\n")
                 if stripped:
@@ -183,6 +202,11 @@ class _Blocks:
     Blank lines at the end of a block are held back and put in front of the next block, so
     that blank lines at the end of the file, which are harmless, are never seen at all: a block
     ends with content, and blank lines are only ever met with content after them.
+
+    A file that is not text stops the iteration as soon as it is read, so that ``/dev/zero`` or
+    a binary file fails at once instead of filling the memory: a NUL byte (after the lines
+    before its own, so that an earlier bad line is still the one named, whatever the block
+    size), or a line longer than :data:`MAX_LINE_BYTES`.
     """
 
     def __init__(self, path: Path, handle: IO[bytes], block_size: int) -> None:
@@ -204,6 +228,13 @@ class _Blocks:
             if first and (buffer.startswith(_BOM) or not _BOM.startswith(buffer[:3])):
                 buffer = buffer.removeprefix(_BOM)  # once the first 3 bytes are known
                 first = False
+            # Only the new bytes can hold a NUL or end the line that ``pending`` began (0 when
+            # a byte-order mark was just dropped from them).
+            new = max(0, len(buffer) - len(data))
+            nul = buffer.find(b"\0", new) if b"\0" in data else -1
+            self._check_line_length(buffer, new, nul)
+            if nul >= 0:
+                yield from self._not_text(buffer, nul)
             if not data:  # end of file: what is left is the last line(s), blank lines dropped
                 content = buffer.rstrip(b"\r\n")
                 if content:
@@ -217,6 +248,34 @@ class _Blocks:
             end = len(content) + (2 if buffer.startswith(b"\r\n", len(content)) else 1)
             pending = buffer[end:]
             yield self._block(buffer[:end])
+
+    def _check_line_length(self, buffer: bytes, new: int, nul: int) -> None:
+        """Raise if the line running through ``buffer[new]`` (the first byte read last) is
+        longer than :data:`MAX_LINE_BYTES`, counted up to its end, the NUL or the buffer's end.
+
+        Lines that begin and end within one read are at most ``block_size`` bytes long.
+        """
+        start = buffer.rfind(b"\n", 0, new) + 1
+        stop = buffer.find(b"\n", new)
+        stop = len(buffer) if stop < 0 else stop
+        if nul >= 0:
+            stop = min(stop, nul)
+        if stop - start > MAX_LINE_BYTES:
+            line = self.line + buffer.count(b"\n", 0, start)
+            msg = (f"{self.path}: line {line} is longer than {MAX_LINE_BYTES >> 20} MiB: "
+                   "not a readings CSV")
+            raise InputError(msg)
+
+    def _not_text(self, buffer: bytes, nul: int) -> Iterator[_Block]:
+        """The whole lines before the one with the NUL byte at ``buffer[nul]``, then the error
+        (worded as :func:`~sonarcarve.io.errors.read_text` words it)."""
+        line = self.line + buffer.count(b"\n", 0, nul)
+        content = buffer[: buffer.rfind(b"\n", 0, nul) + 1].rstrip(b"\r\n")
+        if content:
+            end = len(content) + (2 if buffer.startswith(b"\r\n", len(content)) else 1)
+            yield self._block(buffer[:end])
+        msg = f"{self.path}: not text (NUL byte at line {line})"
+        raise InputError(msg)
 
     def _block(self, raw: bytes) -> _Block:
         try:
@@ -490,7 +549,10 @@ def _check_header(path: Path, header: list[str]) -> None:
         seen.add(name)
     missing = [name for name in READINGS_COLUMNS if name not in header]
     if missing:
-        msg = f"{path}: line 1, missing column(s) {', '.join(missing)} (header: {','.join(header)})"
+        line = ",".join(header)
+        hint = csv_shape_hint(line)
+        msg = (f"{path}: line 1, missing column(s) {', '.join(missing)} (header: {shorten(line)})"
+               f"{'' if hint is None else f'; {hint}'}")
         raise InputError(msg)
 
 

@@ -31,7 +31,11 @@ _COLUMNS = ("t", "sensor", "x", "y", "theta", "range")
 def likely_mistakes(batch: ReadingBatch) -> list[str]:
     """One line per probable unit mistake in ``batch`` (empty when it looks right).
 
-    - ``theta`` beyond ±2π: probably degrees;
+    - ``theta`` beyond ±2π: probably degrees, if it is so from the first reading on or jumps
+      by more than 2π between two readings (a ring of sensors in degrees does at every turn
+      of its firing order). A log in radians whose heading was unwrapped (as ``convert
+      rosbag`` writes it) starts within ±2π and drifts by small steps beyond it as the robot
+      turns round: that is no mistake;
     - ranges with a median of :data:`SUSPECT_MEDIAN_RANGE` m or more: probably centimetres or
       millimetres;
     - a ``beam_width`` below 1 degree: probably another unit (beams are 7-60 degrees).
@@ -45,11 +49,18 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
     >>> likely_mistakes(ReadingBatch.from_arrays(t=[0], sensor=[0], x=[0], y=[0], theta=[0.5],
     ...                                          range=[2.0]))
     []
+    >>> turning = np.linspace(0.0, 20.0, 200)  # radians, unwrapped: three turns and more
+    >>> likely_mistakes(ReadingBatch.from_arrays(t=turning, sensor=np.zeros(200, int),
+    ...     x=np.zeros(200), y=np.zeros(200), theta=turning, range=np.full(200, 2.0)))
+    []
     """
     found: list[str] = []
     if len(batch.theta):
+        full_turn = 2.0 * math.pi + 1e-9
         biggest = float(np.max(np.abs(batch.theta)))
-        if biggest > 2.0 * math.pi + 1e-9:
+        if biggest > full_turn and (abs(float(batch.theta[0])) > full_turn
+                                    or float(np.max(np.abs(np.diff(batch.theta)),
+                                                    initial=0.0)) > full_turn):
             found.append(f"theta reaches {biggest:g} rad, beyond ±2π: is it in degrees? "
                          "(readings CSV theta is radians)")
     ranges = batch.range[np.isfinite(batch.range)]
