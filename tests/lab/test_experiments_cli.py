@@ -14,7 +14,7 @@ from sonarcarve.lab.report import APPENDIX_BEGIN_MARKER as APPENDIX_BEGIN
 from sonarcarve.lab.report import APPENDIX_END_MARKER as APPENDIX_END
 from sonarcarve.lab.report import BEGIN_MARKER, END_MARKER
 
-METHODS = ("atm", "carving", "combined", "centerline")
+METHODS = ("atm", "carving", "combined", "centerline", "evidence")
 
 
 @pytest.fixture(scope="module")

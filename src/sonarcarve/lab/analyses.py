@@ -67,7 +67,7 @@ __all__ = [
 
 #: Method CLI name -> the label used in results (the paper's names).
 METHOD_LABELS = {"centerline": "centerline", "carve": "carving", "atm": "atm",
-                 "combined": "combined"}
+                 "combined": "combined", "evidence": "evidence"}
 #: Range bins of Fig. 10-12, metres: 0.5 m wide up to the Scout2's 6.477 m maximum range.
 RANGE_EDGES = tuple(np.round(np.arange(0.0, 7.0 + 1e-9, 0.5), 3).tolist())
 #: Fig. 4: the facing wall "shows" once this many local-map points lie within the radius of it.

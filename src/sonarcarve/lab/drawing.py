@@ -27,9 +27,10 @@ __all__ = [
 ]
 
 #: One colour per method (by its results label), the same in every figure: centerline, carved
-#: and ATM points as in :data:`~sonarcarve.plotting.SOURCE_COLORS`, combined in purple.
+#: and ATM points as in :data:`~sonarcarve.plotting.SOURCE_COLORS`, combined in purple,
+#: evidence in orange.
 METHOD_COLORS = {"atm": "#2ca02c", "carving": "#1f77b4", "combined": "#9467bd",
-                 "centerline": "#d62728"}
+                 "centerline": "#d62728", "evidence": "#ff7f0e"}
 
 
 def new_figure(rows: int = 1, cols: int = 1, width: float = 7.0, height: float = 4.5,

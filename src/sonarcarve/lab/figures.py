@@ -42,7 +42,7 @@ __all__ = [
 ]
 
 
-METHOD_ORDER = ("atm", "carving", "combined", "centerline")
+METHOD_ORDER = ("atm", "carving", "combined", "centerline", "evidence")
 
 
 def _values(seq: Sequence[float | None]) -> npt.NDArray[np.float64]:
@@ -72,13 +72,18 @@ def _own_axes(ax: Axes | None, width: float = 7.0, height: float = 4.5) -> tuple
     return fig, axes[0, 0]
 
 
+#: Line styles of Fig. 10 that differ from ``-o``.
+_FIG10_STYLE = {"combined": "--", "evidence": "-.^"}
+
+
 def plot_fig10(fig10: JsonDict, ax: Axes | None = None) -> Figure:
     """Paper Fig. 10: percentage of history arcs unprocessed, by range (``fig10``: binned
     curves by method label)."""
     fig, ax = _own_axes(ax)
-    for label in ("atm", "carving", "combined"):
-        _binned_line(ax, fig10[label], label, METHOD_COLORS[label],
-                     style="-o" if label != "combined" else "--")
+    for label in ("atm", "carving", "combined", "evidence"):
+        if label in fig10:
+            _binned_line(ax, fig10[label], label, METHOD_COLORS[label],
+                         style=_FIG10_STYLE.get(label, "-o"))
     ax.set_xlabel("range of the reading (m)")
     ax.set_ylabel("unprocessed (% of history arcs)")
     ax.set_title("Fig. 10: unprocessed arcs by range (office tour; band: min-max over seeds)")
@@ -113,6 +118,9 @@ def plot_fig12(f12: JsonDict, ax: Axes | None = None) -> Figure:
     _binned_line(ax, f12["centerline"], "centerline (E_m = φ/2)", METHOD_COLORS["centerline"])
     _binned_line(ax, f12["combined"], "combined (measured)", METHOD_COLORS["combined"],
                  style="--")
+    if "evidence" in f12:
+        _binned_line(ax, f12["evidence"], "evidence (measured)", METHOD_COLORS["evidence"],
+                     style="-.^")
     ax.axhline(f12["atm_bound"], color=METHOD_COLORS["atm"], ls="-",
                label=f"ATM theoretical bound (eq. 5.4 × δ) = {f12['atm_bound']:.3f} m")
     ax.set_xlabel("range of the reading (m)")
@@ -138,26 +146,30 @@ def plot_fig04(tj: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     """Paper Fig. 4: distance from the facing wall when each local map first shows it.
 
     Left: bars (mean over seeds, whiskers min-max) for all points and for refined points only;
-    right: the local maps of ATM (refined points only, as in the paper), centerline and carving
-    when the robot is about 4 m from the wall (seed 0).
+    right: the local maps of ATM (refined points only, as in the paper), centerline, carving
+    and evidence when the robot is about 4 m from the wall (seed 0).
     """
     snaps = (artifacts or {}).get("snapshots") or {}
-    panels = [m for m in ("atm", "centerline", "carving") if snaps.get(m)]
+    panels = [m for m in ("atm", "centerline", "carving", "evidence") if snaps.get(m)]
     fig, axes = new_figure(1, 1 + len(panels), width=4.2 + 3.0 * len(panels), height=5.0)
     ax = axes[0, 0]
-    x = np.arange(len(METHOD_ORDER))
+    order = [m for m in METHOD_ORDER if m in tj["all"]]
+    x = np.arange(len(order))
     for offset, kind, hatch in ((-0.2, "all", ""), (0.2, "refined", "//")):
-        means = _values([tj[kind][m]["mean"] for m in METHOD_ORDER])
-        lo = means - _values([tj[kind][m]["min"] for m in METHOD_ORDER])
-        hi = _values([tj[kind][m]["max"] for m in METHOD_ORDER]) - means
+        means = _values([tj[kind][m]["mean"] for m in order])
+        lo = means - _values([tj[kind][m]["min"] for m in order])
+        hi = _values([tj[kind][m]["max"] for m in order]) - means
         ax.bar(x + offset, np.nan_to_num(means), 0.4, yerr=np.nan_to_num([lo, hi]),
-               color=[METHOD_COLORS[m] for m in METHOD_ORDER], hatch=hatch, alpha=0.85,
+               color=[METHOD_COLORS[m] for m in order], hatch=hatch, alpha=0.85,
                edgecolor="k", label="any point" if kind == "all" else "refined points only")
         for xi, mean in zip(x + offset, means, strict=True):
             if not np.isfinite(mean):
                 ax.text(xi, 0.1, "never", rotation=90, ha="center", va="bottom", fontsize=8)
-    ax.set_xticks(x, list(METHOD_ORDER))
+    ax.set_xticks(x, order, rotation=30, ha="right")
     ax.set_ylabel("distance from the facing wall (m)")
+    # Head room for the legend above the bars.
+    tallest = np.nanmax(_values([tj["all"][m]["max"] for m in order]), initial=0.0)
+    ax.set_ylim(0, 1.3 * tallest if np.isfinite(tallest) and tallest > 0 else None)
     ax.set_title(f"≥ {tj['points']} points within {tj['radius_m']:g} m of the wall")
     ax.legend(fontsize="small")
     for k, method in enumerate(panels, start=1):
@@ -188,21 +200,26 @@ def plot_openings(op: JsonDict, artifacts: JsonDict | None = None) -> Figure:
     """
     snaps = (artifacts or {}).get("snapshots") or {}
     worlds = [w for w in ("doorway", "narrow-hallway") if snaps.get(w)]
-    methods = ["centerline", "atm", "carving", "combined"]
+    order = [m for m in METHOD_ORDER if m in op]
+    methods = [m for m in ("centerline", "atm", "carving", "combined", "evidence") if m in op]
     rows = max(1, len(worlds))
     cols = 1 + (len(methods) if worlds else 0)
     fig, axes = new_figure(rows, cols, width=4.5 + 2.6 * (cols - 1), height=3.6 * rows)
     ax = axes[0, 0]
-    distances = sorted(op[METHOD_ORDER[0]], key=float)
+    distances = sorted(op[order[0]], key=float)
     x = np.arange(len(distances))
-    for k, m in enumerate(METHOD_ORDER):
-        ax.bar(x + (k - 1.5) * 0.2, [op[m][d] for d in distances], 0.2,
+    bar = 0.8 / len(order)
+    for k, m in enumerate(order):
+        ax.bar(x + (k - 0.5 * (len(order) - 1)) * bar,
+               [np.nan if op[m][d] is None else op[m][d] for d in distances], bar,
                color=METHOD_COLORS[m], label=m)
     ax.set_xticks(x, [f"{float(d):g} m" for d in distances])
     ax.set_xlabel("distance before the opening")
     ax.set_ylabel("runs with the opening passable (%)")
-    ax.set_ylim(0, 105)
-    ax.legend(fontsize="small", loc="lower left")
+    ax.set_ylim(0, 130)
+    ax.set_yticks(range(0, 101, 20))
+    ax.legend(fontsize="small", loc="upper center", ncol=3, columnspacing=0.8,
+              handlelength=1.2)
     ax.set_title("all opening runs")
     for r in range(1, rows):
         axes[r, 0].axis("off")
@@ -259,7 +276,7 @@ def plot_fig13(threshold: float, artifacts: JsonDict | None = None) -> Figure | 
 def plot_true_error(by_range: JsonDict, ax: Axes | None = None) -> Figure:
     """True error of local-map points by range: median (solid) and 90th percentile (dashed)."""
     fig, ax = _own_axes(ax)
-    for m in METHOD_ORDER:
+    for m in [m for m in METHOD_ORDER if m in by_range]:
         entry = by_range[m]
         _binned_line(ax, entry["median"], f"{m} median", METHOD_COLORS[m])
         _binned_line(ax, entry["p90"], f"{m} p90", METHOD_COLORS[m], style=":")
@@ -274,13 +291,14 @@ def plot_true_error(by_range: JsonDict, ax: Axes | None = None) -> Figure:
 
 def plot_latency_accuracy(la: JsonDict) -> Figure:
     """Share of wall patches whose local-map points are right, against time and distance."""
-    tolerances = [k for k in la[METHOD_ORDER[0]] if k != "patches_seen"]
+    order = [m for m in METHOD_ORDER if m in la]
+    tolerances = [k for k in la[order[0]] if k != "patches_seen"]
     fig, axes = new_figure(len(tolerances), 2, width=11.0, height=3.6 * len(tolerances))
     for r, tol in enumerate(tolerances):
         for c, (grid, key, unit) in enumerate(((la["grid_s"], "curve_s", "s"),
                                                (la["grid_m"], "curve_m", "m"))):
             ax = axes[r, c]
-            for m in METHOD_ORDER:
+            for m in order:
                 ax.plot(grid, la[m][tol][key], color=METHOD_COLORS[m], label=m)
             ax.set_xlabel(f"delay since the patch came into view ({unit})" if unit == "s"
                           else "distance travelled since the patch came into view (m)")
@@ -310,6 +328,7 @@ _SWEEP_STYLE: dict[str, dict[str, Any]] = {
     "combined": {"ls": "--", "marker": "^", "lw": 1.5, "ms": 5, "zorder": 3},
     "atm": {"ls": "-", "marker": "o", "lw": 1.3, "ms": 4, "zorder": 2},
     "centerline": {"ls": ":", "marker": "D", "lw": 1.5, "ms": 3.5, "zorder": 2},
+    "evidence": {"ls": "-.", "marker": "v", "lw": 1.5, "ms": 4, "zorder": 3},
 }
 
 
@@ -330,7 +349,7 @@ def plot_sensitivity(sensitivity: JsonDict) -> Figure:
         x = np.asarray(entry["values"], dtype=np.float64)
         for c, (key, label) in enumerate(measures):
             ax = axes[r, c]
-            for m in ("carving", "combined", "atm", "centerline"):
+            for m in ("carving", "combined", "atm", "centerline", "evidence"):
                 if m in entry:
                     (line,) = ax.plot(x, _values(entry[m][key]), color=METHOD_COLORS[m],
                                       label=m, **_SWEEP_STYLE[m])

@@ -21,7 +21,7 @@ __all__ = ["ALL_METHODS", "ExperimentError", "Job", "Settings"]
 
 
 #: Every method, in the order tables list them.
-ALL_METHODS = ("atm", "carve", "combined", "centerline")
+ALL_METHODS = ("atm", "carve", "combined", "centerline", "evidence")
 
 
 @dataclass(frozen=True)

@@ -97,6 +97,7 @@ def _figs_10_12(s: Settings, by_method: Runs) -> dict[str, Any]:
             "centerline": binned_over_seeds(by_method["centerline"], "max_error_by_range"),
             "atm_measured": binned_over_seeds(by_method["atm"], "max_error_by_range"),
             "combined": binned_over_seeds(by_method["combined"], "max_error_by_range"),
+            "evidence": binned_over_seeds(by_method["evidence"], "max_error_by_range"),
             "atm_bound": atm_error_bound(config.min_transversal, config.range_resolution),
         },
     }
@@ -110,6 +111,8 @@ def _fully_carved(by_method: Runs) -> dict[str, Any]:
         "fully_carved_spread": {k: spread(o["removal"][k] for o in carve) for k in main},
         "fully_carved_combined": {k: _mean(o["removal"][k] for o in by_method["combined"])
                                   for k in main},
+        "fully_carved_evidence": {k: _mean(o["removal"][k] for o in by_method["evidence"])
+                                  for k in (*main, "spurious_of_removed")},
     }
 
 

@@ -36,13 +36,18 @@ class OfficeResult:
         ``carved_only`` arcs, each ``mean`` and ``median`` binned curves.
     fig12 : dict
         Fig. 12: binned mean maximum error (metres) of ``carving``, ``centerline``,
-        ``atm_measured`` and ``combined``, and ATM's bound ``atm_bound`` (eq. 5.4 times δ).
+        ``atm_measured``, ``combined`` and ``evidence``, and ATM's bound ``atm_bound``
+        (eq. 5.4 times δ).
     fully_carved : dict
         Carving's removal shares (:func:`~sonarcarve.lab.analyses.removal_summary`), means.
     fully_carved_spread : dict
         ``share``, ``spurious_removed`` and ``true_lost`` as spreads.
     fully_carved_combined : dict
         The same three means for the combined method.
+    fully_carved_evidence : dict
+        The same three means and ``spurious_of_removed`` for the evidence method, whose
+        fully carved is: no bin of the arc's profile survived (arcs its confidence leaves out
+        of the map are not counted).
     true_error : dict
         Per method, ``median``, ``p90`` and ``mean`` true error of local-map points, metres.
     true_error_spread : dict
@@ -72,6 +77,7 @@ class OfficeResult:
     fully_carved: dict[str, Any]
     fully_carved_spread: dict[str, JsonDict]
     fully_carved_combined: dict[str, Any]
+    fully_carved_evidence: dict[str, Any]
     true_error: dict[str, JsonDict]
     true_error_spread: dict[str, JsonDict]
     true_error_by_range: dict[str, JsonDict]

@@ -12,7 +12,11 @@ from sonarcarve.lab.formatting import fmt_num, fmt_seeds, fmt_spread, md_image
 from sonarcarve.lab.plan import Settings
 from sonarcarve.typing import JsonDict
 
-__all__ = ["PAPER", "fig13", "figs_10_12", "fully_carved", "latency", "table1", "true_error"]
+__all__ = ["METHODS", "PAPER", "fig13", "figs_10_12", "fully_carved", "latency", "table1",
+           "true_error"]
+
+#: Methods in the order the tables list them (result labels).
+METHODS = ("centerline", "atm", "carving", "combined", "evidence")
 
 #: The paper's numbers (section 5), where it gives one.
 PAPER: JsonDict = {
@@ -30,10 +34,12 @@ def table1(r: OfficeResult) -> list[str]:
            "| method | paper | ours: all history rows | ours: live arcs only |",
            "|---|---:|---:|---:|"]
     names = {"atm": "ATM", "carving": "Arc carving", "combined": "Arc carving and ATM",
-             "centerline": "Centerline"}
+             "centerline": "Centerline", "evidence": "Evidence carving (beyond the paper)"}
     for key, name in names.items():
-        out.append(f"| {name} | {paper[key]:.2f} | {fmt_spread(spread[key], 2)} | "
-                   f"{fmt_num(alive.get(key), 2)} |")
+        if key not in spread:
+            continue
+        out.append(f"| {name} | {_paper_cell(paper.get(key))} | "
+                   f"{fmt_spread(spread[key], 2)} | {fmt_num(alive.get(key), 2)} |")
     out += ["", "Sampled every 16 readings once the history is full. *All history rows* is the "
             "library's measure (`SonarMethod.measures().unprocessed_share`; also the one of "
             "Fig. 10 and the sensitivity tables below): an arc carving removed (fully carved, "
@@ -42,6 +48,10 @@ def table1(r: OfficeResult) -> list[str]:
             "still alive: *live arcs only* leaves removed arcs out, as the paper would."]
     out += ["", *_table1_sentences(r), ""]
     return out
+
+
+def _paper_cell(value: float | None) -> str:
+    return "not in the paper" if value is None else f"{value:.2f}"
 
 
 def _share_below(entry: JsonDict, limit: float) -> float:
@@ -89,7 +99,23 @@ def _table1_sentences(r: OfficeResult) -> list[str]:
         "the smaller of the two: one history, an arc is processed when either model processed "
         "it." + _combined_sentence(r.fig10, r.table1),
         "- Centerline: 0 % in both, by definition.",
+        *_evidence_table1(r),
     ]
+
+
+def _evidence_table1(r: OfficeResult) -> list[str]:
+    """Evidence carving's Table I share against carving's, and what it measures."""
+    t1, alive = r.table1, r.table1_alive_only
+    if t1.get("evidence") is None:
+        return []
+    return [
+        f"- Evidence carving (`evidence`, beyond the paper): {t1['evidence']:.1f} % of all "
+        f"history rows ({fmt_num(alive.get('evidence'), 1)} % of live arcs only) against "
+        f"carving's {t1['carving']:.1f} %. Not the same test: an evidence arc counts as "
+        "processed once any newer reading added evidence to it (free space, support or "
+        "occlusion) or ATM found a crossing, a carving arc only once a newer sector actually "
+        "cut it. So a processed evidence arc need not have moved its point yet: the "
+        "latency-accuracy table below is the fair comparison of the two."]
 
 
 def _combined_sentence(f10: JsonDict, t1: JsonDict) -> str:
@@ -157,8 +183,32 @@ def fully_carved(r: OfficeResult) -> list[str]:
         "so newer readings carve away arcs that were right. The paper had no ground truth to "
         "see this."
         + _lost_sentence(r),
+        *_evidence_removal(r),
         "",
     ]
+
+
+def _evidence_removal(r: OfficeResult) -> list[str]:
+    """Evidence carving's removal shares against carving's (fully carved or split)."""
+    ev, fc = r.fully_carved_evidence, r.fully_carved
+    tb = r.truth_breakdown
+    if not ev or ev.get("share") is None:
+        return []
+    spurious = ""
+    if "evidence" in tb and "carving" in tb:
+        spurious = (f" Its confidence leaves more out of the map: spurious readings make "
+                    f"{fmt_num(tb['evidence']['spurious_share'])} % of its global map's points "
+                    f"against {fmt_num(tb['carving']['spurious_share'])} % of carving's (true "
+                    "error section below).")
+    return [
+        f"- Evidence carving (`evidence`): fully carved here means no bin of the arc's "
+        "profile survived (the fate the method reports); it never drops an arc as split, and "
+        "arcs left out of its map for low confidence are not counted. It fully carves "
+        f"{fmt_num(ev['share'])} % of all arcs: {fmt_num(ev['spurious_removed'])} % of the "
+        f"spurious readings and {fmt_num(ev['true_lost'])} % of the direct ones "
+        f"({fmt_num(ev['spurious_of_removed'])} % of them spurious); carving, counting split "
+        f"arcs too, removes {fmt_num(fc['spurious_removed_or_split'])} % of the spurious "
+        f"readings and {fmt_num(fc['true_lost_or_split'])} % of the direct ones." + spurious]
 
 
 def _lost_sentence(r: OfficeResult) -> str:
@@ -231,6 +281,38 @@ def figs_10_12(r: OfficeResult, page: Page) -> list[str]:
     return out
 
 
+def _evidence_latency(r: OfficeResult, share5: dict[str, float | None]) -> list[str]:
+    """Evidence carving's latency to a right local map against carving's (issue 9's target:
+    no worse than carving)."""
+    la = r.latency_accuracy
+    if "evidence" not in la:
+        return []
+    tols = [k for k in la["carving"] if k != "patches_seen"]
+    parts, worse = [], False
+    for t in tols:
+        e, c = la["evidence"][t], la["carving"][t]
+        parts.append(f"within {float(t) * 100:g} cm {fmt_num(e['resolved_share'], 0)} % of "
+                     f"patches right, median {fmt_num(e['median_s'], 2)} s / "
+                     f"{fmt_num(e['median_m'], 2)} m, against carving's "
+                     f"{fmt_num(c['resolved_share'], 0)} %, {fmt_num(c['median_s'], 2)} s / "
+                     f"{fmt_num(c['median_m'], 2)} m")
+        worse = worse or _worse(e["resolved_share"], c["resolved_share"], higher=True) \
+            or _worse(e["median_s"], c["median_s"], higher=False)
+    return [f"- Evidence carving (`evidence`): {'; '.join(parts)}; "
+            f"{fmt_num(share5.get('evidence'), 0)} % right within 5 s (carving "
+            f"{fmt_num(share5.get('carving'), 0)} %). "
+            + ("Its latency is NOT as good as carving's on this measure: it waits for "
+               "evidence (several weak misses, or support) where one newer sector carves at "
+               "once." if worse else "Its latency is no worse than carving's on this measure.")]
+
+
+def _worse(value: float | None, reference: float | None, *, higher: bool) -> bool:
+    """Whether ``value`` is worse than ``reference`` (``higher``: larger is better)."""
+    if value is None or reference is None:
+        return False
+    return value < reference if higher else value > reference
+
+
 def _span(r: OfficeResult, settings: Settings) -> str:
     """How long the history reaches back on the office tour, in words."""
     runs = r.office_runs
@@ -291,7 +373,7 @@ def fig13(r: OfficeResult, page: Page) -> list[str]:
            "maps of seed 0, whose point counts are in its panel titles.", "",
            "| map | points in the global map | points shown | their true error, median / "
            "p90 (m) |", "|---|---:|---:|---:|"]
-    for m in ("atm", "carving", "combined"):
+    for m in [m for m in ("atm", "carving", "combined", "evidence") if m in f]:
         e = f[m]
         out.append(f"| {m} | {fmt_num(e['points'], 0)} | {fmt_num(e['kept'], 0)} | "
                    f"{fmt_num(e['kept_error_median'], 3)} / {fmt_num(e['kept_error_p90'], 3)} |")
@@ -333,7 +415,7 @@ def true_error(r: OfficeResult, page: Page) -> list[str]:
            "nearest true wall; and of every global-map point.", "",
            "| method | local map: median (m) | local map: p90 (m) | global map: median | "
            "global map: p90 |", "|---|---:|---:|---:|---:|"]
-    for m in ("centerline", "atm", "carving", "combined"):
+    for m in [m for m in METHODS if m in sp]:
         out.append(f"| {m} | {fmt_spread(sp[m]['median'], 3)} | {fmt_spread(sp[m]['p90'], 3)} | "
                    f"{fmt_num(g[m]['median'], 3)} | {fmt_num(g[m]['p90'], 3)} |")
     tb = r.truth_breakdown
@@ -342,7 +424,7 @@ def true_error(r: OfficeResult, page: Page) -> list[str]:
                 "true error of the points from direct readings only (means over seeds):", "",
                 "| method | spurious points (%) | direct points: median (m) | "
                 "direct points: p90 (m) |", "|---|---:|---:|---:|"]
-        for m in ("centerline", "atm", "carving", "combined"):
+        for m in [m for m in METHODS if m in tb]:
             e = tb[m]
             out.append(f"| {m} | {fmt_num(e['spurious_share'])} | "
                        f"{fmt_num(e['direct_error']['median'], 3)} | "
@@ -362,9 +444,25 @@ def true_error(r: OfficeResult, page: Page) -> list[str]:
             "and long arcs carved little or not at all, while the readings carving removes "
             "are mostly short, accurate ones, so its map holds a larger share of long arcs. "
             "Carving plus ATM (combined) has the smallest error: ATM's crossings refine the "
-            "long arcs carving leaves wide.", ""]
+            "long arcs carving leaves wide.", *_evidence_error(r), ""]
     out += md_image(page.figures, "true_error_by_range.png", "true error by range")
     return out
+
+
+def _evidence_error(r: OfficeResult) -> list[str]:
+    """Evidence carving's true error against carving's and centerline's."""
+    te, g = r.true_error, r.true_error_global
+    if "evidence" not in te or te["evidence"]["median"] is None:
+        return []
+    ev, carve, center = te["evidence"], te["carving"], te["centerline"]
+    return [
+        f"- Evidence carving (`evidence`): local-map median {ev['median']:.3f} m and p90 "
+        f"{ev['p90']:.3f} m against carving's {carve['median']:.3f} m and {carve['p90']:.3f} m "
+        f"(centerline {center['median']:.3f} m and {center['p90']:.3f} m); global map "
+        f"{fmt_num(g['evidence']['median'], 3)} / {fmt_num(g['evidence']['p90'], 3)} m against "
+        f"carving's {fmt_num(g['carving']['median'], 3)} / {fmt_num(g['carving']['p90'], 3)} m. "
+        + ("Its tail is the shorter: it keeps fewer spurious points (table above)."
+           if ev["p90"] < carve["p90"] else "Its tail is NOT shorter than carving's.")]
 
 
 def latency(r: OfficeResult, page: Page) -> list[str]:
@@ -379,7 +477,7 @@ def latency(r: OfficeResult, page: Page) -> list[str]:
            "| method | " + " | ".join(f"within {float(t) * 100:g} cm: right (%) | median s | "
                                       "median m" for t in tols) + " |",
            "|---|" + "---:|" * (3 * len(tols))]
-    for m in ("centerline", "atm", "carving", "combined"):
+    for m in [m for m in METHODS if m in la]:
         cells = []
         for t in tols:
             e = la[m][t]
@@ -389,7 +487,7 @@ def latency(r: OfficeResult, page: Page) -> list[str]:
     grid = la["grid_s"]
     at5 = grid.index(5.0) if 5.0 in grid else None
     share5 = {m: la[m][tols[0]]["curve_s"][at5] if at5 is not None else None
-              for m in ("centerline", "atm", "carving", "combined")}
+              for m in METHODS if m in la}
     out += ["", f"- Within 5 s of coming into view, {fmt_num(share5['carving'], 0)} % of "
             "patches are "
             f"right to {float(tols[0]) * 100:g} cm in carving's local map, "
@@ -399,6 +497,6 @@ def latency(r: OfficeResult, page: Page) -> list[str]:
             "at once (walls seen head-on, where even the centerline point is on the wall); the "
             f"step in every curve is the history's span ({_span(r, page.settings)}): a patch's "
             "first, least "
-            "accurate arcs leave the local map then.", ""]
+            "accurate arcs leave the local map then.", *_evidence_latency(r, share5), ""]
     out += md_image(page.figures, "latency_accuracy.png", "latency against accuracy")
     return out

@@ -145,6 +145,34 @@ def _avg(values: list[float]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
+def _below(value: float | None, reference: float | None) -> bool:
+    return value is not None and reference is not None and value < reference
+
+
+def _evidence_sentence(r: OpeningsResult, dist: list[str]) -> list[str]:
+    """Whether evidence carving shows openings passable at least as often as carving (issue
+    9's target), at each distance, and where it does not."""
+    op = r.openings
+    if "evidence" not in op or "carving" not in op:
+        return []
+    ev, carve = op["evidence"], op["carving"]
+    short = [x for x in dist if _below(ev[x], carve[x])]
+    cells = ", ".join(f"{fmt_num(ev[x], 0)} % against {fmt_num(carve[x], 0)} % at {x} m"
+                      for x in dist)
+    if not short:
+        return [f"- Evidence carving (`evidence`): {cells}: at least as often passable as "
+                "with carving at every distance."]
+    by = r.openings_by_world
+    worse = sorted({k for x in short for k, v in by["evidence"].get(x, {}).items()
+                    if _below(v, by["carving"][x].get(k))},
+                   key=lambda k: (k.split()[0], float(k.split()[1])))
+    return [f"- Evidence carving (`evidence`): {cells}: NOT at least as often passable as "
+            f"with carving at {', '.join(f'{x} m' for x in short)}. The runs it loses are "
+            f"{', '.join(worse) if worse else 'none in particular'} (world, width m): "
+            "narrow doors, where its map keeps points in the gap's clear stretch that "
+            "carving's does not."]
+
+
 def markdown(r: OpeningsResult, page: Page) -> list[Part]:
     """The passable shares by distance and the doorway comparison with the paper."""
     op, d = r.openings, r.openings_definition
@@ -162,7 +190,7 @@ def markdown(r: OpeningsResult, page: Page) -> list[Part]:
            "has to go to reach the door or come abreast of the opening).", "",
            "| method | " + " | ".join(f"{x} m before" for x in dist) + " |",
            "|---|" + "---:|" * len(dist)]
-    for m in ("centerline", "atm", "carving", "combined"):
+    for m in [m for m in ("centerline", "atm", "carving", "combined", "evidence") if m in op]:
         out.append(f"| {m} | " + " | ".join(fmt_num(op[m][x], 0, " %") for x in dist) + " |")
     by = r.openings_by_world
     doors = {m: _avg([v for k, v in by.get(m, {}).get(dist[0], {}).items()
@@ -175,7 +203,7 @@ def markdown(r: OpeningsResult, page: Page) -> list[Part]:
             "Side openings seen from a corridor and the "
             "narrow hallway are passable in almost every map: on specular walls few echoes "
             "come from the gap's edges at the angles that would put centerline points inside "
-            "it.", ""]
+            "it.", *_evidence_sentence(r, dist), ""]
     out += md_image(page.figures, "fig02_09_openings.png", "Fig. 2 and 9")
     return [Part(40, out)]
 

@@ -9,6 +9,7 @@ are shared by every value of a parameter that does not change them (history, ε,
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from itertools import pairwise
 from pathlib import Path
@@ -29,12 +30,12 @@ __all__ = ["EXPERIMENT", "SWEEP_MEASURES", "SWEEP_METHODS", "SensitivityResult",
 
 #: Sweep parameter -> (methods it matters to, unit).
 SWEEP_METHODS = {
-    "history": (("carve", "atm", "combined"), "arcs"),
-    "range_tolerance": (("carve", "combined"), "m"),
-    "beam_width_deg": (("carve", "atm", "combined", "centerline"), "deg"),
-    "min_transversal_deg": (("atm", "combined"), "deg"),
-    "speed": (("carve", "atm", "combined", "centerline"), "m/s"),
-    "range_noise": (("carve", "atm", "combined", "centerline"), "m"),
+    "history": (("carve", "atm", "combined", "evidence"), "arcs"),
+    "range_tolerance": (("carve", "combined", "evidence"), "m"),
+    "beam_width_deg": (("carve", "atm", "combined", "centerline", "evidence"), "deg"),
+    "min_transversal_deg": (("atm", "combined", "evidence"), "deg"),
+    "speed": (("carve", "atm", "combined", "centerline", "evidence"), "m/s"),
+    "range_noise": (("carve", "atm", "combined", "centerline", "evidence"), "m"),
 }
 
 #: What each sensitivity run reports (see :func:`~sonarcarve.lab.analyses.analyse_sweep`).
@@ -118,11 +119,13 @@ def markdown(result: SensitivityResult, page: Page) -> list[Part]:
            "parameter changed at a time from the defaults above; simulations shared by every "
            "parameter that does not change them (history, ε, ψ). Median true error of the "
            "local map (m) / unprocessed (% of all history rows, as in Table I) / fully carved "
-           "(%):", ""]
+           "(%; for `evidence`: processed means any evidence or crossing, fully carved means "
+           "not in its map, as in Table I and the fully carved section):", ""]
     for param, entry in sens.items():
         if param == "scenario":
             continue
-        methods = [m for m in ("carving", "atm", "combined", "centerline") if m in entry]
+        methods = [m for m in ("carving", "atm", "combined", "centerline", "evidence")
+                   if m in entry]
         out += [f"**{SWEEP_LABELS[param]}**" if param in SWEEP_LABELS else
                 f"**{param}** ({entry['unit']})", "",
                 "| value | " + " | ".join(methods) + " |", "|---|" + "---:|" * len(methods)]
@@ -171,7 +174,19 @@ def _sweep_sentences(sens: JsonDict) -> list[str]:
         f"m/s; carving's error from {ends('speed', 'carving')} m/s.",
         f"- Range noise: carving's error goes from {ends('range_noise', 'carving')} m, "
         f"ATM's from {ends('range_noise', 'atm')} m, centerline's from "
-        f"{ends('range_noise', 'centerline')} m.", ""]
+        f"{ends('range_noise', 'centerline')} m.",
+        *_evidence_sweeps(sens, ends), ""]
+
+
+def _evidence_sweeps(sens: JsonDict, ends: Callable[..., str]) -> list[str]:
+    """Evidence carving's median true error over each sweep, beside carving's."""
+    swept = [p for p in sens if p != "scenario" and "evidence" in sens[p]]
+    if not swept:
+        return []
+    parts = [f"{SWEEP_LABELS.get(p, p)}: {ends(p, 'evidence')}"
+             + (f" (carving {ends(p, 'carving')})" if "carving" in sens[p] else "")
+             for p in swept]
+    return ["- Evidence carving's median true error: " + "; ".join(parts) + "."]
 
 
 def _psi_sentence(sens: JsonDict) -> str:

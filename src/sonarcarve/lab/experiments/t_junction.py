@@ -99,7 +99,8 @@ def markdown(tj: TJunctionResult, page: Page) -> list[Part]:
            f"{fmt_num(tj.end_distance_m, 2)} m from the wall.", "",
            "| method | any point of the map | refined points only (carved or ATM) |",
            "|---|---:|---:|"]
-    for m in ("atm", "carving", "combined", "centerline"):
+    for m in [m for m in ("atm", "carving", "combined", "centerline", "evidence")
+              if m in tj.all]:
         refined = f"{MISSING} (no refined points)" if m == "centerline" else (
             fmt_spread(tj.refined[m], 2) if tj.refined[m]["mean"] is not None
             else "never during the drive")
