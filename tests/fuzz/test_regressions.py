@@ -125,3 +125,30 @@ def test_arc_box_ends_for_any_angle(lo: float) -> None:
     for angle in (lo, lo + 0.4):
         assert xmin <= math.cos(angle) <= xmax
         assert ymin <= math.sin(angle) <= ymax
+
+
+def _mcap_with_a_huge_summary_record() -> bytes:
+    """The fuzz suite's MCAP bag with the length of its first summary record set beyond any
+    index (found by `make fuzz`: rosbags' read raised OverflowError, a traceback)."""
+    import struct
+
+    from tests.fuzz.test_fuzz_cli import _bags
+
+    data = bytearray(_bags()["run.mcap"])
+    # The footer record ends the file before the 8-byte magic: opcode 0x02, length (u64),
+    # then summary_start (u64), where the summary's first record (opcode, length) begins.
+    footer = len(data) - 8 - (1 + 8 + 8 + 8 + 4)
+    assert data[footer] == 0x02
+    (summary_start,) = struct.unpack_from("<Q", data, footer + 9)
+    assert 0 < summary_start < footer
+    struct.pack_into("<Q", data, summary_start + 1, 15925584226954786420)
+    return bytes(data)
+
+
+@pytest.mark.parametrize("command", [["convert", "rosbag"], ["process"]])
+def test_mcap_with_a_record_length_beyond_any_index(
+        command: list[str], tmp_path: Path, run_cli: Callable[..., tuple[int, str]]) -> None:
+    files = {"run.mcap": _mcap_with_a_huge_summary_record()}
+    code, err = run_cli(tmp_path, files, [*command, "run.mcap", "--out", "out.csv"], "out.csv")
+    assert code == 2
+    assert "run.mcap" in err

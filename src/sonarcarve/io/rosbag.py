@@ -328,7 +328,7 @@ def _read_errors() -> tuple[type[BaseException], ...]:
     errors: tuple[type[BaseException], ...] = (
         AnyReaderError, Reader1Error, Reader2Error, OSError, ValueError, KeyError, IndexError,
         EOFError, struct.error, AssertionError, sqlite3.Error,
-        MemoryError)  # a corrupt MCAP record size asks rosbags for an absurd allocation
+        MemoryError, OverflowError)  # a corrupt MCAP record size: an absurd read
     try:  # rosbags reads sqlite3 storage through apsw where it is installed
         import apsw
     except ImportError:
