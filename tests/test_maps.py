@@ -1,4 +1,4 @@
-"""maps: the chord error bound, point maps, the global-map builder and ``global_map()``.
+"""maps: the chord error bound, point maps, the global-map sinks and ``global_map()``.
 
 Expected values are written out by hand (or from the paper's formulas with the numbers put in),
 never computed by the function under test.
@@ -11,9 +11,17 @@ import math
 import numpy as np
 import pytest
 
-from sonarcarve.maps import GlobalMap, GlobalMapBuilder, LocalMap, PointSource, chord_error
-from sonarcarve.methods import CenterlineMethod
-from sonarcarve.readings import Reading
+from sonarcarve.maps import (
+    CallbackSink,
+    CountingSink,
+    GlobalMap,
+    GlobalMapBuilder,
+    LocalMap,
+    PointSource,
+    chord_error,
+)
+from sonarcarve.methods import METHODS, CenterlineMethod, MethodConfig, make_method
+from sonarcarve.readings import Reading, ReadingBatch
 
 # -- chord_error (eq. 5.2: E_m = θd / 2; eq. 5.3: E_s = 2 r sin(E_m / 2)) -------------------
 
@@ -217,3 +225,86 @@ def test_global_map_across_many_history_turnovers() -> None:
     final = method.finish()
     assert final.reading_id.tolist() == list(range(40))
     np.testing.assert_allclose(final.xy, [_expected_xy(k) for k in range(40)], atol=1e-12)
+
+
+# -- other sinks: SonarMethod.set_global_sink ---------------------------------------------------
+
+
+def test_callback_and_counting_sinks() -> None:
+    blocks: list[GlobalMap] = []
+    callback, counting = CallbackSink(blocks.append), CountingSink()
+    for sink in (callback, counting):
+        sink.commit(_points(GlobalMap, [0, 1]))
+        sink.commit(GlobalMap.empty())
+        sink.commit(_points(GlobalMap, [2]))
+    assert [b.reading_id.tolist() for b in blocks] == [[0, 1], [2]]  # no empty block passed on
+    assert callback.points == counting.points == 3
+    assert counting.by_source.tolist() == [3, 0, 0]  # _points places centerline points
+
+
+def _room_log(n: int, seed: int = 0) -> ReadingBatch:
+    """A robot crossing a 6 m x 4 m room, 8 sensors, ranges to the walls plus noise: enough
+    overlap for carving and ATM to act."""
+    rng = np.random.default_rng(seed)
+    k = np.arange(n)
+    sensor = k % 8
+    x, y = 1.0 + 4.0 * k / n, 2.0 + 0.3 * np.sin(k / 50)
+    theta = 2 * np.pi * sensor / 8 + 0.1 * rng.standard_normal(n)
+    c, s = np.cos(theta), np.sin(theta)
+    with np.errstate(divide="ignore"):
+        to_x = np.where(c > 0, (6.0 - x) / c, np.where(c < 0, -x / c, np.inf))
+        to_y = np.where(s > 0, (4.0 - y) / s, np.where(s < 0, -y / s, np.inf))
+    r = np.minimum(to_x, to_y) + 0.01 * rng.standard_normal(n)
+    return ReadingBatch.from_arrays(t=0.01 * k, sensor=sensor, x=x, y=y, theta=theta,
+                                    range=np.maximum(r, 0.1))
+
+
+@pytest.mark.parametrize("name", sorted(METHODS))
+def test_a_sink_gets_every_point_once_in_reading_order(name: str) -> None:
+    batch = _room_log(600)
+    config = MethodConfig(history_size=40)
+    expected = make_method(name, config)
+    expected.add_many(batch[:250])
+    expected.add_many(batch[250:])
+    whole = expected.finish()
+    blocks: list[GlobalMap] = []
+    method = make_method(name, config)
+    method.set_global_sink(CallbackSink(blocks.append))
+    method.add_many(batch[:250])
+    for k in range(250, 300):
+        method.add(batch[k])
+    method.add_many(batch[300:])
+    assert type(method.finish()) is GlobalMap
+    assert method.committed_points == len(whole) > 0
+    streamed = GlobalMap.concatenate(blocks)
+    assert np.all(np.diff(streamed.reading_id) > 0)  # once each, in reading order
+    for field in ("reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range",
+                  "confidence"):
+        np.testing.assert_array_equal(getattr(streamed, field), getattr(whole, field), field)
+
+
+def test_with_a_sink_the_method_keeps_no_map(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse(self: GlobalMapBuilder, points: GlobalMap) -> None:
+        raise AssertionError("the in-memory builder was used")
+
+    monkeypatch.setattr(GlobalMapBuilder, "commit", refuse)
+    method = CenterlineMethod(history_size=3)
+    sink = CountingSink()
+    method.set_global_sink(sink)
+    for k in range(20):
+        method.add(_reading(k))
+    with pytest.raises(RuntimeError, match="sends its global map to a sink"):
+        method.global_map()
+    final = method.finish()
+    assert len(final) == 0  # the sink has the map
+    assert sink.points == method.committed_points == 20
+
+
+def test_sink_only_before_the_first_reading() -> None:
+    method = CenterlineMethod(history_size=3)
+    method.add(_reading(0))
+    with pytest.raises(RuntimeError, match="fresh method"):
+        method.set_global_sink(CountingSink())
+    assert method.global_map().reading_id.tolist() == []  # still the in-memory map
+    assert method.finish().reading_id.tolist() == [0]
+    assert method.committed_points == 1

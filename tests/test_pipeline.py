@@ -15,9 +15,10 @@ import pytest
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import FilterError, MapFilter, ReadingFilter, filter_readings
-from sonarcarve.maps import GlobalMap
-from sonarcarve.methods import CarvingMethod, CenterlineMethod, Estimates
+from sonarcarve.maps import CallbackSink, GlobalMap, GlobalMapBuilder
+from sonarcarve.methods import METHODS, CarvingMethod, CenterlineMethod, Estimates, make_method
 from sonarcarve.methods.centerline import CenterlineModel
+from sonarcarve.methods.config import MethodConfig
 from sonarcarve.pipeline import ProcessError, process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch, ReadingsError
 from sonarcarve.typing import SlotArray
@@ -310,3 +311,61 @@ def test_process_chunks_checks_its_arguments_as_process_readings_does() -> None:
     process_chunks(iter([_row(3)]), method)
     with pytest.raises(ProcessError, match="fresh method"):
         process_chunks([_row(3)], method)
+
+
+# -- the global map to a sink -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", sorted(METHODS))
+@pytest.mark.parametrize("spec", [None, ReadingFilter(max_range=3.0, min_range=0.2,
+                                                      jump_threshold=0.4)])
+def test_a_sink_gets_the_map_the_result_would_hold(name: str, spec: ReadingFilter | None) -> None:
+    batch = _noisy_log(157, 3)
+    config = MethodConfig(history_size=12)
+    whole = process_readings(batch, make_method(name, config), sample_every=5,
+                             reading_filter=spec)
+    blocks: list[GlobalMap] = []
+    cuts = _cuts(len(batch), np.random.default_rng(3))
+    streamed = process_chunks((batch[part] for part in cuts), make_method(name, config),
+                              sample_every=5, reading_filter=spec,
+                              sink=CallbackSink(blocks.append))
+    assert len(streamed.global_map) == 0  # the sink has it
+    assert streamed.points == whole.points == len(whole.global_map) > 0
+    assert (streamed.readings, streamed.reading_filter, streamed.mean_unprocessed_share) == (
+        whole.readings, whole.reading_filter, whole.mean_unprocessed_share)
+    points = GlobalMap.concatenate(blocks)
+    for field in ("reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range",
+                  "confidence"):
+        np.testing.assert_array_equal(getattr(points, field), getattr(whole.global_map, field))
+    if spec is not None:  # ids are input rows, with the gaps the filters left
+        assert np.any(np.diff(points.reading_id) > 1)
+
+
+def test_a_sink_keeps_nothing_in_memory(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse(self: GlobalMapBuilder, points: GlobalMap) -> None:
+        raise AssertionError("the in-memory builder was used")
+
+    monkeypatch.setattr(GlobalMapBuilder, "commit", refuse)
+    seen: list[int] = []
+    result = process_readings(_row(50), CenterlineMethod(history_size=4),
+                              sink=CallbackSink(lambda points: seen.extend(points.reading_id)))
+    assert seen == list(range(50))
+    assert result.points == 50
+
+
+def test_a_sink_and_map_filters_do_not_go_together() -> None:
+    method = CenterlineMethod(history_size=4)
+    with pytest.raises(ProcessError, match="map filters need the whole global map"):
+        process_readings(_row(5), method, map_filter=MapFilter(max_error=0.1),
+                         sink=CallbackSink(print))
+    assert method.readings == 0
+
+
+def test_points_counts_the_map_after_the_map_filters() -> None:
+    result = process_readings(_row(5), CenterlineMethod(history_size=2))
+    assert result.points == len(result.global_map) == 5
+    result = process_readings(_noisy_log(80, 0), CarvingMethod(history_size=12),
+                              map_filter=MapFilter(max_error=0.05))
+    assert result.map_filter is not None
+    assert result.points == len(result.global_map) == result.map_filter.total - (
+        result.map_filter.max_error + result.map_filter.outliers)

@@ -4,13 +4,22 @@ A :class:`LocalMap` is what a method returns on request: one point per arc in th
 survived, labelled by the model that placed it. A :class:`GlobalMap` collects the *final* point of
 every arc as it leaves the history (paper, Fig. 7 and 13). Both are struct-of-arrays values with
 the batch axis first.
+
+Where the global map goes is a *sink* (:class:`GlobalMapSink`): anything with a ``commit(points)``
+method, called with each block of final points as arcs leave the history, in reading order. The
+default, :class:`GlobalMapBuilder`, keeps them all in memory (a map grows by about 22 MB per
+million readings); :class:`CallbackSink` hands each block to a function, :class:`CountingSink`
+counts and drops them, and :func:`sonarcarve.io.map_csv.map_csv_sink` appends them to a map CSV,
+so a long run holds only the history and bounded buffers
+(:meth:`~sonarcarve.methods.base.SonarMethod.set_global_sink`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
 from enum import IntEnum
-from typing import Self
+from typing import Protocol, Self
 
 import numpy as np
 import numpy.typing as npt
@@ -18,8 +27,11 @@ import numpy.typing as npt
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
+    "CallbackSink",
+    "CountingSink",
     "GlobalMap",
     "GlobalMapBuilder",
+    "GlobalMapSink",
     "LocalMap",
     "PointSource",
     "chord_error",
@@ -99,7 +111,7 @@ class _PointMap:
         )
 
     @classmethod
-    def concatenate(cls, maps: list[_PointMap]) -> Self:
+    def concatenate(cls, maps: Sequence[_PointMap]) -> Self:
         """The points of ``maps`` one after the other."""
         if not maps:
             return cls.empty()
@@ -162,8 +174,21 @@ class GlobalMap(_PointMap):
     """
 
 
+class GlobalMapSink(Protocol):
+    """Where a method sends the final points of arcs leaving its history (module docstring).
+
+    ``commit`` is called with every point of the global map exactly once, in blocks, in
+    reading order (never with an empty block); a sink must not keep a reference to a block's
+    arrays and then modify them.
+    """
+
+    def commit(self, points: GlobalMap) -> None:
+        """Take the final points of arcs leaving the history."""
+
+
 class GlobalMapBuilder:
-    """Collects committed points cheaply (chunks) and hands out a :class:`GlobalMap`."""
+    """The in-memory sink: collects committed points cheaply (chunks) and hands out a
+    :class:`GlobalMap`. Memory grows with the map: use another sink for long runs."""
 
     def __init__(self) -> None:
         self._chunks: list[_PointMap] = []
@@ -178,3 +203,42 @@ class GlobalMapBuilder:
         merged = GlobalMap.concatenate(self._chunks)
         self._chunks = [merged] if len(merged) else []
         return merged
+
+
+class CallbackSink:
+    """A sink that calls ``callback(points)`` with each non-empty block of committed points.
+
+    Examples
+    --------
+    >>> blocks = []
+    >>> sink = CallbackSink(blocks.append)
+    >>> sink.commit(GlobalMap.empty())
+    >>> blocks, sink.points
+    ([], 0)
+    """
+
+    def __init__(self, callback: Callable[[GlobalMap], object]) -> None:
+        self.callback = callback
+        self.points = 0  #: points passed on so far
+
+    def commit(self, points: GlobalMap) -> None:
+        """Pass ``points`` to the callback (an empty block is not passed)."""
+        if len(points):
+            self.points += len(points)
+            self.callback(points)
+
+
+class CountingSink:
+    """A sink that counts committed points, by source, and keeps none of them (a grid that is
+    its own map, a benchmark)."""
+
+    def __init__(self) -> None:
+        self.points = 0  #: points committed so far
+        self.by_source = np.zeros(len(PointSource), dtype=np.int64)  #: per PointSource code
+
+    def commit(self, points: GlobalMap) -> None:
+        """Count ``points``."""
+        if len(points):
+            self.points += len(points)
+            self.by_source += np.bincount(points.source.astype(np.int64),
+                                          minlength=len(PointSource))[: len(PointSource)]

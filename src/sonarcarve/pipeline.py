@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from array import array
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, fields
 
@@ -18,7 +19,7 @@ from sonarcarve.filters import (
     filter_map,
     filter_readings,
 )
-from sonarcarve.maps import GlobalMap
+from sonarcarve.maps import GlobalMap, GlobalMapSink
 from sonarcarve.methods.base import SonarMethod
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import IntArray
@@ -28,7 +29,7 @@ __all__ = ["ProcessError", "ProcessResult", "process_chunks", "process_readings"
 
 class ProcessError(SonarcarveError, ValueError):
     """A bad argument to :func:`process_readings` or :func:`process_chunks` (a sampling step
-    < 1, a used method)."""
+    < 1, a used method, a sink with map filters)."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,11 @@ class ProcessResult:
     Attributes
     ----------
     global_map : GlobalMap
-        One point per surviving reading (the ``process`` output).
+        One point per surviving reading (the ``process`` output); empty when the map went to
+        a ``sink``.
+    points : int
+        Points in the global map (after the map filters, if any), whether kept here or sent to
+        a sink.
     readings : int
         Readings processed (after the reading filters, if any).
     mean_unprocessed_share : float
@@ -47,7 +52,7 @@ class ProcessResult:
     fully_carved, split : int
         Arcs removed by carving, by cause.
     seconds : float
-        Wall time spent in the method (sampling for the measures excluded).
+        Wall time spent in the method (sampling for the measures and a sink's time excluded).
     reading_filter : ReadingFilterReport or None
         What the reading filters dropped (None if none ran).
     map_filter : MapFilterReport or None
@@ -55,6 +60,7 @@ class ProcessResult:
     """
 
     global_map: GlobalMap
+    points: int
     readings: int
     mean_unprocessed_share: float
     fully_carved: int
@@ -77,6 +83,7 @@ def process_readings(
     on_progress: Callable[[int], None] | None = None,
     reading_filter: ReadingFilter | None = None,
     map_filter: MapFilter | None = None,
+    sink: GlobalMapSink | None = None,
 ) -> ProcessResult:
     """Feed ``batch`` to ``method``, finish it, and return the global map with the measures.
 
@@ -94,14 +101,20 @@ def process_readings(
         Reading filters applied before the method; kept readings keep their input row as id.
     map_filter : MapFilter, optional
         Map filters applied to the finished global map.
+    sink : GlobalMapSink, optional
+        Where the global map goes, a block at a time as arcs leave the history
+        (:meth:`SonarMethod.set_global_sink`), instead of :attr:`ProcessResult.global_map`
+        (then empty; :attr:`ProcessResult.points` counts the points). Memory then stays flat
+        however long the log. The map filters need the whole map, so not with ``map_filter``.
 
     Raises
     ------
     ProcessError
-        ``sample_every`` < 1, or a method that has already been fed readings.
+        ``sample_every`` < 1, a method that has already been fed readings, or both ``sink``
+        and ``map_filter``.
     """
     return process_chunks([batch], method, sample_every=sample_every, on_progress=on_progress,
-                          reading_filter=reading_filter, map_filter=map_filter)
+                          reading_filter=reading_filter, map_filter=map_filter, sink=sink)
 
 
 def process_chunks(
@@ -112,6 +125,7 @@ def process_chunks(
     on_progress: Callable[[int], None] | None = None,
     reading_filter: ReadingFilter | None = None,
     map_filter: MapFilter | None = None,
+    sink: GlobalMapSink | None = None,
 ) -> ProcessResult:
     """:func:`process_readings` over a log that comes in consecutive batches.
 
@@ -120,7 +134,8 @@ def process_chunks(
     sensor's reading with its previous one across batch boundaries, and the unprocessed share
     is sampled at the same readings. Only one batch (and the method's state) is held at a time,
     so a log read with :func:`~sonarcarve.io.readings_csv.iter_readings_csv` is mapped in
-    bounded memory (the global map aside).
+    bounded memory, the global map aside; with a ``sink``, the map too (what stays is 8 bytes
+    per unprocessed-share sample).
 
     Parameters
     ----------
@@ -128,13 +143,13 @@ def process_chunks(
         The log in time order, cut anywhere. A batch is validated as it is fed to the method
         (against the time of the reading before it); an error raised by the iterable itself
         (a bad line of a file) passes through.
-    method, sample_every, on_progress, reading_filter, map_filter
+    method, sample_every, on_progress, reading_filter, map_filter, sink
         As :func:`process_readings`.
 
     Raises
     ------
     ProcessError
-        ``sample_every`` < 1, or a method that has already been fed readings.
+        As :func:`process_readings`.
     """
     if sample_every is not None and sample_every < 1:
         # 0 would silently mean the default, and a negative step would process nothing.
@@ -144,6 +159,15 @@ def process_chunks(
         msg = (f"process_readings needs a fresh method; this {method.name} method has "
                f"already been fed {method.readings} readings")
         raise ProcessError(msg)
+    if sink is not None:
+        if map_filter is not None:
+            msg = ("the map filters need the whole global map; run without a sink to filter "
+                   "the map")
+            raise ProcessError(msg)
+        timed = _TimedSink(sink)
+        method.set_global_sink(timed)
+    else:
+        timed = None
     every = max(1, method.history.capacity // 10) if sample_every is None else sample_every
     run = _Run(method, every, on_progress)
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
@@ -162,16 +186,21 @@ def process_chunks(
         if on_progress is not None:
             on_progress(filter_report.total)
     measures = method.measures()
-    shares = run.shares or [measures.unprocessed_share]
+    shares = np.frombuffer(run.shares) if run.shares else [measures.unprocessed_share]
     tic = time.perf_counter()
     global_map = method.finish()
     seconds = run.seconds + time.perf_counter() - tic
+    if timed is not None:  # the method's time: writing the map is the sink's
+        seconds = max(0.0, seconds - timed.seconds)
+    points = method.committed_points
     map_report = None
     if map_filter is not None:
         kept = filter_map(global_map, map_filter)
         global_map, map_report = kept.points, kept.report
+        points = len(global_map)
     return ProcessResult(
         global_map=global_map,
+        points=points,
         readings=run.readings,
         mean_unprocessed_share=float(np.mean(shares)),
         fully_carved=measures.fully_carved,
@@ -180,6 +209,19 @@ def process_chunks(
         reading_filter=filter_report,
         map_filter=map_report,
     )
+
+
+class _TimedSink:
+    """A sink passed through, the time spent in it counted (not the method's time)."""
+
+    def __init__(self, sink: GlobalMapSink) -> None:
+        self.sink = sink
+        self.seconds = 0.0
+
+    def commit(self, points: GlobalMap) -> None:
+        tic = time.perf_counter()
+        self.sink.commit(points)
+        self.seconds += time.perf_counter() - tic
 
 
 class _Run:
@@ -191,7 +233,8 @@ class _Run:
         self.method = method
         self.every = every
         self.on_progress = on_progress
-        self.shares: list[float] = []
+        # 8 bytes a sample (one per step), not a Python float each: a long run stays flat.
+        self.shares = array("d")
         self.seconds = 0.0
         self.readings = 0
         self._held: list[tuple[ReadingBatch, IntArray]] = []  # less than one step

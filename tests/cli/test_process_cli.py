@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.cli import main
-from sonarcarve.filters import ReadingFilter
+from sonarcarve.filters import MapFilter, ReadingFilter
 from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv, write_readings_csv
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.pipeline import process_readings
@@ -166,3 +166,62 @@ def test_bad_line_late_in_a_long_log_is_one_line_and_writes_nothing(
     assert err == (f"sonarcarve: error: {readings}: line 24322, column 'range' must be > 0\n")
     assert out.read_text() == "precious\n"
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".map.csv")] == []
+
+
+@pytest.mark.parametrize(("method", "options"), [
+    ("carve", []),
+    ("atm", ["--max-range", "1.6", "--jump-threshold", "0.5"]),
+    ("combined", ["--min-range", "0.3"]),
+    ("evidence", []),
+])
+def test_streamed_map_is_byte_identical_to_the_in_memory_one(
+    tmp_path: Path, method: str, options: list[str]
+) -> None:
+    # Without map filters the map streams to the file; the bytes are those of the whole map.
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    n = 2_000
+    k = np.arange(n)
+    rng = np.random.default_rng(5)
+    batch = ReadingBatch.from_arrays(
+        t=0.05 * k, sensor=k % 4, x=0.01 * k, y=rng.normal(0, 0.05, n),
+        theta=np.pi / 2 * (k % 4) + rng.normal(0, 0.1, n),
+        range=np.where(rng.random(n) < 0.1, rng.uniform(0.2, 2.0, n), 1.5 + 0.02 * (k % 7)))
+    write_readings_csv(batch, readings)
+    assert main(["process", str(readings), "--method", method, "--history", "40",
+                 *options, "--out", str(out)]) == 0
+    spec = ReadingFilter(
+        max_range=float(options[1]) if "--max-range" in options else None,
+        min_range=float(options[1]) if "--min-range" in options else None,
+        jump_threshold=float(options[3]) if "--jump-threshold" in options else None)
+    expected = process_readings(batch, make_method(method, MethodConfig(history_size=40)),
+                                reading_filter=spec if spec.active else None)
+    assert len(expected.global_map) > 0
+    write_map_csv(expected.global_map, tmp_path / "expected.csv")
+    assert out.read_bytes() == (tmp_path / "expected.csv").read_bytes()
+    if spec.active:  # the filters left gaps: ids are still input rows
+        assert np.any(np.diff(read_map_csv(out).reading_id) > 1)
+
+
+def test_a_failed_streamed_run_creates_no_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _long_log(readings)
+    lines = readings.read_text().splitlines()
+    lines[20_001] = "oops"  # after many blocks of map rows went to the temporary file
+    readings.write_text("\n".join(lines) + "\n")
+    assert main(["process", str(readings), "--method", "carve", "--history", "20",
+                 "--out", str(out)]) == 2
+    assert "line 20002" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]
+
+
+def test_map_filters_keep_the_whole_map_and_still_write_it(tmp_path: Path) -> None:
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    batch = _write_ring_readings(readings, 300)
+    assert main(["process", str(readings), "--method", "carve", "--history", "20",
+                 "--max-error", "0.2", "--out", str(out)]) == 0
+    expected = process_readings(batch, make_method("carve", MethodConfig(history_size=20)),
+                                map_filter=MapFilter(max_error=0.2))
+    write_map_csv(expected.global_map, tmp_path / "expected.csv")
+    assert out.read_bytes() == (tmp_path / "expected.csv").read_bytes()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import pytest
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.errors import InputError
-from sonarcarve.io.map_csv import APPENDED_COLUMNS, BLOCK_ROWS
+from sonarcarve.io.map_csv import APPENDED_COLUMNS, BLOCK_ROWS, map_csv_sink
 from sonarcarve.maps import GlobalMap, PointSource
 
 HEADER = "id,t,sensor,x,y,source,width,max_error"
@@ -243,3 +244,57 @@ def test_unknown_source_code_and_bad_block_rows_are_refused(tmp_path: Path) -> N
     assert not (tmp_path / "bad.csv").exists()
     with pytest.raises(ValueError, match="block_rows"):
         write_map_csv(points, tmp_path / "map.csv", block_rows=0)
+
+
+# -- the streaming writer (a global-map sink) ----------------------------------------------------
+
+
+@pytest.mark.parametrize("block_rows", [1, 7, 64, BLOCK_ROWS])
+def test_sink_writes_the_same_bytes_in_any_blocks(tmp_path: Path, block_rows: int) -> None:
+    points = _random_map(500, 1)
+    expected, path = tmp_path / "reference.csv", tmp_path / "map.csv"
+    _reference_write(points, expected)
+    cuts = [0, 1, 1, 3, 60, 61, 200, 499, 500]  # empty, single-row and uneven pieces
+    with map_csv_sink(path, block_rows=block_rows) as sink:
+        for start, stop in itertools.pairwise(cuts):
+            sink.commit(points.select(np.arange(start, stop)))
+            assert not path.exists()  # nothing at the target before the end
+    assert sink.points == 500
+    assert path.read_bytes() == expected.read_bytes()
+
+
+def test_sink_with_no_points_writes_the_header(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    with map_csv_sink(path):
+        pass
+    assert path.read_bytes() == (",".join(MAP_COLUMNS + APPENDED_COLUMNS) + "\n").encode()
+
+
+def test_sink_error_leaves_the_old_file_and_no_temporary(tmp_path: Path) -> None:
+    path = tmp_path / "map.csv"
+    path.write_text("precious\n")
+
+    def run() -> None:
+        with map_csv_sink(path, block_rows=2) as sink:
+            sink.commit(_random_map(50, 0))  # several blocks already in the temporary file
+            msg = "mid-run"
+            raise RuntimeError(msg)
+
+    with pytest.raises(RuntimeError, match="mid-run"):
+        run()
+    assert path.read_text() == "precious\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["map.csv"]
+
+
+def test_sink_refuses_an_unknown_source_code(tmp_path: Path) -> None:
+    points = _map()
+    bad = GlobalMap(**{**{name: getattr(points, name) for name in (
+        "reading_id", "t", "sensor", "xy", "width", "max_error", "range")},
+        "source": np.array([0, 3, 1], dtype=np.int8)})
+    with pytest.raises(ValueError, match="3 is not a valid PointSource"), \
+            map_csv_sink(tmp_path / "bad.csv") as sink:
+        sink.commit(bad)
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="block_rows"), \
+            map_csv_sink(tmp_path / "map.csv", block_rows=0):
+        pass

@@ -42,6 +42,7 @@ from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
+from sonarcarve.io.map_csv import MapCsvSink, map_csv_sink
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.io.rerun_out import write_rerun
 from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
@@ -115,7 +116,8 @@ _OutOpt = Annotated[Path | None, typer.Option(
          "topics copied through plus /sonarcarve/local_map (PointCloud2) and "
          "/sonarcarve/arcs (MarkerArray); `.rrd` a Rerun recording. Its folder must exist; "
          "never the input; a bag is never overwritten. Bag and .rrd outputs, and bag inputs, "
-         "hold the whole log in memory; CSV to CSV streams.",
+         "hold the whole log in memory; CSV to CSV streams (the map too, unless a map filter "
+         "is on).",
     show_default=False)]
 _OutDirOpt = Annotated[Path | None, typer.Option(
     "--out-dir", metavar="FOLDER",
@@ -234,6 +236,8 @@ def process(
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
     rows; map filters (--max-error, then --outlier-radius) drop points from the global map.
+    Without map filters a map CSV is written as it is made (memory stays flat however long the
+    log); map filters need the whole map, so with them it is held in memory until the end.
 
     The summary's "unprocessed (mean % of history rows)" is the paper's Table I latency: the
     share of the history's arcs that no newer reading has sharpened yet, averaged over the run.
@@ -364,19 +368,31 @@ def _check_bag(job: _Job) -> None:
 
 
 def _write_csv(job: _Job) -> list[tuple[str, str]]:
-    """The global map CSV. A readings CSV is read, checked and mapped a block at a time; a bad
-    line stops the run with nothing written, as the map is written only at the end."""
+    """The global map CSV. A readings CSV is read, checked and mapped a block at a time.
+
+    Without map filters the map streams to a temporary file beside ``--out`` as arcs leave the
+    history (memory stays flat however long the log) and is renamed into place at the end; with
+    them (they need the whole map) it is kept in memory and written at the end. Either way a bad
+    line stops the run with nothing written."""
+    if job.map_filter is not None:
+        result = _map(job, None)
+        write_map_csv(result.global_map, job.out)
+    else:
+        with map_csv_sink(job.out) as sink:
+            result = _map(job, sink)
+    return _summary_rows(result, job.out)
+
+
+def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
+    """Run the job's method over its input, the map to ``sink`` (None: kept in the result)."""
     sonar = job.sonar()
     if is_bag(job.source):
         batch = job.bag.readings(job.bag.read(job.source))
         job.warnings.extend(likely_mistakes(batch))
-        result = process_readings(batch, sonar, reading_filter=job.reading_filter,
-                                  map_filter=job.map_filter)
-    else:
-        result = _run(job.source, sonar, job.method, job.reading_filter, job.map_filter,
-                      job.warnings)
-    write_map_csv(result.global_map, job.out)
-    return _summary_rows(result, job.out)
+        return process_readings(batch, sonar, reading_filter=job.reading_filter,
+                                map_filter=job.map_filter, sink=sink)
+    return _run(job.source, sonar, job.method, job.reading_filter, job.map_filter,
+                job.warnings, sink)
 
 
 def _write_bag(job: _Job) -> list[tuple[str, str]]:
@@ -499,18 +515,18 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
 
 def _run(readings: Path, sonar: SonarMethod, label: str,
          reading_filter: ReadingFilter | None, map_filter: MapFilter | None,
-         warnings: list[str]) -> ProcessResult:
-    """Map the file ``readings`` with ``sonar``, with a progress bar for long logs; the likely
-    mistakes of its first block added to ``warnings``."""
+         warnings: list[str], sink: MapCsvSink | None = None) -> ProcessResult:
+    """Map the file ``readings`` with ``sonar`` (the map to ``sink``, if given), with a
+    progress bar for long logs; the likely mistakes of its first block added to ``warnings``."""
     chunks = _first_checked(iter_readings_csv(readings), warnings)
     rows = count_data_lines(readings)  # the bar's total, from the line breaks alone
     if rows < _PROGRESS_MIN_READINGS:
         return process_chunks(chunks, sonar, reading_filter=reading_filter,
-                              map_filter=map_filter)
+                              map_filter=map_filter, sink=sink)
     with progress() as bar:
         task = bar.add_task(label, total=rows)
         return process_chunks(chunks, sonar, on_progress=lambda n: bar.update(task, completed=n),
-                              reading_filter=reading_filter, map_filter=map_filter)
+                              reading_filter=reading_filter, map_filter=map_filter, sink=sink)
 
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,
@@ -552,7 +568,7 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
         rows += [("points before map filters", f"{points.total:,}"),
                  ("dropped: above --max-error", f"{points.max_error:,}"),
                  ("dropped: outliers", f"{points.outliers:,}")]
-    rows += [("points out", f"{len(result.global_map):,}"),
+    rows += [("points out", f"{result.points:,}"),
              ("fully carved", f"{result.fully_carved:,}"),
              ("split (dropped)", f"{result.split:,}"),
              # Removed arcs count as processed: see the command's help.

@@ -76,7 +76,7 @@ from sonarcarve.grids.range_sensor_layer import (
     RangeSensorLayer,
 )
 from sonarcarve.history import SonarHistory
-from sonarcarve.maps import GlobalMapBuilder
+from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.base import Estimates
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
@@ -573,6 +573,8 @@ class CarvedGrid:
         self._stale = False
         self.readings = 0
         method.add_commit_listener(self._on_commit)
+        # A global map would grow with the log; the grid is the map, so only count the points.
+        method.set_global_sink(CountingSink())
 
     def __repr__(self) -> str:
         ny, nx = self.shape
@@ -673,8 +675,6 @@ class CarvedGrid:
         first_seq = history.appended
         method.add_many(batch)
         history.flush_retired()  # every arc that left the history is final now
-        # The method's global map grows with the log; the grid is the map, so drop it.
-        method._global = GlobalMapBuilder()  # no public way to discard it
         finals = self._take_pending()
         half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
         r = batch.range

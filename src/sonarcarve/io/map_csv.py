@@ -5,13 +5,20 @@ Header ``id,t,sensor,x,y,source,width,max_error,confidence``; one row per surviv
 ``width`` the final angular width (radians), ``max_error`` the bound in metres. The first eight
 columns are the original contract and keep their meaning exactly; ``confidence`` (appended) is
 the probability that the point is a real surface, empty where the method does not model it.
+
+:func:`write_map_csv` writes a whole map; :func:`map_csv_sink` writes one as it is made, from a
+method's global-map sink (:meth:`~sonarcarve.methods.base.SonarMethod.set_global_sink`), to the
+same bytes.
 """
 
 from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 
@@ -20,7 +27,15 @@ from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.maps import GlobalMap, PointSource
 from sonarcarve.typing import Int8Array
 
-__all__ = ["APPENDED_COLUMNS", "BLOCK_ROWS", "MAP_COLUMNS", "read_map_csv", "write_map_csv"]
+__all__ = [
+    "APPENDED_COLUMNS",
+    "BLOCK_ROWS",
+    "MAP_COLUMNS",
+    "MapCsvSink",
+    "map_csv_sink",
+    "read_map_csv",
+    "write_map_csv",
+]
 
 #: The original contract's eight columns, in order.
 MAP_COLUMNS = ("id", "t", "sensor", "x", "y", "source", "width", "max_error")
@@ -43,14 +58,92 @@ def write_map_csv(points: GlobalMap, path: str | Path, *, block_rows: int = BLOC
     confidence as an empty cell. The text is built a column at a time, ``block_rows`` rows at
     a time, so memory stays bounded whatever the map's size.
     """
+    _check_block_rows(block_rows)
+    _check_sources(points.source)
+    with map_csv_sink(path, block_rows=block_rows) as sink:
+        sink.commit(points)
+
+
+@contextmanager
+def map_csv_sink(path: str | Path, *, block_rows: int = BLOCK_ROWS) -> Iterator[MapCsvSink]:
+    """A global-map sink that writes the map CSV at ``path`` as points arrive, atomically.
+
+    The rows go to a temporary file beside ``path`` (:func:`~sonarcarve.io.atomic.atomic_text`)
+    that is renamed onto ``path`` when the block ends without error: a failed run, or one
+    killed mid-way, leaves ``path`` as it was. The bytes are those of :func:`write_map_csv` on
+    the whole map; at most about ``block_rows`` points are held at a time.
+
+    Examples
+    --------
+    Stream a method's global map to a file::
+
+        with map_csv_sink("map.csv") as sink:
+            process_chunks(iter_readings_csv("log.csv"), method, sink=sink)
+
+    Raises
+    ------
+    OutputError
+        As :func:`~sonarcarve.io.atomic.atomic_path`.
+    """
+    _check_block_rows(block_rows)
+    with atomic_text(path) as handle:
+        sink = MapCsvSink(handle, block_rows)
+        yield sink
+        sink.flush()
+
+
+class MapCsvSink:
+    """Appends committed points to an open map CSV, ``block_rows`` rows formatted at a time
+    (made by :func:`map_csv_sink`, which writes the header and renames the file at the end)."""
+
+    def __init__(self, handle: IO[str], block_rows: int = BLOCK_ROWS) -> None:
+        _check_block_rows(block_rows)
+        self._handle = handle
+        self._block_rows = block_rows
+        self._pending: list[GlobalMap] = []
+        self._pending_rows = 0
+        self.points = 0  #: points written or waiting to be
+        handle.write(",".join(MAP_COLUMNS + APPENDED_COLUMNS) + "\n")
+
+    def commit(self, points: GlobalMap) -> None:
+        """Append ``points`` (formatted once ``block_rows`` rows are waiting).
+
+        Raises
+        ------
+        ValueError
+            A ``source`` code that is no :class:`~sonarcarve.maps.PointSource`.
+        """
+        if not len(points):
+            return
+        _check_sources(points.source)
+        self._pending.append(points)
+        self._pending_rows += len(points)
+        self.points += len(points)
+        if self._pending_rows >= self._block_rows:
+            self._write(whole_blocks=True)
+
+    def flush(self) -> None:
+        """Write every waiting point (the last, short block)."""
+        if self._pending_rows:
+            self._write(whole_blocks=False)
+
+    def _write(self, *, whole_blocks: bool) -> None:
+        pending = self._pending
+        points = pending[0] if len(pending) == 1 else GlobalMap.concatenate(pending)
+        n = len(points)
+        size = self._block_rows
+        stop = n - n % size if whole_blocks else n
+        for start in range(0, stop, size):
+            self._handle.write(_rows_text(points, slice(start, min(start + size, stop))))
+        rest = points.select(np.arange(stop, n)) if stop < n else None  # a copy: frees the rest
+        self._pending = [] if rest is None else [rest]
+        self._pending_rows = n - stop
+
+
+def _check_block_rows(block_rows: int) -> None:
     if block_rows < 1:
         msg = f"block_rows must be at least 1, got {block_rows}"
         raise ValueError(msg)
-    _check_sources(points.source)
-    with atomic_text(path) as handle:
-        handle.write(",".join(MAP_COLUMNS + APPENDED_COLUMNS) + "\n")
-        for start in range(0, len(points), block_rows):
-            handle.write(_rows_text(points, slice(start, start + block_rows)))
 
 
 def _rows_text(points: GlobalMap, rows: slice) -> str:

@@ -27,7 +27,7 @@ import numpy as np
 
 from sonarcarve.geometry import ArcFate
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
-from sonarcarve.maps import GlobalMap, GlobalMapBuilder, LocalMap, PointSource
+from sonarcarve.maps import GlobalMap, GlobalMapBuilder, GlobalMapSink, LocalMap, PointSource
 from sonarcarve.methods.config import check_beam_width
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, check_reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
@@ -168,6 +168,10 @@ class SonarMethod(ABC):
     Feed it readings with :meth:`add` or :meth:`add_many`; ask for :meth:`local_map` at any time;
     call :meth:`finish` at the end of a log to get the :class:`~sonarcarve.maps.GlobalMap`.
 
+    The global map is kept in memory unless :meth:`set_global_sink` sends it elsewhere (a file,
+    a callback) as arcs leave the history; then the method holds only its history, and
+    :meth:`global_map` and :meth:`finish` cannot return the points (see there).
+
     Every reading is checked on the way in (:func:`~sonarcarve.readings.check_reading`): a bad
     one raises :class:`~sonarcarve.readings.ReadingsError` and leaves the method as it was.
 
@@ -190,7 +194,7 @@ class SonarMethod(ABC):
     ) -> None:
         self.beam_width = check_beam_width(beam_width)
         self.history = SonarHistory(history_size, on_evict=self._commit)
-        self._global = GlobalMapBuilder()
+        self._global = _GlobalFeed()
         self._readings = 0
         self._no_echo = 0  # no-echo readings among them
         self._last_t = -math.inf  # time of the newest reading: times never go backwards
@@ -328,16 +332,62 @@ class SonarMethod(ABC):
             self._local = local
         return self._local
 
+    def set_global_sink(self, sink: GlobalMapSink) -> None:
+        """Send the global map to ``sink`` instead of keeping it in memory.
+
+        From then on every final point is passed to ``sink.commit`` once, in reading order, as
+        its arc leaves the history (the last ones at :meth:`finish`), and nothing of the global
+        map stays in the method: memory no longer grows with the log.
+
+        Raises
+        ------
+        RuntimeError
+            The method has been fed readings already (their points would be split between two
+            places).
+        """
+        if self._readings or self._finished:
+            msg = (f"set_global_sink needs a fresh method; this {self.name} method has already "
+                   f"been fed {self._readings} readings")
+            raise RuntimeError(msg)
+        self._global = _GlobalFeed(sink)
+
+    @property
+    def committed_points(self) -> int:
+        """Points committed to the global map (its sink) so far; after :meth:`finish`, the
+        size of the whole global map."""
+        return self._global.points
+
     def global_map(self) -> GlobalMap:
-        """Final points of the arcs that have left the history so far, in reading order."""
+        """Final points of the arcs that have left the history so far, in reading order.
+
+        Raises
+        ------
+        RuntimeError
+            The global map goes to a sink (:meth:`set_global_sink`): the method does not keep
+            it; ask the sink.
+        """
+        memory = self._memory("global_map()")
         self.history.flush_retired()
-        return self._global.build()
+        return memory.build()
 
     def finish(self) -> GlobalMap:
-        """End of the log: commit the arcs still in the history and return the global map."""
+        """End of the log: commit the arcs still in the history and return the global map.
+
+        With a sink (:meth:`set_global_sink`) the last points go to the sink and the map
+        returned is empty: the sink has the map, :attr:`committed_points` its size.
+        """
         self.history.flush()
         self._finished = True
-        return self._global.build()
+        memory = self._global.memory
+        return GlobalMap.empty() if memory is None else memory.build()
+
+    def _memory(self, what: str) -> GlobalMapBuilder:
+        memory = self._global.memory
+        if memory is None:
+            msg = (f"{what}: this {self.name} method sends its global map to a sink and keeps "
+                   "none of it in memory")
+            raise RuntimeError(msg)
+        return memory
 
     def measures(self) -> Measures:
         """The paper's measures over the current history (Table I, Fig. 11, section 5-C)."""
@@ -389,6 +439,23 @@ class SonarMethod(ABC):
             confidence=(np.full(len(keep), np.nan) if est.confidence is None
                         else est.confidence[est.alive]),
         )
+
+
+class _GlobalFeed:
+    """Where a method's committed points go: ``sink`` (the in-memory builder by default),
+    counted on the way."""
+
+    def __init__(self, sink: GlobalMapSink | None = None) -> None:
+        self.memory: GlobalMapBuilder | None = None
+        if sink is None:
+            sink = self.memory = GlobalMapBuilder()
+        self.sink = sink
+        self.points = 0
+
+    def commit(self, points: GlobalMap) -> None:
+        if len(points):
+            self.points += len(points)
+            self.sink.commit(points)
 
 
 def arc_point(history: SonarHistory, slots: SlotArray, bearing: FloatArray) -> FloatArray:
