@@ -34,7 +34,15 @@ if TYPE_CHECKING:
         write_map_csv,
         write_readings_csv,
     )
-    from sonarcarve.maps import GlobalMap, LocalMap, PointSource, chord_error
+    from sonarcarve.maps import (
+        CallbackSink,
+        CountingSink,
+        GlobalMap,
+        GlobalMapSink,
+        LocalMap,
+        PointSource,
+        chord_error,
+    )
     from sonarcarve.methods import (
         METHODS,
         AtmMethod,
@@ -62,7 +70,10 @@ _EXPORTS = {
     "EvidenceMethod": "sonarcarve.methods",
     "DEFAULT_BEAM_WIDTH": "sonarcarve.readings",
     "DEFAULT_HISTORY_SIZE": "sonarcarve.history",
+    "CallbackSink": "sonarcarve.maps",
+    "CountingSink": "sonarcarve.maps",
     "GlobalMap": "sonarcarve.maps",
+    "GlobalMapSink": "sonarcarve.maps",
     "GridError": "sonarcarve.grids",
     "LocalMap": "sonarcarve.maps",
     "METHODS": "sonarcarve.methods",
@@ -104,12 +115,15 @@ __all__ = [
     "METHODS",
     "ArcFate",
     "AtmMethod",
+    "CallbackSink",
     "CarvedGrid",
     "CarvingMethod",
     "CenterlineMethod",
     "CombinedMethod",
+    "CountingSink",
     "EvidenceMethod",
     "GlobalMap",
+    "GlobalMapSink",
     "GridError",
     "LocalMap",
     "MapFilter",

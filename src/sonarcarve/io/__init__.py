@@ -3,7 +3,13 @@ dataset adapters."""
 
 from sonarcarve.io.bag_out import BagOutReport, BagWriter, write_map_bag
 from sonarcarve.io.errors import InputError, OutputError
-from sonarcarve.io.map_csv import MAP_COLUMNS, read_map_csv, write_map_csv
+from sonarcarve.io.map_csv import (
+    MAP_COLUMNS,
+    MapCsvSink,
+    map_csv_sink,
+    read_map_csv,
+    write_map_csv,
+)
 from sonarcarve.io.readings_csv import READINGS_COLUMNS, read_readings_csv, write_readings_csv
 from sonarcarve.io.roboND import RoboNDLog, RoboNDReport, bundled_robond_dir, read_robond
 from sonarcarve.io.rosbag import (
@@ -21,6 +27,7 @@ __all__ = [
     "BagOutReport",
     "BagWriter",
     "InputError",
+    "MapCsvSink",
     "NoEchoReadings",
     "OutputError",
     "RoboNDLog",
@@ -30,6 +37,7 @@ __all__ = [
     "SensorMounts",
     "SensorSource",
     "bundled_robond_dir",
+    "map_csv_sink",
     "read_map_csv",
     "read_readings_csv",
     "read_robond",
