@@ -57,3 +57,38 @@ def test_kill_9_while_writing(tmp_path: Path) -> None:
     subprocess.run(argv, check=True, capture_output=True, timeout=120)
     assert out.read_bytes() == new
     assert _temps(tmp_path) == []  # the dead writers' temporaries are gone
+
+
+def _kill_at_random_moments(argv: list[str], out: Path, seed: int, *,
+                            outputs: tuple[Path, ...] = ()) -> None:
+    """Run ``argv`` once for the complete outputs, then three times killed at a seeded moment
+    of the run (before, during or after writing): each output is always its old bytes or the
+    complete new ones; one more full run leaves the new bytes and no temporary file."""
+    files = (out, *outputs)
+    tic = time.monotonic()
+    subprocess.run(argv, check=True, capture_output=True, timeout=180)
+    duration = time.monotonic() - tic
+    new = {f: f.read_bytes() for f in files}
+    chooser = random.Random(seed)
+    for _ in range(3):
+        for f in files:
+            f.write_bytes(b"old\n")
+        child = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(chooser.uniform(0.2, 1.0) * duration)
+        if child.poll() is None:
+            child.send_signal(signal.SIGKILL)
+        child.wait(timeout=180)
+        for f in files:
+            assert f.read_bytes() in (b"old\n", new[f])  # never a partial file
+    subprocess.run(argv, check=True, capture_output=True, timeout=180)
+    assert {f: f.read_bytes() for f in files} == new
+    assert [p.name for p in out.parent.iterdir() if p.name.startswith(".")] == []
+
+
+def test_kill_9_simulate_and_grid(tmp_path: Path) -> None:
+    readings = tmp_path / "r.csv"
+    simulate = [*SONARCARVE, "simulate", "--world", "t-junction", "--out", str(readings)]
+    _kill_at_random_moments(simulate, readings, 8, outputs=(tmp_path / "r.truth.json",))
+    grid = [*SONARCARVE, "grid", str(readings), "--resolution", "0.05",
+            "--out", str(tmp_path / "g.yaml")]
+    _kill_at_random_moments(grid, tmp_path / "g.yaml", 9, outputs=(tmp_path / "g.pgm",))
