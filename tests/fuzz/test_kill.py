@@ -6,6 +6,7 @@ next run must then remove the dead writer's temporary (:func:`sonarcarve.io.atom
 
 from __future__ import annotations
 
+import json
 import random
 import signal
 import subprocess
@@ -60,10 +61,14 @@ def test_kill_9_while_writing(tmp_path: Path) -> None:
 
 
 def _kill_at_random_moments(argv: list[str], out: Path, seed: int, *,
-                            outputs: tuple[Path, ...] = ()) -> None:
+                            outputs: tuple[Path, ...] = (),
+                            timed: tuple[Path, ...] = ()) -> None:
     """Run ``argv`` once for the complete outputs, then three times killed at a seeded moment
     of the run (before, during or after writing): each output is always its old bytes or the
-    complete new ones; one more full run leaves the new bytes and no temporary file."""
+    complete new ones; one more full run leaves the new bytes and no temporary file.
+
+    ``timed`` outputs are JSON that records run times, so a complete one is one that parses
+    (the other fields are checked equal)."""
     files = (out, *outputs)
     tic = time.monotonic()
     subprocess.run(argv, check=True, capture_output=True, timeout=180)
@@ -79,10 +84,23 @@ def _kill_at_random_moments(argv: list[str], out: Path, seed: int, *,
             child.send_signal(signal.SIGKILL)
         child.wait(timeout=180)
         for f in files:
-            assert f.read_bytes() in (b"old\n", new[f])  # never a partial file
+            if f in timed and f.read_bytes() != b"old\n":
+                assert _untimed(f.read_bytes()) == _untimed(new[f])  # whole, not partial
+            else:
+                assert f.read_bytes() in (b"old\n", new[f])  # never a partial file
     subprocess.run(argv, check=True, capture_output=True, timeout=180)
-    assert {f: f.read_bytes() for f in files} == new
+    for f in files:
+        assert (_untimed(f.read_bytes()) == _untimed(new[f]) if f in timed
+                else f.read_bytes() == new[f])
     assert [p.name for p in out.parent.iterdir() if p.name.startswith(".")] == []
+
+
+def _untimed(data: bytes) -> object:
+    """A results JSON without its wall-clock fields (raises if the file is not whole JSON)."""
+    value = json.loads(data)
+    value["meta"].pop("seconds")
+    value.pop("office_runs", None)
+    return value
 
 
 def test_kill_9_simulate_and_grid(tmp_path: Path) -> None:
@@ -92,3 +110,14 @@ def test_kill_9_simulate_and_grid(tmp_path: Path) -> None:
     grid = [*SONARCARVE, "grid", str(readings), "--resolution", "0.05",
             "--out", str(tmp_path / "g.yaml")]
     _kill_at_random_moments(grid, tmp_path / "g.yaml", 9, outputs=(tmp_path / "g.pgm",))
+
+
+def test_kill_9_experiments(tmp_path: Path) -> None:
+    out = tmp_path / "exp"
+    argv = [*SONARCARVE, "experiments", "--quick", "--only", "t-junction", "--workers", "1",
+            "--out", str(out)]
+    out.mkdir()
+    results = out / "results.json"
+    results.write_bytes(b"old\n")  # so that the first run has an old file to replace
+    _kill_at_random_moments(argv, results, 10, outputs=(out / "fig04_t_junction.png",),
+                            timed=(results,))
