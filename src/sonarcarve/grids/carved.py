@@ -69,7 +69,8 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.elfes import MAX_CELLS, ROS_FADE_RANGE, GridError, OccupancyGrid
+from sonarcarve.grids.cells import GridError, grid_cells
+from sonarcarve.grids.elfes import MAX_CELLS, ROS_FADE_RANGE, OccupancyGrid
 from sonarcarve.grids.range_sensor_layer import (
     FREE_SPACE,
     LETHAL_OBSTACLE,
@@ -525,27 +526,8 @@ class CarvedGrid:
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  method: SonarMethod | None = None, params: CarvedGridParams | None = None
                  ) -> None:
-        h = resolution
-        if isinstance(h, bool) or not isinstance(h, int | float) or not math.isfinite(h) or h <= 0:
-            msg = f"carved grid: resolution must be a finite number > 0 metres, got {h!r}"
-            raise GridError(msg)
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            msg = f"carved grid: bounds must be 4 numbers (xmin, ymin, xmax, ymax), got {bounds!r}"
-            raise GridError(msg) from None
-        if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)):
-            msg = f"carved grid: bounds must be finite, got {bounds!r}"
-            raise GridError(msg)
-        if not (xmax > xmin and ymax > ymin):
-            msg = f"carved grid: bounds need xmax > xmin and ymax > ymin, got {bounds!r}"
-            raise GridError(msg)
-        nx = max(1, math.ceil((xmax - xmin) / h - 1e-9))
-        ny = max(1, math.ceil((ymax - ymin) / h - 1e-9))
-        if nx * ny > MAX_CELLS:
-            msg = (f"carved grid: {nx} x {ny} cells of {h:g} m exceed the limit of "
-                   f"{MAX_CELLS:,} (MAX_CELLS); use a coarser resolution or smaller bounds")
-            raise GridError(msg)
+        h, (xmin, ymin, xmax, ymax), nx, ny = grid_cells("carved grid", resolution, bounds,
+                                                        MAX_CELLS, "MAX_CELLS")
         if method is None:
             method = make_method("carve", MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
         elif method.readings:

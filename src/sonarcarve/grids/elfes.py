@@ -58,7 +58,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.grids.cells import GridError, grid_cells
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import FloatArray
@@ -94,10 +94,6 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 def _compiled(func: _F) -> _F:
     """``numba.njit(cache=True)``, typed so that mypy keeps the function's signature."""
     return cast(_F, njit(cache=True)(func))
-
-
-class GridError(SonarcarveError, ValueError):
-    """A grid parameter out of range: resolution, bounds, model probabilities, threshold."""
 
 
 def _logit(p: float) -> float:
@@ -212,30 +208,8 @@ class OccupancyGrid:
 
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  model: SonarConeModel | None = None) -> None:
-        h = resolution
-        if isinstance(h, bool) or not isinstance(h, int | float) or not math.isfinite(h) or h <= 0:
-            msg = f"grid: resolution must be a finite number > 0 metres, got {h!r}"
-            raise GridError(msg)
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            msg = f"grid: bounds must be 4 numbers (xmin, ymin, xmax, ymax), got {bounds!r}"
-            raise GridError(msg) from None
-        if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)):
-            msg = f"grid: bounds must be finite, got {bounds!r}"
-            raise GridError(msg)
-        if not (xmax > xmin and ymax > ymin):
-            msg = f"grid: bounds need xmax > xmin and ymax > ymin, got {bounds!r}"
-            raise GridError(msg)
-        # The small allowance keeps a width that is a whole number of cells from gaining one.
-        nx = max(1, math.ceil((xmax - xmin) / h - 1e-9))
-        ny = max(1, math.ceil((ymax - ymin) / h - 1e-9))
-        if nx * ny > MAX_CELLS:
-            msg = (f"grid: {nx} x {ny} cells of {h:g} m exceed the limit of {MAX_CELLS:,} "
-                   f"(MAX_CELLS); use a coarser resolution or smaller bounds")
-            raise GridError(msg)
-        self._resolution = float(h)
-        self._bounds = (xmin, ymin, xmax, ymax)
+        h, self._bounds, nx, ny = grid_cells("grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
+        self._resolution = h
         self._model = model if model is not None else SonarConeModel()
         self.log_odds: GridArray = np.zeros((ny, nx), dtype=np.float32)
         self.readings = 0

@@ -143,7 +143,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.elfes import GridError
+from sonarcarve.grids.cells import GridError, grid_cells
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray
 
@@ -568,26 +568,8 @@ class RangeSensorLayer:
 
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  params: RangeSensorLayerParams | None = None) -> None:
-        h = resolution
-        _check(_finite(h) and h > 0, "resolution", "must be a finite number > 0 metres", h)
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            msg = (f"range sensor layer: bounds must be 4 numbers (xmin, ymin, xmax, ymax), "
-                   f"got {bounds!r}")
-            raise GridError(msg) from None
-        _check(all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)), "bounds",
-               "must be finite", bounds)
-        _check(xmax > xmin and ymax > ymin, "bounds", "need xmax > xmin and ymax > ymin",
-               bounds)
-        # The small allowance keeps a width that is a whole number of cells from gaining one.
-        nx = max(1, math.ceil((xmax - xmin) / h - 1e-9))
-        ny = max(1, math.ceil((ymax - ymin) / h - 1e-9))
-        _check(nx * ny <= MAX_LAYER_CELLS, "bounds",
-               f"need {nx} x {ny} cells of {h:g} m, over the limit of {MAX_LAYER_CELLS:,} "
-               f"(MAX_LAYER_CELLS)", bounds)
-        self._resolution = float(h)
-        self._bounds = (xmin, ymin, xmax, ymax)
+        self._resolution, self._bounds, nx, ny = grid_cells(
+            "range sensor layer", resolution, bounds, MAX_LAYER_CELLS, "MAX_LAYER_CELLS")
         self._params = params if params is not None else RangeSensorLayerParams()
         self._cost: FloatArray = np.full((ny, nx), float(ROS_UNKNOWN_COST))
         self._box = np.array([math.inf, math.inf, -math.inf, -math.inf])
