@@ -35,7 +35,7 @@ experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESU
 fuzz: $(TEST_STAMP)  ## thousands of mutated inputs per family through the real CLI (no crash, hang, leftover or changed file)
 	FUZZ_CASES=5000 $(BIN)/python -m pytest -n 2 -m fuzz -q tests/fuzz
 
-bench: $(STAMP)  ## every benchmark: throughput, simulator speed, import time, parameter choices (tables for docs/RESULTS.md)
+bench: $(STAMP)  ## every benchmark (about an hour): speed, memory, parameter choices, evidence carving, grids, changing scenes (tables for docs/RESULTS.md)
 	$(BIN)/python benchmarks/import_time.py
 	$(BIN)/python benchmarks/throughput.py
 	$(BIN)/python benchmarks/simulate_speed.py
@@ -43,6 +43,13 @@ bench: $(STAMP)  ## every benchmark: throughput, simulator speed, import time, p
 	$(BIN)/python benchmarks/min_transversal.py
 	$(BIN)/python benchmarks/specular.py
 	$(BIN)/python benchmarks/grid_baseline.py
+	$(BIN)/python benchmarks/speed.py --sections ratio latency cold
+	$(BIN)/python benchmarks/process_speed.py
+	$(BIN)/python benchmarks/soak.py
+	$(BIN)/python benchmarks/evidence.py
+	$(BIN)/python benchmarks/no_echo.py
+	$(BIN)/python benchmarks/grids.py
+	$(BIN)/python benchmarks/changing_scenes.py
 
 clean:
 	rm -rf $(VENV) demo-output .pytest_cache .mypy_cache .ruff_cache
