@@ -6,11 +6,12 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from sonarcarve.errors import ConfigError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.geometry import circle_intersections
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import METHODS, MethodConfig, make_method
-from sonarcarve.methods.atm import AtmMethod, AtmModel, atm_error_bound
+from sonarcarve.methods import atm as atm_module
+from sonarcarve.methods.atm import AtmMethod, AtmModel, CrossingStoreError, atm_error_bound
 from sonarcarve.readings import Reading
 
 PHI = math.radians(22.5)
@@ -286,14 +287,68 @@ def test_state_does_not_grow_with_the_log() -> None:
     method = AtmMethod(history_size=capacity, beam_width=PHI,
                        min_transversal=math.radians(20.0), range_resolution=INCH)
     model = _atm(method)
-    shapes = (model.bearings.shape, model.counts.shape)
-    assert shapes == ((2 * capacity, 4 * (capacity - 1)), (2 * capacity,))
-    for reading in _cluttered_stream(5 * capacity, seed=8):
+    assert model.counts.shape == (2 * capacity,)
+    # Room for every crossing an arc can have: 2 a pair, with capacity - 1 older and newer arcs.
+    most = 4 * (capacity - 1)
+    assert model.bearings.shape[0] == 2 * capacity
+    assert model.bearings.shape[1] <= most
+    shapes = []
+    for k, reading in enumerate(_cluttered_stream(25 * capacity, seed=8)):
         method.add(reading)
-    assert (model.bearings.shape, model.counts.shape) == shapes
+        if k in (5 * capacity, 25 * capacity - 1):
+            shapes.append(model.bearings.shape)
+    assert shapes[0] == shapes[1]
+    assert model.bearings.shape[1] <= most
     assert model.counts.max() > 0
     assert model.counts.max() <= model.bearings.shape[1]
     assert model.counters()["atm_crossings"] > 0
+
+
+def test_the_crossing_store_grows_on_demand_and_keeps_every_crossing() -> None:
+    # 40 arcs from one point through one beam-wide fan of 16 sensors cross none; arcs from a
+    # ring of origins all around a central post cross each other pairwise in their beams.
+    # A store that starts at 2 columns must grow and still keep what a full-size store keeps.
+    rng = np.random.default_rng(4)
+    n = 120
+    angle = rng.uniform(0.0, 2.0 * math.pi, n)
+    dist = rng.uniform(1.0, 1.5, n)
+    readings = [Reading(0.1 * i, i % 16, float(dist[i] * math.cos(angle[i])),
+                        float(dist[i] * math.sin(angle[i])), float(angle[i] + math.pi),
+                        float(dist[i]), PHI) for i in range(n)]
+    counts = []
+    for initial in (2, 4 * (n - 1)):
+        method = AtmMethod(history_size=n, beam_width=PHI, min_transversal=math.radians(20.0),
+                           range_resolution=INCH)
+        model = _atm(method)
+        model.bearings = np.zeros((model.bearings.shape[0], initial), dtype=np.float32)
+        for reading in readings:
+            method.add(reading)
+        counts.append(model.counts.copy())
+        assert model.counts.max() <= model.bearings.shape[1]
+        if initial == 2:
+            assert model.bearings.shape[1] > 2  # it grew
+            small = (model, method.local_map())
+        else:
+            full = (model, method.local_map())
+    np.testing.assert_array_equal(counts[0], counts[1])
+    assert counts[0].max() > 2
+    for slot in np.flatnonzero(counts[0]):
+        c = counts[0][slot]
+        np.testing.assert_array_equal(np.sort(small[0].bearings[slot, :c]),
+                                      np.sort(full[0].bearings[slot, :c]))
+    np.testing.assert_array_equal(small[1].xy, full[1].xy)
+
+
+def test_a_store_beyond_the_memory_limit_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(atm_module, "MAX_ATM_STATE_BYTES", 32)
+    method = AtmMethod(history_size=4, beam_width=math.radians(60.0),
+                       min_transversal=math.radians(30.0), range_resolution=INCH)
+    _atm(method).bearings = np.zeros((8, 1), dtype=np.float32)
+    wide = math.radians(60.0)
+    method.add(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.05, wide))
+    with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+        method.add(Reading(1.0, 8, 2.0, 0.0, math.pi, 1.05, wide))
+    assert issubclass(CrossingStoreError, SonarcarveError)
 
 
 @pytest.mark.parametrize(("psi", "delta"), [(-0.1, INCH), (1.6, INCH), (0.5, -1.0),

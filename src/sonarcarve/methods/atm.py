@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
-from sonarcarve.errors import ConfigError
+from sonarcarve.errors import SonarcarveError
 from sonarcarve.geometry import common_chord
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.index import (
@@ -64,18 +64,25 @@ from sonarcarve.methods.config import (
 from sonarcarve.typing import FloatArray, SlotArray
 
 __all__ = [
+    "INITIAL_COLUMNS",
     "MAX_ATM_STATE_BYTES",
     "MIN_INDEXED_TRANSVERSAL",
     "AtmMethod",
     "AtmModel",
+    "CrossingStoreError",
     "atm_error_bound",
 ]
 
 
-#: Most memory ATM's crossing store may take, bytes (1 GiB). It keeps room for every crossing an
-#: arc can have, ``2n × 4(n - 1)`` float32 values for a history of ``n`` arcs (about 32 n² bytes:
-#: 2 MB at the paper's 250, 128 MB at 2,000), so ATM refuses histories above about 5,790 arcs.
+#: Most memory ATM's crossing store may take, bytes (1 GiB). The store grows on demand (see
+#: :class:`AtmModel`): an arc needs a column per crossing it has actually kept, a few tens on the
+#: benchmark streams, so a history of 10,000 arcs takes a few MB. Only an arc with more crossings
+#: than 1 GiB leaves room for (about 1,300 at the largest history, 100,000 arcs) stops the method
+#: with :class:`CrossingStoreError`.
 MAX_ATM_STATE_BYTES = 2**30
+
+#: Columns of the crossing store when a model starts (it doubles when an arc needs more).
+INITIAL_COLUMNS = 32
 
 
 #: Smallest ψ (radians) for which ATM uses its spatial index: below it the crossings of
@@ -84,12 +91,26 @@ MAX_ATM_STATE_BYTES = 2**30
 MIN_INDEXED_TRANSVERSAL = 1e-4
 
 
-def _check_state_size(nbytes: int) -> None:
-    if nbytes > MAX_ATM_STATE_BYTES:
-        msg = (f"history_size too large for ATM: its crossing store would take "
-               f"{nbytes / 2**30:.1f} GiB (32 bytes x history_size²; at most 1 GiB, a history "
-               "of about 5,790 arcs)")
-        raise ConfigError(msg)
+class CrossingStoreError(SonarcarveError, MemoryError):
+    """ATM's crossing store would exceed :data:`MAX_ATM_STATE_BYTES`: some arc has more
+    transversal crossings than that much memory holds. The method cannot go on (the readings of
+    the block that needed the room are in the history but not all intersected); a shorter
+    history bounds the crossings an arc can collect."""
+
+
+def _grown_columns(rows: int, columns: int, needed: int, most: int) -> int:
+    """Columns of the crossing store after it grows to hold ``needed`` crossings in one row:
+    doubled until enough, never more than ``most`` (every crossing an arc can have), and
+    :class:`CrossingStoreError` beyond :data:`MAX_ATM_STATE_BYTES`."""
+    while columns < needed:
+        columns *= 2
+    columns = min(columns, max(most, needed))
+    if rows * columns * 4 > MAX_ATM_STATE_BYTES:
+        msg = (f"ATM's crossing store would take {rows * columns * 4 / 2**30:.1f} GiB for "
+               f"{needed} crossings of one arc (at most {MAX_ATM_STATE_BYTES / 2**30:.0f} GiB); "
+               "use a shorter history_size")
+        raise CrossingStoreError(msg)
+    return columns
 
 
 def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
@@ -181,7 +202,7 @@ def _add_arc(
             along_i = qx * cos_axis[i] + qy * sin_axis[i]
             if along_i < ri * cos_half[i]:
                 continue
-            # The store holds every crossing an arc can have (see AtmModel), so these guards
+            # _add_arcs makes room for every crossing first (_room_needed), so these guards
             # never drop one; they only keep a bad caller from writing out of bounds.
             if counts[slot] < width:
                 bearings[slot, counts[slot]] = math.atan2(cj * py - sj * px, along_j)
@@ -193,6 +214,16 @@ def _add_arc(
     return kept
 
 
+@compiled_inline
+def _room_needed(slot_found: int, candidates: SlotArray, counts: npt.NDArray[np.int32]) -> int:
+    """Columns the crossing store needs before a new arc meets ``slot_found`` older arcs: two
+    crossings a pair at most, for the new arc and for each partner."""
+    needed = 2 * slot_found
+    for k in range(slot_found):
+        needed = max(needed, counts[candidates[k]] + 2)
+    return needed
+
+
 @compiled
 def _add_arcs(
     first: int, count: int, capacity: int,
@@ -201,18 +232,25 @@ def _add_arcs(
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
     index: ArcIndex, candidates: SlotArray, use_index: bool,
-) -> int:
+) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
-    (:func:`_add_arc`). Returns the crossings kept.
+    (:func:`_add_arc`).
 
     With ``use_index`` only the arcs the index returns for the new arc's box
     (:func:`~sonarcarve.geometry.index.query_box`) are intersected: a kept crossing lies on both
     full beams, so both boxes contain it. ``index`` holds the live arcs (ATM removes none).
     Off (ψ < :data:`MIN_INDEXED_TRANSVERSAL`), every live arc is: the crossings of nearly
     tangent circles are too ill-conditioned for the boxes' padding.
+
+    Returns ``(kept, done, needed)``: the crossings kept, the sequence number after the last arc
+    done (``first + count`` when all are) and, when it stops early, the columns ``bearings``
+    needs for arc ``done`` (0 otherwise). It stops *before* an arc whose crossings might not
+    fit, having changed nothing of that arc that a second call would not redo the same way, so
+    the caller grows the store and calls again from ``done``.
     """
     storage = x.shape[0]
+    width = bearings.shape[1]
     kept = 0
     for sequence in range(first, first + count):
         slot = sequence % storage
@@ -229,41 +267,70 @@ def _add_arcs(
             for older in range(max(0, sequence - capacity + 1), sequence):
                 candidates[found] = older % storage
                 found += 1
+        needed = _room_needed(found, candidates, counts)
+        if needed > width:
+            return kept, sequence, needed
         kept += _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates, found,
                          cos_psi, bearings, counts)
         if use_index:
             index_insert(index, slot, xmin, xmax, ymin, ymax)
-    return kept
+    return kept, first + count, 0
+
+
+@compiled_inline
+def _shell_sort(values: FloatArray, count: int) -> None:
+    """Sort ``values[:count]`` in place (Shell's sort, Knuth's gaps 1, 4, 13, ...).
+
+    Not ``np.sort``: numba's quicksort took a second to compile, for lists of a few crossings.
+    Any correct sort gives the same order statistics, so the medians are unchanged.
+    """
+    gap = 1
+    while gap < count // 3:
+        gap = 3 * gap + 1
+    while gap > 0:
+        for i in range(gap, count):
+            v = values[i]
+            j = i
+            while j >= gap and values[j - gap] > v:
+                values[j] = values[j - gap]
+                j -= gap
+            values[j] = v
+        gap //= 3
 
 
 @compiled
 def _medians(
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray
-) -> tuple[FloatArray, FloatArray]:
-    """Median and span (max − min) of each slot's stored bearings; 0 where it has none."""
-    n = slots.shape[0]
-    median = np.zeros(n)
-    span = np.zeros(n)
-    for k in range(n):
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray,
+    median: FloatArray, span: FloatArray,
+) -> None:
+    """Median and span (max − min) of each slot's stored bearings into ``median`` and ``span``
+    (shape ``slots.shape``); 0 where it has none."""
+    values = np.empty(bearings.shape[1])
+    for k in range(slots.shape[0]):
         s = slots[k]
         c = counts[s]
+        median[k] = 0.0
+        span[k] = 0.0
         if c == 0:
             continue
-        values = np.sort(bearings[s, :c].astype(np.float64))
+        for i in range(c):
+            values[i] = bearings[s, i]
+        _shell_sort(values, c)
         median[k] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
         span[k] = values[c - 1] - values[0]
-    return median, span
 
 
 class AtmModel(ArcModel):
     """ATM over a shared history (section 2-D): the median of transversal crossings per arc.
 
-    State is fixed-size, independent of the length of the log: ``bearings`` has one row per
-    history slot and room for every crossing an arc can collect. An arc meets at most
-    ``capacity − 1`` older arcs when it arrives and ``capacity − 1`` newer ones while it is live,
-    and two circles cross at most twice, so ``4 (capacity − 1)`` columns can never overflow
-    (both crossings of one pair can lie in both beams when two sensors face each other). That is
-    ``2 capacity × 4 (capacity − 1) × 4`` bytes: 2 MB at the paper's 250.
+    State does not grow with the length of the log: ``bearings`` has one row per history slot
+    and a column per crossing the busiest arc has kept (``counts``). It starts with
+    :data:`INITIAL_COLUMNS` and doubles when an arc is about to meet more partners than its row
+    can hold: an arc meets at most ``capacity − 1`` older arcs when it arrives and
+    ``capacity − 1`` newer ones while it is live, and two circles cross at most twice, so it
+    never needs more than ``4 (capacity − 1)`` (both crossings of one pair can lie in both beams
+    when two sensors face each other), and in practice far fewer (a history of 10,000 arcs keeps
+    a few MB where room for every possible crossing would take 3 GB).
 
     Crossings found with a partner that later leaves the history stay with the arc: they were
     found while both were live. A row is reset only when its slot is reused by a new arc.
@@ -294,8 +361,9 @@ class AtmModel(ArcModel):
         self.range_resolution = check_range_resolution(range_resolution)
         self.error_bound = atm_error_bound(min_transversal, range_resolution)
         self._cos_psi = math.cos(min_transversal)
-        columns = max(1, 4 * (history.capacity - 1))
-        _check_state_size(history.storage_size * columns * 4)
+        #: Columns no arc can outgrow (module docstring): the store never grows beyond them.
+        self._most_columns = max(1, 4 * (history.capacity - 1))
+        columns = min(INITIAL_COLUMNS, self._most_columns)
         self.bearings = np.zeros((history.storage_size, columns), dtype=np.float32)
         self.counts = np.zeros(history.storage_size, dtype=np.int32)
         # Per-slot cos θ, sin θ and cos(φ/2), so the pair loop needs no trig for its beam tests.
@@ -318,16 +386,32 @@ class AtmModel(ArcModel):
     def on_add_many(self, first: int, count: int) -> None:
         """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
         h = self.history
-        self._kept += _add_arcs(
-            first, count, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1, h.theta2,
-            self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi, self.bearings,
-            self.counts, self.index, self._candidates, self._use_index,
-        )
+        end = first + count
+        while first < end:
+            kept, first, needed = _add_arcs(
+                first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
+                h.theta2, self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi,
+                self.bearings, self.counts, self.index, self._candidates, self._use_index,
+            )
+            self._kept += kept
+            if first < end:
+                self._grow(needed)
+
+    def _grow(self, needed: int) -> None:
+        """Widen the crossing store to at least ``needed`` columns (doubling; bounded)."""
+        rows, columns = self.bearings.shape
+        columns = _grown_columns(rows, columns, needed, self._most_columns)
+        wider = np.zeros((rows, columns), dtype=np.float32)
+        wider[:, : self.bearings.shape[1]] = self.bearings
+        self.bearings = wider
 
     def estimates(self, slots: SlotArray) -> Estimates:
         h = self.history
-        slots = np.ascontiguousarray(slots, dtype=np.int64)
-        median, span = _medians(self.bearings, self.counts, slots)
+        # A writable int64 copy: one compiled version of _medians, whatever the caller passes.
+        slots = np.array(slots, dtype=np.int64)
+        median = np.empty(len(slots))
+        span = np.empty(len(slots))
+        _medians(self.bearings, self.counts, slots, median, span)
         has = self.counts[slots] > 0
         beam = h.beam_width[slots]
         return Estimates(
