@@ -1,4 +1,5 @@
-"""``sonarcarve demo``: simulate a tour, map it with every method, print a table, write figures."""
+"""``sonarcarve demo``: simulate a tour, map it with every method and two occupancy grids, print
+the tables, write figures and the grids."""
 
 from __future__ import annotations
 
@@ -15,24 +16,27 @@ from sonarcarve.cli.app import app, console, progress
 from sonarcarve.io.atomic import check_output_dir
 from sonarcarve.lab.demo import (
     APPROACH_DISTANCE,
-    FIGURE_FILES,
-    FIGURE_TEXT,
+    GRID_RESOLUTION,
     METHOD_COLORS,
+    TABLE_COLUMNS,
     DemoResult,
     caption,
     demo_config,
+    grid_caption,
+    grid_table_rows,
     load_demo_world,
+    output_captions,
     run_demo,
     table_rows,
     write_demo_outputs,
 )
-from sonarcarve.lab.demo.animation import ANIMATION_FILE
 
 __all__ = ["demo"]
 
 #: Progress labels of the steps.
 _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": "ATM",
-          "carve": "arc carving", "combined": "carving + ATM"}
+          "carve": "arc carving", "combined": "carving + ATM", "evidence": "evidence carving",
+          "grid:carved": "carved grid", "grid:range-sensor-layer": "ROS range layer"}
 
 
 @app.command(help=(
@@ -40,8 +44,9 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     "compare the maps with the true walls.\n\n"
     "A Scout2-like robot (16 sonars, 22.5° beams) drives the world's built-in tour; its "
     "readings include spurious echoes (crosstalk, floor, multipath) as real sonars do. "
-    "Centerline, ATM, arc carving and carving + ATM (combined) each map the same readings "
-    "with a history of --history arcs. The table has one row per method:\n\n"
+    "Centerline, ATM, arc carving, carving + ATM (combined) and evidence carving (beyond "
+    "the paper) each map the same readings with a history of --history arcs. The table has "
+    "one row per method:\n\n"
     "- **unprocessed %**: mean share of the history still waiting for another reading to "
     "sharpen it (the paper's Table I: latency; centerline is always 0).\n"
     "- **median / p90 error cm**: distance of the final map's points to the true walls "
@@ -50,11 +55,20 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     "- **spurious removed %**: of the spurious readings, the share left out of the map "
     "(carving removed them); **true lost %**: the same for true wall echoes.\n"
     "- **map points**: points in the final map; **readings per s**: processing speed.\n\n"
+    f"A second table compares two occupancy grids of {GRID_RESOLUTION:g} m cells built from "
+    "the same readings: the carved grid and ROS's RangeSensorLayer (its defaults). "
+    "**occupied precision**: share of occupied cells on a true wall (within one cell); "
+    "**recall**: share of the walls the sonars saw that are marked; **phantom %**: free "
+    "space marked occupied; **wall covered %**: seen wall length marked; **CPU µs per "
+    "reading**: processor time.\n\n"
     "Writes into --out: fig1-global-maps.png (each method's map over the true walls), "
     "fig2-global-maps-zoom.png (a close-up of the same maps), fig3-error-vs-range.png "
     "(error against the reading's range), fig4-door-local-maps.png (what the robot's local "
-    f"map shows {APPROACH_DISTANCE:g} m before a door), summary.md and summary.json. Takes "
-    "about 4 s for the office tour (about 9 s the first time, while numba compiles).\n\n"
+    f"map shows {APPROACH_DISTANCE:g} m before a door), approach.gif, "
+    "fig5-occupancy-grids.png (both grids over the true walls), carved-grid.yaml/.pgm and "
+    "range-sensor-layer.yaml/.pgm (the grids as ROS map_server maps), summary.md and "
+    "summary.json. Takes about 10 s for the office tour (more the first time, while numba "
+    "compiles).\n\n"
     "Example: `sonarcarve demo --world t-junction --seed 3 --out /tmp/demo`"
 ))
 def demo(
@@ -71,7 +85,7 @@ def demo(
     history: Annotated[int, typer.Option(
         metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")] = 250,
 ) -> None:
-    """Simulate a tour and compare centerline, ATM, arc carving and combined maps."""
+    """Simulate a tour; compare the methods' maps, and the carved grid with ROS's layer."""
     # Every bad option fails here, in one line, before a progress bar or a file appears.
     folder = check_output_dir(out, label=f"--out {out}")  # a str: "" is not "."
     demo_config(history)
@@ -92,16 +106,15 @@ def demo(
     console.print(_table(result))
     console.print()
     console.print(Text(caption(result)), width=min(console.width, 110))
+    if result.grids:
+        console.print()
+        console.print(_grid_table(result))
+        console.print()
+        console.print(Text(grid_caption(result)), width=min(console.width, 110))
     console.print()
     console.print(f"[bold]Wrote {len(written)} files to {out}/[/bold], look at them in order:")
-    for key, name in FIGURE_FILES.items():
-        console.print(f"  {name:<28} {FIGURE_TEXT[key]}", highlight=False)
-    console.print(f"  {ANIMATION_FILE:<28} that approach, animated: carving opens the door",
-                  highlight=False)
-    summaries = [p.name for p in written
-                 if p.name not in (*FIGURE_FILES.values(), ANIMATION_FILE)]
-    console.print(f"  {' and '.join(summaries)}: this table, as text and as data",
-                  highlight=False)
+    for name, text in output_captions(result, animation=True):
+        console.print(f"  {name:<28} {text}", highlight=False)
     console.print(f"[dim]done in {time.perf_counter() - tic:.1f} s (simulation "
                   f"{result.seconds['simulate']:.1f} s).[/dim]")
 
@@ -109,16 +122,35 @@ def demo(
 def _table(result: DemoResult) -> Table:
     header, rows = table_rows(result)
     sim = result.simulation
-    # Compact enough for an 80-column terminal: no vertical rules, one space between columns.
+    # Compact enough for an 80-column terminal: no vertical rules, one space between columns,
+    # and the readings column (the same number in every row) moved into the title, which
+    # leaves room for "evidence carving / (beyond the paper)" on two lines.
+    keep = [k for k, (key, _, _) in enumerate(TABLE_COLUMNS) if key != "readings"]
     table = Table(title=f"sonarcarve demo: '{result.world.name}' tour, "
-                        f"{sim.trajectory.path_length:.0f} m, seed {result.seed}, "
-                        f"history {result.config.history_size}",
+                        f"{sim.trajectory.path_length:.0f} m, {len(sim.readings):,} readings, "
+                        f"seed {result.seed}, history {result.config.history_size}",
                   header_style="bold", title_style="bold", box=box.SIMPLE_HEAD,
                   show_edge=False, padding=0)
-    for k, name in enumerate(header):
-        table.add_column(name, justify="left" if k == 0 else "right", no_wrap=True)
+    for k in keep:
+        table.add_column(header[k], justify="left" if k == 0 else "right", no_wrap=True)
     for row, cells in zip(result.methods, rows, strict=True):
         color = METHOD_COLORS.get(row.method)
-        table.add_row(f"[{color}]{cells[0]}[/]" if color else cells[0], *cells[1:])
+        label = cells[0].replace(" (", "\n(")
+        shown = [cells[k] for k in keep]
+        table.add_row(f"[{color}]{label}[/]" if color else label, *shown[1:])
+    return table
+
+
+def _grid_table(result: DemoResult) -> Table:
+    header, rows = grid_table_rows(result)
+    grids = result.grids
+    table = Table(title=f"occupancy grids of the same readings, {grids[0].resolution:.2f} m "
+                        "cells, against the true walls",
+                  header_style="bold", title_style="bold", box=box.SIMPLE_HEAD,
+                  show_edge=False, padding=(0, 1, 0, 0))
+    for k, name in enumerate(header):
+        table.add_column(name, justify="left" if k == 0 else "right", no_wrap=True)
+    for cells in rows:
+        table.add_row(*cells)
     return table
 

@@ -1,40 +1,55 @@
-"""The demo: one simulated tour, every method over the same readings, a table and four figures.
+"""The demo: one simulated tour, every method and two occupancy grids over the same readings.
 
 :func:`run_demo` simulates the built-in tour of a world with a Scout2-like sonar ring, runs
-centerline, ATM, arc carving and the combined method over the same readings, and measures each
-against the ground truth the simulator knows. :func:`write_demo_outputs` turns the
-:class:`DemoResult` into ``summary.md``, ``summary.json`` and four PNG figures. Nothing here
-prints; the CLI (``sonarcarve demo``) does.
+centerline, ATM, arc carving, the combined method and evidence carving (beyond the paper) over
+the same readings, builds the carved grid and ROS's range sensor layer from them, and measures
+each against the ground truth the simulator knows. :func:`write_demo_outputs` turns the
+:class:`DemoResult` into ``summary.md``, ``summary.json``, five PNG figures and each grid as a
+ROS map_server map. Nothing here prints; the CLI (``sonarcarve demo``) does.
 
 The modules, each importing only those above it:
 
 - :mod:`~sonarcarve.lab.demo.scenario`: what the demo simulates (methods, world, settings);
 - :mod:`~sonarcarve.lab.demo.doors`: the doors the tour approaches and the local maps then;
 - :mod:`~sonarcarve.lab.demo.results`: the records a run produces;
+- :mod:`~sonarcarve.lab.demo.costmaps`: the occupancy grids, built and measured;
 - :mod:`~sonarcarve.lab.demo.runs`: :func:`run_demo`, running the methods and measuring;
-- :mod:`~sonarcarve.lab.demo.figures`: the four figures;
-- :mod:`~sonarcarve.lab.demo.table`: the printed table, ``summary.md`` and ``summary.json``;
+- :mod:`~sonarcarve.lab.demo.figures`: figures 1-4 (the paper's methods);
+- :mod:`~sonarcarve.lab.demo.grid_figure`: figure 5 (the grids) and which grid is better;
+- :mod:`~sonarcarve.lab.demo.table`: the printed tables, ``summary.md`` and ``summary.json``;
 - :mod:`~sonarcarve.lab.demo.outputs`: writing all of them at once, atomically.
 """
 
+from sonarcarve.lab.demo.costmaps import GRID_KINDS, grid_bounds, run_grids
 from sonarcarve.lab.demo.doors import DoorApproach, LocalView
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
-from sonarcarve.lab.demo.outputs import check_output_dir, write_demo_outputs
-from sonarcarve.lab.demo.results import DemoResult, MethodSummary
+from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, grid_verdict
+from sonarcarve.lab.demo.outputs import (
+    check_output_dir,
+    grid_files,
+    output_captions,
+    write_demo_outputs,
+)
+from sonarcarve.lab.demo.results import DemoResult, GridSummary, MethodSummary
 from sonarcarve.lab.demo.runs import run_demo
 from sonarcarve.lab.demo.scenario import (
     APPROACH_DISTANCE,
     DEMO_METHODS,
+    GRID_RESOLUTION,
     METHOD_COLORS,
     METHOD_LABELS,
+    PAPER_METHODS,
     SAMPLE_EVERY,
     DemoError,
     demo_config,
     load_demo_world,
 )
 from sonarcarve.lab.demo.table import (
+    GRID_COLUMNS,
     TABLE_COLUMNS,
     caption,
+    grid_caption,
+    grid_table_rows,
     summary_json,
     summary_markdown,
     table_rows,
@@ -45,20 +60,33 @@ __all__ = [
     "DEMO_METHODS",
     "FIGURE_FILES",
     "FIGURE_TEXT",
+    "GRID_COLUMNS",
+    "GRID_FIGURE_FILE",
+    "GRID_KINDS",
+    "GRID_RESOLUTION",
     "METHOD_COLORS",
     "METHOD_LABELS",
+    "PAPER_METHODS",
     "SAMPLE_EVERY",
     "TABLE_COLUMNS",
     "DemoError",
     "DemoResult",
     "DoorApproach",
+    "GridSummary",
     "LocalView",
     "MethodSummary",
     "caption",
     "check_output_dir",
     "demo_config",
+    "grid_bounds",
+    "grid_caption",
+    "grid_files",
+    "grid_table_rows",
+    "grid_verdict",
     "load_demo_world",
+    "output_captions",
     "run_demo",
+    "run_grids",
     "summary_json",
     "summary_markdown",
     "table_rows",

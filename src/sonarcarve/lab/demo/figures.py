@@ -1,6 +1,9 @@
 """Figures of the demo (``sonarcarve demo``), drawn from a
 :class:`~sonarcarve.lab.demo.results.DemoResult`.
 
+Figures 1-3 show the paper's four methods (:data:`~sonarcarve.lab.demo.scenario.PAPER_METHODS`);
+evidence carving, beyond the paper, is in the table only.
+
 1. :func:`plot_global_maps`: each method's whole global map over the true walls;
 2. :func:`plot_map_zoom`: the same maps in a window where single points can be seen;
 3. :func:`plot_error_by_range`: distance of map points to the true walls against range;
@@ -21,12 +24,13 @@ import numpy as np
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import GAP_DEPTH, RANGE_EDGES, passage_clearance
 from sonarcarve.lab.demo.doors import DoorApproach, LocalView
-from sonarcarve.lab.demo.results import DemoResult
+from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import (
     APPROACH_DISTANCE,
     CLOSEUP_METHODS,
     METHOD_COLORS,
     METHOD_LABELS,
+    PAPER_METHODS,
 )
 from sonarcarve.lab.drawing import new_figure, scatter_sources
 from sonarcarve.lab.instrument import ArcTable
@@ -42,10 +46,12 @@ __all__ = [
     "FIGURE_FILES",
     "FIGURE_TEXT",
     "ZOOM_SIZE",
+    "map_limits",
     "plot_door_closeup",
     "plot_error_by_range",
     "plot_global_maps",
     "plot_map_zoom",
+    "zoom_window",
 ]
 
 #: Output files, in the order a reader should look at them.
@@ -72,11 +78,19 @@ def _walls(ax: Axes, world: World, **style: Any) -> None:
     plot_walls(world.segments, ax, **({"colors": "0.55", "linewidths": 1.2} | style))
 
 
-def _map_limits(result: DemoResult, margin: float = 1.5) -> tuple[float, float, float, float]:
-    """``(xmin, xmax, ymin, ymax)`` showing every map point and the robot's path, metres."""
+def _drawn_rows(result: DemoResult) -> tuple[MethodSummary, ...]:
+    """The methods figures 1-3 show: the paper's four of the run (all if it ran none)."""
+    rows = tuple(row for row in result.methods if row.method in PAPER_METHODS)
+    return rows or result.methods
+
+
+def map_limits(result: DemoResult, margin: float = 1.5) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` showing every drawn map point and the robot's path,
+    metres."""
     traj = result.simulation.trajectory
-    xs = [traj.x] + [m.xy[:, 0] for m in result.global_maps.values()]
-    ys = [traj.y] + [m.xy[:, 1] for m in result.global_maps.values()]
+    maps = [result.global_maps[row.method] for row in _drawn_rows(result)]
+    xs = [traj.x] + [m.xy[:, 0] for m in maps]
+    ys = [traj.y] + [m.xy[:, 1] for m in maps]
     x, y = np.concatenate(xs), np.concatenate(ys)
     wx0, wy0, wx1, wy1 = result.world.bounds
     # Clip to the walls' box: a stray multipath point far outside must not shrink the building.
@@ -84,16 +98,17 @@ def _map_limits(result: DemoResult, margin: float = 1.5) -> tuple[float, float, 
             max(float(y.min()), wy0) - margin, min(float(y.max()), wy1) + margin)
 
 
-def _zoom_window(result: DemoResult) -> tuple[float, float, float, float]:
-    """A :data:`ZOOM_SIZE` window over the stretch of the tour with the most map points."""
-    x0, x1, y0, y1 = _map_limits(result, margin=0.0)
+def zoom_window(result: DemoResult) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)``: a :data:`ZOOM_SIZE` window over the stretch of the tour
+    with the most map points (fig. 2's window; fig. 5's close-ups)."""
+    x0, x1, y0, y1 = map_limits(result, margin=0.0)
     w, h = min(ZOOM_SIZE[0], x1 - x0), min(ZOOM_SIZE[1], y1 - y0)
     traj = result.simulation.trajectory
     step = max(1, len(traj) // 400)
     centres = np.column_stack((traj.x[::step], traj.y[::step]))
     centres[:, 0] = np.clip(centres[:, 0], x0 + w / 2, x1 - w / 2)
     centres[:, 1] = np.clip(centres[:, 1], y0 + h / 2, y1 - h / 2)
-    xy = result.global_maps[result.methods[0].method].xy
+    xy = result.global_maps[_drawn_rows(result)[0].method].xy
     inside = ((np.abs(xy[None, :, 0] - centres[:, None, 0]) <= w / 2)
               & (np.abs(xy[None, :, 1] - centres[:, None, 1]) <= h / 2))
     cx, cy = centres[int(np.argmax(inside.sum(axis=1)))]
@@ -106,15 +121,16 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
     from matplotlib.patches import Rectangle
 
     x0, x1, y0, y1 = limits
-    cols = 2 if len(result.methods) > 1 else 1
-    rows = math.ceil(len(result.methods) / cols)
+    drawn = _drawn_rows(result)
+    cols = 2 if len(drawn) > 1 else 1
+    rows = math.ceil(len(drawn) / cols)
     aspect = (y1 - y0) / max(x1 - x0, 1e-9)
     width = 13.0 if cols == 2 else 7.0
     fig, axes = new_figure(rows, cols, width=width,
                         height=min(14.0, 1.0 + rows * (width / cols) * aspect),
                         sharex=True, sharey=True)
     traj = result.simulation.trajectory
-    for ax, row in zip(axes.flat, result.methods, strict=False):
+    for ax, row in zip(axes.flat, drawn, strict=False):
         gmap = result.global_maps[row.method]
         _walls(ax, result.world)
         ax.plot(traj.x, traj.y, color="0.25", lw=0.7, ls=":", zorder=2, label="robot path")
@@ -130,7 +146,7 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
                   framealpha=0.9)
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
-    for ax in axes.flat[len(result.methods):]:
+    for ax in axes.flat[len(drawn):]:
         ax.axis("off")
     for ax in axes[-1]:
         ax.set_xlabel("x (m)")
@@ -142,11 +158,11 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
 
 def plot_global_maps(result: DemoResult) -> Figure:
     """Fig. 1: each method's whole global map over the true walls (same limits everywhere)."""
-    limits = _map_limits(result)
+    limits = map_limits(result)
     span = max(limits[1] - limits[0], limits[3] - limits[2])
     size = float(np.clip(60.0 / span, 0.8, 8.0))  # dots shrink as the map grows
     return _map_panels(
-        result, limits, size, box=_zoom_window(result),
+        result, limits, size, box=zoom_window(result),
         title=f"Final maps of the '{result.world.name}' tour: one dot per reading that survived, "
               "coloured by the model that placed it; grey: the true walls; dashed box: fig. 2")
 
@@ -154,7 +170,7 @@ def plot_global_maps(result: DemoResult) -> Figure:
 def plot_map_zoom(result: DemoResult) -> Figure:
     """Fig. 2: the maps of fig. 1 inside its dashed box, where single points can be seen."""
     return _map_panels(
-        result, _zoom_window(result), 6.0,
+        result, zoom_window(result), 6.0,
         title="Close-up of the final maps (the dashed box of fig. 1): sharp maps hug the grey "
               "walls; smeared points and stray dots are errors")
 
@@ -169,7 +185,7 @@ def plot_error_by_range(result: DemoResult) -> Figure:
     ax = axes[0, 0]
     edges = np.asarray(RANGE_EDGES)
     handles = []
-    for row in result.methods:
+    for row in _drawn_rows(result):
         gmap = result.global_maps[row.method]
         stats = metrics.binned(result.map_errors[row.method], gmap.range, edges)
         enough = stats.counts >= 10  # the median of a handful of points is noise

@@ -1,4 +1,5 @@
-"""What a demo measured: one :class:`MethodSummary` per method and the whole :class:`DemoResult`.
+"""What a demo measured: one :class:`MethodSummary` per method, one :class:`GridSummary` per
+occupancy grid, and the whole :class:`DemoResult`.
 
 These records are what the table (:mod:`~sonarcarve.lab.demo.table`) and the figures
 (:mod:`~sonarcarve.lab.demo.figures`) are drawn from; :func:`~sonarcarve.lab.demo.run_demo`
@@ -13,14 +14,15 @@ from typing import Any
 
 from sonarcarve.lab.demo.doors import DoorApproach, LocalView
 from sonarcarve.lab.demo.scenario import METHOD_LABELS
+from sonarcarve.lab.grid_measures import GridMeasures
 from sonarcarve.lab.output import json_ready
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.world import World
-from sonarcarve.typing import FloatArray
+from sonarcarve.typing import FloatArray, Int8Array
 
-__all__ = ["DemoResult", "MethodSummary"]
+__all__ = ["DemoResult", "GridSummary", "MethodSummary"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,65 @@ class MethodSummary:
 
 
 @dataclass(frozen=True, eq=False)
+class GridSummary:
+    """One row of the demo's grid table: one occupancy grid over the whole tour.
+
+    Attributes
+    ----------
+    kind : str
+        The grid's ``sonarcarve grid --model`` name (``carved``, ``range-sensor-layer``).
+    label : str
+        Display name.
+    resolution : float
+        Cell side, metres.
+    origin : tuple of 2 floats
+        ``(x, y)`` of the lower-left corner of cell ``(0, 0)``, metres.
+    cells : ndarray of int8, shape (rows, columns)
+        The trinary map (:func:`~sonarcarve.grids.trinary`): 100 occupied, 0 free, -1 unknown;
+        row 0 the bottom (y up).
+    measures : GridMeasures
+        The map against the true walls (:func:`~sonarcarve.lab.grid_measures.grid_measures`).
+    readings : int
+        Readings folded in.
+    cpu_seconds : float
+        Processor time of folding the readings in and reading the trinary map once, seconds
+        (kernels compiled beforehand).
+    """
+
+    kind: str
+    label: str
+    resolution: float
+    origin: tuple[float, float]
+    cells: Int8Array
+    measures: GridMeasures
+    readings: int
+    cpu_seconds: float
+
+    @property
+    def cpu_us_per_reading(self) -> float:
+        """Processor time per reading, microseconds (NaN without readings)."""
+        return 1e6 * self.cpu_seconds / self.readings if self.readings else math.nan
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` covered by the cells, metres."""
+        rows, cols = self.cells.shape
+        x0, y0 = self.origin
+        return x0, y0, x0 + cols * self.resolution, y0 + rows * self.resolution
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready: the settings and measures (shares in [0, 1]; NaN becomes None)."""
+        rows, cols = self.cells.shape
+        row: dict[str, Any] = {"kind": self.kind, "label": self.label,
+                               "resolution_m": self.resolution, "origin": list(self.origin),
+                               "rows": rows, "columns": cols}
+        row |= {name: json_ready(value) for name, value in self.measures._asdict().items()}
+        row |= {"readings": self.readings, "cpu_seconds": self.cpu_seconds,
+                "cpu_us_per_reading": json_ready(self.cpu_us_per_reading)}
+        return row
+
+
+@dataclass(frozen=True, eq=False)
 class DemoResult:
     """Everything :func:`run_demo` measured, ready for the table and the figures.
 
@@ -113,8 +174,12 @@ class DemoResult:
         The door shown in the close-up figure (None when the tour approaches none).
     fallback_view : LocalView or None
         Local maps at mid-tour, for the close-up when there is no door.
+    grids : tuple of GridSummary
+        The occupancy grids of the same readings (carved grid, then ROS's range sensor layer);
+        empty when the run built none.
     seconds : dict of str to float
-        Wall time per step (``simulate``, each method incl. its snapshots, ``measure``).
+        Wall time per step (``simulate``, each method incl. its snapshots, ``measure``, each
+        grid as ``grid:KIND`` incl. its measures).
     """
 
     world: World
@@ -127,6 +192,7 @@ class DemoResult:
     doors: tuple[DoorApproach, ...]
     closeup: DoorApproach | None
     fallback_view: LocalView | None
+    grids: tuple[GridSummary, ...]
     seconds: dict[str, float]
 
     def summary(self, method: str) -> MethodSummary:
@@ -135,4 +201,12 @@ class DemoResult:
             if row.method == method:
                 return row
         msg = f"no method {method!r} in this demo"
+        raise KeyError(msg)
+
+    def grid(self, kind: str) -> GridSummary:
+        """The grid table row of ``kind``."""
+        for row in self.grids:
+            if row.kind == kind:
+                return row
+        msg = f"no grid {kind!r} in this demo"
         raise KeyError(msg)

@@ -8,7 +8,10 @@
 * which readings carving removed, split by what really produced them (direct echoes against
   crosstalk, floor and multipath echoes; section 3 and 5-C),
 * whether each door the tour approaches is open in the local map 1.5 m of driving before it
-  (the paper's Fig. 2; :mod:`~sonarcarve.lab.demo.doors`).
+  (the paper's Fig. 2; :mod:`~sonarcarve.lab.demo.doors`);
+
+and builds the occupancy grids of the same readings, the carved grid beside ROS's range sensor
+layer, measured against the true walls (:mod:`~sonarcarve.lab.demo.costmaps`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import numpy as np
 
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import removal_summary
+from sonarcarve.lab.demo.costmaps import run_grids
 from sonarcarve.lab.demo.doors import (
     DoorCandidate,
     door_candidates,
@@ -30,6 +34,7 @@ from sonarcarve.lab.demo.doors import (
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import (
     DEMO_METHODS,
+    GRID_RESOLUTION,
     SAMPLE_EVERY,
     DemoError,
     ProgressCallback,
@@ -64,6 +69,7 @@ def run_demo(
     robot: str = "scout2",
     max_length: float | None = None,
     methods: tuple[str, ...] = DEMO_METHODS,
+    grid_resolution: float | None = GRID_RESOLUTION,
     on_progress: ProgressCallback | None = None,
 ) -> DemoResult:
     """Simulate a world's tour and map it with every method; measure each against the truth.
@@ -83,9 +89,12 @@ def run_demo(
         Drive only the first ``max_length`` metres of the tour (default: all of it).
     methods : tuple of str
         Methods to run, CLI names; the table follows this order.
+    grid_resolution : float or None
+        Cell side of the carved grid and the range sensor layer built from the same readings,
+        metres; None builds no grids.
     on_progress : callable, optional
-        ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings) or a method name
-        (readings).
+        ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings), a method name or
+        ``grid:KIND`` (readings).
 
     Returns
     -------
@@ -96,9 +105,9 @@ def run_demo(
     WorldError
         Unknown or unreadable world, or a world without a tour.
     DemoError
-        Bad ``history_size``, ``max_length`` or method name.
+        Bad ``history_size``, ``max_length``, ``grid_resolution`` or method name.
     """
-    config = demo_config(history_size, methods, max_length)
+    config = demo_config(history_size, methods, max_length, grid_resolution)
     the_world = load_demo_world(world)
     the_robot = load_robot(robot)
     seconds: dict[str, float] = {}
@@ -124,11 +133,13 @@ def run_demo(
     closeup = pick_closeup(doors)
     fallback = None if closeup is not None else local_view(sim, records, mid)
     seconds["measure"] = time.perf_counter() - tic
+    grids = () if grid_resolution is None else run_grids(sim, grid_resolution, on_progress,
+                                                         seconds)
     return DemoResult(
         world=the_world, seed=seed, config=config, simulation=sim, methods=rows,
         global_maps={name: rec.global_map for name, rec in records.items()},
         map_errors=errors, doors=doors, closeup=closeup, fallback_view=fallback,
-        seconds=seconds,
+        grids=grids, seconds=seconds,
     )
 
 

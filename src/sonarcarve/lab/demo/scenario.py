@@ -20,8 +20,11 @@ __all__ = [
     "APPROACH_DISTANCE",
     "CLOSEUP_METHODS",
     "DEMO_METHODS",
+    "GRID_MARGIN",
+    "GRID_RESOLUTION",
     "METHOD_COLORS",
     "METHOD_LABELS",
+    "PAPER_METHODS",
     "SAMPLE_EVERY",
     "DemoError",
     "ProgressCallback",
@@ -30,11 +33,14 @@ __all__ = [
 ]
 
 
-#: The methods of the demo (CLI names), in table order: the baseline first, the paper's last.
-DEMO_METHODS = ("centerline", "atm", "carve", "combined")
+#: The paper's four methods (CLI names): the baseline first, the paper's own last. Figures 1-3
+#: show these.
+PAPER_METHODS = ("centerline", "atm", "carve", "combined")
+#: The methods of the demo, in table order: the paper's, then evidence carving (beyond it).
+DEMO_METHODS = (*PAPER_METHODS, "evidence")
 #: Row labels of the table and legends.
 METHOD_LABELS = {"centerline": "centerline", "atm": "ATM", "carve": "carving",
-                 "combined": "combined"}
+                 "combined": "combined", "evidence": "evidence carving (beyond the paper)"}
 #: One colour per method: the colour of the point source it stands for (``SOURCE_COLORS``);
 #: combined, which mixes carved and ATM points, in purple (as in the experiments' figures).
 METHOD_COLORS = {name: EXPERIMENT_COLORS[label] for name, label in EXPERIMENT_LABELS.items()}
@@ -49,8 +55,14 @@ APPROACH_DISTANCE = 1.5
 #: the Scout2 ring, 0.64 s; the experiments use the same).
 SAMPLE_EVERY = 16
 
-#: ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings) or a method name
-#: (readings).
+#: Cell side of the demo's occupancy grids (the carved grid and ROS's range sensor layer),
+#: metres: the resolution of the issue's targets that a whole office fits at (610 x 910 cells).
+GRID_RESOLUTION = 0.10
+#: The grids cover the world's walls plus this margin on every side, metres.
+GRID_MARGIN = 0.5
+
+#: ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings), a method name or
+#: ``grid:`` and a grid kind (readings).
 ProgressCallback = Callable[[str, int, int], None]
 
 
@@ -74,13 +86,15 @@ def load_demo_world(world: str | World) -> World:
 
 
 def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS,
-                max_length: float | None = None) -> MethodConfig:
+                max_length: float | None = None,
+                grid_resolution: float | None = GRID_RESOLUTION) -> MethodConfig:
     """The methods' parameters of a demo, after checking the options.
 
     Raises
     ------
     DemoError
-        ``history_size`` below 1, an unknown method, or a ``max_length`` that is not > 0.
+        ``history_size`` below 1, an unknown method, or a ``max_length`` or
+        ``grid_resolution`` that is not a finite number > 0.
     """
     if history_size < 1:
         msg = f"--history must be at least 1, got {history_size}"
@@ -91,5 +105,9 @@ def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS
         raise DemoError(msg)
     if max_length is not None and not (math.isfinite(max_length) and max_length > 0.0):
         msg = f"max_length must be a positive number of metres, got {max_length}"
+        raise DemoError(msg)
+    if grid_resolution is not None and not (math.isfinite(grid_resolution)
+                                            and grid_resolution > 0.0):
+        msg = f"grid_resolution must be a positive number of metres, got {grid_resolution}"
         raise DemoError(msg)
     return MethodConfig(history_size=history_size)

@@ -1,8 +1,9 @@
-"""The demo's table and summaries: the printed table, its caption, ``summary.md``, ``summary.json``.
+"""The demo's tables and summaries: the methods table and its caption, the grid table and its
+caption, ``summary.md``, ``summary.json``.
 
-Pure text from a :class:`~sonarcarve.lab.demo.results.DemoResult`; the CLI prints the table
-(:func:`table_rows`, :func:`caption`) and :func:`~sonarcarve.lab.demo.outputs.write_demo_outputs`
-writes the summaries.
+Pure text from a :class:`~sonarcarve.lab.demo.results.DemoResult`; the CLI prints the tables
+(:func:`table_rows`, :func:`caption`, :func:`grid_table_rows`, :func:`grid_caption`) and
+:func:`~sonarcarve.lab.demo.outputs.write_demo_outputs` writes the summaries.
 """
 
 from __future__ import annotations
@@ -12,11 +13,21 @@ import math
 from typing import Any
 
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
+from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, GRID_FIGURE_TEXT, grid_verdict
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE
 from sonarcarve.lab.output import json_ready
 
-__all__ = ["TABLE_COLUMNS", "caption", "summary_json", "summary_markdown", "table_rows"]
+__all__ = [
+    "GRID_COLUMNS",
+    "TABLE_COLUMNS",
+    "caption",
+    "grid_caption",
+    "grid_table_rows",
+    "summary_json",
+    "summary_markdown",
+    "table_rows",
+]
 
 
 def _pct(value: float) -> str:
@@ -50,6 +61,49 @@ TABLE_COLUMNS = (
 )
 
 
+#: Grid table columns: (key, header as printed with line breaks, description).
+GRID_COLUMNS = (
+    ("grid", "grid", "occupancy grid, built from the same readings"),
+    ("precision", "occupied\nprecision",
+     "share of the occupied cells within one cell of a true wall (higher is better)"),
+    ("recall", "recall",
+     "share of the seen wall cells with an occupied cell within one cell (higher is better)"),
+    ("phantoms", "phantom\n%", "share of the truly free cells marked occupied (lower is better)"),
+    ("wall_covered", "wall\ncovered\n%",
+     "share of the seen wall length with an occupied cell within one cell"),
+    ("cpu_us_per_reading", "CPU µs\nper\nreading",
+     "processor time per reading: folding it in, and reading the map once at the end"),
+)
+
+
+def _share(value: float) -> str:
+    return "–" if math.isnan(value) else f"{value:.2f}"
+
+
+def grid_table_rows(result: DemoResult) -> tuple[list[str], list[list[str]]]:
+    """Header (with line breaks) and cells of the grid table (empty rows without grids)."""
+    header = [title for _, title, _ in GRID_COLUMNS]
+    rows = [[g.label, _share(g.measures.precision), _share(g.measures.recall),
+             _pct(100.0 * g.measures.phantoms), _pct(100.0 * g.measures.wall_covered),
+             "–" if math.isnan(g.cpu_us_per_reading) else f"{g.cpu_us_per_reading:.0f}"]
+            for g in result.grids]
+    return header, rows
+
+
+def grid_caption(result: DemoResult) -> str:
+    """How to read the grid table, and which grid is better (one paragraph; empty without
+    grids)."""
+    if not result.grids:
+        return ""
+    text = (f"How to read: both grids mapped the same readings into "
+            f"{result.grids[0].resolution:.2f} m cells, read as a planner reads them (occupied, "
+            "free, unknown). Precision: share of the occupied cells that lie on a true wall "
+            "(within one cell); recall: share of the walls the sonars saw that are marked; "
+            "phantoms: free space marked occupied.")
+    verdict = grid_verdict(result)
+    return f"{text} Here {verdict}." if verdict else text
+
+
 def table_rows(result: DemoResult) -> tuple[list[str], list[list[str]]]:
     """Header (with line breaks) and cells of the demo table, as printed and in ``summary.md``."""
     header = [title for _, title, _ in TABLE_COLUMNS]
@@ -75,7 +129,8 @@ def caption(result: DemoResult) -> str:
     names = {row.method for row in result.methods}
     if "centerline" in names:
         base = result.summary("centerline")
-        for method, name in (("carve", "Carving"), ("atm", "ATM"), ("combined", "Combined")):
+        for method, name in (("carve", "Carving"), ("atm", "ATM"), ("combined", "Combined"),
+                             ("evidence", "Evidence carving (beyond the paper)")):
             if method in names:
                 parts.append(_compare(name, result.summary(method), base))
     carve = result.summary("carve") if "carve" in names else None
@@ -105,17 +160,19 @@ def summary_markdown(result: DemoResult) -> str:
     """``summary.md``: the table, its caption, the figures and how the run was made."""
     sim = result.simulation
     header, rows = table_rows(result)
-    header = [title.replace("-\n", "").replace("\n", " ") for title in header]
+    header = [_flat(title) for title in header]
     lines = [f"# sonarcarve demo: {result.world.name}, seed {result.seed}", ""]
     lines.append("| " + " | ".join(header) + " |")
     lines.append("|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|")
     lines += ["| " + " | ".join(cells) + " |" for cells in rows]
     lines += ["", caption(result), "", "Columns:", ""]
-    lines += [f"- {title.replace('-' + chr(10), '').replace(chr(10), ' ')}: {text}"
-              for _, title, text in TABLE_COLUMNS[1:]]
+    lines += [f"- {_flat(title)}: {text}" for _, title, text in TABLE_COLUMNS[1:]]
+    lines += _grid_markdown(result)
     lines += ["", "## Figures", ""]
     for key, name in FIGURE_FILES.items():
         lines.append(f"- [{name}]({name}): {FIGURE_TEXT[key]}")
+    if result.grids:
+        lines.append(f"- [{GRID_FIGURE_FILE}]({GRID_FIGURE_FILE}): {GRID_FIGURE_TEXT}")
     lines += ["", "## Run", "",
               f"- world: {result.world.name}; seed {result.seed}; history "
               f"{result.config.history_size} arcs; tour {sim.trajectory.path_length:.0f} m in "
@@ -124,6 +181,24 @@ def summary_markdown(result: DemoResult) -> str:
               + ", ".join(f"{k} {v:,}" for k, v in sim.kind_counts().items()),
               "- seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()), ""]
     return "\n".join(lines)
+
+
+def _flat(title: str) -> str:
+    """A printed header on one line ("unpro-\ncessed\n%" -> "unprocessed %")."""
+    return title.replace("-\n", "").replace("\n", " ")
+
+
+def _grid_markdown(result: DemoResult) -> list[str]:
+    """The grid table of ``summary.md``, its caption and columns (no lines without grids)."""
+    if not result.grids:
+        return []
+    header, rows = grid_table_rows(result)
+    lines = ["", "## Occupancy grids", "", "| " + " | ".join(_flat(t) for t in header) + " |",
+             "|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|"]
+    lines += ["| " + " | ".join(cells) + " |" for cells in rows]
+    lines += ["", grid_caption(result), "", "Columns:", ""]
+    lines += [f"- {_flat(title)}: {text}" for _, title, text in GRID_COLUMNS[1:]]
+    return lines
 
 
 def summary_json(result: DemoResult) -> str:
@@ -146,7 +221,9 @@ def summary_json(result: DemoResult) -> str:
                    "free_width_m": d.free_width, "passable": d.passable} for d in result.doors],
         "closeup_opening": None if result.closeup is None else result.closeup.opening,
         "caption": caption(result),
-        "figures": list(FIGURE_FILES.values()),
+        "figures": list(FIGURE_FILES.values()) + ([GRID_FIGURE_FILE] if result.grids else []),
+        "grids": [g.as_dict() for g in result.grids],
+        "grid_caption": grid_caption(result),
         "seconds": result.seconds,
     }
     return json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n"
