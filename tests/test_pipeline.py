@@ -19,7 +19,12 @@ from sonarcarve.maps import CallbackSink, GlobalMap, GlobalMapBuilder
 from sonarcarve.methods import METHODS, CarvingMethod, CenterlineMethod, Estimates, make_method
 from sonarcarve.methods.centerline import CenterlineModel
 from sonarcarve.methods.config import MethodConfig
-from sonarcarve.pipeline import ProcessError, process_chunks, process_readings
+from sonarcarve.pipeline import (
+    ProcessError,
+    default_sample_every,
+    process_chunks,
+    process_readings,
+)
 from sonarcarve.readings import ReadingBatch, ReadingsError
 from sonarcarve.typing import SlotArray
 
@@ -116,7 +121,7 @@ RANGES = [1.0, 3.0, 1.0, 1.0, 3.0, 3.0, 1.0, 1.0]
     (2, (1 / 4 + 2 / 4 + 2 / 4) / 3),  # after 4, 6, 8: rows 0-3, 2-5, 4-7
     (4, (1 / 4 + 2 / 4) / 2),  # after 4, 8
     (3, (2 / 4 + 2 / 4) / 2),  # after 6, 8 (3 < 4: the history is not full yet)
-    (None, (1 / 4 + 2 / 4 + 2 / 4 + 2 / 4 + 2 / 4) / 5),  # default: a tenth of 4, at least 1
+    (None, 2 / 4),  # default: every 1,009 readings, so one sample, at the end
 ])
 def test_unprocessed_share_is_sampled_every_so_many_readings(every: int | None,
                                                               expected: float) -> None:
@@ -126,11 +131,31 @@ def test_unprocessed_share_is_sampled_every_so_many_readings(every: int | None,
     assert len(result.global_map) == 8
 
 
-def test_default_sampling_is_a_tenth_of_the_history() -> None:
-    # History 20: the default step is 2 readings, so progress comes at 2, 4, ..., 24, then 25.
+def test_default_sampling_is_every_1009_readings_for_small_histories() -> None:
+    # History 20: the default step is 1,009 readings (the first prime >= 1,000), so progress
+    # comes at 1009, 2018, then at the end.
     calls: list[int] = []
-    process_readings(_row(25), CenterlineMethod(history_size=20), on_progress=calls.append)
-    assert calls == [2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 25]
+    process_readings(_row(2500), CenterlineMethod(history_size=20), on_progress=calls.append)
+    assert calls == [1009, 2018, 2500]
+
+
+@pytest.mark.parametrize(("history", "every"), [
+    (1, 1009), (250, 1009), (10_090, 1009), (10_100, 1013), (100_000, 10_007),
+])
+def test_default_sample_every_is_the_first_prime_past_a_tenth_of_the_history(
+    history: int, every: int,
+) -> None:
+    assert default_sample_every(history) == every
+    assert all(every % k for k in range(2, every))  # prime: every phase of a sensor ring
+
+
+def test_the_default_sampling_is_that_step() -> None:
+    batch = _row(3000, [1.0 + (k % 7 == 0) * 2.0 for k in range(3000)])
+    default = process_readings(batch, _FarMethod(history_size=4))
+    explicit = process_readings(batch, _FarMethod(history_size=4), sample_every=1009)
+    assert default.mean_unprocessed_share == explicit.mean_unprocessed_share
+    every_25 = process_readings(batch, _FarMethod(history_size=4), sample_every=25)
+    assert default.mean_unprocessed_share != every_25.mean_unprocessed_share
 
 
 def test_short_log_samples_the_end() -> None:

@@ -225,3 +225,13 @@ def test_map_filters_keep_the_whole_map_and_still_write_it(tmp_path: Path) -> No
                                 map_filter=MapFilter(max_error=0.2))
     write_map_csv(expected.global_map, tmp_path / "expected.csv")
     assert out.read_bytes() == (tmp_path / "expected.csv").read_bytes()
+
+
+def test_process_help_lists_every_method(capsys: pytest.CaptureFixture[str]) -> None:
+    from sonarcarve.methods import METHODS
+
+    assert main(["process", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.replace("│", " ").split())
+    option = text.split("--method -m NAME", 1)[1]  # "centerline | carve | ... . combined ..."
+    names = [name.strip() for name in option.split(".", 1)[0].split("|")]
+    assert names == list(METHODS)

@@ -291,7 +291,10 @@ def _damage(lines: list[str], kind: str, k: int) -> list[str]:
                         "sensor_negative": (1, "-3"), "x_text": (2, "1,5".replace(",", ";")),
                         "y_inf": (3, "-inf"), "range_zero": (5, "0"),
                         "range_text": (5, ""), "width_wide": (6, "3.5"),
-                        "width_text": (6, "wide")}[kind]
+                        "width_text": (6, "wide"), "t_exponent_only": (0, "1e"),
+                        "x_two_points": (2, "1..2"), "y_sign_only": (3, "-"),
+                        "theta_huge": (4, "1e300"), "range_inf": (5, "inf"),
+                        "range_overflow": (5, "1e999"), "range_signs": (5, "+-1")}[kind]
         cells[column] = text
         damaged[k] = ",".join(cells)
     return damaged
@@ -319,6 +322,139 @@ def test_one_bad_line_gives_the_reference_message_whatever_the_blocks(
                 read_readings_csv(path, block_size=size)
             assert str(caught.value) == str(reference.value), (kind, k, size)
             assert f"line {k + 2}" in str(caught.value)
+
+
+def _numeric_log_text(n: int, seed: int) -> list[str]:
+    """Data lines of a valid log holding only numbers (read by numpy's parser)."""
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(0, 0.1, n))
+    return [",".join([repr(float(t[k])), str(int(rng.integers(0, 16))),
+                      repr(float(rng.normal())), f"{rng.normal():.3e}",
+                      repr(float(rng.uniform(-3, 3))), f"{rng.uniform(0.1, 5):+.6f}",
+                      repr(float(rng.uniform(0.1, 0.5)))]) for k in range(n)]
+
+
+NUMERIC_HEADER = "t,sensor,x,y,theta,range,beam_width"
+#: Problems whose line holds only the bytes numpy's parser reads (digits, signs, ., e, inf).
+NUMERIC_KINDS = ("blank", "short", "long", "backwards", "sensor_half", "sensor_huge",
+                 "sensor_negative", "range_zero", "range_text", "width_wide",
+                 "t_exponent_only", "x_two_points", "y_sign_only", "theta_huge", "range_inf",
+                 "range_overflow", "range_signs")
+
+
+@pytest.fixture
+def numbers_parsed(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Counts the blocks numpy's parser read (so a test knows the fast path ran)."""
+    from sonarcarve.io import readings_csv
+
+    parsed: list[int] = []
+    original = readings_csv._parse_numbers
+
+    def counting(raw: bytes) -> np.ndarray | None:
+        values = original(raw)
+        if values is not None:
+            parsed.append(values.size)
+        return values
+
+    monkeypatch.setattr(readings_csv, "_parse_numbers", counting)
+    return parsed
+
+
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+def test_a_log_of_plain_numbers_is_parsed_by_numpy_to_the_same_batch(
+    tmp_path: Path, newline: str, numbers_parsed: list[int],
+) -> None:
+    path = _write(tmp_path / "r.csv", NUMERIC_HEADER, _numeric_log_text(300, 7), newline)
+    expected = _reference_read(path)
+    for size in BLOCK_SIZES:
+        numbers_parsed.clear()
+        _assert_same(read_readings_csv(path, block_size=size), expected)
+        assert sum(numbers_parsed) == 300 * 7, size  # every row by numpy's parser
+
+
+def test_spellings_only_float_reads_are_read_as_before(tmp_path: Path) -> None:
+    lines = _numeric_log_text(60, 9)
+    lines[20] = lines[20].replace(",", ", ", 1)  # a space after a comma
+    lines[40] = ",".join([*lines[40].split(",")[:-1], "0_3"])  # an underscore in a number
+    path = _write(tmp_path / "r.csv", NUMERIC_HEADER, lines)
+    for size in BLOCK_SIZES:
+        _assert_same(read_readings_csv(path, block_size=size), _reference_read(path))
+
+
+@pytest.mark.parametrize("tail", ["", "\n"])
+def test_an_empty_last_cell_is_read_as_before(tmp_path: Path, tail: str) -> None:
+    # numpy reads "...,5," at the very end of the text as one number short, without an error.
+    lines = _numeric_log_text(30, 10)
+    lines[-1] = ",".join([*lines[-1].split(",")[:-1], ""])
+    path = _write(tmp_path / "r.csv", NUMERIC_HEADER, lines, tail=tail)
+    for size in BLOCK_SIZES:
+        batch = read_readings_csv(path, block_size=size)
+        _assert_same(batch, _reference_read(path))
+        assert math.isnan(batch.beam_width[-1])
+
+
+@pytest.mark.parametrize("kind", NUMERIC_KINDS)
+def test_a_bad_line_of_numbers_gives_the_reference_message(
+    tmp_path: Path, kind: str, numbers_parsed: list[int],
+) -> None:
+    lines = _numeric_log_text(60, 8)
+    for k in (1, 30, 59):
+        path = _write(tmp_path / "bad.csv", NUMERIC_HEADER, _damage(lines, kind, k))
+        with pytest.raises(InputError) as reference:
+            _reference_read(path)
+        for size in (64, 1000, BLOCK_SIZE):
+            with pytest.raises(InputError) as caught:
+                read_readings_csv(path, block_size=size)
+            assert str(caught.value) == str(reference.value), (kind, k, size)
+            assert f"line {k + 2}" in str(caught.value)
+    assert numbers_parsed  # the good blocks before the bad line went through numpy
+
+
+def _number_texts(rng: np.random.Generator, n: int) -> list[str]:
+    """Numbers as a log may spell them: shortest reprs of doubles of every size (subnormals,
+    huge, negative zero), fixed and exponent notation with many digits, signs, leading zeros,
+    overflow and underflow."""
+    bits = rng.integers(0, 2**63, n, dtype=np.int64).view(np.float64)
+    bits = bits[np.isfinite(bits)] * rng.choice([-1.0, 1.0], bits[np.isfinite(bits)].size)
+    texts = [repr(float(v)) for v in bits]
+    texts += [repr(float(v)) for v in rng.uniform(0, 5e-308, 200)]  # subnormals
+    texts += [f"{v:.{p}e}" for v, p in zip(rng.normal(size=300), rng.integers(0, 25, 300),
+                                           strict=True)]
+    texts += [f"{v:.{p}f}" for v, p in zip(rng.normal(scale=1e3, size=300),
+                                           rng.integers(0, 25, 300), strict=True)]
+    texts += [f"{v:+.{p}g}" for v, p in zip(rng.lognormal(0, 30, 300),
+                                            rng.integers(1, 30, 300), strict=True)]
+    texts += ["0", "-0", "+0", "-0.0", "007", "00.5", ".5", "5.", "-.5e-3", "1E5", "1e+05",
+              "1e400", "-1e400", "1e-400", "4.9e-324", "2.4703282292062328e-324",
+              "2.4703282292062329e-324", "1.7976931348623157e308",
+              "1.7976931348623158e308", "1.7976931348623159e308", "9" * 400,
+              "0." + "0" * 400 + "1", "inf", "-inf", "+inf", "123456789012345678901234567890"]
+    rng.shuffle(texts)
+    return texts
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_numpy_parses_numbers_as_float_does(seed: int) -> None:
+    from sonarcarve.io.readings_csv import _parse_numbers
+
+    texts = _number_texts(np.random.default_rng(seed), 20_000)
+    lines = [",".join(texts[k : k + 5]) for k in range(0, len(texts), 5)]
+    values = _parse_numbers("\n".join(lines).encode() + b"\n")
+    assert values is not None
+    expected = np.array([float(text) for text in texts])
+    assert values.tobytes() == expected.tobytes()  # bit for bit (signs of zero included)
+
+
+@pytest.mark.parametrize("text", ["1_0", " 1", "1 ", "nan", "NaN", "Infinity", "INF", "0x10",
+                                  "1e", "--1", "1..2", "+", ".", "e5", "", "1,,2", "1\r2",
+                                  "inf5", "\u0661"])
+def test_numpy_parser_leaves_other_spellings_to_float(text: str) -> None:
+    """Text numpy would read differently from ``float`` (or not at all) goes to the exact
+    path: None, or fewer numbers than fields."""
+    from sonarcarve.io.readings_csv import _parse_numbers
+
+    values = _parse_numbers(f"1,{text},3\n".encode())
+    assert values is None or values.size != 3
 
 
 def test_several_bad_lines_name_the_first(tmp_path: Path) -> None:

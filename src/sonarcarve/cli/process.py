@@ -148,8 +148,10 @@ _MapRateOpt = Annotated[float | None, typer.Option(
          f"{_DEFAULT_MAP_RATE:g}].", show_default=False)]
 _MethodOpt = Annotated[str, typer.Option(
     "--method", "-m", metavar="NAME",
-    help="centerline | carve | atm | combined. `combined` runs carving and ATM on one history "
-         "and keeps, per arc, the estimate with the smaller error bound.")]
+    help="centerline | carve | atm | combined | evidence. `combined` runs carving and ATM on "
+         "one history and keeps, per arc, the estimate with the smaller error bound; "
+         "`evidence` is evidence carving (beyond the paper): free-space evidence accumulated "
+         "across each beam, ATM inside it, and a confidence column per point.")]
 _HistoryOpt = Annotated[int, typer.Option(
     metavar="ARCS", help=f"Arcs kept in the history (paper: 250; at most {MAX_HISTORY_SIZE}).")]
 _BeamWidthOpt = Annotated[float, typer.Option(

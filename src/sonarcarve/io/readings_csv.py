@@ -19,9 +19,12 @@ together). A UTF-8 byte-order mark, as spreadsheet programs write, is accepted.
 Reading streams: :func:`iter_readings_csv` yields the file as validated batches of a few
 megabytes each, so a log of any length is read in bounded memory, and
 :func:`read_readings_csv` joins them. A block of plain lines (no quotes, no NUL, line breaks
-``\\n`` or ``\\r\\n``) is split and converted column by column (``float`` over a column, no
-per-row Python code); anything else (quoted fields, a lone ``\\r``) is read by the :mod:`csv`
-module from that block on. Both give the same values and errors. The error names the first bad
+``\\n`` or ``\\r\\n``) that holds only numbers and passes validation is parsed whole by
+numpy's C number parser (the same correctly rounded conversion as ``float``); a plain block
+with anything else (an empty cell, ``nan``, spaces, a bad line) is split and converted column
+by column (``float`` over a column, no per-row Python code); anything else (quoted fields, a
+lone ``\\r``) is read by the :mod:`csv` module from that block on. All give the same values
+and errors. The error names the first bad
 line of the file (its first problem in the order: field count, a non-numeric cell in column
 order, then the checks of :meth:`~sonarcarve.readings.ReadingBatch.validate`), whatever the
 block size.
@@ -34,6 +37,7 @@ import io
 import math
 import os
 import stat
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -361,7 +365,12 @@ class _Reader:
 
     def _plain_batch(self, block: _Block, text: str) -> ReadingBatch:
         """The rows of a plain block (``text``: its lines joined by ``\\n``)."""
-        bad = np.flatnonzero(_fields_per_line(block.raw) != self.width)
+        per_line = _fields_per_line(block.raw)
+        bad = np.flatnonzero(per_line != self.width)
+        if not bad.size:
+            fast = self._numbers_batch(block.raw, per_line.size, block.first_line)
+            if fast is not None:
+                return fast
         problem = None
         if bad.size:
             stop = int(bad[0])
@@ -372,6 +381,23 @@ class _Reader:
         columns = {name: fields[i :: self.width] for name, i in self.indices.items()}
         first = block.first_line
         return self._batch(columns, lambda k: first + k, problem)
+
+    def _numbers_batch(self, raw: bytes, rows: int, first_line: int) -> ReadingBatch | None:
+        """The batch of ``rows`` lines of ``width`` fields each, parsed by numpy's C parser;
+        None unless every field is a number and every row passes validation (then the exact
+        path reads the block again, to raise its error about the first bad line)."""
+        values = _parse_numbers(raw)
+        if values is None or values.size != rows * self.width:
+            return None
+        table = values.reshape(rows, self.width)
+        arrays = {name: table[:, i].copy() for name, i in self.indices.items()}
+        try:
+            batch = self._validated(arrays, first_line)
+        except ReadingsError:
+            return None
+        if len(batch):
+            self.previous_t = float(batch.t[-1])
+        return batch
 
     # -- everything else: the csv module ------------------------------------------------------
 
@@ -496,6 +522,36 @@ def _floats(cells: Sequence[str], *, optional: bool) -> FloatArray:
             raise
     return np.array([float(text) if text.strip() else math.nan for text in cells],
                     dtype=np.float64).reshape(-1)
+
+
+#: The bytes of a block that :func:`_parse_numbers` reads (``inf`` aside): digits, signs,
+#: the decimal point, the exponent's letter, the field and line separators.
+_NUMBER_BYTES = b"0123456789+-.eE,\n"
+
+
+def _parse_numbers(raw: bytes) -> FloatArray | None:
+    """Every comma- or line-separated field of ``raw`` as a float, in order, by numpy's C
+    parser (about three times faster than ``float`` over a list of cells); None if a byte is
+    not one of :data:`_NUMBER_BYTES` (``inf`` aside) or numpy cannot read the fields.
+
+    On those bytes numpy's parser (``PyOS_string_to_double``, Python's own correctly rounded
+    conversion) gives exactly what ``float`` gives, overflow to ``inf`` and subnormals
+    included; ``float`` alone also reads spaces, underscores, ``nan`` and the other spellings
+    of infinity, so a block holding any of them goes to the exact path. An empty field makes
+    numpy stop early (an error, or a short result: the caller checks the count).
+    """
+    if b"\r" in raw:
+        raw = raw.replace(b"\r\n", b"\n")  # a lone carriage return is refused below
+    plain = raw.replace(b"inf", b"") if b"i" in raw else raw
+    if plain.translate(None, _NUMBER_BYTES):
+        return None
+    try:
+        with warnings.catch_warnings():
+            # Older numpy warns and returns what it read before bad data; newer numpy raises.
+            warnings.simplefilter("error", DeprecationWarning)
+            return np.fromstring(raw.replace(b"\n", b","), dtype=np.float64, sep=",")
+    except (ValueError, DeprecationWarning):
+        return None
 
 
 def _first_false(n: int, valid: Callable[[int], bool]) -> int:
