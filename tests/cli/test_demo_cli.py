@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 from PIL import Image
 
 from sonarcarve.cli import main
-from sonarcarve.lab.demo import DEMO_METHODS, FIGURE_FILES, METHOD_LABELS
+from sonarcarve.lab.demo import DEMO_METHODS, FIGURE_FILES, GRID_FIGURE_FILE, METHOD_LABELS
 
 PERCENT_FIELDS = ("unprocessed_pct", "fully_carved_pct", "spurious_removed_pct", "true_lost_pct")
 
@@ -19,11 +21,14 @@ def test_cli_writes_every_figure_and_summary(tmp_path: Path,
     out = tmp_path / "nested" / "demo"
     assert main(["demo", "--world", "doorway", "--seed", "1", "--out", str(out)]) == 0
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted([*FIGURE_FILES.values(), "approach.gif", "summary.json", "summary.md"])
+    grid_files = ["carved-grid.yaml", "carved-grid.pgm", "range-sensor-layer.yaml",
+                  "range-sensor-layer.pgm"]
+    assert names == sorted([*FIGURE_FILES.values(), GRID_FIGURE_FILE, "approach.gif",
+                            "summary.json", "summary.md", *grid_files])
     with Image.open(out / "approach.gif") as gif:
         assert gif.format == "GIF"
         assert gif.n_frames > 10  # an animation, not a still
-    for name in FIGURE_FILES.values():
+    for name in [*FIGURE_FILES.values(), GRID_FIGURE_FILE]:
         with Image.open(out / name) as png:
             assert png.format == "PNG"
             assert min(png.size) >= 400  # a real figure, not an empty canvas
@@ -43,13 +48,53 @@ def test_cli_writes_every_figure_and_summary(tmp_path: Path,
         assert row["readings_per_second"] > 0.0
 
     printed = capsys.readouterr().out
+    first_words = [METHOD_LABELS[m].split()[0] for m in DEMO_METHODS]
     table_rows = [line for line in printed.splitlines()
-                  if line.split() and line.split()[0] in METHOD_LABELS.values()]
-    assert [line.split()[0] for line in table_rows] == [METHOD_LABELS[m] for m in DEMO_METHODS]
+                  if line.split() and line.split()[0] in first_words]
+    assert [line.split()[0] for line in table_rows] == first_words
+    assert "evidence carving" in printed
+    assert "(beyond the paper)" in printed
     assert "How to read" in printed
+    # The grid table, under the methods table, and one caption line per file written.
+    assert printed.index("occupied") > printed.index(first_words[-1])
+    assert "carved grid" in printed
+    assert "RangeSensorLayer (defaults)" in printed
+    listed = [line.split()[0] for line in printed.splitlines() if line.startswith("  ")]
+    assert sorted(name for name in listed if name in names) == names
     markdown = (out / "summary.md").read_text()
     assert sum(line.startswith(f"| {METHOD_LABELS[m]} |") for m in DEMO_METHODS
                for line in markdown.splitlines()) == len(DEMO_METHODS)
+    assert "| evidence carving (beyond the paper) |" in markdown
+    assert "| carved grid |" in markdown
+
+
+def _pgm_pixels(path: Path) -> np.ndarray:
+    """A binary PGM's pixels, parsed here: magic, width, height, maxval, then the bytes."""
+    magic, cols, rows, maxval, body = path.read_bytes().split(maxsplit=4)
+    assert (magic, maxval) == (b"P5", b"255")
+    assert len(body) == int(cols) * int(rows)
+    return np.frombuffer(body, dtype=np.uint8).reshape(int(rows), int(cols))
+
+
+def test_cli_writes_each_grid_as_a_trinary_map_server_map(tmp_path: Path) -> None:
+    out = tmp_path / "demo"
+    assert main(["demo", "--world", "doorway", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    grids = {g["kind"]: g for g in summary["grids"]}
+    assert list(grids) == ["carved", "range-sensor-layer"]
+    for kind, stem in (("carved", "carved-grid"), ("range-sensor-layer", "range-sensor-layer")):
+        meta = yaml.safe_load((out / f"{stem}.yaml").read_text())
+        assert meta["image"] == f"{stem}.pgm"
+        assert meta["resolution"] == 0.1
+        assert meta["negate"] == 0
+        assert meta["free_thresh"] < meta["occupied_thresh"]
+        # The doorway world's walls span x in [-4, 4], y in [-1.5, 8]; the grid adds 0.5 m.
+        assert meta["origin"] == pytest.approx([-4.5, -2.0, 0.0])
+        pixels = _pgm_pixels(out / f"{stem}.pgm")
+        assert pixels.shape == (grids[kind]["rows"], grids[kind]["columns"]) == (105, 90)
+        # Trinary, as map_saver writes it: occupied 0, unknown 205, free 254, and nothing else.
+        assert set(np.unique(pixels).tolist()) == {0, 205, 254}
+        assert int(np.count_nonzero(pixels == 0)) == grids[kind]["occupied_cells"]
 
 
 def test_cli_help_teaches_the_columns() -> None:

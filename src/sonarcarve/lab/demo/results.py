@@ -44,11 +44,13 @@ class MethodSummary:
     median_error_m, p90_error_m : float
         Median and 90th percentile distance of the global map's points to the true walls, m.
     fully_carved_pct : float
-        Share of all readings whose arc carving emptied completely, percent (section 5-C).
+        Share of all readings whose arc carving emptied completely, percent (section 5-C;
+        evidence carving: no bin of the arc's profile survived).
     spurious_removed_pct : float
-        Of the spurious readings (crosstalk, floor and multipath echoes), the share the method
-        left out of its map (fully carved, or split and dropped), percent; NaN if there were no
-        spurious readings.
+        Of the spurious readings (crosstalk, floor and multipath echoes), the share missing
+        from the method's global map (fully carved, or split and dropped; evidence carving
+        also leaves out arcs below its confidence), percent; NaN if there were no spurious
+        readings.
     true_lost_pct : float
         Of the direct readings (true echoes off a wall), the share left out the same way,
         percent; NaN if there were none.

@@ -5,8 +5,8 @@
 * how much of the history is still unprocessed (the paper's Table I, section 5-B; arcs carving
   removed count as processed, see :func:`~sonarcarve.lab.instrument.unprocessed_percent`),
 * how far the global map's points lie from the true walls (median and 90th percentile),
-* which readings carving removed, split by what really produced them (direct echoes against
-  crosstalk, floor and multipath echoes; section 3 and 5-C),
+* which readings each method left out of its map, split by what really produced them (direct
+  echoes against crosstalk, floor and multipath echoes; section 3 and 5-C),
 * whether each door the tour approaches is open in the local map 1.5 m of driving before it
   (the paper's Fig. 2; :mod:`~sonarcarve.lab.demo.doors`);
 
@@ -52,6 +52,7 @@ from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.motion import follow_waypoints
 from sonarcarve.sim.simulate import Simulation, simulate
+from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.sim.world import World
 from sonarcarve.typing import FloatArray, IntArray
 
@@ -190,6 +191,11 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
     # Table I's measure over the regular snapshots only (the door moments would bias it).
     unprocessed = unprocessed_percent(full_history_samples(record, capacity, every=SAMPLE_EVERY))
     removal = removal_summary(record.final, sim.truth.kind)
+    # Left out of the map, whatever the reason: fully carved or split (the paper's methods), or
+    # below the confidence a method keeps (evidence carving), so read it off the map itself.
+    kept = np.zeros(len(sim.readings), dtype=bool)
+    kept[record.global_map.reading_id] = True
+    direct = sim.truth.kind == EchoKind.DIRECT
     summary = metrics.error_summary(err)
     return MethodSummary(
         method=record.method,
@@ -198,8 +204,8 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
         median_error_m=summary.median,
         p90_error_m=summary.p90,
         fully_carved_pct=removal["share"],
-        spurious_removed_pct=removal["spurious_removed_or_split"],
-        true_lost_pct=removal["true_lost_or_split"],
+        spurious_removed_pct=metrics.percent(~kept[~direct]),
+        true_lost_pct=metrics.percent(~kept[direct]),
         map_points=len(record.global_map),
         seconds=record.seconds,
     )
