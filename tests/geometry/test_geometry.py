@@ -46,6 +46,8 @@ from sonarcarve.geometry import (
     carve_arc,
     carve_arcs,
 )
+from sonarcarve.geometry.bounds import arc_clear_of_disk
+from sonarcarve.geometry.sector import make_sector
 
 SAMPLES = 2001
 CLEAR = 1e-9  # metres: samples nearer the sector's boundary are ties
@@ -610,3 +612,42 @@ def test_carved_set_matches_shapely(seed: int) -> None:
         parts = [g for g in getattr(z, "geoms", [z]) if g.length > 1e-6]
         carved_runs = len(gaps) - len(pieces)
         assert len(parts) == carved_runs
+
+
+# -- the cheap rejection before the closed form (geometry/bounds.py) ----------------------------
+
+
+def test_arc_clear_of_disk_only_for_arcs_carving_leaves_unchanged() -> None:
+    """Whenever the test says "clear", every sample of the arc is outside the open disk and the
+    closed form carves nothing; it says so for most arcs clearly outside. Half the cases put the
+    disk's edge within 1e-15..1e-5 (relative) of the arc's nearest sample: near-tangencies."""
+    rng = np.random.default_rng(11)
+    clear_outside = said_clear = 0
+    for k in range(4000):
+        ox, oy = rng.uniform(-3.0, 3.0, 2) * (1e5 if k % 10 == 0 else 1.0)
+        r = rng.uniform(0.05, 5.0)
+        lo = rng.uniform(-8.0, 8.0)
+        hi = lo + (0.0 if k % 17 == 0 else rng.uniform(0.0, 3.1))
+        fx, fy = np.array([ox, oy]) + rng.uniform(-6.0, 6.0, 2)
+        if k % 13 == 0:
+            fx, fy = ox, oy  # coincident origins
+        tau = np.linspace(lo, hi, SAMPLES)
+        nearest = np.hypot(ox + r * np.cos(tau) - fx, oy + r * np.sin(tau) - fy).min()
+        if k % 2:
+            radius = nearest * (1.0 + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-15, -5))
+        else:
+            radius = rng.uniform(0.01, 8.0)
+        f_lo = rng.uniform(-4.0, 4.0)
+        sector = make_sector(fx, fy, radius, f_lo, f_lo + rng.uniform(0.0, 3.0), 0.0, OFF)
+        clear = arc_clear_of_disk(ox, oy, r, math.cos(lo), math.sin(lo), math.cos(hi),
+                                  math.sin(hi), sector)
+        if clear:
+            said_clear += 1
+            assert nearest >= radius
+            fate, _, _ = carve_arc(ox, oy, r, lo, hi, fx, fy, radius, sector.a1, sector.a2)
+            assert fate == ArcFate.UNCHANGED
+        if nearest > radius * (1.0 + 1e-3) + 1e-3 * (1.0 + abs(ox) + abs(oy)):
+            clear_outside += 1
+            assert clear, "an arc clearly outside the disk must be found clear"
+    assert said_clear > 1000
+    assert clear_outside > 500

@@ -8,7 +8,7 @@ from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.sector import Sector
 
-__all__ = ["UNDECIDED", "arc_bounding_circle", "circle_against_sector"]
+__all__ = ["UNDECIDED", "arc_bounding_circle", "arc_clear_of_disk", "circle_against_sector"]
 
 #: :func:`circle_against_sector` could not decide: the exact carving must.
 UNDECIDED = -1
@@ -78,3 +78,36 @@ def circle_against_sector(cx: float, cy: float, rho: float, ox: float, oy: float
             clearance = math.sqrt(dist2) - rho
             inside = clearance > 0.0 and origins2 <= sb2 * clearance * clearance
     return FULLY_CARVED if inside else UNDECIDED
+
+
+@compiled_inline
+def arc_clear_of_disk(ox: float, oy: float, r: float, clo: float, slo: float, chi: float,
+                      shi: float, sector: Sector) -> bool:
+    """Whether the arc ``o + r e(τ)``, ``τ ∈ [lo, hi]`` (``hi - lo < π``), is clear of the
+    sector's open disk ``|p - o_j| < R`` by a margin: then carving leaves it unchanged.
+
+    ``(clo, slo)``, ``(chi, shi)`` are ``e(lo)`` and ``e(hi)``. The point of the circle nearest
+    ``o_j`` is in the direction ``d = o_j - o_i``: if ``d`` lies between ``e(lo)`` and ``e(hi)``
+    the arc's least distance from ``o_j`` is ``|D - r|``, else it is at an end (the distance
+    ``D² + r² - 2 r D cos(τ - α)`` grows with ``|τ - α|``). No trigonometry: a cheap test before
+    the closed form, for the arcs whose bounding circle reaches into the disk.
+
+    Exact: with every point of the arc at least ``R + pad`` from ``o_j``, the closed form's
+    membership test ``cos(m - α) > k`` (eq. 3.2) fails at every sub-interval's middle by at least
+    ``(2 R pad + pad²) / 2rD`` in ``cos``. ``pad`` = 1e-6 of the coordinates' size makes that
+    margin (``pad²`` alone, for any ``R``) far above the rounding of ``k``, of ``cos`` and
+    ``sin`` and of this test, so :func:`~sonarcarve.geometry.carve_arc` finds nothing to carve
+    and returns ``UNCHANGED``, as this test says.
+    """
+    dx = sector.fx - ox
+    dy = sector.fy - oy
+    radius = sector.radius
+    reach = radius + 1e-6 * (1.0 + abs(ox) + abs(oy) + r + radius)
+    if clo * dy - slo * dx >= 0.0 and dx * shi - dy * chi >= 0.0:
+        gap = math.sqrt(dx * dx + dy * dy) - r
+        return gap * gap >= reach * reach
+    ax = r * clo - dx
+    ay = r * slo - dy
+    bx = r * chi - dx
+    by = r * shi - dy
+    return min(ax * ax + ay * ay, bx * bx + by * by) >= reach * reach

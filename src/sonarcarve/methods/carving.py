@@ -22,11 +22,13 @@ with ``R = max_range - ε``), and adds no arc.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle
-from sonarcarve.geometry._compiled import compiled
-from sonarcarve.geometry.bounds import UNDECIDED, circle_against_sector
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.bounds import UNDECIDED, arc_clear_of_disk, circle_against_sector
 from sonarcarve.geometry.circular import new_scratch
 from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
@@ -38,7 +40,7 @@ from sonarcarve.geometry.index import (
     query_sector,
 )
 from sonarcarve.geometry.intervals import _carve_core
-from sonarcarve.geometry.sector import make_sector
+from sonarcarve.geometry.sector import Sector, make_sector
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
@@ -56,12 +58,28 @@ __all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
 _ALIVE = int(ArcFate.ALIVE)
 
 
+@compiled_inline
+def _clear_of_disk(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: FloatArray,
+                   hi: FloatArray, tips: FloatArray, sector: Sector) -> bool:
+    """:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk` for arc ``i``: the sector leaves
+    it unchanged. ``tips[i]`` caches ``e(lo), e(hi)`` (NaN when the interval changed): most arcs
+    are tested many times between changes."""
+    if math.isnan(tips[i, 0]):
+        tips[i, 0] = math.cos(lo[i])
+        tips[i, 1] = math.sin(lo[i])
+        tips[i, 2] = math.cos(hi[i])
+        tips[i, 3] = math.sin(hi[i])
+    return arc_clear_of_disk(x[i], y[i], r[i], tips[i, 0], tips[i, 1], tips[i, 2], tips[i, 3],
+                             sector)
+
+
 @compiled
 def _add_arcs(
     first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
-    lo: FloatArray, hi: FloatArray, bounds: FloatArray, status: Int8Array, carved: BoolArray,
-    tolerance: float, max_incidence: float, index: ArcIndex, candidates: SlotArray,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
+    carved: BoolArray, tolerance: float, max_incidence: float, index: ArcIndex,
+    candidates: SlotArray,
 ) -> tuple[int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: initialise each as its full beam (section 3), carve the live arcs before it by its
@@ -89,6 +107,7 @@ def _add_arcs(
         bounds[slot, 0] = cx
         bounds[slot, 1] = cy
         bounds[slot, 2] = radius
+        tips[slot, 0] = math.nan
         status[slot] = _ALIVE
         carved[slot] = False
         sector = make_sector(x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
@@ -113,6 +132,8 @@ def _add_arcs(
                 new_lo = lo[i]
                 new_hi = hi[i]
                 if fate == UNDECIDED:
+                    if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
+                        continue
                     fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi,
                                                        sector, cuts, starts, ends, flags)
                     if fate == UNCHANGED:
@@ -121,6 +142,7 @@ def _add_arcs(
                 if fate == SHRUNK:
                     lo[i] = new_lo
                     hi[i] = new_hi
+                    tips[i, 0] = math.nan
                     bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
                         x[i], y[i], r[i], new_lo, new_hi)
                 else:
@@ -139,8 +161,9 @@ def _add_arcs(
 def _carve_free(
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float, appended: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray,
-    lo: FloatArray, hi: FloatArray, bounds: FloatArray, status: Int8Array, carved: BoolArray,
-    tolerance: float, max_incidence: float, index: ArcIndex, candidates: SlotArray,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
+    carved: BoolArray, tolerance: float, max_incidence: float, index: ArcIndex,
+    candidates: SlotArray,
 ) -> tuple[int, int]:
     """Carve the live arcs (the ``appended`` arcs so far, the newest ``capacity`` of them live)
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
@@ -170,6 +193,8 @@ def _carve_free(
         new_lo = lo[i]
         new_hi = hi[i]
         if fate == UNDECIDED:
+            if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
+                continue
             fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
                                                starts, ends, flags)
             if fate == UNCHANGED:
@@ -178,6 +203,7 @@ def _carve_free(
         if fate == SHRUNK:
             lo[i] = new_lo
             hi[i] = new_hi
+            tips[i, 0] = math.nan
             bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
                 x[i], y[i], r[i], new_lo, new_hi)
         else:
@@ -215,6 +241,10 @@ class CarvingModel(ArcModel):
     bounds : ndarray of float64, shape (history.storage_size, 3)
         A circle ``(cx, cy, radius)`` containing each carved arc
         (:func:`~sonarcarve.geometry.arc_bounding_circle`): a cheap first test in carving.
+    tips : ndarray of float64, shape (history.storage_size, 4)
+        ``cos lo, sin lo, cos hi, sin hi`` of each carved interval, NaN until a test needs them
+        (:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk`: a cheap test before the closed
+        form).
     index : ArcIndex
         The live arcs that carving has not removed, by place
         (:mod:`sonarcarve.geometry.index`): a reading carves only those near its sector.
@@ -231,6 +261,7 @@ class CarvingModel(ArcModel):
         self.lo = np.zeros(size)
         self.hi = np.zeros(size)
         self.bounds = np.zeros((size, 3))
+        self.tips = np.full((size, 4), np.nan)
         self.status = np.full(size, _ALIVE, dtype=np.int8)
         self.carved = np.zeros(size, dtype=bool)
         self.index = make_index(size)
@@ -252,8 +283,8 @@ class CarvingModel(ArcModel):
         h = self.history
         fully, split = _add_arcs(
             first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
-            self.lo, self.hi, self.bounds, self.status, self.carved, self.range_tolerance,
-            self.max_incidence, self.index, self._candidates,
+            self.lo, self.hi, self.bounds, self.tips, self.status, self.carved,
+            self.range_tolerance, self.max_incidence, self.index, self._candidates,
         )
         self._fully_carved += fully
         self._split += split
@@ -264,8 +295,8 @@ class CarvingModel(ArcModel):
         half = 0.5 * beam_width
         fully, split = _carve_free(
             reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
-            h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.status,
-            self.carved, self.range_tolerance, self.max_incidence, self.index,
+            h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.tips,
+            self.status, self.carved, self.range_tolerance, self.max_incidence, self.index,
             self._candidates,
         )
         self._fully_carved += fully
