@@ -11,7 +11,7 @@ from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError
 from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods.evidence import EvidenceModel
-from sonarcarve.readings import Reading
+from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
 
@@ -145,3 +145,111 @@ def test_a_fresh_point_has_the_fresh_confidence() -> None:
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0))
     fresh = method.confidence_model.fresh
     np.testing.assert_allclose(method.local_map().confidence, 1.0 / (1.0 + math.exp(-fresh)))
+
+
+def _model(method: object) -> EvidenceModel:
+    assert isinstance(method, EvidenceMethod)
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    return model
+
+
+def test_support_from_the_same_sensor_moved_is_not_support_from_another_sensor() -> None:
+    # A wall at x = 2 heard by sensor 0 from two places 0.3 m apart (distinct viewpoints, but
+    # one transducer: a systematic phantom repeats that way too), then by sensor 1.
+    method = make_method("evidence")
+    model = _model(method)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+    method.add(_reading(0.05, 0.0, 0.3, 0.0, 2.0, sensor=0))
+    first = int(method.history.slots()[0])
+    assert model.viewpoints[first] > 0.0
+    assert model.others[first] == 0.0
+    method.add(_reading(0.1, 0.0, 0.15, 0.0, 2.0, sensor=1))
+    assert model.others[first] > 0.0
+    # The confidence model prefers the arc another sensor confirmed (fitted weight > 0).
+    assert method.confidence_model.others > 0.0
+
+
+def test_through_is_the_support_of_the_surface_a_new_beam_passed() -> None:
+    # A wall at x = 1 heard head-on by three sensors (each echo supports the others); an echo
+    # at 2.5 m along the same line passed it, an echo at 0.8 m did not reach it.
+    method = make_method("evidence")
+    model = _model(method)
+    for k, y in enumerate((0.0, 0.05, -0.05)):
+        method.add(_reading(0.05 * k, 0.0, y, 0.0, 1.0, sensor=k))
+    wall_support = model.support[method.history.slots()].max()
+    method.add(_reading(0.2, 0.0, 0.02, 0.0, 2.5, sensor=3))
+    behind = int(method.history.slots()[-1])
+    assert model.through[behind] > 0.5 * wall_support
+    method.add(_reading(0.25, 0.0, -0.02, 0.0, 0.8, sensor=4))
+    short = int(method.history.slots()[-1])
+    assert model.through[short] == 0.0
+
+
+def _phantom_and_oblique_looks(transmission: bool, *, grazing: bool) -> tuple[float, float]:
+    """A phantom arc at 1 m along +x from the origin (sensor 0), then two other sensors'
+    echoes that confirm a surface beyond it, then two beams that pass it obliquely (45°, or
+    along +y when ``grazing``) and hear that surface. Returns the free evidence of the
+    phantom's middle bin and the threshold."""
+    method = EvidenceMethod(min_confidence=0.0, with_transmission=transmission)
+    model = _model(method)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0, sensor=0))
+    if grazing:
+        origins, heading, far = [(1.0, -2.0), (1.05, -2.0)], math.pi / 2, (1.0, 1.0)
+    else:
+        origins, heading, far = [(-0.5, -1.5), (-0.45, -1.55)], math.pi / 4, (1.97, 0.97)
+    # Two sensors beyond the phantom hear the far surface head-on (along the beams' heading).
+    for k, back in enumerate((0.8, 0.9)):
+        ox = far[0] - back * math.cos(heading) + 0.03 * k
+        oy = far[1] - back * math.sin(heading)
+        method.add(_reading(0.1 + 0.05 * k, ox, oy, heading, back, sensor=5 + k))
+    for k, (ox, oy) in enumerate(origins):
+        r = math.hypot(far[0] - ox, far[1] - oy)
+        method.add(_reading(0.3 + 0.05 * k, ox, oy, heading, r, sensor=1 + k))
+    first = int(method.history.slots()[0])
+    return float(model.free[first, model.bins // 2]), model.threshold
+
+
+def test_an_oblique_look_through_a_phantom_at_a_confirmed_echo_carves_it() -> None:
+    # At 45° the phantom's implied surface returns nothing to the passing beams (specular), so
+    # their incidence evidence is weak; but their echo beyond it is confirmed by other
+    # sensors, so the sound went through: transmission evidence carves the phantom.
+    with_it, threshold = _phantom_and_oblique_looks(True, grazing=False)
+    without, _ = _phantom_and_oblique_looks(False, grazing=False)
+    assert without < threshold
+    assert with_it >= threshold
+
+
+def test_a_beam_running_along_a_wall_does_not_carve_it_by_transmission() -> None:
+    # The same, with beams running along the wall the arc implies (γ near 90°): a wall edge-on
+    # does not block the beam, so its confirmed echo beyond says nothing about the wall.
+    with_it, threshold = _phantom_and_oblique_looks(True, grazing=True)
+    without, _ = _phantom_and_oblique_looks(False, grazing=True)
+    assert with_it < threshold
+    assert with_it == pytest.approx(without, abs=0.05 * threshold)
+
+
+def test_blocks_of_readings_give_the_maps_of_one_reading_at_a_time() -> None:
+    # add_many runs the evidence kernel once per block; arcs commit between blocks with the
+    # confidence (and its maturity clock) that add() per reading gives them.
+    rng = np.random.default_rng(7)
+    n = 400
+    t = np.cumsum(rng.uniform(0.01, 0.05, n))
+    sensor = np.arange(n) % 8
+    theta = 2 * math.pi * sensor / 8
+    xs = 0.01 * np.arange(n)
+    ranges = rng.uniform(0.5, 4.0, n)
+    readings = [Reading(t=float(t[k]), sensor=int(sensor[k]), x=float(xs[k]), y=0.0,
+                        theta=float(theta[k]), range=float(ranges[k]), beam_width=PHI)
+                for k in range(n)]
+    one = make_method("evidence", MethodConfig(history_size=40))
+    for reading in readings:
+        one.add(reading)
+    blocks = make_method("evidence", MethodConfig(history_size=40))
+    for start in range(0, n, 97):
+        blocks.add_many(ReadingBatch.from_readings(readings[start : start + 97]),
+                        first_id=start)
+    a, b = one.finish(), blocks.finish()
+    np.testing.assert_array_equal(a.reading_id, b.reading_id)
+    np.testing.assert_array_equal(a.xy, b.xy)
+    np.testing.assert_array_equal(a.confidence, b.confidence)

@@ -46,6 +46,25 @@ A no-echo reading (it heard nothing up to its ``max_range``, :func:`evidence_fre
 free-space evidence with ``r_j = max_range``: ``w`` at every bin centre ``d < max_range - ε`` in
 its beam, and nothing else (no support, no occlusion, no crossing, no arc of its own).
 
+Transmission (the other half of a look): a surface at ``p`` that ``j`` met at a glancing angle
+returns no echo, but it still stands in the way of the sound. When ``j``'s own echo, at the
+bearing of ``p`` and beyond it, is confirmed by *other sensors'* older echoes (support ``S``
+from readings of another transducer; a sensor's own repeated echoes can repeat one systematic
+error, crosstalk off the same wall or one multipath path), the sound went through ``p``: the
+bin gains ``-log(1 - P_t)`` with ``P_t = transmit · P_beam · cos γ · min(1, S / S_conf)``
+instead of the incidence evidence when that is larger (one reading, one event: the larger
+counts). ``cos γ`` is the share of the beam a patch at ``p`` with the older echo's normal
+would block: a wall the beam runs along (γ near 90°) does not block it, so grazing looks do
+not carve true walls. Bins of ``j`` carved by occlusion take no part (a multipath echo behind
+a wall confirms nothing). This is what lets another sensor remove a crosstalk or floor
+phantom it can only look at obliquely, and it is exact in the same sense as the rest (bin
+centres).
+
+Two per-arc sums serve the confidence of :mod:`sonarcarve.methods.evidence`: ``others``, the
+support from other sensors (as ``viewpoints`` but never from the arc's own sensor), and
+``through``, the largest support of an older live bin a new beam passed on its way to its
+echo (the graded form of the occlusion rule).
+
 ATM (section 6, integration): transversal crossings (eq. 2.1, ψ) are found in the same pass for
 the pairs the evidence pass does not cull, stored per arc as bearings relative to its axis, and
 *counted only inside the surviving bins*; a crossing inside a surviving piece confirms it.
@@ -70,6 +89,7 @@ __all__ = [
     "EvidenceParams",
     "detect_probability",
     "evidence_add",
+    "evidence_add_many",
     "evidence_estimates",
     "evidence_free",
     "evidence_threshold",
@@ -113,6 +133,13 @@ class EvidenceParams(NamedTuple):
         Metres: a reading of the same sensor counts as a distinct viewpoint of an arc only when
         its origin is at least this far from the arc's (repeated looks from one place at one
         phantom do not confirm it).
+    transmit : float
+        Factor in [0, 1] on transmission evidence (0: off): a newer echo confirmed by other
+        sensors behind a point says that the sound passed through the point (module
+        docstring).
+    confirm : float
+        Other-sensor support at which a bin of a new arc counts as fully confirmed for
+        transmission.
     """
 
     tolerance: float
@@ -128,6 +155,8 @@ class EvidenceParams(NamedTuple):
     cos_psi: float
     protect: float
     viewpoint_spacing: float
+    transmit: float
+    confirm: float
 
 
 def evidence_threshold(carve_probability: float) -> float:
@@ -148,6 +177,22 @@ def _incidence_gain(cos_gamma: float, cos_full: float, cos_zero: float, rough: f
     if cos_gamma <= cos_zero:
         return rough
     return rough + (1.0 - rough) * (cos_gamma - cos_zero) / (cos_full - cos_zero)
+
+
+@compiled_inline
+def _bin_of_sine(sine: float, edges: FloatArray, bins: int) -> int:
+    """Bin index of a direction inside a beam (``along > 0``) from the sine of its angle to the
+    axis, ``edges[k]`` the sines of the bin edges (increasing; the beam is narrower than π):
+    the same bin as :func:`_bin_of` of the angle, without an arc tangent (clamped)."""
+    lo = 0
+    hi = bins
+    while hi - lo > 1:  # edges[lo] <= sine < edges[hi], or the clamped ends
+        mid = (lo + hi) // 2
+        if edges[mid] <= sine:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 @compiled
@@ -235,11 +280,53 @@ def _bin_of(rel: float, half: float, width: float, bins: int) -> int:
     return min(max(k, 0), bins - 1)
 
 
+@compiled_inline
+def _transmission(slot: int, passed: FloatArray, n_passed: int, trans: FloatArray,
+                  free: FloatArray, status: Int8Array, params: EvidenceParams) -> int:
+    """Transmission evidence of the new reading ``slot`` (module docstring).
+
+    For each older live bin it looked past (``passed`` rows: arc, bin, the new arc's bin
+    behind it, ``P_beam cos γ``, ``protect`` factor, evidence already given), the chance that
+    the sound went through is ``transmit · P_beam · cos γ · min(1, S / S_conf)``, ``S`` the
+    new arc's support from other sensors in the bin behind; the bin gains what that exceeds
+    the incidence evidence by (one reading, one event: the larger of the two counts). Returns
+    the arcs this carved fully.
+    """
+    threshold = params.threshold
+    bins = free.shape[1]
+    fully = 0
+    for m in range(n_passed):
+        kj = int(passed[m, 2])
+        s = trans[kj]
+        if s <= 0.0 or free[slot, kj] >= threshold:
+            continue  # nothing confirmed behind, or that bin of the new arc is occluded
+        i = int(passed[m, 0])
+        k = int(passed[m, 1])
+        if status[i] != EVIDENCE_ALIVE or free[i, k] >= threshold:
+            continue
+        p_t = params.transmit * passed[m, 3] * min(1.0, s / params.confirm)
+        w_t = -math.log1p(-p_t) * passed[m, 4]
+        if w_t <= passed[m, 5]:
+            continue
+        free[i, k] += w_t - passed[m, 5]
+        if free[i, k] >= threshold:
+            alive = False
+            for kk in range(bins):
+                if free[i, kk] < threshold:
+                    alive = True
+                    break
+            if not alive:
+                status[i] = EVIDENCE_CARVED
+                fully += 1
+    return fully
+
+
 @compiled
 def evidence_add(
     slot: int, older: SlotArray,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -268,6 +355,22 @@ def evidence_add(
         whose free sector covers a bin still alive, ``P`` the largest detection over those bins
         *without* the incidence factor (a phantom in open space has no surface to be glancing
         at; how much this says about a real surface is left to the confidence fit).
+    others : ndarray, shape (n,)
+        Support from *other sensors* per arc: as ``viewpoints``, but only over readings of
+        another sensor. A systematic phantom (crosstalk off the same wall, a multipath path)
+        repeats for one sensor as the robot moves, so one sensor's repeated echoes confirm
+        each other without being independent; another transducer at another mounting angle
+        is closer to independent (updated in place).
+    through : ndarray, shape (n,)
+        Per new arc, the largest support of an older live bin its free sector passed
+        (nearer than ``r_j - 2ε``): how well heard the surface is that its echo would have had
+        to cross; the graded form of the occlusion rule (filled for ``slot``).
+    passed : ndarray, shape (m, 6)
+        Scratch for the transmission pass: one row per older live bin in the new beam's free
+        sector (``m`` at least the older arcs' bins); overwritten.
+    trans : ndarray, shape (2 K + 1,)
+        Scratch, overwritten: the new arc's support per bin from other sensors' older echoes,
+        then the sines of its bin edges.
     bx, by, ex, ey : ndarray, shape (n, K)
         Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
     free, support : ndarray, shape (n, K)
@@ -324,6 +427,14 @@ def evidence_add(
     occluded[slot] = 0.0
     viewpoints[slot] = 0.0
     looked[slot] = 0.0
+    others[slot] = 0.0
+    top_through = 0.0
+    n_passed = 0
+    edges = trans[bins:]  # the scratch's second part: sines of j's bin edges
+    for k in range(bins + 1):
+        edges[k] = math.sin(-half_j + k * step_j)
+    for k in range(bins):
+        trans[k] = 0.0
     counts[slot] = 0
     spacing2 = params.viewpoint_spacing * params.viewpoint_spacing
 
@@ -366,7 +477,8 @@ def evidence_add(
         alive_bins = 0
         ox = x[i] - xj
         oy = y[i] - yj
-        distinct = sensor[i] != sensor[slot] or ox * ox + oy * oy >= spacing2
+        other = sensor[i] != sensor[slot]
+        distinct = other or ox * ox + oy * oy >= spacing2
         top_support = 0.0
         top_looked = 0.0
         for k in range(bins):
@@ -386,15 +498,19 @@ def evidence_add(
                 alive_bins += 1
                 continue
             # detect_probability, inlined: beam and range (p_any), then incidence.
-            u = min(abs(vx * sj - vy * cj) / (d * sin_half_j), 1.0)
+            inv_d = 1.0 / d
+            sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
+            u = min(abs(sine) / sin_half_j, 1.0)
             p_beam = params.max_detect * (1.0 - edge_loss * u * u) / (1.0 + d * inv_scale)
-            cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) / d
+            cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) * inv_d
             p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, params.rough)
             if d < free_r:
                 touched[i] = True
                 if distinct:
                     top_looked = max(top_looked, p_beam)
                 established = (support[i, k] >= params.establish and f < 0.5 * threshold)
+                if d < free_r - params.tolerance:
+                    top_through = max(top_through, support[i, k])
                 if established and d < free_r - params.tolerance:
                     # An established surface j looked past at a glancing angle: the bins of j
                     # behind it cannot hold j's echo (sound does not pass through walls).
@@ -407,30 +523,87 @@ def evidence_add(
                             free[slot, kk] = threshold
                             occluding += 1
                     touched[slot] = True
-                f += -math.log1p(-p) * (params.protect if established else 1.0)
+                factor = params.protect if established else 1.0
+                w = -math.log1p(-p) * factor
+                f += w
                 free[i, k] = f
                 if f < threshold:
                     alive_bins += 1
+                    if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
+                        # Kept for the transmission pass (after j's support is known).
+                        passed[n_passed, 0] = i
+                        passed[n_passed, 1] = k
+                        passed[n_passed, 2] = _bin_of_sine(sine, edges, bins)
+                        passed[n_passed, 3] = p_beam * cos_gamma  # blocked, not echoed
+                        passed[n_passed, 4] = factor
+                        passed[n_passed, 5] = w
+                        n_passed += 1
             else:
                 alive_bins += 1
                 touched[i] = True
                 touched[slot] = True
                 support[i, k] += p
                 top_support = max(top_support, p)
-                rel = math.atan2(cj * vy - sj * vx, along)
-                support[slot, _bin_of(rel, half_j, step_j, bins)] += p
+                kb = _bin_of_sine(sine, edges, bins)
+                support[slot, kb] += p
+                if other:
+                    trans[kb] += p
         if distinct:
             viewpoints[i] += top_support
             viewpoints[slot] += top_support
             if top_looked > 0.0:
                 looked[i] += -math.log1p(-top_looked)
+        if other:
+            others[i] += top_support
+            others[slot] += top_support
         if alive_bins == 0:
             status[i] = EVIDENCE_CARVED
             fully += 1
     occluded[slot] = occluding / bins
+    through[slot] = top_through
+    fully += _transmission(slot, passed, n_passed, trans, free, status, params)
     if occluding >= bins:
         status[slot] = EVIDENCE_CARVED
         fully += 1
+    return fully, crossings, occluding
+
+
+@compiled
+def evidence_add_many(
+    first: int, count: int, capacity: int, wrapped: SlotArray,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    status: Int8Array, touched: BoolArray, occluded: FloatArray,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    params: EvidenceParams, with_atm: bool,
+) -> tuple[int, int, int]:
+    """:func:`evidence_add` for the arcs of sequence numbers ``first .. first + count - 1``,
+    in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
+    per block of readings (no Python between arcs), the same result as one call per arc.
+
+    ``wrapped`` is ``arange(2 n) % n`` for the ``n`` storage rows (any window of live rows is
+    one contiguous slice of it); the other arrays are those of :func:`evidence_add`. Returns
+    the sums of its three counts.
+    """
+    storage = x.shape[0]
+    fully = 0
+    crossings = 0
+    occluding = 0
+    for sequence in range(first, first + count):
+        live = min(sequence + 1, capacity)
+        start = (sequence + 1 - live) % storage
+        a, b, c = evidence_add(
+            sequence % storage, wrapped[start : start + live - 1], x, y, r, theta, beam_width,
+            sensor, viewpoints, looked, others, through, passed, trans, bx, by, ex, ey, free,
+            support, circle, cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
+            counts, params, with_atm)
+        fully += a
+        crossings += b
+        occluding += c
     return fully, crossings, occluding
 
 

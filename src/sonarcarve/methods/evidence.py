@@ -41,6 +41,7 @@ from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EvidenceParams,
     evidence_add,
+    evidence_add_many,
     evidence_estimates,
     evidence_free,
     evidence_threshold,
@@ -86,12 +87,14 @@ class SensorModel:
     establish: float = 1.0
     protect: float = 0.5
     viewpoint_spacing: float = 0.25
+    transmit: float = 1.0
+    confirm: float = 1.0
 
 
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
 #: docstring): each is known when the arc is committed, and for the local map at any time.
 CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
-                       "occluded", "unheard", "range", "width")
+                       "occluded", "unheard", "range", "width", "others", "through")
 
 
 @dataclass(frozen=True)
@@ -125,19 +128,21 @@ class ConfidenceModel:
     ``benchmarks/evidence.py``.
     """
 
-    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,631 arcs.
-    intercept: float = -3.013
-    support: float = 0.265
-    viewpoints: float = 1.844
-    crossings: float = 1.069
-    free: float = -0.125
-    looked: float = 0.298
-    split: float = -0.841
-    occluded: float = -0.373
-    unheard: float = -0.240
-    range: float = -0.042
-    width: float = 0.554
-    fresh: float = 2.412  # log-odds of the 91.8 % direct share of the training arcs
+    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,253 arcs.
+    intercept: float = -3.542
+    support: float = 0.270
+    viewpoints: float = 0.922
+    crossings: float = 0.641
+    free: float = -0.427
+    looked: float = 0.297
+    split: float = -0.425
+    occluded: float = -0.545
+    unheard: float = 0.018
+    range: float = -0.066
+    width: float = 0.663
+    others: float = 3.397
+    through: float = 0.228
+    fresh: float = 2.504  # log-odds of the 92.4 % direct share of the training arcs
     maturity_time: float = 1.0
 
     def weights(self) -> np.ndarray:
@@ -168,6 +173,8 @@ class ConfidenceModel:
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
+    Block safe: :meth:`on_add_many` runs a block of stored arcs in one compiled call.
+
     Parameters
     ----------
     history : SonarHistory
@@ -188,9 +195,12 @@ class EvidenceModel(ArcModel):
         The detection model.
     """
 
+    block_safe = True
+
     def __init__(self, history: SonarHistory, bins: int, range_tolerance: float,
                  carve_probability: float, min_transversal: float, range_resolution: float,
                  *, with_atm: bool = True, with_occlusion: bool = True,
+                 with_transmission: bool = True,
                  sensor: SensorModel | None = None) -> None:
         super().__init__(history)
         sensor = SensorModel() if sensor is None else sensor
@@ -207,6 +217,8 @@ class EvidenceModel(ArcModel):
             establish=sensor.establish if with_occlusion else math.inf,
             cos_psi=math.cos(min_transversal), protect=sensor.protect,
             viewpoint_spacing=sensor.viewpoint_spacing,
+            transmit=sensor.transmit if with_transmission else 0.0,
+            confirm=sensor.confirm,
         )
         size = history.storage_size
         self.bx = np.zeros((size, bins))
@@ -224,26 +236,44 @@ class EvidenceModel(ArcModel):
         self.occluded = np.zeros(size)
         self.viewpoints = np.zeros(size)
         self.looked = np.zeros(size)
+        self.others = np.zeros(size)
+        self.through = np.zeros(size)
+        # Scratch for the transmission pass: at most every older bin once (capped: past the
+        # cap the rest is skipped, which only withholds evidence).
+        self.passed = np.zeros((min(size * bins, 1 << 16), 6))
+        self.trans = np.zeros(2 * bins + 1)
         columns = max(1, 4 * (history.capacity - 1)) if with_atm else 1
         self.bearings = np.zeros((size, columns), dtype=np.float32)
         self.counts = np.zeros(size, dtype=np.int32)
+        # Slot numbers laid out twice: any window of live rows is one contiguous slice.
+        self._wrapped = np.arange(2 * size, dtype=np.int64) % size
         self._fully = 0
         self._crossings = 0
         self._occluded_bins = 0
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs."""
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        """The history's rows and the per-arc state, in :func:`evidence_add`'s order."""
         h = self.history
-        fully, crossings, occluding = evidence_add(
-            slot, older, h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints,
-            self.looked, self.bx, self.by, self.ex,
-            self.ey, self.free, self.support, self.circle, self.cos_axis, self.sin_axis,
-            self.cos_half, self.status, self.touched, self.occluded, self.bearings,
-            self.counts, self.params, self.with_atm,
-        )
+        return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
+                self.others, self.through, self.passed, self.trans, self.bx, self.by, self.ex,
+                self.ey, self.free, self.support, self.circle, self.cos_axis, self.sin_axis,
+                self.cos_half, self.status, self.touched, self.occluded, self.bearings,
+                self.counts)
+
+    def _count(self, counts: tuple[int, int, int]) -> None:
+        fully, crossings, occluding = counts
         self._fully += fully
         self._crossings += crossings
         self._occluded_bins += occluding
+
+    def on_add(self, slot: int, older: SlotArray) -> None:
+        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs."""
+        self._count(evidence_add(slot, older, *self._arrays(), self.params, self.with_atm))
+
+    def on_add_many(self, first: int, count: int) -> None:
+        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        self._count(evidence_add_many(first, count, self.history.capacity, self._wrapped,
+                                      *self._arrays(), self.params, self.with_atm))
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
@@ -336,6 +366,7 @@ class EvidenceMethod(SonarMethod):
         *,
         with_atm: bool = True,
         with_occlusion: bool = True,
+        with_transmission: bool = True,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -347,6 +378,7 @@ class EvidenceMethod(SonarMethod):
         )
         self.with_atm = with_atm
         self.with_occlusion = with_occlusion
+        self.with_transmission = with_transmission
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -357,6 +389,7 @@ class EvidenceMethod(SonarMethod):
         return (EvidenceModel(self.history, c.evidence_bins, c.range_tolerance,
                               c.carve_probability, c.min_transversal, c.range_resolution,
                               with_atm=self.with_atm, with_occlusion=self.with_occlusion,
+                              with_transmission=self.with_transmission,
                               sensor=self.sensor),)
 
     def features(self, slots: SlotArray,
@@ -380,12 +413,24 @@ class EvidenceMethod(SonarMethod):
             unheard,
             h.r[slots],
             width / h.beam_width[slots],
+            np.minimum(model.others[slots], 1.0),
+            np.minimum(model.through[slots], 3.0),
         ])
 
     def maturity(self, slots: SlotArray) -> np.ndarray:
-        """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,)."""
-        age = self._last_t - self.history.t[slots] if self._readings else np.zeros(len(slots))
-        return self.confidence_model.maturity(age)
+        """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,).
+
+        "Now" is the time of the last reading added; inside a block of
+        :meth:`~sonarcarve.methods.base.SonarMethod.add_many` (arcs committed between blocks,
+        before the method's clock moves at the end of the batch) it is the newest stored arc's
+        time, which is what one :meth:`add` per reading would have seen then.
+        """
+        h = self.history
+        if h.appended == 0:
+            return np.zeros(len(slots))
+        newest = float(h.t[(h.appended - 1) % h.storage_size])
+        now = max(self._last_t, newest)
+        return self.confidence_model.maturity(now - h.t[slots])
 
     def estimates(self, slots: SlotArray) -> Estimates:
         """The model's points with their confidence; low-confidence points are not alive."""
