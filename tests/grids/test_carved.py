@@ -110,7 +110,7 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     method = make_method("carve", MethodConfig(history_size=50))
     grid = CarvedGrid(0.1, BOUNDS, method=method)
     rows, cols = grid.shape
-    expected = rows * cols * (4 + 8) + 2 * 50 * (6 * 8 + 8)
+    expected = rows * cols * (4 + 8 + 4) + 2 * 50 * (6 * 8 + 8)  # base, live, heard bins
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):
@@ -170,3 +170,85 @@ def test_trinary_follows_each_grids_rule() -> None:
     p = elfes.probabilities()
     assert np.array_equal(trinary(elfes) == 100, p > 0.65)
     assert np.array_equal(trinary(elfes) == 0, p < 0.196)
+
+
+def _silent(t: float, theta: float, x: float, y: float, max_range: float = 4.0) -> Reading:
+    return Reading(t, 0, x, y, theta, math.inf, math.nan, max_range)
+
+
+def _cell(grid: CarvedGrid, x: float, y: float) -> tuple[int, int]:
+    xs, ys = grid.cell_centers()
+    return int(np.argmin(np.abs(ys - y))), int(np.argmin(np.abs(xs - x)))
+
+
+def _box_face_seen_head_on(params: CarvedGridParams) -> CarvedGrid:
+    """A face at x = 2 heard head-on 30 times from (0, 0), every arc final (history of 1)."""
+    grid = CarvedGrid(0.1, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)),
+                      params=params)
+    grid.add_many(ReadingBatch.from_readings(_reading(0.1 * k, 0.0, 2.0) for k in range(30)))
+    return grid
+
+
+def test_beams_through_a_vanished_box_clear_it() -> None:
+    face = (2.0, 0.0)
+    for aware, cleared in ((True, True), (False, False)):
+        grid = _box_face_seen_head_on(CarvedGridParams(surface_aware=aware))
+        i, j = _cell(grid, *face)
+        assert grid.log_odds[i, j] == pytest.approx(math.log(0.97 / 0.03), abs=1e-5)
+        # The box is gone: three beams from where it was heard pass it and hear the wall at 4 m.
+        grid.add_many(ReadingBatch.from_readings(_reading(5.0 + k, 0.0, 4.0) for k in range(3)))
+        # Surface-aware: each beam that would have heard the face gives γ(α) logit(0.2), γ the
+        # angular profile at the cell centre's bearing: 3.476 - 3 x 0.984 x 1.386 = -0.62, no
+        # longer occupied. Faded (ROS's 1.2 m fade, 0.04 x logit(0.4) a beam) it stays.
+        xs, ys = grid.cell_centers()
+        d, alpha = math.hypot(xs[j], ys[i]), math.atan2(ys[i], xs[j])
+        gamma = 1.0 - (alpha / (PHI / 2)) ** 2
+        per_beam = (math.log(0.2 / 0.8) if aware else
+                    0.5 * (1 - math.tanh(2 * (d - 1.2))) * math.log(0.4 / 0.6))
+        expected = math.log(0.97 / 0.03) + 3 * gamma * per_beam
+        assert grid.log_odds[i, j] == pytest.approx(expected, abs=0.02)
+        assert (trinary(grid)[i, j] == OCCUPIED) is not cleared
+
+
+def test_a_glancing_silent_beam_does_not_clear_a_wall() -> None:
+    # A wall along y = 1 heard head-on from below by readings every 5 cm, all final.
+    grid = CarvedGrid(0.1, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)))
+    grid.add_many(ReadingBatch.from_readings(
+        _reading(0.1 * k, math.pi / 2, 1.0, x=0.5 + 0.05 * k) for k in range(40)))
+    i, j = _cell(grid, 1.5, 1.0)
+    assert trinary(grid)[i, j] == OCCUPIED
+    before = grid.log_odds[i, j]
+    # Ten silent beams along the wall (incidence about 86°): a smooth wall would not have
+    # answered them, so they say little about it (ROS's fade only, about 0.03 a beam here).
+    grid.add_many(ReadingBatch.from_readings(
+        _silent(10.0 + k, 0.0, -0.5, 0.9) for k in range(10)))
+    assert trinary(grid)[i, j] == OCCUPIED
+    assert before - grid.log_odds[i, j] < 0.5
+    # Ten silent beams from below, where the wall was heard from: it is gone.
+    grid.add_many(ReadingBatch.from_readings(
+        _silent(30.0 + k, math.pi / 2, 1.5, 0.0) for k in range(10)))
+    assert trinary(grid)[i, j] != OCCUPIED
+
+
+def test_a_jamb_arc_carved_away_leaves_the_door_open() -> None:
+    # A door 0.8 m wide in a wall at x = 2 (jambs at y = ±0.4). A sensor at (0, 0.6) looking
+    # at the upper jamb hears it at its distance; its uncarved arc sweeps over the doorway.
+    grid = CarvedGrid(0.05, BOUNDS)
+    jamb = (2.0, 0.4)
+    r = math.hypot(jamb[0], jamb[1] - 0.6)
+    grid.add(_reading(0.0, math.atan2(jamb[1] - 0.6, jamb[0]), r, y=0.6))
+    axis = math.atan2(jamb[1] - 0.6, jamb[0])
+    xs, ys = grid.cell_centers()
+    cx, cy = np.meshgrid(xs, ys)
+    on_arc = ((np.abs(np.hypot(cx, cy - 0.6) - r) <= grid.band)
+              & (np.abs(np.arctan2(cy - 0.6, cx) - axis) <= PHI / 2 - 0.02))
+    door = on_arc & (cy < 0.3)  # the flank more than 0.1 m inside the doorway
+    assert door.sum() >= 3
+    assert np.all(grid.live_log_odds[door] > 0.0)  # the arc's flank lies over the doorway
+    # Beams through the doorway (from the same place) hear the room beyond at 3.4 m: carving
+    # cuts the flank, and the doorway's cells lose what it gave them.
+    grid.add_many(ReadingBatch.from_readings(
+        _reading(1.0 + k, math.atan2(-0.1 - 0.6 + 0.1 * k, 2.0), 3.4, y=0.6)
+        for k in range(3)))
+    np.testing.assert_allclose(grid.live_log_odds[door], 0.0, atol=1e-12)
+    assert not np.any(trinary(grid)[door] == OCCUPIED)
