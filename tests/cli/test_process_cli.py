@@ -74,7 +74,6 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
         ([str(good), "--method", "nonsense"], "unknown method 'nonsense'"),
         ([str(good), "--history", "0"], "history_size must be a whole number of arcs in [1, "),
         ([str(good), "--history", "100001"], "history_size must be a whole number of arcs"),
-        ([str(good), "--history", "9999"], "history_size too large for ATM"),
         ([str(good), "--beam-width", "200"], "beam_width must lie in (0, pi) radians"),
         ([str(good), "--range-tolerance", "-1"], "range_tolerance must be finite and >= 0"),
         ([str(good), "--min-transversal", "91"], "min_transversal must lie in [0, pi/2]"),

@@ -234,6 +234,30 @@ def test_every_awkward_float_in_every_float_column(tmp_path: Path) -> None:
     assert lines[4].split(",")[1] == "5e-324"
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_floats_of_any_bit_pattern_are_written_as_the_reference_writes_them(
+    tmp_path: Path, seed: int,
+) -> None:
+    """The compiled writer against ``repr`` on doubles of every exponent: subnormals, NaNs of
+    any sign and payload, infinities, negative zero, huge and tiny values."""
+    rng = np.random.default_rng(100 + seed)
+    n = 20_000
+
+    def floats() -> np.ndarray:
+        return rng.integers(0, 2**64, n, dtype=np.uint64).view(np.float64)
+
+    points = GlobalMap(
+        reading_id=rng.integers(0, 2**53, n), t=floats(), sensor=rng.integers(0, 2**31, n),
+        xy=np.column_stack((floats(), floats())),
+        source=rng.integers(0, len(PointSource), n).astype(np.int8), width=floats(),
+        max_error=floats(), range=np.ones(n), confidence=floats(),
+    )
+    expected, path = tmp_path / "reference.csv", tmp_path / "map.csv"
+    _reference_write(points, expected)
+    write_map_csv(points, path)
+    assert path.read_bytes() == expected.read_bytes()
+
+
 def test_unknown_source_code_and_bad_block_rows_are_refused(tmp_path: Path) -> None:
     points = _map()
     bad = GlobalMap(**{**{name: getattr(points, name) for name in (

@@ -1,0 +1,67 @@
+"""The compiled ``repr`` of floats (Ryu) against Python's ``repr``, value by value."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.io.float_text import floats_text
+
+
+def _assert_repr(values: np.ndarray) -> None:
+    values = np.concatenate([values, -values])
+    expected = [repr(v) for v in values.tolist()]
+    got = floats_text(values)
+    assert len(got) == len(expected)
+    wrong = [(e, g) for e, g in zip(expected, got, strict=True) if e != g]
+    assert not wrong, wrong[:10]
+
+
+def test_the_forms_python_writes() -> None:
+    values = np.array([0.0, 1.0, 0.1, 0.3, 100.0, 123.456, 1e15, 1e16, 1234567890123456.0,
+                       9999999999999998.0, 1e-4, 1e-5, 0.00012345, 2.5e-7, 1.5e300, 1e22,
+                       5e-324, 1.7976931348623157e308, 2.0**53 + 2, math.pi, math.inf])
+    assert floats_text(values[:12]) == [
+        "0.0", "1.0", "0.1", "0.3", "100.0", "123.456", "1000000000000000.0", "1e+16",
+        "1234567890123456.0", "9999999999999998.0", "0.0001", "1e-05"]
+    assert floats_text(np.array([-0.0, math.nan, -math.nan, -math.inf])) == [
+        "-0.0", "nan", "nan", "-inf"]
+    _assert_repr(values)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_bit_patterns(seed: int) -> None:
+    bits = np.random.default_rng(seed).integers(0, 2**64, 200_000, dtype=np.uint64)
+    _assert_repr(bits.view(np.float64))
+
+
+def test_subnormals() -> None:
+    rng = np.random.default_rng(7)
+    _assert_repr(rng.integers(1, 2**52, 100_000, dtype=np.uint64).view(np.float64))
+    _assert_repr(np.arange(1, 2000, dtype=np.uint64).view(np.float64))  # the smallest
+
+
+def test_powers_of_two_and_ten_and_their_neighbours() -> None:
+    powers = np.concatenate([np.ldexp(1.0, np.arange(-1074, 1024)),
+                             np.array([float(f"1e{k}") for k in range(-323, 309)])])
+    _assert_repr(np.concatenate([powers, np.nextafter(powers, math.inf),
+                                 np.nextafter(powers, 0.0)]))
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_values_written_in_decimal(seed: int) -> None:
+    """Doubles nearest to short and long decimal texts (where ties between candidates and
+    trailing zeros are likeliest), and everyday magnitudes."""
+    rng = np.random.default_rng(10 + seed)
+    digits = rng.integers(1, 10**17, 50_000)
+    exponents = rng.integers(-340, 300, 50_000)
+    short = rng.integers(1, 10**6, 50_000)
+    near = rng.integers(-30, 30, 50_000)
+    decimal = [float(f"{m}e{e}") for m, e in zip(digits.tolist(), exponents.tolist(), strict=True)]
+    decimal += [float(f"{m}e{e}") for m, e in zip(short.tolist(), near.tolist(), strict=True)]
+    _assert_repr(np.array(decimal))
+    _assert_repr(np.concatenate([rng.normal(size=50_000), rng.uniform(-10, 10, 50_000),
+                                 rng.lognormal(0, 100, 50_000),
+                                 rng.integers(-2**60, 2**60, 50_000).astype(np.float64)]))
