@@ -12,13 +12,17 @@ Per arc (see the geometry module for the equations):
   support (newer echo circles through it); a bin is carved at ``T = -log(1 - P_carve)``;
 * occlusion: bins of a new arc behind a surface the history holds with confidence, that the new
   beam met at a glancing angle, are carved (multipath echoes read too long, behind walls);
+* transmission: a newer beam that passed a bin obliquely and whose echo beyond it is confirmed
+  by other sensors says the sound went through (times ``cos γ``, so a beam running along a
+  wall does not carve it);
 * split arcs are kept: the surviving run with the most support and ATM crossings, its bound
   covering every surviving run (honest: the echo may lie in any of them);
 * ATM crossings counted only inside the kept run; a crossing confirms the run and, when its
   bound is smaller, places the point (``source = atm``);
 * a confidence per point: a logistic model of the evidence the arc has gathered (support,
-  support from distinct viewpoints, crossings, free and looked-through evidence, runs,
-  occlusion, range, width; :class:`ConfidenceModel`), its weights fitted on the simulator's
+  support from distinct viewpoints and from other sensors, crossings, free and looked-through
+  evidence, runs, occlusion, the support of the surface the beam passed, range, width;
+  :class:`ConfidenceModel`), its weights fitted on the simulator's
   truth of one world (``benchmarks/fit_confidence.py``); points below ``min_confidence`` are
   left out of the maps (the default map), so "removed" means: not in the map the method
   outputs.
@@ -109,7 +113,10 @@ class ConfidenceModel:
     units of T), ``looked`` (looked-through evidence from distinct viewpoints in units of T,
     capped at 3), ``split`` (surviving runs - 1, capped at 3), ``occluded`` (share of the beam
     carved by occlusion), ``unheard`` (never supported, times the maturity), ``range``
-    (metres) and ``width`` (kept run over the full beam).
+    (metres), ``width`` (kept run over the full beam), ``others`` (support from other
+    sensors, capped at 1: a sensor's own repeated echoes can repeat one systematic error, so
+    they confirm less than another transducer does) and ``through`` (support of the surface
+    the echo's beam passed on its way, capped at 3: multipath echoes read from behind walls).
 
     Maturity: the features are fitted on arcs as they leave the history, when the ring has
     looked again many times; a fresh arc has had no chance to be supported or seen through. So
@@ -128,21 +135,21 @@ class ConfidenceModel:
     ``benchmarks/evidence.py``.
     """
 
-    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,253 arcs.
-    intercept: float = -3.542
-    support: float = 0.270
-    viewpoints: float = 0.922
-    crossings: float = 0.641
-    free: float = -0.427
-    looked: float = 0.297
-    split: float = -0.425
-    occluded: float = -0.545
-    unheard: float = 0.018
-    range: float = -0.066
-    width: float = 0.663
-    others: float = 3.397
-    through: float = 0.228
-    fresh: float = 2.504  # log-odds of the 92.4 % direct share of the training arcs
+    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,459 arcs.
+    intercept: float = -3.605
+    support: float = 0.280
+    viewpoints: float = 0.939
+    crossings: float = 0.657
+    free: float = -0.400
+    looked: float = 0.286
+    split: float = -0.551
+    occluded: float = -0.483
+    unheard: float = -0.021
+    range: float = -0.067
+    width: float = 0.560
+    others: float = 3.384
+    through: float = 0.285
+    fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 1.0
 
     def weights(self) -> np.ndarray:
