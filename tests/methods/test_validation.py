@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.errors import ConfigError, ReadingsError, SonarcarveError
+from sonarcarve.history import MAX_HISTORY_SIZE
 from sonarcarve.methods import (
     METHODS,
     AtmMethod,
@@ -23,6 +24,7 @@ from sonarcarve.methods import (
     SonarMethod,
     make_method,
 )
+from sonarcarve.methods.atm import AtmModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 GOOD = Reading(1.0, 0, 0.0, 0.0, 0.0, 2.0)
@@ -218,12 +220,13 @@ def test_make_method_passes_every_field_on() -> None:
         9, 0.3, 0.02, 0.4, 0.01, 0.7)
 
 
-def test_atm_refuses_a_history_whose_crossing_store_would_exceed_a_gibibyte() -> None:
-    # 2n rows x 4(n - 1) float32 crossings: n = 5,793 takes 1,073,697,792 bytes (under 2**30 =
-    # 1,073,741,824), n = 5,794 takes 1,074,068,544 (over).
-    assert 32 * 5793 * 5792 <= 2**30 < 32 * 5794 * 5793
-    make_method("atm", MethodConfig(history_size=5793))
+def test_atm_accepts_every_history_with_a_store_that_grows_on_demand() -> None:
+    # Room for every possible crossing would be 2n rows x 4(n - 1) float32: 3.2 GB at n =
+    # 10,000, 128 GB at the largest history. The store starts small and grows with the
+    # crossings actually kept (test_atm.py), so every valid history size is accepted.
     for method in ("atm", "combined"):
-        with pytest.raises(ConfigError, match="too large for ATM"):
-            make_method(method, MethodConfig(history_size=6000))
+        for size in (10_000, MAX_HISTORY_SIZE):
+            made = make_method(method, MethodConfig(history_size=size))
+            model = next(m for m in made.models if isinstance(m, AtmModel))
+            assert model.bearings.nbytes <= 2 * size * 32 * 4
     assert make_method("carve", MethodConfig(history_size=6000)).history.capacity == 6000
