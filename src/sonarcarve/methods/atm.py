@@ -46,7 +46,9 @@ from sonarcarve.geometry import common_chord
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.index import (
     ArcIndex,
+    IndexArrays,
     arc_box,
+    index_arrays,
     index_insert,
     index_remove,
     make_index,
@@ -231,13 +233,15 @@ def _add_arcs(
     theta1: FloatArray, theta2: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
-    index: ArcIndex, candidates: SlotArray, use_index: bool,
+    index_arrays: IndexArrays, candidates: SlotArray, use_index: bool,
 ) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
     (:func:`_add_arc`).
 
-    With ``use_index`` only the arcs the index returns for the new arc's box
+    ``index_arrays`` is the :class:`~sonarcarve.geometry.index.ArcIndex` as a plain tuple (numba's
+    dispatcher types it much faster than a NamedTuple). With ``use_index`` only the arcs the
+    index returns for the new arc's box
     (:func:`~sonarcarve.geometry.index.query_box`) are intersected: a kept crossing lies on both
     full beams, so both boxes contain it. ``index`` holds the live arcs (ATM removes none).
     Off (ψ < :data:`MIN_INDEXED_TRANSVERSAL`), every live arc is: the crossings of nearly
@@ -251,6 +255,7 @@ def _add_arcs(
     """
     storage = x.shape[0]
     width = bearings.shape[1]
+    index = ArcIndex(*index_arrays)
     kept = 0
     for sequence in range(first, first + count):
         slot = sequence % storage
@@ -391,7 +396,8 @@ class AtmModel(ArcModel):
             kept, first, needed = _add_arcs(
                 first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
                 h.theta2, self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi,
-                self.bearings, self.counts, self.index, self._candidates, self._use_index,
+                self.bearings, self.counts, index_arrays(self.index), self._candidates,
+                self._use_index,
             )
             self._kept += kept
             if first < end:
