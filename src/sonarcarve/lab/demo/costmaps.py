@@ -30,7 +30,8 @@ __all__ = ["GRID_KINDS", "GridKind", "grid_bounds", "run_grids"]
 Bounds = tuple[float, float, float, float]
 Grid = CarvedGrid | RangeSensorLayer
 
-#: Readings of the (untimed) run that loads or compiles a grid's kernels before its timed run.
+#: Readings of the (untimed) run that loads or compiles a grid's kernels before its timed run,
+#: beyond a carved grid's history capacity.
 _WARM_UP = 64
 #: Progress reports per grid: the readings go in this many batches (the map is the same as with
 #: one batch; both grids fold readings strictly in order).
@@ -100,9 +101,11 @@ def run_grids(sim: Simulation, resolution: float = GRID_RESOLUTION,
 def _fill(kind: GridKind, resolution: float, bounds: Bounds, readings: ReadingBatch,
           on_progress: ProgressCallback | None) -> tuple[Grid, np.ndarray, float]:
     """The grid with every reading in, its trinary map, and the processor time both took."""
-    # Compile (or load) the kernels first, so that the time is the grid's, not numba's.
+    # Compile (or load) the kernels first, so that the time is the grid's, not numba's: with
+    # enough readings to push arcs out of a carved grid's history (its commit path).
     warm = kind.make(resolution, bounds)
-    warm.add_many(readings[:_WARM_UP])
+    capacity = warm.method.history.capacity if isinstance(warm, CarvedGrid) else 0
+    warm.add_many(readings[:capacity + _WARM_UP])
     trinary(warm)
     del warm
     grid = kind.make(resolution, bounds)

@@ -34,6 +34,8 @@ GRID_FIGURE_TEXT = "carved grid beside ROS's layer, over true walls"
 #: Cell colours: free, unknown, occupied (the map_server image's own shades, and black).
 _CELL_COLORS = ("#ffffff", "#c0c0c0", "#000000")
 _WALL_COLOR = "#e8000b"
+#: The close-up row is drawn only when fig. 2's window is smaller than this share of the map.
+_CLOSEUP_SHARE = 0.3
 #: What the numbers in the panel titles mean (the legend's title).
 _MEASURES_TEXT = ("precision: share of the occupied cells within one cell of a true wall; "
                   "recall: share of the walls the sonars saw that have an occupied cell; "
@@ -86,7 +88,8 @@ def grid_verdict(result: DemoResult) -> str:
 
 
 def plot_occupancy_grids(result: DemoResult) -> Figure:
-    """Fig. 5: each grid's trinary map over the true walls; whole map above, close-up below.
+    """Fig. 5: each grid's trinary map over the true walls; whole map above, and below, fig.
+    2's close-up window (left out when that window shows most of the map anyway).
 
     Returns an empty figure with a note if the run built no grids.
     """
@@ -94,12 +97,11 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
     cols = max(1, len(grids))
     limits = map_limits(result)
     box = zoom_window(result)
-    aspect_top = (limits[3] - limits[2]) / max(limits[1] - limits[0], 1e-9)
-    aspect_zoom = (box[3] - box[2]) / max(box[1] - box[0], 1e-9)
+    rows = 2 if _area(box) < _CLOSEUP_SHARE * _area(limits) else 1
+    aspects = [(lim[3] - lim[2]) / max(lim[1] - lim[0], 1e-9) for lim in (limits, box)[:rows]]
     width = 13.0 if cols == 2 else 7.0
-    panel = width / cols
-    fig, axes = new_figure(2, cols, width=width,
-                           height=min(16.0, 1.6 + panel * (aspect_top + aspect_zoom)))
+    fig, axes = new_figure(rows, cols, width=width,
+                           height=min(16.0, 1.6 + width / cols * sum(aspects)))
     if not grids:
         axes[0, 0].text(0.5, 0.5, "no grids in this run", ha="center", va="center")
         for ax in axes.flat:
@@ -107,13 +109,14 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
         return fig
     for k, grid in enumerate(grids):
         m = grid.measures
-        top, bottom = axes[0, k], axes[1, k]
-        _grid_panel(top, result, grid, limits, linewidth=0.5, box=box)
-        top.set_title(f"{grid.label}: precision {m.precision:.2f}, recall {m.recall:.2f}, "
-                      f"phantoms {100.0 * m.phantoms:.2f} %", fontsize=11)
-        _grid_panel(bottom, result, grid, box, linewidth=1.0)
-        bottom.set_title(f"{grid.label}, close-up (dashed box above; fig. 2's window)",
-                         fontsize=10)
+        _grid_panel(axes[0, k], result, grid, limits, linewidth=0.5,
+                    box=box if rows == 2 else None)
+        axes[0, k].set_title(f"{grid.label}: precision {m.precision:.2f}, recall "
+                             f"{m.recall:.2f}, phantoms {100.0 * m.phantoms:.2f} %", fontsize=11)
+        if rows == 2:
+            _grid_panel(axes[1, k], result, grid, box, linewidth=1.0)
+            axes[1, k].set_title(f"{grid.label}, close-up (dashed box above; fig. 2's window)",
+                                 fontsize=10)
     for ax in axes[:, 0]:
         ax.set_ylabel("y (m)")
     for ax in axes.flat:
@@ -127,6 +130,11 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
         f"('{result.world.name}' tour, {grids[0].resolution:.2f} m cells), as a robot's planner "
         "reads them" + (f":\n{verdict}" if verdict else ""), fontsize=12)
     return fig
+
+
+def _area(limits: tuple[float, float, float, float]) -> float:
+    """Area of ``(xmin, xmax, ymin, ymax)``, square metres."""
+    return (limits[1] - limits[0]) * (limits[3] - limits[2])
 
 
 def _grid_panel(ax: Axes, result: DemoResult, grid: GridSummary,

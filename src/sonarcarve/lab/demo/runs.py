@@ -58,7 +58,8 @@ from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = ["run_demo"]
 
-#: Readings each method processes once, untimed, before its run (see :func:`run_demo`).
+#: Readings beyond its history size each method processes once, untimed, before its run (see
+#: :func:`run_demo`).
 _WARM_UP = 64
 
 
@@ -171,8 +172,11 @@ def _run_methods(sim: Simulation, methods: tuple[str, ...], config: MethodConfig
     for name in methods:
         tic = time.perf_counter()
         # Load (or compile) the method's numba kernels on a few readings first, so that the
-        # readings-per-second column measures processing, not one-off start-up.
-        make_method(name, config).add_many(sim.readings[:_WARM_UP])
+        # readings-per-second column measures processing, not one-off start-up: enough of them
+        # to fill the history and push arcs out of it, then finish (both have kernels too).
+        warm = make_method(name, config)
+        warm.add_many(sim.readings[:config.history_size + _WARM_UP])
+        warm.finish()
         records[name] = record_run(sim.readings, make_method(name, config), stops, on_progress=(
             None if on_progress is None else _reporter(on_progress, name, n)))
         seconds[name] = time.perf_counter() - tic
