@@ -131,6 +131,10 @@ DEFAULT_MAX_INCIDENCE = math.radians(30.0)
 
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
+#: A beam within this many sectors of a bearing a cell was heard from would hear it again (one
+#: more sector: half as likely). Measured: 2 changes the box's clearing time by nothing and
+#: costs 0.003-0.004 of office recall.
+HEARD_NEAR = 1
 
 _TWO_PI = 2.0 * math.pi
 
@@ -426,9 +430,9 @@ def _audibility(heard: int, k: int) -> float:
         return 0.0
     near = 0
     far = 0
-    for o in range(-2, 3):
+    for o in range(-HEARD_NEAR - 1, HEARD_NEAR + 2):
         bit = 1 << ((k + o) % HEARD_BINS)
-        if o == -2 or o == 2:
+        if abs(o) > HEARD_NEAR:
             far |= bit
         else:
             near |= bit
@@ -437,6 +441,36 @@ def _audibility(heard: int, k: int) -> float:
     if heard & far:
         return 0.5
     return 0.0
+
+
+@compiled_inline
+def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x: float,
+              u2y: float) -> tuple[float, float]:
+    """``(lo, hi)`` of ``dx`` on the line ``dy`` (relative to the apex) inside the sector of
+    radius ``reach`` between the unit directions ``u1`` (clockwise edge) and ``u2``; empty
+    when ``lo > hi``. The sector is the disk cut by two half-planes when ``half < π/2``."""
+    rest = reach * reach - dy * dy
+    if rest < 0.0:
+        return 1.0, 0.0
+    hi = math.sqrt(rest)
+    lo = -hi
+    if half >= 0.5 * math.pi:
+        return lo, hi
+    # Counter-clockwise of u1: u1x dy - u1y dx >= 0.
+    if u1y > 0.0:
+        hi = min(hi, u1x * dy / u1y)
+    elif u1y < 0.0:
+        lo = max(lo, u1x * dy / u1y)
+    elif u1x * dy < 0.0:
+        return 1.0, 0.0
+    # Clockwise of u2: u2y dx - u2x dy >= 0.
+    if u2y > 0.0:
+        lo = max(lo, u2x * dy / u2y)
+    elif u2y < 0.0:
+        hi = min(hi, u2x * dy / u2y)
+    elif u2x * dy > 0.0:
+        return 1.0, 0.0
+    return lo, hi
 
 
 @compiled_inline
@@ -455,9 +489,17 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
     xlo, ylo, xhi, yhi = _sector_box(x, y, theta - half, theta + half, 0.0, reach)
     j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
     i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    t1, t2 = theta - half, theta + half
+    u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        for j in range(j0, j1 + 1):
+        # Only the row's stretch inside the sector (plus a cell each side; the exact test is
+        # per cell below): most of the bounding box of a slanted beam lies outside it.
+        lo, hi = _row_span(dy, reach, half, u1x, u1y, u2x, u2y)
+        if lo > hi:
+            continue
+        ja, jb = _cell_range(x + lo, x + hi, xmin, h, nx)
+        for j in range(max(j0, ja), min(j1, jb) + 1):
             dx = xmin + (j + 0.5) * h - x
             d2 = dx * dx + dy * dy
             if d2 >= reach * reach:
@@ -553,6 +595,23 @@ def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.
         drawn_seq[slot] = seqs[k]
         changed += 1
     return changed
+
+
+@compiled
+def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray, l_min: float,
+                    l_max: float, l_occupied: float, l_free: float, out: Int8Grid) -> None:
+    """Occupied (100) where ``clamp(base + live) > l_occupied``, free (0) below ``l_free``,
+    else unknown (-1)."""
+    ny, nx = base.shape
+    for i in range(ny):
+        for j in range(nx):
+            lo = min(l_max, max(l_min, base[i, j] + live[i, j]))
+            if lo > l_occupied:
+                out[i, j] = OCCUPIED
+            elif lo < l_free:
+                out[i, j] = FREE
+            else:
+                out[i, j] = UNKNOWN
 
 
 class _Finals(NamedTuple):
@@ -830,9 +889,16 @@ class CarvedGrid:
 
     def trinary(self) -> Int8Grid:
         """:data:`OCCUPIED` (100) above :attr:`CarvedGridParams.occupied_threshold`,
-        :data:`FREE` (0) below ``free_threshold``, else :data:`UNKNOWN` (-1)."""
-        return _classify(self.probabilities(), self._params.occupied_threshold,
-                         self._params.free_threshold)
+        :data:`FREE` (0) below ``free_threshold``, else :data:`UNKNOWN` (-1).
+
+        Compared in log-odds (the logistic is monotone), one pass, no temporary grids.
+        """
+        self._sync()
+        out = np.empty(self.shape, dtype=np.int8)
+        _trinary_kernel(self._base, self._live, self._l_min, self._l_max,
+                        _logit(self._params.occupied_threshold),
+                        _logit(self._params.free_threshold), out)
+        return out
 
     def occupied_mask(self, threshold: float | None = None) -> BoolArray:
         """Cells whose probability is above ``threshold`` (default
