@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from sonarcarve.io.float_text import floats_text
+from sonarcarve.io.float_text import floats_text, parse_floats
 
 
 def _assert_repr(values: np.ndarray) -> None:
@@ -65,3 +65,58 @@ def test_values_written_in_decimal(seed: int) -> None:
     _assert_repr(np.concatenate([rng.normal(size=50_000), rng.uniform(-10, 10, 50_000),
                                  rng.lognormal(0, 100, 50_000),
                                  rng.integers(-2**60, 2**60, 50_000).astype(np.float64)]))
+
+
+def _decimal_texts(rng: np.random.Generator, n: int) -> list[str]:
+    """Numbers as logs write them: reprs of everyday and extreme doubles, short decimals,
+    fixed and exponent forms with up to 25 digits, signs, leading and trailing zeros."""
+    values = np.concatenate([rng.normal(size=n), rng.uniform(-1e4, 1e4, n),
+                             rng.lognormal(0, 60, n),
+                             rng.integers(1, 2**64, n, dtype=np.uint64).view(np.float64)])
+    values = values[np.isfinite(values)]
+    texts = [repr(v) for v in values.tolist()]
+    texts += [f"{v:.{p}f}" for v, p in zip(rng.normal(scale=100, size=n).tolist(),
+                                           rng.integers(0, 25, n).tolist(), strict=True)]
+    texts += [f"{v:+.{p}e}" for v, p in zip(rng.lognormal(0, 40, n).tolist(),
+                                            rng.integers(0, 25, n).tolist(), strict=True)]
+    texts += [f"{m}e{e}" for m, e in zip(rng.integers(1, 10**17, n).tolist(),
+                                         rng.integers(-330, 320, n).tolist(), strict=True)]
+    texts += ["0", "-0", "+0.000", "007", ".5", "5.", "-.5e-3", "1E5", "1e+05", "100",
+              "1.2500", "inf", "-inf", "+inf", "1e22", "1e23", "9007199254740993",
+              "0.30000000000000004", "0.10000000000000001", "4.9e-324", "1e400", "1e-400",
+              "2.2250738585072014e-308", "2.2250738585072011e-308"]
+    rng.shuffle(texts)
+    return texts
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_parse_floats_is_float_or_undecided(seed: int) -> None:
+    """Each group of fields is read bit for bit as ``float`` reads it, or left undecided
+    (None) as a whole; repr's texts and short decimals are always decided."""
+    rng = np.random.default_rng(20 + seed)
+    texts = _decimal_texts(rng, 20_000)
+    decided = 0
+    for text in texts:
+        values = parse_floats(text.encode(), 1)
+        if values is not None:
+            assert values.tobytes() == np.array([float(text)]).tobytes(), text
+            decided += 1
+    assert decided > len(texts) // 2
+    for start in range(0, len(texts), 8):  # groups: separators, and undecided as a whole
+        group = texts[start : start + 8]
+        line = ",".join(group[:4]) + "\n" + ",".join(group[4:]) + "\n"
+        values = parse_floats(line.encode(), len(group))
+        if values is not None:
+            assert values.tobytes() == np.array([float(t) for t in group]).tobytes(), group
+    scales = 10.0 ** rng.integers(-300, 300, 5000)  # no subnormals
+    reprs = [repr(v) for v in rng.normal(scale=scales).tolist()]
+    values = parse_floats(",".join(reprs).encode(), len(reprs))
+    assert values is not None
+    assert values.tolist() == [float(t) for t in reprs]
+
+
+@pytest.mark.parametrize("text", ["", ",", "1,", ",1", "1,,2", "1\n\n2", "1;2", "1 2", "e5",
+                                  "1e", "--1", "+-1", "1..2", ".", "-", "in", "infinity",
+                                  "nan", "1" * 20, "0." + "1" * 20, "1_0", "1,2,3"])
+def test_parse_floats_refuses_what_it_does_not_read_exactly(text: str) -> None:
+    assert parse_floats(text.encode(), 2) is None

@@ -344,14 +344,14 @@ NUMERIC_KINDS = ("blank", "short", "long", "backwards", "sensor_half", "sensor_h
 
 @pytest.fixture
 def numbers_parsed(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Counts the blocks numpy's parser read (so a test knows the fast path ran)."""
+    """Counts the numbers parsed in bulk (so a test knows the fast path ran)."""
     from sonarcarve.io import readings_csv
 
     parsed: list[int] = []
     original = readings_csv._parse_numbers
 
-    def counting(raw: bytes) -> np.ndarray | None:
-        values = original(raw)
+    def counting(raw: bytes, count: int) -> np.ndarray | None:
+        values = original(raw, count)
         if values is not None:
             parsed.append(values.size)
         return values
@@ -434,27 +434,34 @@ def _number_texts(rng: np.random.Generator, n: int) -> list[str]:
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_numpy_parses_numbers_as_float_does(seed: int) -> None:
+@pytest.mark.parametrize("compiled", [True, False])
+def test_bulk_parsing_reads_numbers_as_float_does(
+    seed: int, compiled: bool, monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Both bulk parsers: the compiled one (with numpy for what it leaves), and numpy alone."""
+    from sonarcarve.io import float_text
     from sonarcarve.io.readings_csv import _parse_numbers
 
+    if not compiled:
+        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count: None)
     texts = _number_texts(np.random.default_rng(seed), 20_000)
     lines = [",".join(texts[k : k + 5]) for k in range(0, len(texts), 5)]
-    values = _parse_numbers("\n".join(lines).encode() + b"\n")
+    values = _parse_numbers("\n".join(lines).encode() + b"\n", len(texts))
     assert values is not None
     expected = np.array([float(text) for text in texts])
     assert values.tobytes() == expected.tobytes()  # bit for bit (signs of zero included)
+    assert _parse_numbers("\n".join(lines).encode(), len(texts) + 1) is None  # a count short
 
 
 @pytest.mark.parametrize("text", ["1_0", " 1", "1 ", "nan", "NaN", "Infinity", "INF", "0x10",
                                   "1e", "--1", "1..2", "+", ".", "e5", "", "1,,2", "1\r2",
                                   "inf5", "\u0661"])
 def test_numpy_parser_leaves_other_spellings_to_float(text: str) -> None:
-    """Text numpy would read differently from ``float`` (or not at all) goes to the exact
-    path: None, or fewer numbers than fields."""
+    """Text the bulk parsers would read differently from ``float`` (or not at all) goes to
+    the exact path."""
     from sonarcarve.io.readings_csv import _parse_numbers
 
-    values = _parse_numbers(f"1,{text},3\n".encode())
-    assert values is None or values.size != 3
+    assert _parse_numbers(f"1,{text},3\n".encode(), 3) is None
 
 
 def test_several_bad_lines_name_the_first(tmp_path: Path) -> None:

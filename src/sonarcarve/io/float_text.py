@@ -24,7 +24,7 @@ from numba import njit
 
 from sonarcarve.typing import FloatArray, Int8Array, IntArray
 
-__all__ = ["floats_text", "map_rows_text"]
+__all__ = ["floats_text", "map_rows_text", "parse_floats"]
 
 _MASK64 = (1 << 64) - 1
 #: Bits of the tabulated powers of five and of their inverses (Ryu's ``DOUBLE_POW5_BITCOUNT``
@@ -94,6 +94,32 @@ def floats_text(values: FloatArray) -> list[str]:
     size = _floats_lines(_bits(values), _POWERS, _INVERSES, out)
     text = out[:size].tobytes().decode("ascii")
     return text.split("\n")[:-1] if text else []
+
+
+def parse_floats(text: bytes, count: int) -> FloatArray | None:
+    """The ``count`` comma- or line-separated numbers of ``text``, exactly as ``float`` reads
+    each; None if a field is not a plain decimal number (digits, one point, an exponent, a
+    sign; or ``inf``), or is one this kernel does not decide (more than 19 significant digits,
+    a 16-19 digit significand that is not the shortest text of its double, a subnormal or
+    extreme exponent: rare), or if there are not ``count`` fields.
+
+    How: a significand of at most 15 digits times a power of ten of at most 22 is computed
+    exactly in binary64 (Clinger's fast path: both factors exact, one rounding). Otherwise an
+    approximation within two units in the last place is taken, and of it and its four nearest
+    doubles, the one whose shortest text (:func:`_shortest`, Ryu) has the field's digits and
+    exponent is the answer: a shortest text reads back to its own double, so that double is
+    what ``float`` returns. Text written by ``repr`` (``write_readings_csv``, most loggers in
+    Python) is always decided, subnormals aside.
+    """
+    values = np.empty(count, dtype=np.float64)
+    scratch = np.empty(1, dtype=np.float64)
+    found = _parse(np.frombuffer(text, dtype=np.uint8), values, scratch, scratch.view(np.uint64),
+                   _POWERS_OF_TEN, _POWERS, _INVERSES)
+    return values if found == count else None
+
+
+#: 10^k as the nearest binary64, k = 0 .. 308 (exact up to 10^22).
+_POWERS_OF_TEN = np.array([float(f"1e{k}") for k in range(309)])
 
 
 def _bits(values: FloatArray) -> np.ndarray:
@@ -396,3 +422,125 @@ def _floats_lines(values: np.ndarray, powers: np.ndarray, inverses: np.ndarray,
         out[at] = 10
         at += 1
     return at
+
+
+# --------------------------------------------------------------------------------------------
+# Text to floats
+# --------------------------------------------------------------------------------------------
+
+_MAX_SIGNIFICAND_DIGITS = 19  # 10^19 < 2^64
+
+
+@njit(cache=True)
+def _decimal(significand: np.uint64, exponent: int, digits: int, scratch: np.ndarray,
+             scratch_bits: np.ndarray, tens: np.ndarray, powers: np.ndarray,
+             inverses: np.ndarray) -> float:
+    """significand * 10^exponent as ``float`` reads it (nonnegative); NaN if undecided."""
+    if significand == _U0:
+        return 0.0
+    while significand % _U10 == _U0:  # the form _shortest gives: no trailing zeros
+        significand //= _U10
+        exponent += 1
+        digits -= 1
+    if digits <= 15 and -22 <= exponent <= 22:  # Clinger: exact operands, one rounding
+        if exponent >= 0:
+            return float(float(significand) * tens[exponent])
+        return float(float(significand) / tens[-exponent])
+    if exponent > 308 or exponent < -340:
+        return np.nan  # overflow or underflow: left to float
+    if exponent >= 0:
+        scratch[0] = float(significand) * tens[exponent]
+    elif exponent >= -308:
+        scratch[0] = float(significand) / tens[-exponent]
+    else:  # two roundings: still within two units in the last place
+        scratch[0] = float(significand) / tens[308] / tens[-exponent - 308]
+    center = scratch_bits[0]
+    if (center >> _U52) & _EXPONENT == _EXPONENT or (center >> _U52) & _EXPONENT == _U0:
+        return np.nan  # inf (overflow) or subnormal: left to float
+    for step in range(5):  # 0, +1, -1, +2, -2 units in the last place
+        offset = np.uint64((step + 1) // 2)
+        candidate = center + offset if step % 2 == 1 else center - offset
+        if (candidate >> _U52) & _EXPONENT == _EXPONENT or (candidate >> _U52) & _EXPONENT == _U0:
+            continue
+        shortest, power = _shortest(candidate, powers, inverses)
+        if shortest == significand and power == exponent:
+            scratch_bits[0] = candidate
+            return float(scratch[0])
+    return np.nan
+
+
+@njit(cache=True)
+def _parse(text: np.ndarray, values: np.ndarray, scratch: np.ndarray, scratch_bits: np.ndarray,
+           tens: np.ndarray, powers: np.ndarray, inverses: np.ndarray) -> int:
+    """Fields of ``text`` into ``values``; how many, or -1 at the first field not decided."""
+    n = text.shape[0]
+    at = 0
+    count = 0
+    while at < n:
+        if count == values.shape[0]:
+            return -1
+        negative = text[at] == 45
+        if text[at] == 45 or text[at] == 43:
+            at += 1
+        if at < n and text[at] == 105:  # "inf"
+            if at + 2 < n and text[at + 1] == 110 and text[at + 2] == 102:
+                value = np.inf
+                at += 3
+            else:
+                return -1
+        else:
+            significand = _U0
+            digits = 0
+            seen = 0
+            exponent = 0
+            while at < n and 48 <= text[at] <= 57:
+                digit = np.uint64(text[at] - 48)
+                seen += 1
+                if digits > 0 or digit != _U0:
+                    if digits == _MAX_SIGNIFICAND_DIGITS:
+                        return -1
+                    significand = significand * _U10 + digit
+                    digits += 1
+                at += 1
+            if at < n and text[at] == 46:  # "."
+                at += 1
+                while at < n and 48 <= text[at] <= 57:
+                    digit = np.uint64(text[at] - 48)
+                    seen += 1
+                    if digits > 0 or digit != _U0:
+                        if digits == _MAX_SIGNIFICAND_DIGITS:
+                            return -1
+                        significand = significand * _U10 + digit
+                        digits += 1
+                    exponent -= 1
+                    at += 1
+            if seen == 0:
+                return -1
+            if at < n and (text[at] == 101 or text[at] == 69):  # "e", "E"
+                at += 1
+                minus = at < n and text[at] == 45
+                if at < n and (text[at] == 45 or text[at] == 43):
+                    at += 1
+                power = 0
+                power_digits = 0
+                while at < n and 48 <= text[at] <= 57:
+                    if power < 100_000:
+                        power = power * 10 + (text[at] - 48)
+                    power_digits += 1
+                    at += 1
+                if power_digits == 0:
+                    return -1
+                exponent += -power if minus else power
+            value = _decimal(significand, exponent, digits, scratch, scratch_bits, tens,
+                             powers, inverses)
+            if np.isnan(value):
+                return -1
+        values[count] = -value if negative else value
+        count += 1
+        if at < n:
+            if text[at] != 44 and text[at] != 10:  # "," or a line break ends a field
+                return -1
+            at += 1
+            if at == n and text[at - 1] == 44:
+                return -1  # a last, empty field
+    return count
