@@ -20,18 +20,19 @@ mapped by every variant; the tables give means over seeds, per world and physics
 
 Variants: ``carve`` (paper), ``carve β=30°`` (specular-aware), ``combined`` (paper, carving and
 ATM); evidence carving with each part alone on top of the free-space evidence (``evidence
-only``: graded evidence, split arcs kept, no ATM, no occlusion, no confidence filter;
-``+occlusion``; ``+ATM``; ``+confidence``) and ``evidence`` (all together, the library
-defaults). A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
-``lab/experiments/real_log.py``) and a throughput table times ``carve`` and ``evidence`` at
-history 250 on ``throughput.py``'s stream (median of 3 after a warm-up).
+only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission, no confidence
+filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``) and ``evidence`` (all
+together, the library defaults). A last table gives the roboND-sonar-8 log's line spread
+(the sharpness measure of ``lab/experiments/real_log.py``) and a throughput table times
+``carve``, ``combined`` and ``evidence`` at history 250 on ``throughput.py``'s stream (after a
+warm-up, the three interleaved, the best of 5 runs each: on a shared machine the fastest run
+is the one least slowed by other processes).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import statistics
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -51,13 +52,15 @@ from synthetic import corridor_stream
 Factory = Callable[[MethodConfig], SonarMethod]
 
 
-def _evidence(*, atm: bool, occlusion: bool, confidence: bool) -> Factory:
+def _evidence(*, atm: bool = False, occlusion: bool = False, transmission: bool = False,
+              confidence: bool = False) -> Factory:
     def make(config: MethodConfig) -> SonarMethod:
         c = config if confidence else replace(config, min_confidence=0.0)
         return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
                               c.min_transversal, c.range_resolution, c.evidence_bins,
                               c.carve_probability, c.min_confidence, c.stamp_error,
-                              with_atm=atm, with_occlusion=occlusion)
+                              with_atm=atm, with_occlusion=occlusion,
+                              with_transmission=transmission)
     return make
 
 
@@ -65,10 +68,11 @@ VARIANTS: dict[str, Factory] = {
     "carve (paper)": lambda c: make_method("carve", c),
     "carve β=30°": lambda c: make_method("carve", replace(c, max_incidence=math.radians(30.0))),
     "combined (paper)": lambda c: make_method("combined", c),
-    "evidence only": _evidence(atm=False, occlusion=False, confidence=False),
-    "+occlusion": _evidence(atm=False, occlusion=True, confidence=False),
-    "+ATM": _evidence(atm=True, occlusion=False, confidence=False),
-    "+confidence": _evidence(atm=False, occlusion=False, confidence=True),
+    "evidence only": _evidence(),
+    "+occlusion": _evidence(occlusion=True),
+    "+transmission": _evidence(transmission=True),
+    "+ATM": _evidence(atm=True),
+    "+confidence": _evidence(confidence=True),
     "evidence (all)": lambda c: make_method("evidence", c),
 }
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
@@ -97,6 +101,11 @@ def _measure(sim: Simulation, make: Factory, config: MethodConfig,
     return row
 
 
+def _pct(value: float) -> str:
+    """A share with one decimal, "–" where the world has no such echo."""
+    return "–" if math.isnan(value) else f"{value:.1f}"
+
+
 def _table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
     print(f"\n{title}\n")
     print("| variant | direct kept (%) | crosstalk removed (%) | floor removed (%) | "
@@ -105,8 +114,9 @@ def _table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, runs in rows.items():
         m = {c: float(np.nanmean([r[c] for r in runs])) for c in COLUMNS}
-        print(f"| {name} | {m['direct_kept']:.1f} | {m['crosstalk']:.1f} | {m['floor']:.1f} | "
-              f"{m['multipath']:.1f} | {m['spurious']:.1f} | {m['median_ratio']:.2f} | "
+        print(f"| {name} | {m['direct_kept']:.1f} | {_pct(m['crosstalk'])} | "
+              f"{_pct(m['floor'])} | {_pct(m['multipath'])} | {m['spurious']:.1f} | "
+              f"{m['median_ratio']:.2f} | "
               f"{m['p90_ratio']:.2f} | {m['unprocessed']:.1f} | {m['readings_per_s']:,.0f} |")
 
 
@@ -127,7 +137,7 @@ def _robond(config: MethodConfig) -> None:
               f"{100 * np.percentile(spread[ok], 90):.1f} | {100 * np.mean(~ok):.0f} |")
 
 
-def _throughput(history: int = 250, repeats: int = 3) -> None:
+def _throughput(history: int = 250, repeats: int = 5) -> None:
     batch = corridor_stream(20_000, noise=0.01, spurious_share=0.05, seed=0).batch
 
     def run(name: str, readings: ReadingBatch) -> float:
@@ -137,14 +147,19 @@ def _throughput(history: int = 250, repeats: int = 3) -> None:
         method.finish()
         return time.perf_counter() - tic
 
-    print(f"\nthroughput: history {history}, ring corridor, {len(batch):,} readings, median "
-          f"of {repeats} runs\n")
+    print(f"\nthroughput: history {history}, ring corridor, {len(batch):,} readings, best "
+          f"of {repeats} interleaved runs\n")
     print("| method | readings/s |")
     print("|---|---:|")
-    rates = {}
-    for name in ("carve", "combined", "evidence"):
+    names = ("carve", "combined", "evidence")
+    for name in names:
         run(name, batch[:2000])
-        rates[name] = len(batch) / statistics.median(run(name, batch) for _ in range(repeats))
+    times: dict[str, list[float]] = {name: [] for name in names}
+    for _ in range(repeats):
+        for name in names:
+            times[name].append(run(name, batch))
+    rates = {name: len(batch) / min(times[name]) for name in names}
+    for name in names:
         print(f"| {name} | {rates[name]:,.0f} |")
     print(f"\nevidence / carve: {rates['evidence'] / rates['carve']:.2f}")
 

@@ -253,3 +253,30 @@ def test_blocks_of_readings_give_the_maps_of_one_reading_at_a_time() -> None:
     np.testing.assert_array_equal(a.reading_id, b.reading_id)
     np.testing.assert_array_equal(a.xy, b.xy)
     np.testing.assert_array_equal(a.confidence, b.confidence)
+
+
+def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one() -> None:
+    # An arc at 3 m whose middle a head-on look carves (two pieces at the beam's edges). The
+    # upper piece is supported by the same sensor one step along that piece's direction (its
+    # circle touches the arc there: the same range again says nothing about the bearing); the
+    # lower piece by another sensor's echo crossing the arc at 55°. ATM is off, so only the
+    # localised support can tell them apart.
+    method = EvidenceMethod(min_confidence=0.0, with_atm=False)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 3.0, sensor=0))
+    method.add(_reading(0.05, 0.5, 0.0, 0.0, 4.0, sensor=1))
+    up = math.radians(10.5)
+    method.add(_reading(0.1, 0.3 * math.cos(up), 0.3 * math.sin(up), up, 2.7, sensor=0))
+    low = (3.0 * math.cos(-up), 3.0 * math.sin(-up))
+    ox, oy = 1.5, -2.0
+    method.add(_reading(0.15, ox, oy, math.atan2(low[1] - oy, low[0] - ox),
+                        math.hypot(low[0] - ox, low[1] - oy), sensor=2))
+    model = _model(method)
+    first = int(method.history.slots()[0])
+    carved = model.free[first] >= model.threshold
+    assert carved[model.bins // 2]  # split in two
+    assert not carved[0]
+    assert not carved[-1]
+    assert model.support[first, -1] > model.support[first, 0]  # the tangent one is louder
+    local = method.local_map()
+    row = local.reading_id.tolist().index(0)
+    assert local.xy[row, 1] < 0.0  # the point is on the lower, located piece

@@ -328,7 +328,7 @@ def evidence_add(
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
     others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, circle: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
@@ -375,6 +375,10 @@ def evidence_add(
         Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
     free, support : ndarray, shape (n, K)
         Evidence of empty space and support per bin (updated in place).
+    located : ndarray, shape (n, K)
+        Support per bin times the sine of the angle at which the two echo circles meet there:
+        how much the support says about where on the arc the echo came from (updated in
+        place; it picks the kept run of a split arc).
     circle : ndarray, shape (n, 3)
         A circle containing each full arc (a cheap first test).
     cos_axis, sin_axis, cos_half : ndarray, shape (n,)
@@ -418,6 +422,7 @@ def evidence_add(
         by[slot, k] = yj + rj * ey[slot, k]
         free[slot, k] = 0.0
         support[slot, k] = 0.0
+        located[slot, k] = 0.0
     c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
     circle[slot, 0] = c0
     circle[slot, 1] = c1
@@ -546,6 +551,12 @@ def evidence_add(
                 top_support = max(top_support, p)
                 kb = _bin_of_sine(sine, edges, bins)
                 support[slot, kb] += p
+                # Localised support: times the sine of the angle between the two circles
+                # there (tangent circles, one sensor stepping along its axis, say nothing of
+                # *where* on the arc the echo came from).
+                loc = p * abs(ex[i, k] * vy - ey[i, k] * vx) * inv_d
+                located[i, k] += loc
+                located[slot, kb] += loc
                 if other:
                     trans[kb] += p
         if distinct:
@@ -575,7 +586,7 @@ def evidence_add_many(
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
     others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, circle: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
@@ -599,8 +610,8 @@ def evidence_add_many(
         a, b, c = evidence_add(
             sequence % storage, wrapped[start : start + live - 1], x, y, r, theta, beam_width,
             sensor, viewpoints, looked, others, through, passed, trans, bx, by, ex, ey, free,
-            support, circle, cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
-            counts, params, with_atm)
+            support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
+            bearings, counts, params, with_atm)
         fully += a
         crossings += b
         occluding += c
@@ -701,19 +712,20 @@ def evidence_free(
 @compiled
 def evidence_estimates(
     slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
-    beam_width: FloatArray, free: FloatArray, support: FloatArray, status: Int8Array,
+    beam_width: FloatArray, free: FloatArray, support: FloatArray, located: FloatArray,
+    status: Int8Array,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
     atm_bound: float, with_atm: bool,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
            FloatArray, FloatArray, FloatArray, FloatArray]:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
-    The surviving bins form runs; with several (a *split* arc), the run with the most support
-    plus ATM crossings is kept (ties: the longest, then the first). The point is the middle of
-    that run (eq. 3.6), or the median of the ATM crossings inside it where that bound is
-    smaller. The bound covers every surviving run (the echo may be in any of them), widened by
-    half a bin on each side: ``2 r sin(e/2)`` with ``e`` the largest angle from the point to the
-    far end of the surviving hull plus ``Δ/2`` (eq. 5.3).
+    The surviving bins form runs; with several (a *split* arc), the run with the most
+    localised support (``located``) plus ATM crossings is kept (ties: the longest, then the
+    first). The point is the middle of that run (eq. 3.6), or the median of the ATM crossings
+    inside it where that bound is smaller. The bound covers every surviving run (the echo may
+    be in any of them), widened by half a bin on each side: ``2 r sin(e/2)`` with ``e`` the
+    largest angle from the point to the far end of the surviving hull plus ``Δ/2`` (eq. 5.3).
 
     Returns
     -------
@@ -784,7 +796,7 @@ def evidence_estimates(
             top = 0.0
             while k < bins and free[s, k] < threshold:
                 score += in_bin[k]
-                top = max(top, support[s, k])
+                top = max(top, located[s, k])
                 k += 1
             score += top
             runs += 1

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -234,6 +235,7 @@ class EvidenceModel(ArcModel):
         self.ey = np.zeros((size, bins))
         self.free = np.zeros((size, bins))
         self.support = np.zeros((size, bins))
+        self.located = np.zeros((size, bins))
         self.circle = np.zeros((size, 3))
         self.cos_axis = np.zeros(size)
         self.sin_axis = np.zeros(size)
@@ -258,14 +260,15 @@ class EvidenceModel(ArcModel):
         self._crossings = 0
         self._occluded_bins = 0
 
-    def _arrays(self) -> tuple[np.ndarray, ...]:
-        """The history's rows and the per-arc state, in :func:`evidence_add`'s order."""
+    def _arrays(self) -> tuple[Any, ...]:
+        """The history's rows, the per-arc state and the model, in :func:`evidence_add`'s
+        order (after its first two arguments)."""
         h = self.history
         return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
                 self.others, self.through, self.passed, self.trans, self.bx, self.by, self.ex,
-                self.ey, self.free, self.support, self.circle, self.cos_axis, self.sin_axis,
-                self.cos_half, self.status, self.touched, self.occluded, self.bearings,
-                self.counts)
+                self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
+                self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
+                self.bearings, self.counts, self.params, self.with_atm)
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -275,12 +278,12 @@ class EvidenceModel(ArcModel):
 
     def on_add(self, slot: int, older: SlotArray) -> None:
         """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs."""
-        self._count(evidence_add(slot, older, *self._arrays(), self.params, self.with_atm))
+        self._count(evidence_add(slot, older, *self._arrays()))
 
     def on_add_many(self, first: int, count: int) -> None:
         """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
         self._count(evidence_add_many(first, count, self.history.capacity, self._wrapped,
-                                      *self._arrays(), self.params, self.with_atm))
+                                      *self._arrays()))
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
@@ -298,8 +301,8 @@ class EvidenceModel(ArcModel):
         h = self.history
         return evidence_estimates(
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
-            self.free, self.support, self.status, self.bearings, self.counts, self.threshold,
-            self.atm_bound, self.with_atm,
+            self.free, self.support, self.located, self.status, self.bearings, self.counts,
+            self.threshold, self.atm_bound, self.with_atm,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
