@@ -242,7 +242,9 @@ def process(
     log); map filters need the whole map, so with them it is held in memory until the end.
 
     The summary's "unprocessed (mean % of history rows)" is the paper's Table I latency: the
-    share of the history's arcs that no newer reading has sharpened yet, averaged over the run.
+    share of the history's arcs that no newer reading has sharpened yet, averaged over samples
+    taken every 1,009 readings (every tenth of the history, rounded up to a prime, for
+    histories over 10,090 arcs).
     Arcs carving removed (fully carved or split) count as processed; the paper's history drops
     them instead, which gives a larger share for carving (docs/RESULTS.md reports both).
 
