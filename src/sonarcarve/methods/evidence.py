@@ -137,19 +137,19 @@ class ConfidenceModel:
     """
 
     # Fitted (see above): office tour, specular physics, seeds 0-2, 38,459 arcs.
-    intercept: float = -3.605
-    support: float = 0.280
-    viewpoints: float = 0.939
-    crossings: float = 0.657
-    free: float = -0.400
-    looked: float = 0.286
-    split: float = -0.551
-    occluded: float = -0.483
-    unheard: float = -0.021
-    range: float = -0.067
-    width: float = 0.560
-    others: float = 3.384
-    through: float = 0.285
+    intercept: float = -3.607
+    support: float = 0.282
+    viewpoints: float = 0.938
+    crossings: float = 0.664
+    free: float = -0.372
+    looked: float = 0.281
+    split: float = -0.556
+    occluded: float = -0.480
+    unheard: float = -0.023
+    range: float = -0.065
+    width: float = 0.557
+    others: float = 3.378
+    through: float = 0.283
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 1.0
 
