@@ -67,8 +67,8 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     f"map shows {APPROACH_DISTANCE:g} m before a door), approach.gif, "
     "fig5-occupancy-grids.png (both grids over the true walls), carved-grid.yaml/.pgm and "
     "range-sensor-layer.yaml/.pgm (the grids as ROS map_server maps), summary.md and "
-    "summary.json. Takes about 10 s for the office tour (more the first time, while numba "
-    "compiles).\n\n"
+    "summary.json. Takes about 10 s for the office tour on 2 cores (longer on a loaded "
+    "machine, and the first time, while numba compiles).\n\n"
     "Example: `sonarcarve demo --world t-junction --seed 3 --out /tmp/demo`"
 ))
 def demo(
@@ -80,8 +80,8 @@ def demo(
         help="Seeds the simulated noise and spurious echoes: same seed, same numbers.")] = 0,
     out: Annotated[str, typer.Option(
         "--out", "-o", metavar="FOLDER",
-        help="Folder for the figures, summary.md and summary.json (created with its missing "
-             "parents; files of the same names are replaced).")] = "demo-output",
+        help="Folder for the figures, the grid maps, summary.md and summary.json (created "
+             "with its missing parents; files of the same names are replaced).")] = "demo-output",
     history: Annotated[int, typer.Option(
         metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")] = 250,
 ) -> None:
