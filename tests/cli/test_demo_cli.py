@@ -100,11 +100,13 @@ def test_cli_writes_each_grid_as_a_trinary_map_server_map(tmp_path: Path) -> Non
 def test_cli_help_teaches_the_columns() -> None:
     from typer.testing import CliRunner
 
+    import sonarcarve.cli.demo  # noqa: F401  (registers the command, as main() does lazily)
     from sonarcarve.cli.app import app
 
     result = CliRunner().invoke(app, ["demo", "--help"], terminal_width=100)
     assert result.exit_code == 0
-    for phrase in ("unprocessed", "spurious removed", "true lost", "Example", "--history"):
+    for phrase in ("unprocessed", "spurious removed", "true lost", "Example", "--history",
+                   "RangeSensorLayer", "precision", "recall", "map_server"):
         assert phrase in result.output
 
 
