@@ -160,13 +160,19 @@ def _add_arc(
     cos_psi: float,
     bearings: npt.NDArray[np.float32],
     counts: npt.NDArray[np.int32],
-) -> int:
+    tally: npt.NDArray[np.int32],
+) -> tuple[int, int]:
     """Intersect the arc in ``slot`` with the ``older[:found]`` arcs and store the kept
     crossings.
 
     Kept: ``|cos γ| ≤ cos ψ`` (transversal angle ≥ ψ) and inside both full beams (eq. 2.1). Each
     kept crossing is appended to both rows of ``bearings`` as a bearing relative to that arc's
-    axis. Returns the number of crossings kept.
+    axis. Returns ``(kept, 0)``: the number of crossings kept.
+
+    When a row is full, nothing of this arc stays: its partners' rows lose the crossings stored
+    with it (the last ones of each row; ``tally[k]`` counts, for ``older[k]``, the crossings
+    found and stored) and the call returns ``(0, needed)``, the columns the store needs to hold
+    them all; the caller grows it and calls again.
 
     Most pairs fail the transversal test, so it comes first and costs no square root or trig:
     with ``cos γ = (rj² + ri² − d²) / (2 rj ri)`` it reads ``|rj² + ri² − d²| ≤ 2 rj ri cos ψ``,
@@ -178,7 +184,10 @@ def _add_arc(
     xj, yj, rj = x[slot], y[slot], r[slot]
     cj, sj, hj = cos_axis[slot], sin_axis[slot], cos_half[slot]
     kept = 0
+    full = False
     for k in range(found):
+        tally[k, 0] = 0
+        tally[k, 1] = 0
         i = older[k]
         ri = r[i]
         dx = x[i] - xj
@@ -204,26 +213,25 @@ def _add_arc(
             along_i = qx * cos_axis[i] + qy * sin_axis[i]
             if along_i < ri * cos_half[i]:
                 continue
-            # _add_arcs makes room for every crossing first (_room_needed), so these guards
-            # never drop one; they only keep a bad caller from writing out of bounds.
-            if counts[slot] < width:
-                bearings[slot, counts[slot]] = math.atan2(cj * py - sj * px, along_j)
-                counts[slot] += 1
-            if counts[i] < width:
-                bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
-                counts[i] += 1
             kept += 1
-    return kept
-
-
-@compiled_inline
-def _room_needed(slot_found: int, candidates: SlotArray, counts: npt.NDArray[np.int32]) -> int:
-    """Columns the crossing store needs before a new arc meets ``slot_found`` older arcs: two
-    crossings a pair at most, for the new arc and for each partner."""
-    needed = 2 * slot_found
-    for k in range(slot_found):
-        needed = max(needed, counts[candidates[k]] + 2)
-    return needed
+            tally[k, 0] += 1
+            full = full or counts[slot] >= width or counts[i] >= width
+            if full:
+                continue  # only counted from now on: see the docstring
+            bearings[slot, counts[slot]] = math.atan2(cj * py - sj * px, along_j)
+            counts[slot] += 1
+            bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
+            counts[i] += 1
+            tally[k, 1] += 1
+    if not full:
+        return kept, 0
+    needed = kept
+    for k in range(found):
+        i = older[k]
+        counts[i] -= tally[k, 1]
+        needed = max(needed, counts[i] + tally[k, 0])
+    counts[slot] = 0
+    return 0, needed
 
 
 @compiled
@@ -233,7 +241,8 @@ def _add_arcs(
     theta1: FloatArray, theta2: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
-    index_arrays: IndexArrays, candidates: SlotArray, use_index: bool,
+    index_arrays: IndexArrays, candidates: SlotArray, tally: npt.NDArray[np.int32],
+    use_index: bool,
 ) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
@@ -249,12 +258,11 @@ def _add_arcs(
 
     Returns ``(kept, done, needed)``: the crossings kept, the sequence number after the last arc
     done (``first + count`` when all are) and, when it stops early, the columns ``bearings``
-    needs for arc ``done`` (0 otherwise). It stops *before* an arc whose crossings might not
-    fit, having changed nothing of that arc that a second call would not redo the same way, so
-    the caller grows the store and calls again from ``done``.
+    needs for arc ``done`` (0 otherwise). It stops at an arc whose crossings do not fit, having
+    taken them back (:func:`_add_arc`) and changed nothing else of that arc that a second call
+    would not redo the same way, so the caller grows the store and calls again from ``done``.
     """
     storage = x.shape[0]
-    width = bearings.shape[1]
     index = ArcIndex(*index_arrays)
     kept = 0
     for sequence in range(first, first + count):
@@ -272,11 +280,11 @@ def _add_arcs(
             for older in range(max(0, sequence - capacity + 1), sequence):
                 candidates[found] = older % storage
                 found += 1
-        needed = _room_needed(found, candidates, counts)
-        if needed > width:
+        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
+                                    found, cos_psi, bearings, counts, tally)
+        if needed:
             return kept, sequence, needed
-        kept += _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates, found,
-                         cos_psi, bearings, counts)
+        kept += arc_kept
         if use_index:
             index_insert(index, slot, xmin, xmax, ymin, ymax)
     return kept, first + count, 0
@@ -330,12 +338,13 @@ class AtmModel(ArcModel):
 
     State does not grow with the length of the log: ``bearings`` has one row per history slot
     and a column per crossing the busiest arc has kept (``counts``). It starts with
-    :data:`INITIAL_COLUMNS` and doubles when an arc is about to meet more partners than its row
-    can hold: an arc meets at most ``capacity − 1`` older arcs when it arrives and
-    ``capacity − 1`` newer ones while it is live, and two circles cross at most twice, so it
-    never needs more than ``4 (capacity − 1)`` (both crossings of one pair can lie in both beams
-    when two sensors face each other), and in practice far fewer (a history of 10,000 arcs keeps
-    a few MB where room for every possible crossing would take 3 GB).
+    :data:`INITIAL_COLUMNS` and doubles when a crossing does not fit (the arc being added is
+    then taken back and added again). An arc meets at most ``capacity − 1`` older arcs when it
+    arrives and ``capacity − 1`` newer ones while it is live, and two circles cross at most
+    twice, so it never needs more than ``4 (capacity − 1)`` (both crossings of one pair can lie
+    in both beams when two sensors face each other), and in practice far fewer: on the benchmark
+    stream at a history of 10,000 arcs the busiest arc keeps about 200, a store of a few tens of
+    MB where room for every possible crossing would take 3.2 GB.
 
     Crossings found with a partner that later leaves the history stay with the arc: they were
     found while both were live. A row is reset only when its slot is reused by a new arc.
@@ -378,6 +387,8 @@ class AtmModel(ArcModel):
         self._use_index = self.min_transversal >= MIN_INDEXED_TRANSVERSAL
         self.index = make_index(history.storage_size)
         self._candidates = np.zeros(history.storage_size, dtype=np.int64)
+        # Crossings found and stored with each candidate, to take them back (_add_arc).
+        self._tally = np.zeros((history.storage_size, 2), dtype=np.int32)
         self._kept = 0
 
     def on_add(self, slot: int, older: SlotArray) -> None:
@@ -397,7 +408,7 @@ class AtmModel(ArcModel):
                 first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
                 h.theta2, self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi,
                 self.bearings, self.counts, index_arrays(self.index), self._candidates,
-                self._use_index,
+                self._tally, self._use_index,
             )
             self._kept += kept
             if first < end:
