@@ -14,11 +14,15 @@ every grid's occupied cells (0.10 m, and 0.05 m with ``--resolutions 0.1 0.05``)
 no unexplained point within 0.25 m of where the obstacle was, for good; appeared: a point within
 0.25 m of it away from the walls), and the phantom share over time.
 
-``--no-echo`` records and feeds the firings that heard nothing too (range inf, free space up to
-the robot's max range) and adds the range sensor layer with +Inf clearing
-(``inf_is_max_reading`` and ``clear_on_max_reading``)::
+By default the firings that heard nothing are recorded and fed too (range inf, free space up to
+the robot's max range), as a real driver publishes them (ROS REP 117: +Inf), and the range
+sensor layer with +Inf clearing (``inf_is_max_reading`` and ``clear_on_max_reading``) joins the
+grids; the layer with ROS's defaults drops them. ``--echoes-only`` feeds the echoes alone (the
+default before issue 10's clearing work; a log that drops silent firings)::
 
-    .venv/bin/python benchmarks/changing_scenes.py --no-echo --no-figure
+    .venv/bin/python benchmarks/changing_scenes.py --echoes-only --no-figure
+
+``--no-echo`` is accepted and means the default.
 """
 
 from __future__ import annotations
@@ -66,14 +70,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--resolutions", type=float, nargs="+", default=[0.1])
     parser.add_argument("--figure", type=Path, default=FIGURE)
     parser.add_argument("--no-figure", action="store_true")
-    parser.add_argument("--no-echo", action="store_true",
-                        help="also feed the firings that heard nothing (free space)")
+    echoes = parser.add_mutually_exclusive_group()
+    echoes.add_argument("--no-echo", action="store_true",
+                        help="also feed the firings that heard nothing (the default)")
+    echoes.add_argument("--echoes-only", action="store_true",
+                        help="feed only the firings that heard an echo")
     args = parser.parse_args(argv)
+    args.no_echo = not args.echoes_only
     seeds = range(args.seeds)
     grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
     if args.no_echo:
         print("\nWith no-echo readings (every firing that heard nothing: free space up to the "
               "robot's max range).")
+    else:
+        print("\nEchoes only (the firings that heard nothing are not fed).")
     for h_index, h in enumerate(args.resolutions):
         methods = METHOD_NAMES if h_index == 0 else ()
         runs = {name: [run_changing_scene(name, seed, h, methods=methods, grids=grids,
