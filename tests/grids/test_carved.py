@@ -252,3 +252,25 @@ def test_a_jamb_arc_carved_away_leaves_the_door_open() -> None:
         for k in range(3)))
     np.testing.assert_allclose(grid.live_log_odds[door], 0.0, atol=1e-12)
     assert not np.any(trinary(grid)[door] == OCCUPIED)
+
+
+def test_free_space_covers_exactly_the_beams_cells_whatever_its_bearing() -> None:
+    # One silent beam on a fresh grid: every cell whose centre lies in the sector (nearer than
+    # max_range, within φ/2 of the axis) gets γ(α) f(d) logit(0.4), every other cell nothing;
+    # computed here over all cells, against the kernel that visits only each row's stretch.
+    rng = np.random.default_rng(7)
+    l_miss = math.log(0.4 / 0.6)
+    for _ in range(25):
+        grid = CarvedGrid(0.1, BOUNDS)
+        x, y = rng.uniform(0.0, 3.0), rng.uniform(-1.0, 1.0)
+        theta, reach = rng.uniform(-math.pi, math.pi), rng.uniform(0.3, 3.0)
+        grid.add_many(ReadingBatch.from_readings([_silent(0.0, theta, x, y, reach)]))
+        xs, ys = grid.cell_centers()
+        cx, cy = np.meshgrid(xs, ys)
+        d = np.hypot(cx - x, cy - y)
+        alpha = np.angle(np.exp(1j * (np.arctan2(cy - y, cx - x) - theta)))
+        inside = (d < reach) & (np.abs(alpha) <= PHI / 2)
+        fade = 0.5 * (1.0 - np.tanh(2.0 * (d - 1.2)))
+        expected = np.where(inside, (1.0 - (alpha / (PHI / 2)) ** 2) * fade * l_miss, 0.0)
+        edge = (np.abs(d - reach) < 1e-6) | (np.abs(np.abs(alpha) - PHI / 2) < 1e-6)
+        np.testing.assert_allclose(grid.log_odds[~edge], expected[~edge], atol=1e-6)
