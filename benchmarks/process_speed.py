@@ -19,9 +19,9 @@ the baseline (if given):
   method's own rate and the unprocessed share as the command's summary prints them (method
   only: no parsing, sampling or writing), and whether the map is byte-identical to the
   baseline's;
-- times, in a child process, reading and validating the CSV alone (``iter_readings_csv``, best
-  of ``--repeats``) and writing the largest map alone (``write_map_csv``, best of
-  ``--repeats``);
+- times (CPU seconds), in a child process, reading and validating the CSV alone
+  (``iter_readings_csv``, best of ``--repeats``) and writing the largest map alone
+  (``write_map_csv``, best of ``--repeats``);
 - times ``sonarcarve --version`` and ``sonarcarve --help`` in fresh processes (median of 9,
   after one warm-up run).
 
@@ -173,8 +173,8 @@ def main(argv: list[str] | None = None) -> int:
                       f"{_summary_number(summary, 'unprocessed (mean % of history rows)'):.1f}"
                       f" | {rows:,} | {same} |", flush=True)
 
-        print(f"\n| code | stage (in a child, best of {args.repeats}) | rows/s | seconds | "
-              "MiB/s |")
+        print(f"\n| code | stage (in a child, best of {args.repeats}) | rows per CPU second | "
+              "CPU seconds | MiB per CPU second |")
         print("|---|---|---:|---:|---:|")
         largest = max(folder.glob("map-*-after.csv"), key=lambda path: path.stat().st_size)
         shutil.copy(largest, folder / "largest-map.csv")
@@ -220,9 +220,10 @@ def _drain(batches: Iterable[object]) -> None:
 
 
 def _timed(action: Callable[[], object]) -> float:
-    tic = time.perf_counter()
+    """CPU seconds of ``action`` (one thread: steadier than wall time on a shared machine)."""
+    tic = time.process_time()
     action()
-    return time.perf_counter() - tic
+    return time.process_time() - tic
 
 
 if __name__ == "__main__":
