@@ -400,3 +400,29 @@ def test_psi_zero_keeps_every_crossing_with_an_infinite_bound() -> None:
     assert est.processed.tolist() == [True, True, False, True]
     assert est.max_error[0] == math.inf
     assert atm_error_bound(0.0, 0.0) == 0.0
+
+
+def test_cached_medians_follow_every_change_of_the_crossings() -> None:
+    # estimates() recomputes only the rows whose crossings changed; after every reading its
+    # medians and spans must equal numpy's over the stored crossings, row by row.
+    method = AtmMethod(history_size=12, beam_width=PHI, min_transversal=math.radians(20.0),
+                       range_resolution=INCH)
+    model = _atm(method)
+    for k, reading in enumerate(_cluttered_stream(80, seed=3)):
+        method.add(reading)
+        if k % 3:
+            continue
+        slots = method.history.slots()
+        est = model.estimates(slots)
+        for j, slot in enumerate(slots):
+            c = model.counts[slot]
+            if c == 0:
+                assert not est.processed[j]
+                continue
+            values = model.bearings[slot, :c].astype(np.float64)
+            axis = method.history.theta[slot] + np.median(values)
+            r = method.history.r[slot]
+            xy = (method.history.x[slot] + r * math.cos(axis),
+                  method.history.y[slot] + r * math.sin(axis))
+            np.testing.assert_allclose(est.xy[j], xy, rtol=0, atol=1e-12)
+            assert est.width[j] == values.max() - values.min()

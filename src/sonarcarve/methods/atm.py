@@ -63,7 +63,7 @@ from sonarcarve.methods.config import (
     check_min_transversal,
     check_range_resolution,
 )
-from sonarcarve.typing import FloatArray, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "INITIAL_COLUMNS",
@@ -161,13 +161,15 @@ def _add_arc(
     bearings: npt.NDArray[np.float32],
     counts: npt.NDArray[np.int32],
     tally: npt.NDArray[np.int32],
+    stale: BoolArray,
 ) -> tuple[int, int]:
     """Intersect the arc in ``slot`` with the ``older[:found]`` arcs and store the kept
     crossings.
 
     Kept: ``|cos γ| ≤ cos ψ`` (transversal angle ≥ ψ) and inside both full beams (eq. 2.1). Each
     kept crossing is appended to both rows of ``bearings`` as a bearing relative to that arc's
-    axis. Returns ``(kept, 0)``: the number of crossings kept.
+    axis, and both rows are marked ``stale`` (their medians must be computed again). Returns
+    ``(kept, 0)``: the number of crossings kept.
 
     When a row is full, nothing of this arc stays: its partners' rows lose the crossings stored
     with it (the last ones of each row; ``tally[k]`` counts, for ``older[k]``, the crossings
@@ -222,6 +224,7 @@ def _add_arc(
             counts[slot] += 1
             bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
             counts[i] += 1
+            stale[i] = True
             tally[k, 1] += 1
     if not full:
         return kept, 0
@@ -242,7 +245,7 @@ def _add_arcs(
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
     index_arrays: IndexArrays, candidates: SlotArray, tally: npt.NDArray[np.int32],
-    use_index: bool,
+    stale: BoolArray, use_index: bool,
 ) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
@@ -270,6 +273,7 @@ def _add_arcs(
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
         counts[slot] = 0
+        stale[slot] = True
         cos_axis[slot] = math.cos(theta[slot])
         sin_axis[slot] = math.sin(theta[slot])
         cos_half[slot] = math.cos(0.5 * beam_width[slot])
@@ -281,7 +285,7 @@ def _add_arcs(
                 candidates[found] = older % storage
                 found += 1
         arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
-                                    found, cos_psi, bearings, counts, tally)
+                                    found, cos_psi, bearings, counts, tally, stale)
         if needed:
             return kept, sequence, needed
         kept += arc_kept
@@ -316,21 +320,21 @@ def _medians(
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray,
     median: FloatArray, span: FloatArray,
 ) -> None:
-    """Median and span (max − min) of each slot's stored bearings into ``median`` and ``span``
-    (shape ``slots.shape``); 0 where it has none."""
+    """Median and span (max − min) of the stored bearings of each of ``slots``, written to
+    ``median[slot]`` and ``span[slot]`` (arrays by slot); 0 where it has none."""
     values = np.empty(bearings.shape[1])
     for k in range(slots.shape[0]):
         s = slots[k]
         c = counts[s]
-        median[k] = 0.0
-        span[k] = 0.0
+        median[s] = 0.0
+        span[s] = 0.0
         if c == 0:
             continue
         for i in range(c):
             values[i] = bearings[s, i]
         _shell_sort(values, c)
-        median[k] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
-        span[k] = values[c - 1] - values[0]
+        median[s] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
+        span[s] = values[c - 1] - values[0]
 
 
 class AtmModel(ArcModel):
@@ -389,6 +393,10 @@ class AtmModel(ArcModel):
         self._candidates = np.zeros(history.storage_size, dtype=np.int64)
         # Crossings found and stored with each candidate, to take them back (_add_arc).
         self._tally = np.zeros((history.storage_size, 2), dtype=np.int32)
+        # Median and span of each row's bearings, valid where the row is not stale.
+        self._median = np.zeros(history.storage_size)
+        self._span = np.zeros(history.storage_size)
+        self._stale = np.ones(history.storage_size, dtype=bool)
         self._kept = 0
 
     def on_add(self, slot: int, older: SlotArray) -> None:
@@ -408,7 +416,7 @@ class AtmModel(ArcModel):
                 first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
                 h.theta2, self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi,
                 self.bearings, self.counts, index_arrays(self.index), self._candidates,
-                self._tally, self._use_index,
+                self._tally, self._stale, self._use_index,
             )
             self._kept += kept
             if first < end:
@@ -424,11 +432,15 @@ class AtmModel(ArcModel):
 
     def estimates(self, slots: SlotArray) -> Estimates:
         h = self.history
-        # A writable int64 copy: one compiled version of _medians, whatever the caller passes.
-        slots = np.array(slots, dtype=np.int64)
-        median = np.empty(len(slots))
-        span = np.empty(len(slots))
-        _medians(self.bearings, self.counts, slots, median, span)
+        # Medians only of the rows whose crossings changed since they were last asked for
+        # (a writable int64 array: one compiled version of _medians, whatever the caller
+        # passes): local_map() at a history of 10,000 re-sorted every arc's crossings.
+        stale = np.array(slots[self._stale[slots]], dtype=np.int64)
+        if len(stale):
+            _medians(self.bearings, self.counts, stale, self._median, self._span)
+            self._stale[stale] = False
+        median = self._median[slots]
+        span = self._span[slots]
         has = self.counts[slots] > 0
         beam = h.beam_width[slots]
         return Estimates(
