@@ -21,12 +21,13 @@ mapped by every variant; the tables give means over seeds, per world and physics
 Variants: ``carve`` (paper), ``carve β=30°`` (specular-aware), ``combined`` (paper, carving and
 ATM); evidence carving with each part alone on top of the free-space evidence (``evidence
 only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission, no confidence
-filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``) and ``evidence`` (all
-together, the library defaults). A last table gives the roboND-sonar-8 log's line spread
-(the sharpness measure of ``lab/experiments/real_log.py``) and a throughput table times
-``carve``, ``combined`` and ``evidence`` at history 250 on ``throughput.py``'s stream (after a
-warm-up, the three interleaved, the best of 5 runs each: on a shared machine the fastest run
-is the one least slowed by other processes).
+filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``), ``evidence`` (all
+together, the library defaults) and the same with each point at its run's middle (eq. 3.6)
+instead of at the median of its localised support. A last table gives the roboND-sonar-8
+log's line spread (the sharpness measure of ``lab/experiments/real_log.py``) and a throughput
+table times ``carve``, ``combined`` and ``evidence`` at history 250 on ``throughput.py``'s
+stream (after a warm-up, the three interleaved, the best of 5 runs each: on a shared machine
+the fastest run is the one least slowed by other processes).
 """
 
 from __future__ import annotations
@@ -74,6 +75,10 @@ VARIANTS: dict[str, Factory] = {
     "+ATM": _evidence(atm=True),
     "+confidence": _evidence(confidence=True),
     "evidence (all)": lambda c: make_method("evidence", c),
+    "all, point at the run's middle": lambda c: EvidenceMethod(
+        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+        c.stamp_error, with_located_placement=False),
 }
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 COLUMNS = ("direct_kept", "crosstalk", "floor", "multipath", "spurious", "median_ratio",

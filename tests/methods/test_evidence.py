@@ -280,3 +280,29 @@ def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one()
     local = method.local_map()
     row = local.reading_id.tolist().index(0)
     assert local.xy[row, 1] < 0.0  # the point is on the lower, located piece
+
+
+def test_a_point_goes_where_crossing_echoes_locate_the_surface() -> None:
+    # A wall at x = 2 heard head-on from the origin (sensor 0), then by two other sensors whose
+    # echoes cross its arc near its upper edge at a wide angle: the point moves there (with
+    # the placement switched off it stays at the beam's middle); its bound still covers the
+    # whole arc.
+    points = {}
+    for located in (True, False):
+        method = EvidenceMethod(min_confidence=0.0, with_atm=False,
+                                with_located_placement=located)
+        method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+        target = (2.0 * math.cos(0.15), 2.0 * math.sin(0.15))
+        for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1))):
+            method.add(_reading(0.1 + 0.05 * k, ox, oy,
+                                math.atan2(target[1] - oy, target[0] - ox),
+                                math.hypot(target[0] - ox, target[1] - oy), sensor=1 + k))
+        local = method.local_map()
+        row = local.reading_id.tolist().index(0)
+        points[located] = (local.xy[row], local.max_error[row])
+    (moved, bound), (middle, _) = points[True], points[False]
+    assert abs(middle[1]) < 0.02  # eq. 3.6: the middle of the beam
+    assert moved[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.05)
+    # The bound covers the far end of the arc from the moved point.
+    bearing = math.atan2(moved[1], moved[0])
+    assert bound >= 2.0 * 2.0 * math.sin((bearing + PHI / 2) / 2) - 1e-9

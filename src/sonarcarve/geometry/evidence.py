@@ -709,21 +709,41 @@ def evidence_free(
     return fully
 
 
+@compiled_inline
+def _located_median(located: FloatArray, s: int, start: int, end: int, lo_axis: float,
+                    step: float, mid: float) -> float:
+    """Bearing of the median of the localised support over bins ``start .. end - 1`` of arc
+    ``s`` (``mid`` where there is none)."""
+    total = 0.0
+    for k in range(start, end):
+        total += located[s, k]
+    if total <= 0.0:
+        return mid
+    acc = 0.0
+    for k in range(start, end):
+        acc += located[s, k]
+        if acc >= 0.5 * total:
+            return lo_axis + (k + 0.5) * step
+    return mid
+
+
 @compiled
 def evidence_estimates(
     slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
     beam_width: FloatArray, free: FloatArray, support: FloatArray, located: FloatArray,
     status: Int8Array,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
-    atm_bound: float, with_atm: bool,
+    atm_bound: float, with_atm: bool, place_located: bool = False,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
            FloatArray, FloatArray, FloatArray, FloatArray]:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
     localised support (``located``) plus ATM crossings is kept (ties: the longest, then the
-    first). The point is the middle of that run (eq. 3.6), or the median of the ATM crossings
-    inside it where that bound is smaller. The bound covers every surviving run (the echo may
+    first). The point is the middle of that run (eq. 3.6) or, with ``place_located``, the bin
+    at the median of the run's localised support (where crossing echoes put the surface; the
+    middle where it has none), or the median of the ATM crossings inside it where that bound is
+    smaller. The bound covers every surviving run (the echo may
     be in any of them), widened by half a bin on each side: ``2 r sin(e/2)`` with ``e`` the
     largest angle from the point to the far end of the surviving hull plus ``Δ/2`` (eq. 5.3).
 
@@ -820,6 +840,8 @@ def evidence_estimates(
         hull_lo = lo_axis + first * step
         hull_hi = lo_axis + last * step
         mid = 0.5 * (lo + hi)
+        if place_located:
+            mid = _located_median(located, s, best_start, best_end, lo_axis, step, mid)
         width[q] = hi - lo
         top = 0.0
         mean_free = 0.0

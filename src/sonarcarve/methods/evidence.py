@@ -15,8 +15,11 @@ Per arc (see the geometry module for the equations):
 * transmission: a newer beam that passed a bin obliquely and whose echo beyond it is confirmed
   by other sensors says the sound went through (times ``cos γ``, so a beam running along a
   wall does not carve it);
-* split arcs are kept: the surviving run with the most support and ATM crossings, its bound
-  covering every surviving run (honest: the echo may lie in any of them);
+* split arcs are kept: the surviving run with the most localised support (support times the
+  sine of the angle at which the echo circles meet: tangent repeats of one range say nothing of
+  the bearing) and ATM crossings, its bound covering every surviving run (honest: the echo may
+  lie in any of them); the point sits at the median of the run's localised support (the
+  run's middle, eq. 3.6, where it has none), the bound measured from there;
 * ATM crossings counted only inside the kept run; a crossing confirms the run and, when its
   bound is smaller, places the point (``source = atm``);
 * a confidence per point: a logistic model of the evidence the arc has gathered (support,
@@ -199,6 +202,11 @@ class EvidenceModel(ArcModel):
         Find and use ATM crossings.
     with_occlusion : bool
         Carve bins behind established surfaces (the multipath rule).
+    with_transmission : bool
+        Transmission evidence (a newer echo confirmed by other sensors behind a bin).
+    place_located : bool
+        Place each point at the median of its kept run's localised support (where it has
+        any) instead of the run's middle (eq. 3.6).
     sensor : SensorModel
         The detection model.
     """
@@ -208,13 +216,14 @@ class EvidenceModel(ArcModel):
     def __init__(self, history: SonarHistory, bins: int, range_tolerance: float,
                  carve_probability: float, min_transversal: float, range_resolution: float,
                  *, with_atm: bool = True, with_occlusion: bool = True,
-                 with_transmission: bool = True,
+                 with_transmission: bool = True, place_located: bool = True,
                  sensor: SensorModel | None = None) -> None:
         super().__init__(history)
         sensor = SensorModel() if sensor is None else sensor
         self.bins = bins
         self.threshold = evidence_threshold(carve_probability)
         self.with_atm = with_atm
+        self.place_located = place_located
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
         self.params = EvidenceParams(
             tolerance=range_tolerance, support_tolerance=sensor.support_tolerance,
@@ -302,7 +311,7 @@ class EvidenceModel(ArcModel):
         return evidence_estimates(
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
-            self.threshold, self.atm_bound, self.with_atm,
+            self.threshold, self.atm_bound, self.with_atm, self.place_located,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -352,8 +361,8 @@ class EvidenceMethod(SonarMethod):
     stamp_error : float
         Upper bound on the position-stamping error of a reading, metres (Appendix A), added to
         every point's bound.
-    with_atm, with_occlusion : bool
-        Switch parts off (ablation).
+    with_atm, with_occlusion, with_transmission, with_located_placement : bool
+        Switch parts off (ablation); see :class:`EvidenceModel`.
     sensor : SensorModel, optional
         The detection model.
     confidence_model : ConfidenceModel, optional
@@ -377,6 +386,7 @@ class EvidenceMethod(SonarMethod):
         with_atm: bool = True,
         with_occlusion: bool = True,
         with_transmission: bool = True,
+        with_located_placement: bool = True,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -389,6 +399,7 @@ class EvidenceMethod(SonarMethod):
         self.with_atm = with_atm
         self.with_occlusion = with_occlusion
         self.with_transmission = with_transmission
+        self.with_located_placement = with_located_placement
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -400,6 +411,7 @@ class EvidenceMethod(SonarMethod):
                               c.carve_probability, c.min_transversal, c.range_resolution,
                               with_atm=self.with_atm, with_occlusion=self.with_occlusion,
                               with_transmission=self.with_transmission,
+                              place_located=self.with_located_placement,
                               sensor=self.sensor),)
 
     def features(self, slots: SlotArray,
