@@ -15,7 +15,7 @@ the baseline (if given):
   process (after a warm-up run on the first 2,000 readings, which compiles numba's kernels)
   and reports its wall time as readings/s end to end, its CPU time (user + system: the command
   runs on one core, so on an idle machine the two agree, and on a busy one CPU time is the
-  steadier), its peak resident memory (the child's own ``ru_maxrss`` from ``os.wait4``), the
+  steadier), its peak resident memory (the child's own VmHWM, read at its exit), the
   method's own rate and the unprocessed share as the command's summary prints them (method
   only: no parsing, sampling or writing), and whether the map is byte-identical to the
   baseline's;
@@ -48,7 +48,25 @@ from pathlib import Path
 
 METHODS = ("centerline", "carve", "atm", "combined", "evidence")
 _REPO = Path(__file__).resolve().parent.parent
-_CLI = "import sys; from sonarcarve.cli import main; sys.argv[0] = 'sonarcarve'; sys.exit(main())"
+#: ``sonarcarve`` in a child that writes its peak resident memory (VmHWM, KiB) at exit to the
+#: file named by ``$BENCH_PEAK_FILE``. Not ``ru_maxrss``: Linux carries the parent's resident
+#: size over the fork into the child's ``ru_maxrss``, so every child would read at least the
+#: benchmark's own size (the 1M-reading stream it generated).
+_CLI = """\
+import atexit, os, sys
+
+def _peak():
+    if "BENCH_PEAK_FILE" in os.environ:
+        with open("/proc/self/status") as status:
+            kib = next(line.split()[1] for line in status if line.startswith("VmHWM:"))
+        with open(os.environ["BENCH_PEAK_FILE"], "w") as out:
+            out.write(kib)
+
+atexit.register(_peak)
+from sonarcarve.cli import main
+sys.argv[0] = "sonarcarve"
+sys.exit(main())
+"""
 
 
 @dataclass(frozen=True)
@@ -82,7 +100,10 @@ def _side(label: str, commit: str | None, folder: Path) -> Side:
 
 
 def _run_child(command: list[str], env: dict[str, str]) -> tuple[float, float, int, str]:
-    """Wall seconds, CPU seconds, peak RSS in bytes and stdout of one child process."""
+    """Wall seconds, CPU seconds, peak RSS in bytes (the child's own VmHWM, 0 if it wrote
+    none) and stdout of one child process."""
+    peak_file = Path(tempfile.mkstemp(prefix="sonarcarve-bench-peak-")[1])
+    env = {**env, "BENCH_PEAK_FILE": str(peak_file)}
     tic = time.perf_counter()
     with tempfile.TemporaryFile() as out:
         child = subprocess.Popen(command, stdout=out, stderr=subprocess.PIPE, env=env)
@@ -96,7 +117,9 @@ def _run_child(command: list[str], env: dict[str, str]) -> tuple[float, float, i
         out.seek(0)
         text = out.read().decode()
     cpu = usage.ru_utime + usage.ru_stime
-    return seconds, cpu, usage.ru_maxrss * 1024, text  # ru_maxrss is in KiB on Linux
+    kib = peak_file.read_text().strip()
+    peak_file.unlink()
+    return seconds, cpu, int(kib or 0) * 1024, text
 
 
 def _summary_number(summary: str, label: str) -> float:
