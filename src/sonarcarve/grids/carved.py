@@ -255,8 +255,9 @@ class CarvedGridParams:
         docstring); False: the fade everywhere (the grid before issue 10's clearing work).
     p_miss_heard : float
         Probability one on-axis beam that would have heard a cell's surface and passed it leaves
-        the cell, in (0, 0.5); 0.2 (measured: 0.4, octomap's miss, leaves the changing-scenes box
-        marked 4-7 s after the robot passed it, 0.2 clears it at 0.10 m).
+        the cell, in (0, 0.5); 0.2. Measured on the changing-scenes box with no-echo readings,
+        seeds 0-2: 0.4 (octomap's miss) never clears it, 0.2 clears it 4.4 s after the robot
+        passes at 0.10 m (4.4-6.2 s at 0.05 m), 0.12 gives 3.0-4.4 s.
     band_profile : float
         0 (default): every cell of the carved band gets the same value. ``k > 0``: a cell at
         ``u`` (-1..1) across the widened carved interval gets ``min(1, k (1 - u²))`` of it, the
