@@ -23,11 +23,12 @@ ATM); evidence carving with each part alone on top of the free-space evidence (`
 only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission, no confidence
 filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``), ``evidence`` (all
 together, the library defaults) and the same with each point at its run's middle (eq. 3.6)
-instead of at the median of its localised support. A last table gives the roboND-sonar-8
-log's line spread (the sharpness measure of ``lab/experiments/real_log.py``) and a throughput
-table times ``carve``, ``combined`` and ``evidence`` at history 250 on ``throughput.py``'s
-stream (after a warm-up, the three interleaved, the best of 5 runs each: on a shared machine
-the fastest run is the one least slowed by other processes).
+instead of at the median of its localised support (once its beam is cut). A last table gives
+the roboND-sonar-8 log's line spread (the sharpness measure of
+``lab/experiments/real_log.py``) and a throughput table times ``carve``, ``combined`` and
+``evidence`` at history 250 on ``throughput.py``'s stream (after a warm-up, the three
+interleaved, the best of 5 runs each: on a shared machine the fastest run is the one least
+slowed by other processes).
 """
 
 from __future__ import annotations

@@ -282,27 +282,39 @@ def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one()
     assert local.xy[row, 1] < 0.0  # the point is on the lower, located piece
 
 
+def _wall_with_crossings(located: bool, *, carve_lower: bool) -> tuple[np.ndarray, float]:
+    """A wall at x = 2 heard head-on from the origin (sensor 0); optionally its lower half seen
+    through head-on by sensor 3; then two other sensors' echoes crossing the arc at a wide
+    angle near bearing 0.15. Returns the point of the first echo and its bound."""
+    method = EvidenceMethod(min_confidence=0.0, with_atm=False, with_located_placement=located)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+    if carve_lower:
+        method.add(_reading(0.05, 0.3, -0.35, 0.0, 4.0, sensor=3))
+    target = (2.0 * math.cos(0.15), 2.0 * math.sin(0.15))
+    for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1))):
+        method.add(_reading(0.1 + 0.05 * k, ox, oy, math.atan2(target[1] - oy, target[0] - ox),
+                            math.hypot(target[0] - ox, target[1] - oy), sensor=1 + k))
+    local = method.local_map()
+    row = local.reading_id.tolist().index(0)
+    return local.xy[row], float(local.max_error[row])
+
+
 def test_a_point_goes_where_crossing_echoes_locate_the_surface() -> None:
-    # A wall at x = 2 heard head-on from the origin (sensor 0), then by two other sensors whose
-    # echoes cross its arc near its upper edge at a wide angle: the point moves there (with
-    # the placement switched off it stays at the beam's middle); its bound still covers the
-    # whole arc.
-    points = {}
-    for located in (True, False):
-        method = EvidenceMethod(min_confidence=0.0, with_atm=False,
-                                with_located_placement=located)
-        method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
-        target = (2.0 * math.cos(0.15), 2.0 * math.sin(0.15))
-        for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1))):
-            method.add(_reading(0.1 + 0.05 * k, ox, oy,
-                                math.atan2(target[1] - oy, target[0] - ox),
-                                math.hypot(target[0] - ox, target[1] - oy), sensor=1 + k))
-        local = method.local_map()
-        row = local.reading_id.tolist().index(0)
-        points[located] = (local.xy[row], local.max_error[row])
-    (moved, bound), (middle, _) = points[True], points[False]
-    assert abs(middle[1]) < 0.02  # eq. 3.6: the middle of the beam
-    assert moved[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.05)
-    # The bound covers the far end of the arc from the moved point.
-    bearing = math.atan2(moved[1], moved[0])
-    assert bound >= 2.0 * 2.0 * math.sin((bearing + PHI / 2) / 2) - 1e-9
+    # Once evidence has cut the arc (its lower half seen through), the point moves to where
+    # the crossing echoes put the surface, not the middle of what is left; the bound still
+    # covers the far end of the surviving piece from there.
+    moved, bound = _wall_with_crossings(True, carve_lower=True)
+    middle, _ = _wall_with_crossings(False, carve_lower=True)
+    assert moved[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.04)
+    assert moved[1] - middle[1] > 0.1  # the run's middle is lower (its lower end was cut)
+    # The bound reaches at least from the point to the lower end of the piece left, which
+    # lies below the middle.
+    below = math.atan2(moved[1], moved[0]) - math.atan2(middle[1], middle[0])
+    assert bound >= 2.0 * 2.0 * math.sin(below) - 1e-9
+
+
+def test_an_uncut_beam_keeps_its_point_in_the_middle() -> None:
+    # Nothing has seen through any of it: crossings on a whole beam may be ghosts (two jambs'
+    # circles meet in the doorway), so the point stays at the beam's middle (eq. 3.6).
+    point, _ = _wall_with_crossings(True, carve_lower=False)
+    assert abs(point[1]) < 0.02

@@ -740,10 +740,12 @@ def evidence_estimates(
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
     localised support (``located``) plus ATM crossings is kept (ties: the longest, then the
-    first). The point is the middle of that run (eq. 3.6) or, with ``place_located``, the bin
-    at the median of the run's localised support (where crossing echoes put the surface; the
-    middle where it has none), or the median of the ATM crossings inside it where that bound is
-    smaller. The bound covers every surviving run (the echo may
+    first). The point is the middle of that run (eq. 3.6) or, with ``place_located`` and once
+    evidence has cut the beam (the run is narrower than it), the bin at the median of the run's
+    localised support (where crossing echoes put the surface; the middle where it has none).
+    On a beam nothing has cut, crossings may be ghosts (two jambs' echo circles meet in the
+    doorway between them), so the middle stays. The ATM median inside the run replaces it
+    where that bound is smaller. The bound covers every surviving run (the echo may
     be in any of them), widened by half a bin on each side: ``2 r sin(e/2)`` with ``e`` the
     largest angle from the point to the far end of the surviving hull plus ``Δ/2`` (eq. 5.3).
 
@@ -840,7 +842,7 @@ def evidence_estimates(
         hull_lo = lo_axis + first * step
         hull_hi = lo_axis + last * step
         mid = 0.5 * (lo + hi)
-        if place_located:
+        if place_located and best_end - best_start < bins:
             mid = _located_median(located, s, best_start, best_end, lo_axis, step, mid)
         width[q] = hi - lo
         top = 0.0

@@ -18,8 +18,9 @@ Per arc (see the geometry module for the equations):
 * split arcs are kept: the surviving run with the most localised support (support times the
   sine of the angle at which the echo circles meet: tangent repeats of one range say nothing of
   the bearing) and ATM crossings, its bound covering every surviving run (honest: the echo may
-  lie in any of them); the point sits at the median of the run's localised support (the
-  run's middle, eq. 3.6, where it has none), the bound measured from there;
+  lie in any of them); once evidence has cut the beam, the point sits at the median of the
+  kept run's localised support (the run's middle, eq. 3.6, where it has none; a beam nothing
+  has cut keeps its middle), the bound measured from there;
 * ATM crossings counted only inside the kept run; a crossing confirms the run and, when its
   bound is smaller, places the point (``source = atm``);
 * a confidence per point: a logistic model of the evidence the arc has gathered (support,
@@ -205,8 +206,8 @@ class EvidenceModel(ArcModel):
     with_transmission : bool
         Transmission evidence (a newer echo confirmed by other sensors behind a bin).
     place_located : bool
-        Place each point at the median of its kept run's localised support (where it has
-        any) instead of the run's middle (eq. 3.6).
+        Once evidence has cut an arc's beam, place its point at the median of its kept run's
+        localised support (where it has any) instead of the run's middle (eq. 3.6).
     sensor : SensorModel
         The detection model.
     """
