@@ -25,6 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
+from scipy.spatial import cKDTree
 
 from sonarcarve.grids import OCCUPIED, OccupancyMap, trinary
 from sonarcarve.grids.carved import FREE
@@ -171,25 +172,14 @@ def grid_measures(grid: OccupancyMap, segments: npt.ArrayLike, reflections: npt.
 
 
 def _near_any(points: FloatArray, targets: FloatArray, radius: float) -> BoolArray:
-    """Whether each point has a target within ``radius`` (bucketed by a ``radius`` lattice)."""
-    out = np.zeros(len(points), dtype=bool)
+    """Whether each point has a target within ``radius`` (a k-d tree over the targets)."""
     if not len(points) or not len(targets):
-        return out
-    keys = np.floor(targets / radius).astype(np.int64)
-    buckets: dict[tuple[int, int], list[int]] = {}
-    for k, (a, b) in enumerate(keys.tolist()):
-        buckets.setdefault((a, b), []).append(k)
-    pkeys = np.floor(points / radius).astype(np.int64).tolist()
-    for i, (a, b) in enumerate(pkeys):
-        for da in (-1, 0, 1):
-            for db in (-1, 0, 1):
-                idx = buckets.get((a + da, b + db))
-                if idx and np.min(np.hypot(*(targets[idx] - points[i]).T)) <= radius:
-                    out[i] = True
-                    break
-            if out[i]:
-                break
-    return out
+        return np.zeros(len(points), dtype=bool)
+    # One nearest-neighbour query per point, bounded by the radius: a point with none within
+    # it gets an infinite distance. (A Python loop over lattice buckets took half a second
+    # per office grid.)
+    distance, _ = cKDTree(targets).query(points, k=1, distance_upper_bound=radius * (1 + 1e-12))
+    return np.asarray(distance <= radius)
 
 
 def grid_free_width(grid: OccupancyMap, region: GapRegion, *, strict: bool = False,
