@@ -26,8 +26,8 @@ DEFAULT_HISTORY_SIZE = 250
 
 #: Largest history accepted, arcs: 400 times the paper's. The history itself costs about 100
 #: bytes an arc (10 MB here), so the bound only stops a mistyped size from exhausting memory;
-#: methods whose state grows faster refuse smaller sizes themselves (ATM:
-#: :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES`).
+#: methods whose state grows faster bound it themselves (ATM's crossing store grows on demand
+#: and stops at :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES`).
 MAX_HISTORY_SIZE = 100_000
 
 
