@@ -121,7 +121,7 @@ RANGES = [1.0, 3.0, 1.0, 1.0, 3.0, 3.0, 1.0, 1.0]
     (2, (1 / 4 + 2 / 4 + 2 / 4) / 3),  # after 4, 6, 8: rows 0-3, 2-5, 4-7
     (4, (1 / 4 + 2 / 4) / 2),  # after 4, 8
     (3, (2 / 4 + 2 / 4) / 2),  # after 6, 8 (3 < 4: the history is not full yet)
-    (None, 2 / 4),  # default: every 1,009 readings, so one sample, at the end
+    (None, (1 / 4 + 2 / 4 + 2 / 4 + 2 / 4 + 2 / 4) / 5),  # default: a tenth of 4, so 1
 ])
 def test_unprocessed_share_is_sampled_every_so_many_readings(every: int | None,
                                                               expected: float) -> None:
@@ -131,12 +131,23 @@ def test_unprocessed_share_is_sampled_every_so_many_readings(every: int | None,
     assert len(result.global_map) == 8
 
 
-def test_default_sampling_is_every_1009_readings_for_small_histories() -> None:
-    # History 20: the default step is 1,009 readings (the first prime >= 1,000), so progress
-    # comes at 1009, 2018, then at the end.
+def test_default_sampling_is_fine_for_1000_samples_then_every_1009_readings() -> None:
+    # History 20: a tenth is 2 readings. The history is full after 20 readings, so the
+    # 1,000th sample comes after 20 + 2 * 999 = 2,018; the next step, 1,009 readings, would end
+    # past the log, so the last step ends with it.
     calls: list[int] = []
     process_readings(_row(2500), CenterlineMethod(history_size=20), on_progress=calls.append)
-    assert calls == [1009, 2018, 2500]
+    assert calls == [*range(2, 2019, 2), 2500]
+
+
+def test_coarse_samples_weigh_the_readings_they_stand_for() -> None:
+    # History 10: fine step 1 (samples after 10, 11, ..., 1,009 readings: 1,000 of them, share
+    # 0 since every range so far is 1), then 1,009 readings a step (after 2,018 and 3,027: the
+    # history then holds only far readings, share 1). Weighted: 2 x 1,009 of 3,018 readings.
+    n = 3027
+    ranges = [1.0 if k < 2008 else 3.0 for k in range(n)]
+    result = process_readings(_row(n, ranges), _FarMethod(history_size=10))
+    assert result.mean_unprocessed_share == pytest.approx(2018 / 3018, rel=1e-12)
 
 
 @pytest.mark.parametrize(("history", "every"), [
@@ -149,13 +160,15 @@ def test_default_sample_every_is_the_first_prime_past_a_tenth_of_the_history(
     assert all(every % k for k in range(2, every))  # prime: every phase of a sensor ring
 
 
-def test_the_default_sampling_is_that_step() -> None:
+def test_a_short_log_is_sampled_every_tenth_of_the_history() -> None:
+    # History 40: fine step 4; 3,000 readings give fewer than 1,000 samples, so the default
+    # is exactly sampling every 4 readings, and differs from sampling every 1,009.
     batch = _row(3000, [1.0 + (k % 7 == 0) * 2.0 for k in range(3000)])
-    default = process_readings(batch, _FarMethod(history_size=4))
-    explicit = process_readings(batch, _FarMethod(history_size=4), sample_every=1009)
-    assert default.mean_unprocessed_share == explicit.mean_unprocessed_share
-    every_25 = process_readings(batch, _FarMethod(history_size=4), sample_every=25)
-    assert default.mean_unprocessed_share != every_25.mean_unprocessed_share
+    default = process_readings(batch, _FarMethod(history_size=40))
+    fine = process_readings(batch, _FarMethod(history_size=40), sample_every=4)
+    assert default.mean_unprocessed_share == fine.mean_unprocessed_share
+    coarse = process_readings(batch, _FarMethod(history_size=40), sample_every=1009)
+    assert default.mean_unprocessed_share != coarse.mean_unprocessed_share
 
 
 def test_short_log_samples_the_end() -> None:

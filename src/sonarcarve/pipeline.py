@@ -26,6 +26,7 @@ from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import IntArray
 
 __all__ = [
+    "FINE_SAMPLES",
     "MIN_SAMPLE_EVERY",
     "ProcessError",
     "ProcessResult",
@@ -39,6 +40,12 @@ __all__ = [
 #: 250): sampled every 25 readings (a tenth of the history, the old default) that halved
 #: carving's rate; every thousand or so readings it costs under 0.5 µs a reading.
 MIN_SAMPLE_EVERY = 1_000
+
+#: Samples taken at the fine step (a tenth of the history, at least one reading) before the
+#: default switches to :func:`default_sample_every`: a log shorter than about this many
+#: tenths of a history past the first full one (25,000 readings at history 250) gets exactly
+#: the share it always got, and a long one pays the fine step's cost on its first few per cent.
+FINE_SAMPLES = 1_000
 
 
 class ProcessError(SonarcarveError, ValueError):
@@ -62,8 +69,9 @@ class ProcessResult:
         Readings processed (after the reading filters, if any).
     mean_unprocessed_share : float
         Mean over the run of the share of history arcs still unprocessed (Table I), sampled
-        every ``sample_every`` readings once the history is full (by default
-        :func:`default_sample_every`).
+        once the history is full: every ``sample_every`` readings, or by default every tenth
+        of the history for the first :data:`FINE_SAMPLES` samples and then every
+        :func:`default_sample_every` readings, weighted by step.
     fully_carved, split : int
         Arcs removed by carving, by cause.
     seconds : float
@@ -109,8 +117,10 @@ def process_readings(
     method : SonarMethod
         A fresh method.
     sample_every : int, optional
-        How often (in readings) to sample the unprocessed share; default
-        :func:`default_sample_every` of the history size (1,009 readings for 250 arcs).
+        How often (in readings) to sample the unprocessed share. By default every tenth of
+        the history (25 readings for 250 arcs) for the first :data:`FINE_SAMPLES` samples,
+        then every :func:`default_sample_every` readings (1,009), each sample weighted by its
+        step: short logs get the fine estimate, long ones do not pay for it.
     on_progress : callable, optional
         Called with the number of input rows done after each chunk.
     reading_filter : ReadingFilter, optional
@@ -184,8 +194,12 @@ def process_chunks(
         method.set_global_sink(timed)
     else:
         timed = None
-    every = default_sample_every(method.history.capacity) if sample_every is None else sample_every
-    run = _Run(method, every, on_progress)
+    if sample_every is None:
+        schedule = _Schedule(fine=max(1, method.history.capacity // 10),
+                             coarse=default_sample_every(method.history.capacity))
+    else:
+        schedule = _Schedule(fine=sample_every, coarse=sample_every)
+    run = _Run(method, schedule, on_progress)
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
     rows = 0
     for chunk in chunks:
@@ -202,7 +216,7 @@ def process_chunks(
         if on_progress is not None:
             on_progress(filter_report.total)
     measures = method.measures()
-    shares = np.frombuffer(run.shares) if run.shares else [measures.unprocessed_share]
+    mean_share = run.mean_share() if run.shares else measures.unprocessed_share
     tic = time.perf_counter()
     global_map = method.finish()
     seconds = run.seconds + time.perf_counter() - tic
@@ -218,7 +232,7 @@ def process_chunks(
         global_map=global_map,
         points=points,
         readings=run.readings,
-        mean_unprocessed_share=float(np.mean(shares)),
+        mean_unprocessed_share=mean_share,
         fully_carved=measures.fully_carved,
         split=measures.split,
         seconds=seconds,
@@ -269,21 +283,45 @@ class _TimedSink:
         self.seconds += time.perf_counter() - tic
 
 
-class _Run:
-    """Feeds readings to a method in steps of exactly ``every`` readings, whatever the batches
-    they come in, sampling the unprocessed share and reporting progress after each step."""
+@dataclass(frozen=True)
+class _Schedule:
+    """Readings between samples of the unprocessed share: ``fine`` for the first
+    :data:`FINE_SAMPLES` samples, then ``coarse``."""
 
-    def __init__(self, method: SonarMethod, every: int,
+    fine: int
+    coarse: int
+
+    def step(self, samples: int) -> int:
+        return self.fine if samples < FINE_SAMPLES else self.coarse
+
+
+class _Run:
+    """Feeds readings to a method in steps of exactly the schedule's length, whatever the
+    batches they come in, sampling the unprocessed share and reporting progress after each
+    step."""
+
+    def __init__(self, method: SonarMethod, schedule: _Schedule,
                  on_progress: Callable[[int], None] | None) -> None:
         self.method = method
-        self.every = every
+        self.schedule = schedule
         self.on_progress = on_progress
         # 8 bytes a sample (one per step), not a Python float each: a long run stays flat.
         self.shares = array("d")
+        self.weights = array("d")  # the step each sample stands for
         self.seconds = 0.0
         self.readings = 0
         self._held: list[tuple[ReadingBatch, IntArray]] = []  # less than one step
         self._held_count = 0
+
+    @property
+    def every(self) -> int:
+        """Readings in the current step."""
+        return self.schedule.step(len(self.shares))
+
+    def mean_share(self) -> float:
+        """The run's mean unprocessed share, each sample weighted by the step it stands for
+        (with one step throughout, the plain mean)."""
+        return float(np.average(np.frombuffer(self.shares), weights=np.frombuffer(self.weights)))
 
     def feed(self, batch: ReadingBatch, ids: IntArray) -> None:
         """Queue ``batch`` (reading ids ``ids``); run every whole step."""
@@ -294,9 +332,9 @@ class _Run:
             if self._held_count < self.every:
                 return
             self.flush()
-        while len(batch) - start >= self.every:
-            self._step(batch[start : start + self.every], ids[start : start + self.every])
-            start += self.every
+        while len(batch) - start >= (every := self.every):
+            self._step(batch[start : start + every], ids[start : start + every])
+            start += every
         self._hold(batch[start:], ids[start:])
 
     def flush(self) -> None:
@@ -329,6 +367,7 @@ class _Run:
         self.seconds += time.perf_counter() - tic
         self.readings += len(batch)
         if self.readings >= method.history.capacity:
+            self.weights.append(self.every)  # the nominal step, the last shorter one included
             self.shares.append(method.measures().unprocessed_share)
         if self.on_progress is not None:  # progress counts input rows, dropped ones included
             self.on_progress(last_id + 1)

@@ -243,8 +243,9 @@ def process(
 
     The summary's "unprocessed (mean % of history rows)" is the paper's Table I latency: the
     share of the history's arcs that no newer reading has sharpened yet, averaged over samples
-    taken every 1,009 readings (every tenth of the history, rounded up to a prime, for
-    histories over 10,090 arcs).
+    taken every tenth of the history (25 readings) for the first 1,000 samples, then every
+    1,009 readings (a tenth of the history rounded up to a prime, for histories over 10,090
+    arcs), each weighted by its step.
     Arcs carving removed (fully carved or split) count as processed; the paper's history drops
     them instead, which gives a larger share for carving (docs/RESULTS.md reports both).
 
