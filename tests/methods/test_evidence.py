@@ -318,3 +318,19 @@ def test_an_uncut_beam_keeps_its_point_in_the_middle() -> None:
     # circles meet in the doorway), so the point stays at the beam's middle (eq. 3.6).
     point, _ = _wall_with_crossings(True, carve_lower=False)
     assert abs(point[1]) < 0.02
+
+
+def test_a_points_confidence_does_not_depend_on_the_rows_beside_it() -> None:
+    # Arcs are committed in blocks whose size depends on when the map or the measures are
+    # read; a matrix product sums in an order that depends on the block, which moved
+    # confidences in their last digits (and so the process output).
+    from sonarcarve.methods.evidence import ConfidenceModel
+
+    model = ConfidenceModel()
+    rng = np.random.default_rng(3)
+    features = rng.uniform(0.0, 3.0, (1001, len(model.weights())))
+    maturity = rng.uniform(0.0, 1.0, 1001)
+    together = model.confidence(features, maturity)
+    alone = np.concatenate([model.confidence(features[k : k + 1], maturity[k : k + 1])
+                            for k in range(len(features))])
+    np.testing.assert_array_equal(together, alone)

@@ -177,7 +177,13 @@ class ConfidenceModel:
                    ) -> np.ndarray:
         """Probability that each point is a real surface; ``features`` shape (n, F),
         ``maturity`` in [0, 1] (:meth:`maturity`)."""
-        fitted = self.intercept + features @ self.weights()
+        # One column at a time, not ``features @ weights``: BLAS sums a row in an order that
+        # depends on how many rows there are, so a point's confidence would change in its last
+        # digits with the size of the block it was committed in (and the map with when
+        # measures() was called). Elementwise products and sums are the same for any length.
+        fitted = np.full(len(features), self.intercept)
+        for column, weight in zip(np.asarray(features).T, self.weights(), strict=True):
+            fitted = fitted + column * weight
         logit = self.fresh + maturity * (fitted - self.fresh)
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
 
