@@ -493,27 +493,24 @@ def _parse(text: np.ndarray, values: np.ndarray, scratch: np.ndarray, scratch_bi
             digits = 0
             seen = 0
             exponent = 0
-            while at < n and 48 <= text[at] <= 57:
+            point = False  # digits after "." scale the exponent down
+            while at < n:
+                if text[at] == 46 and not point:  # "."
+                    point = True
+                    at += 1
+                    continue
+                if not 48 <= text[at] <= 57:
+                    break
                 digit = np.uint64(text[at] - 48)
                 seen += 1
-                if digits > 0 or digit != _U0:
+                if digits > 0 or digit != _U0:  # leading zeros carry no digit
                     if digits == _MAX_SIGNIFICAND_DIGITS:
                         return -1
                     significand = significand * _U10 + digit
                     digits += 1
-                at += 1
-            if at < n and text[at] == 46:  # "."
-                at += 1
-                while at < n and 48 <= text[at] <= 57:
-                    digit = np.uint64(text[at] - 48)
-                    seen += 1
-                    if digits > 0 or digit != _U0:
-                        if digits == _MAX_SIGNIFICAND_DIGITS:
-                            return -1
-                        significand = significand * _U10 + digit
-                        digits += 1
+                if point:
                     exponent -= 1
-                    at += 1
+                at += 1
             if seen == 0:
                 return -1
             if at < n and (text[at] == 101 or text[at] == 69):  # "e", "E"
