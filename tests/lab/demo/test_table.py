@@ -19,3 +19,14 @@ def test_summary_markdown_has_one_row_per_method_then_per_grid(doorway: DemoResu
     assert [row.split("|")[1].strip() for row in rows] == [
         "grid", "carved grid", "ROS RangeSensorLayer (defaults)"]
     assert all(row.count("|") == 7 for row in rows)  # grid and five measures
+
+
+def test_caption_states_what_each_carving_left_out(doorway: DemoResult) -> None:
+    from sonarcarve.lab.demo.table import caption
+
+    text = caption(doorway)
+    for method, name in (("carve", "Carving"), ("evidence", "Evidence carving")):
+        row = doorway.summary(method)
+        assert (f"{name} left out {row.spurious_removed_pct:.0f}% of the spurious readings"
+                in text)
+        assert f"{row.true_lost_pct:.0f}% of the true ones." in text

@@ -137,6 +137,11 @@ def caption(result: DemoResult) -> str:
     if carve is not None and math.isfinite(carve.spurious_removed_pct + carve.true_lost_pct):
         parts.append(f"Carving left out {carve.spurious_removed_pct:.0f}% of the spurious "
                      f"readings, but also {carve.true_lost_pct:.0f}% of the true ones.")
+    evidence = result.summary("evidence") if "evidence" in names else None
+    if evidence is not None and math.isfinite(evidence.spurious_removed_pct
+                                              + evidence.true_lost_pct):
+        parts.append(f"Evidence carving left out {evidence.spurious_removed_pct:.0f}% of the "
+                     f"spurious readings and {evidence.true_lost_pct:.0f}% of the true ones.")
     return " ".join(parts)
 
 
