@@ -163,8 +163,13 @@ def test_default_sample_every_is_the_first_prime_past_a_tenth_of_the_history(
 def test_a_short_log_is_sampled_every_tenth_of_the_history() -> None:
     # History 40: fine step 4; 3,000 readings give fewer than 1,000 samples, so the default
     # is exactly sampling every 4 readings, and differs from sampling every 1,009.
-    batch = _row(3000, [1.0 + (k % 7 == 0) * 2.0 for k in range(3000)])
+    ranges = [1.0 + (k % 7 == 0) * 2.0 for k in range(3000)]
+    batch = _row(3000, ranges)
     default = process_readings(batch, _FarMethod(history_size=40))
+    # By hand: after 40, 44, ..., 3,000 readings, the share of the last 40 that read 3.
+    far = np.array(ranges) == 3.0
+    by_hand = np.mean([np.mean(far[k - 40 : k]) for k in range(40, 3001, 4)])
+    assert default.mean_unprocessed_share == by_hand
     fine = process_readings(batch, _FarMethod(history_size=40), sample_every=4)
     assert default.mean_unprocessed_share == fine.mean_unprocessed_share
     coarse = process_readings(batch, _FarMethod(history_size=40), sample_every=1009)

@@ -320,8 +320,11 @@ class _Run:
 
     def mean_share(self) -> float:
         """The run's mean unprocessed share, each sample weighted by the step it stands for
-        (with one step throughout, the plain mean)."""
-        return float(np.average(np.frombuffer(self.shares), weights=np.frombuffer(self.weights)))
+        (the last, shorter step by the step it would have been)."""
+        shares, weights = np.frombuffer(self.shares), np.frombuffer(self.weights)
+        if np.all(weights == weights[0]):  # one step throughout: the plain mean, bit for bit
+            return float(np.mean(shares))
+        return float(np.average(shares, weights=weights))
 
     def feed(self, batch: ReadingBatch, ids: IntArray) -> None:
         """Queue ``batch`` (reading ids ``ids``); run every whole step."""
