@@ -200,6 +200,7 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
     kept = np.zeros(len(sim.readings), dtype=bool)
     kept[record.global_map.reading_id] = True
     direct = sim.truth.kind == EchoKind.DIRECT
+    spurious = sim.truth.kind > EchoKind.DIRECT  # no-echo readings (NO_ECHO, -1) are neither
     summary = metrics.error_summary(err)
     return MethodSummary(
         method=record.method,
@@ -208,7 +209,7 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
         median_error_m=summary.median,
         p90_error_m=summary.p90,
         fully_carved_pct=removal["share"],
-        spurious_removed_pct=metrics.percent(~kept[~direct]),
+        spurious_removed_pct=metrics.percent(~kept[spurious]),
         true_lost_pct=metrics.percent(~kept[direct]),
         map_points=len(record.global_map),
         seconds=record.seconds,
