@@ -43,6 +43,7 @@ bench: $(STAMP)  ## every benchmark (slow: several take minutes): speed, memory,
 	$(BIN)/python benchmarks/min_transversal.py
 	$(BIN)/python benchmarks/specular.py
 	$(BIN)/python benchmarks/grid_baseline.py
+	$(BIN)/python benchmarks/carve_kernel.py --repeats 9
 	$(BIN)/python benchmarks/speed.py --sections ratio latency cold
 	$(BIN)/python benchmarks/process_speed.py
 	$(BIN)/python benchmarks/soak.py
