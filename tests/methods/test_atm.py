@@ -349,6 +349,27 @@ def test_a_store_beyond_the_memory_limit_is_refused(monkeypatch: pytest.MonkeyPa
     with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
         method.add(Reading(1.0, 8, 2.0, 0.0, math.pi, 1.05, wide))
     assert issubclass(CrossingStoreError, SonarcarveError)
+    # Half intersected, the method refuses to go on rather than map from a partial state.
+    with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+        method.add(Reading(2.0, 0, 0.0, 0.0, 0.0, 1.5, wide))
+
+
+@pytest.mark.parametrize(("rows", "columns", "needed", "most", "grown"), [
+    (100, 32, 33, 10_000, 64),  # doubled
+    (100, 32, 200, 10_000, 256),  # doubled until enough
+    (100, 32, 40, 50, 50),  # never past every crossing an arc can have
+    # 1 GiB holds 2**30 / (4 * 200,000) = 1,342 float32 columns of 200,000 rows: a doubling
+    # from 1,024 to 2,048 would not fit, what is left does.
+    (200_000, 1024, 1025, 400_000, 1342),
+])
+def test_the_store_grows_by_doubling_within_its_bounds(rows: int, columns: int, needed: int,
+                                                       most: int, grown: int) -> None:
+    assert atm_module._grown_columns(rows, columns, needed, most) == grown
+
+
+def test_the_store_is_refused_only_past_what_the_limit_holds() -> None:
+    with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take 1\.0 GiB"):
+        atm_module._grown_columns(200_000, 1024, 1343, 400_000)
 
 
 @pytest.mark.parametrize(("psi", "delta"), [(-0.1, INCH), (1.6, INCH), (0.5, -1.0),

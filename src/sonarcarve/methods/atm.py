@@ -78,9 +78,11 @@ __all__ = [
 
 #: Most memory ATM's crossing store may take, bytes (1 GiB). The store grows on demand (see
 #: :class:`AtmModel`): as many columns as the busiest arc has kept crossings, rounded up to a
-#: power of two (512 at a history of 10,000 on the benchmark stream: 41 MB). Only an arc with
-#: more crossings than 1 GiB leaves room for (about 1,300 at the largest history, 100,000 arcs)
-#: stops the method with :class:`CrossingStoreError`.
+#: power of two (512 at a history of 10,000 on the benchmark stream: 41 MB), or to what is left
+#: of the 1 GiB. Only an arc with more crossings than 1 GiB leaves room for (1,342 at the
+#: largest history, 100,000 arcs in 200,000 rows) stops the method with
+#: :class:`CrossingStoreError`, and then for good: the arcs of the block that needed the room
+#: are in the history but not all intersected, so every later call raises it again.
 MAX_ATM_STATE_BYTES = 2**30
 
 #: Columns of the crossing store when a model starts (it doubles when an arc needs more).
@@ -102,13 +104,15 @@ class CrossingStoreError(SonarcarveError, MemoryError):
 
 def _grown_columns(rows: int, columns: int, needed: int, most: int) -> int:
     """Columns of the crossing store after it grows to hold ``needed`` crossings in one row:
-    doubled until enough, never more than ``most`` (every crossing an arc can have), and
-    :class:`CrossingStoreError` beyond :data:`MAX_ATM_STATE_BYTES`."""
+    doubled until enough, never more than ``most`` (every crossing an arc can have) nor than
+    :data:`MAX_ATM_STATE_BYTES` holds (a last step short of a doubling uses what is left), and
+    :class:`CrossingStoreError` when even that is fewer than ``needed``."""
     while columns < needed:
         columns *= 2
-    columns = min(columns, max(most, needed))
-    if rows * columns * 4 > MAX_ATM_STATE_BYTES:
-        msg = (f"ATM's crossing store would take {rows * columns * 4 / 2**30:.1f} GiB for "
+    budget = MAX_ATM_STATE_BYTES // (4 * rows)  # float32 bearings
+    columns = min(columns, max(most, needed), budget)
+    if columns < needed:
+        msg = (f"ATM's crossing store would take {rows * needed * 4 / 2**30:.1f} GiB for "
                f"{needed} crossings of one arc (at most {MAX_ATM_STATE_BYTES / 2**30:.0f} GiB); "
                "use a shorter history_size")
         raise CrossingStoreError(msg)
@@ -398,6 +402,7 @@ class AtmModel(ArcModel):
         self._span = np.zeros(history.storage_size)
         self._stale = np.ones(history.storage_size, dtype=bool)
         self._kept = 0
+        self._failed: CrossingStoreError | None = None  # the store could not grow: stop
 
     def on_add(self, slot: int, older: SlotArray) -> None:
         """Reset ``slot``'s crossings, then intersect its arc with the older live arcs.
@@ -409,6 +414,8 @@ class AtmModel(ArcModel):
 
     def on_add_many(self, first: int, count: int) -> None:
         """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        if self._failed is not None:
+            raise CrossingStoreError(str(self._failed))
         h = self.history
         end = first + count
         while first < end:
@@ -420,7 +427,11 @@ class AtmModel(ArcModel):
             )
             self._kept += kept
             if first < end:
-                self._grow(needed)
+                try:
+                    self._grow(needed)
+                except CrossingStoreError as error:
+                    self._failed = error
+                    raise
 
     def _grow(self, needed: int) -> None:
         """Widen the crossing store to at least ``needed`` columns (doubling; bounded)."""
