@@ -115,8 +115,55 @@ def test_parse_floats_is_float_or_undecided(seed: int) -> None:
     assert values.tolist() == [float(t) for t in reprs]
 
 
-@pytest.mark.parametrize("text", ["", ",", "1,", ",1", "1,,2", "1\n\n2", "1;2", "1 2", "e5",
-                                  "1e", "--1", "+-1", "1..2", ".", "-", "in", "infinity",
-                                  "nan", "1" * 20, "0." + "1" * 20, "1_0", "1,2,3"])
-def test_parse_floats_refuses_what_it_does_not_read_exactly(text: str) -> None:
-    assert parse_floats(text.encode(), 2) is None
+#: Single fields that are no plain decimal number, or that this parser leaves to ``float``.
+BAD_FIELDS = ["e5", "1e", "1e+", "--1", "+-1", "1..2", "1.2.3", ".", "-", "+", "in", "infinity",
+              "inff", "nan", "NaN", "1" * 20, "0." + "1" * 20, "1_0", "1 ", " 1", "1;2",
+              "1 2", "0x10", "1e5.5", "1e--5"]
+
+
+@pytest.mark.parametrize("text", BAD_FIELDS)
+def test_parse_floats_refuses_a_field_it_does_not_read_exactly(text: str) -> None:
+    """Alone, and between good fields, with the right field count: the parser itself must
+    refuse the text (a miscount would refuse anything)."""
+    assert parse_floats(text.encode(), 1) is None
+    assert parse_floats(f"1,{text},3".encode(), 3) is None
+    assert parse_floats(f"1\n{text}\n3\n".encode(), 3) is None
+    assert parse_floats(b"1,2,3", 3) is not None  # the same shape, good fields: read
+
+
+@pytest.mark.parametrize(("text", "count"), [(",", 2), ("1,", 2), (",1", 2), ("1,,2", 3),
+                                             ("1\n\n2", 3), ("1\n,2", 3), ("1,\n2", 3)])
+def test_parse_floats_refuses_empty_fields(text: str, count: int) -> None:
+    assert parse_floats(text.encode(), count) is None
+
+
+@pytest.mark.parametrize(("text", "count"), [("", 1), ("1", 2), ("1,2", 3), ("1,2,3", 2),
+                                             ("1\n2\n", 3), ("1\n2\n", 1)])
+def test_parse_floats_refuses_another_field_count(text: str, count: int) -> None:
+    assert parse_floats(text.encode(), count) is None
+
+
+_ZEROS = "0" * 100_100
+
+
+@pytest.mark.parametrize("text", [
+    f"0.{_ZEROS}1e1000500", f"-0.{_ZEROS}1e+1000500", f"0.{_ZEROS}1E1000500",  # inf, -inf
+    f"0.{_ZEROS}1e100050", f"0.{_ZEROS}9e100100",  # 1e-51, 9e-2: finite, exponent > limit
+    f"0.{_ZEROS}1e-1000500", f"{_ZEROS}1e-1000500", f"-{_ZEROS}1.5e1000500",  # 0.0, -inf
+    f"1e{_ZEROS}5", f"-1e-{_ZEROS}5", f"0.{_ZEROS[:99_990]}1e99995",  # 1e5, -1e-5, 1e4
+    f"0e{_ZEROS}1000500", "1e99999", "1e-99999", "1e100000", "1e-100000",
+])
+def test_parse_floats_with_huge_exponents_is_float_or_undecided(text: str) -> None:
+    """Exponents of many digits, offset by many leading zeros: an exponent capped instead of
+    read exactly gave 1e-51 for the first text, whose value is inf."""
+    values = parse_floats(text.encode(), 1)
+    if values is not None:
+        assert values.tobytes() == np.array([float(text)]).tobytes(), text[:20]
+
+
+def test_exponents_from_the_limit_on_are_left_to_float() -> None:
+    """Of the texts above: the bug's text is left undecided, shorter exponents are read."""
+    assert parse_floats(f"0.{_ZEROS}1e1000500".encode(), 1) is None
+    decided = parse_floats(f"1e{_ZEROS}5,0.{_ZEROS[:99_990]}1e99995".encode(), 2)
+    assert decided is not None  # exponents below the limit, leading zeros or not: read
+    assert decided.tolist() == [1e5, 1e4]

@@ -429,6 +429,12 @@ def _floats_lines(values: np.ndarray, powers: np.ndarray, inverses: np.ndarray,
 # --------------------------------------------------------------------------------------------
 
 _MAX_SIGNIFICAND_DIGITS = 19  # 10^19 < 2^64
+#: Exponents (the number after ``e``) from this size on are left to ``float``. Leading zeros
+#: of a fraction lower the decimal exponent by one each without limit, so only an exponent
+#: read exactly gives the right sum: one capped at a bound instead read
+#: ``"0." + "0" * 100_100 + "1e1000500"`` (``inf``) as 1e-51. Below the limit ``power`` stays
+#: exact and far from int64's range.
+_EXPONENT_LIMIT = 100_000
 
 
 @njit(cache=True)
@@ -521,8 +527,9 @@ def _parse(text: np.ndarray, values: np.ndarray, scratch: np.ndarray, scratch_bi
                 power = 0
                 power_digits = 0
                 while at < n and 48 <= text[at] <= 57:
-                    if power < 100_000:
-                        power = power * 10 + (text[at] - 48)
+                    power = power * 10 + (text[at] - 48)
+                    if power >= _EXPONENT_LIMIT:
+                        return -1  # left to float: see _EXPONENT_LIMIT
                     power_digits += 1
                     at += 1
                 if power_digits == 0:
