@@ -294,7 +294,10 @@ def _damage(lines: list[str], kind: str, k: int) -> list[str]:
                         "width_text": (6, "wide"), "t_exponent_only": (0, "1e"),
                         "x_two_points": (2, "1..2"), "y_sign_only": (3, "-"),
                         "theta_huge": (4, "1e300"), "range_inf": (5, "inf"),
-                        "range_overflow": (5, "1e999"), "range_signs": (5, "+-1")}[kind]
+                        "range_overflow": (5, "1e999"), "range_signs": (5, "+-1"),
+                        # inf: many leading zeros and a long exponent (a capped exponent read
+                        # it as 1e-51, a finite x)
+                        "x_huge_exponent": (2, "0." + "0" * 100_100 + "1e1000500")}[kind]
         cells[column] = text
         damaged[k] = ",".join(cells)
     return damaged
@@ -325,7 +328,8 @@ def test_one_bad_line_gives_the_reference_message_whatever_the_blocks(
 
 
 def _numeric_log_text(n: int, seed: int) -> list[str]:
-    """Data lines of a valid log holding only numbers (read by numpy's parser)."""
+    """Data lines of a valid log holding only numbers, each one ``repr`` or a short decimal
+    wrote (so the compiled parser reads them all)."""
     rng = np.random.default_rng(seed)
     t = np.cumsum(rng.uniform(0, 0.1, n))
     return [",".join([repr(float(t[k])), str(int(rng.integers(0, 16))),
@@ -335,41 +339,69 @@ def _numeric_log_text(n: int, seed: int) -> list[str]:
 
 
 NUMERIC_HEADER = "t,sensor,x,y,theta,range,beam_width"
-#: Problems whose line holds only the bytes numpy's parser reads (digits, signs, ., e, inf).
+#: Problems whose line holds only the bytes the bulk parsers read (digits, signs, ., e, inf).
 NUMERIC_KINDS = ("blank", "short", "long", "backwards", "sensor_half", "sensor_huge",
                  "sensor_negative", "range_zero", "range_text", "width_wide",
                  "t_exponent_only", "x_two_points", "y_sign_only", "theta_huge", "range_inf",
-                 "range_overflow", "range_signs")
+                 "range_overflow", "range_signs", "x_huge_exponent")
 
 
 @pytest.fixture
-def numbers_parsed(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Counts the numbers parsed in bulk (so a test knows the fast path ran)."""
-    from sonarcarve.io import readings_csv
+def numbers_parsed(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Counts the numbers parsed in bulk, by parser (so a test knows which fast path ran):
+    ``compiled`` (:func:`~sonarcarve.io.float_text.parse_floats`) and ``numpy`` (blocks the
+    compiled parser left undecided)."""
+    from sonarcarve.io import float_text, readings_csv
 
-    parsed: list[int] = []
-    original = readings_csv._parse_numbers
+    parsed = {"compiled": 0, "numpy": 0}
+    parse_floats = float_text.parse_floats
+    parse_numbers = readings_csv._parse_numbers
 
-    def counting(raw: bytes, count: int) -> np.ndarray | None:
-        values = original(raw, count)
+    def compiled(raw: bytes, count: int) -> np.ndarray | None:
+        values = parse_floats(raw, count)
         if values is not None:
-            parsed.append(values.size)
+            parsed["compiled"] += values.size
         return values
 
-    monkeypatch.setattr(readings_csv, "_parse_numbers", counting)
+    def bulk(raw: bytes, count: int) -> np.ndarray | None:
+        before = parsed["compiled"]
+        values = parse_numbers(raw, count)
+        if values is not None and parsed["compiled"] == before:
+            parsed["numpy"] += values.size
+        return values
+
+    monkeypatch.setattr(float_text, "parse_floats", compiled)
+    monkeypatch.setattr(readings_csv, "_parse_numbers", bulk)
     return parsed
 
 
 @pytest.mark.parametrize("newline", ["\n", "\r\n"])
-def test_a_log_of_plain_numbers_is_parsed_by_numpy_to_the_same_batch(
-    tmp_path: Path, newline: str, numbers_parsed: list[int],
+def test_a_log_of_plain_numbers_is_parsed_by_the_compiled_parser_to_the_same_batch(
+    tmp_path: Path, newline: str, numbers_parsed: dict[str, int],
 ) -> None:
     path = _write(tmp_path / "r.csv", NUMERIC_HEADER, _numeric_log_text(300, 7), newline)
     expected = _reference_read(path)
     for size in BLOCK_SIZES:
-        numbers_parsed.clear()
+        numbers_parsed.update(compiled=0, numpy=0)
         _assert_same(read_readings_csv(path, block_size=size), expected)
-        assert sum(numbers_parsed) == 300 * 7, size  # every row by numpy's parser
+        assert numbers_parsed == {"compiled": 300 * 7, "numpy": 0}, size  # every row
+
+
+def test_a_block_the_compiled_parser_leaves_is_parsed_by_numpy_to_the_same_batch(
+    tmp_path: Path, numbers_parsed: dict[str, int],
+) -> None:
+    lines = _numeric_log_text(300, 11)
+    cells = lines[150].split(",")
+    cells[2] = "-0.1000000000000000000000001"  # 25 digits: more than the compiled parser reads
+    lines[150] = ",".join(cells)
+    path = _write(tmp_path / "r.csv", NUMERIC_HEADER, lines)
+    expected = _reference_read(path)
+    for size in BLOCK_SIZES:
+        numbers_parsed.update(compiled=0, numpy=0)
+        _assert_same(read_readings_csv(path, block_size=size), expected)
+        assert numbers_parsed["numpy"] >= 7, size  # the block of line 150, at least
+        assert numbers_parsed["compiled"] + numbers_parsed["numpy"] == 300 * 7, size
+        assert numbers_parsed["compiled"] > 0 or size == BLOCK_SIZE, size  # the other blocks
 
 
 def test_spellings_only_float_reads_are_read_as_before(tmp_path: Path) -> None:
@@ -395,7 +427,7 @@ def test_an_empty_last_cell_is_read_as_before(tmp_path: Path, tail: str) -> None
 
 @pytest.mark.parametrize("kind", NUMERIC_KINDS)
 def test_a_bad_line_of_numbers_gives_the_reference_message(
-    tmp_path: Path, kind: str, numbers_parsed: list[int],
+    tmp_path: Path, kind: str, numbers_parsed: dict[str, int],
 ) -> None:
     lines = _numeric_log_text(60, 8)
     for k in (1, 30, 59):
@@ -407,7 +439,7 @@ def test_a_bad_line_of_numbers_gives_the_reference_message(
                 read_readings_csv(path, block_size=size)
             assert str(caught.value) == str(reference.value), (kind, k, size)
             assert f"line {k + 2}" in str(caught.value)
-    assert numbers_parsed  # the good blocks before the bad line went through numpy
+    assert numbers_parsed["compiled"]  # the good blocks before the bad line were read in bulk
 
 
 def _number_texts(rng: np.random.Generator, n: int) -> list[str]:
@@ -455,13 +487,23 @@ def test_bulk_parsing_reads_numbers_as_float_does(
 
 @pytest.mark.parametrize("text", ["1_0", " 1", "1 ", "nan", "NaN", "Infinity", "INF", "0x10",
                                   "1e", "--1", "1..2", "+", ".", "e5", "", "1,,2", "1\r2",
-                                  "inf5", "\u0661"])
-def test_numpy_parser_leaves_other_spellings_to_float(text: str) -> None:
+                                  "inf5", "\u0661", "1,", ",1", "1\n\n2"])
+@pytest.mark.parametrize("compiled", [True, False])
+def test_bulk_parsers_leave_other_spellings_to_float(
+    text: str, compiled: bool, monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """Text the bulk parsers would read differently from ``float`` (or not at all) goes to
-    the exact path."""
+    the exact path: the compiled parser (with numpy for what it leaves), and numpy alone. The
+    count is the line's true number of fields, so that only the text can be refused."""
+    from sonarcarve.io import float_text
     from sonarcarve.io.readings_csv import _parse_numbers
 
-    assert _parse_numbers(f"1,{text},3\n".encode(), 3) is None
+    if not compiled:
+        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count: None)
+    line = f"1,{text},3\n"
+    fields = line[:-1].replace("\n", ",").count(",") + 1
+    assert _parse_numbers(line.encode(), fields) is None
+    assert _parse_numbers(b"1,2,3\n", 3) is not None  # the same shape, good fields: read
 
 
 def test_several_bad_lines_name_the_first(tmp_path: Path) -> None:
