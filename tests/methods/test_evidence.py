@@ -334,3 +334,15 @@ def test_a_points_confidence_does_not_depend_on_the_rows_beside_it() -> None:
     alone = np.concatenate([model.confidence(features[k : k + 1], maturity[k : k + 1])
                             for k in range(len(features))])
     np.testing.assert_array_equal(together, alone)
+
+
+@pytest.mark.parametrize(("history", "refused"), [(5793, False), (5794, True), (100_000, True)])
+def test_a_history_whose_crossing_store_exceeds_1_gib_is_refused(history: int,
+                                                                 refused: bool) -> None:
+    # 2n rows of 4(n - 1) float32 columns: 32 n (n - 1) bytes, 1 GiB at n = 5,793.
+    if refused:
+        with pytest.raises(ConfigError, match=r"^history_size too large for evidence carving"):
+            make_method("evidence", MethodConfig(history_size=history))
+    else:
+        assert make_method("evidence", MethodConfig(history_size=history)).history.capacity \
+            == history

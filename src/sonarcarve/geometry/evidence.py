@@ -733,7 +733,7 @@ def evidence_estimates(
     beam_width: FloatArray, free: FloatArray, support: FloatArray, located: FloatArray,
     status: Int8Array,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
-    atm_bound: float, with_atm: bool, place_located: bool = False,
+    atm_bound: float, with_atm: bool, place_located: bool,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
            FloatArray, FloatArray, FloatArray, FloatArray]:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EvidenceParams,
@@ -58,7 +59,7 @@ from sonarcarve.geometry.evidence import (
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, PointSource
-from sonarcarve.methods.atm import atm_error_bound
+from sonarcarve.methods.atm import MAX_ATM_STATE_BYTES, atm_error_bound
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
 from sonarcarve.methods.config import (
     DEFAULT_CARVE_PROBABILITY,
@@ -188,6 +189,16 @@ class ConfidenceModel:
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
 
 
+def _check_crossing_store(rows: int, columns: int) -> None:
+    """Refuse a history whose crossing store (room for every crossing an arc can have, as
+    ATM reserved before its store grew on demand) would exceed ATM's memory limit."""
+    if rows * columns * 4 > MAX_ATM_STATE_BYTES:
+        msg = (f"history_size too large for evidence carving: its crossing store would take "
+               f"{rows * columns * 4 / 2**30:.1f} GiB (at most "
+               f"{MAX_ATM_STATE_BYTES / 2**30:.0f} GiB: at most 5,793 arcs)")
+        raise ConfigError(msg)
+
+
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
@@ -245,6 +256,8 @@ class EvidenceModel(ArcModel):
             confirm=sensor.confirm,
         )
         size = history.storage_size
+        columns = max(1, 4 * (history.capacity - 1)) if with_atm else 1
+        _check_crossing_store(size, columns)
         self.bx = np.zeros((size, bins))
         self.by = np.zeros((size, bins))
         self.ex = np.zeros((size, bins))
@@ -263,11 +276,11 @@ class EvidenceModel(ArcModel):
         self.looked = np.zeros(size)
         self.others = np.zeros(size)
         self.through = np.zeros(size)
-        # Scratch for the transmission pass: at most every older bin once (capped: past the
-        # cap the rest is skipped, which only withholds evidence).
-        self.passed = np.zeros((min(size * bins, 1 << 16), 6))
+        # Scratch for the transmission pass: every older bin at most once (the kernel would
+        # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
+        # history of about 1,366 arcs). 13 MB at the largest history the store allows.
+        self.passed = np.zeros((size * bins, 6))
         self.trans = np.zeros(2 * bins + 1)
-        columns = max(1, 4 * (history.capacity - 1)) if with_atm else 1
         self.bearings = np.zeros((size, columns), dtype=np.float32)
         self.counts = np.zeros(size, dtype=np.int32)
         # Slot numbers laid out twice: any window of live rows is one contiguous slice.
