@@ -55,8 +55,9 @@ def write_map_csv(points: GlobalMap, path: str | Path, *, block_rows: int = BLOC
 
     Floats are written as Python's ``repr`` (the shortest text that reads back to the same
     float: ``0.1``, ``-0.0``, ``inf``, ``5e-324``), ids and sensors as integers, a NaN
-    confidence as an empty cell. The text is built a column at a time, ``block_rows`` rows at
-    a time, so memory stays bounded whatever the map's size.
+    confidence as an empty cell. The text is built row by row by a compiled kernel
+    (:func:`~sonarcarve.io.float_text.map_rows_text`), ``block_rows`` rows at a time, so memory
+    stays bounded whatever the map's size.
     """
     _check_block_rows(block_rows)
     _check_sources(points.source)
