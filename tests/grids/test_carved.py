@@ -274,3 +274,34 @@ def test_free_space_covers_exactly_the_beams_cells_whatever_its_bearing() -> Non
         expected = np.where(inside, (1.0 - (alpha / (PHI / 2)) ** 2) * fade * l_miss, 0.0)
         edge = (np.abs(d - reach) < 1e-6) | (np.abs(np.abs(alpha) - PHI / 2) < 1e-6)
         np.testing.assert_allclose(grid.log_odds[~edge], expected[~edge], atol=1e-6)
+
+
+def test_a_freed_cell_forgets_the_bearings_it_was_heard_from() -> None:
+    # A cell heard from the south, then freed by silent beams from the south, then heard only
+    # from the east (a different surface). A silent beam from the south would not have heard
+    # the new surface: it must give the faded update γ f(d) logit(0.4), not γ logit(0.2).
+    grid = CarvedGrid(0.1, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)))
+    cx, cy = 1.55, 0.05  # a cell centre
+    i, j = _cell(grid, cx, cy)
+    south, east = (cx, cy - 1.0), (cx + 1.0, cy)
+
+    def heard_from(origin: tuple[float, float], theta: float, t0: float) -> None:
+        aside = _reading(t0 + 5.0, math.pi, 0.5, x=-0.3, y=1.3)  # far off: pushes the last
+        grid.add_many(ReadingBatch.from_readings(  # arc out, every band final
+            [*(_reading(t0 + 0.1 * k, theta, 1.0, *origin) for k in range(10)), aside]))
+
+    heard_from(south, math.pi / 2, 0.0)
+    assert grid.log_odds[i, j] == pytest.approx(math.log(0.97 / 0.03), abs=1e-5)
+    grid.add_many(ReadingBatch.from_readings(
+        _silent(10.0 + k, math.pi / 2, *south) for k in range(3)))
+    assert grid.log_odds[i, j] <= 0.0  # freed (3.476 - 3 x 1.386 = -0.68, each beam audible)
+    heard_from(east, math.pi, 20.0)
+    assert np.all(grid.live_log_odds[i - 1 : i + 2, j - 1 : j + 2] == 0.0)
+    before = grid.log_odds[i, j]
+    assert before > 0.0  # believed occupied again
+    grid.add_many(ReadingBatch.from_readings([_silent(30.0, math.pi / 2, *south)]))
+    alpha = math.atan2(cx - south[0], cy - south[1])  # off the beam's axis (0 up to rounding)
+    gamma = 1.0 - (alpha / (PHI / 2)) ** 2
+    d = math.hypot(cx - south[0], cy - south[1])
+    faded = gamma * 0.5 * (1.0 - math.tanh(2.0 * (d - 1.2))) * math.log(0.4 / 0.6)  # -0.28
+    assert grid.log_odds[i, j] - before == pytest.approx(faded, abs=1e-5)

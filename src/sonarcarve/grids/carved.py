@@ -33,7 +33,8 @@ Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
 from erasing an obstacle that has gone (the changing-scenes box stayed marked for good). So the
 grid records, for every cell a final band marked, the bearings it was heard from
-(:data:`HEARD_BINS` sectors of 11.25°, one bit each, 4 bytes a cell). A beam's free space at a
+(:data:`HEARD_BINS` sectors of 11.25°, one bit each, 4 bytes a cell), since it was last freed
+(free space brought its ``base`` from above 0 to 0 or below). A beam's free space at a
 cell believed occupied (``base > 0``) is weighted by how likely that beam was to hear the
 cell's surface, its *audibility* ``A`` (1 within one sector of a bearing the cell was heard
 from, 1/2 at two, else 0: a smooth wall echoes only near normal incidence, so a beam from a
@@ -131,6 +132,11 @@ DEFAULT_MAX_INCIDENCE = math.radians(30.0)
 
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
+#: One bit a sector in each cell's word: more sectors than bits would shift out of it silently.
+_HEARD_DTYPE = np.uint32
+if not 0 < HEARD_BINS <= np.iinfo(_HEARD_DTYPE).bits:
+    raise AssertionError(f"HEARD_BINS must lie in 1..{np.iinfo(_HEARD_DTYPE).bits}, "
+                         f"got {HEARD_BINS}")
 #: A beam within this many sectors of a bearing a cell was heard from would hear it again (one
 #: more sector: half as likely). Measured: 2 changes the box's clearing time by nothing and
 #: costs 0.003-0.004 of office recall.
@@ -179,7 +185,9 @@ def trinary(grid: OccupancyMap) -> Int8Grid:
     """Occupied (100), free (0) or unknown (-1) for every cell, shape ``grid.shape``.
 
     Each grid with its own rule: :class:`CarvedGrid` with its
-    :attr:`CarvedGridParams.occupied_threshold` and ``free_threshold``;
+    :attr:`CarvedGridParams.occupied_threshold` and ``free_threshold``, compared in log-odds
+    (:meth:`CarvedGrid.trinary`: equal to comparing probabilities up to rounding within a few
+    ulp of the thresholds);
     :class:`~sonarcarve.grids.RangeSensorLayer` as it writes its master costmap
     (:meth:`~sonarcarve.grids.RangeSensorLayer.costs`: lethal above ``mark_threshold``, free
     below ``clear_threshold``); :class:`~sonarcarve.grids.OccupancyGrid` (Elfes) occupied above
@@ -208,6 +216,7 @@ def trinary(grid: OccupancyMap) -> Int8Grid:
 
 
 def _classify(p: FloatArray, occupied: float, free: float) -> Int8Grid:
+    """Occupied where the probability ``p`` is above ``occupied``, free below ``free``."""
     out = np.full(p.shape, UNKNOWN, dtype=np.int8)
     out[p > occupied] = OCCUPIED
     out[p < free] = FREE
@@ -239,7 +248,9 @@ class CarvedGridParams:
     occupied_threshold, free_threshold : float
         :meth:`CarvedGrid.trinary` calls a cell occupied above the first and free below the
         second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196 (ROS
-        map_saver's ``free_thresh``).
+        map_saver's ``free_thresh``). Compared in log-odds (``l > logit(occupied)``), which
+        equals comparing :meth:`CarvedGrid.probabilities` with the threshold up to rounding:
+        a cell within a few ulp of a threshold's logit may fall on the other side.
     range_tolerance : float
         ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm.
     spread : bool
@@ -252,7 +263,9 @@ class CarvedGridParams:
         ``d_f``, metres > 0, of the free-space fade; ``inf``: no fade. Default ROS's 1.2 m.
     surface_aware : bool
         Weigh the free space at cells believed occupied by the beam's audibility (module
-        docstring); False: the fade everywhere (the grid before issue 10's clearing work).
+        docstring); False: the fade everywhere, the rule of the grid before issue 10's clearing
+        work, equal to it up to rounding order (the fade is now applied as
+        ``γ · (logit(p_miss) · f)``, before as ``(γ · f) · logit(p_miss)``).
     p_miss_heard : float
         Probability one on-axis beam that would have heard a cell's surface and passed it leaves
         the cell, in (0, 0.5); 0.2. Measured on the changing-scenes box with no-echo readings,
@@ -479,9 +492,14 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
                 y: float, theta: float, r: float, half: float, band: float, l_miss: float,
                 l_min: float, l_max: float, fade: float, heard: npt.NDArray[np.uint32],
                 aware: bool, l_heard: float) -> None:
-    """One reading's free space: ``γ(α) · w · logit(p_miss)`` on the beam's cells nearer than
-    ``r - band``, clamped; ``w`` the fade for cells not believed occupied (``base <= 0``),
-    the cell's :func:`_audibility` for the others (``hear > 0``; else the fade for all)."""
+    """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
+    ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
+    occupied (``base <= 0``), and where ``aware`` on the others
+    ``γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the cell's
+    :func:`_audibility` from the beam's bearing (``aware`` False: the fade for all).
+
+    A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
+    from (module docstring)."""
     reach = r - band
     if reach <= 0.0:
         return
@@ -518,6 +536,16 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
                 audible = _audibility(int(heard[i, j]), _heard_bin(theta + a))
                 miss = audible * l_heard + (1.0 - audible) * miss
             base[i, j] = min(l_max, max(l_min, cell + w * miss))
+            # Freed: the surface it was heard from is believed gone, so are its bearings (else
+            # a later, different surface here would be cleared at full strength from them).
+            # Now, at the crossing, and not when a band next marks the cell: the bits are read
+            # only while base > 0, which only a final band restores, so the bearings kept are
+            # exactly those heard since the cell was freed; forgetting them at every free-space
+            # update below 0 would drop the bands that raised the cell back, and forgetting at
+            # the next band would keep only that band's. The stored (float32) value decides,
+            # as it does when the bits are read.
+            if cell > 0.0 and base[i, j] <= 0.0:
+                heard[i, j] = 0
 
 
 @compiled
@@ -584,7 +612,7 @@ def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.
         if drawn_seq[slot] >= 0:
             _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, drawn[slot, 0], drawn[slot, 1],
                       drawn[slot, 2], drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], band,
-                  heard, profile)
+                      heard, profile)
         _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, x[k], y[k], r[k], lo[k], hi[k], value,
                   band, heard, profile)
         drawn[slot, 0] = x[k]
@@ -696,7 +724,7 @@ class CarvedGrid:
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
-        self._heard = np.zeros((ny, nx), dtype=np.uint32)
+        self._heard = np.zeros((ny, nx), dtype=_HEARD_DTYPE)
         size = method.history.storage_size
         # Per slot, what was drawn into ``live``: x, y, r, lo, hi, value; and the arc's
         # sequence number (its position in the stream of arcs), -1 for nothing.
@@ -889,10 +917,13 @@ class CarvedGrid:
         return np.asarray(1.0 / (1.0 + np.exp(-self.log_odds)))
 
     def trinary(self) -> Int8Grid:
-        """:data:`OCCUPIED` (100) above :attr:`CarvedGridParams.occupied_threshold`,
-        :data:`FREE` (0) below ``free_threshold``, else :data:`UNKNOWN` (-1).
+        """:data:`OCCUPIED` (100) where the log-odds :attr:`log_odds` is above
+        ``logit(`` :attr:`CarvedGridParams.occupied_threshold` ``)``, :data:`FREE` (0) below
+        ``logit(free_threshold)``, else :data:`UNKNOWN` (-1).
 
-        Compared in log-odds (the logistic is monotone), one pass, no temporary grids.
+        Compared in log-odds, one pass, no temporary grids. The logistic is monotone, so this
+        is comparing :meth:`probabilities` with the thresholds, up to rounding: a cell whose
+        log-odds lies within a few ulp of a threshold's logit may land in the other class.
         """
         self._sync()
         out = np.empty(self.shape, dtype=np.int8)
@@ -902,8 +933,9 @@ class CarvedGrid:
         return out
 
     def occupied_mask(self, threshold: float | None = None) -> BoolArray:
-        """Cells whose probability is above ``threshold`` (default
-        :attr:`CarvedGridParams.occupied_threshold`), shape :attr:`shape`."""
+        """Cells whose log-odds is above ``logit(threshold)`` (default
+        :attr:`CarvedGridParams.occupied_threshold`), shape :attr:`shape`: the probability
+        above ``threshold`` up to rounding, as :meth:`trinary`."""
         limit = self._params.occupied_threshold if threshold is None else _check_probability(
             "threshold", threshold, 0.0, 1.0)
         return np.asarray(self.log_odds > _logit(limit))
