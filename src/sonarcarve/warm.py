@@ -1,0 +1,225 @@
+"""Fill numba's on-disk cache once, so that a user's first ``add()`` loads machine code.
+
+Every kernel of the product is compiled by numba on first use and cached on disk
+(``cache=True``; :mod:`sonarcarve.geometry._compiled` keys the cache on the kernel sources).
+Compiling is slow: carving's first ``add()`` compiles about 21 functions, 6.6-7.4 s of CPU
+(``benchmarks/speed.py --sections cold``), and compiling less was measured not to get near a
+second. So the honest remedy is to compile once, right after installing: :func:`warm_up` runs
+every method, grid and compiled I/O path on a small built-in stream, and every later process
+(the same Python, numba and CPU, the same sources) loads the cached machine code instead.
+
+Where the cache lives is numba's choice: ``NUMBA_CACHE_DIR`` if set, otherwise the
+``__pycache__`` folders next to the kernel modules (or a user cache folder when those are not
+writable). :func:`cache_location` says which.
+
+A step list rather than one run: numba compiles one version per argument type, and the types
+depend on the path (one reading or a block, an echo or none, a fresh or a re-used map), so
+each path a normal run takes is taken here once. ``tests/test_warm.py`` checks, in a fresh
+process with the warmed cache, that a normal run of every method compiles nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer, trinary
+from sonarcarve.io import read_readings_csv, write_map_csv, write_readings_csv
+from sonarcarve.io.map_csv import map_csv_sink
+from sonarcarve.io.readings_csv import iter_readings_csv
+from sonarcarve.methods import METHODS, MethodConfig, make_method
+from sonarcarve.pipeline import process_chunks
+from sonarcarve.readings import Reading, ReadingBatch
+
+__all__ = ["WARM_READINGS", "cache_location", "counting_compiles", "warm_stream", "warm_steps",
+           "warm_up"]
+
+#: Readings of the built-in stream: a default history (250) and 350 more, so that arcs leave
+#: the history (eviction, commit to the global map) many times.
+WARM_READINGS = 600
+
+#: Half the side of the square room of the built-in stream, metres.
+_ROOM = 2.5
+#: Sensors around the robot, evenly spread (8, like the roboND ring).
+_SENSORS = 8
+#: Every this many readings is a no-echo one (range inf, heard up to ``_MAX_RANGE``).
+_NO_ECHO_EVERY = 37
+_MAX_RANGE = 6.0
+#: Single ``add()`` calls before the rest goes in blocks through ``add_many()``.
+_SINGLE_ADDS = 40
+
+#: What a step reports: its name; what ``on_progress`` receives after each step.
+Progress = Callable[[str, float], None]
+
+
+def warm_stream(n: int = WARM_READINGS) -> ReadingBatch:
+    """A robot circling in a square room with a ring of sonars: ``n`` readings, deterministic.
+
+    Ranges are the distance to the room's walls along each sensor's axis plus a little noise
+    (seeded), and every ``_NO_ECHO_EVERY``-th reading hears nothing up to ``_MAX_RANGE``.
+    """
+    i = np.arange(n)
+    heading = 2.0 * math.pi * i / 400.0
+    x, y = 1.2 * np.cos(heading), 1.2 * np.sin(heading)
+    sensor = i % _SENSORS
+    theta = heading + math.pi / 2.0 + 2.0 * math.pi * sensor / _SENSORS
+    c, s = np.cos(theta), np.sin(theta)
+    with np.errstate(divide="ignore"):  # an axis parallel to a wall never meets it
+        to_x = np.where(c > 0, (_ROOM - x) / c, np.where(c < 0, (-_ROOM - x) / c, np.inf))
+        to_y = np.where(s > 0, (_ROOM - y) / s, np.where(s < 0, (-_ROOM - y) / s, np.inf))
+    rng = np.random.default_rng(0)
+    r = np.minimum(to_x, to_y) + rng.normal(0.0, 0.01, n)
+    max_range = np.full(n, np.nan)
+    no_echo = i % _NO_ECHO_EVERY == _NO_ECHO_EVERY - 1
+    r[no_echo], max_range[no_echo] = np.inf, _MAX_RANGE
+    return ReadingBatch.from_arrays(t=0.05 * i, sensor=sensor, x=x, y=y, theta=theta, range=r,
+                                    beam_width=np.full(n, math.radians(22.5)),
+                                    max_range=max_range, source="warm-up stream")
+
+
+def _readings(batch: ReadingBatch, rows: range) -> Iterator[Reading]:
+    for k in rows:
+        yield Reading(float(batch.t[k]), int(batch.sensor[k]), float(batch.x[k]),
+                      float(batch.y[k]), float(batch.theta[k]), float(batch.range[k]),
+                      float(batch.beam_width[k]), float(batch.max_range[k]))
+
+
+def _run_method(name: str, config: MethodConfig) -> None:
+    """Every path of a method a run takes: single adds, blocks, no echo, maps, measures."""
+    batch = warm_stream()
+    method = make_method(name, config)
+    for reading in _readings(batch, range(_SINGLE_ADDS)):
+        method.add(reading)
+        method.local_map()
+    last = float(batch.t[_SINGLE_ADDS - 1])
+    method.add(Reading(last + 0.01, 0, 0.0, 0.0, 0.0, math.inf, max_range=_MAX_RANGE))
+    method.add_many(batch[_SINGLE_ADDS:])
+    method.local_map()
+    method.local_map()  # asked again with nothing new: the cached map
+    method.global_map()
+    method.measures()
+    method.finish()
+    # A second method of the same kind re-uses the compiled code; a process-like run feeds
+    # it one whole block, as ``sonarcarve process`` does.
+    again = make_method(name, config)
+    again.add_many(batch)
+    again.finish()
+
+
+def _run_grids() -> None:
+    """The three occupancy grids: one reading, a block, the grid read out."""
+    batch = warm_stream()
+    extent = (-_ROOM, -_ROOM, _ROOM, _ROOM)
+    grids: tuple[CarvedGrid | RangeSensorLayer | OccupancyGrid, ...] = (
+        CarvedGrid.around(extent, 0.1), RangeSensorLayer(0.1, extent),
+        OccupancyGrid.around(extent, 0.1))
+    for grid in grids:
+        grid.add(next(_readings(batch, range(1))))
+        grid.add_many(batch[1:])
+        grid.probabilities()
+        trinary(grid)
+        grid.occupied_mask()
+    grids[0].trinary()
+
+
+def _run_csv() -> None:
+    """The readings CSV's compiled parser and the map CSV's compiled writer, in a temp folder.
+
+    Both ways a map is written (whole, and streamed a block at a time as ``process`` does) and
+    both ways a log is read (whole, and in chunks).
+    """
+    batch = warm_stream()
+    with tempfile.TemporaryDirectory(prefix="sonarcarve-warm-") as folder:
+        log = Path(folder) / "readings.csv"
+        write_readings_csv(batch, log)
+        read_readings_csv(log)
+        method = make_method("centerline", MethodConfig())
+        with map_csv_sink(Path(folder) / "streamed.csv") as sink:
+            process_chunks(iter_readings_csv(log), method, sink=sink)
+        write_map_csv(make_method("centerline").finish(), Path(folder) / "empty.csv")
+        method = make_method("centerline")
+        method.add_many(batch)
+        write_map_csv(method.finish(), Path(folder) / "map.csv")
+
+
+def warm_steps() -> list[tuple[str, Callable[[], None]]]:
+    """The steps of :func:`warm_up`: a name and what it runs, in order."""
+    steps: list[tuple[str, Callable[[], None]]] = [
+        (f"method {name}", lambda name=name: _run_method(name, MethodConfig()))  # type: ignore[misc]
+        for name in METHODS
+    ]
+    # Specular-aware carving (beta < 90 deg) takes other branches of the same kernels; the
+    # carved grid's default method uses it.
+    steps.append(("method carve, max_incidence 60 deg",
+                  lambda: _run_method("carve", MethodConfig(max_incidence=math.radians(60)))))
+    steps.append(("grids (carved, range sensor layer, occupancy)", _run_grids))
+    steps.append(("CSV reader and map writer", _run_csv))
+    return steps
+
+
+@contextmanager
+def counting_compiles() -> Iterator[list[str]]:
+    """Collect the name of every function numba compiles (not loads from cache) meanwhile.
+
+    numba's ``numba:compile`` event fires only when a function is really compiled; loading a
+    cached version does not fire it.
+    """
+    from numba.core import event  # numba is loaded by the kernels already
+
+    names: list[str] = []
+
+    class _Listener(event.Listener):  # type: ignore[misc]  # numba is untyped
+        def on_start(self, ev: event.Event) -> None:
+            pass
+
+        def on_end(self, ev: event.Event) -> None:
+            names.append(str(ev.data["dispatcher"].py_func.__qualname__))
+
+    listener = _Listener()
+    event.register("numba:compile", listener)
+    try:
+        yield names
+    finally:
+        event.unregister("numba:compile", listener)
+
+
+def warm_up(on_progress: Progress | None = None) -> list[tuple[str, float, int]]:
+    """Run every compiled path once so numba's cache holds it; return what each step took.
+
+    Parameters
+    ----------
+    on_progress : callable, optional
+        Called after each step with its name and its wall time in seconds.
+
+    Returns
+    -------
+    list of (str, float, int)
+        Per step (see :func:`warm_steps`): its name, its wall time in seconds and how many
+        functions numba compiled in it (0 when the cache already held them all).
+    """
+    done: list[tuple[str, float, int]] = []
+    for what, step in warm_steps():
+        with counting_compiles() as names:
+            tic = time.perf_counter()
+            step()
+            seconds = time.perf_counter() - tic
+        done.append((what, seconds, len(names)))
+        if on_progress is not None:
+            on_progress(what, seconds)
+    return done
+
+
+def cache_location() -> str:
+    """Where numba keeps the compiled kernels: ``NUMBA_CACHE_DIR`` or the package's folders."""
+    chosen = os.environ.get("NUMBA_CACHE_DIR")
+    if chosen:
+        return f"{chosen} (NUMBA_CACHE_DIR)"
+    package = Path(__file__).resolve().parent
+    return f"__pycache__ folders under {package} (set NUMBA_CACHE_DIR to choose another)"
