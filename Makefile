@@ -11,12 +11,16 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 
+# After installing, `sonarcarve warm` compiles every kernel once into numba's on-disk cache
+# (about a minute), so the first run of each method loads machine code instead of compiling.
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e '.[all]'
+	$(BIN)/sonarcarve warm --quiet
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e '.[test]'
+	$(BIN)/sonarcarve warm --quiet
 	touch $@ $(STAMP)
 
 demo: $(STAMP)  ## simulate an office tour, map it with every method, print the table, write figures

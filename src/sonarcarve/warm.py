@@ -38,8 +38,14 @@ from sonarcarve.methods import METHODS, MethodConfig, make_method
 from sonarcarve.pipeline import process_chunks
 from sonarcarve.readings import Reading, ReadingBatch
 
-__all__ = ["WARM_READINGS", "cache_location", "counting_compiles", "warm_stream", "warm_steps",
-           "warm_up"]
+__all__ = [
+    "WARM_READINGS",
+    "cache_location",
+    "counting_compiles",
+    "warm_steps",
+    "warm_stream",
+    "warm_up",
+]
 
 #: Readings of the built-in stream: a default history (250) and 350 more, so that arcs leave
 #: the history (eviction, commit to the global map) many times.
@@ -117,16 +123,16 @@ def _run_grids() -> None:
     """The three occupancy grids: one reading, a block, the grid read out."""
     batch = warm_stream()
     extent = (-_ROOM, -_ROOM, _ROOM, _ROOM)
+    carved = CarvedGrid.around(extent, 0.1)
     grids: tuple[CarvedGrid | RangeSensorLayer | OccupancyGrid, ...] = (
-        CarvedGrid.around(extent, 0.1), RangeSensorLayer(0.1, extent),
-        OccupancyGrid.around(extent, 0.1))
+        carved, RangeSensorLayer(0.1, extent), OccupancyGrid.around(extent, 0.1))
     for grid in grids:
         grid.add(next(_readings(batch, range(1))))
         grid.add_many(batch[1:])
         grid.probabilities()
         trinary(grid)
         grid.occupied_mask()
-    grids[0].trinary()
+    carved.trinary()
 
 
 def _run_csv() -> None:
@@ -175,7 +181,7 @@ def counting_compiles() -> Iterator[list[str]]:
 
     names: list[str] = []
 
-    class _Listener(event.Listener):  # type: ignore[misc]  # numba is untyped
+    class _Listener(event.Listener):
         def on_start(self, ev: event.Event) -> None:
             pass
 
@@ -183,11 +189,11 @@ def counting_compiles() -> Iterator[list[str]]:
             names.append(str(ev.data["dispatcher"].py_func.__qualname__))
 
     listener = _Listener()
-    event.register("numba:compile", listener)
+    event.register("numba:compile", listener)  # type: ignore[no-untyped-call]  # numba
     try:
         yield names
     finally:
-        event.unregister("numba:compile", listener)
+        event.unregister("numba:compile", listener)  # type: ignore[no-untyped-call]
 
 
 def warm_up(on_progress: Progress | None = None) -> list[tuple[str, float, int]]:
