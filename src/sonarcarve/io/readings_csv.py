@@ -537,10 +537,11 @@ def _parse_numbers(raw: bytes, count: int) -> FloatArray | None:
     aside), or a field is not a number, or there are not ``count`` fields.
 
     Two parsers, both exact: the compiled one of :func:`~sonarcarve.io.float_text.parse_floats`
-    (about twice numpy's rate on repr-written fields), which decides every field that ``repr`` or a short decimal
-    wrote, and for the rest numpy's C parser (``PyOS_string_to_double``, Python's own correctly
-    rounded conversion: on those bytes exactly what ``float`` gives, overflow to ``inf`` and
-    subnormals included). ``float`` alone also reads spaces, underscores, ``nan`` and the other
+    (about twice numpy's rate on repr-written fields), which decides every field that
+    ``repr`` or a short decimal wrote, and for the rest numpy's C parser
+    (``PyOS_string_to_double``, Python's own correctly rounded conversion: on those bytes
+    exactly what ``float`` gives, overflow to ``inf`` and subnormals included). ``float`` alone
+    also reads spaces, underscores, ``nan`` and the other
     spellings of infinity, so a block holding any of them goes to the exact path.
     """
     if b"\r" in raw:
