@@ -332,6 +332,26 @@ class CarvedGridParams:
 
 # -- compiled kernels -----------------------------------------------------------------------------
 
+class _Model(NamedTuple):
+    """The grid's geometry and sensor model as the kernels use them (metres, log-odds), one
+    argument instead of fourteen positional numbers that could be swapped unnoticed."""
+
+    xmin: float
+    ymin: float
+    h: float
+    band: float  # b, half-width of the occupied band
+    l_hit: float
+    l_miss: float
+    l_heard: float  # logit(p_miss_heard)
+    l_min: float
+    l_max: float
+    spread: float  # 1.0: spread each echo over its carved interval, 0.0: not
+    unit: float  # max(spread_length, h)
+    fade: float  # d_f, inf: no fade
+    aware: bool
+    profile: float  # band_profile
+
+
 @compiled_inline
 def _cell_range(lo: float, hi: float, origin: float, h: float, n: int) -> tuple[int, int]:
     """Indices ``k0..k1`` of the cells whose centres may lie in ``[lo, hi]`` (one cell of
@@ -370,30 +390,29 @@ def _sector_box(x: float, y: float, t1: float, t2: float, r_in: float,
 
 
 @compiled_inline
-def _arc_value(r: float, lo: float, hi: float, weight: float, h: float, l_hit: float,
-               spread: float, unit: float) -> float:
+def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model) -> float:
     """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``."""
     if not weight > 0.0:
         return 0.0
     s = 1.0
-    if spread > 0.0:
+    if m.spread > 0.0:
         length = r * (hi - lo)
-        if length > unit:
-            s = unit / length
-    return weight * s * l_hit
+        if length > m.unit:
+            s = m.unit / length
+    return weight * s * m.l_hit
 
 
 @compiled_inline
-def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, l_min: float, l_max: float,
-              xmin: float, ymin: float, h: float, x: float, y: float, r: float, lo: float,
-              hi: float, value: float, band: float, heard: npt.NDArray[np.uint32],
-              profile: float) -> None:
+def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
+              m: _Model, x: float, y: float, r: float, lo: float, hi: float,
+              value: float) -> None:
     """Add ``value`` to the cells of the arc's band (clamped into ``[l_min, l_max]`` if
     ``clamp``): centre within ``band`` of the circle, bearing within ``[lo, hi]`` widened by
     ``h / 2r``. A final (``clamp``) band with ``value > 0`` also records in ``heard`` the
     bearing each cell was heard from."""
     if value == 0.0:
         return
+    xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
     ny, nx = grid.shape
     widen = 0.5 * h / r
     t1 = lo - widen
@@ -421,7 +440,7 @@ def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, l_min: float, l_max: 
                 u = off / half
                 v *= min(1.0, profile * (1.0 - u * u))
             if clamp:
-                grid[i, j] = min(l_max, max(l_min, grid[i, j] + v))
+                grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + v))
                 if v > 0.0:
                     heard[i, j] |= 1 << _heard_bin(mid + off)
             else:
@@ -488,10 +507,8 @@ def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x:
 
 
 @compiled_inline
-def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: float, x: float,
-                y: float, theta: float, r: float, half: float, band: float, l_miss: float,
-                l_min: float, l_max: float, fade: float, heard: npt.NDArray[np.uint32],
-                aware: bool, l_heard: float) -> None:
+def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                x: float, y: float, theta: float, r: float, half: float) -> None:
     """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
     occupied (``base <= 0``), and where ``aware`` on the others
@@ -500,9 +517,10 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
 
     A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
     from (module docstring)."""
-    reach = r - band
+    reach = r - m.band
     if reach <= 0.0:
         return
+    xmin, ymin, h, l_miss, fade = m.xmin, m.ymin, m.h, m.l_miss, m.fade
     ny, nx = base.shape
     c, s, cos_half = math.cos(theta), math.sin(theta), math.cos(half)
     xlo, ylo, xhi, yhi = _sector_box(x, y, theta - half, theta + half, 0.0, reach)
@@ -532,10 +550,10 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
             miss = l_miss
             if fade < math.inf:
                 miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
-            if aware and cell > 0.0:
+            if m.aware and cell > 0.0:
                 audible = _audibility(int(heard[i, j]), _heard_bin(theta + a))
-                miss = audible * l_heard + (1.0 - audible) * miss
-            base[i, j] = min(l_max, max(l_min, cell + w * miss))
+                miss = audible * m.l_heard + (1.0 - audible) * miss
+            base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
             # Freed: the surface it was heard from is believed gone, so are its bearings (else
             # a later, different surface here would be cleared at full strength from them).
             # Now, at the crossing, and not when a band next marks the cell: the bits are read
@@ -549,48 +567,44 @@ def _free_space(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: floa
 
 
 @compiled
-def _fold_kernel(base: npt.NDArray[np.float32], xmin: float, ymin: float, h: float,
+def _fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
                  x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
                  half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
-                 fx: FloatArray, fy: FloatArray, fr: FloatArray, flo: FloatArray,
-                 fhi: FloatArray, fweight: FloatArray, fseq: npt.NDArray[np.int64],
-                 band: float, l_hit: float, l_miss: float, l_min: float, l_max: float,
-                 spread: float, unit: float, fade: float, heard: npt.NDArray[np.uint32],
-                 aware: bool, l_heard: float, profile: float) -> None:
+                 finals: _Finals) -> None:
     """The final updates of a batch in reading order: before the free space of reading ``k``
     (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
-    final band of every arc it pushed out of the history (``fseq + capacity <= seq``)."""
+    final band of every arc it pushed out of the history (``finals.seq + capacity <= seq``)."""
     p = 0
-    nf = fseq.shape[0]
+    nf = finals.seq.shape[0]
     for k in range(x.shape[0]):
-        seq = seqs[k]
-        while p < nf and fseq[p] + capacity <= seq:
-            value = _arc_value(fr[p], flo[p], fhi[p], fweight[p], h, l_hit, spread, unit)
-            _draw_arc(base, True, l_min, l_max, xmin, ymin, h, fx[p], fy[p], fr[p], flo[p],
-                      fhi[p], value, band, heard, profile)
+        while p < nf and finals.seq[p] + capacity <= seqs[k]:
+            _draw_final(base, heard, m, finals, p)
             p += 1
-        _free_space(base, xmin, ymin, h, x[k], y[k], theta[k], r[k], half[k], band, l_miss,
-                    l_min, l_max, fade, heard, aware, l_heard)
+        _free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k])
     while p < nf:
-        value = _arc_value(fr[p], flo[p], fhi[p], fweight[p], h, l_hit, spread, unit)
-        _draw_arc(base, True, l_min, l_max, xmin, ymin, h, fx[p], fy[p], fr[p], flo[p],
-                  fhi[p], value, band, heard, profile)
+        _draw_final(base, heard, m, finals, p)
         p += 1
+
+
+@compiled_inline
+def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                finals: _Finals, p: int) -> None:
+    """Arc ``p`` of ``finals`` into ``base``, for good."""
+    value = _arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
+    _draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
+              finals.hi[p], value)
 
 
 @compiled
 def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
-                   slots: SlotArray, seqs: npt.NDArray[np.int64], xmin: float, ymin: float,
-                   h: float, band: float, heard: npt.NDArray[np.uint32],
-                   profile: float) -> None:
+                   slots: SlotArray, seqs: npt.NDArray[np.int64],
+                   heard: npt.NDArray[np.uint32], m: _Model) -> None:
     """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
     for k in range(slots.shape[0]):
         slot = slots[k]
         if drawn_seq[slot] != seqs[k]:
             continue
-        _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, drawn[slot, 0], drawn[slot, 1],
-                  drawn[slot, 2], drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], band,
-                  heard, profile)
+        _undraw(live, heard, m, drawn, slot)
         drawn_seq[slot] = -1
 
 
@@ -598,23 +612,18 @@ def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[n
 def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
                  slots: SlotArray, seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
                  r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
-                 xmin: float, ymin: float, h: float, band: float, l_hit: float,
-                 spread: float, unit: float, heard: npt.NDArray[np.uint32],
-                 profile: float) -> int:
+                 heard: npt.NDArray[np.uint32], m: _Model) -> int:
     """Redraw every live arc whose interval or weight changed; returns how many."""
     changed = 0
     for k in range(slots.shape[0]):
         slot = slots[k]
-        value = _arc_value(r[k], lo[k], hi[k], weight[k], h, l_hit, spread, unit)
+        value = _arc_value(r[k], lo[k], hi[k], weight[k], m)
         if (drawn_seq[slot] == seqs[k] and drawn[slot, 3] == lo[k] and drawn[slot, 4] == hi[k]
                 and drawn[slot, 5] == value):
             continue
         if drawn_seq[slot] >= 0:
-            _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, drawn[slot, 0], drawn[slot, 1],
-                      drawn[slot, 2], drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], band,
-                      heard, profile)
-        _draw_arc(live, False, 0.0, 0.0, xmin, ymin, h, x[k], y[k], r[k], lo[k], hi[k], value,
-                  band, heard, profile)
+            _undraw(live, heard, m, drawn, slot)
+        _draw_arc(live, False, heard, m, x[k], y[k], r[k], lo[k], hi[k], value)
         drawn[slot, 0] = x[k]
         drawn[slot, 1] = y[k]
         drawn[slot, 2] = r[k]
@@ -624,6 +633,14 @@ def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.
         drawn_seq[slot] = seqs[k]
         changed += 1
     return changed
+
+
+@compiled_inline
+def _undraw(live: FloatArray, heard: npt.NDArray[np.uint32], m: _Model, drawn: FloatArray,
+            slot: int) -> None:
+    """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``."""
+    _draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
+              drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])
 
 
 @compiled
@@ -721,6 +738,10 @@ class CarvedGrid:
         self._spread = 1.0 if p.spread else 0.0
         self._unit = max(p.spread_length, self._resolution)
         self._l_heard = _logit(p.p_miss_heard)
+        self._model = _Model(xmin, ymin, self._resolution, self.band, self._l_hit,
+                             self._l_miss, self._l_heard, self._l_min, self._l_max,
+                             self._spread, self._unit, float(p.fade_range),
+                             p.surface_aware, float(p.band_profile))
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
@@ -847,15 +868,10 @@ class CarvedGrid:
             r = np.where(no_echo, batch.max_range + self.band, r)
         else:
             seqs = first_seq + np.arange(n, dtype=np.int64)
-        _fold_kernel(self._base, self._bounds[0], self._bounds[1], self._resolution,
-                     np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
-                     np.ascontiguousarray(batch.theta), np.ascontiguousarray(r),
-                     np.ascontiguousarray(half), seqs, history.capacity, finals.x,
-                     finals.y, finals.r, finals.lo, finals.hi, finals.weight, finals.seq,
-                     self.band, self._l_hit, self._l_miss,
-                     self._l_min, self._l_max, self._spread, self._unit,
-                     self._params.fade_range, self._heard, self._params.surface_aware,
-                     self._l_heard, self._params.band_profile)
+        _fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
+                     np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
+                     np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
+                     history.capacity, finals)
         self.readings += n
         self._stale = True
 
@@ -863,9 +879,8 @@ class CarvedGrid:
         """Arcs leaving the history: their live contribution out, their final one pending."""
         seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
         self._next_final += len(slots)
-        _undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs,
-                       self._bounds[0], self._bounds[1], self._resolution, self.band,
-                       self._heard, self._params.band_profile)
+        _undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
+                       self._model)
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = _intervals(x, y, est)
         self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
@@ -892,9 +907,7 @@ class CarvedGrid:
             lo, hi, weight = _intervals(x, y, est)
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             _sync_kernel(self._live, self._drawn, self._drawn_seq, np.ascontiguousarray(slots),
-                         seqs, x, y, r, lo, hi, weight, self._bounds[0], self._bounds[1],
-                         self._resolution, self.band, self._l_hit, self._spread,
-                         self._unit, self._heard, self._params.band_profile)
+                         seqs, x, y, r, lo, hi, weight, self._heard, self._model)
         self._stale = False
 
     # -- reading the map ---------------------------------------------------------------------
