@@ -1,0 +1,86 @@
+"""``sonarcarve warm``: help, table, quiet line, cache location (steps stubbed: no compiling).
+
+That warming really fills the cache is checked in ``tests/test_warm.py`` with subprocesses.
+"""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import pytest
+
+from sonarcarve.cli import main
+
+
+@pytest.fixture
+def stub_steps(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Two quick steps instead of the real ones (which compile for about a minute)."""
+    calls: list[str] = []
+    steps = [("method alpha", lambda: calls.append("alpha")),
+             ("CSV beta", lambda: calls.append("beta"))]
+    import sonarcarve.cli.warm as command
+
+    monkeypatch.setattr("sonarcarve.warm.warm_steps", lambda: steps)
+    monkeypatch.setattr(command, "warm_steps", lambda: steps)
+    return calls
+
+
+def test_help_says_what_it_is_for(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["warm", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.replace("│", " ").split())
+    for phrase in ("Usage: sonarcarve warm [OPTIONS]", "first run", "several seconds",
+                   "NUMBA_CACHE_DIR", "__pycache__", "--quiet"):
+        assert phrase in text, phrase
+
+
+def test_the_table_lists_every_step_and_the_cache(
+    stub_steps: list[str], capsys: pytest.CaptureFixture[str], tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert main(["warm"]) == 0
+    out = capsys.readouterr().out
+    assert stub_steps == ["alpha", "beta"]
+    for word in ("method alpha", "CSV beta", "total", "functions compiled", "seconds"):
+        assert word in out, word
+    assert str(tmp_path) in out.replace("\n", "")
+    assert "Nothing needed compiling" in out  # the stubs compile nothing
+
+
+def test_quiet_prints_one_line(
+    stub_steps: list[str], capsys: pytest.CaptureFixture[str], tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert main(["warm", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert stub_steps == ["alpha", "beta"]
+    assert out.startswith("sonarcarve warm: 0 functions compiled in ")
+    assert str(tmp_path) in out.replace("\n", "")
+    assert "method alpha" not in out
+
+
+def test_without_numba_cache_dir_it_names_the_package_folders(
+    stub_steps: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert main(["warm", "-q"]) == 0
+    out = capsys.readouterr().out.replace("\n", "")
+    assert "__pycache__" in out
+    assert "sonarcarve" in out
+
+
+def test_an_unknown_option_is_one_line_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["warm", "--fast"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("sonarcarve: error: ")
+    assert len(err.splitlines()) == 1
+
+
+def test_the_command_is_listed_with_its_first_paragraph() -> None:
+    from sonarcarve.cli.app import LAZY_COMMANDS, _load
+
+    module, summary = LAZY_COMMANDS["warm"]
+    command = _load("warm", module)
+    assert inspect.cleandoc(command.help or "").split("\n\n")[0].replace("\n", " ") == summary

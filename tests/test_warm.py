@@ -1,0 +1,176 @@
+"""``sonarcarve.warm``: warm_up fills numba's cache so that a later process compiles nothing.
+
+The decisive checks run in subprocesses with their own empty ``NUMBA_CACHE_DIR``: one process
+warms, a second, fresh one runs a normal workload and counts numba's compile events (which fire
+only for a real compile, never for a cache load). Nothing here asserts on time.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sonarcarve.methods import METHODS
+from sonarcarve.warm import counting_compiles, warm_steps, warm_stream, warm_up
+
+
+def _run(code: str, cache: Path) -> str:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env,
+                          capture_output=True, text=True, check=False, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return done.stdout
+
+
+def _compiled_names(stdout: str) -> list[str]:
+    line = next(line for line in stdout.splitlines() if line.startswith("COMPILED"))
+    return line.split()[1:]
+
+
+def test_the_stream_passes_the_history_and_has_no_echo_readings() -> None:
+    batch = warm_stream()
+    assert len(batch) >= 250 + 300  # past the default history: arcs leave it many times
+    no_echo = np.isinf(batch.range)
+    assert no_echo.any()
+    assert (~no_echo).sum() > 500
+    assert np.all(batch.max_range[no_echo] > 0)
+    # Every echo is the distance to a wall of the room: its far point lies on a wall.
+    x = batch.x + batch.range * np.cos(batch.theta)
+    y = batch.y + batch.range * np.sin(batch.theta)
+    wall = np.maximum(np.abs(x), np.abs(y))[~no_echo]
+    assert np.all(np.abs(wall - 2.5) < 0.1)
+
+
+def test_there_is_a_step_for_every_method_the_grids_and_the_csv_kernels() -> None:
+    names = [name for name, _ in warm_steps()]
+    for method in METHODS:
+        assert f"method {method}" in names
+    assert any("max_incidence" in name for name in names)
+    assert any("grids" in name for name in names)
+    assert any("CSV" in name for name in names)
+
+
+def test_warm_up_runs_every_step_and_reports_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The real steps compile for about a minute; here each step is a stand-in that records
+    # its call, so the reporting is checked, not the compiling (the subprocess tests do that).
+    calls: list[str] = []
+    steps = [(f"step {k}", lambda k=k: calls.append(f"step {k}")) for k in range(3)]
+    monkeypatch.setattr("sonarcarve.warm.warm_steps", lambda: steps)
+    seen: list[tuple[str, float]] = []
+    done = warm_up(on_progress=lambda what, seconds: seen.append((what, seconds)))
+    assert calls == ["step 0", "step 1", "step 2"]
+    assert [what for what, _, _ in done] == calls == [what for what, _ in seen]
+    assert all(seconds >= 0 and count == 0 for _, seconds, count in done)
+
+
+def test_counting_compiles_counts_a_fresh_function_once() -> None:
+    from numba import njit
+
+    @njit(cache=False)
+    def twice(v: float) -> float:
+        return 2.0 * v
+
+    with counting_compiles() as names:
+        twice(1.0)
+        twice(2.0)  # the same signature: no second compile
+    assert names.count("test_counting_compiles_counts_a_fresh_function_once.<locals>.twice") == 1
+    with counting_compiles() as names:
+        twice(3)  # an int: a new signature
+    assert len(names) == 1
+
+
+# What a normal run does in a fresh process: every method's first add() and a process-like
+# block, the readings CSV read and the map CSV written, as the CLI would.
+_NORMAL_RUN = """
+import math, sys, tempfile
+from pathlib import Path
+from sonarcarve.warm import counting_compiles, warm_stream
+from sonarcarve import MethodConfig, Reading, make_method
+from sonarcarve.io import read_readings_csv, write_map_csv, write_readings_csv
+methods = sys.argv[1:]
+with counting_compiles() as names:
+    for name in methods:
+        m = make_method(name, MethodConfig(history_size=250))
+        m.add(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0))
+        m.add(Reading(0.01, 1, 0.0, 0.1, 0.3, 1.5))
+        m.local_map()
+        m.finish()
+    with tempfile.TemporaryDirectory() as folder:
+        log = Path(folder) / "log.csv"
+        write_readings_csv(warm_stream(300), log)
+        batch = read_readings_csv(log)
+        m = make_method("centerline")
+        m.add_many(batch)
+        write_map_csv(m.finish(), Path(folder) / "map.csv")
+print("COMPILED", *names)
+"""
+
+
+def test_a_cold_cache_compiles_so_the_check_below_can_fail(tmp_path: Path) -> None:
+    """Without warming, the same normal run compiles the kernels (the oracle of the test)."""
+    names = _compiled_names(_run(_NORMAL_RUN.replace("sys.argv[1:]", "['centerline']"),
+                                 tmp_path))
+    assert len(names) >= 5, names
+
+
+def test_after_warm_up_a_fresh_process_compiles_nothing_cheap(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Centerline and the CSV kernels only: warmed in one process, used in another."""
+    warm = """
+    import sonarcarve.warm as w
+    steps = [s for s in w.warm_steps() if s[0] in ('method centerline',
+                                                   'CSV reader and map writer')]
+    w.warm_steps = lambda: steps
+    done = w.warm_up()
+    print('STEPS', len(done), sum(count for _, _, count in done))
+    """
+    out = _run(warm, tmp_path)
+    report = next(line for line in out.splitlines() if line.startswith("STEPS"))
+    steps, compiled = report.split()[1:]
+    assert steps == "2"
+    assert int(compiled) > 0
+    run = _NORMAL_RUN.replace("sys.argv[1:]", "['centerline']")
+    assert _compiled_names(_run(run, tmp_path)) == []
+
+
+@pytest.mark.slow
+def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
+    """Every step warmed (about a minute of compiling), then every method's first add()."""
+    out = _run("import sonarcarve.warm as w\nw.warm_up()\nprint('WARM')\n", tmp_path)
+    assert "WARM" in out
+    run = _NORMAL_RUN.replace("sys.argv[1:]", repr(sorted(METHODS)))
+    assert _compiled_names(_run(run, tmp_path)) == []
+    # Specular-aware carving and the grids, as `sonarcarve grid` runs them.
+    grids = """
+    import math
+    from sonarcarve.warm import counting_compiles, warm_stream
+    from sonarcarve import MethodConfig, make_method
+    from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer
+    batch = warm_stream(400)
+    box = (-3.0, -3.0, 3.0, 3.0)
+    with counting_compiles() as names:
+        m = make_method('carve', MethodConfig(max_incidence=math.radians(30)))
+        m.add_many(batch)
+        m.finish()
+        for grid in (CarvedGrid.around(box, 0.05), RangeSensorLayer(0.05, box),
+                     OccupancyGrid.around(box, 0.05)):
+            grid.add_many(batch)
+            grid.probabilities()
+    print('COMPILED', *names)
+    """
+    assert _compiled_names(_run(grids, tmp_path)) == []
+
+
+def test_no_echo_reading_of_the_stream_is_valid_input() -> None:
+    batch = warm_stream(40)
+    k = int(np.flatnonzero(np.isinf(batch.range))[0])
+    assert math.isinf(batch.range[k])
+    assert batch.max_range[k] == pytest.approx(6.0)
