@@ -17,7 +17,7 @@ from sonarcarve.cli import main
 from sonarcarve.cli.app import LAZY_COMMANDS, app
 
 COMMANDS = ("process", "simulate", "convert", "worlds", "demo", "experiments", "grid", "plot",
-            "view", "sweep")
+            "view", "sweep", "warm")
 
 
 @pytest.mark.parametrize(("args", "words"), [

@@ -55,6 +55,8 @@ lazy_command("sweep", "sonarcarve.cli.sweep",
 lazy_command("experiments", "sonarcarve.cli.experiments",
              "Regenerate the paper's experiments (section 5) on the simulator, plus what the "
              "paper could not measure without ground truth.")
+lazy_command("warm", "sonarcarve.cli.warm",
+             "Compile every method's kernels now, so that their first run needs no compiling.")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
