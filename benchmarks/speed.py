@@ -21,7 +21,10 @@ Sections (``--sections``):
   ``local_map()`` time (fresh after an ``add``, and asked again with nothing new) per method.
 * ``cold``: the first ``add()`` of each method in a fresh interpreter with an empty
   ``NUMBA_CACHE_DIR`` (so numba compiles), the import time, and how many functions numba
-  compiled for that first ``add()`` (numba's compile events).
+  compiled for that first ``add()`` (numba's compile events). Then the same after install:
+  ``sonarcarve warm`` run once in its own process into a new ``NUMBA_CACHE_DIR`` (as ``make``
+  does after ``pip install``), and each method's first ``add()`` in a further fresh
+  interpreter that loads the cached machine code (it must compile 0 functions).
 * ``stream``: peak RSS growth while carving ``--stream`` readings (the corridor stream
   repeated, times shifted), sampled every million: it must stay flat.
 """
@@ -170,31 +173,49 @@ class Count(event.Listener):
     def on_end(self, ev):
         compiled.append(ev.data["dispatcher"])
 event.register("numba:compile", Count())
-tic = time.perf_counter()
+tic, cpu = time.perf_counter(), time.process_time()
 m.add(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0))
-first = time.perf_counter() - tic
+first, first_cpu = time.perf_counter() - tic, time.process_time() - cpu
 functions = len(compiled)
 tic = time.perf_counter()
 m.add(Reading(0.01, 1, 0.0, 0.1, 0.3, 1.5))
 m.local_map()
 m.finish()
 rest = time.perf_counter() - tic
-print(imported, first, rest, functions)
+print(imported, first, rest, functions, first_cpu, len(compiled) - functions)
 """
+
+_WARM = "from sonarcarve.cli import main; raise SystemExit(main(['warm', '--quiet']))"
+
+
+def _cold_run(name: str, cache: str) -> list[str]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    return subprocess.run([sys.executable, "-c", _COLD, name], env=env, check=True,
+                          capture_output=True, text=True).stdout.split()
 
 
 def cold(args: argparse.Namespace) -> None:
-    print("\n### Cold start (fresh interpreter, empty NUMBA_CACHE_DIR; s)\n")
-    print("| method | import sonarcarve | first add() | then add, local_map, finish | "
-          "functions compiled by the first add() |")
-    print("|---|---:|---:|---:|---:|")
-    for name in args.methods:
-        with tempfile.TemporaryDirectory() as cache:
-            env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-            out = subprocess.run([sys.executable, "-c", _COLD, name], env=env, check=True,
-                                 capture_output=True, text=True).stdout.split()
-        imported, first, rest = (float(v) for v in out[:3])
-        print(f"| {name} | {imported:.2f} | {first:.2f} | {rest:.2f} | {out[3]} |", flush=True)
+    print("\n### Cold start (fresh interpreter; s)\n")
+    with tempfile.TemporaryDirectory() as warmed:
+        tic, cpu = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
+        said = subprocess.run([sys.executable, "-c", _WARM], check=True, capture_output=True,
+                              text=True, env={**os.environ, "NUMBA_CACHE_DIR": warmed}).stdout
+        warm_wall = time.perf_counter() - tic
+        warm_cpu = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime - cpu
+        print(f"`sonarcarve warm` into an empty NUMBA_CACHE_DIR, its own process: "
+              f"{warm_wall:.1f} s wall, {warm_cpu:.1f} s CPU ({' '.join(said.split())})\n")
+        print("| method | cache | import sonarcarve | first add() | first add() CPU | "
+              "then add, local_map, finish | functions compiled by the first add() | "
+              "compiled after it |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|")
+        for name in args.methods:
+            with tempfile.TemporaryDirectory() as empty:
+                runs = [("empty", _cold_run(name, empty)),
+                        ("after `sonarcarve warm`", _cold_run(name, warmed))]
+            for cache, out in runs:
+                imported, first, rest, first_cpu = (float(v) for v in (*out[:3], out[4]))
+                print(f"| {name} | {cache} | {imported:.2f} | {first:.2f} | {first_cpu:.2f} | "
+                      f"{rest:.2f} | {out[3]} | {out[5]} |", flush=True)
 
 
 def stream(args: argparse.Namespace) -> None:
