@@ -174,3 +174,10 @@ def test_no_echo_reading_of_the_stream_is_valid_input() -> None:
     k = int(np.flatnonzero(np.isinf(batch.range))[0])
     assert math.isinf(batch.range[k])
     assert batch.max_range[k] == pytest.approx(6.0)
+
+
+def test_warm_up_runs_the_steps_it_is_given() -> None:
+    calls: list[int] = []
+    done = warm_up(steps=[("only", lambda: calls.append(1))])
+    assert calls == [1]
+    assert [what for what, _, _ in done] == ["only"]

@@ -196,13 +196,18 @@ def counting_compiles() -> Iterator[list[str]]:
         event.unregister("numba:compile", listener)  # type: ignore[no-untyped-call]
 
 
-def warm_up(on_progress: Progress | None = None) -> list[tuple[str, float, int]]:
+def warm_up(on_progress: Progress | None = None,
+            steps: list[tuple[str, Callable[[], None]]] | None = None,
+            ) -> list[tuple[str, float, int]]:
     """Run every compiled path once so numba's cache holds it; return what each step took.
 
     Parameters
     ----------
     on_progress : callable, optional
         Called after each step with its name and its wall time in seconds.
+    steps : list of (str, callable), optional
+        What to run; by default :func:`warm_steps` (the command adds the demo's own kernels,
+        which the product may not import).
 
     Returns
     -------
@@ -211,7 +216,7 @@ def warm_up(on_progress: Progress | None = None) -> list[tuple[str, float, int]]
         functions numba compiled in it (0 when the cache already held them all).
     """
     done: list[tuple[str, float, int]] = []
-    for what, step in warm_steps():
+    for what, step in warm_steps() if steps is None else steps:
         with counting_compiles() as names:
             tic = time.perf_counter()
             step()

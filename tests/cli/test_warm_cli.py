@@ -23,6 +23,7 @@ def stub_steps(monkeypatch: pytest.MonkeyPatch) -> list[str]:
 
     monkeypatch.setattr("sonarcarve.warm.warm_steps", lambda: steps)
     monkeypatch.setattr(command, "warm_steps", lambda: steps)
+    monkeypatch.setattr(command, "_demo_metrics", lambda: calls.append("demo"))
     return calls
 
 
@@ -41,8 +42,8 @@ def test_the_table_lists_every_step_and_the_cache(
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert main(["warm"]) == 0
     out = capsys.readouterr().out
-    assert stub_steps == ["alpha", "beta"]
-    for word in ("method alpha", "CSV beta", "total", "functions compiled", "seconds"):
+    assert stub_steps == ["alpha", "beta", "demo"]
+    for word in ("method alpha", "CSV beta", "demo's truth metrics", "total", "functions compiled", "seconds"):
         assert word in out, word
     assert str(tmp_path) in out.replace("\n", "")
     assert "Nothing needed compiling" in out  # the stubs compile nothing
@@ -55,7 +56,7 @@ def test_quiet_prints_one_line(
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert main(["warm", "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert stub_steps == ["alpha", "beta"]
+    assert stub_steps == ["alpha", "beta", "demo"]
     assert out.startswith("sonarcarve warm: 0 functions compiled in ")
     assert str(tmp_path) in out.replace("\n", "")
     assert "method alpha" not in out
