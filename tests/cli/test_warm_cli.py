@@ -43,7 +43,8 @@ def test_the_table_lists_every_step_and_the_cache(
     assert main(["warm"]) == 0
     out = capsys.readouterr().out
     assert stub_steps == ["alpha", "beta", "demo"]
-    for word in ("method alpha", "CSV beta", "demo's truth metrics", "total", "functions compiled", "seconds"):
+    for word in ("method alpha", "CSV beta", "demo's truth metrics", "total",
+                 "functions compiled", "seconds"):
         assert word in out, word
     assert str(tmp_path) in out.replace("\n", "")
     assert "Nothing needed compiling" in out  # the stubs compile nothing
