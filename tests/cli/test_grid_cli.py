@@ -103,3 +103,23 @@ def test_a_semicolon_separated_file_gets_a_hint(
     assert err.count("\n") == 1
     assert err.startswith("sonarcarve: error: ")
     assert "the file looks separated by ';': the readings CSV is comma-separated" in err
+
+
+@pytest.mark.parametrize("model", ["carved", "range-sensor-layer", "elfes"])
+def test_a_log_with_no_echo_readings_maps_over_their_max_range(tmp_path: Path,
+                                                               model: str) -> None:
+    # The wall readings of the fixture, then silent firings facing away from it (-y) that
+    # listened 2 m: the grid reaches 2 m below the path, plus the 0.5 m margin.
+    wall = [Reading(t=0.1 * k, sensor=0, x=0.05 * k, y=0.0, theta=math.pi / 2, range=1.0)
+            for k in range(60)]
+    silent = [Reading(t=6.0 + 0.1 * k, sensor=1, x=0.05 * k, y=0.0, theta=-math.pi / 2,
+                      range=math.inf, max_range=2.0) for k in range(20)]
+    path = tmp_path / "readings.csv"
+    write_readings_csv(ReadingBatch.from_readings(wall + silent), path)
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(path), "--model", model, "--resolution", "0.1",
+                 "--out", str(out)]) == 0
+    m = read_map_server(out)
+    assert m.origin[1] == pytest.approx(-2.5, abs=1e-9)
+    rows, _ = m.cells.shape
+    assert m.origin[1] + rows * 0.1 == pytest.approx(1.5, abs=0.1)

@@ -57,12 +57,14 @@ GRID_MODELS: dict[str, Callable[[float, Bounds], OccupancyMap]] = {
 
 def readings_extent(batch: ReadingBatch, margin: float) -> Bounds:
     """``(xmin, ymin, xmax, ymax)`` of the sensors and their arcs (both beam edges and the
-    axis at the range), grown by ``margin`` metres."""
+    axis at the range; a no-echo reading's at its ``max_range``, the free space it clears),
+    grown by ``margin`` metres."""
     width = np.where(np.isnan(batch.beam_width), DEFAULT_BEAM_WIDTH, batch.beam_width)
+    reach = np.where(np.isfinite(batch.range), batch.range, batch.max_range)
     xs, ys = [batch.x], [batch.y]
     for k in (-0.5, 0.0, 0.5):
-        xs.append(batch.x + batch.range * np.cos(batch.theta + k * width))
-        ys.append(batch.y + batch.range * np.sin(batch.theta + k * width))
+        xs.append(batch.x + reach * np.cos(batch.theta + k * width))
+        ys.append(batch.y + reach * np.sin(batch.theta + k * width))
     x, y = np.concatenate(xs), np.concatenate(ys)
     return (float(x.min()) - margin, float(y.min()) - margin,
             float(x.max()) + margin, float(y.max()) + margin)
