@@ -177,29 +177,11 @@ def process_chunks(
     ProcessError
         As :func:`process_readings`.
     """
-    if sample_every is not None and sample_every < 1:
-        # 0 would silently mean the default, and a negative step would process nothing.
-        msg = f"sample_every must be at least 1 reading, got {sample_every}"
-        raise ProcessError(msg)
-    if method.readings:
-        msg = (f"process_readings needs a fresh method; this {method.name} method has "
-               f"already been fed {method.readings} readings")
-        raise ProcessError(msg)
-    if sink is not None:
-        if map_filter is not None:
-            msg = ("the map filters need the whole global map; run without a sink to filter "
-                   "the map")
-            raise ProcessError(msg)
-        timed = _TimedSink(sink)
+    _check_run(method, sample_every, map_filter, sink)
+    timed = None if sink is None else _TimedSink(sink)
+    if timed is not None:
         method.set_global_sink(timed)
-    else:
-        timed = None
-    if sample_every is None:
-        schedule = _Schedule(fine=max(1, method.history.capacity // 10),
-                             coarse=default_sample_every(method.history.capacity))
-    else:
-        schedule = _Schedule(fine=sample_every, coarse=sample_every)
-    run = _Run(method, schedule, on_progress)
+    run = _Run(method, _schedule(method, sample_every), on_progress)
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
     rows = 0
     for chunk in chunks:
@@ -215,6 +197,37 @@ def process_chunks(
         filter_report = chunk_filter.report
         if on_progress is not None:
             on_progress(filter_report.total)
+    return _finish(run, timed, filter_report, map_filter)
+
+
+def _check_run(method: SonarMethod, sample_every: int | None, map_filter: MapFilter | None,
+               sink: GlobalMapSink | None) -> None:
+    """Refuse what :func:`process_chunks` cannot do (its ``Raises``)."""
+    if sample_every is not None and sample_every < 1:
+        # 0 would silently mean the default, and a negative step would process nothing.
+        msg = f"sample_every must be at least 1 reading, got {sample_every}"
+        raise ProcessError(msg)
+    if method.readings:
+        msg = (f"process_readings needs a fresh method; this {method.name} method has "
+               f"already been fed {method.readings} readings")
+        raise ProcessError(msg)
+    if sink is not None and map_filter is not None:
+        msg = "the map filters need the whole global map; run without a sink to filter the map"
+        raise ProcessError(msg)
+
+
+def _schedule(method: SonarMethod, sample_every: int | None) -> _Schedule:
+    """``sample_every`` throughout, or by default a tenth of the history, then coarser."""
+    if sample_every is not None:
+        return _Schedule(fine=sample_every, coarse=sample_every)
+    return _Schedule(fine=max(1, method.history.capacity // 10),
+                     coarse=default_sample_every(method.history.capacity))
+
+
+def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterReport | None,
+            map_filter: MapFilter | None) -> ProcessResult:
+    """Finish the run's method and gather what it measured (the map filtered last)."""
+    method = run.method
     measures = method.measures()
     mean_share = run.mean_share() if run.shares else measures.unprocessed_share
     tic = time.perf_counter()
