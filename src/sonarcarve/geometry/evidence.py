@@ -321,6 +321,87 @@ def _transmission(slot: int, passed: FloatArray, n_passed: int, trans: FloatArra
     return fully
 
 
+class _Beam(NamedTuple):
+    """The new reading ``j`` as the weighing pass sees it (metres, radians)."""
+
+    x: float
+    y: float
+    r: float
+    cos_axis: float
+    sin_axis: float
+    half: float  # φ_j / 2
+    step: float  # Δ_j = φ_j / K
+    sin_half: float
+    cos_half2: float  # cos²(φ_j / 2): beam membership without a root
+    free_r: float  # r_j - ε: the end of the freespace sector F_j (eq. 3.2)
+    reach: float  # r_j + ε_s: beyond it a point is neither free nor supported
+    reach2: float
+    edge1_x: float  # unit vectors of the beam's lower and upper edges
+    edge1_y: float
+    edge2_x: float
+    edge2_y: float
+    # The sensor model's derived constants, computed once per reading, not per older arc.
+    edge_loss: float  # 1 - g
+    inv_scale: float  # 1 / L
+    cos_full: float  # cos γ0
+    cos_zero: float  # cos γ1
+    spacing2: float  # viewpoint_spacing²
+
+
+@compiled_inline
+def _new_beam(slot: int, x: FloatArray, y: FloatArray, r: FloatArray, beam_width: FloatArray,
+              cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, bins: int,
+              params: EvidenceParams) -> _Beam:
+    """The new reading's :class:`_Beam`, from its row (once :func:`evidence_add` has
+    initialised it)."""
+    rj = r[slot]
+    half_j = 0.5 * beam_width[slot]
+    cj = cos_axis[slot]
+    sj = sin_axis[slot]
+    sin_half_j = math.sin(half_j)
+    cos_half_j = cos_half[slot]
+    reach = rj + params.support_tolerance
+    return _Beam(
+        x[slot], y[slot], rj, cj, sj, half_j, beam_width[slot] / bins, sin_half_j,
+        cos_half_j * cos_half_j, rj - params.tolerance, reach, reach * reach,
+        cj * cos_half_j + sj * sin_half_j, sj * cos_half_j - cj * sin_half_j,
+        cj * cos_half_j - sj * sin_half_j, sj * cos_half_j + cj * sin_half_j,
+        1.0 - params.edge_gain, 1.0 / params.range_scale, math.cos(params.incidence_full),
+        math.cos(params.incidence_zero), params.viewpoint_spacing * params.viewpoint_spacing,
+    )
+
+
+@compiled_inline
+def _beyond_beam(cx: float, cy: float, rho: float, beam: _Beam) -> bool:
+    """Cull: an arc's bounding circle (centre ``(cx, cy)``, radius ``rho``) lies beyond the
+    reach of ``j``'s echo circle, or clear of one of the two half-planes whose intersection is
+    ``j``'s beam (φ < π; as ``geometry/bounds.py``)."""
+    dcx = cx - beam.x
+    dcy = cy - beam.y
+    reach = beam.reach
+    if dcx * dcx + dcy * dcy >= (reach + rho) * (reach + rho):
+        return True
+    below_lower_edge = beam.edge1_x * dcy - beam.edge1_y * dcx < -rho
+    return bool(below_lower_edge or dcx * beam.edge2_y - dcy * beam.edge2_x < -rho)
+
+
+@compiled_inline
+def _occlude_behind(slot: int, rel: float, spread: float, beam: _Beam, free: FloatArray,
+                    threshold: float) -> int:
+    """Carve the bins of the new arc within ``rel ± spread`` (bearings relative to its axis):
+    they lie behind an established surface it looked past at a glancing angle, and sound does
+    not pass through walls. Returns the bins this carved."""
+    bins = free.shape[1]
+    k0 = _bin_of(rel - spread, beam.half, beam.step, bins)
+    k1 = _bin_of(rel + spread, beam.half, beam.step, bins)
+    carved = 0
+    for kk in range(k0, k1 + 1):
+        if free[slot, kk] < threshold:
+            free[slot, kk] = threshold
+            carved += 1
+    return carved
+
+
 @compiled
 def evidence_add(
     slot: int, older: SlotArray,
@@ -403,16 +484,16 @@ def evidence_add(
         carved by occlusion.
     """
     bins = bx.shape[1]
+    # The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
+    # evidence, the bounding circle, and the scratch ``trans``. Written here, not in a helper:
+    # a compiled helper taking these twenty arrays, inlined or not, cost 4-8 % per reading.
     xj = x[slot]
     yj = y[slot]
     rj = r[slot]
-    phi_j = beam_width[slot]
-    half_j = 0.5 * phi_j
-    step_j = phi_j / bins
-    cj = math.cos(theta[slot])
-    sj = math.sin(theta[slot])
-    cos_axis[slot] = cj
-    sin_axis[slot] = sj
+    half_j = 0.5 * beam_width[slot]
+    step_j = beam_width[slot] / bins
+    cos_axis[slot] = math.cos(theta[slot])
+    sin_axis[slot] = math.sin(theta[slot])
     cos_half[slot] = math.cos(half_j)
     for k in range(bins):
         tau = theta[slot] - half_j + (k + 0.5) * step_j
@@ -433,57 +514,45 @@ def evidence_add(
     viewpoints[slot] = 0.0
     looked[slot] = 0.0
     others[slot] = 0.0
-    top_through = 0.0
-    n_passed = 0
-    edges = trans[bins:]  # the scratch's second part: sines of j's bin edges
-    for k in range(bins + 1):
-        edges[k] = math.sin(-half_j + k * step_j)
-    for k in range(bins):
+    for k in range(bins + 1):  # the scratch's second part: sines of j's bin edges
+        trans[bins + k] = math.sin(-half_j + k * step_j)
+    for k in range(bins):  # its first part: j's support from other sensors
         trans[k] = 0.0
     counts[slot] = 0
-    spacing2 = params.viewpoint_spacing * params.viewpoint_spacing
-
+    beam = _new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
+    edges = trans[bins:]  # the scratch's second part: sines of j's bin edges
+    # Weigh every older live arc against j (one loop here, not a compiled helper: a helper
+    # taking these arrays, per arc or per reading, inlined or not, measured 3-20 % slower).
     threshold = params.threshold
-    free_r = rj - params.tolerance
-    reach = rj + params.support_tolerance
-    sin_half_j = math.sin(half_j)
-    cos_half_j = cos_half[slot]
-    cos_half_j2 = cos_half_j * cos_half_j
-    reach2 = reach * reach
-    edge_loss = 1.0 - params.edge_gain
-    inv_scale = 1.0 / params.range_scale
-    # Unit vectors of the beam's two edges (lower, upper).
-    u1x = cj * cos_half_j + sj * sin_half_j
-    u1y = sj * cos_half_j - cj * sin_half_j
-    u2x = cj * cos_half_j - sj * sin_half_j
-    u2y = sj * cos_half_j + cj * sin_half_j
-    cos_full = math.cos(params.incidence_full)
-    cos_zero = math.cos(params.incidence_zero)
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    free_r = beam.free_r
+    reach2 = beam.reach2
+    cos_half2 = beam.cos_half2
+    sin_half = beam.sin_half
+    edge_loss = beam.edge_loss
+    inv_scale = beam.inv_scale
+    cos_full = beam.cos_full
+    cos_zero = beam.cos_zero
     fully = 0
     crossings = 0
     occluding = 0
+    n_passed = 0
+    top_through = 0.0
     for i in older:
         if status[i] != EVIDENCE_ALIVE:
             continue
-        # Cull: the arc's circle beyond the reach of j's echo circle, or clear of one of the
-        # two half-planes whose intersection is j's beam (φ < π; as geometry/bounds.py).
-        dcx = circle[i, 0] - xj
-        dcy = circle[i, 1] - yj
-        rho = circle[i, 2]
-        dc2 = dcx * dcx + dcy * dcy
-        if dc2 >= (reach + rho) * (reach + rho):
-            continue
-        if u1x * dcy - u1y * dcx < -rho or dcx * u2y - dcy * u2x < -rho:
+        if _beyond_beam(circle[i, 0], circle[i, 1], circle[i, 2], beam):
             continue
         if with_atm:
             crossings += _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
                                     params.cos_psi, bearings, counts)
-        step_i = beam_width[i] / bins
-        alive_bins = 0
         ox = x[i] - xj
         oy = y[i] - yj
         other = sensor[i] != sensor[slot]
-        distinct = other or ox * ox + oy * oy >= spacing2
+        distinct = other or ox * ox + oy * oy >= beam.spacing2
+        half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
+        alive_bins = 0
         top_support = 0.0
         top_looked = 0.0
         for k in range(bins):
@@ -495,17 +564,17 @@ def evidence_add(
             d2 = vx * vx + vy * vy
             along = vx * cj + vy * sj
             # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
-            if d2 >= reach2 or along <= 0.0 or along * along < d2 * cos_half_j2:
+            if d2 >= reach2 or along <= 0.0 or along * along < d2 * cos_half2:
                 alive_bins += 1
                 continue
             d = math.sqrt(d2)
-            if d >= free_r and abs(d - rj) > params.support_tolerance:
+            if d >= free_r and abs(d - beam.r) > params.support_tolerance:
                 alive_bins += 1
                 continue
-            # detect_probability, inlined: beam and range (p_any), then incidence.
+            # detect_probability, inlined: beam and range (p_beam), then incidence.
             inv_d = 1.0 / d
             sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
-            u = min(abs(sine) / sin_half_j, 1.0)
+            u = min(abs(sine) / sin_half, 1.0)
             p_beam = params.max_detect * (1.0 - edge_loss * u * u) / (1.0 + d * inv_scale)
             cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) * inv_d
             p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, params.rough)
@@ -519,14 +588,8 @@ def evidence_add(
                 if established and d < free_r - params.tolerance:
                     # An established surface j looked past at a glancing angle: the bins of j
                     # behind it cannot hold j's echo (sound does not pass through walls).
-                    rel = math.atan2(cj * vy - sj * vx, along)
-                    spread = 0.5 * step_i * r[i] / d
-                    k0 = _bin_of(rel - spread, half_j, step_j, bins)
-                    k1 = _bin_of(rel + spread, half_j, step_j, bins)
-                    for kk in range(k0, k1 + 1):
-                        if free[slot, kk] < threshold:
-                            free[slot, kk] = threshold
-                            occluding += 1
+                    occluding += _occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
+                                                 half_bin_arc / d, beam, free, threshold)
                     touched[slot] = True
                 factor = params.protect if established else 1.0
                 w = -math.log1p(-p) * factor
@@ -543,22 +606,23 @@ def evidence_add(
                         passed[n_passed, 4] = factor
                         passed[n_passed, 5] = w
                         n_passed += 1
-            else:
+            else:  # on j's echo circle: support, not freespace
                 alive_bins += 1
                 touched[i] = True
                 touched[slot] = True
-                support[i, k] += p
                 top_support = max(top_support, p)
-                kb = _bin_of_sine(sine, edges, bins)
-                support[slot, kb] += p
                 # Localised support: times the sine of the angle between the two circles
                 # there (tangent circles, one sensor stepping along its axis, say nothing of
                 # *where* on the arc the echo came from).
+                support[i, k] += p
+                kb = _bin_of_sine(sine, edges, bins)
+                support[slot, kb] += p
                 loc = p * abs(ex[i, k] * vy - ey[i, k] * vx) * inv_d
                 located[i, k] += loc
                 located[slot, kb] += loc
                 if other:
                     trans[kb] += p
+        # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
         if distinct:
             viewpoints[i] += top_support
             viewpoints[slot] += top_support
@@ -727,6 +791,109 @@ def _located_median(located: FloatArray, s: int, start: int, end: int, lo_axis: 
     return mid
 
 
+@compiled_inline
+def _whole_beam_bound(r: float, phi: float) -> float:
+    """``E_s = 2 r sin(φ/4)`` (eq. 5.3): the bound of a point at the middle of the full beam."""
+    return 2.0 * r * math.sin(0.25 * phi)
+
+
+@compiled_inline
+def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: float) -> float:
+    """``2 r sin(e/2)`` (eq. 5.3), ``e`` the largest angle from the point's bearing to an end of
+    the surviving hull ``[hull_lo, hull_hi]`` plus half a bin (the binned ends), at most π."""
+    e = max(point - hull_lo, hull_hi - point) + 0.5 * step
+    return 2.0 * r * math.sin(0.5 * min(e, math.pi))
+
+
+@compiled_inline
+def _crossings_per_bin(in_bin: FloatArray, bearings: npt.NDArray[np.float32], s: int,
+                       c: int, half: float, step: float) -> None:
+    """Count arc ``s``'s first ``c`` ATM crossings into ``in_bin`` (shape (K,), overwritten)."""
+    bins = in_bin.shape[0]
+    for k in range(bins):
+        in_bin[k] = 0.0
+    for m in range(c):
+        in_bin[_bin_of(float(bearings[s, m]), half, step, bins)] += 1.0
+
+
+@compiled_inline
+def _kept_run(free: FloatArray, located: FloatArray, in_bin: FloatArray, s: int,
+              threshold: float) -> tuple[int, int, int, int, int]:
+    """The surviving runs of arc ``s`` (bins with free evidence below ``T``), and the one kept:
+    the most ATM crossings plus the largest localised support; ties, the longest, then the
+    first.
+
+    Returns
+    -------
+    start, end, first, last, runs
+        Bins ``start .. end - 1`` of the kept run, ``first .. last - 1`` of the surviving hull
+        (-1 when nothing survives), and the number of runs.
+    """
+    bins = free.shape[1]
+    best_score = -1.0
+    best_start = -1
+    best_end = -1
+    first = -1
+    last = -1
+    runs = 0
+    k = 0
+    while k < bins:
+        if free[s, k] >= threshold:
+            k += 1
+            continue
+        start = k
+        score = 0.0
+        top = 0.0
+        while k < bins and free[s, k] < threshold:
+            score += in_bin[k]
+            top = max(top, located[s, k])
+            k += 1
+        score += top
+        runs += 1
+        if first < 0:
+            first = start
+        last = k
+        better = score > best_score or (
+            score == best_score and k - start > best_end - best_start)
+        if better:
+            best_score = score
+            best_start = start
+            best_end = k
+    return best_start, best_end, first, last, runs
+
+
+@compiled_inline
+def _run_evidence(support: FloatArray, free: FloatArray, s: int, start: int, end: int,
+                  threshold: float) -> tuple[float, float]:
+    """Largest support of a bin in run ``start .. end - 1`` of arc ``s``, and the run's mean
+    free evidence in units of ``T``."""
+    top = 0.0
+    mean_free = 0.0
+    for k in range(start, end):
+        top = max(top, support[s, k])
+        mean_free += free[s, k]
+    return top, mean_free / ((end - start) * threshold)
+
+
+@compiled_inline
+def _run_crossings(values: FloatArray, bearings: npt.NDArray[np.float32], s: int, c: int,
+                   half: float, step: float, bins: int, start: int, end: int,
+                   ) -> tuple[int, float]:
+    """ATM's crossings of arc ``s`` inside bins ``start .. end - 1`` (copied into ``values``),
+    and their median bearing relative to the axis (0 when there are none)."""
+    kept = 0
+    for m in range(c):
+        b = float(bearings[s, m])
+        kb = _bin_of(b, half, step, bins)
+        if start <= kb < end:
+            values[kept] = b
+            kept += 1
+    if kept == 0:
+        return 0, 0.0
+    ordered = np.sort(values[:kept])
+    return kept, 0.5 * (ordered[(kept - 1) // 2] + ordered[kept // 2])
+
+
 @compiled
 def evidence_estimates(
     slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
@@ -792,89 +959,37 @@ def evidence_estimates(
         half = 0.5 * phi
         step = phi / bins
         lo_axis = theta[s] - half
-        if status[s] != EVIDENCE_ALIVE:
-            bearing[q] = theta[s]
-            width[q] = phi
-            max_error[q] = 2.0 * r[s] * math.sin(0.25 * phi)
-            continue
-        for k in range(bins):
-            in_bin[k] = 0.0
         c = counts[s] if with_atm else 0
-        for m in range(c):
-            in_bin[_bin_of(float(bearings[s, m]), half, step, bins)] += 1.0
-        best_score = -1.0
-        best_start = -1
-        best_end = -1
-        first = -1
-        last = -1
-        runs = 0
-        k = 0
-        while k < bins:
-            if free[s, k] >= threshold:
-                k += 1
-                continue
-            start = k
-            score = 0.0
-            top = 0.0
-            while k < bins and free[s, k] < threshold:
-                score += in_bin[k]
-                top = max(top, located[s, k])
-                k += 1
-            score += top
-            runs += 1
-            if first < 0:
-                first = start
-            last = k
-            better = score > best_score or (
-                score == best_score and k - start > best_end - best_start)
-            if better:
-                best_score = score
-                best_start = start
-                best_end = k
-        if runs == 0:
+        start = end = first = last = runs = 0
+        if status[s] == EVIDENCE_ALIVE:
+            _crossings_per_bin(in_bin, bearings, s, c, half, step)
+            start, end, first, last, runs = _kept_run(free, located, in_bin, s, threshold)
+        if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
             bearing[q] = theta[s]
             width[q] = phi
-            max_error[q] = 2.0 * r[s] * math.sin(0.25 * phi)
+            max_error[q] = _whole_beam_bound(r[s], phi)
             continue
         has_piece[q] = True
-        lo = lo_axis + best_start * step
-        hi = lo_axis + best_end * step
+        lo = lo_axis + start * step
+        hi = lo_axis + end * step
         hull_lo = lo_axis + first * step
         hull_hi = lo_axis + last * step
-        mid = 0.5 * (lo + hi)
-        if place_located and best_end - best_start < bins:
-            mid = _located_median(located, s, best_start, best_end, lo_axis, step, mid)
+        mid = 0.5 * (lo + hi)  # eq. 3.6
+        if place_located and end - start < bins:
+            mid = _located_median(located, s, start, end, lo_axis, step, mid)
         width[q] = hi - lo
-        top = 0.0
-        mean_free = 0.0
-        for kk in range(best_start, best_end):
-            top = max(top, support[s, kk])
-            mean_free += free[s, kk]
-        piece_support[q] = top
-        piece_free[q] = mean_free / ((best_end - best_start) * threshold)
+        piece_support[q], piece_free[q] = _run_evidence(support, free, s, start, end, threshold)
         run_count[q] = runs
         hull_share[q] = (hull_hi - hull_lo) / phi
-        e = max(mid - hull_lo, hull_hi - mid) + 0.5 * step
-        carved_bound = 2.0 * r[s] * math.sin(0.5 * min(e, math.pi))
+        carved_bound = _hull_bound(r[s], mid, hull_lo, hull_hi, step)
         bearing[q] = mid
         max_error[q] = carved_bound
-        # ATM crossings inside the kept run only.
-        kept = 0
-        for m in range(c):
-            b = float(bearings[s, m])
-            kb = _bin_of(b, half, step, bins)
-            if best_start <= kb < best_end:
-                values[kept] = b
-                kept += 1
+        kept, median_rel = _run_crossings(values, bearings, s, c, half, step, bins, start, end)
         piece_crossings[q] = kept
         if kept > 0:
-            ordered = np.sort(values[:kept])
-            median = theta[s] + 0.5 * (ordered[(kept - 1) // 2] + ordered[kept // 2])
-            if runs == 1:
-                bound = atm_bound
-            else:
-                ea = max(median - hull_lo, hull_hi - median) + 0.5 * step
-                bound = 2.0 * r[s] * math.sin(0.5 * min(ea, math.pi))
+            median = theta[s] + median_rel
+            bound = (atm_bound if runs == 1
+                     else _hull_bound(r[s], median, hull_lo, hull_hi, step))
             if bound < carved_bound:
                 bearing[q] = median
                 max_error[q] = bound
