@@ -83,7 +83,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.cells import GridError, grid_cells
+from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.grids.elfes import MAX_CELLS, ROS_FADE_RANGE, OccupancyGrid
 from sonarcarve.grids.range_sensor_layer import (
     FREE_SPACE,
@@ -674,7 +674,7 @@ class _Finals(NamedTuple):
 
 # -- the grid -------------------------------------------------------------------------------------
 
-class CarvedGrid:
+class CarvedGrid(CellGrid):
     """Log-odds occupancy grid whose occupied bands are the carved arcs (module docstring).
 
     Parameters
@@ -720,16 +720,14 @@ class CarvedGrid:
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  method: SonarMethod | None = None, params: CarvedGridParams | None = None
                  ) -> None:
-        h, (xmin, ymin, xmax, ymax), nx, ny = grid_cells("carved grid", resolution, bounds,
-                                                        MAX_CELLS, "MAX_CELLS")
+        super().__init__("carved grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
+        (xmin, ymin, _, _), (ny, nx) = self._bounds, self._shape
         if method is None:
             method = make_method("carve", MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
         elif method.readings:
             msg = (f"carved grid: the method must be fresh, it has {method.readings} readings "
                    f"already")
             raise GridError(msg)
-        self._resolution = float(h)
-        self._bounds = (xmin, ymin, xmax, ymax)
         self._params = params if params is not None else CarvedGridParams()
         self._method = method
         p = self._params
@@ -786,16 +784,6 @@ class CarvedGrid:
     # -- geometry ----------------------------------------------------------------------------
 
     @property
-    def resolution(self) -> float:
-        """Cell side h, metres."""
-        return self._resolution
-
-    @property
-    def bounds(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` as given, metres (see :attr:`extent`)."""
-        return self._bounds
-
-    @property
     def params(self) -> CarvedGridParams:
         """The sensor model."""
         return self._params
@@ -804,19 +792,6 @@ class CarvedGrid:
     def method(self) -> SonarMethod:
         """The carving method the grid runs (read it, do not feed it)."""
         return self._method
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """``(rows, columns)`` = cells along y, along x."""
-        ny, nx = self._base.shape
-        return int(ny), int(nx)
-
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` actually covered by the cells, metres."""
-        ny, nx = self.shape
-        xmin, ymin = self._bounds[0], self._bounds[1]
-        return xmin, ymin, xmin + nx * self._resolution, ymin + ny * self._resolution
 
     @property
     def band(self) -> float:
@@ -829,14 +804,6 @@ class CarvedGrid:
         the method's history and state come on top, fixed by its history size."""
         return int(self._base.nbytes + self._live.nbytes + self._heard.nbytes
                    + self._drawn.nbytes + self._drawn_seq.nbytes)
-
-    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
-        """``(xs, ys)``: centres of the columns, shape (columns,), and rows, shape (rows,)."""
-        ny, nx = self.shape
-        h = self._resolution
-        xs = self._bounds[0] + (np.arange(nx, dtype=np.float64) + 0.5) * h
-        ys = self._bounds[1] + (np.arange(ny, dtype=np.float64) + 0.5) * h
-        return np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
 
     # -- updates -----------------------------------------------------------------------------
 

@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import math
 
-from sonarcarve.errors import SonarcarveError
+import numpy as np
 
-__all__ = ["GridError", "grid_cells"]
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.typing import FloatArray
+
+__all__ = ["CellGrid", "GridError", "grid_cells"]
 
 Bounds = tuple[float, float, float, float]
 
@@ -60,3 +63,44 @@ def grid_cells(label: str, resolution: object, bounds: object, max_cells: int,
                f"({limit_name}); use a coarser resolution or smaller bounds")
         raise GridError(msg)
     return float(h), (xmin, ymin, xmax, ymax), nx, ny
+
+
+class CellGrid:
+    """The cells every grid lays over the plane: checked by :func:`grid_cells`, then the
+    geometry the grids share (resolution, bounds, shape, extent, cell centres)."""
+
+    def __init__(self, label: str, resolution: object, bounds: object, max_cells: int,
+                 limit_name: str) -> None:
+        self._resolution, self._bounds, nx, ny = grid_cells(label, resolution, bounds,
+                                                            max_cells, limit_name)
+        self._shape = (ny, nx)
+
+    @property
+    def resolution(self) -> float:
+        """Cell side h, metres."""
+        return self._resolution
+
+    @property
+    def bounds(self) -> Bounds:
+        """``(xmin, ymin, xmax, ymax)`` as given, metres (see :attr:`extent`)."""
+        return self._bounds
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, columns)`` = cells along y, along x."""
+        return self._shape
+
+    @property
+    def extent(self) -> Bounds:
+        """``(xmin, ymin, xmax, ymax)`` actually covered by the cells, metres."""
+        ny, nx = self._shape
+        xmin, ymin = self._bounds[0], self._bounds[1]
+        return xmin, ymin, xmin + nx * self._resolution, ymin + ny * self._resolution
+
+    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
+        """``(xs, ys)``: centres of the columns, shape (columns,), and rows, shape (rows,)."""
+        ny, nx = self._shape
+        h = self._resolution
+        xs = self._bounds[0] + (np.arange(nx, dtype=np.float64) + 0.5) * h
+        ys = self._bounds[1] + (np.arange(ny, dtype=np.float64) + 0.5) * h
+        return xs, ys

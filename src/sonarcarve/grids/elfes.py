@@ -58,7 +58,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from sonarcarve.grids.cells import GridError, grid_cells
+from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import FloatArray
@@ -163,7 +163,7 @@ class SonarConeModel:
                 _logit(self.p_max))
 
 
-class OccupancyGrid:
+class OccupancyGrid(CellGrid):
     """Log-odds occupancy grid over a rectangle, updated with :class:`SonarConeModel`.
 
     Cell ``(i, j)`` (row ``i`` along y, column ``j`` along x) is the square of side
@@ -208,8 +208,8 @@ class OccupancyGrid:
 
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  model: SonarConeModel | None = None) -> None:
-        h, self._bounds, nx, ny = grid_cells("grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
-        self._resolution = h
+        super().__init__("grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
+        ny, nx = self._shape
         self._model = model if model is not None else SonarConeModel()
         self.log_odds: GridArray = np.zeros((ny, nx), dtype=np.float32)
         self.readings = 0
@@ -218,16 +218,6 @@ class OccupancyGrid:
         ny, nx = self.shape
         return (f"OccupancyGrid({self._resolution:g} m, {nx} x {ny} cells, "
                 f"bounds={self._bounds}, {self.readings} readings)")
-
-    @property
-    def resolution(self) -> float:
-        """Cell side h, metres."""
-        return self._resolution
-
-    @property
-    def bounds(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` as given, metres (see :attr:`extent`)."""
-        return self._bounds
 
     @property
     def model(self) -> SonarConeModel:
@@ -255,30 +245,9 @@ class OccupancyGrid:
     # -- shape -------------------------------------------------------------------------------
 
     @property
-    def shape(self) -> tuple[int, int]:
-        """``(rows, columns)`` = cells along y, along x."""
-        ny, nx = self.log_odds.shape
-        return int(ny), int(nx)
-
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` actually covered by the cells, metres."""
-        ny, nx = self.shape
-        xmin, ymin = self.bounds[0], self.bounds[1]
-        return xmin, ymin, xmin + nx * self.resolution, ymin + ny * self.resolution
-
-    @property
     def nbytes(self) -> int:
         """Memory of the grid's state (the float32 log-odds array), bytes."""
         return int(self.log_odds.nbytes)
-
-    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
-        """``(xs, ys)``: centres of the columns, shape (columns,), and rows, shape (rows,)."""
-        ny, nx = self.shape
-        h = self.resolution
-        xs = self.bounds[0] + (np.arange(nx, dtype=np.float64) + 0.5) * h
-        ys = self.bounds[1] + (np.arange(ny, dtype=np.float64) + 0.5) * h
-        return np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
 
     # -- updates -----------------------------------------------------------------------------
 

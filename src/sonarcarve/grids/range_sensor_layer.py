@@ -143,7 +143,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.cells import GridError, grid_cells
+from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray
 
@@ -520,7 +520,7 @@ def master_costs(layer_costs: npt.ArrayLike, clear_threshold: float = 0.2,
 
 # -- the layer ----------------------------------------------------------------------------------
 
-class RangeSensorLayer:
+class RangeSensorLayer(CellGrid):
     """ROS's ``RangeSensorLayer`` over a rectangle of the world (module docstring).
 
     Cell ``(i, j)`` (row ``i`` along y, column ``j`` along x; ROS's ``(mx, my) = (j, i)``) is
@@ -568,8 +568,9 @@ class RangeSensorLayer:
 
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
                  params: RangeSensorLayerParams | None = None) -> None:
-        self._resolution, self._bounds, nx, ny = grid_cells(
-            "range sensor layer", resolution, bounds, MAX_LAYER_CELLS, "MAX_LAYER_CELLS")
+        super().__init__("range sensor layer", resolution, bounds, MAX_LAYER_CELLS,
+                         "MAX_LAYER_CELLS")
+        ny, nx = self._shape
         self._params = params if params is not None else RangeSensorLayerParams()
         self._cost: FloatArray = np.full((ny, nx), float(ROS_UNKNOWN_COST))
         self._box = np.array([math.inf, math.inf, -math.inf, -math.inf])
@@ -583,40 +584,9 @@ class RangeSensorLayer:
                 f"bounds={self._bounds}, {self.readings} readings)")
 
     @property
-    def resolution(self) -> float:
-        """Cell side h, metres."""
-        return self._resolution
-
-    @property
-    def bounds(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` as given, metres (see :attr:`extent`)."""
-        return self._bounds
-
-    @property
     def params(self) -> RangeSensorLayerParams:
         """The layer's parameters."""
         return self._params
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """``(rows, columns)`` = cells along y, along x."""
-        ny, nx = self._cost.shape
-        return int(ny), int(nx)
-
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` actually covered by the cells, metres."""
-        ny, nx = self.shape
-        xmin, ymin = self._bounds[0], self._bounds[1]
-        return xmin, ymin, xmin + nx * self._resolution, ymin + ny * self._resolution
-
-    def cell_centers(self) -> tuple[FloatArray, FloatArray]:
-        """``(xs, ys)``: centres of the columns, shape (columns,), and rows, shape (rows,)."""
-        ny, nx = self.shape
-        h = self._resolution
-        xs = self._bounds[0] + (np.arange(nx, dtype=np.float64) + 0.5) * h
-        ys = self._bounds[1] + (np.arange(ny, dtype=np.float64) + 0.5) * h
-        return np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
 
     # -- updates -------------------------------------------------------------------------------
 
