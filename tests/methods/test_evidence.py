@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from sonarcarve import MethodConfig, make_method
-from sonarcarve.errors import ConfigError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.methods import EvidenceMethod
+from sonarcarve.methods import evidence as evidence_module
+from sonarcarve.methods.atm import CrossingStoreError
 from sonarcarve.methods.evidence import EvidenceModel
 from sonarcarve.readings import Reading, ReadingBatch
 
@@ -336,13 +338,98 @@ def test_a_points_confidence_does_not_depend_on_the_rows_beside_it() -> None:
     np.testing.assert_array_equal(together, alone)
 
 
-@pytest.mark.parametrize(("history", "refused"), [(5793, False), (5794, True), (100_000, True)])
-def test_a_history_whose_crossing_store_exceeds_1_gib_is_refused(history: int,
-                                                                 refused: bool) -> None:
-    # 2n rows of 4(n - 1) float32 columns: 32 n (n - 1) bytes, 1 GiB at n = 5,793.
-    if refused:
-        with pytest.raises(ConfigError, match=r"^history_size too large for evidence carving"):
-            make_method("evidence", MethodConfig(history_size=history))
-    else:
-        assert make_method("evidence", MethodConfig(history_size=history)).history.capacity \
-            == history
+def _post_ring(n: int) -> list[Reading]:
+    # Arcs from a ring of origins all around a central post: they cross each other pairwise in
+    # their beams, so the busiest arc keeps far more crossings than a narrow store holds.
+    rng = np.random.default_rng(4)
+    angle = rng.uniform(0.0, 2.0 * math.pi, n)
+    dist = rng.uniform(1.0, 1.5, n)
+    return [Reading(0.1 * i, i % 16, float(dist[i] * math.cos(angle[i])),
+                    float(dist[i] * math.sin(angle[i])), float(angle[i] + math.pi),
+                    float(dist[i]), PHI) for i in range(n)]
+
+
+@pytest.mark.parametrize("blocks", [False, True])
+def test_the_crossing_store_grows_on_demand_and_keeps_every_crossing(blocks: bool) -> None:
+    # A store that starts at 2 columns must grow and give, crossing for crossing and bit for
+    # bit, what a store with room for every crossing an arc can have (4 (n - 1)) gives.
+    n = 120
+    readings = _post_ring(n)
+    runs = []
+    for initial in (2, 4 * (n - 1)):
+        method = EvidenceMethod(history_size=n, beam_width=PHI)
+        model = method.models[0]
+        assert isinstance(model, EvidenceModel)
+        model.bearings = np.zeros((model.bearings.shape[0], initial), dtype=np.float32)
+        if blocks:
+            for start in range(0, n, 50):
+                method.add_many(ReadingBatch.from_readings(readings[start : start + 50]),
+                                first_id=start)
+        else:
+            for reading in readings:
+                method.add(reading)
+        assert model.counts.max() <= model.bearings.shape[1]
+        runs.append((model, method.local_map(), method.finish()))
+    (small, small_local, small_map), (full, full_local, full_map) = runs
+    assert small.bearings.shape[1] > 2  # it grew
+    assert full.bearings.shape[1] == 4 * (n - 1)  # it did not
+    assert full.counts.max() > 2
+    np.testing.assert_array_equal(small.counts, full.counts)
+    for slot in np.flatnonzero(full.counts):
+        c = full.counts[slot]
+        np.testing.assert_array_equal(small.bearings[slot, :c], full.bearings[slot, :c])
+    for field in ("reading_id", "xy", "width", "max_error", "source", "confidence"):
+        np.testing.assert_array_equal(getattr(small_local, field), getattr(full_local, field))
+        np.testing.assert_array_equal(getattr(small_map, field), getattr(full_map, field))
+
+
+def test_a_long_history_starts_with_a_narrow_store() -> None:
+    # History 10,000: room for every crossing would take 20,000 x 39,996 float32 (3.2 GB).
+    method = make_method("evidence", MethodConfig(history_size=10_000))
+    method.add_many(ReadingBatch.from_readings(_post_ring(60)))
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    assert model.bearings.shape == (20_000, 64)  # 32 columns, doubled once
+    assert 32 < model.counts.max() <= 64
+
+
+def test_a_store_beyond_the_memory_limit_stops_the_method(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # 256 bytes hold 256 // (4 * 240) = 0 float32 columns of 240 rows, so the store's first
+    # growth (a row with 3 crossings in 2 columns) must fail.
+    monkeypatch.setattr(evidence_module, "MAX_ATM_STATE_BYTES", 256)
+    n = 120
+    method = EvidenceMethod(history_size=n, beam_width=PHI)
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    model.bearings = np.zeros((2 * n, 2), dtype=np.float32)
+    readings = _post_ring(n)
+    with pytest.raises(CrossingStoreError,
+                       match=r"^evidence carving's crossing store would take"):
+        method.add_many(ReadingBatch.from_readings(readings))
+    assert issubclass(CrossingStoreError, SonarcarveError)
+    assert model.counts.max() <= 2  # no row claims a crossing past the store's end
+    # Crossings were lost: the method refuses to go on rather than map from them.
+    with pytest.raises(CrossingStoreError):
+        method.add(readings[-1]._replace(t=100.0))
+    with pytest.raises(CrossingStoreError):
+        method.add(readings[-1]._replace(t=101.0, range=math.inf, max_range=5.0))
+
+
+@pytest.mark.parametrize(("rows", "columns", "needed", "most", "grown"), [
+    (100, 32, 33, 10_000, 64),  # doubled
+    (100, 32, 200, 10_000, 256),  # doubled until enough
+    (100, 32, 40, 50, 50),  # never past every crossing an arc can have
+    # 1 GiB holds 2**30 / (4 * 200,000) = 1,342 float32 columns of 200,000 rows: a doubling
+    # from 1,024 to 2,048 would not fit, what is left does.
+    (200_000, 1024, 1025, 400_000, 1342),
+])
+def test_the_store_grows_by_doubling_within_its_bounds(rows: int, columns: int, needed: int,
+                                                       most: int, grown: int) -> None:
+    assert evidence_module._grown_columns(rows, columns, needed, most) == grown
+
+
+def test_the_store_is_refused_only_past_what_the_limit_holds() -> None:
+    with pytest.raises(CrossingStoreError,
+                       match=r"^evidence carving's crossing store would take 1\.0 GiB"):
+        evidence_module._grown_columns(200_000, 1024, 1343, 400_000)

@@ -227,18 +227,28 @@ def detect_probability(vx: float, vy: float, ex: float, ey: float, axis_x: float
 
 @compiled_inline
 def _store_crossing(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
-                    slot: int, value: float) -> None:
+                    spill: FloatArray, spilled: int, slot: int, value: float) -> int:
+    """Append ``value`` to row ``slot`` of the crossing store; when the row is full, to
+    ``spill`` instead (``(slot, value)`` at row ``spilled``). ``counts[slot]`` counts both, so
+    the spilled crossings of a row are its last ones, in order. Returns the spilled rows."""
     if counts[slot] < bearings.shape[1]:
         bearings[slot, counts[slot]] = value
-        counts[slot] += 1
+    else:
+        spill[spilled, 0] = slot
+        spill[spilled, 1] = value
+        spilled += 1
+    counts[slot] += 1
+    return spilled
 
 
 @compiled_inline
 def _crossings(j: int, i: int, x: FloatArray, y: FloatArray, r: FloatArray,
                cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
                cos_psi: float, bearings: npt.NDArray[np.float32],
-               counts: npt.NDArray[np.int32]) -> int:
-    """ATM's transversal crossings of arcs ``j`` and ``i`` (as ``methods/atm.py``), stored."""
+               counts: npt.NDArray[np.int32], spill: FloatArray, spilled: int,
+               ) -> tuple[int, int]:
+    """ATM's transversal crossings of arcs ``j`` and ``i`` (as ``methods/atm.py``), stored
+    (:func:`_store_crossing`). Returns the crossings kept and the rows of ``spill`` used."""
     xj = x[j]
     yj = y[j]
     rj = r[j]
@@ -247,7 +257,7 @@ def _crossings(j: int, i: int, x: FloatArray, y: FloatArray, r: FloatArray,
     dy = y[i] - yj
     d2 = dx * dx + dy * dy
     if abs(rj * rj + ri * ri - d2) > 2.0 * rj * ri * cos_psi or d2 == 0.0:
-        return 0
+        return 0, spilled
     a, h = common_chord(d2, rj, ri)
     d = math.sqrt(d2)
     ux = dx / d
@@ -266,11 +276,12 @@ def _crossings(j: int, i: int, x: FloatArray, y: FloatArray, r: FloatArray,
         along_i = qx * cos_axis[i] + qy * sin_axis[i]
         if along_i < ri * cos_half[i]:
             continue
-        _store_crossing(bearings, counts, j, math.atan2(cj * py - sj * px, along_j))
-        _store_crossing(bearings, counts, i,
-                        math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i))
+        spilled = _store_crossing(bearings, counts, spill, spilled, j,
+                                  math.atan2(cj * py - sj * px, along_j))
+        spilled = _store_crossing(bearings, counts, spill, spilled, i,
+                                  math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i))
         kept += 1
-    return kept
+    return kept, spilled
 
 
 @compiled_inline
@@ -412,9 +423,9 @@ def evidence_add(
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
     params: EvidenceParams, with_atm: bool,
-) -> tuple[int, int, int]:
+) -> tuple[int, int, int, int]:
     """Add reading ``slot``: initialise its profile, then weigh it against every ``older`` arc.
 
     Parameters
@@ -471,7 +482,13 @@ def evidence_add(
     occluded : ndarray, shape (n,)
         Share of the arc's bins carved by occlusion when it arrived (the multipath flag).
     bearings, counts : ndarray
-        ATM's crossing store (bearings relative to the axis), as in ``methods/atm.py``.
+        ATM's crossing store (bearings relative to the axis), as in ``methods/atm.py``:
+        ``bearings`` has a column per crossing the busiest arc has kept so far, ``counts`` the
+        crossings of each row, spilled ones included.
+    spill : ndarray, shape (m, 2)
+        Where crossings go that do not fit their row: ``(row, bearing)`` in the order found;
+        ``m`` at least ``4 (older + 1)`` (an arc meets each older arc at most twice, and each
+        crossing goes to two rows). The caller widens the store and moves them there.
     params : EvidenceParams
         The sensor model.
     with_atm : bool
@@ -479,9 +496,9 @@ def evidence_add(
 
     Returns
     -------
-    fully_carved, crossings, occluded_bins : int
+    fully_carved, crossings, occluded_bins, spilled : int
         Arcs whose last bin was carved by this reading; ATM crossings kept; bins of the new arc
-        carved by occlusion.
+        carved by occlusion; rows of ``spill`` used (0: every crossing fitted).
     """
     bins = bx.shape[1]
     # The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
@@ -538,6 +555,7 @@ def evidence_add(
     crossings = 0
     occluding = 0
     n_passed = 0
+    spilled = 0
     top_through = 0.0
     for i in older:
         if status[i] != EVIDENCE_ALIVE:
@@ -545,8 +563,9 @@ def evidence_add(
         if _beyond_beam(circle[i, 0], circle[i, 1], circle[i, 2], beam):
             continue
         if with_atm:
-            crossings += _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
-                                    params.cos_psi, bearings, counts)
+            kept, spilled = _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
+                                       params.cos_psi, bearings, counts, spill, spilled)
+            crossings += kept
         ox = x[i] - xj
         oy = y[i] - yj
         other = sensor[i] != sensor[slot]
@@ -640,7 +659,7 @@ def evidence_add(
     if occluding >= bins:
         status[slot] = EVIDENCE_CARVED
         fully += 1
-    return fully, crossings, occluding
+    return fully, crossings, occluding, spilled
 
 
 @compiled
@@ -653,16 +672,29 @@ def evidence_add_many(
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
     params: EvidenceParams, with_atm: bool,
-) -> tuple[int, int, int]:
+) -> tuple[int, int, int, int, int]:
     """:func:`evidence_add` for the arcs of sequence numbers ``first .. first + count - 1``,
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
 
     ``wrapped`` is ``arange(2 n) % n`` for the ``n`` storage rows (any window of live rows is
-    one contiguous slice of it); the other arrays are those of :func:`evidence_add`. Returns
-    the sums of its three counts.
+    one contiguous slice of it); the other arrays are those of :func:`evidence_add`.
+
+    It stops after the first arc whose crossings did not all fit the store (they are in
+    ``spill``; every other part of that arc is done): the caller widens the store, moves the
+    spilled crossings to the ends of their rows and calls again for the arcs after it. The
+    crossings are then stored as a store wide enough from the start would hold them.
+
+    Returns
+    -------
+    fully_carved, crossings, occluded_bins : int
+        The sums of :func:`evidence_add`'s counts over the arcs done.
+    done : int
+        Sequence number after the last arc done (``first + count`` when all are).
+    spilled : int
+        Rows of ``spill`` the last arc done used (0 when all are done).
     """
     storage = x.shape[0]
     fully = 0
@@ -671,15 +703,17 @@ def evidence_add_many(
     for sequence in range(first, first + count):
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
-        a, b, c = evidence_add(
+        a, b, c, spilled = evidence_add(
             sequence % storage, wrapped[start : start + live - 1], x, y, r, theta, beam_width,
             sensor, viewpoints, looked, others, through, passed, trans, bx, by, ex, ey, free,
             support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
-            bearings, counts, params, with_atm)
+            bearings, counts, spill, params, with_atm)
         fully += a
         crossings += b
         occluding += c
-    return fully, crossings, occluding
+        if spilled:
+            return fully, crossings, occluding, sequence + 1, spilled
+    return fully, crossings, occluding, first + count, 0
 
 
 @compiled

@@ -46,11 +46,9 @@ from typing import Any
 import numpy as np
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
-from sonarcarve.errors import ConfigError
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EvidenceParams,
-    evidence_add,
     evidence_add_many,
     evidence_estimates,
     evidence_free,
@@ -59,7 +57,12 @@ from sonarcarve.geometry.evidence import (
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, PointSource
-from sonarcarve.methods.atm import MAX_ATM_STATE_BYTES, atm_error_bound
+from sonarcarve.methods.atm import (
+    INITIAL_COLUMNS,
+    MAX_ATM_STATE_BYTES,
+    CrossingStoreError,
+    atm_error_bound,
+)
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
 from sonarcarve.methods.config import (
     DEFAULT_CARVE_PROBABILITY,
@@ -189,20 +192,41 @@ class ConfidenceModel:
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
 
 
-def _check_crossing_store(rows: int, columns: int) -> None:
-    """Refuse a history whose crossing store (room for every crossing an arc can have, as
-    ATM reserved before its store grew on demand) would exceed ATM's memory limit."""
-    if rows * columns * 4 > MAX_ATM_STATE_BYTES:
-        msg = (f"history_size too large for evidence carving: its crossing store would take "
-               f"{rows * columns * 4 / 2**30:.1f} GiB (at most "
-               f"{MAX_ATM_STATE_BYTES / 2**30:.0f} GiB: at most 5,793 arcs)")
-        raise ConfigError(msg)
+def _grown_columns(rows: int, columns: int, needed: int, most: int) -> int:
+    """Columns of the crossing store after it grows to hold ``needed`` crossings in one row, as
+    ATM's store grows (:class:`~sonarcarve.methods.atm.AtmModel`): doubled until enough, never
+    more than ``most`` (every crossing an arc can have) nor than
+    :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES` holds (a last step short of a doubling
+    uses what is left), and :class:`~sonarcarve.methods.atm.CrossingStoreError` when even that
+    is fewer than ``needed``."""
+    while columns < needed:
+        columns *= 2
+    budget = MAX_ATM_STATE_BYTES // (4 * rows)  # float32 bearings
+    columns = min(columns, max(most, needed), budget)
+    if columns < needed:
+        msg = (f"evidence carving's crossing store would take "
+               f"{rows * needed * 4 / 2**30:.1f} GiB for {needed} crossings of one arc (at most "
+               f"{MAX_ATM_STATE_BYTES / 2**30:.0f} GiB); use a shorter history_size")
+        raise CrossingStoreError(msg)
+    return columns
 
 
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
     Block safe: :meth:`on_add_many` runs a block of stored arcs in one compiled call.
+
+    Memory: the per-arc state is fixed by the history (about 4 kB an arc with K = 24); the
+    ATM crossing store grows on demand as ATM's does (:class:`~sonarcarve.methods.atm.AtmModel`):
+    it starts at :data:`~sonarcarve.methods.atm.INITIAL_COLUMNS` columns and doubles when an
+    arc's crossings do not fit (the kernel stops after that arc, its crossings wait in
+    ``spill`` and move to their rows once the store is wider, so the store holds what one wide
+    enough from the start would). The store is bounded by
+    :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES`; a growth past it raises
+    :class:`~sonarcarve.methods.atm.CrossingStoreError`, and then every later reading does
+    (crossings were lost). Measured on ``benchmarks/synthetic.py``'s corridor stream: 512
+    columns (39 MiB) at a history of 10,000 arcs, 1,024 (781 MiB) at 100,000 arcs after
+    60,000 readings.
 
     Parameters
     ----------
@@ -256,8 +280,8 @@ class EvidenceModel(ArcModel):
             confirm=sensor.confirm,
         )
         size = history.storage_size
-        columns = max(1, 4 * (history.capacity - 1)) if with_atm else 1
-        _check_crossing_store(size, columns)
+        # Crossings an arc can have: 2 with each of capacity - 1 older and as many newer arcs.
+        most = max(1, 4 * (history.capacity - 1))
         self.bx = np.zeros((size, bins))
         self.by = np.zeros((size, bins))
         self.ex = np.zeros((size, bins))
@@ -278,11 +302,18 @@ class EvidenceModel(ArcModel):
         self.through = np.zeros(size)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
-        # history of about 1,366 arcs). 13 MB at the largest history the store allows.
-        self.passed = np.zeros((size * bins, 6))
+        # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
+        self.passed = np.zeros((max(1, (history.capacity - 1) * bins), 6))
         self.trans = np.zeros(2 * bins + 1)
-        self.bearings = np.zeros((size, columns), dtype=np.float32)
+        # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
+        # when an arc's crossings do not fit (they wait in ``spill``, room for every crossing
+        # one new arc can make; 3.2 MB at a history of 10,000 arcs).
+        self._most_columns = most if with_atm else 1
+        self.bearings = np.zeros((size, min(INITIAL_COLUMNS, self._most_columns)),
+                                 dtype=np.float32)
         self.counts = np.zeros(size, dtype=np.int32)
+        self.spill = np.zeros((most if with_atm else 1, 2))
+        self._failed: CrossingStoreError | None = None  # the store could not grow: stop
         # Slot numbers laid out twice: any window of live rows is one contiguous slice.
         self._wrapped = np.arange(2 * size, dtype=np.int64) % size
         self._fully = 0
@@ -297,7 +328,7 @@ class EvidenceModel(ArcModel):
                 self.others, self.through, self.passed, self.trans, self.bx, self.by, self.ex,
                 self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
                 self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
-                self.bearings, self.counts, self.params, self.with_atm)
+                self.bearings, self.counts, self.spill, self.params, self.with_atm)
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -306,17 +337,58 @@ class EvidenceModel(ArcModel):
         self._occluded_bins += occluding
 
     def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs."""
-        self._count(evidence_add(slot, older, *self._arrays()))
+        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs.
+
+        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
+        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
+        """
+        self.on_add_many(self.history.appended - 1, 1)
 
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
-        self._count(evidence_add_many(first, count, self.history.capacity, self._wrapped,
-                                      *self._arrays()))
+        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call (more
+        when the crossing store has to grow on the way)."""
+        self._check_usable()
+        end = first + count
+        while first < end:
+            fully, crossings, occluding, first, spilled = evidence_add_many(
+                first, end - first, self.history.capacity, self._wrapped, *self._arrays())
+            self._count((fully, crossings, occluding))
+            if spilled:
+                self._take_spill(spilled)
+
+    def _take_spill(self, spilled: int) -> None:
+        """Widen the crossing store for the ``spilled`` crossings in :attr:`spill` and move
+        them to the ends of their rows (:func:`~sonarcarve.geometry.evidence.evidence_add`).
+        If it cannot grow (:class:`~sonarcarve.methods.atm.CrossingStoreError`), the method
+        stops for good: the spilled crossings are lost, so its maps would be wrong."""
+        rows = self.spill[:spilled, 0].astype(np.int64)
+        values = self.spill[:spilled, 1]
+        old = self.bearings.shape[1]
+        try:
+            columns = _grown_columns(len(self.bearings), old,
+                                     int(self.counts[rows].max()), self._most_columns)
+        except CrossingStoreError as error:
+            self._failed = error
+            np.minimum(self.counts, old, out=self.counts)  # no row past the store's end
+            raise
+        wider = np.zeros((len(self.bearings), columns), dtype=np.float32)
+        wider[:, :old] = self.bearings
+        # A row's spilled crossings are its last ones, in the order found (_store_crossing).
+        spilled_in_row = np.bincount(rows, minlength=len(self.counts))
+        first_spilled = self.counts - spilled_in_row
+        for row, value in zip(rows.tolist(), values.tolist(), strict=True):
+            wider[row, first_spilled[row]] = value
+            first_spilled[row] += 1
+        self.bearings = wider
+
+    def _check_usable(self) -> None:
+        if self._failed is not None:
+            raise CrossingStoreError(str(self._failed))
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
         """
+        self._check_usable()
         h = self.history
         self._fully += evidence_free(
             reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
