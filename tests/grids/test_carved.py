@@ -25,6 +25,9 @@ H = 0.05
 BOUNDS = (-0.5, -1.5, 3.5, 1.5)
 L_HIT = math.log(0.7 / 0.3)
 PHI = DEFAULT_BEAM_WIDTH
+#: The spread rule alone: the tests of how arcs are spread and follow carving read arcs that are
+#: their sensor's newest reading, which the default draws as a point (the fresh-arc tests).
+SPREAD_ONLY = CarvedGridParams(fresh_arcs=False)
 
 
 def _reading(t: float, theta: float, r: float, x: float = 0.0, y: float = 0.0) -> Reading:
@@ -43,7 +46,7 @@ def _band(grid: CarvedGrid, r: float, lo: float, hi: float) -> np.ndarray:
 
 
 def test_an_arc_carved_narrower_takes_back_exactly_what_it_gave_outside() -> None:
-    grid = CarvedGrid(H, BOUNDS)
+    grid = CarvedGrid(H, BOUNDS, params=SPREAD_ONLY)
     # A: a wall 2 m ahead, head-on; its arc spans the whole beam, 2 * φ = 0.785 m long.
     grid.add(_reading(0.0, 0.0, 2.0))
     old = _band(grid, 2.0, -PHI / 2, PHI / 2)
@@ -81,7 +84,7 @@ def test_a_fully_carved_arc_leaves_no_occupied_cell() -> None:
 
 def test_an_arc_leaving_the_history_makes_its_band_final() -> None:
     method = make_method("carve", MethodConfig(history_size=1))
-    grid = CarvedGrid(H, BOUNDS, method=method)
+    grid = CarvedGrid(H, BOUNDS, method=method, params=SPREAD_ONLY)
     grid.add(_reading(0.0, 0.0, 2.0))
     band = _band(grid, 2.0, -PHI / 2, PHI / 2)
     before = grid.log_odds[band]
@@ -233,7 +236,7 @@ def test_a_glancing_silent_beam_does_not_clear_a_wall() -> None:
 def test_a_jamb_arc_carved_away_leaves_the_door_open() -> None:
     # A door 0.8 m wide in a wall at x = 2 (jambs at y = ±0.4). A sensor at (0, 0.6) looking
     # at the upper jamb hears it at its distance; its uncarved arc sweeps over the doorway.
-    grid = CarvedGrid(0.05, BOUNDS)
+    grid = CarvedGrid(0.05, BOUNDS, params=SPREAD_ONLY)
     jamb = (2.0, 0.4)
     r = math.hypot(jamb[0], jamb[1] - 0.6)
     grid.add(_reading(0.0, math.atan2(jamb[1] - 0.6, jamb[0]), r, y=0.6))
@@ -305,3 +308,98 @@ def test_a_freed_cell_forgets_the_bearings_it_was_heard_from() -> None:
     d = math.hypot(cx - south[0], cy - south[1])
     faded = gamma * 0.5 * (1.0 - math.tanh(2.0 * (d - 1.2))) * math.log(0.4 / 0.6)  # -0.28
     assert grid.log_odds[i, j] - before == pytest.approx(faded, abs=1e-5)
+
+
+# -- fresh arcs: each sensor's newest echo marks at once ----------------------------------------
+
+#: A row of cell centres (y = 0.025 at H = 0.05) and a column (x = 1.825) on it.
+ROW_Y, FACE_X = 0.025, 1.825
+L_OCCUPIED = math.log(0.65 / 0.35)  # 0.619
+L_MISS = math.log(0.4 / 0.6)
+#: An echo at FACE_X spread over the whole beam: s = 0.2 / (1.825 x 0.3927) = 0.2791 of a hit.
+SPREAD_AT_FACE = DEFAULT_SPREAD_LENGTH / (FACE_X * PHI) * L_HIT  # 0.236
+#: One silent on-axis beam's free space at FACE_X, ROS's fade: 0.0759 x logit(0.4) = -0.031.
+FREE_AT_FACE = 0.5 * (1.0 - math.tanh(2.0 * (FACE_X - 1.2))) * L_MISS
+
+
+def _ring_hears_nothing(grid: CarvedGrid) -> None:
+    """Eight sensors 45° apart at (0, ROW_Y) fire once and hear nothing within 3 m."""
+    grid.add_many(ReadingBatch.from_readings(
+        Reading(0.1 * k, k, 0.0, ROW_Y, k * math.pi / 4, math.inf, math.nan, 3.0)
+        for k in range(8)))
+
+
+def _front(t: float, r: float = FACE_X, sensor: int = 0) -> Reading:
+    return Reading(t, sensor, 0.0, ROW_Y, 0.0, r)
+
+
+def test_a_disc_stepping_in_front_of_a_ring_is_occupied_after_one_reading() -> None:
+    face = (FACE_X, ROW_Y)
+    for params, marked in ((CarvedGridParams(), True), (SPREAD_ONLY, False)):
+        grid = CarvedGrid(H, BOUNDS, params=params)
+        _ring_hears_nothing(grid)
+        i, j = _cell(grid, *face)
+        assert grid.log_odds[i, j] == pytest.approx(FREE_AT_FACE, abs=1e-6)
+        # A person (a 0.4 m disc) steps in front of sensor 0; its face is 1.825 m away.
+        grid.add(_front(1.0))
+        # The newest echo of sensor 0, explained by nothing on the map: a whole hit on its
+        # middle, -0.031 + 0.847 = 0.816 > logit(0.65) = 0.619. Spread over the beam it would
+        # be -0.031 + 0.236 = 0.206: unsure, and the robot would drive into the person.
+        expected = FREE_AT_FACE + (L_HIT if marked else SPREAD_AT_FACE)
+        assert grid.log_odds[i, j] == pytest.approx(expected, abs=1e-6)
+        assert bool(trinary(grid)[i, j] == OCCUPIED) is marked
+
+
+def test_a_person_standing_still_stays_marked_reading_after_reading() -> None:
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    i, j = _cell(grid, FACE_X, ROW_Y)
+    for k in range(6):
+        grid.add(_front(1.0 + k))
+        # k older arcs spread (0.236 each) plus the newest: a whole hit while they leave the
+        # face unsure (k <= 2: at most 0.44), its own spread once they mark it (k >= 3:
+        # 3 x 0.236 - 0.031 = 0.68 > 0.619). Occupied after every reading: no flicker.
+        newest = L_HIT if k * SPREAD_AT_FACE + FREE_AT_FACE <= L_OCCUPIED else SPREAD_AT_FACE
+        expected = FREE_AT_FACE + k * SPREAD_AT_FACE + newest
+        assert grid.log_odds[i, j] == pytest.approx(expected, abs=1e-6), k
+        assert trinary(grid)[i, j] == OCCUPIED, k
+    # The person walks away: the sensor hears the wall behind at 3 m; carving removes every
+    # arc at 1.825 m, and the cell keeps only free space: the ring's beam and this one (-0.031
+    # each; the echoes' own free space stopped short of their band).
+    grid.add(_front(10.0, 3.0))
+    assert grid.log_odds[i, j] == pytest.approx(2 * FREE_AT_FACE, abs=1e-6)
+
+
+def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_again() -> None:
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    mid, side = _cell(grid, FACE_X, ROW_Y), _cell(grid, 1.816, ROW_Y + 0.175)
+    # The side cell lies on the arc (1.8244 m, 0.0955 rad off the axis, inside φ/2 = 0.196)
+    # but off its middle: the whole hit covers ±(0.1 / 1.825 + 0.05 / (2 x 1.825)) = ±0.068
+    # rad (the middle spread_length, widened by half a cell).
+    grid.add(_front(1.0))
+    live = grid.live_log_odds
+    assert live[mid] == pytest.approx(L_HIT)
+    assert live[side] == 0.0
+    # Another sensor firing elsewhere changes nothing: sensor 0's echo is still its newest.
+    grid.add(Reading(1.1, 4, 0.0, ROW_Y, math.pi, 0.3))
+    assert grid.live_log_odds[mid] == pytest.approx(L_HIT)
+    # Sensor 0 fires again, backwards: its first echo is no longer its newest, and is spread.
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, math.pi, 0.3))
+    live = grid.live_log_odds
+    assert live[mid] == pytest.approx(SPREAD_AT_FACE)
+    assert live[side] == pytest.approx(SPREAD_AT_FACE)
+
+
+def test_an_echo_the_map_already_explains_is_only_spread() -> None:
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)))
+    _ring_hears_nothing(grid)
+    i, j = _cell(grid, FACE_X, ROW_Y)
+    # Sensors 1-3 (turned to face the same way) hear the face; with a history of one arc,
+    # each pushes the one before it out, final: 2 x 0.236 - 0.031 = 0.44, then the third
+    # reading's push makes it 0.68 > 0.619, occupied.
+    grid.add_many(ReadingBatch.from_readings(_front(1.0 + k, sensor=1 + k) for k in range(3)))
+    grid.add(_front(5.0))
+    # Sensor 0's echo lies on a band the map marks already: it gets its spread value only.
+    assert grid.live_log_odds[i, j] == pytest.approx(SPREAD_AT_FACE)
+    assert grid.log_odds[i, j] == pytest.approx(FREE_AT_FACE + 4 * SPREAD_AT_FACE, abs=1e-6)

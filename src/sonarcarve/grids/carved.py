@@ -29,6 +29,26 @@ Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ
   NaN). An arc carving removed (fully carved, split, or below the method's confidence)
   contributes nothing.
 
+**The newest echoes mark at once** (:attr:`CarvedGridParams.fresh_arcs`): spread over a
+22.5° arc 3.5 m away, one echo gives its cells 0.12 in log-odds, and a person crossing ahead
+of the robot is heard 2-4 times from each place before the beams of its next places carve those
+arcs away: the grid never marked it, where ROS's layer (which marks the beam's middle at once)
+takes 1.2 s. A robot must see an obstacle that steps in front of it now. So each sensor's
+newest reading, while it is the newest (until that sensor fires again: the ring's current
+view), counts as carving's point estimate instead of its spread: a whole hit ``c ·
+logit(p_hit)`` on the middle ``L`` (:attr:`~CarvedGridParams.spread_length`) of its carved
+interval, as if carved down to ``L`` around the method's point. Only where nothing on the map
+explains the echo: if a cell of the arc's carved band is occupied already (without the arc's
+own share), the echo may well come from it and the arc keeps its spread value. Why these three
+limits, measured on the changing scenes and the office (``docs/RESULTS.md``): the whole carved
+band at a whole hit marks the person in 0.8 s but doubles the scenes' phantom share (11.8 →
+29 % on the person scene), mostly from the flanks of long arcs early in a run; the middle alone
+and only unexplained echoes mark it in 1.0 s at 15.5 %; counting as explained any cell more
+likely occupied than not (``l > 0``) lowers phantoms further but makes a person standing still
+flicker (its older spread arcs "explain" each new echo while the cell is still unsure). Arcs
+leave the history at their spread value: the mark is an overlay of the present, not evidence
+that accumulates.
+
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
 from erasing an obstacle that has gone (the changing-scenes box stayed marked for good). So the
@@ -277,6 +297,11 @@ class CarvedGridParams:
         beam's angular profile laid over the interval. Measured (office, seeds 0-2): 1.0 raises
         precision (0.78/0.88 at 0.05/0.10 m) and the Fig. 2 door (81/78 % passable) but drops
         recall to the layer's (0.895 at 0.05 m); so off.
+    fresh_arcs : bool
+        Each sensor's newest echo, when no occupied cell on its carved band explains it, is a
+        whole hit on the middle ``spread_length`` of its carved interval until that sensor
+        fires again (module docstring: a person stepping in front of the robot is marked
+        after one reading). False: every live arc spread, the rule before.
 
     Raises
     ------
@@ -297,6 +322,7 @@ class CarvedGridParams:
     surface_aware: bool = True
     p_miss_heard: float = 0.2
     band_profile: float = 0.0
+    fresh_arcs: bool = True
 
     def __post_init__(self) -> None:
         _check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -319,7 +345,7 @@ class CarvedGridParams:
                 msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
                 raise GridError(msg)
         _check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
-        for name in ("spread", "surface_aware"):
+        for name in ("spread", "surface_aware", "fresh_arcs"):
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
@@ -350,6 +376,7 @@ class _Model(NamedTuple):
     fade: float  # d_f, inf: no fade
     aware: bool
     profile: float  # band_profile
+    l_occupied: float  # logit(occupied_threshold)
 
 
 @compiled_inline
@@ -390,12 +417,15 @@ def _sector_box(x: float, y: float, t1: float, t2: float, r_in: float,
 
 
 @compiled_inline
-def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model) -> float:
-    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``."""
+def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model,
+               fresh: bool = False) -> float:
+    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``; a
+    ``fresh`` arc (the newest reading of its sensor, :attr:`CarvedGridParams.fresh_arcs`)
+    ``c · logit(p_hit)``, unspread."""
     if not weight > 0.0:
         return 0.0
     s = 1.0
-    if m.spread > 0.0:
+    if m.spread > 0.0 and not fresh:
         length = r * (hi - lo)
         if length > m.unit:
             s = m.unit / length
@@ -609,30 +639,86 @@ def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[n
 
 
 @compiled
-def _sync_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
-                 slots: SlotArray, seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
-                 r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
+def _sync_kernel(base: npt.NDArray[np.float32], live: FloatArray, drawn: FloatArray,
+                 drawn_seq: npt.NDArray[np.int64], slots: SlotArray,
+                 seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                 lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
                  heard: npt.NDArray[np.uint32], m: _Model) -> int:
-    """Redraw every live arc whose interval or weight changed; returns how many."""
+    """Redraw every live arc whose interval or value changed; returns how many redrawn.
+
+    First every arc at its spread value; then each ``fresh`` arc (its sensor's newest
+    reading, :attr:`CarvedGridParams.fresh_arcs`) that the map of the first pass does not
+    explain (:func:`_band_occupied`, without the arc itself) as carving's point estimate
+    instead: a whole hit on the middle ``unit`` of its carved interval. Every fresh arc is
+    judged on the first pass's map, so their order does not matter."""
     changed = 0
     for k in range(slots.shape[0]):
-        slot = slots[k]
-        value = _arc_value(r[k], lo[k], hi[k], weight[k], m)
-        if (drawn_seq[slot] == seqs[k] and drawn[slot, 3] == lo[k] and drawn[slot, 4] == hi[k]
-                and drawn[slot, 5] == value):
-            continue
-        if drawn_seq[slot] >= 0:
-            _undraw(live, heard, m, drawn, slot)
-        _draw_arc(live, False, heard, m, x[k], y[k], r[k], lo[k], hi[k], value)
-        drawn[slot, 0] = x[k]
-        drawn[slot, 1] = y[k]
-        drawn[slot, 2] = r[k]
-        drawn[slot, 3] = lo[k]
-        drawn[slot, 4] = hi[k]
-        drawn[slot, 5] = value
-        drawn_seq[slot] = seqs[k]
-        changed += 1
+        changed += _redraw(live, drawn, drawn_seq, slots[k], seqs[k], x[k], y[k], r[k],
+                           lo[k], hi[k], _arc_value(r[k], lo[k], hi[k], weight[k], m),
+                           heard, m)
+    point = np.zeros(slots.shape[0], dtype=np.bool_)
+    for k in range(slots.shape[0]):
+        point[k] = (fresh[k] and weight[k] > 0.0 and not _band_occupied(
+            base, live, m, x[k], y[k], r[k], lo[k], hi[k], drawn[slots[k], 5]))
+    for k in range(slots.shape[0]):
+        if point[k]:
+            mid = 0.5 * (lo[k] + hi[k])
+            half = min(0.5 * (hi[k] - lo[k]), 0.5 * m.unit / r[k])
+            _redraw(live, drawn, drawn_seq, slots[k], seqs[k], x[k], y[k], r[k], mid - half,
+                    mid + half, _arc_value(r[k], lo[k], hi[k], weight[k], m, True), heard, m)
     return changed
+
+
+@compiled_inline
+def _redraw(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], slot: int,
+            seq: int, x: float, y: float, r: float, lo: float, hi: float, value: float,
+            heard: npt.NDArray[np.uint32], m: _Model) -> int:
+    """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
+    changed anything."""
+    if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
+            and drawn[slot, 5] == value):
+        return 0
+    if drawn_seq[slot] >= 0:
+        _undraw(live, heard, m, drawn, slot)
+    _draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
+    drawn[slot, 0] = x
+    drawn[slot, 1] = y
+    drawn[slot, 2] = r
+    drawn[slot, 3] = lo
+    drawn[slot, 4] = hi
+    drawn[slot, 5] = value
+    drawn_seq[slot] = seq
+    return 1
+
+
+@compiled_inline
+def _band_occupied(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+                   y: float, r: float, lo: float, hi: float, own: float) -> bool:
+    """Whether a cell of the arc's band (as :func:`_draw_arc` draws it, without a profile)
+    is occupied, ``clamp(base + live - own) > l_occupied``, ``own`` the arc's own share."""
+    xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
+    ny, nx = base.shape
+    widen = 0.5 * h / r
+    t1 = lo - widen
+    t2 = hi + widen
+    mid = 0.5 * (t1 + t2)
+    half = 0.5 * (t2 - t1)
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, max(0.0, r - band), r + band)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        for j in range(j0, j1 + 1):
+            dx = xmin + (j + 0.5) * h - x
+            if abs(math.sqrt(dx * dx + dy * dy) - r) > band:
+                continue
+            off = math.atan2(dy, dx) - mid
+            off -= _TWO_PI * math.floor((off + math.pi) / _TWO_PI)
+            if abs(off) > half:
+                continue
+            if min(m.l_max, max(m.l_min, base[i, j] + live[i, j] - own)) > m.l_occupied:
+                return True
+    return False
 
 
 @compiled_inline
@@ -711,10 +797,13 @@ class CarvedGrid(CellGrid):
     >>> g = CarvedGrid(0.1, (0.0, 0.0, 2.0, 1.0))
     >>> g.add(Reading(t=0.0, sensor=0, x=0.05, y=0.55, theta=0.0, range=1.0))
     >>> p = g.probabilities()
-    >>> float(p[5, 10].round(3)), float(p[5, 5].round(3))  # on the arc (spread), free space
-    (0.606, 0.406)
-    >>> trinary(g)[5, [0, 5, 10, 15]].tolist()  # origin, free, arc, beyond: all still unsure
-    [-1, -1, -1, -1]
+    >>> float(p[5, 10].round(3)), float(p[5, 5].round(3))  # the arc's middle, free space
+    (0.7, 0.406)
+    >>> trinary(g)[5, [0, 5, 10, 15]].tolist()  # the newest echo, unexplained: marked now
+    [-1, -1, 100, -1]
+    >>> g.add(Reading(t=0.1, sensor=0, x=0.05, y=0.55, theta=math.pi, range=0.3))
+    >>> float(g.probabilities()[5, 10].round(3))  # no longer the sensor's newest: spread
+    0.606
     """
 
     def __init__(self, resolution: float, bounds: tuple[float, float, float, float],
@@ -739,7 +828,8 @@ class CarvedGrid(CellGrid):
         self._model = _Model(xmin, ymin, self._resolution, self.band, self._l_hit,
                              self._l_miss, self._l_heard, self._l_min, self._l_max,
                              self._spread, self._unit, float(p.fade_range),
-                             p.surface_aware, float(p.band_profile))
+                             p.surface_aware, float(p.band_profile),
+                             _logit(p.occupied_threshold))
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
@@ -751,6 +841,8 @@ class CarvedGrid(CellGrid):
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
         self._pending: list[tuple[FloatArray, ...]] = []
         self._next_final = 0  # sequence number of the next arc to leave the history
+        # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
+        self._newest: dict[int, int] = {}
         self._stale = False
         self.readings = 0
         method.add_commit_listener(self._on_commit)
@@ -835,12 +927,22 @@ class CarvedGrid(CellGrid):
             r = np.where(no_echo, batch.max_range + self.band, r)
         else:
             seqs = first_seq + np.arange(n, dtype=np.int64)
+        self._note_newest(batch.sensor, seqs, no_echo)
         _fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
                      np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
                      np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
                      history.capacity, finals)
         self.readings += n
         self._stale = True
+
+    def _note_newest(self, sensor: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64],
+                     no_echo: BoolArray) -> None:
+        """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
+        heard nothing (its arc is then no sensor's newest)."""
+        ids, rev_first = np.unique(sensor[::-1], return_index=True)
+        last = len(sensor) - 1 - rev_first
+        for s, k in zip(ids.tolist(), last.tolist(), strict=True):
+            self._newest[s] = -1 if no_echo[k] else int(seqs[k])
 
     def _on_commit(self, history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
         """Arcs leaving the history: their live contribution out, their final one pending."""
@@ -873,8 +975,12 @@ class CarvedGrid(CellGrid):
             x, y, r = history.x[slots], history.y[slots], history.r[slots]
             lo, hi, weight = _intervals(x, y, est)
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
-            _sync_kernel(self._live, self._drawn, self._drawn_seq, np.ascontiguousarray(slots),
-                         seqs, x, y, r, lo, hi, weight, self._heard, self._model)
+            fresh = np.zeros(len(slots), dtype=np.bool_)
+            if self._params.fresh_arcs and self._newest:
+                fresh = np.isin(seqs, np.fromiter(self._newest.values(), dtype=np.int64))
+            _sync_kernel(self._base, self._live, self._drawn, self._drawn_seq,
+                         np.ascontiguousarray(slots),
+                         seqs, x, y, r, lo, hi, weight, fresh, self._heard, self._model)
         self._stale = False
 
     # -- reading the map ---------------------------------------------------------------------
