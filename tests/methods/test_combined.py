@@ -10,7 +10,7 @@ from sonarcarve.methods.atm import AtmMethod, AtmModel
 from sonarcarve.methods.base import Estimates, SonarMethod
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.combined import CombinedMethod, combine_carving_atm
-from sonarcarve.readings import Reading
+from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.sim.world import World
 
 PHI = math.radians(22.5)
@@ -133,3 +133,98 @@ def test_combined_is_registered_and_configured() -> None:
     assert atm.min_transversal == pytest.approx(0.5)
     assert atm.range_resolution == pytest.approx(0.01)
     assert carving.history is atm.history is method.history  # one shared history
+
+
+def _wandering_stream(n: int, seed: int, *, spread: float, huge_share: float) -> ReadingBatch:
+    """A robot wandering over ``spread`` metres: random bearings, ranges and beam widths, some
+    coincident origins, some huge ranges (arcs beyond the index's cells), some no-echo
+    readings (free space up to ``max_range``)."""
+    rng = np.random.default_rng(seed)
+    xy = np.mod(rng.normal(0.0, 0.05, (n, 2)).cumsum(axis=0), spread)
+    for i in np.flatnonzero(rng.random(n) < 0.1):
+        xy[i] = xy[max(i - 1, 0)]
+    r = np.round(rng.uniform(0.05, 4.0, n) / INCH) * INCH + INCH
+    huge = rng.random(n) < huge_share
+    r[huge] = rng.uniform(50.0, 5e3, int(huge.sum()))
+    max_range = np.full(n, np.nan)
+    silent = rng.random(n) < 0.05
+    r[silent] = np.inf
+    max_range[silent] = rng.uniform(0.5, 6.0, int(silent.sum()))
+    return ReadingBatch.from_arrays(
+        t=np.arange(n) * 0.01, sensor=rng.integers(0, 16, n), x=xy[:, 0], y=xy[:, 1],
+        theta=rng.uniform(-3.0 * math.pi, 3.0 * math.pi, n), range=r,
+        beam_width=np.where(rng.random(n) < 0.3, rng.uniform(0.05, 2.5, n), np.nan),
+        max_range=max_range,
+    )
+
+
+def _feed_mixed(method: SonarMethod, batch: ReadingBatch) -> None:
+    """Blocks with single readings between them."""
+    cut = len(batch) // 3
+    method.add_many(batch[:cut])
+    for i in range(cut, cut + 25):
+        method.add(batch[i])
+    method.add_many(batch[cut + 25:])
+
+
+def _room_batch(seed: int) -> ReadingBatch:
+    stream = _room_stream(seed)
+    columns = ("t", "sensor", "x", "y", "theta", "range", "beam_width")
+    return ReadingBatch.from_arrays(**{c: np.array([getattr(r, c) for r in stream])
+                                       for c in columns})
+
+
+@pytest.mark.parametrize(("stream", "history", "max_incidence"), [
+    ("wander 0 3.0 0.0", 40, 0.5 * math.pi),
+    ("wander 1 1.5 0.02", 150, 0.5 * math.pi),
+    ("wander 2 8.0 0.02", 60, math.radians(17.5)),
+    ("wander 3 2.0 0.0", 900, 0.5 * math.pi),  # no eviction
+    ("room 2", 400, 0.5 * math.pi),  # ATM's crossing store grows inside the joint kernel
+])
+def test_combined_leaves_each_model_as_it_runs_alone(stream: str, history: int,
+                                                     max_incidence: float) -> None:
+    # The oracles are the two methods run on their own (each with its own index); combined
+    # runs both in one kernel over one index of every live arc.
+    kind, seed, *rest = stream.split()
+    if kind == "room":
+        batch = _room_batch(int(seed))
+    else:
+        batch = _wandering_stream(800, int(seed), spread=float(rest[0]),
+                                  huge_share=float(rest[1]))
+    config = MethodConfig(history_size=history, max_incidence=max_incidence)
+    both = make_method("combined", config)
+    carving = make_method("carve", config)
+    atm = make_method("atm", config)
+    committed: list[list[Estimates]] = [[], [], []]
+    for method, out in zip((both, carving, atm), committed, strict=True):
+        method.add_commit_listener(lambda _h, _s, est, out=out: out.append(est))
+        _feed_mixed(method, batch)
+    c_model, a_model = _model(both, CarvingModel), _model(both, AtmModel)
+    c_alone, a_alone = _model(carving, CarvingModel), _model(atm, AtmModel)
+    assert isinstance(c_model, CarvingModel)
+    assert isinstance(c_alone, CarvingModel)
+    assert isinstance(a_model, AtmModel)
+    assert isinstance(a_alone, AtmModel)
+    live = both.history.slots()
+    for field in ("lo", "hi", "bounds", "status", "carved"):
+        np.testing.assert_array_equal(getattr(c_model, field)[live], getattr(c_alone, field)[live])
+    np.testing.assert_array_equal(a_model.counts, a_alone.counts)
+    for slot in np.flatnonzero(a_alone.counts):
+        c = a_alone.counts[slot]
+        np.testing.assert_array_equal(np.sort(a_model.bearings[slot, :c]),
+                                      np.sort(a_alone.bearings[slot, :c]))
+    assert c_model.counters() == c_alone.counters()
+    assert a_model.counters() == a_alone.counters()
+    if kind == "room":
+        assert a_model.bearings.shape[1] > 32  # the store grew (the kernel stopped and resumed)
+    # Every field of every row, removed arcs included, live and as committed:
+    # combine_carving_atm of the two alone (combined computes ATM's medians only where used).
+    pairs = [(both.estimates(live), carving.estimates(live), atm.estimates(live))]
+    for method in (both, carving, atm):
+        method.finish()
+    pairs += list(zip(*committed, strict=True))
+    assert len(pairs) > (2 if history < 800 else 1)
+    for got, alone_c, alone_a in pairs:
+        want = combine_carving_atm(alone_c, alone_a)
+        for field in ("alive", "processed", "xy", "width", "max_error", "source", "fate"):
+            np.testing.assert_array_equal(getattr(got, field), getattr(want, field))

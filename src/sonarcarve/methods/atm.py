@@ -241,6 +241,19 @@ def _add_arc(
     return 0, needed
 
 
+@compiled_inline
+def _start_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: FloatArray,
+               sin_axis: FloatArray, cos_half: FloatArray, counts: npt.NDArray[np.int32],
+               stale: BoolArray) -> None:
+    """A new arc in ``slot``: no crossings yet, and its axis and half-beam cosines for the beam
+    tests of :func:`_add_arc`."""
+    counts[slot] = 0
+    stale[slot] = True
+    cos_axis[slot] = math.cos(theta[slot])
+    sin_axis[slot] = math.sin(theta[slot])
+    cos_half[slot] = math.cos(0.5 * beam_width[slot])
+
+
 @compiled
 def _add_arcs(
     first: int, count: int, capacity: int,
@@ -276,11 +289,7 @@ def _add_arcs(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        counts[slot] = 0
-        stale[slot] = True
-        cos_axis[slot] = math.cos(theta[slot])
-        sin_axis[slot] = math.sin(theta[slot])
-        cos_half[slot] = math.cos(0.5 * beam_width[slot])
+        _start_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
         xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
         found = query_box(index, xmin, xmax, ymin, ymax, candidates) if use_index else -1
         if found < 0:
@@ -414,8 +423,7 @@ class AtmModel(ArcModel):
 
     def on_add_many(self, first: int, count: int) -> None:
         """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
-        if self._failed is not None:
-            raise CrossingStoreError(str(self._failed))
+        self.check_usable()
         h = self.history
         end = first + count
         while first < end:
@@ -427,11 +435,40 @@ class AtmModel(ArcModel):
             )
             self._kept += kept
             if first < end:
-                try:
-                    self._grow(needed)
-                except CrossingStoreError as error:
-                    self._failed = error
-                    raise
+                self.make_room(needed)
+
+    def check_usable(self) -> None:
+        """Raise the :class:`CrossingStoreError` that stopped the model, if one did."""
+        if self._failed is not None:
+            raise CrossingStoreError(str(self._failed))
+
+    def make_room(self, needed: int) -> None:
+        """Grow the store to ``needed`` columns (:meth:`_grow`), or stop the model for good."""
+        try:
+            self._grow(needed)
+        except CrossingStoreError as error:
+            self._failed = error
+            raise
+
+    @property
+    def uses_index(self) -> bool:
+        """Whether the spatial index finds each new arc's partners (ψ ≥
+        :data:`MIN_INDEXED_TRANSVERSAL`), rather than a scan of every live arc."""
+        return self._use_index
+
+    def kernel_state(self) -> tuple[FloatArray, FloatArray, FloatArray, float,
+                                    npt.NDArray[np.float32], npt.NDArray[np.int32],
+                                    npt.NDArray[np.int32], BoolArray]:
+        """``cos θ, sin θ, cos(φ/2)`` per slot, ``cos ψ``, the crossing store and its counts,
+        the per-candidate tally and the stale marks: what a kernel adding arcs to this model
+        takes (:func:`_add_arc`; the store is replaced when it grows, so ask again after
+        :meth:`make_room`)."""
+        return (self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi, self.bearings,
+                self.counts, self._tally, self._stale)
+
+    def count_kept(self, kept: int) -> None:
+        """Add crossings kept by a kernel that the method ran for this model."""
+        self._kept += kept
 
     def _grow(self, needed: int) -> None:
         """Widen the crossing store to at least ``needed`` columns (doubling; bounded)."""
@@ -441,17 +478,25 @@ class AtmModel(ArcModel):
         wider[:, : self.bearings.shape[1]] = self.bearings
         self.bearings = wider
 
-    def estimates(self, slots: SlotArray) -> Estimates:
+    def estimates(self, slots: SlotArray, points: BoolArray | None = None) -> Estimates:
+        """ATM's estimates for ``slots``; ``points`` (a mask over ``slots``, default all) says
+        which rows' points and widths are wanted: the others are NaN and their medians are not
+        computed (:class:`~sonarcarve.methods.combined.CombinedMethod` asks only where ATM's
+        point can beat carving's)."""
         h = self.history
         # Medians only of the rows whose crossings changed since they were last asked for
         # (a writable int64 array: one compiled version of _medians, whatever the caller
         # passes): local_map() at a history of 10,000 re-sorted every arc's crossings.
-        stale = np.array(slots[self._stale[slots]], dtype=np.int64)
+        wanted = self._stale[slots] if points is None else self._stale[slots] & points
+        stale = np.array(slots[wanted], dtype=np.int64)
         if len(stale):
             _medians(self.bearings, self.counts, stale, self._median, self._span)
             self._stale[stale] = False
         median = self._median[slots]
         span = self._span[slots]
+        if points is not None:
+            median = np.where(points, median, np.nan)
+            span = np.where(points, span, np.nan)
         has = self.counts[slots] > 0
         beam = h.beam_width[slots]
         return Estimates(

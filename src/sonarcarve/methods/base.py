@@ -277,8 +277,7 @@ class SonarMethod(ABC):
             first = h.append_many(batch.x[part], batch.y[part], batch.range[part],
                                   batch.theta[part], batch.t[part], batch.sensor[part],
                                   width[part], start + done)
-            for model in self.models:
-                model.on_add_many(first, stop - done)
+            self._feed_block(first, stop - done)
             done = stop
         self._readings += n
         self._last_t = float(batch.t[-1])
@@ -295,18 +294,32 @@ class SonarMethod(ABC):
             return
         width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
         slot = self.history.append(reading, reading_id, width)
-        older = self.history.slots()[:-1]
-        for model in self.models:
-            model.on_add(slot, older)
+        self._feed_one(slot)
         self._readings += 1
         self._last_t = reading.t
         self._local = None
 
+    def _feed_one(self, slot: int) -> None:
+        """Let the models take in the arc just stored in ``slot``, the newest (:meth:`add`)."""
+        older = self.history.slots()[:-1]
+        for model in self.models:
+            model.on_add(slot, older)
+
+    def _feed_block(self, first: int, count: int) -> None:
+        """Let the (block-safe) models take in the arcs of sequence numbers ``first .. first +
+        count - 1``, just stored by :meth:`~sonarcarve.history.SonarHistory.append_many`."""
+        for model in self.models:
+            model.on_add_many(first, count)
+
+    def _feed_no_echo(self, reading: Reading, beam_width: float) -> None:
+        """Let the models take in a no-echo reading of beam width ``beam_width``."""
+        for model in self.models:
+            model.on_no_echo(reading, beam_width)
+
     def _add_no_echo(self, reading: Reading) -> None:
         """A validated no-echo reading: free space for the models, no arc (module docstring)."""
         width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
-        for model in self.models:
-            model.on_no_echo(reading, width)
+        self._feed_no_echo(reading, width)
         self._readings += 1
         self._no_echo += 1
         self._last_t = reading.t

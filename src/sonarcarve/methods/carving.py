@@ -75,6 +75,76 @@ def _clear_of_disk(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Floa
                              sector)
 
 
+@compiled_inline
+def _start_arc(
+    slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray,
+    theta2: FloatArray, lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray,
+    status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
+) -> Sector:
+    """A new arc in ``slot``: alive, not carved, its full beam (section 3) and the circle around
+    it; returns its freespace sector (eq. 3.2), which carves the older arcs."""
+    lo[slot] = theta1[slot]
+    hi[slot] = theta2[slot]
+    cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+    bounds[slot, 0] = cx
+    bounds[slot, 1] = cy
+    bounds[slot, 2] = radius
+    tips[slot, 0] = math.nan
+    status[slot] = _ALIVE
+    carved[slot] = False
+    return make_sector(x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
+                       max_incidence)
+
+
+@compiled_inline
+def _carve_found(
+    found: int, candidates: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
+    carved: BoolArray, sector: Sector, index: ArcIndex, prune: bool, cuts: FloatArray,
+    starts: FloatArray, ends: FloatArray, flags: BoolArray,
+) -> tuple[int, int]:
+    """Carve the arcs ``candidates[:found]`` by ``sector``: the step of
+    :func:`~sonarcarve.geometry.carve_arcs`, arc by arc, for the arcs the index returned (the
+    others it leaves unchanged). Arcs already removed are skipped; an arc it removes leaves
+    ``index`` too when ``prune`` (an index of the alive arcs; a shared index keeps every live
+    arc). Returns ``(fully carved, split)``."""
+    fully = 0
+    split = 0
+    for k in range(found):
+        i = candidates[k]
+        if status[i] != _ALIVE:
+            continue
+        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
+                                     sector)
+        if fate == UNCHANGED:
+            continue
+        new_lo = lo[i]
+        new_hi = hi[i]
+        if fate == UNDECIDED:
+            if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
+                continue
+            fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
+                                               starts, ends, flags)
+            if fate == UNCHANGED:
+                continue
+        carved[i] = True
+        if fate == SHRUNK:
+            lo[i] = new_lo
+            hi[i] = new_hi
+            tips[i, 0] = math.nan
+            bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
+                x[i], y[i], r[i], new_lo, new_hi)
+        else:
+            status[i] = fate
+            if prune:
+                index_remove(index, i)
+            if fate == FULLY_CARVED:
+                fully += 1
+            else:
+                split += 1
+    return fully, split
+
+
 @compiled
 def _add_arcs(
     first: int, count: int, capacity: int,
@@ -105,18 +175,8 @@ def _add_arcs(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        lo[slot] = theta1[slot]
-        hi[slot] = theta2[slot]
-        cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], theta1[slot],
-                                             theta2[slot])
-        bounds[slot, 0] = cx
-        bounds[slot, 1] = cy
-        bounds[slot, 2] = radius
-        tips[slot, 0] = math.nan
-        status[slot] = _ALIVE
-        carved[slot] = False
-        sector = make_sector(x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
-                             max_incidence)
+        sector = _start_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status, carved,
+                            tolerance, max_incidence)
         if sector.radius > 0.0:
             found = query_sector(index, sector, candidates)
             if found < 0:  # a huge sector: every live arc before this one
@@ -124,39 +184,11 @@ def _add_arcs(
                 for older in range(max(0, sequence - capacity + 1), sequence):
                     candidates[found] = older % storage
                     found += 1
-            for k in range(found):
-                # The step of carve_arcs, arc by arc (written out: numba runs it 20 times
-                # slower as an inlined helper taking the arrays).
-                i = candidates[k]
-                if status[i] != _ALIVE:
-                    continue
-                fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i],
-                                             y[i], r[i], sector)
-                if fate == UNCHANGED:
-                    continue
-                new_lo = lo[i]
-                new_hi = hi[i]
-                if fate == UNDECIDED:
-                    if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
-                        continue
-                    fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi,
-                                                       sector, cuts, starts, ends, flags)
-                    if fate == UNCHANGED:
-                        continue
-                carved[i] = True
-                if fate == SHRUNK:
-                    lo[i] = new_lo
-                    hi[i] = new_hi
-                    tips[i, 0] = math.nan
-                    bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
-                        x[i], y[i], r[i], new_lo, new_hi)
-                else:
-                    status[i] = fate
-                    index_remove(index, i)
-                    if fate == FULLY_CARVED:
-                        fully += 1
-                    else:
-                        split += 1
+            arcs_fully, arcs_split = _carve_found(
+                found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
+                True, cuts, starts, ends, flags)
+            fully += arcs_fully
+            split += arcs_split
         xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
         index_insert(index, slot, xmin, xmax, ymin, ymax)
     return fully, split
@@ -168,58 +200,27 @@ def _carve_free(
     x: FloatArray, y: FloatArray, r: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, tolerance: float, max_incidence: float, index_arrays: IndexArrays,
-    candidates: SlotArray,
+    candidates: SlotArray, prune: bool,
 ) -> tuple[int, int]:
     """Carve the live arcs (the ``appended`` arcs so far, the newest ``capacity`` of them live)
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
     to ``fr`` metres (its sector ends at ``fr - tolerance``). The carving step of
-    :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``."""
+    :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``. ``prune``: the
+    index holds only the alive arcs (:func:`_carve_found`)."""
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)
     cuts, starts, ends, flags = new_scratch()
-    fully = 0
-    split = 0
     sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
     if sector.radius <= 0.0:
-        return fully, split
+        return 0, 0
     found = query_sector(index, sector, candidates)
     if found < 0:  # a huge sector: every live arc
         found = 0
         for older in range(max(0, appended - capacity), appended):
             candidates[found] = older % storage
             found += 1
-    for k in range(found):
-        i = candidates[k]
-        if status[i] != _ALIVE:
-            continue
-        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
-                                     sector)
-        if fate == UNCHANGED:
-            continue
-        new_lo = lo[i]
-        new_hi = hi[i]
-        if fate == UNDECIDED:
-            if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
-                continue
-            fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
-                                               starts, ends, flags)
-            if fate == UNCHANGED:
-                continue
-        carved[i] = True
-        if fate == SHRUNK:
-            lo[i] = new_lo
-            hi[i] = new_hi
-            tips[i, 0] = math.nan
-            bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
-                x[i], y[i], r[i], new_lo, new_hi)
-        else:
-            status[i] = fate
-            index_remove(index, i)
-            if fate == FULLY_CARVED:
-                fully += 1
-            else:
-                split += 1
-    return fully, split
+    return _carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
+                        sector, index, prune, cuts, starts, ends, flags)
 
 
 class CarvingModel(ArcModel):
@@ -292,21 +293,31 @@ class CarvingModel(ArcModel):
             self.lo, self.hi, self.bounds, self.tips, self.status, self.carved,
             self.range_tolerance, self.max_incidence, index_arrays(self.index), self._candidates,
         )
+        self.count_removed(fully, split)
+
+    def count_removed(self, fully: int, split: int) -> None:
+        """Add arcs removed by a kernel that the method ran for this model."""
         self._fully_carved += fully
         self._split += split
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Carve the live arcs by the no-echo reading's beam up to ``max_range - ε``."""
+        self.carve_free(reading, beam_width, self.index, prune=True)
+
+    def carve_free(self, reading: Reading, beam_width: float, index: ArcIndex, *,
+                   prune: bool) -> None:
+        """:meth:`on_no_echo` with the arcs to carve found in ``index``: this model's own index
+        of the alive arcs (``prune``: the arcs it removes leave it) or, without ``prune``, an
+        index of every live arc that the method keeps (combined's joint kernel)."""
         h = self.history
         half = 0.5 * beam_width
         fully, split = _carve_free(
             reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
             h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.tips,
             self.status, self.carved, self.range_tolerance, self.max_incidence,
-            index_arrays(self.index), self._candidates,
+            index_arrays(index), self._candidates, prune,
         )
-        self._fully_carved += fully
-        self._split += split
+        self.count_removed(fully, split)
 
     def estimates(self, slots: SlotArray) -> Estimates:
         """Points at the middle of the carved intervals (eq. 3.6) and their bounds (5.1-5.3).

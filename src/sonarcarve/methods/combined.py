@@ -9,20 +9,107 @@ for every arc, "the most accurate data available from each technique" (section 4
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
+from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry.circular import new_scratch
+from sonarcarve.geometry.index import (
+    ArcIndex,
+    IndexArrays,
+    arc_box,
+    index_arrays,
+    index_insert,
+    index_remove,
+    query_box,
+    query_sector,
+)
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
-from sonarcarve.methods.atm import AtmModel
+from sonarcarve.methods.atm import AtmModel, _add_arc
+from sonarcarve.methods.atm import _start_arc as _start_atm_arc
 from sonarcarve.methods.base import Estimates, SonarMethod
-from sonarcarve.methods.carving import CarvingModel
+from sonarcarve.methods.carving import CarvingModel, _carve_found
+from sonarcarve.methods.carving import _start_arc as _start_carved_arc
 from sonarcarve.methods.config import (
     DEFAULT_MIN_TRANSVERSAL,
     DEFAULT_RANGE_TOLERANCE,
     MethodConfig,
 )
+from sonarcarve.readings import Reading
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["CombinedMethod", "combine_carving_atm"]
+
+
+@compiled
+def _add_joint(
+    first: int, count: int, capacity: int,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    theta1: FloatArray, theta2: FloatArray,
+    lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
+    carved: BoolArray, tolerance: float, max_incidence: float,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, cos_psi: float,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    tally: npt.NDArray[np.int32], stale: BoolArray,
+    index_arrays: IndexArrays, atm_candidates: SlotArray, carving_candidates: SlotArray,
+) -> tuple[int, int, int, int, int]:
+    """Arcs ``first .. first + count - 1`` (sequence numbers) through ATM and carving, in
+    order, with one index of every live arc for both: per arc what ATM's ``_add_arcs`` does
+    (its crossings with the live arcs whose boxes meet its own), then what carving's does (its
+    freespace carves the older alive arcs; the arcs carving removed are in the index and
+    skipped), and the arc enters the index once. The two models touch disjoint state, so each
+    ends exactly as when run alone.
+
+    Returns ``(crossings kept, fully carved, split, done, needed)``: ``done`` is the sequence
+    number after the last arc done and ``needed``, when it stops early, the columns ATM's store
+    needs for arc ``done``, which neither model has taken in (ATM took its crossings back; an
+    arc that left the history at its start is out of the index, and taking it out again does
+    nothing), so the caller grows the store and calls again from ``done``.
+    """
+    storage = x.shape[0]
+    index = ArcIndex(*index_arrays)
+    cuts, starts, ends, flags = new_scratch()
+    kept = 0
+    fully = 0
+    split = 0
+    for sequence in range(first, first + count):
+        slot = sequence % storage
+        if sequence >= capacity:
+            index_remove(index, (sequence - capacity) % storage)  # it has left the history
+        _start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
+        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+        found = query_box(index, xmin, xmax, ymin, ymax, atm_candidates)
+        if found < 0:  # a huge box: every live arc before this one
+            found = _live_before(sequence, capacity, storage, atm_candidates)
+        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, atm_candidates,
+                                    found, cos_psi, bearings, counts, tally, stale)
+        if needed:
+            return kept, fully, split, sequence, needed
+        kept += arc_kept
+        sector = _start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
+                                   carved, tolerance, max_incidence)
+        if sector.radius > 0.0:
+            found = query_sector(index, sector, carving_candidates)
+            if found < 0:  # a huge sector
+                found = _live_before(sequence, capacity, storage, carving_candidates)
+            arcs_fully, arcs_split = _carve_found(
+                found, carving_candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector,
+                index, False, cuts, starts, ends, flags)
+            fully += arcs_fully
+            split += arcs_split
+        index_insert(index, slot, xmin, xmax, ymin, ymax)
+    return kept, fully, split, first + count, 0
+
+
+@compiled
+def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> int:
+    """Slots of the live arcs before arc ``sequence``, written to ``out``; their count."""
+    found = 0
+    for older in range(max(0, sequence - capacity + 1), sequence):
+        out[found] = older % storage
+        found += 1
+    return found
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -105,10 +192,66 @@ class CombinedMethod(SonarMethod):
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel, AtmModel]:
-        return (
-            CarvingModel(self.history, self.range_tolerance, self.max_incidence),
-            AtmModel(self.history, self.min_transversal, self.range_resolution),
-        )
+        self._carving = CarvingModel(self.history, self.range_tolerance, self.max_incidence)
+        self._atm = AtmModel(self.history, self.min_transversal, self.range_resolution)
+        self._joint: bool | None = None  # decided at the first reading (_uses_joint_kernel)
+        storage = self.history.storage_size
+        self._candidates = (np.zeros(storage, dtype=np.int64), np.zeros(storage, dtype=np.int64))
+        return self._carving, self._atm
+
+    def _uses_joint_kernel(self) -> bool:
+        """Whether both models run in :func:`_add_joint` over ATM's index (every live arc).
+
+        Not when ATM scans every pair (ψ below
+        :data:`~sonarcarve.methods.atm.MIN_INDEXED_TRANSVERSAL`, or switched off as the tests'
+        oracle does): then each model runs alone, carving with its own index. Fixed at the
+        first reading, since only one of the two indexes is kept up to date.
+        """
+        if self._joint is None:
+            self._joint = self._atm.uses_index
+        return self._joint
+
+    def _feed_one(self, slot: int) -> None:
+        if self._uses_joint_kernel():
+            self._feed_block(self.history.appended - 1, 1)
+        else:
+            super()._feed_one(slot)
+
+    def _feed_block(self, first: int, count: int) -> None:
+        if not self._uses_joint_kernel():
+            super()._feed_block(first, count)
+            return
+        carving, atm = self._carving, self._atm
+        atm.check_usable()
+        h = self.history
+        end = first + count
+        while first < end:
+            kept, fully, split, first, needed = _add_joint(
+                first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
+                h.theta2, carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
+                carving.carved, carving.range_tolerance, carving.max_incidence,
+                *atm.kernel_state(), index_arrays(atm.index), *self._candidates,
+            )
+            atm.count_kept(kept)
+            carving.count_removed(fully, split)
+            if first < end:
+                atm.make_room(needed)
+
+    def _feed_no_echo(self, reading: Reading, beam_width: float) -> None:
+        if self._uses_joint_kernel():
+            # Carving finds its arcs in the joint index (removed arcs stay in it); ATM ignores
+            # no-echo readings.
+            self._carving.carve_free(reading, beam_width, self._atm.index, prune=False)
+            self._atm.on_no_echo(reading, beam_width)
+        else:
+            super()._feed_no_echo(reading, beam_width)
+
+    def estimates(self, slots: SlotArray) -> Estimates:
+        """:func:`combine_carving_atm` of the two models' estimates; ATM's medians only where
+        its point can be chosen (a bound below carving's), the same estimates for less work."""
+        carving = self._carving.estimates(slots)
+        atm = self._atm.estimates(slots, points=carving.max_error > self._atm.error_bound)
+        return combine_carving_atm(carving, atm)
 
     def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
         carving, atm = estimates
