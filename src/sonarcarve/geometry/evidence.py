@@ -67,7 +67,10 @@ echo (the graded form of the occlusion rule).
 
 ATM (section 6, integration): transversal crossings (eq. 2.1, ψ) are found in the same pass for
 the pairs the evidence pass does not cull, stored per arc as bearings relative to its axis, and
-*counted only inside the surviving bins*; a crossing inside a surviving piece confirms it.
+*counted only inside the surviving bins*; a crossing inside a surviving piece confirms it. The
+store has as many columns as the caller gave it: crossings that do not fit wait in a spill
+buffer, and :func:`evidence_add_many` stops after that arc so that the caller can widen the
+store and move them to their rows (the store grows on demand, as ATM's does).
 """
 
 from __future__ import annotations
