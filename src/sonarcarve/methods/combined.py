@@ -17,9 +17,7 @@ from sonarcarve.geometry._compiled import compiled
 from sonarcarve.geometry.circular import new_scratch
 from sonarcarve.geometry.index import (
     ArcIndex,
-    IndexArrays,
     arc_box,
-    index_arrays,
     index_insert,
     index_remove,
     query_box,
@@ -37,7 +35,9 @@ from sonarcarve.methods.config import (
     MethodConfig,
 )
 from sonarcarve.readings import Reading
-from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, IntArray, SlotArray
+
+I32Array = npt.NDArray[np.int32]
 
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
@@ -52,7 +52,9 @@ def _add_joint(
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, cos_psi: float,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
     tally: npt.NDArray[np.int32], stale: BoolArray,
-    index_arrays: IndexArrays, atm_candidates: SlotArray, carving_candidates: SlotArray,
+    head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
+    stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
+    candidates: SlotArray,
 ) -> tuple[int, int, int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers) through ATM and carving, in
     order, with one index of every live arc for both: per arc what ATM's ``_add_arcs`` does
@@ -66,9 +68,13 @@ def _add_joint(
     needs for arc ``done``, which neither model has taken in (ATM took its crossings back; an
     arc that left the history at its start is out of the index, and taking it out again does
     nothing), so the caller grows the store and calls again from ``done``.
+
+    The index comes as its eight arrays (``*index``) and one ``candidates`` buffer serves both
+    queries: numba's dispatcher unboxes every array argument (about 0.1 µs each, more inside a
+    tuple), which is most of a single ``add()``'s cost.
     """
     storage = x.shape[0]
-    index = ArcIndex(*index_arrays)
+    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick, cell_size)
     cuts, starts, ends, flags = new_scratch()
     kept = 0
     fully = 0
@@ -79,10 +85,10 @@ def _add_joint(
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
         _start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
         xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
-        found = query_box(index, xmin, xmax, ymin, ymax, atm_candidates)
+        found = query_box(index, xmin, xmax, ymin, ymax, candidates)
         if found < 0:  # a huge box: every live arc before this one
-            found = _live_before(sequence, capacity, storage, atm_candidates)
-        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, atm_candidates,
+            found = _live_before(sequence, capacity, storage, candidates)
+        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
                                     found, cos_psi, bearings, counts, tally, stale)
         if needed:
             return kept, fully, split, sequence, needed
@@ -90,12 +96,12 @@ def _add_joint(
         sector = _start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
                                    carved, tolerance, max_incidence)
         if sector.radius > 0.0:
-            found = query_sector(index, sector, carving_candidates)
+            found = query_sector(index, sector, candidates)
             if found < 0:  # a huge sector
-                found = _live_before(sequence, capacity, storage, carving_candidates)
+                found = _live_before(sequence, capacity, storage, candidates)
             arcs_fully, arcs_split = _carve_found(
-                found, carving_candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector,
-                index, False, cuts, starts, ends, flags)
+                found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
+                False, cuts, starts, ends, flags)
             fully += arcs_fully
             split += arcs_split
         index_insert(index, slot, xmin, xmax, ymin, ymax)
@@ -195,8 +201,7 @@ class CombinedMethod(SonarMethod):
         self._carving = CarvingModel(self.history, self.range_tolerance, self.max_incidence)
         self._atm = AtmModel(self.history, self.min_transversal, self.range_resolution)
         self._joint: bool | None = None  # decided at the first reading (_uses_joint_kernel)
-        storage = self.history.storage_size
-        self._candidates = (np.zeros(storage, dtype=np.int64), np.zeros(storage, dtype=np.int64))
+        self._candidates = np.zeros(self.history.storage_size, dtype=np.int64)
         return self._carving, self._atm
 
     def _uses_joint_kernel(self) -> bool:
@@ -230,7 +235,7 @@ class CombinedMethod(SonarMethod):
                 first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
                 h.theta2, carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
                 carving.carved, carving.range_tolerance, carving.max_incidence,
-                *atm.kernel_state(), index_arrays(atm.index), *self._candidates,
+                *atm.kernel_state(), *atm.index, self._candidates,
             )
             atm.count_kept(kept)
             carving.count_removed(fully, split)
