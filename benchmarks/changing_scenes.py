@@ -22,7 +22,10 @@ default before issue 10's clearing work; a log that drops silent firings)::
 
     .venv/bin/python benchmarks/changing_scenes.py --echoes-only --no-figure
 
-``--no-echo`` is accepted and means the default.
+``--no-echo`` is accepted and means the default. ``--physics amplitude`` simulates the second
+sonar model (:mod:`sonarcarve.sim.amplitude`) instead of the default one::
+
+    .venv/bin/python benchmarks/changing_scenes.py --physics amplitude --no-figure
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from sonarcarve.lab.changing_scenes import (
     run_changing_scene,
 )
 from sonarcarve.lab.drawing import save_pngs
+from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
 
 SCENES = ("person", "door", "box")
 FIGURE = Path("docs/figures/changing-scenes.png")
@@ -75,8 +79,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="also feed the firings that heard nothing (the default)")
     echoes.add_argument("--echoes-only", action="store_true",
                         help="feed only the firings that heard an echo")
+    parser.add_argument("--physics", choices=("default", "amplitude"), default="default",
+                        help="sonar model simulated (default: the default physics)")
     args = parser.parse_args(argv)
     args.no_echo = not args.echoes_only
+    physics = (DEFAULT_PHYSICS if args.physics == "default"
+               else SonarPhysics(echo_model=args.physics))
     seeds = range(args.seeds)
     grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
     if args.no_echo:
@@ -84,10 +92,13 @@ def main(argv: Sequence[str] | None = None) -> int:
               "robot's max range).")
     else:
         print("\nEchoes only (the firings that heard nothing are not fed).")
+    if args.physics != "default":
+        print(f"Physics: {args.physics}.")
     for h_index, h in enumerate(args.resolutions):
         methods = METHOD_NAMES if h_index == 0 else ()
         runs = {name: [run_changing_scene(name, seed, h, methods=methods, grids=grids,
-                                          no_echo=args.no_echo) for seed in seeds]
+                                          no_echo=args.no_echo, physics=physics)
+                       for seed in seeds]
                 for name in SCENES}
         _print_tables(runs, h, seeds, with_methods=h_index == 0)
         if h_index == 0 and not args.no_figure:

@@ -68,6 +68,7 @@ from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
 from sonarcarve.sim.scene import ChangingScene, DynamicObstacle, Scene, changing_scene
 from sonarcarve.sim.simulate import Simulation, simulate
+from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
 from sonarcarve.sim.world import World
 from sonarcarve.typing import BoolArray, FloatArray
 
@@ -408,12 +409,13 @@ class SceneRun:
 
 
 def simulate_changing_scene(name: str, seed: int, robot: str = "scout2", *,
-                            no_echo: bool = False) -> tuple[ChangingScene, Simulation]:
+                            no_echo: bool = False, physics: SonarPhysics = DEFAULT_PHYSICS
+                            ) -> tuple[ChangingScene, Simulation]:
     """A built-in changing scene (:func:`~sonarcarve.sim.scene.changing_scene`) driven at the
-    default speed and simulated with the default physics; ``no_echo`` also records the firings
-    that heard nothing (:func:`~sonarcarve.sim.simulate.simulate`)."""
+    default speed and simulated with ``physics`` (default: the default physics); ``no_echo``
+    also records the firings that heard nothing (:func:`~sonarcarve.sim.simulate.simulate`)."""
     cs = changing_scene(name)
-    sim = simulate(cs.world, load_robot(robot), follow_waypoints(cs.waypoints), seed,
+    sim = simulate(cs.world, load_robot(robot), follow_waypoints(cs.waypoints), seed, physics,
                    scene=cs.scene, no_echo=no_echo)
     return cs, sim
 
@@ -421,13 +423,15 @@ def simulate_changing_scene(name: str, seed: int, robot: str = "scout2", *,
 def run_changing_scene(name: str, seed: int, resolution: float = 0.1,
                        methods: Sequence[str] = METHOD_NAMES,
                        grids: Sequence[str] = tuple(GRID_KINDS),
-                       period: float = SNAPSHOT_PERIOD, *, no_echo: bool = False) -> SceneRun:
+                       period: float = SNAPSHOT_PERIOD, *, no_echo: bool = False,
+                       physics: SonarPhysics = DEFAULT_PHYSICS) -> SceneRun:
     """Simulate a changing scene and measure every map on it (module docstring).
 
     ``no_echo`` feeds the maps the no-echo readings too (free space up to the robot's max
-    range); ``grids`` may then also name :data:`NO_ECHO_GRID_KINDS`.
+    range); ``grids`` may then also name :data:`NO_ECHO_GRID_KINDS`. ``physics``: the sonar
+    model simulated (e.g. ``SonarPhysics(echo_model="amplitude")``, the second model).
     """
-    cs, sim = simulate_changing_scene(name, seed, no_echo=no_echo)
+    cs, sim = simulate_changing_scene(name, seed, no_echo=no_echo, physics=physics)
     kinds = GRID_KINDS | NO_ECHO_GRID_KINDS
     changes = scene_changes(sim)
     xmin, ymin, xmax, ymax = sim.world.bounds
