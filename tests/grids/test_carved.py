@@ -113,7 +113,8 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     method = make_method("carve", MethodConfig(history_size=50))
     grid = CarvedGrid(0.1, BOUNDS, method=method)
     rows, cols = grid.shape
-    expected = rows * cols * (4 + 8 + 4) + 2 * 50 * (6 * 8 + 8)  # base, live, heard bins
+    # base, live, points, heard bins; per slot what was drawn (spread and point)
+    expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * 2 * (6 * 8 + 8)
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):
@@ -380,7 +381,7 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     grid.add(_front(1.0))
     live = grid.live_log_odds
     assert live[mid] == pytest.approx(L_HIT)
-    assert live[side] == 0.0
+    assert live[side] == pytest.approx(SPREAD_AT_FACE)  # the rest of the arc: spread
     # Another sensor firing elsewhere changes nothing: sensor 0's echo is still its newest.
     grid.add(Reading(1.1, 4, 0.0, ROW_Y, math.pi, 0.3))
     assert grid.live_log_odds[mid] == pytest.approx(L_HIT)
@@ -389,6 +390,7 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     live = grid.live_log_odds
     assert live[mid] == pytest.approx(SPREAD_AT_FACE)
     assert live[side] == pytest.approx(SPREAD_AT_FACE)
+    assert trinary(grid)[mid] != OCCUPIED  # one spread echo: unsure
 
 
 def test_an_echo_the_map_already_explains_is_only_spread() -> None:

@@ -35,9 +35,10 @@ of the robot is heard 2-4 times from each place before the beams of its next pla
 arcs away: the grid never marked it, where ROS's layer (which marks the beam's middle at once)
 takes 1.2 s. A robot must see an obstacle that steps in front of it now. So each sensor's
 newest reading, while it is the newest (until that sensor fires again: the ring's current
-view), counts as carving's point estimate instead of its spread: a whole hit ``c ·
-logit(p_hit)`` on the middle ``L`` (:attr:`~CarvedGridParams.spread_length`) of its carved
-interval, as if carved down to ``L`` around the method's point. Only where nothing on the map
+view), also counts as carving's point estimate: the middle ``L``
+(:attr:`~CarvedGridParams.spread_length`) of its carved interval is raised from the spread
+value to a whole hit ``c · logit(p_hit)``, as if carved down to ``L`` around the method's
+point. Only where nothing on the map
 explains the echo: if a cell of the arc's carved band is occupied already (without the arc's
 own share), the echo may well come from it and the arc keeps its spread value. Why these three
 limits, measured on the changing scenes and the office (``docs/RESULTS.md``): the whole carved
@@ -47,7 +48,10 @@ and only unexplained echoes mark it in 1.0 s at 15.5 %; counting as explained an
 likely occupied than not (``l > 0``) lowers phantoms further but makes a person standing still
 flicker (its older spread arcs "explain" each new echo while the cell is still unsure). Arcs
 leave the history at their spread value: the mark is an overlay of the present, not evidence
-that accumulates.
+that accumulates. The points are kept in an array of their own (4 bytes a cell), so that
+whether an echo is explained is judged on the spread arcs alone (their order does not matter)
+and a read redraws only the points that changed: drawing them into ``live`` and back at every
+read doubled the cost of keeping the map read every 0.2 s.
 
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
@@ -78,10 +82,11 @@ the arc leaves the history its contribution is subtracted from ``live`` and adde
 final, in reading order (just before the free space of the reading that pushed it out), so the
 map does not depend on how the readings were batched.
 
-Memory: ``base`` (float32), ``live`` (float64) and the heard bearings (uint32), 16 bytes a
-cell, plus 7 numbers per history slot and the carving method's own state (bounded by its
-history): bounded by the map size plus the history, never by the length of the log (the
-method's global map, which does grow, is discarded after each batch: the grid is the map).
+Memory: ``base`` (float32), ``live`` (float64), the fresh arcs' points (float32) and the heard
+bearings (uint32), 20 bytes a cell, plus 14 numbers per history slot and the carving method's
+own state (bounded by its history): bounded by the map size plus the history, never by the
+length of the log (the method's global map, which does grow, is discarded after each batch:
+the grid is the map).
 
 ``live`` is brought up to date lazily, when the map is read (:attr:`CarvedGrid.log_odds`,
 :meth:`~CarvedGrid.probabilities`, :meth:`~CarvedGrid.trinary`...): one call of the method's
@@ -303,9 +308,10 @@ class CarvedGridParams:
         recall to the layer's (0.895 at 0.05 m); so off.
     fresh_arcs : bool
         Each sensor's newest echo, when no occupied cell on its carved band explains it, is a
-        whole hit on the middle ``spread_length`` of its carved interval until that sensor
-        fires again (module docstring: a person stepping in front of the robot is marked
-        after one reading). False: every live arc spread, the rule before.
+        whole hit on the middle ``spread_length`` of its carved interval (its spread value on
+        the rest) until that sensor fires again (module docstring: a person stepping in front
+        of the robot is marked after one reading). False: every live arc spread, the rule
+        before.
 
     Raises
     ------
@@ -646,30 +652,46 @@ def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[n
 def _sync_kernel(base: npt.NDArray[np.float32], live: FloatArray, drawn: FloatArray,
                  drawn_seq: npt.NDArray[np.int64], slots: SlotArray,
                  seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                 lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
+                 lo: FloatArray, hi: FloatArray, weight: FloatArray,
                  heard: npt.NDArray[np.uint32], m: _Model) -> int:
-    """Redraw every live arc whose interval or value changed; returns how many redrawn.
-
-    First every arc at its spread value; then each ``fresh`` arc (its sensor's newest
-    reading, :attr:`CarvedGridParams.fresh_arcs`) that the map of the first pass does not
-    explain (:func:`_band_occupied`, without the arc itself) as carving's point estimate
-    instead: a whole hit on the middle ``unit`` of its carved interval. Every fresh arc is
-    judged on the first pass's map, so their order does not matter."""
+    """Redraw every live arc whose interval or value changed; returns how many."""
     changed = 0
     for k in range(slots.shape[0]):
         changed += _redraw(live, drawn, drawn_seq, slots[k], seqs[k], x[k], y[k], r[k],
                            lo[k], hi[k], _arc_value(r[k], lo[k], hi[k], weight[k], m),
                            heard, m)
-    point = np.zeros(slots.shape[0], dtype=np.bool_)
+    return changed
+
+
+@compiled
+def _points_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], drawn: FloatArray,
+                   pdrawn: FloatArray, pseq: npt.NDArray[np.int64], slots: SlotArray,
+                   seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
+                   heard: npt.NDArray[np.uint32], m: _Model) -> int:
+    """Draw each ``fresh`` arc (its sensor's newest reading) that the map of spread arcs
+    (``base + live``, without the arc's own spread value) does not explain
+    (:func:`_band_occupied`) into ``points`` as carving's point estimate: the middle ``unit``
+    of its carved interval raised from its spread value to a whole hit; take out the points
+    of every other arc. The spread
+    map does not hold the points, so the fresh arcs' order does not matter. Returns how many
+    points changed."""
+    changed = 0
     for k in range(slots.shape[0]):
-        point[k] = (fresh[k] and weight[k] > 0.0 and not _band_occupied(
-            base, live, m, x[k], y[k], r[k], lo[k], hi[k], drawn[slots[k], 5]))
-    for k in range(slots.shape[0]):
-        if point[k]:
+        slot = slots[k]
+        if (fresh[k] and weight[k] > 0.0 and not _band_occupied(
+                base, live, m, x[k], y[k], r[k], lo[k], hi[k], drawn[slot, 5])):
             mid = 0.5 * (lo[k] + hi[k])
             half = min(0.5 * (hi[k] - lo[k]), 0.5 * m.unit / r[k])
-            _redraw(live, drawn, drawn_seq, slots[k], seqs[k], x[k], y[k], r[k], mid - half,
-                    mid + half, _arc_value(r[k], lo[k], hi[k], weight[k], m, True), heard, m)
+            raise_to_whole = (_arc_value(r[k], lo[k], hi[k], weight[k], m, True)
+                              - drawn[slot, 5])
+            changed += _redraw(points, pdrawn, pseq, slot, seqs[k], x[k], y[k], r[k],
+                               mid - half, mid + half, raise_to_whole, heard, m)
+        elif pseq[slot] >= 0:
+            _undraw(points, heard, m, pdrawn, slot)
+            pseq[slot] = -1
+            changed += 1
     return changed
 
 
@@ -734,14 +756,15 @@ def _undraw(live: FloatArray, heard: npt.NDArray[np.uint32], m: _Model, drawn: F
 
 
 @compiled
-def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray, l_min: float,
-                    l_max: float, l_occupied: float, l_free: float, out: Int8Grid) -> None:
-    """Occupied (100) where ``clamp(base + live) > l_occupied``, free (0) below ``l_free``,
-    else unknown (-1)."""
+def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], l_min: float, l_max: float,
+                    l_occupied: float, l_free: float, out: Int8Grid) -> None:
+    """Occupied (100) where ``clamp(base + (live + points)) > l_occupied``, free (0) below
+    ``l_free``, else unknown (-1)."""
     ny, nx = base.shape
     for i in range(ny):
         for j in range(nx):
-            lo = min(l_max, max(l_min, base[i, j] + live[i, j]))
+            lo = min(l_max, max(l_min, base[i, j] + (live[i, j] + points[i, j])))
             if lo > l_occupied:
                 out[i, j] = OCCUPIED
             elif lo < l_free:
@@ -836,6 +859,9 @@ class CarvedGrid(CellGrid):
                              _logit(p.occupied_threshold))
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
+        # The points of the fresh arcs (CarvedGridParams.fresh_arcs), apart from ``live`` so
+        # that whether an echo is explained is judged on the spread arcs alone.
+        self._points = np.zeros((ny, nx), dtype=np.float32)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
         self._heard = np.zeros((ny, nx), dtype=_HEARD_DTYPE)
         size = method.history.storage_size
@@ -843,6 +869,8 @@ class CarvedGrid(CellGrid):
         # sequence number (its position in the stream of arcs), -1 for nothing.
         self._drawn = np.zeros((size, 6), dtype=np.float64)
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
+        self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
+        self._pseq = np.full(size, -1, dtype=np.int64)
         self._pending: list[tuple[FloatArray, ...]] = []
         self._next_final = 0  # sequence number of the next arc to leave the history
         # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
@@ -898,7 +926,8 @@ class CarvedGrid(CellGrid):
     def nbytes(self) -> int:
         """Memory of the grid's own state (the cell arrays and the per-slot record), bytes;
         the method's history and state come on top, fixed by its history size."""
-        return int(self._base.nbytes + self._live.nbytes + self._heard.nbytes
+        return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
+                   + self._heard.nbytes + self._pdrawn.nbytes + self._pseq.nbytes
                    + self._drawn.nbytes + self._drawn_seq.nbytes)
 
     # -- updates -----------------------------------------------------------------------------
@@ -954,6 +983,8 @@ class CarvedGrid(CellGrid):
         self._next_final += len(slots)
         _undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
                        self._model)
+        _undraw_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
+                       self._model)
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = _intervals(x, y, est)
         self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
@@ -979,12 +1010,14 @@ class CarvedGrid(CellGrid):
             x, y, r = history.x[slots], history.y[slots], history.r[slots]
             lo, hi, weight = _intervals(x, y, est)
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
-            fresh = np.zeros(len(slots), dtype=np.bool_)
-            if self._params.fresh_arcs and self._newest:
+            slots = np.ascontiguousarray(slots)
+            _sync_kernel(self._base, self._live, self._drawn, self._drawn_seq, slots, seqs, x,
+                         y, r, lo, hi, weight, self._heard, self._model)
+            if self._params.fresh_arcs:
                 fresh = np.isin(seqs, np.fromiter(self._newest.values(), dtype=np.int64))
-            _sync_kernel(self._base, self._live, self._drawn, self._drawn_seq,
-                         np.ascontiguousarray(slots),
-                         seqs, x, y, r, lo, hi, weight, fresh, self._heard, self._model)
+                _points_kernel(self._base, self._live, self._points, self._drawn,
+                               self._pdrawn, self._pseq, slots, seqs, x, y, r, lo, hi, weight,
+                               fresh, self._heard, self._model)
         self._stale = False
 
     # -- reading the map ---------------------------------------------------------------------
@@ -994,13 +1027,14 @@ class CarvedGrid(CellGrid):
         """Each cell's log-odds of occupancy, ``clamp(base + live)``, shape :attr:`shape`
         (a new float64 array)."""
         self._sync()
-        return np.asarray(np.clip(self._base + self._live, self._l_min, self._l_max))
+        return np.asarray(np.clip(self._base + (self._live + self._points), self._l_min,
+                                  self._l_max))
 
     @property
     def live_log_odds(self) -> FloatArray:
         """The live arcs' summed contribution (unclamped), shape :attr:`shape` (a copy)."""
         self._sync()
-        return self._live.copy()
+        return np.asarray(self._live + self._points)
 
     def probabilities(self) -> FloatArray:
         """Occupancy probability of every cell, shape :attr:`shape`: ``1 / (1 + exp(-l))``."""
@@ -1017,7 +1051,7 @@ class CarvedGrid(CellGrid):
         """
         self._sync()
         out = np.empty(self.shape, dtype=np.int8)
-        _trinary_kernel(self._base, self._live, self._l_min, self._l_max,
+        _trinary_kernel(self._base, self._live, self._points, self._l_min, self._l_max,
                         _logit(self._params.occupied_threshold),
                         _logit(self._params.free_threshold), out)
         return out
