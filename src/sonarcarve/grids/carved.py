@@ -636,8 +636,8 @@ def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
 
 
 @compiled
-def _undraw_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
-                   slots: SlotArray, seqs: npt.NDArray[np.int64],
+def _undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
+                   drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
                    heard: npt.NDArray[np.uint32], m: _Model) -> None:
     """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
     for k in range(slots.shape[0]):
@@ -696,9 +696,10 @@ def _points_kernel(base: npt.NDArray[np.float32], live: FloatArray,
 
 
 @compiled_inline
-def _redraw(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], slot: int,
-            seq: int, x: float, y: float, r: float, lo: float, hi: float, value: float,
-            heard: npt.NDArray[np.uint32], m: _Model) -> int:
+def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
+            drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
+            r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
+            m: _Model) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
     changed anything."""
     if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
@@ -748,8 +749,8 @@ def _band_occupied(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x
 
 
 @compiled_inline
-def _undraw(live: FloatArray, heard: npt.NDArray[np.uint32], m: _Model, drawn: FloatArray,
-            slot: int) -> None:
+def _undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
+            drawn: FloatArray, slot: int) -> None:
     """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``."""
     _draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
               drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])
