@@ -8,6 +8,8 @@ for every arc, "the most accurate data available from each technique" (section 4
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
@@ -202,6 +204,7 @@ class CombinedMethod(SonarMethod):
         self._atm = AtmModel(self.history, self.min_transversal, self.range_resolution)
         self._joint: bool | None = None  # decided at the first reading (_uses_joint_kernel)
         self._candidates = np.zeros(self.history.storage_size, dtype=np.int64)
+        self._arguments: tuple[Any, ...] | None = None  # _joint_arguments
         return self._carving, self._atm
 
     def _uses_joint_kernel(self) -> bool:
@@ -228,19 +231,29 @@ class CombinedMethod(SonarMethod):
             return
         carving, atm = self._carving, self._atm
         atm.check_usable()
-        h = self.history
         end = first + count
         while first < end:
-            kept, fully, split, first, needed = _add_joint(
-                first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
-                h.theta2, carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
-                carving.carved, carving.range_tolerance, carving.max_incidence,
-                *atm.kernel_state(), *atm.index, self._candidates,
-            )
+            kept, fully, split, first, needed = _add_joint(first, end - first,
+                                                           *self._joint_arguments())
             atm.count_kept(kept)
             carving.count_removed(fully, split)
             if first < end:
                 atm.make_room(needed)
+                self._arguments = None  # the crossing store is a new array
+
+    def _joint_arguments(self) -> tuple[Any, ...]:
+        """The arguments of :func:`_add_joint` after ``first, count``, made once: the arrays
+        stay the same (ATM's store is replaced only when it grows), and building the tuple
+        anew was a good part of a single ``add()``."""
+        if self._arguments is None:
+            h, carving, atm = self.history, self._carving, self._atm
+            self._arguments = (
+                h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1, h.theta2,
+                carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
+                carving.carved, carving.range_tolerance, carving.max_incidence,
+                *atm.kernel_state(), *atm.index, self._candidates,
+            )
+        return self._arguments
 
     def _feed_no_echo(self, reading: Reading, beam_width: float) -> None:
         if self._uses_joint_kernel():
