@@ -30,28 +30,32 @@ Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ
   contributes nothing.
 
 **The newest echoes mark at once** (:attr:`CarvedGridParams.fresh_arcs`): spread over a
-22.5° arc 3.5 m away, one echo gives its cells 0.12 in log-odds, and a person crossing ahead
-of the robot is heard 2-4 times from each place before the beams of its next places carve those
-arcs away: the grid never marked it, where ROS's layer (which marks the beam's middle at once)
+22.5° arc 3.5 m away, one echo gives its cells 0.12 in log-odds, and the changing scenes' person,
+crossing 3.2-4.2 m ahead, is heard from each place by only a few firings before the beams of its
+next places carve those arcs away (their sum peaked at 0.39 at its cells, below the 0.62 of
+"occupied"): the grid never marked it, where ROS's layer, which marks the beam's middle at once,
 takes 1.2 s. A robot must see an obstacle that steps in front of it now. So each sensor's
 newest reading, while it is the newest (until that sensor fires again: the ring's current
 view), also counts as carving's point estimate: the middle ``L``
 (:attr:`~CarvedGridParams.spread_length`) of its carved interval is raised from the spread
 value to a whole hit ``c · logit(p_hit)``, as if carved down to ``L`` around the method's
-point. Only where nothing on the map
-explains the echo: if a cell of the arc's carved band is occupied already (without the arc's
-own share), the echo may well come from it and the arc keeps its spread value. Why these three
-limits, measured on the changing scenes and the office (``docs/RESULTS.md``): the whole carved
-band at a whole hit marks the person in 0.8 s but doubles the scenes' phantom share (11.8 →
-29 % on the person scene), mostly from the flanks of long arcs early in a run; the middle alone
-and only unexplained echoes mark it in 1.0 s at 15.5 %; counting as explained any cell more
-likely occupied than not (``l > 0``) lowers phantoms further but makes a person standing still
-flicker (its older spread arcs "explain" each new echo while the cell is still unsure). Arcs
-leave the history at their spread value: the mark is an overlay of the present, not evidence
-that accumulates. The points are kept in an array of their own (4 bytes a cell), so that
-whether an echo is explained is judged on the spread arcs alone (their order does not matter)
-and a read redraws only the points that changed: drawing them into ``live`` and back at every
-read doubled the cost of keeping the map read every 0.2 s.
+point. Only where nothing on the map explains the echo: if a cell of the arc's carved band is
+occupied already (without the arc's own share), the echo may well come from it and the arc
+keeps its spread value. Why these limits, measured on the changing scenes (0.10 m, no-echo
+readings, seeds 0-2; phantom share person/door/box 11.8/9.1/10.3 % before): the whole carved
+band at a whole hit for every newest echo marks the person in 0.8 s at 29.0/32.7/19.0 %, mostly
+the flanks of long arcs early in a run when nothing is explained yet; only unexplained echoes,
+25.0/23.1/15.4 %; the middle ``L`` of only unexplained echoes marks it in 1.0 s at
+15.4/16.4/11.8 %. Counting as explained any cell more likely occupied than not (``l > 0``)
+lowers the phantoms further but makes a person standing still flicker: its older spread arcs
+"explain" each new echo while its cells are still unsure. Arcs leave the history at their
+spread value: the mark is an overlay of the present, not evidence that accumulates. The points
+are kept in an array of their own (4 bytes a cell), so that whether an echo is explained is
+judged on the spread arcs alone (the fresh arcs' order does not matter) and a read redraws only
+the points that changed: drawing them into ``live`` and back at every read doubled the cost of
+a map read every 0.2 s. The price: more phantoms in changing scenes (above), and the Fig. 2
+door, echoes only, passable in 67/61 % of approaches at 0.05/0.10 m instead of 72/67 % (an
+uncarved echo's point can fall in the doorway).
 
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
