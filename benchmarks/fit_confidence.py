@@ -9,7 +9,11 @@ Each arc that leaves the history with a surviving piece is one sample: its featu
 moment (:meth:`~sonarcarve.methods.evidence.EvidenceMethod.features`, the order of
 :data:`~sonarcarve.methods.evidence.CONFIDENCE_FEATURES`) and its label, 1 for a direct echo and
 0 for a spurious one (crosstalk, floor, multipath). The weights minimise the mean log-loss plus
-a small ridge (``--ridge``) by Newton's method (numpy only). A ``min_confidence`` is then
+a small ridge (``--ridge``) by Newton's method (numpy only). The maturity time (how long the
+logit takes to move from ``fresh`` to the fitted one, :class:`ConfidenceModel`) is then chosen on
+the same runs: every ``--snapshot-every`` readings, every arc in the history with a surviving
+piece is a sample of the local map (its features and age then); the time on ``--maturity-grid``
+with the smallest mean log-loss over those samples is printed. A ``min_confidence`` is then
 chosen by one rule on the same training data: the largest threshold, on a 0.05 grid, that keeps
 at least ``--keep`` (90 %) of *all* direct echoes (fully carved ones count as lost); shares are
 printed for it and for 0.5 (the library default: the decision of a calibrated probability).
@@ -23,7 +27,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,7 +36,13 @@ from sonarcarve.geometry.fate import UNCHANGED
 from sonarcarve.history import SonarHistory
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.base import Estimates
-from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceMethod
+from sonarcarve.methods.evidence import (
+    CONFIDENCE_FEATURES,
+    ConfidenceModel,
+    EvidenceMethod,
+    EvidenceModel,
+)
+from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.typing import SlotArray
 
@@ -48,11 +58,23 @@ class Samples:
     kind: np.ndarray
     total_direct: int
     total_by_kind: dict[int, int]
+    local: LocalSamples | None = None
+
+
+@dataclass(frozen=True)
+class LocalSamples:
+    """Arcs of the local map at regular snapshots: features (n, F), age (s) and labels (n,)."""
+
+    features: np.ndarray
+    age: np.ndarray
+    direct: np.ndarray
 
 
 def collect(world: str, physics: str, seeds: range,
-            model: ConfidenceModel | None = None) -> Samples:
-    """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs."""
+            model: ConfidenceModel | None = None, snapshot_every: int = 0) -> Samples:
+    """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs (and,
+    with ``snapshot_every``, the local map's arcs every that many readings)."""
+    local: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     rows: list[np.ndarray] = []
     maturities: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
@@ -77,7 +99,10 @@ def collect(world: str, physics: str, seeds: range,
                 kinds.append(kind[history.reading_id[slots[has]]])
 
         method.add_commit_listener(listener)
-        method.add_many(sim.readings)
+        if snapshot_every > 0:
+            local += _snapshots(method, sim.readings, kind, snapshot_every)
+        else:
+            method.add_many(sim.readings)
         method.finish()
         total_direct += int(np.count_nonzero(kind == EchoKind.DIRECT))
         for k in np.unique(kind):
@@ -85,8 +110,47 @@ def collect(world: str, physics: str, seeds: range,
             total_by_kind[int(k)] = total_by_kind.get(int(k), 0) + count
     all_kinds = np.concatenate(kinds)
     direct = (all_kinds == EchoKind.DIRECT).astype(float)
+    snapshots = None
+    if local:
+        features, age, labels = (np.concatenate(part) for part in zip(*local, strict=True))
+        snapshots = LocalSamples(features, age, labels)
     return Samples(np.vstack(rows), np.concatenate(maturities), direct, all_kinds, total_direct,
-                   total_by_kind)
+                   total_by_kind, snapshots)
+
+
+def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
+               every: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Add ``readings`` in blocks of ``every``; after each, the features, age (seconds) and
+    label (direct echo) of every arc in the history with a surviving piece."""
+    out = []
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    for stop in range(every, len(readings) + every, every):
+        block = readings[stop - every : min(stop, len(readings))]
+        method.add_many(block)
+        slots = method.history.slots()
+        slots = slots[model.raw(slots)[0]]
+        now = float(block.t[-1])
+        out.append((method.features(slots), now - method.history.t[slots],
+                    (kind[method.history.reading_id[slots]] == EchoKind.DIRECT).astype(float)))
+    return out
+
+
+def fit_maturity(model: ConfidenceModel, local: LocalSamples,
+                 grid: tuple[float, ...]) -> tuple[float, list[float]]:
+    """The maturity time on ``grid`` whose confidence has the smallest mean log-loss over the
+    local map's arcs, and the log-loss of each time on the grid."""
+    losses = []
+    for t in grid:
+        timed = replace(model, maturity_time=t)
+        losses.append(_log_loss(timed.confidence(local.features, timed.maturity(local.age)),
+                                local.direct))
+    return grid[int(np.argmin(losses))], losses
+
+
+def _log_loss(confidence: np.ndarray, direct: np.ndarray) -> float:
+    return float(-np.mean(direct * np.log(np.clip(confidence, 1e-12, 1.0))
+                          + (1 - direct) * np.log(np.clip(1 - confidence, 1e-12, 1.0))))
 
 
 def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
@@ -132,9 +196,7 @@ def report(title: str, samples: Samples, model: ConfidenceModel,
         if sel.any():
             print(f"| {lo:.1f}-{hi:.1f} | {np.count_nonzero(sel)} | {conf[sel].mean():.2f} | "
                   f"{samples.direct[sel].mean():.2f} |")
-    loss = -np.mean(samples.direct * np.log(np.clip(conf, 1e-12, 1.0))
-                    + (1 - samples.direct) * np.log(np.clip(1 - conf, 1e-12, 1.0)))
-    print(f"\nlog-loss {loss:.3f}")
+    print(f"\nlog-loss {_log_loss(conf, samples.direct):.3f}")
     for threshold in thresholds:
         kept = conf >= threshold
         direct_kept = np.count_nonzero(kept & (samples.direct == 1.0)) / samples.total_direct
@@ -155,16 +217,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1")
     parser.add_argument("--ridge", type=float, default=1e-3)
     parser.add_argument("--keep", type=float, default=0.90)
+    parser.add_argument("--snapshot-every", type=int, default=20,
+                        help="readings between local-map samples for the maturity time")
+    parser.add_argument("--maturity-grid", type=float, nargs="+",
+                        default=[0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0],
+                        help="maturity times tried, seconds")
     parser.add_argument("--check", nargs="*", default=[
         "t-junction/specular", "doorway/specular", "office/amplitude", "t-junction/amplitude",
         "doorway/amplitude"], help="held-out world/physics pairs")
     args = parser.parse_args(argv)
-    train = collect(args.world, args.physics, range(args.seeds))
+    train = collect(args.world, args.physics, range(args.seeds),
+                    snapshot_every=args.snapshot_every)
     mature = train.maturity >= 1.0
     intercept, weights = fit(train.features[mature], train.direct[mature], args.ridge)
     share = float(train.direct.mean())
     fresh = float(np.log(share / (1.0 - share)))
     model = ConfidenceModel.from_weights(intercept, weights, fresh)
+    assert train.local is not None
+    maturity_time, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
+    model = replace(model, maturity_time=maturity_time)
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
                                   args.keep)
     print(f"fitted on {args.world}, {args.physics} physics, seeds 0-{args.seeds - 1}: "
@@ -172,9 +243,13 @@ def main(argv: list[str] | None = None) -> int:
     print("ConfidenceModel(")
     print(f"    intercept={intercept:.3f},")
     print(f"    fresh={fresh:.3f},")
+    print(f"    maturity_time={maturity_time:g},")
     for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True):
         print(f"    {name}={w:.3f},")
     print(")")
+    print(f"local-map log-loss by maturity time ({len(train.local.direct)} samples): "
+          + ", ".join(f"{t:g} s {loss:.4f}" for t, loss in
+                      zip(args.maturity_grid, losses, strict=True)))
     print(f"min_confidence (largest keeping ≥ {100 * args.keep:.0f} % of direct): {threshold:.2f}")
     thresholds = (0.5, threshold)
     report(f"train: {args.world}/{args.physics}", train, model, thresholds)
