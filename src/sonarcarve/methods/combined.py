@@ -174,7 +174,10 @@ class CombinedMethod(SonarMethod):
     Notes
     -----
     The rule is :func:`combine_carving_atm`. ``models`` is ``(CarvingModel, AtmModel)``; the
-    counters of both are reported (``fully_carved``, ``split``, ``atm_crossings``).
+    counters of both are reported (``fully_carved``, ``split``, ``atm_crossings``). Both models
+    are fed by one compiled call per reading or block (:func:`_add_joint`) over ATM's index of
+    every live arc, which leaves each exactly as it would be alone (carving's own ``index`` then
+    stays empty).
     """
 
     name = "combined"
