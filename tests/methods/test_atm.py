@@ -12,7 +12,7 @@ from sonarcarve.maps import PointSource
 from sonarcarve.methods import METHODS, MethodConfig, make_method
 from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods.atm import AtmMethod, AtmModel, CrossingStoreError, atm_error_bound
-from sonarcarve.readings import Reading
+from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
 INCH = 0.0254
@@ -349,9 +349,19 @@ def test_a_store_beyond_the_memory_limit_is_refused(monkeypatch: pytest.MonkeyPa
     with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
         method.add(Reading(1.0, 8, 2.0, 0.0, math.pi, 1.05, wide))
     assert issubclass(CrossingStoreError, SonarcarveError)
-    # Half intersected, the method refuses to go on rather than map from a partial state.
+    # Half intersected, the method refuses to go on rather than map from a partial state:
+    # no reading is stored, no map or measure is read.
+    stored = method.history.appended
     with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
         method.add(Reading(2.0, 0, 0.0, 0.0, 0.0, 1.5, wide))
+    with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+        method.add_many(ReadingBatch.from_readings([Reading(3.0, 0, 0.0, 0.0, 0.0, 1.5, wide)]))
+    assert method.history.appended == stored
+    slots = method.history.slots()
+    for read in (method.local_map, method.measures, method.global_map, method.finish,
+                 lambda: method.estimates(slots), lambda: _atm(method).estimates(slots)):
+        with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+            read()
 
 
 @pytest.mark.parametrize(("rows", "columns", "needed", "most", "grown"), [

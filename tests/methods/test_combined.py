@@ -6,7 +6,8 @@ import pytest
 
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import METHODS, MethodConfig, make_method
-from sonarcarve.methods.atm import AtmMethod, AtmModel
+from sonarcarve.methods import atm as atm_module
+from sonarcarve.methods.atm import AtmMethod, AtmModel, CrossingStoreError
 from sonarcarve.methods.base import Estimates, SonarMethod
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.combined import CombinedMethod, combine_carving_atm
@@ -228,3 +229,39 @@ def test_combined_leaves_each_model_as_it_runs_alone(stream: str, history: int,
         want = combine_carving_atm(alone_c, alone_a)
         for field in ("alive", "processed", "xy", "width", "max_error", "source", "fate"):
             np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+
+
+def test_a_store_beyond_the_memory_limit_stops_combined_for_good(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # ATM's test case (test_atm.py): 32 bytes hold no column of 8 rows, so the first pair of
+    # facing arcs that cross cannot be stored. Combined then refuses every reading (a no-echo
+    # one too: carving must not carve from it) and every map.
+    monkeypatch.setattr(atm_module, "MAX_ATM_STATE_BYTES", 32)
+    wide = math.radians(60.0)
+    method = CombinedMethod(history_size=4, beam_width=wide, min_transversal=math.radians(30.0),
+                            range_resolution=INCH)
+    atm = _model(method, AtmModel)
+    carving = _model(method, CarvingModel)
+    assert isinstance(atm, AtmModel)
+    assert isinstance(carving, CarvingModel)
+    atm.bearings = np.zeros((8, 1), dtype=np.float32)
+    method.add(Reading(0.0, 0, 0.0, 0.0, 0.0, 1.05, wide))
+    with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+        method.add(Reading(1.0, 8, 2.0, 0.0, math.pi, 1.05, wide))
+    stored = method.history.appended
+    carved = carving.lo.copy(), carving.hi.copy(), carving.status.copy()
+    no_echo = Reading(2.0, 0, 0.0, 0.0, 0.0, math.inf, wide, max_range=3.0)
+    for feed in (lambda: method.add(no_echo),
+                 lambda: method.add_many(ReadingBatch.from_readings([no_echo])),
+                 lambda: method._feed_no_echo(no_echo, wide),
+                 lambda: method.add(Reading(2.0, 0, 0.0, 0.0, 0.0, 1.5, wide))):
+        with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+            feed()
+    assert method.history.appended == stored
+    for before, after in zip(carved, (carving.lo, carving.hi, carving.status), strict=True):
+        np.testing.assert_array_equal(before, after)
+    slots = method.history.slots()
+    for read in (method.local_map, method.measures, method.global_map, method.finish,
+                 lambda: method.estimates(slots)):
+        with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
+            read()

@@ -404,16 +404,27 @@ def test_a_store_beyond_the_memory_limit_stops_the_method(
     assert isinstance(model, EvidenceModel)
     model.bearings = np.zeros((2 * n, 2), dtype=np.float32)
     readings = _post_ring(n)
+    method.add_many(ReadingBatch.from_readings(readings[:3]))
+    method.local_map()  # a map from before the failure is cached
     with pytest.raises(CrossingStoreError,
                        match=r"^evidence carving's crossing store would take"):
-        method.add_many(ReadingBatch.from_readings(readings))
+        method.add_many(ReadingBatch.from_readings(readings[3:]), first_id=3)
     assert issubclass(CrossingStoreError, SonarcarveError)
     assert model.counts.max() <= 2  # no row claims a crossing past the store's end
     # Crossings were lost: the method refuses to go on rather than map from them.
+    stored = method.history.appended
     with pytest.raises(CrossingStoreError):
         method.add(readings[-1]._replace(t=100.0))
     with pytest.raises(CrossingStoreError):
         method.add(readings[-1]._replace(t=101.0, range=math.inf, max_range=5.0))
+    with pytest.raises(CrossingStoreError):
+        method.add_many(ReadingBatch.from_readings([readings[-1]._replace(t=102.0)]))
+    assert method.history.appended == stored  # refused before it was stored
+    slots = method.history.slots()
+    for read in (method.local_map, method.measures, method.global_map, method.finish,
+                 lambda: method.estimates(slots), lambda: model.raw(slots)):
+        with pytest.raises(CrossingStoreError, match=r"^evidence carving's crossing store"):
+            read()
 
 
 @pytest.mark.parametrize(("rows", "columns", "needed", "most", "grown"), [

@@ -482,7 +482,8 @@ class AtmModel(ArcModel):
         """ATM's estimates for ``slots``; ``points`` (a mask over ``slots``, default all) says
         which rows' points and widths are wanted: the others are NaN and their medians are not
         computed (:class:`~sonarcarve.methods.combined.CombinedMethod` asks only where ATM's
-        point can beat carving's)."""
+        point can beat carving's). Refused once the model has stopped (:meth:`check_usable`)."""
+        self.check_usable()
         h = self.history
         # Medians only of the rows whose crossings changed since they were last asked for
         # (a writable int64 array: one compiled version of _medians, whatever the caller
@@ -546,6 +547,3 @@ class AtmMethod(SonarMethod):
 
     def _make_models(self) -> tuple[AtmModel]:
         return (AtmModel(self.history, self.min_transversal, self.range_resolution),)
-
-    def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
-        return estimates[0]

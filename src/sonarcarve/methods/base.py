@@ -157,6 +157,15 @@ class ArcModel(ABC):
     def estimates(self, slots: SlotArray) -> Estimates:
         """This model's estimates for ``slots``, vectorised."""
 
+    def check_usable(self) -> None:
+        """Raise the error that stopped this model for good, if one did (its state lost
+        something, e.g. crossings its store could not hold, so its maps would be wrong).
+
+        :class:`SonarMethod` asks every model before it stores a reading and before it reads
+        a map, so a stopped method refuses everything. This default never stops.
+        """
+        return  # deliberately not abstract: most models cannot fail
+
     def counters(self) -> dict[str, int]:
         """Event counts since the start (for example fully carved and split arcs)."""
         return {}
@@ -207,9 +216,16 @@ class SonarMethod(ABC):
     def _make_models(self) -> tuple[ArcModel, ...]:
         """The models this method runs on its history."""
 
-    @abstractmethod
     def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
-        """One estimate per row from the models' estimates (same order as ``models``)."""
+        """One estimate per row from the models' estimates (same order as ``models``).
+
+        This default is the only model's; a method with more models overrides it (or
+        :meth:`_estimates`, when its estimate is not a per-model combination).
+        """
+        if len(estimates) != 1:
+            msg = f"{type(self).__name__} runs {len(estimates)} models: override _combine"
+            raise NotImplementedError(msg)
+        return estimates[0]
 
     # -- streaming ---------------------------------------------------------------------------
 
@@ -222,8 +238,13 @@ class SonarMethod(ABC):
             For a reading :func:`~sonarcarve.readings.check_reading` refuses (non-finite
             values, range ≤ 0, a sensor that is no index, a beam width outside (0, π), a time
             before the previous reading's); nothing is changed.
+        SonarcarveError
+            The error that stopped a model for good (:meth:`ArcModel.check_usable`, e.g.
+            :class:`~sonarcarve.methods.atm.CrossingStoreError`), raised again: nothing is
+            stored. Every map and measure raises it too.
         """
         self._check_open()
+        self._check_usable()
         rid = self._readings if reading_id is None else reading_id
         check_reading(reading, rid, self._last_t)
         self._add_checked(reading, rid)
@@ -239,6 +260,7 @@ class SonarMethod(ABC):
         after them (each still consumes its id), so the result is that of :meth:`add` per row.
         """
         self._check_open()
+        self._check_usable()
         start = self._readings if first_id is None else first_id
         batch.validate(first_id=start, previous_t=self._last_t)
         n = len(batch)
@@ -288,6 +310,13 @@ class SonarMethod(ABC):
             msg = "this method has finished its log; make a new one for more readings"
             raise RuntimeError(msg)
 
+    def _check_usable(self) -> None:
+        """Raise the error that stopped a model for good (:meth:`ArcModel.check_usable`), if
+        one did: asked before a reading is stored and before any map or measure is read, so a
+        stopped method neither grows its history nor returns a map built from lost state."""
+        for model in self.models:
+            model.check_usable()
+
     def _add_checked(self, reading: Reading, reading_id: int) -> None:
         if reading.range == math.inf:
             self._add_no_echo(reading)
@@ -328,7 +357,16 @@ class SonarMethod(ABC):
     # -- maps and measures --------------------------------------------------------------------
 
     def estimates(self, slots: SlotArray) -> Estimates:
-        """The method's combined estimate for history ``slots``."""
+        """The method's combined estimate for history ``slots``.
+
+        Raises the error that stopped a model for good, if one did (:meth:`_check_usable`).
+        """
+        self._check_usable()
+        return self._estimates(slots)
+
+    def _estimates(self, slots: SlotArray) -> Estimates:
+        """:meth:`estimates` of a usable method: :meth:`_combine` of the models' estimates.
+        Methods whose estimate is not a per-model combination override this."""
         return self._combine(tuple(model.estimates(slots) for model in self.models))
 
     def local_map(self) -> LocalMap:
@@ -337,6 +375,7 @@ class SonarMethod(ABC):
         Asked again with no reading added in between, it returns the same map without
         recomputing or copying anything (its arrays are read-only for that reason).
         """
+        self._check_usable()
         if self._local is None:
             local = self._points(self.history.slots(), LocalMap)
             for value in vars(local).values():
@@ -379,6 +418,7 @@ class SonarMethod(ABC):
             The global map goes to a sink (:meth:`set_global_sink`): the method does not keep
             it; ask the sink.
         """
+        self._check_usable()
         memory = self._memory("global_map()")
         self.history.flush_retired()
         return memory.build()
@@ -389,6 +429,7 @@ class SonarMethod(ABC):
         With a sink (:meth:`set_global_sink`) the last points go to the sink and the map
         returned is empty: the sink has the map, :attr:`committed_points` its size.
         """
+        self._check_usable()
         self.history.flush()
         self._finished = True
         memory = self._global.memory
@@ -404,6 +445,7 @@ class SonarMethod(ABC):
 
     def measures(self) -> Measures:
         """The paper's measures over the current history (Table I, Fig. 11, section 5-C)."""
+        self._check_usable()
         slots = self.history.slots()
         est = self.estimates(slots)
         counters: dict[str, int] = {}

@@ -233,7 +233,7 @@ class CombinedMethod(SonarMethod):
             super()._feed_block(first, count)
             return
         carving, atm = self._carving, self._atm
-        atm.check_usable()
+        self._check_usable()
         end = first + count
         while first < end:
             kept, fully, split, first, needed = _add_joint(first, end - first,
@@ -259,6 +259,7 @@ class CombinedMethod(SonarMethod):
         return self._arguments
 
     def _feed_no_echo(self, reading: Reading, beam_width: float) -> None:
+        self._check_usable()  # a stopped ATM stops the method: no carving from the no-echo
         if self._uses_joint_kernel():
             # Carving finds its arcs in the joint index (removed arcs stay in it); ATM ignores
             # no-echo readings.
@@ -267,13 +268,9 @@ class CombinedMethod(SonarMethod):
         else:
             super()._feed_no_echo(reading, beam_width)
 
-    def estimates(self, slots: SlotArray) -> Estimates:
+    def _estimates(self, slots: SlotArray) -> Estimates:
         """:func:`combine_carving_atm` of the two models' estimates; ATM's medians only where
         its point can be chosen (a bound below carving's), the same estimates for less work."""
         carving = self._carving.estimates(slots)
         atm = self._atm.estimates(slots, points=carving.max_error > self._atm.error_bound)
-        return combine_carving_atm(carving, atm)
-
-    def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
-        carving, atm = estimates
         return combine_carving_atm(carving, atm)

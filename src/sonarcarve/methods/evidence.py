@@ -353,7 +353,7 @@ class EvidenceModel(ArcModel):
     def on_add_many(self, first: int, count: int) -> None:
         """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call (more
         when the crossing store has to grow on the way)."""
-        self._check_usable()
+        self.check_usable()
         end = first + count
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
@@ -387,14 +387,16 @@ class EvidenceModel(ArcModel):
             first_spilled[row] += 1
         self.bearings = wider
 
-    def _check_usable(self) -> None:
+    def check_usable(self) -> None:
+        """Raise the :class:`~sonarcarve.methods.atm.CrossingStoreError` that stopped the model,
+        if one did."""
         if self._failed is not None:
             raise CrossingStoreError(str(self._failed))
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
         """
-        self._check_usable()
+        self.check_usable()
         h = self.history
         self._fully += evidence_free(
             reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
@@ -404,7 +406,9 @@ class EvidenceModel(ArcModel):
         )
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
-        """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots``."""
+        """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
+        the model has stopped: :meth:`check_usable`)."""
+        self.check_usable()
         h = self.history
         return evidence_estimates(
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
@@ -552,7 +556,7 @@ class EvidenceMethod(SonarMethod):
         now = max(self._last_t, newest)
         return self.confidence_model.maturity(now - h.t[slots])
 
-    def estimates(self, slots: SlotArray) -> Estimates:
+    def _estimates(self, slots: SlotArray) -> Estimates:
         """The model's points with their confidence; low-confidence points are not alive."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
@@ -567,9 +571,6 @@ class EvidenceMethod(SonarMethod):
             max_error=base.max_error + self.config.stamp_error, source=base.source,
             fate=base.fate, confidence=np.where(has, confidence, 0.0),
         )
-
-    def _combine(self, estimates: tuple[Estimates, ...]) -> Estimates:
-        return estimates[0]  # unused: estimates() is overridden
 
     def _commit(self, slots: SlotArray) -> None:
         est = self.estimates(slots)
