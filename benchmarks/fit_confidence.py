@@ -13,7 +13,11 @@ a small ridge (``--ridge``) by Newton's method (numpy only). The maturity time (
 logit takes to move from ``fresh`` to the fitted one, :class:`ConfidenceModel`) is then chosen on
 the same runs: every ``--snapshot-every`` readings, every arc in the history with a surviving
 piece is a sample of the local map (its features and age then); the time on ``--maturity-grid``
-with the smallest mean log-loss over those samples is printed. A ``min_confidence`` is then
+with the smallest mean log-loss over those samples is printed (each time scored with the
+``unheard`` feature rebuilt for it). The weights themselves are fitted at the library's default
+maturity time (it picks the mature arcs at commit and sets their ``unheard``): a time chosen
+here that differs from the default is a fixed point only once the default is changed and the
+script run again. A ``min_confidence`` is then
 chosen by one rule on the same training data: the largest threshold, on a 0.05 grid, that keeps
 at least ``--keep`` (90 %) of *all* direct echoes (fully carved ones count as lost); shares are
 printed for it and for 0.5 (the library default: the decision of a calibrated probability).
@@ -63,18 +67,31 @@ class Samples:
 
 @dataclass(frozen=True)
 class LocalSamples:
-    """Arcs of the local map at regular snapshots: features (n, F), age (s) and labels (n,)."""
+    """Arcs of the local map at regular snapshots: features (n, F), whether the arc was never
+    supported, age (s) and labels (n,).
+
+    The ``unheard`` column of ``features`` is ``unsupported * maturity(age)`` with the maturity
+    time of the run that collected them; :meth:`features_at` rebuilds it for another time.
+    """
 
     features: np.ndarray
+    unsupported: np.ndarray
     age: np.ndarray
     direct: np.ndarray
+
+    def features_at(self, model: ConfidenceModel) -> np.ndarray:
+        """The features as ``model`` (its maturity time) would have computed them."""
+        features = self.features.copy()
+        features[:, CONFIDENCE_FEATURES.index("unheard")] = (
+            self.unsupported * model.maturity(self.age))
+        return features
 
 
 def collect(world: str, physics: str, seeds: range,
             model: ConfidenceModel | None = None, snapshot_every: int = 0) -> Samples:
     """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs (and,
     with ``snapshot_every``, the local map's arcs every that many readings)."""
-    local: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    local: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     rows: list[np.ndarray] = []
     maturities: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
@@ -112,16 +129,18 @@ def collect(world: str, physics: str, seeds: range,
     direct = (all_kinds == EchoKind.DIRECT).astype(float)
     snapshots = None
     if local:
-        features, age, labels = (np.concatenate(part) for part in zip(*local, strict=True))
-        snapshots = LocalSamples(features, age, labels)
+        features, unsupported, age, labels = (np.concatenate(part)
+                                              for part in zip(*local, strict=True))
+        snapshots = LocalSamples(features, unsupported, age, labels)
     return Samples(np.vstack(rows), np.concatenate(maturities), direct, all_kinds, total_direct,
                    total_by_kind, snapshots)
 
 
 def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
-               every: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Add ``readings`` in blocks of ``every``; after each, the features, age (seconds) and
-    label (direct echo) of every arc in the history with a surviving piece."""
+               every: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Add ``readings`` in blocks of ``every``; after each, the features, whether it was never
+    supported, age (seconds) and label (direct echo) of every arc in the history with a
+    surviving piece."""
     out = []
     model = method.models[0]
     assert isinstance(model, EvidenceModel)
@@ -130,8 +149,10 @@ def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
         method.add_many(block)
         slots = method.history.slots()
         slots = slots[model.raw(slots)[0]]
+        raw = model.raw(slots)
+        support = raw[4]  # as EvidenceMethod.features reads it for ``unheard``
         now = float(block.t[-1])
-        out.append((method.features(slots), now - method.history.t[slots],
+        out.append((method.features(slots, raw), support <= 0.0, now - method.history.t[slots],
                     (kind[method.history.reading_id[slots]] == EchoKind.DIRECT).astype(float)))
     return out
 
@@ -139,12 +160,17 @@ def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
 def fit_maturity(model: ConfidenceModel, local: LocalSamples,
                  grid: tuple[float, ...]) -> tuple[float, list[float]]:
     """The maturity time on ``grid`` whose confidence has the smallest mean log-loss over the
-    local map's arcs, and the log-loss of each time on the grid."""
+    local map's arcs, and the log-loss of each time on the grid.
+
+    Each time is scored with the model it names: its maturity moves the logit and also the
+    ``unheard`` feature (never supported, times the maturity), rebuilt per time
+    (:meth:`LocalSamples.features_at`). The weights of ``model`` stay those fitted at commit.
+    """
     losses = []
     for t in grid:
         timed = replace(model, maturity_time=t)
-        losses.append(_log_loss(timed.confidence(local.features, timed.maturity(local.age)),
-                                local.direct))
+        losses.append(_log_loss(timed.confidence(local.features_at(timed),
+                                                 timed.maturity(local.age)), local.direct))
     return grid[int(np.argmin(losses))], losses
 
 
