@@ -25,6 +25,7 @@ from sonarcarve.methods import (
     make_method,
 )
 from sonarcarve.methods.atm import AtmModel
+from sonarcarve.methods.evidence import ConfidenceModel, SensorModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 GOOD = Reading(1.0, 0, 0.0, 0.0, 0.0, 2.0)
@@ -230,3 +231,56 @@ def test_atm_accepts_every_history_with_a_store_that_grows_on_demand() -> None:
             model = next(m for m in made.models if isinstance(m, AtmModel))
             assert model.bearings.nbytes <= 2 * size * 32 * 4
     assert make_method("carve", MethodConfig(history_size=6000)).history.capacity == 6000
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    # 0 divided a brand-new arc's age by 0 (NaN confidence), NaN made every confidence NaN, a
+    # negative time left every arc fresh whatever its age.
+    ("maturity_time", 0.0), ("maturity_time", -1.0), ("maturity_time", math.nan),
+    ("maturity_time", math.inf), ("maturity_time", "2 s"),
+    ("intercept", math.nan), ("others", math.inf), ("fresh", -math.inf), ("unheard", None),
+])
+def test_confidence_model_refuses_each_bad_field(field: str, value: object) -> None:
+    with pytest.raises(ConfigError) as caught:
+        ConfidenceModel(**{field: value})  # type: ignore[arg-type]
+    rule = "be finite and > 0 seconds" if field == "maturity_time" else "be finite"
+    assert str(caught.value) == f"ConfidenceModel.{field} must {rule}, got {value!r}"
+
+
+def test_confidence_model_accepts_any_finite_weight_and_a_short_maturity() -> None:
+    model = ConfidenceModel(maturity_time=1e-9, others=-50.0, intercept=0.0)
+    # Fresh at age 0, mature (the fitted logit: intercept only, no feature) from 1e-9 s on.
+    no_features = np.zeros((2, 12))
+    confidence = model.confidence(no_features, model.maturity(np.array([0.0, 1.0])))
+    np.testing.assert_allclose(confidence, [1 / (1 + math.exp(-model.fresh)), 0.5])
+
+
+@pytest.mark.parametrize(("field", "value", "rule"), [
+    ("edge_gain", 0.0, "lie in (0, 1]"), ("edge_gain", 1.5, "lie in (0, 1]"),
+    ("incidence_full", -0.1, "lie in [0, pi/2) radians"),
+    ("incidence_full", 0.5 * math.pi, "lie in [0, pi/2) radians"),
+    # The default incidence_full is 10 degrees: the gain's ramp would have no width.
+    ("incidence_zero", math.radians(10.0), "lie above incidence_full and at most pi/2 radians"),
+    ("incidence_zero", 1.6, "lie above incidence_full and at most pi/2 radians"),
+    ("rough", -0.01, "lie in [0, 1]"), ("rough", math.nan, "lie in [0, 1]"),
+    ("max_detect", 1.0, "lie in (0, 1)"), ("max_detect", 0.0, "lie in (0, 1)"),
+    ("range_scale", 0.0, "be > 0 metres (inf: no fall with range)"),
+    ("support_tolerance", math.inf, "be finite and >= 0 metres"),
+    ("establish", 0.0, "be > 0 (inf: no bin is ever established)"),
+    ("protect", 1.1, "lie in [0, 1]"),
+    ("viewpoint_spacing", -0.25, "be finite and >= 0 metres"),
+    ("transmit", math.nan, "lie in [0, 1]"),
+    ("confirm", 0.0, "be finite and > 0"),
+])
+def test_sensor_model_refuses_each_bad_field(field: str, value: float, rule: str) -> None:
+    with pytest.raises(ConfigError) as caught:
+        SensorModel(**{field: value})  # type: ignore[arg-type]
+    assert str(caught.value) == f"SensorModel.{field} must {rule}, got {value!r}"
+
+
+def test_sensor_model_accepts_the_edges() -> None:
+    edges = SensorModel(edge_gain=1.0, incidence_full=0.0, incidence_zero=0.5 * math.pi,
+                        rough=1.0, max_detect=1e-9, range_scale=math.inf, support_tolerance=0.0,
+                        establish=math.inf, protect=0.0, viewpoint_spacing=0.0, transmit=0.0,
+                        confirm=1e-9)
+    assert edges.range_scale == math.inf

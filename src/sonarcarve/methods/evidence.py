@@ -40,12 +40,15 @@ A no-echo reading adds its free-space evidence up to ``max_range - ε``
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from numbers import Real
 from typing import Any
 
 import numpy as np
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
+from sonarcarve.errors import ConfigError
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EvidenceParams,
@@ -79,6 +82,28 @@ __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "Evidence
            "SensorModel"]
 
 
+#: A field's rule: what a valid value satisfies, and how the error message says it.
+_Rule = tuple[Callable[[float], bool], str]
+
+
+def _check_fields(owner: object, rules: dict[str, _Rule]) -> None:
+    """:class:`~sonarcarve.errors.ConfigError` for the first field of ``owner`` that is no
+    real number or breaks its rule (NaN breaks every rule: comparisons with it are false)."""
+    for name, (ok, rule) in rules.items():
+        value = getattr(owner, name)
+        if isinstance(value, bool) or not isinstance(value, Real) or not ok(float(value)):
+            msg = f"{type(owner).__name__}.{name} must {rule}, got {value!r}"
+            raise ConfigError(msg)
+
+
+def _fraction(v: float) -> bool:
+    return 0.0 <= v <= 1.0
+
+
+def _finite_at_least_zero(v: float) -> bool:
+    return 0.0 <= v < math.inf
+
+
 @dataclass(frozen=True)
 class SensorModel:
     """How likely a reading was to hear a surface (:mod:`sonarcarve.geometry.evidence`).
@@ -102,6 +127,28 @@ class SensorModel:
     viewpoint_spacing: float = 0.25
     transmit: float = 1.0
     confirm: float = 1.0
+
+    def __post_init__(self) -> None:
+        """Refuse values the equations cannot take (ranges of
+        :class:`~sonarcarve.geometry.evidence.EvidenceParams`) with ConfigError."""
+        right = 0.5 * math.pi
+        _check_fields(self, {
+            "edge_gain": (lambda v: 0.0 < v <= 1.0, "lie in (0, 1]"),
+            "incidence_full": (lambda v: 0.0 <= v < right, "lie in [0, pi/2) radians"),
+            # The gain falls linearly between the two: they must differ (no division by 0).
+            "incidence_zero": (lambda v: self.incidence_full < v <= right,
+                               "lie above incidence_full and at most pi/2 radians"),
+            "rough": (_fraction, "lie in [0, 1]"),
+            # 1 would make one miss infinite evidence (-log(1 - P)).
+            "max_detect": (lambda v: 0.0 < v < 1.0, "lie in (0, 1)"),
+            "range_scale": (lambda v: v > 0.0, "be > 0 metres (inf: no fall with range)"),
+            "support_tolerance": (_finite_at_least_zero, "be finite and >= 0 metres"),
+            "establish": (lambda v: v > 0.0, "be > 0 (inf: no bin is ever established)"),
+            "protect": (_fraction, "lie in [0, 1]"),
+            "viewpoint_spacing": (_finite_at_least_zero, "be finite and >= 0 metres"),
+            "transmit": (_fraction, "lie in [0, 1]"),
+            "confirm": (lambda v: 0.0 < v < math.inf, "be finite and > 0"),
+        })
 
 
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
@@ -166,6 +213,14 @@ class ConfidenceModel:
     through: float = 0.285
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
+
+    def __post_init__(self) -> None:
+        """Refuse a weight that is not finite and a maturity time that is not finite and > 0
+        (0 would divide by zero, a negative time leave every arc fresh) with ConfigError."""
+        finite: _Rule = (math.isfinite, "be finite")
+        rules = dict.fromkeys(("intercept", *CONFIDENCE_FEATURES, "fresh"), finite)
+        rules["maturity_time"] = (lambda v: 0.0 < v < math.inf, "be finite and > 0 seconds")
+        _check_fields(self, rules)
 
     def weights(self) -> np.ndarray:
         """The weights in :data:`CONFIDENCE_FEATURES` order, shape (F,)."""
