@@ -235,6 +235,18 @@ def report(title: str, samples: Samples, model: ConfidenceModel,
         print(f"- min_confidence {threshold:.2f}: {'; '.join(parts)}")
 
 
+def _positive_int(text: str) -> int:
+    """An argparse type: an integer ≥ 1 (argparse turns the error into a usage message)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        msg = f"must be an integer of at least 1, not {text!r}"
+        raise argparse.ArgumentTypeError(msg)
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     """Fit on one world and physics, print the weights, check on the others."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -243,7 +255,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1")
     parser.add_argument("--ridge", type=float, default=1e-3)
     parser.add_argument("--keep", type=float, default=0.90)
-    parser.add_argument("--snapshot-every", type=int, default=20,
+    parser.add_argument("--snapshot-every", type=_positive_int, default=20,
                         help="readings between local-map samples for the maturity time")
     parser.add_argument("--maturity-grid", type=float, nargs="+",
                         default=[0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0],
@@ -259,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
     share = float(train.direct.mean())
     fresh = float(np.log(share / (1.0 - share)))
     model = ConfidenceModel.from_weights(intercept, weights, fresh)
-    assert train.local is not None
+    assert train.local is not None  # snapshot_every >= 1 (_positive_int)
     maturity_time, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
     model = replace(model, maturity_time=maturity_time)
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,

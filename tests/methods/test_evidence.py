@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -12,7 +13,7 @@ from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods import evidence as evidence_module
 from sonarcarve.methods.atm import CrossingStoreError
-from sonarcarve.methods.evidence import EvidenceModel
+from sonarcarve.methods.evidence import ConfidenceModel, EvidenceModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
@@ -326,8 +327,6 @@ def test_a_points_confidence_does_not_depend_on_the_rows_beside_it() -> None:
     # Arcs are committed in blocks whose size depends on when the map or the measures are
     # read; a matrix product sums in an order that depends on the block, which moved
     # confidences in their last digits (and so the process output).
-    from sonarcarve.methods.evidence import ConfidenceModel
-
     model = ConfidenceModel()
     rng = np.random.default_rng(3)
     features = rng.uniform(0.0, 3.0, (1001, len(model.weights())))
@@ -444,3 +443,15 @@ def test_the_store_is_refused_only_past_what_the_limit_holds() -> None:
     with pytest.raises(CrossingStoreError,
                        match=r"^evidence carving's crossing store would take 1\.0 GiB"):
         evidence_module._grown_columns(200_000, 1024, 1343, 400_000)
+
+
+def test_from_weights_takes_the_fields_default_maturity_time() -> None:
+    weights = np.arange(len(evidence_module.CONFIDENCE_FEATURES), dtype=float)
+    (default,) = (f.default for f in dataclasses.fields(ConfidenceModel)
+                  if f.name == "maturity_time")
+    for model in (ConfidenceModel.from_weights(-1.0, weights, 2.5),
+                  ConfidenceModel.from_weights(-1.0, weights, 2.5, maturity_time=None)):
+        assert model.maturity_time == default
+        assert (model.intercept, model.fresh) == (-1.0, 2.5)
+        np.testing.assert_array_equal(model.weights(), weights)
+    assert ConfidenceModel.from_weights(-1.0, weights, 2.5, 0.75).maturity_time == 0.75

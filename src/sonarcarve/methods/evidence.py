@@ -228,11 +228,13 @@ class ConfidenceModel:
 
     @classmethod
     def from_weights(cls, intercept: float, weights: np.ndarray, fresh: float,
-                     maturity_time: float = 2.0) -> ConfidenceModel:
-        """The model with ``weights`` (shape (F,), :data:`CONFIDENCE_FEATURES` order)."""
+                     maturity_time: float | None = None) -> ConfidenceModel:
+        """The model with ``weights`` (shape (F,), :data:`CONFIDENCE_FEATURES` order);
+        ``maturity_time`` defaults to the class's (None: the field's default)."""
         named = {name: float(w) for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True)}
-        return cls(intercept=float(intercept), fresh=float(fresh),
-                   maturity_time=maturity_time, **named)
+        if maturity_time is not None:
+            named["maturity_time"] = maturity_time
+        return cls(intercept=float(intercept), fresh=float(fresh), **named)
 
     def maturity(self, age: np.ndarray) -> np.ndarray:
         """``clip(age / maturity_time, 0, 1)``, ``age`` in seconds."""
