@@ -697,7 +697,9 @@ def evidence_add_many(
     done : int
         Sequence number after the last arc done (``first + count`` when all are).
     spilled : int
-        Rows of ``spill`` the last arc done used (0 when all are done).
+        Rows of ``spill`` the last arc done used: 0 when no arc spilled. It can be > 0 with
+        ``done == first + count`` (the block's last arc spilled, as every single ``add()``
+        that spills), so the caller moves the spill whenever it is > 0, whatever ``done``.
     """
     storage = x.shape[0]
     fully = 0
