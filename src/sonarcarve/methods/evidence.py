@@ -370,7 +370,8 @@ class EvidenceModel(ArcModel):
         self.trans = np.zeros(2 * bins + 1)
         # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
         # when an arc's crossings do not fit (they wait in ``spill``, room for every crossing
-        # one new arc can make; 3.2 MB at a history of 10,000 arcs).
+        # one new arc can make: 4 (capacity - 1) rows of (row, bearing) float64, 0.64 MB at
+        # a history of 10,000 arcs).
         self._most_columns = most if with_atm else 1
         self.bearings = np.zeros((size, min(INITIAL_COLUMNS, self._most_columns)),
                                  dtype=np.float32)
