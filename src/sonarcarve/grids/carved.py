@@ -123,6 +123,7 @@ from sonarcarve.history import SonarHistory
 from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
@@ -446,6 +447,63 @@ def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model,
     return weight * s * m.l_hit
 
 
+#: Margin of :func:`_surely_within`'s dot-product test: far above its rounding (about 1e-15)
+#: and that of the bearing test it stands for, so the two never disagree outside it.
+_EDGE = 1e-9
+
+
+@compiled_inline
+def _bearing_off(dx: float, dy: float, mid: float) -> float:
+    """Bearing of ``(dx, dy)`` minus ``mid``, wrapped into ``[-π, π)``."""
+    off = math.atan2(dy, dx) - mid
+    off -= _TWO_PI * math.floor((off + math.pi) / _TWO_PI)
+    return off
+
+
+@compiled_inline
+def _within(dx: float, dy: float, d: float, mid: float, half: float, cos_mid: float,
+            sin_mid: float, cos_half: float) -> bool:
+    """``|_bearing_off(dx, dy, mid)| <= half``, the bearing test of :func:`_draw_arc`, with the
+    arctangent only near the interval's edges: ``(dx, dy)`` (length ``d``) is within ``half``
+    of the direction ``(cos_mid, sin_mid)`` when its cosine to it is above ``cos_half`` (-2
+    when ``half >= π``: every bearing), and the cosine decides wherever it is more than
+    :data:`_EDGE` from ``cos_half``: there both tests' rounding (1e-15) cannot change the
+    answer, so the answer is the same bit for bit."""
+    if d > 0.0:
+        q = (dx * cos_mid + dy * sin_mid) / d - cos_half
+        if q > _EDGE:
+            return True
+        if q < -_EDGE:
+            return False
+    return abs(_bearing_off(dx, dy, mid)) <= half
+
+
+@compiled_inline
+def _cos_half(half: float) -> float:
+    """``cos(half)`` for :func:`_within`; -2 (every bearing) when ``half >= π``."""
+    return math.cos(half) if half < math.pi else -2.0
+
+
+@compiled_inline
+def _ring_columns(dy: float, r_in: float, r_out: float, x: float, xmin: float, h: float,
+                  nx: int, j0: int, j1: int) -> tuple[int, int, int, int]:
+    """The columns ``a0..a1`` and ``b0..b1`` (disjoint, left then right; empty when the first
+    index is larger) of the row ``dy`` (relative to the centre ``x``) whose cell centres may
+    lie in the ring ``r_in <= d <= r_out``, within ``j0..j1``: one cell of slack each side, the
+    exact test is the caller's."""
+    rest = r_out * r_out - dy * dy
+    if rest < 0.0:
+        return 1, 0, 1, 0
+    outer = math.sqrt(rest)
+    inner = math.sqrt(max(0.0, r_in * r_in - dy * dy))
+    a0, a1 = _cell_range(x - outer, x - inner, xmin, h, nx)
+    b0, b1 = _cell_range(x + inner, x + outer, xmin, h, nx)
+    a0, a1, b0, b1 = max(a0, j0), min(a1, j1), max(b0, j0), min(b1, j1)
+    if b0 <= a1 + 1:  # the two stretches touch: one
+        return min(a0, b0), max(a1, b1), 1, 0
+    return a0, a1, b0, b1
+
+
 @compiled_inline
 def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
               m: _Model, x: float, y: float, r: float, lo: float, hi: float,
@@ -468,27 +526,35 @@ def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np
     xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
     j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
     i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    # Only a plain live draw needs no bearing: it then takes the cheap bearing test.
+    plain = not clamp and not profile > 0.0
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        for j in range(j0, j1 + 1):
-            dx = xmin + (j + 0.5) * h - x
-            d = math.sqrt(dx * dx + dy * dy)
-            if abs(d - r) > band:
-                continue
-            off = math.atan2(dy, dx) - mid
-            off -= _TWO_PI * math.floor((off + math.pi) / _TWO_PI)
-            if abs(off) > half:
-                continue
-            v = value
-            if profile > 0.0:
-                u = off / half
-                v *= min(1.0, profile * (1.0 - u * u))
-            if clamp:
-                grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + v))
-                if v > 0.0:
-                    heard[i, j] |= 1 << _heard_bin(mid + off)
-            else:
-                grid[i, j] += v
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if plain:
+                    if _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                        grid[i, j] += value
+                    continue
+                off = _bearing_off(dx, dy, mid)
+                if abs(off) > half:
+                    continue
+                v = value
+                if profile > 0.0:
+                    u = off / half
+                    v *= min(1.0, profile * (1.0 - u * u))
+                if clamp:
+                    grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + v))
+                    if v > 0.0:
+                        heard[i, j] |= 1 << _heard_bin(mid + off)
+                else:
+                    grid[i, j] += v
 
 
 @compiled_inline
@@ -653,50 +719,79 @@ def _undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
 
 
 @compiled
-def _sync_kernel(base: npt.NDArray[np.float32], live: FloatArray, drawn: FloatArray,
-                 drawn_seq: npt.NDArray[np.int64], slots: SlotArray,
-                 seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                 lo: FloatArray, hi: FloatArray, weight: FloatArray,
-                 heard: npt.NDArray[np.uint32], m: _Model) -> int:
-    """Redraw every live arc whose interval or value changed; returns how many."""
+def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], drawn: FloatArray,
+                    drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                    pseq: npt.NDArray[np.int64], slots: SlotArray,
+                    seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                    lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
+                    with_points: bool, heard: npt.NDArray[np.uint32], m: _Model) -> int:
+    """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs
+    ``slots`` (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
+    (:func:`_intervals`) are indexed by slot, ``fresh`` by position. First every arc whose
+    interval or value changed is redrawn into ``live``, then the points are judged on the whole
+    updated spread map (:func:`_refresh_points`). Returns how many arcs and points changed."""
     changed = 0
     for k in range(slots.shape[0]):
-        changed += _redraw(live, drawn, drawn_seq, slots[k], seqs[k], x[k], y[k], r[k],
-                           lo[k], hi[k], _arc_value(r[k], lo[k], hi[k], weight[k], m),
-                           heard, m)
+        s = slots[k]
+        changed += _redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
+                           hi[s], _arc_value(r[s], lo[s], hi[s], weight[s], m), heard, m)
+    if with_points:
+        for k in range(slots.shape[0]):
+            changed += _refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
+                                       seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m)
     return changed
+
+
+@compiled_inline
+def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
+                    pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
+                    y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
+                    weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
+                    m: _Model) -> int:
+    """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
+    ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
+    without the arc's own spread value) does not explain it (:func:`_band_occupied`): the
+    middle ``unit`` of its carved interval raised from its spread value to a whole hit; else
+    take its point out. The spread map does not hold the points, so the fresh arcs' order does
+    not matter. Returns 1 if its point changed."""
+    if (fresh and weight[slot] > 0.0 and not _band_occupied(
+            base, live, m, x[slot], y[slot], r[slot], lo[slot], hi[slot], drawn[slot, 5])):
+        mid = 0.5 * (lo[slot] + hi[slot])
+        half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+        raise_to_whole = (_arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+                          - drawn[slot, 5])
+        return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                       mid - half, mid + half, raise_to_whole, heard, m)
+    if pseq[slot] >= 0:
+        _undraw(points, heard, m, pdrawn, slot)
+        pseq[slot] = -1
+        return 1
+    return 0
 
 
 @compiled
-def _points_kernel(base: npt.NDArray[np.float32], live: FloatArray,
-                   points: npt.NDArray[np.float32], drawn: FloatArray,
-                   pdrawn: FloatArray, pseq: npt.NDArray[np.int64], slots: SlotArray,
-                   seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                   lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
-                   heard: npt.NDArray[np.uint32], m: _Model) -> int:
-    """Draw each ``fresh`` arc (its sensor's newest reading) that the map of spread arcs
-    (``base + live``, without the arc's own spread value) does not explain
-    (:func:`_band_occupied`) into ``points`` as carving's point estimate: the middle ``unit``
-    of its carved interval raised from its spread value to a whole hit; take out the points
-    of every other arc. The spread
-    map does not hold the points, so the fresh arcs' order does not matter. Returns how many
-    points changed."""
-    changed = 0
+def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
+                 hi: FloatArray, status: npt.NDArray[np.int8], seen: FloatArray,
+                 seen_seq: npt.NDArray[np.int64], out: SlotArray) -> int:
+    """Positions ``k`` (into ``out``, returns how many) of the live arcs whose carving state
+    (``lo, hi, status`` of :class:`~sonarcarve.methods.carving.CarvingModel`, indexed by slot)
+    differs from ``seen`` (``seen_seq``: the arc it was recorded for), recording the new state.
+    An arc whose state is as seen has the same estimate, so its interval need not be asked
+    for again."""
+    count = 0
     for k in range(slots.shape[0]):
-        slot = slots[k]
-        if (fresh[k] and weight[k] > 0.0 and not _band_occupied(
-                base, live, m, x[k], y[k], r[k], lo[k], hi[k], drawn[slot, 5])):
-            mid = 0.5 * (lo[k] + hi[k])
-            half = min(0.5 * (hi[k] - lo[k]), 0.5 * m.unit / r[k])
-            raise_to_whole = (_arc_value(r[k], lo[k], hi[k], weight[k], m, True)
-                              - drawn[slot, 5])
-            changed += _redraw(points, pdrawn, pseq, slot, seqs[k], x[k], y[k], r[k],
-                               mid - half, mid + half, raise_to_whole, heard, m)
-        elif pseq[slot] >= 0:
-            _undraw(points, heard, m, pdrawn, slot)
-            pseq[slot] = -1
-            changed += 1
-    return changed
+        s = slots[k]
+        if (seen_seq[s] != seqs[k] or seen[s, 0] != lo[s] or seen[s, 1] != hi[s]
+                or seen[s, 2] != status[s]):
+            seen_seq[s] = seqs[k]
+            seen[s, 0] = lo[s]
+            seen[s, 1] = hi[s]
+            seen[s, 2] = status[s]
+            out[count] = k
+            count += 1
+    return count
 
 
 @compiled_inline
@@ -705,13 +800,20 @@ def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
             r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
             m: _Model) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
-    changed anything."""
+    changed anything. The same arc drawn before with another interval or value is moved in
+    one pass (:func:`_move_arc`: the same additions, cell by cell, as taking it out and
+    drawing it again)."""
     if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
             and drawn[slot, 5] == value):
         return 0
-    if drawn_seq[slot] >= 0:
-        _undraw(live, heard, m, drawn, slot)
-    _draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
+    if (drawn_seq[slot] >= 0 and drawn[slot, 0] == x and drawn[slot, 1] == y
+            and drawn[slot, 2] == r):
+        _move_arc(live, heard, m, x, y, r, drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5],
+                  lo, hi, value)
+    else:
+        if drawn_seq[slot] >= 0:
+            _undraw(live, heard, m, drawn, slot)
+        _draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
     drawn[slot, 0] = x
     drawn[slot, 1] = y
     drawn[slot, 2] = r
@@ -720,6 +822,59 @@ def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
     drawn[slot, 5] = value
     drawn_seq[slot] = seq
     return 1
+
+
+@compiled_inline
+def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
+              x: float, y: float, r: float,
+              lo0: float, hi0: float, value0: float, lo1: float, hi1: float,
+              value1: float) -> None:
+    """``_draw_arc(live, ..., lo0, hi0, value0)`` then ``_draw_arc(live, ..., lo1, hi1,
+    value1)`` for one arc (same origin and radius), in one pass over the cells: each cell of
+    the band gets the same two additions in the same order (so the same sum, bit for bit), and
+    its distance and bearing are computed once instead of twice."""
+    if value0 == 0.0 or value1 == 0.0:  # one of the two draws nothing
+        _draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0)
+        _draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1)
+        return
+    xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
+    ny, nx = live.shape
+    widen = 0.5 * h / r
+    r_in = max(0.0, r - band)
+    r_out = r + band
+    ta0, tb0 = lo0 - widen, hi0 + widen
+    ta1, tb1 = lo1 - widen, hi1 + widen
+    mid0, half0 = 0.5 * (ta0 + tb0), 0.5 * (tb0 - ta0)
+    mid1, half1 = 0.5 * (ta1 + tb1), 0.5 * (tb1 - ta1)
+    xlo0, ylo0, xhi0, yhi0 = _sector_box(x, y, ta0, tb0, r_in, r_out)
+    xlo1, ylo1, xhi1, yhi1 = _sector_box(x, y, ta1, tb1, r_in, r_out)
+    j0, j1 = _cell_range(min(xlo0, xlo1), max(xhi0, xhi1), xmin, h, nx)
+    i0, i1 = _cell_range(min(ylo0, ylo1), max(yhi0, yhi1), ymin, h, ny)
+    cm0, sm0, ch0 = math.cos(mid0), math.sin(mid0), _cos_half(half0)
+    cm1, sm1, ch1 = math.cos(mid1), math.sin(mid1), _cos_half(half1)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if profile > 0.0:
+                    off = _bearing_off(dx, dy, mid0)
+                    if abs(off) <= half0:
+                        u = off / half0
+                        live[i, j] += value0 * min(1.0, profile * (1.0 - u * u))
+                    off = _bearing_off(dx, dy, mid1)
+                    if abs(off) <= half1:
+                        u = off / half1
+                        live[i, j] += value1 * min(1.0, profile * (1.0 - u * u))
+                    continue
+                if _within(dx, dy, d, mid0, half0, cm0, sm0, ch0):
+                    live[i, j] += value0
+                if _within(dx, dy, d, mid1, half1, cm1, sm1, ch1):
+                    live[i, j] += value1
 
 
 @compiled_inline
@@ -734,21 +889,25 @@ def _band_occupied(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x
     t2 = hi + widen
     mid = 0.5 * (t1 + t2)
     half = 0.5 * (t2 - t1)
-    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, max(0.0, r - band), r + band)
+    r_in, r_out = max(0.0, r - band), r + band
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
     j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
     i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        for j in range(j0, j1 + 1):
-            dx = xmin + (j + 0.5) * h - x
-            if abs(math.sqrt(dx * dx + dy * dy) - r) > band:
-                continue
-            off = math.atan2(dy, dx) - mid
-            off -= _TWO_PI * math.floor((off + math.pi) / _TWO_PI)
-            if abs(off) > half:
-                continue
-            if min(m.l_max, max(m.l_min, base[i, j] + live[i, j] - own)) > m.l_occupied:
-                return True
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                # The cell's value first: a cell that cannot be occupied needs no geometry.
+                if not min(m.l_max, max(m.l_min, base[i, j] + live[i, j] - own)) > m.l_occupied:
+                    continue
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                    return True
     return False
 
 
@@ -876,6 +1035,17 @@ class CarvedGrid(CellGrid):
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
         self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
         self._pseq = np.full(size, -1, dtype=np.int64)
+        # Per slot, the interval and weight (_intervals) of the live arc at the last read.
+        self._lo = np.zeros(size)
+        self._hi = np.zeros(size)
+        self._weight = np.zeros(size)
+        # Plain carving: per slot, the model's state (lo, hi, status) those were computed from,
+        # and for which arc (-1: none); a read asks only for the estimates of the arcs whose
+        # state changed since (_stale_slots). Any other method is asked for every live arc.
+        self._carving = _plain_carving(method)
+        self._seen = np.zeros((size, 3), dtype=np.float64)
+        self._seen_seq = np.full(size, -1, dtype=np.int64)
+        self._changed = np.zeros(size, dtype=np.int64)
         self._pending: list[tuple[FloatArray, ...]] = []
         self._next_final = 0  # sequence number of the next arc to leave the history
         # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
@@ -931,9 +1101,10 @@ class CarvedGrid(CellGrid):
     def nbytes(self) -> int:
         """Memory of the grid's own state (the cell arrays and the per-slot record), bytes;
         the method's history and state come on top, fixed by its history size."""
+        per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._lo, self._hi,
+                    self._weight, self._seen, self._seen_seq, self._changed)
         return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
-                   + self._heard.nbytes + self._pdrawn.nbytes + self._pseq.nbytes
-                   + self._drawn.nbytes + self._drawn_seq.nbytes)
+                   + self._heard.nbytes + sum(a.nbytes for a in per_slot))
 
     # -- updates -----------------------------------------------------------------------------
 
@@ -977,10 +1148,11 @@ class CarvedGrid(CellGrid):
                      no_echo: BoolArray) -> None:
         """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
         heard nothing (its arc is then no sensor's newest)."""
-        ids, rev_first = np.unique(sensor[::-1], return_index=True)
-        last = len(sensor) - 1 - rev_first
-        for s, k in zip(ids.tolist(), last.tolist(), strict=True):
-            self._newest[s] = -1 if no_echo[k] else int(seqs[k])
+        newest = self._newest
+        # In order, the last reading of each sensor wins; a loop, because a robot's batches are
+        # a few readings and np.unique costs more than the loop for them.
+        for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(), strict=True):
+            newest[s] = -1 if silent else seq
 
     def _on_commit(self, history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
         """Arcs leaving the history: their live contribution out, their final one pending."""
@@ -1005,27 +1177,63 @@ class CarvedGrid(CellGrid):
                        cols[6].astype(np.int64))
 
     def _sync(self) -> None:
-        """Bring ``live`` up to date with the method's current carved intervals."""
+        """Bring ``live`` (and the points) up to date with the method's current carved
+        intervals: only the arcs whose interval or value changed since the last read are
+        redrawn, and with plain carving only those arcs' estimates are asked for."""
         if not self._stale:
             return
         history = self._method.history
-        slots = history.slots()
+        slots = np.ascontiguousarray(history.slots())
         if len(slots):
-            est = self._method.estimates(slots)
-            x, y, r = history.x[slots], history.y[slots], history.r[slots]
-            lo, hi, weight = _intervals(x, y, est)
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
-            slots = np.ascontiguousarray(slots)
-            _sync_kernel(self._base, self._live, self._drawn, self._drawn_seq, slots, seqs, x,
-                         y, r, lo, hi, weight, self._heard, self._model)
-            if self._params.fresh_arcs:
-                fresh = np.isin(seqs, np.fromiter(self._newest.values(), dtype=np.int64))
-                _points_kernel(self._base, self._live, self._points, self._drawn,
-                               self._pdrawn, self._pseq, slots, seqs, x, y, r, lo, hi, weight,
-                               fresh, self._heard, self._model)
+            self._update_intervals(history, slots, seqs)
+            with_points = self._params.fresh_arcs
+            fresh = self._fresh(seqs) if with_points else np.zeros(len(slots), dtype=bool)
+            _refresh_kernel(self._base, self._live, self._points, self._drawn,
+                            self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
+                            history.y, history.r, self._lo, self._hi, self._weight, fresh,
+                            with_points, self._heard, self._model)
         self._stale = False
 
+    def _update_intervals(self, history: SonarHistory, slots: SlotArray,
+                          seqs: npt.NDArray[np.int64]) -> None:
+        """``_lo, _hi, _weight`` of the live ``slots`` (arcs ``seqs``) as :func:`_intervals`
+        gives them from the method's estimates. With plain carving an estimate is a function
+        of the arc's row and its model's ``lo, hi, status`` alone
+        (:meth:`~sonarcarve.methods.carving.CarvingModel.estimates`), so only the arcs whose
+        state changed since the last read are asked for, from the model itself (the method's
+        estimate is its one model's)."""
+        carving = self._carving
+        if carving is None:
+            stale = slots
+            est = self._method.estimates(slots)
+        else:
+            count = _stale_slots(slots, seqs, carving.lo, carving.hi, carving.status,
+                                 self._seen, self._seen_seq, self._changed)
+            if not count:
+                return
+            stale = slots[self._changed[:count]]
+            est = carving.estimates(stale)
+        lo, hi, weight = _intervals(history.x[stale], history.y[stale], est)
+        self._lo[stale] = lo
+        self._hi[stale] = hi
+        self._weight[stale] = weight
+
+    def _fresh(self, seqs: npt.NDArray[np.int64]) -> BoolArray:
+        """Which of the live arcs ``seqs`` (consecutive) is its sensor's newest reading."""
+        fresh = np.zeros(len(seqs), dtype=bool)
+        at = np.fromiter(self._newest.values(), dtype=np.int64, count=len(self._newest))
+        at -= seqs[0]
+        fresh[at[(at >= 0) & (at < len(seqs))]] = True
+        return fresh
+
     # -- reading the map ---------------------------------------------------------------------
+
+    def refresh(self) -> None:
+        """Bring the map up to date with the method's current carved intervals without
+        reading it (every read does this first): what a costmap layer does when it is asked
+        for its update, before the cells are read."""
+        self._sync()
 
     @property
     def log_odds(self) -> FloatArray:
@@ -1074,6 +1282,16 @@ class CarvedGrid(CellGrid):
         rows, cols = np.nonzero(self.occupied_mask(threshold))
         xs, ys = self.cell_centers()
         return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
+
+
+def _plain_carving(method: SonarMethod) -> CarvingModel | None:
+    """The carving model of a plain :class:`~sonarcarve.methods.carving.CarvingMethod` (no
+    subclass: one that overrides its estimates must be asked), else None."""
+    if type(method) is CarvingMethod and len(method.models) == 1:
+        model = method.models[0]
+        if type(model) is CarvingModel:
+            return model
+    return None
 
 
 def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
