@@ -374,12 +374,16 @@ def test_a_store_beyond_the_memory_limit_is_refused(monkeypatch: pytest.MonkeyPa
 ])
 def test_the_store_grows_by_doubling_within_its_bounds(rows: int, columns: int, needed: int,
                                                        most: int, grown: int) -> None:
-    assert atm_module._grown_columns(rows, columns, needed, most) == grown
+    assert atm_module.grown_columns(rows, columns, needed, most) == grown
 
 
 def test_the_store_is_refused_only_past_what_the_limit_holds() -> None:
     with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take 1\.0 GiB"):
-        atm_module._grown_columns(200_000, 1024, 1343, 400_000)
+        atm_module.grown_columns(200_000, 1024, 1343, 400_000)
+    # Evidence carving's store is the same class under its own name.
+    with pytest.raises(CrossingStoreError,
+                       match=r"^evidence carving's crossing store would take 1\.0 GiB"):
+        atm_module.grown_columns(200_000, 1024, 1343, 400_000, "evidence carving's")
 
 
 @pytest.mark.parametrize(("psi", "delta"), [(-0.1, INCH), (1.6, INCH), (0.5, -1.0),

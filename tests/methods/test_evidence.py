@@ -11,6 +11,7 @@ import pytest
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.methods import EvidenceMethod
+from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods import evidence as evidence_module
 from sonarcarve.methods.atm import CrossingStoreError
 from sonarcarve.methods.evidence import ConfidenceModel, EvidenceModel
@@ -396,7 +397,7 @@ def test_a_store_beyond_the_memory_limit_stops_the_method(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # 256 bytes hold 256 // (4 * 240) = 0 float32 columns of 240 rows, so the store's first
     # growth (a row with 3 crossings in 2 columns) must fail.
-    monkeypatch.setattr(evidence_module, "MAX_ATM_STATE_BYTES", 256)
+    monkeypatch.setattr(atm_module, "MAX_ATM_STATE_BYTES", 256)
     n = 120
     method = EvidenceMethod(history_size=n, beam_width=PHI)
     model = method.models[0]
@@ -424,25 +425,6 @@ def test_a_store_beyond_the_memory_limit_stops_the_method(
                  lambda: method.estimates(slots), lambda: model.raw(slots)):
         with pytest.raises(CrossingStoreError, match=r"^evidence carving's crossing store"):
             read()
-
-
-@pytest.mark.parametrize(("rows", "columns", "needed", "most", "grown"), [
-    (100, 32, 33, 10_000, 64),  # doubled
-    (100, 32, 200, 10_000, 256),  # doubled until enough
-    (100, 32, 40, 50, 50),  # never past every crossing an arc can have
-    # 1 GiB holds 2**30 / (4 * 200,000) = 1,342 float32 columns of 200,000 rows: a doubling
-    # from 1,024 to 2,048 would not fit, what is left does.
-    (200_000, 1024, 1025, 400_000, 1342),
-])
-def test_the_store_grows_by_doubling_within_its_bounds(rows: int, columns: int, needed: int,
-                                                       most: int, grown: int) -> None:
-    assert evidence_module._grown_columns(rows, columns, needed, most) == grown
-
-
-def test_the_store_is_refused_only_past_what_the_limit_holds() -> None:
-    with pytest.raises(CrossingStoreError,
-                       match=r"^evidence carving's crossing store would take 1\.0 GiB"):
-        evidence_module._grown_columns(200_000, 1024, 1343, 400_000)
 
 
 def test_from_weights_takes_the_fields_default_maturity_time() -> None:

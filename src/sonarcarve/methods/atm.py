@@ -71,8 +71,10 @@ __all__ = [
     "MIN_INDEXED_TRANSVERSAL",
     "AtmMethod",
     "AtmModel",
+    "CrossingStore",
     "CrossingStoreError",
     "atm_error_bound",
+    "grown_columns",
 ]
 
 
@@ -102,21 +104,71 @@ class CrossingStoreError(SonarcarveError, MemoryError):
     history bounds the crossings an arc can collect."""
 
 
-def _grown_columns(rows: int, columns: int, needed: int, most: int) -> int:
-    """Columns of the crossing store after it grows to hold ``needed`` crossings in one row:
-    doubled until enough, never more than ``most`` (every crossing an arc can have) nor than
-    :data:`MAX_ATM_STATE_BYTES` holds (a last step short of a doubling uses what is left), and
-    :class:`CrossingStoreError` when even that is fewer than ``needed``."""
+def grown_columns(rows: int, columns: int, needed: int, most: int, owner: str = "ATM's") -> int:
+    """Columns of a crossing store of ``rows`` rows and ``columns`` columns after it grows to
+    hold ``needed`` crossings in one row: doubled until enough, never more than ``most`` (every
+    crossing an arc can have) nor than :data:`MAX_ATM_STATE_BYTES` holds (a last step short of a
+    doubling uses what is left), and :class:`CrossingStoreError` (naming the store's ``owner``)
+    when even that is fewer than ``needed``."""
     while columns < needed:
         columns *= 2
     budget = MAX_ATM_STATE_BYTES // (4 * rows)  # float32 bearings
     columns = min(columns, max(most, needed), budget)
     if columns < needed:
-        msg = (f"ATM's crossing store would take {rows * needed * 4 / 2**30:.1f} GiB for "
+        msg = (f"{owner} crossing store would take {rows * needed * 4 / 2**30:.1f} GiB for "
                f"{needed} crossings of one arc (at most {MAX_ATM_STATE_BYTES / 2**30:.0f} GiB); "
                "use a shorter history_size")
         raise CrossingStoreError(msg)
     return columns
+
+
+class CrossingStore:
+    """The kept transversal crossings of each history row, as ATM's model and evidence carving
+    keep them: ``bearings`` (float32, relative to the row's arc axis) and their ``counts``.
+
+    It starts with :data:`INITIAL_COLUMNS` columns (at most ``most``) and grows on demand
+    (:meth:`grow`, :func:`grown_columns`). A growth past :data:`MAX_ATM_STATE_BYTES` stops it
+    for good: crossings were lost, so :meth:`check_usable` raises the error from then on.
+
+    Parameters
+    ----------
+    rows : int
+        Rows, one per history slot (``storage_size``).
+    most : int
+        Columns no arc can outgrow (every crossing it can have): the store never grows past.
+    owner : str
+        Whose store it is, for the error message (``"ATM's"``).
+    """
+
+    def __init__(self, rows: int, most: int, owner: str) -> None:
+        self.most = most
+        self.owner = owner
+        self.bearings = np.zeros((rows, min(INITIAL_COLUMNS, most)), dtype=np.float32)
+        self.counts = np.zeros(rows, dtype=np.int32)
+        self.failed: CrossingStoreError | None = None
+
+    def grow(self, needed: int) -> None:
+        """Widen the store to hold ``needed`` crossings in one row, keeping every bearing.
+
+        If it cannot (:class:`CrossingStoreError`), the store stops for good: the error is
+        kept for :meth:`check_usable`, no row's count is left past the store's end, and it is
+        raised.
+        """
+        rows, old = self.bearings.shape
+        try:
+            columns = grown_columns(rows, old, needed, self.most, self.owner)
+        except CrossingStoreError as error:
+            self.failed = error
+            np.minimum(self.counts, old, out=self.counts)
+            raise
+        wider = np.zeros((rows, columns), dtype=np.float32)
+        wider[:, :old] = self.bearings
+        self.bearings = wider
+
+    def check_usable(self) -> None:
+        """Raise the :class:`CrossingStoreError` that stopped the store, if one did."""
+        if self.failed is not None:
+            raise CrossingStoreError(str(self.failed))
 
 
 def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
@@ -392,11 +444,9 @@ class AtmModel(ArcModel):
         self.range_resolution = check_range_resolution(range_resolution)
         self.error_bound = atm_error_bound(min_transversal, range_resolution)
         self._cos_psi = math.cos(min_transversal)
-        #: Columns no arc can outgrow (module docstring): the store never grows beyond them.
-        self._most_columns = max(1, 4 * (history.capacity - 1))
-        columns = min(INITIAL_COLUMNS, self._most_columns)
-        self.bearings = np.zeros((history.storage_size, columns), dtype=np.float32)
-        self.counts = np.zeros(history.storage_size, dtype=np.int32)
+        # Columns no arc can outgrow (module docstring): the store never grows beyond them.
+        self.store = CrossingStore(history.storage_size, max(1, 4 * (history.capacity - 1)),
+                                   "ATM's")
         # Per-slot cos θ, sin θ and cos(φ/2), so the pair loop needs no trig for its beam tests.
         self._cos_axis = np.zeros(history.storage_size)
         self._sin_axis = np.zeros(history.storage_size)
@@ -411,7 +461,20 @@ class AtmModel(ArcModel):
         self._span = np.zeros(history.storage_size)
         self._stale = np.ones(history.storage_size, dtype=bool)
         self._kept = 0
-        self._failed: CrossingStoreError | None = None  # the store could not grow: stop
+
+    @property
+    def bearings(self) -> npt.NDArray[np.float32]:
+        """The crossing store's bearings (:class:`CrossingStore`); replaced when it grows."""
+        return self.store.bearings
+
+    @bearings.setter
+    def bearings(self, value: npt.NDArray[np.float32]) -> None:
+        self.store.bearings = value
+
+    @property
+    def counts(self) -> npt.NDArray[np.int32]:
+        """Crossings stored per row (:class:`CrossingStore`)."""
+        return self.store.counts
 
     def on_add(self, slot: int, older: SlotArray) -> None:
         """Reset ``slot``'s crossings, then intersect its arc with the older live arcs.
@@ -439,16 +502,12 @@ class AtmModel(ArcModel):
 
     def check_usable(self) -> None:
         """Raise the :class:`CrossingStoreError` that stopped the model, if one did."""
-        if self._failed is not None:
-            raise CrossingStoreError(str(self._failed))
+        self.store.check_usable()
 
     def make_room(self, needed: int) -> None:
-        """Grow the store to ``needed`` columns (:meth:`_grow`), or stop the model for good."""
-        try:
-            self._grow(needed)
-        except CrossingStoreError as error:
-            self._failed = error
-            raise
+        """Grow the store to ``needed`` columns (:meth:`CrossingStore.grow`), or stop the
+        model for good."""
+        self.store.grow(needed)
 
     @property
     def uses_index(self) -> bool:
@@ -469,14 +528,6 @@ class AtmModel(ArcModel):
     def count_kept(self, kept: int) -> None:
         """Add crossings kept by a kernel that the method ran for this model."""
         self._kept += kept
-
-    def _grow(self, needed: int) -> None:
-        """Widen the crossing store to at least ``needed`` columns (doubling; bounded)."""
-        rows, columns = self.bearings.shape
-        columns = _grown_columns(rows, columns, needed, self._most_columns)
-        wider = np.zeros((rows, columns), dtype=np.float32)
-        wider[:, : self.bearings.shape[1]] = self.bearings
-        self.bearings = wider
 
     def estimates(self, slots: SlotArray, points: BoolArray | None = None) -> Estimates:
         """ATM's estimates for ``slots``; ``points`` (a mask over ``slots``, default all) says

@@ -60,12 +60,7 @@ from sonarcarve.geometry.evidence import (
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, PointSource
-from sonarcarve.methods.atm import (
-    INITIAL_COLUMNS,
-    MAX_ATM_STATE_BYTES,
-    CrossingStoreError,
-    atm_error_bound,
-)
+from sonarcarve.methods.atm import CrossingStore, atm_error_bound
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
 from sonarcarve.methods.config import (
     DEFAULT_CARVE_PROBABILITY,
@@ -255,25 +250,6 @@ class ConfidenceModel:
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
 
 
-def _grown_columns(rows: int, columns: int, needed: int, most: int) -> int:
-    """Columns of the crossing store after it grows to hold ``needed`` crossings in one row, as
-    ATM's store grows (:class:`~sonarcarve.methods.atm.AtmModel`): doubled until enough, never
-    more than ``most`` (every crossing an arc can have) nor than
-    :data:`~sonarcarve.methods.atm.MAX_ATM_STATE_BYTES` holds (a last step short of a doubling
-    uses what is left), and :class:`~sonarcarve.methods.atm.CrossingStoreError` when even that
-    is fewer than ``needed``."""
-    while columns < needed:
-        columns *= 2
-    budget = MAX_ATM_STATE_BYTES // (4 * rows)  # float32 bearings
-    columns = min(columns, max(most, needed), budget)
-    if columns < needed:
-        msg = (f"evidence carving's crossing store would take "
-               f"{rows * needed * 4 / 2**30:.1f} GiB for {needed} crossings of one arc (at most "
-               f"{MAX_ATM_STATE_BYTES / 2**30:.0f} GiB); use a shorter history_size")
-        raise CrossingStoreError(msg)
-    return columns
-
-
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
@@ -372,17 +348,28 @@ class EvidenceModel(ArcModel):
         # when an arc's crossings do not fit (they wait in ``spill``, room for every crossing
         # one new arc can make: 4 (capacity - 1) rows of (row, bearing) float64, 0.64 MB at
         # a history of 10,000 arcs).
-        self._most_columns = most if with_atm else 1
-        self.bearings = np.zeros((size, min(INITIAL_COLUMNS, self._most_columns)),
-                                 dtype=np.float32)
-        self.counts = np.zeros(size, dtype=np.int32)
+        self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
-        self._failed: CrossingStoreError | None = None  # the store could not grow: stop
         # Slot numbers laid out twice: any window of live rows is one contiguous slice.
         self._wrapped = np.arange(2 * size, dtype=np.int64) % size
         self._fully = 0
         self._crossings = 0
         self._occluded_bins = 0
+
+    @property
+    def bearings(self) -> np.ndarray:
+        """The crossing store's bearings (:class:`~sonarcarve.methods.atm.CrossingStore`);
+        replaced when it grows."""
+        return self.store.bearings
+
+    @bearings.setter
+    def bearings(self, value: np.ndarray) -> None:
+        self.store.bearings = value
+
+    @property
+    def counts(self) -> np.ndarray:
+        """Crossings stored per row (:class:`~sonarcarve.methods.atm.CrossingStore`)."""
+        return self.store.counts
 
     def _arrays(self) -> tuple[Any, ...]:
         """The history's rows, the per-arc state and the model, in :func:`evidence_add`'s
@@ -427,29 +414,19 @@ class EvidenceModel(ArcModel):
         stops for good: the spilled crossings are lost, so its maps would be wrong."""
         rows = self.spill[:spilled, 0].astype(np.int64)
         values = self.spill[:spilled, 1]
-        old = self.bearings.shape[1]
-        try:
-            columns = _grown_columns(len(self.bearings), old,
-                                     int(self.counts[rows].max()), self._most_columns)
-        except CrossingStoreError as error:
-            self._failed = error
-            np.minimum(self.counts, old, out=self.counts)  # no row past the store's end
-            raise
-        wider = np.zeros((len(self.bearings), columns), dtype=np.float32)
-        wider[:, :old] = self.bearings
+        self.store.grow(int(self.counts[rows].max()))
+        bearings = self.bearings
         # A row's spilled crossings are its last ones, in the order found (_store_crossing).
         spilled_in_row = np.bincount(rows, minlength=len(self.counts))
         first_spilled = self.counts - spilled_in_row
         for row, value in zip(rows.tolist(), values.tolist(), strict=True):
-            wider[row, first_spilled[row]] = value
+            bearings[row, first_spilled[row]] = value
             first_spilled[row] += 1
-        self.bearings = wider
 
     def check_usable(self) -> None:
         """Raise the :class:`~sonarcarve.methods.atm.CrossingStoreError` that stopped the model,
         if one did."""
-        if self._failed is not None:
-            raise CrossingStoreError(str(self._failed))
+        self.store.check_usable()
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
