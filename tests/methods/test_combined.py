@@ -207,7 +207,7 @@ def test_combined_leaves_each_model_as_it_runs_alone(stream: str, history: int,
     assert isinstance(a_model, AtmModel)
     assert isinstance(a_alone, AtmModel)
     live = both.history.slots()
-    for field in ("lo", "hi", "bounds", "status", "carved"):
+    for field in ("lo", "hi", "bounds", "tips", "status", "carved"):
         np.testing.assert_array_equal(getattr(c_model, field)[live], getattr(c_alone, field)[live])
     np.testing.assert_array_equal(a_model.counts, a_alone.counts)
     for slot in np.flatnonzero(a_alone.counts):
@@ -265,3 +265,35 @@ def test_a_store_beyond_the_memory_limit_stops_combined_for_good(
                  lambda: method.estimates(slots)):
         with pytest.raises(CrossingStoreError, match=r"^ATM's crossing store would take"):
             read()
+
+
+def test_a_grown_atm_store_reaches_the_next_single_add() -> None:
+    # A block grows ATM's store inside the joint kernel; the single add() after it must write
+    # to the grown store (the kernel's cached arguments are rebuilt), so both models end as
+    # when run alone, every field of every row.
+    batch = _room_batch(2)
+    config = MethodConfig(history_size=400)
+    both, carving, atm = (make_method(name, config) for name in ("combined", "carve", "atm"))
+    cut = 1100  # of 1,888 readings: the store first outgrows 32 columns after about 1,000
+    for method in (both, carving, atm):
+        method.add_many(batch[:cut])
+    a_model = _model(both, AtmModel)
+    assert isinstance(a_model, AtmModel)
+    assert a_model.bearings.shape[1] > 32  # the block grew the store
+    assert isinstance(both, CombinedMethod)
+    for i in range(cut, cut + 10):
+        for method in (both, carving, atm):
+            method.add(batch[i])
+        assert both._arguments is not None
+        assert any(argument is a_model.bearings for argument in both._arguments)
+    c_model, c_alone, a_alone = (_model(both, CarvingModel), _model(carving, CarvingModel),
+                                 _model(atm, AtmModel))
+    assert isinstance(c_model, CarvingModel)
+    assert isinstance(a_alone, AtmModel)
+    for field in ("lo", "hi", "bounds", "tips", "status", "carved"):
+        np.testing.assert_array_equal(getattr(c_model, field), getattr(c_alone, field))
+    np.testing.assert_array_equal(a_model.counts, a_alone.counts)
+    for slot in np.flatnonzero(a_alone.counts):
+        c = a_alone.counts[slot]
+        np.testing.assert_array_equal(np.sort(a_model.bearings[slot, :c]),
+                                      np.sort(a_alone.bearings[slot, :c]))

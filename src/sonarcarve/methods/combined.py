@@ -200,14 +200,13 @@ class CombinedMethod(SonarMethod):
         self.max_incidence = self.config.max_incidence
         self.min_transversal = self.config.min_transversal
         self.range_resolution = self.config.range_resolution
+        self._joint: bool | None = None  # decided at the first reading (_uses_joint_kernel)
+        self._arguments: tuple[Any, ...] | None = None  # _joint_arguments
         super().__init__(history_size, beam_width)
 
     def _make_models(self) -> tuple[CarvingModel, AtmModel]:
         self._carving = CarvingModel(self.history, self.range_tolerance, self.max_incidence)
         self._atm = AtmModel(self.history, self.min_transversal, self.range_resolution)
-        self._joint: bool | None = None  # decided at the first reading (_uses_joint_kernel)
-        self._candidates = np.zeros(self.history.storage_size, dtype=np.int64)
-        self._arguments: tuple[Any, ...] | None = None  # _joint_arguments
         return self._carving, self._atm
 
     def _uses_joint_kernel(self) -> bool:
@@ -247,14 +246,15 @@ class CombinedMethod(SonarMethod):
     def _joint_arguments(self) -> tuple[Any, ...]:
         """The arguments of :func:`_add_joint` after ``first, count``, made once: the arrays
         stay the same (ATM's store is replaced only when it grows), and building the tuple
-        anew was a good part of a single ``add()``."""
+        anew was a good part of a single ``add()``. The last is the kernel's candidate buffer
+        (scratch: a new one after a growth is as good)."""
         if self._arguments is None:
             h, carving, atm = self.history, self._carving, self._atm
             self._arguments = (
                 h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1, h.theta2,
                 carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
                 carving.carved, carving.range_tolerance, carving.max_incidence,
-                *atm.kernel_state(), *atm.index, self._candidates,
+                *atm.kernel_state(), *atm.index, np.zeros(h.storage_size, dtype=np.int64),
             )
         return self._arguments
 
