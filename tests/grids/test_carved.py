@@ -407,3 +407,97 @@ def test_an_echo_the_map_already_explains_is_only_spread() -> None:
     # Sensor 0's echo lies on a band the map marks already: it gets its spread value only.
     assert grid.live_log_odds[i, j] == pytest.approx(SPREAD_AT_FACE)
     assert grid.log_odds[i, j] == pytest.approx(FREE_AT_FACE + 4 * SPREAD_AT_FACE, abs=1e-6)
+
+
+# -- frequent reads: the same map, cheaper ------------------------------------------------------
+
+def _ring_stream(n: int, seed: int, no_echo: bool = False) -> list[ReadingBatch]:
+    """A ring of 8 sensors on a robot driving along a corridor (walls at y = ±1.2 m, an end wall
+    at x = 3.3 m), ranges jittered; batches of 1-7 readings. With ``no_echo`` some firings
+    hear nothing (range +inf, max range 3 m)."""
+    rng = np.random.default_rng(seed)
+    readings = []
+    for k in range(n):
+        sensor = k % 8
+        x = -0.3 + 0.02 * k / 8
+        theta = sensor * math.pi / 4 + float(rng.normal(0.0, 0.02))
+        c, s = math.cos(theta), math.sin(theta)
+        hits = [d for d in ((1.2 / s) if s > 1e-9 else math.inf,
+                            (-1.2 / s) if s < -1e-9 else math.inf,
+                            ((3.3 - x) / c) if c > 1e-9 else math.inf) if d > 0]
+        r = min(hits) + float(rng.normal(0.0, 0.01))
+        if no_echo and (r > 3.0 or rng.random() < 0.1):
+            readings.append(Reading(t=0.04 * k, sensor=sensor, x=x, y=0.0, theta=theta,
+                                    range=math.inf, max_range=3.0))
+        else:
+            readings.append(Reading(t=0.04 * k, sensor=sensor, x=x, y=0.0, theta=theta,
+                                    range=min(r, 3.4)))
+    batches, start = [], 0
+    while start < n:
+        size = int(rng.integers(1, 8))
+        batches.append(ReadingBatch.from_readings(readings[start:start + size]))
+        start += size
+    return batches
+
+
+class _AskEveryArc(CarvingMethod):
+    """Plain carving, but a subclass: the grid asks its estimates for every live arc at every
+    read (it cannot know that they depend on the carving state alone)."""
+
+
+@pytest.mark.parametrize(("seed", "no_echo", "profile"),
+                         [(0, False, 0.0), (1, True, 0.0), (2, False, 1.0)])
+def test_reading_only_the_changed_arcs_gives_the_map_of_asking_every_arc(
+        seed: int, no_echo: bool, profile: float) -> None:
+    params = CarvedGridParams(band_profile=profile)
+    config = MethodConfig(history_size=40, max_incidence=math.radians(30.0))
+    fast = CarvedGrid(H, BOUNDS, method=make_method("carve", config), params=params)
+    full = CarvedGrid(H, BOUNDS, method=_AskEveryArc(
+        history_size=40, max_incidence=math.radians(30.0)), params=params)
+    for batch in _ring_stream(600, seed, no_echo):
+        fast.add_many(batch)
+        full.add_many(batch)
+        assert np.array_equal(fast.log_odds, full.log_odds)  # bit for bit, at every read
+    assert np.count_nonzero(fast.trinary() == OCCUPIED) > 20  # the walls are there
+
+
+@pytest.mark.parametrize(("no_echo", "fresh"), [(False, True), (True, True), (True, False)])
+def test_a_map_read_after_every_batch_is_the_map_read_once(no_echo: bool, fresh: bool) -> None:
+    batches = _ring_stream(600, 3, no_echo)
+    config = MethodConfig(history_size=40, max_incidence=math.radians(30.0))
+    params = CarvedGridParams(fresh_arcs=fresh)
+    often = CarvedGrid(H, BOUNDS, method=make_method("carve", config), params=params)
+    once = CarvedGrid(H, BOUNDS, method=make_method("carve", config), params=params)
+    for batch in batches:
+        often.add_many(batch)
+        often.refresh()
+        once.add_many(batch)
+    # The overlays are sums of additions and removals, in another order: equal up to rounding
+    # (float64 for the spread arcs, float32 for the points), and the classification the same.
+    tolerance = 1e-6 if fresh else 1e-12
+    assert np.allclose(often.log_odds, once.log_odds, rtol=0.0, atol=tolerance)
+    assert np.array_equal(often.trinary(), once.trinary())
+
+
+def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
+    from sonarcarve.grids.carved import _bearing_off, _cos_half, _within
+
+    rng = np.random.default_rng(0)
+    cases = 0
+    for _ in range(3000):
+        mid = float(rng.uniform(-2 * math.pi, 2 * math.pi))
+        half = float(rng.choice([rng.uniform(0.001, 0.4), rng.uniform(0.4, 3.2)]))
+        # Points at random bearings, and at the interval's edges give or take 1e-17..1e-6 rad.
+        edge = mid + float(rng.choice([-1.0, 1.0])) * half
+        bearings = [float(rng.uniform(-math.pi, math.pi))] + [
+            edge + float(rng.choice([-1.0, 1.0])) * 10.0 ** float(rng.uniform(-17, -6))
+            for _ in range(4)]
+        for bearing in bearings:
+            d = float(rng.uniform(0.1, 6.0))
+            dx, dy = d * math.cos(bearing), d * math.sin(bearing)
+            d = math.sqrt(dx * dx + dy * dy)
+            exact = abs(_bearing_off(dx, dy, mid)) <= half
+            assert _within(dx, dy, d, mid, half, math.cos(mid), math.sin(mid),
+                           _cos_half(half)) == exact
+            cases += 1
+    assert cases == 15000

@@ -93,8 +93,14 @@ length of the log (the method's global map, which does grow, is discarded after 
 the grid is the map).
 
 ``live`` is brought up to date lazily, when the map is read (:attr:`CarvedGrid.log_odds`,
-:meth:`~CarvedGrid.probabilities`, :meth:`~CarvedGrid.trinary`...): one call of the method's
-estimates over the history per read, not per reading.
+:meth:`~CarvedGrid.probabilities`, :meth:`~CarvedGrid.trinary`, :meth:`~CarvedGrid.refresh`...),
+not per reading; a read redraws only the arcs whose interval or value changed since the last
+one (moving each in one pass), and with plain carving asks the method's estimates only for the
+arcs whose carving state changed, so a robot can read its map at 5-10 Hz
+(``benchmarks/grid_reads.py``). The map a read gives is the same bit for bit as redrawing
+every arc would give; reads at other moments give the same map up to the rounding of the
+additions and removals that the overlays sum (about 1e-15 in log-odds for the spread arcs'
+float64 ``live``, 1e-7 for the float32 points).
 
 The three grids of :mod:`sonarcarve.grids` share a small protocol (:class:`OccupancyMap`):
 ``resolution``, ``bounds``, ``extent``, ``shape``, ``cell_centers()`` and ``probabilities()``;
@@ -734,10 +740,17 @@ def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
     changed = 0
     for k in range(slots.shape[0]):
         s = slots[k]
+        value = _arc_value(r[s], lo[s], hi[s], weight[s], m)
+        # _redraw's own test first: most arcs did not change, and the call costs more.
+        if (drawn_seq[s] == seqs[k] and drawn[s, 3] == lo[s] and drawn[s, 4] == hi[s]
+                and drawn[s, 5] == value):
+            continue
         changed += _redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
-                           hi[s], _arc_value(r[s], lo[s], hi[s], weight[s], m), heard, m)
+                           hi[s], value, heard, m)
     if with_points:
         for k in range(slots.shape[0]):
+            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
+                continue
             changed += _refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
                                        seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m)
     return changed
@@ -794,7 +807,7 @@ def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
     return count
 
 
-@compiled_inline
+@compiled  # its own function: inlined into the refresh loop, that loop ran 2x slower
 def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
             drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
             r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
@@ -877,7 +890,7 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
                     live[i, j] += value1
 
 
-@compiled_inline
+@compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
 def _band_occupied(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
                    y: float, r: float, lo: float, hi: float, own: float) -> bool:
     """Whether a cell of the arc's band (as :func:`_draw_arc` draws it, without a profile)
