@@ -395,6 +395,29 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     assert trinary(grid)[mid] != OCCUPIED  # one spread echo: unsure
 
 
+def test_a_mark_expires_when_its_sensor_stays_silent_past_fresh_seconds() -> None:
+    # A log without silent firings never shows sensor 0 firing again: its last echo must not
+    # stay a whole hit for as long as the arc is in the history (review finding: 20 s).
+    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(fresh_seconds=2.0))
+    _ring_hears_nothing(grid)
+    mid = _cell(grid, FACE_X, ROW_Y)
+    grid.add(_front(1.0))
+    assert grid.live_log_odds[mid] == pytest.approx(L_HIT)
+    # Sensor 4 looks backwards, away from the face; at t = 3.0 the echo is 2.0 s old: fresh.
+    grid.add(Reading(3.0, 4, 0.0, ROW_Y, math.pi, 0.3))
+    assert grid.live_log_odds[mid] == pytest.approx(L_HIT)
+    # At t = 3.1 it is 2.1 s old: spread, one echo's worth (0.236), and unsure.
+    grid.add(Reading(3.1, 4, 0.0, ROW_Y, math.pi, 0.3))
+    assert grid.live_log_odds[mid] == pytest.approx(SPREAD_AT_FACE)
+    assert trinary(grid)[mid] != OCCUPIED
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, math.nan, math.inf, True, "2"])
+def test_fresh_seconds_must_be_a_finite_positive_number(bad: object) -> None:
+    with pytest.raises(GridError, match="fresh_seconds"):
+        CarvedGridParams(fresh_seconds=bad)  # type: ignore[arg-type]
+
+
 def test_an_echo_the_map_already_explains_is_only_spread() -> None:
     grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)))
     _ring_hears_nothing(grid)

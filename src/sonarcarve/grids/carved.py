@@ -325,6 +325,14 @@ class CarvedGridParams:
         the rest) until that sensor fires again (module docstring: a person stepping in front
         of the robot is marked after one reading). False: every live arc spread, the rule
         before.
+    fresh_seconds : float
+        Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
+        grid has seen; 2.0. A log that drops silent firings (echoes only, or max-range readings
+        filtered out) never shows the sensor "firing again", and without this bound a person
+        heard once would stay marked until the arc left the history (20 s on a 16-sonar ring).
+        2 s is three cycles of such a ring at 40 ms a sonar (0.64 s, the simulator's Scout2),
+        so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
+        of a slower ring.
 
     Raises
     ------
@@ -346,6 +354,7 @@ class CarvedGridParams:
     p_miss_heard: float = 0.2
     band_profile: float = 0.0
     fresh_arcs: bool = True
+    fresh_seconds: float = 2.0
 
     def __post_init__(self) -> None:
         _check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -372,6 +381,11 @@ class CarvedGridParams:
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
+        fs = self.fresh_seconds
+        if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
+                math.isfinite(fs) and fs > 0.0):
+            msg = f"carved grid: fresh_seconds must be a finite number > 0, got {fs!r}"
+            raise GridError(msg)
         bp = self.band_profile
         if isinstance(bp, bool) or not isinstance(bp, int | float) or not (
                 math.isfinite(bp) and bp >= 0.0):
@@ -1065,6 +1079,7 @@ class CarvedGrid(CellGrid):
         self._next_final = 0  # sequence number of the next arc to leave the history
         # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
         self._newest: dict[int, int] = {}
+        self._latest_t = -math.inf  # time of the newest reading seen (fresh_seconds counts back)
         self._stale = False
         self.readings = 0
         method.add_commit_listener(self._on_commit)
@@ -1152,6 +1167,7 @@ class CarvedGrid(CellGrid):
         else:
             seqs = first_seq + np.arange(n, dtype=np.int64)
         self._note_newest(batch.sensor, seqs, no_echo)
+        self._latest_t = max(self._latest_t, float(batch.t.max()))
         _fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
                      np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
                      np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
@@ -1203,7 +1219,7 @@ class CarvedGrid(CellGrid):
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             self._update_intervals(history, slots, seqs)
             with_points = self._params.fresh_arcs
-            fresh = self._fresh(seqs) if with_points else np.zeros(len(slots), dtype=bool)
+            fresh = self._fresh(slots, seqs) if with_points else np.zeros(len(slots), dtype=bool)
             _refresh_kernel(self._base, self._live, self._points, self._drawn,
                             self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
                             history.y, history.r, self._lo, self._hi, self._weight, fresh,
@@ -1234,12 +1250,15 @@ class CarvedGrid(CellGrid):
         self._hi[stale] = hi
         self._weight[stale] = weight
 
-    def _fresh(self, seqs: npt.NDArray[np.int64]) -> BoolArray:
-        """Which of the live arcs ``seqs`` (consecutive) is its sensor's newest reading."""
+    def _fresh(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> BoolArray:
+        """Which of the live arcs ``seqs`` (consecutive, in ``slots``) is its sensor's newest
+        reading, heard at most ``fresh_seconds`` before the newest reading seen."""
         fresh = np.zeros(len(seqs), dtype=bool)
         at = np.fromiter(self._newest.values(), dtype=np.int64, count=len(self._newest))
         at -= seqs[0]
-        fresh[at[(at >= 0) & (at < len(seqs))]] = True
+        at = at[(at >= 0) & (at < len(seqs))]
+        young = self._method.history.t[slots[at]] >= self._latest_t - self._params.fresh_seconds
+        fresh[at[young]] = True
         return fresh
 
     # -- reading the map ---------------------------------------------------------------------
