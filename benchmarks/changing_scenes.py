@@ -79,11 +79,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="also feed the firings that heard nothing (the default)")
     echoes.add_argument("--echoes-only", action="store_true",
                         help="feed only the firings that heard an echo")
-    parser.add_argument("--physics", choices=("default", "amplitude"), default="default",
-                        help="sonar model simulated (default: the default physics)")
+    parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
+                        help="echo model simulated, as in the other benchmarks (default: "
+                             "specular, the simulator's default physics)")
     args = parser.parse_args(argv)
     args.no_echo = not args.echoes_only
-    physics = (DEFAULT_PHYSICS if args.physics == "default"
+    physics = (DEFAULT_PHYSICS if args.physics == DEFAULT_PHYSICS.echo_model
                else SonarPhysics(echo_model=args.physics))
     seeds = range(args.seeds)
     grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
@@ -92,7 +93,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               "robot's max range).")
     else:
         print("\nEchoes only (the firings that heard nothing are not fed).")
-    if args.physics != "default":
+    if args.physics != DEFAULT_PHYSICS.echo_model:
         print(f"Physics: {args.physics}.")
     for h_index, h in enumerate(args.resolutions):
         methods = METHOD_NAMES if h_index == 0 else ()
