@@ -1,5 +1,6 @@
 import itertools
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -297,3 +298,32 @@ def test_a_grown_atm_store_reaches_the_next_single_add() -> None:
         c = a_alone.counts[slot]
         np.testing.assert_array_equal(np.sort(a_model.bearings[slot, :c]),
                                       np.sort(a_alone.bearings[slot, :c]))
+
+
+def test_a_store_growth_that_never_reaches_the_kernel_fails_instead_of_looping(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # If the joint kernel kept the old store after a growth it would stop at the same arc
+    # for ever (found by mutation: the test above then hangs). A growth that changes nothing
+    # stands in for that bug here.
+    batch = _room_batch(2)
+    both = make_method("combined", MethodConfig(history_size=400))
+    a_model = _model(both, AtmModel)
+    assert isinstance(a_model, AtmModel)
+    monkeypatch.setattr(a_model, "make_room", lambda needed: None)
+    raised: list[BaseException] = []
+
+    def feed() -> None:
+        try:
+            both.add_many(batch[:1100])
+        except BaseException as error:  # handed to the test thread
+            raised.append(error)
+
+    # In a daemon thread, bounded: without the guard the feed never returns, and the test
+    # must fail rather than hang the suite.
+    worker = threading.Thread(target=feed, daemon=True)
+    worker.start()
+    worker.join(timeout=120)
+    assert not worker.is_alive(), "add_many looped instead of failing"
+    assert len(raised) == 1
+    assert isinstance(raised[0], RuntimeError)
+    assert "stopped twice at the same arc" in str(raised[0])

@@ -234,12 +234,21 @@ class CombinedMethod(SonarMethod):
         carving, atm = self._carving, self._atm
         self._check_usable()
         end = first + count
+        stopped_at = -1
         while first < end:
             kept, fully, split, first, needed = _add_joint(first, end - first,
                                                            *self._joint_arguments())
             atm.count_kept(kept)
             carving.count_removed(fully, split)
             if first < end:
+                # The kernel stopped at an arc whose crossings did not fit. After the store
+                # grows that arc fits, so stopping at it twice means the kernel never saw the
+                # grown store: fail, rather than loop for ever.
+                if first == stopped_at:
+                    msg = ("combined: the joint kernel stopped twice at the same arc; ATM's "
+                           "grown crossing store did not reach it")
+                    raise RuntimeError(msg)
+                stopped_at = first
                 atm.make_room(needed)
                 self._arguments = None  # the crossing store is a new array
 
