@@ -129,7 +129,7 @@ from sonarcarve.grids.range_sensor_layer import (
 from sonarcarve.history import SonarHistory
 from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
-from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.base import Estimates, arc_point
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import Reading, ReadingBatch
@@ -1334,26 +1334,25 @@ def _carving_intervals(history: SonarHistory, model: CarvingModel,
     operations on the same numbers (so the same bits: the tests compare it with the method's
     estimates), without the fields of the estimates the grid does not read (half the cost)."""
     lo, hi = model.lo[slots], model.hi[slots]
-    x, y, r = history.x[slots], history.y[slots], history.r[slots]
-    middle = 0.5 * (lo + hi)  # the point's bearing as CarvingModel.estimates and arc_point
-    bearing = np.arctan2((y + r * np.sin(middle)) - y, (x + r * np.cos(middle)) - x)
-    half = 0.5 * (hi - lo)
+    xy = arc_point(history, slots, 0.5 * (lo + hi))  # the point, as CarvingModel.estimates
     weight = np.where(model.status[slots] == _ALIVE, 1.0, 0.0)  # no confidence: 1 if alive
-    dead = ~(weight > 0.0) | np.isnan(bearing) | np.isnan(half)
-    bearing = np.where(dead, 0.0, bearing)
-    half = np.where(dead, 0.0, half)
-    weight = np.where(dead, 0.0, weight)
-    return bearing - half, bearing + half, weight
+    return _interval_ends(np.arctan2(xy[:, 1] - history.y[slots], xy[:, 0] - history.x[slots]),
+                          0.5 * (hi - lo), weight)
 
 
 def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
     """``(lo, hi, weight)`` of arcs from their estimates: the point's bearing ± width/2, and
     the confidence (1 where NaN or not modelled; 0 where the arc is not alive)."""
-    bearing = np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x)
-    half = 0.5 * est.width
     weight = np.ones(len(x)) if est.confidence is None else np.where(
         np.isnan(est.confidence), 1.0, np.clip(est.confidence, 0.0, 1.0))
-    weight = np.where(est.alive, weight, 0.0)
+    return _interval_ends(np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x), 0.5 * est.width,
+                          np.where(est.alive, weight, 0.0))
+
+
+def _interval_ends(bearing: FloatArray, half: FloatArray,
+                   weight: FloatArray) -> tuple[FloatArray, ...]:
+    """``(bearing - half, bearing + half, weight)``, all zero for an arc that adds nothing (no
+    weight, or no point: NaN)."""
     dead = ~(weight > 0.0) | np.isnan(bearing) | np.isnan(half)
     bearing = np.where(dead, 0.0, bearing)
     half = np.where(dead, 0.0, half)
