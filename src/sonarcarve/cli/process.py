@@ -15,15 +15,11 @@ import sys
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Annotated, NamedTuple
+from typing import TYPE_CHECKING, Annotated, NamedTuple
 
 import typer
-from rich.progress import TaskID
-from rich.table import Table
-from rich.text import Text
 
 from sonarcarve.cli.app import app, console, err_console, progress, summary_table
-from sonarcarve.cli.grid import readings_extent
 from sonarcarve.cli.options import (
     FrameOpt,
     NoEchoOpt,
@@ -35,22 +31,23 @@ from sonarcarve.cli.options import (
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
-from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag, map_logs
+from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
-from sonarcarve.grids import CarvedGrid
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
-from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 from sonarcarve.io.map_csv import MapCsvSink, map_csv_sink
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
-from sonarcarve.io.rerun_out import write_rerun
 from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
 from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.runner import RunnerSpec, open_runner
+
+if TYPE_CHECKING:  # the grid, bag, Rerun and fleet writers are imported by their output only
+    from rich.table import Table
+
+    from sonarcarve.runner import RunnerSpec
 
 __all__ = ["EXIT_SOME_LOGS_FAILED", "OUTPUTS", "Output", "process"]
 
@@ -402,6 +399,10 @@ def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
 
 def _write_bag(job: _Job) -> list[tuple[str, str]]:
     """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
+    from sonarcarve.cli.grid import readings_extent
+    from sonarcarve.grids import CarvedGrid
+    from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
+
     if is_bag(job.source):
         log = job.bag.read(job.source)
         batch, (parent, child) = job.bag.readings(log), log.report.odometry_frames
@@ -424,6 +425,8 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
 
 def _write_rrd(job: _Job) -> list[tuple[str, str]]:
     """A Rerun recording of the run (no walls: a log has no ground truth)."""
+    from sonarcarve.io.rerun_out import write_rerun
+
     batch = _read_whole(job)
     job.warnings.extend(likely_mistakes(batch))
     global_map = write_rerun(job.out, batch, job.sonar())
@@ -451,6 +454,11 @@ def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodCon
            reading_filter: ReadingFilter | None, map_filter: MapFilter | None,
            bag: BagOptions, workers: int | None, scheduler: str | None) -> int:
     """Map every log into ``out_dir`` on the runner; print the summary; the exit code."""
+    from rich.progress import TaskID
+
+    from sonarcarve.fleet import map_logs
+    from sonarcarve.runner import RunnerSpec, open_runner
+
     count = workers if workers is not None else max(1, min(len(inputs), os.cpu_count() or 1))
     spec = RunnerSpec.from_env(count, scheduler)
     with open_runner(spec) as runner, progress(label_width=8, elapsed=True) as bar:
@@ -476,6 +484,9 @@ def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodCon
 
 def _fleet_table(method: str, rows: Sequence[FleetRow], spec: RunnerSpec) -> Table:
     """One line per log: its counts and map, or its error (summary.csv has every column)."""
+    from rich.table import Table
+    from rich.text import Text
+
     ok = sum(row.ok for row in rows)
     table = Table(title=f"sonarcarve process --method {method}: {ok} of {len(rows)} logs "
                         f"mapped on {spec.describe()}")

@@ -1,17 +1,26 @@
-"""Sonar processing methods, picked by name from a dispatch table (``--method`` in the CLI)."""
+"""Sonar processing methods, picked by name from a dispatch table (``--method`` in the CLI).
+
+Each method's module (and its numba kernels' dispatchers) is imported when the method is first
+made or its class first named (:func:`__getattr__`), so that ``sonarcarve process --method
+carve`` does not import evidence carving or ATM.
+"""
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from sonarcarve.errors import ConfigError
-from sonarcarve.methods.atm import AtmMethod
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod
-from sonarcarve.methods.carving import CarvingMethod, CarvingModel
-from sonarcarve.methods.centerline import CenterlineMethod
-from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.methods.config import MethodConfig
-from sonarcarve.methods.evidence import EvidenceMethod
+
+if TYPE_CHECKING:
+    from sonarcarve.methods.atm import AtmMethod
+    from sonarcarve.methods.carving import CarvingMethod, CarvingModel
+    from sonarcarve.methods.centerline import CenterlineMethod
+    from sonarcarve.methods.combined import CombinedMethod
+    from sonarcarve.methods.evidence import EvidenceMethod
 
 __all__ = [
     "METHODS",
@@ -30,22 +39,56 @@ __all__ = [
 ]
 
 
+#: Class name -> the module that defines it (imported on first use: :func:`__getattr__`).
+_LAZY = {
+    "AtmMethod": "sonarcarve.methods.atm",
+    "CarvingMethod": "sonarcarve.methods.carving",
+    "CarvingModel": "sonarcarve.methods.carving",
+    "CenterlineMethod": "sonarcarve.methods.centerline",
+    "CombinedMethod": "sonarcarve.methods.combined",
+    "EvidenceMethod": "sonarcarve.methods.evidence",
+}
+
+
+def __getattr__(name: str) -> object:
+    """The method classes, each imported with its module when first asked for."""
+    module = _LAZY.get(name)
+    if module is None:
+        msg = f"module {__name__!r} has no attribute {name!r}"
+        raise AttributeError(msg)
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
+
 def _centerline(config: MethodConfig) -> SonarMethod:
+    from sonarcarve.methods.centerline import CenterlineMethod
+
     return CenterlineMethod(config.history_size, config.beam_width)
 
 
 def _atm(config: MethodConfig) -> SonarMethod:
+    from sonarcarve.methods.atm import AtmMethod
+
     return AtmMethod(
         config.history_size, config.beam_width, config.min_transversal, config.range_resolution
     )
 
 
 def _carve(config: MethodConfig) -> SonarMethod:
+    from sonarcarve.methods.carving import CarvingMethod
+
     return CarvingMethod(config.history_size, config.beam_width, config.range_tolerance,
                          config.max_incidence)
 
 
 def _combined(config: MethodConfig) -> SonarMethod:
+    from sonarcarve.methods.combined import CombinedMethod
+
     return CombinedMethod(
         config.history_size, config.beam_width, config.range_tolerance,
         config.min_transversal, config.range_resolution, config.max_incidence,
@@ -53,6 +96,8 @@ def _combined(config: MethodConfig) -> SonarMethod:
 
 
 def _evidence(config: MethodConfig) -> SonarMethod:
+    from sonarcarve.methods.evidence import EvidenceMethod
+
     return EvidenceMethod(
         config.history_size, config.beam_width, config.range_tolerance, config.min_transversal,
         config.range_resolution, config.evidence_bins, config.carve_probability,
