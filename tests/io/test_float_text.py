@@ -167,3 +167,19 @@ def test_exponents_from_the_limit_on_are_left_to_float() -> None:
     decided = parse_floats(f"1e{_ZEROS}5,0.{_ZEROS[:99_990]}1e99995".encode(), 2)
     assert decided is not None  # exponents below the limit, leading zeros or not: read
     assert decided.tolist() == [1e5, 1e4]
+
+
+@pytest.mark.parametrize(("text", "count"), [("1,2\n3\n", 3), ("1,2\n3,4,5\n", 5), ("1\n2,3", 3),
+                                             ("1,2\n3", 3), ("1,2,3,4", 4)])
+def test_parse_floats_with_a_width_refuses_a_line_of_another_width(text: str,
+                                                                   count: int) -> None:
+    # The right count of fields, in lines of the wrong widths (the last without its break).
+    assert parse_floats(text.encode(), count) is not None  # without a width: read
+    assert parse_floats(text.encode(), count, width=2) is None
+
+
+@pytest.mark.parametrize("text", ["1,2\n3,4\n", "1,2\n3,4", "1,2\n"])
+def test_parse_floats_with_a_width_reads_lines_of_that_width(text: str) -> None:
+    values = parse_floats(text.encode(), text.count(",") * 2, width=2)
+    assert values is not None
+    assert values.tolist() == [float(v) for v in text.replace("\n", ",").split(",") if v]

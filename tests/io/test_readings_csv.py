@@ -357,15 +357,15 @@ def numbers_parsed(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
     parse_floats = float_text.parse_floats
     parse_numbers = readings_csv._parse_numbers
 
-    def compiled(raw: bytes, count: int) -> np.ndarray | None:
-        values = parse_floats(raw, count)
+    def compiled(raw: bytes, count: int, width: int = 0) -> np.ndarray | None:
+        values = parse_floats(raw, count, width)
         if values is not None:
             parsed["compiled"] += values.size
         return values
 
-    def bulk(raw: bytes, count: int) -> np.ndarray | None:
+    def bulk(raw: bytes, count: int, width: int = 0) -> np.ndarray | None:
         before = parsed["compiled"]
-        values = parse_numbers(raw, count)
+        values = parse_numbers(raw, count, width)
         if values is not None and parsed["compiled"] == before:
             parsed["numpy"] += values.size
         return values
@@ -475,7 +475,7 @@ def test_bulk_parsing_reads_numbers_as_float_does(
     from sonarcarve.io.readings_csv import _parse_numbers
 
     if not compiled:
-        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count: None)
+        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count, width=0: None)
     texts = _number_texts(np.random.default_rng(seed), 20_000)
     lines = [",".join(texts[k : k + 5]) for k in range(0, len(texts), 5)]
     values = _parse_numbers("\n".join(lines).encode() + b"\n", len(texts))
@@ -499,7 +499,7 @@ def test_bulk_parsers_leave_other_spellings_to_float(
     from sonarcarve.io.readings_csv import _parse_numbers
 
     if not compiled:
-        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count: None)
+        monkeypatch.setattr(float_text, "parse_floats", lambda raw, count, width=0: None)
     line = f"1,{text},3\n"
     fields = line[:-1].replace("\n", ",").count(",") + 1
     assert _parse_numbers(line.encode(), fields) is None

@@ -106,12 +106,14 @@ def floats_text(values: FloatArray) -> list[str]:
     return text.split("\n")[:-1] if text else []
 
 
-def parse_floats(text: bytes, count: int) -> FloatArray | None:
+def parse_floats(text: bytes, count: int, width: int = 0) -> FloatArray | None:
     """The ``count`` comma- or line-separated numbers of ``text``, exactly as ``float`` reads
     each; None if a field is not a plain decimal number (digits, one point, an exponent, a
     sign; or ``inf``), or is one this kernel does not decide (more than 19 significant digits,
     a 16-19 digit significand that is not the shortest text of its double, a subnormal or
-    extreme exponent: rare), or if there are not ``count`` fields.
+    extreme exponent: rare), or if there are not ``count`` fields; with ``width`` > 0, also
+    None if a line (``\n``-separated) has another number of fields than ``width`` (so that a
+    reader need not count the fields of each line first).
 
     How: a significand of at most 15 digits times a power of ten of at most 22 is computed
     exactly in binary64 (Clinger's fast path: both factors exact, one rounding). Otherwise an
@@ -123,8 +125,8 @@ def parse_floats(text: bytes, count: int) -> FloatArray | None:
     """
     values = np.empty(count, dtype=np.float64)
     scratch = np.empty(1, dtype=np.float64)
-    found = _parse(np.frombuffer(text, dtype=np.uint8), values, scratch, scratch.view(np.uint64),
-                   _POWERS_OF_TEN, _POWERS, _INVERSES)
+    found = _parse(np.frombuffer(text, dtype=np.uint8), values, width, scratch,
+                   scratch.view(np.uint64), _POWERS_OF_TEN, _POWERS, _INVERSES)
     return values if found == count else None
 
 
@@ -486,12 +488,15 @@ def _decimal(significand: np.uint64, exponent: int, digits: int, scratch: np.nda
 
 
 @njit(cache=True)
-def _parse(text: np.ndarray, values: np.ndarray, scratch: np.ndarray, scratch_bits: np.ndarray,
-           tens: np.ndarray, powers: np.ndarray, inverses: np.ndarray) -> int:
-    """Fields of ``text`` into ``values``; how many, or -1 at the first field not decided."""
+def _parse(text: np.ndarray, values: np.ndarray, width: int, scratch: np.ndarray,
+           scratch_bits: np.ndarray, tens: np.ndarray, powers: np.ndarray,
+           inverses: np.ndarray) -> int:
+    """Fields of ``text`` into ``values``; how many, or -1 at the first field not decided or
+    (``width`` > 0) at the end of a line of another number of fields."""
     n = text.shape[0]
     at = 0
     count = 0
+    line_fields = 0
     while at < n:
         if count == values.shape[0]:
             return -1
@@ -551,10 +556,17 @@ def _parse(text: np.ndarray, values: np.ndarray, scratch: np.ndarray, scratch_bi
                 return -1
         values[count] = -value if negative else value
         count += 1
+        line_fields += 1
         if at < n:
-            if text[at] != 44 and text[at] != 10:  # "," or a line break ends a field
+            if text[at] == 10:  # a line break ends the field and the line
+                if width > 0 and line_fields != width:
+                    return -1
+                line_fields = 0
+            elif text[at] != 44:  # "," ends a field
                 return -1
             at += 1
             if at == n and text[at - 1] == 44:
                 return -1  # a last, empty field
+        elif width > 0 and line_fields != width:
+            return -1  # the last line, without a final break
     return count

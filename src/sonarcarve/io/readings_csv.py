@@ -74,6 +74,7 @@ BLOCK_SIZE = 1 << 20
 #: and it is refused at once instead of being read whole into memory.
 MAX_LINE_BYTES = 1 << 20
 _BOM = b"\xef\xbb\xbf"
+_LINE_BREAK_BYTES = (ord("\r"), ord("\n"))
 _ROW_BYTES = 64  # a typical row's length, to size the csv module's batches like the blocks
 
 
@@ -194,11 +195,31 @@ def count_data_lines(path: str | Path, *, block_size: int = BLOCK_SIZE) -> int:
 
 @dataclass
 class _Block:
-    """Whole lines of the file, decoded; ``text`` ends with its last line's break, if any."""
+    """Whole lines of the file; :meth:`text` (decoded) ends with its last line's break, if any.
 
+    Decoded only when asked: a block of plain numbers is parsed from its bytes (which are then
+    ASCII, so valid UTF-8), and decoding a megabyte costs as much as a tenth of parsing it.
+    """
+
+    path: Path
     first_line: int  # line number of the first line (lines counted by "\n")
     raw: bytes
-    text: str
+    breaks: int  # line breaks ("\n") in ``raw``
+
+    @property
+    def lines(self) -> int:
+        """Lines in the block (the last one may lack its break)."""
+        return self.breaks + (0 if self.raw.endswith(b"\n") else 1)
+
+    def text(self) -> str:
+        """The block decoded; :class:`InputError` naming the line of a byte that is not UTF-8."""
+        try:
+            return self.raw.decode("utf-8")
+        except UnicodeDecodeError as err:
+            line = self.first_line + self.raw.count(b"\n", 0, err.start)
+            msg = (f"{self.path}: line {line}, cannot read as CSV: not UTF-8 text "
+                   f"(byte 0x{self.raw[err.start]:02x})")
+            raise InputError(msg) from None
 
 
 class _Blocks:
@@ -245,12 +266,15 @@ class _Blocks:
                 if content:
                     yield self._block(content)
                 return
-            cut = buffer.rfind(b"\n") + 1
-            content = buffer[:cut].rstrip(b"\r\n")
+            # Where the content before the last line break ends (blank lines stripped), found
+            # from the end: slicing and stripping the whole buffer would copy a megabyte.
+            content = buffer.rfind(b"\n") + 1
+            while content and buffer[content - 1] in _LINE_BREAK_BYTES:
+                content -= 1
             if not content:  # only blank lines so far: keep them for later
                 pending = buffer
                 continue
-            end = len(content) + (2 if buffer.startswith(b"\r\n", len(content)) else 1)
+            end = content + (2 if buffer.startswith(b"\r\n", content) else 1)
             pending = buffer[end:]
             yield self._block(buffer[:end])
 
@@ -283,22 +307,15 @@ class _Blocks:
         raise InputError(msg)
 
     def _block(self, raw: bytes) -> _Block:
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as err:
-            line = self.line + raw.count(b"\n", 0, err.start)
-            msg = (f"{self.path}: line {line}, cannot read as CSV: not UTF-8 text "
-                   f"(byte 0x{raw[err.start]:02x})")
-            raise InputError(msg) from None
-        block = _Block(self.line, raw, text)
-        self.line += raw.count(b"\n")
+        block = _Block(self.path, self.line, raw, raw.count(b"\n"))
+        self.line += block.breaks
         return block
 
 
 def _plain(block: _Block) -> str | None:
     """The block's lines joined by ``\\n`` (no final break) if it can be split on commas and
     line breaks alone, as :mod:`csv` would split it; None otherwise."""
-    text = block.text
+    text = block.text()
     if "\r" in text:
         text = text.replace("\r\n", "\n")
         if "\r" in text:
@@ -344,15 +361,20 @@ class _Reader:
         self._header(header.split(","))
         if body:
             raw = first.raw[first.raw.index(b"\n") + 1 :]
-            yield self._plain_batch(_Block(2, raw, ""), body)
+            rest = _Block(self.path, 2, raw, first.breaks - 1)
+            batch = self._numbers_batch(rest)
+            yield self._plain_batch(rest, body) if batch is None else batch
         del first, plain, body
         while (block := next(self.blocks, None)) is not None:
-            plain = _plain(block)
-            if plain is None:
-                yield from self._csv_batches(block, header=False)
-                return
-            batch = self._plain_batch(block, plain)
-            del block, plain
+            batch = self._numbers_batch(block)  # the common case: only numbers, all good
+            if batch is None:
+                plain = _plain(block)
+                if plain is None:
+                    yield from self._csv_batches(block, header=False)
+                    return
+                batch = self._plain_batch(block, plain)
+                del plain
+            del block
             yield batch
 
     def _header(self, names: list[str]) -> None:
@@ -365,13 +387,11 @@ class _Reader:
     # -- plain blocks: split in bulk --------------------------------------------------------
 
     def _plain_batch(self, block: _Block, text: str) -> ReadingBatch:
-        """The rows of a plain block (``text``: its lines joined by ``\\n``)."""
+        """The rows of a plain block (``text``: its lines joined by ``\\n``) that
+        :meth:`_numbers_batch` did not read: converted cell by cell, and the first bad line's
+        error raised."""
         per_line = _fields_per_line(block.raw)
         bad = np.flatnonzero(per_line != self.width)
-        if not bad.size:
-            fast = self._numbers_batch(block.raw, per_line.size, block.first_line)
-            if fast is not None:
-                return fast
         problem = None
         if bad.size:
             stop = int(bad[0])
@@ -383,18 +403,19 @@ class _Reader:
         first = block.first_line
         return self._batch(columns, lambda k: first + k, problem)
 
-    def _numbers_batch(self, raw: bytes, rows: int, first_line: int) -> ReadingBatch | None:
-        """The batch of ``rows`` lines of ``width`` fields each, parsed in bulk
-        (:func:`_parse_numbers`); None unless every field is a number and every row passes
-        validation (then the exact
-        path reads the block again, to raise its error about the first bad line)."""
-        values = _parse_numbers(raw, rows * self.width)
+    def _numbers_batch(self, block: _Block) -> ReadingBatch | None:
+        """The block's lines, each of ``width`` fields, parsed in bulk from its bytes
+        (:func:`_parse_numbers`); None unless every line has ``width`` fields, every field is a
+        number and every row passes validation (then the exact path reads the block again, to
+        raise its error about the first bad line)."""
+        rows = block.lines
+        values = _parse_numbers(block.raw, rows * self.width, self.width)
         if values is None:
             return None
         table = values.reshape(rows, self.width)
         arrays = {name: table[:, i].copy() for name, i in self.indices.items()}
         try:
-            batch = self._validated(arrays, first_line)
+            batch = self._validated(arrays, block.first_line)
         except ReadingsError:
             return None
         if len(batch):
@@ -436,7 +457,7 @@ class _Reader:
         """The physical lines from ``block`` on, as the csv module wants them."""
         current: _Block | None = block
         while current is not None:
-            yield from io.StringIO(current.text, newline="")
+            yield from io.StringIO(current.text(), newline="")
             current = next(self.blocks, None)
 
     def _rows_batch(self, rows: list[list[str]], lines: list[int],
@@ -531,10 +552,11 @@ def _floats(cells: Sequence[str], *, optional: bool) -> FloatArray:
 _NUMBER_BYTES = b"0123456789+-.eE,\n"
 
 
-def _parse_numbers(raw: bytes, count: int) -> FloatArray | None:
+def _parse_numbers(raw: bytes, count: int, width: int = 0) -> FloatArray | None:
     """The ``count`` comma- or line-separated fields of ``raw`` as floats, in order, exactly
     as ``float`` reads each; None if a byte is not one of :data:`_NUMBER_BYTES` (``inf``
-    aside), or a field is not a number, or there are not ``count`` fields.
+    aside), or a field is not a number, or there are not ``count`` fields, or (``width`` > 0)
+    a line has another number of fields than ``width``.
 
     Two parsers, both exact: the compiled one of :func:`~sonarcarve.io.float_text.parse_floats`
     (about twice numpy's rate on repr-written fields), which decides every field that
@@ -546,14 +568,18 @@ def _parse_numbers(raw: bytes, count: int) -> FloatArray | None:
     """
     if b"\r" in raw:
         raw = raw.replace(b"\r\n", b"\n")  # a lone carriage return is refused below
+    from sonarcarve.io.float_text import parse_floats  # numba: only once a log is read
+
+    # The compiled parser reads a subset of those bytes' grammar (and checks the lines'
+    # widths): what it decides needs no other test.
+    values = parse_floats(raw, count, width)
+    if values is not None:
+        return values
     plain = raw.replace(b"inf", b"") if b"i" in raw else raw
     if plain.translate(None, _NUMBER_BYTES):
         return None
-    from sonarcarve.io.float_text import parse_floats  # numba: only once a log is read
-
-    values = parse_floats(raw, count)
-    if values is not None:
-        return values
+    if width > 0 and np.any(_fields_per_line(raw) != width):
+        return None
     try:
         with warnings.catch_warnings():
             # Older numpy warns and returns what it read before bad data; newer numpy raises.
