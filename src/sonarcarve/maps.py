@@ -24,7 +24,7 @@ from typing import Protocol, Self
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.typing import FloatArray, IntArray
+from sonarcarve.typing import FloatArray, Int8Array, IntArray
 
 __all__ = [
     "CallbackSink",
@@ -238,7 +238,16 @@ class CountingSink:
 
     def commit(self, points: GlobalMap) -> None:
         """Count ``points``."""
-        if len(points):
-            self.points += len(points)
-            self.by_source += np.bincount(points.source.astype(np.int64),
-                                          minlength=len(PointSource))[: len(PointSource)]
+        self.count(points.source)
+
+    def count(self, source: Int8Array) -> None:
+        """Count points of these :class:`PointSource` codes (what :meth:`commit` counts, for a
+        method that need not make the points)."""
+        if len(source):
+            self.points += len(source)
+            self.by_source += np.bincount(source.astype(np.int64),
+                                          minlength=_SOURCES)[:_SOURCES]
+
+
+#: Number of :class:`PointSource` codes (``len`` of an enum goes through its metaclass: slow).
+_SOURCES = len(PointSource)

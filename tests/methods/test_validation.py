@@ -147,6 +147,105 @@ def test_add_many_does_not_check_reading_by_reading(monkeypatch: pytest.MonkeyPa
     assert method.readings == 3
 
 
+# The cheap check add_many runs first (methods.base._plainly_valid) may only ever say "valid" to
+# a batch ReadingBatch.validate passes: anything else goes to validate, whose error is raised.
+_EDGES = {
+    "t": [math.nan, math.inf, -math.inf, 1e12, 1e12 + 1e-3, -1e12, -2e12],
+    "x": [math.nan, math.inf, 1e6, -1e6, 1e6 * (1 + 1e-15), -2e6],
+    "y": [math.nan, -math.inf, 1e6, -1e6 - 1.0],
+    "theta": [math.nan, math.inf, 1e6, -1e6, 1e6 + 1.0],
+    "range": [math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 5e-324, 1e4, 1e4 + 1e-9],
+    "beam_width": [math.nan, 0.0, -0.0, 5e-324, math.pi, math.nextafter(math.pi, 0.0), 4.0,
+                   math.inf, -math.inf],
+    "max_range": [math.nan, math.inf, 0.0, -1.0, 1.0, 1e4, 1e4 + 1e-9, 5e-324],
+    "sensor": [-1, 0, 2**31 - 1, 2**31, 2**62],
+}
+
+
+def _validates(batch: ReadingBatch, previous_t: float) -> bool:
+    try:
+        batch.validate(first_id=0, previous_t=previous_t)
+    except ReadingsError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_cheap_check_says_valid_only_when_validate_passes(seed: int) -> None:
+    from sonarcarve.methods.base import _plainly_valid
+
+    rng = np.random.default_rng(seed)
+    agreed = 0
+    for _ in range(3_000):
+        n = int(rng.integers(1, 6))
+        columns: dict[str, np.ndarray] = {
+            "t": np.sort(rng.uniform(0.0, 10.0, n)), "x": rng.normal(0, 3, n),
+            "y": rng.normal(0, 3, n), "theta": rng.uniform(-7, 7, n),
+            "range": rng.uniform(0.1, 5.0, n),
+            "beam_width": np.where(rng.random(n) < 0.5, math.nan, rng.uniform(0.1, 1.0, n)),
+            "max_range": np.where(rng.random(n) < 0.5, math.nan, rng.uniform(5.0, 9.0, n)),
+            "sensor": rng.integers(0, 16, n).astype(np.int64),
+        }
+        for _ in range(int(rng.integers(0, 3))):  # zero, one or two cells at an edge
+            name = str(rng.choice(list(_EDGES)))
+            columns[name][int(rng.integers(0, n))] = rng.choice(_EDGES[name])
+        if rng.random() < 0.2 and n > 1:  # time going backwards inside the batch
+            columns["t"][1:] = columns["t"][:-1] - rng.choice([0.0, 1e-9, 1.0])
+        batch = ReadingBatch(**columns)
+        previous_t = float(rng.choice([-math.inf, 0.0, columns["t"][0], 20.0]))
+        valid = _validates(batch, previous_t)
+        cheap = _plainly_valid(batch, previous_t)
+        assert valid or not cheap, (columns, previous_t)
+        agreed += cheap == valid
+    assert agreed > 2_500  # it is not "never valid": most batches take the cheap way
+
+
+def test_the_cheap_check_leaves_other_array_types_and_no_echo_rows_to_validate() -> None:
+    from sonarcarve.methods.base import _plainly_valid
+
+    good = _raw_batch()
+    assert _plainly_valid(good, -math.inf)
+    strided = ReadingBatch(**{name: np.repeat(getattr(good, name), 2)[::2]
+                              for name in ("t", "sensor", "x", "y", "theta", "range",
+                                           "beam_width", "max_range")})
+    assert not _plainly_valid(strided, -math.inf)  # not contiguous: no new kernel compiled
+    assert _validates(strided, -math.inf)
+    as_float = _raw_batch()
+    object.__setattr__(as_float, "sensor", as_float.sensor.astype(float))
+    assert not _plainly_valid(as_float, -math.inf)
+    no_echo = _raw_batch(range=[1.0, math.inf, 2.0])
+    object.__setattr__(no_echo, "max_range", np.array([6.0, 6.0, 6.0]))
+    assert not _plainly_valid(no_echo, -math.inf)
+    assert _validates(no_echo, -math.inf)
+    short = _raw_batch()
+    object.__setattr__(short, "x", short.x[:2])
+    assert not _plainly_valid(short, -math.inf)
+
+
+def test_a_counting_sink_counts_what_the_points_would_have_given() -> None:
+    from sonarcarve.maps import CountingSink
+
+    stream = ReadingBatch.from_readings(
+        [GOOD._replace(t=1.0 + 0.01 * k, sensor=k % 8, theta=0.4 * (k % 8),
+                       range=1.0 + 0.1 * (k % 5), x=0.01 * k) for k in range(600)])
+
+    class Subclass(CountingSink):  # not the exact type: made the points, as before
+        pass
+
+    counted = []
+    for sink in (CountingSink(), Subclass()):
+        method = make_method("combined", MethodConfig(history_size=50))
+        method.set_global_sink(sink)
+        method.add_many(stream)
+        method.finish()
+        counted.append((sink.points, sink.by_source.tolist(), method.committed_points))
+    memory = make_method("combined", MethodConfig(history_size=50))
+    memory.add_many(stream)
+    points = memory.finish()
+    by_source = np.bincount(points.source.astype(np.int64), minlength=3)[:3].tolist()
+    assert counted[0] == counted[1] == (len(points), by_source, len(points))
+
+
 # -- parameters --------------------------------------------------------------------------------
 
 BAD_PARAMETERS = [
