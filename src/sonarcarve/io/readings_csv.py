@@ -268,13 +268,13 @@ class _Blocks:
                 return
             # Where the content before the last line break ends (blank lines stripped), found
             # from the end: slicing and stripping the whole buffer would copy a megabyte.
-            content = buffer.rfind(b"\n") + 1
-            while content and buffer[content - 1] in _LINE_BREAK_BYTES:
-                content -= 1
-            if not content:  # only blank lines so far: keep them for later
+            stop = buffer.rfind(b"\n") + 1
+            while stop and buffer[stop - 1] in _LINE_BREAK_BYTES:
+                stop -= 1
+            if not stop:  # only blank lines so far: keep them for later
                 pending = buffer
                 continue
-            end = content + (2 if buffer.startswith(b"\r\n", content) else 1)
+            end = stop + (2 if buffer.startswith(b"\r\n", stop) else 1)
             pending = buffer[end:]
             yield self._block(buffer[:end])
 
