@@ -437,3 +437,58 @@ def test_from_weights_takes_the_fields_default_maturity_time() -> None:
         assert (model.intercept, model.fresh) == (-1.0, 2.5)
         np.testing.assert_array_equal(model.weights(), weights)
     assert ConfidenceModel.from_weights(-1.0, weights, 2.5, 0.75).maturity_time == 0.75
+
+
+def _ring_readings(n: int, seed: int) -> list[Reading]:
+    # Eight sensors on a robot stepping along x, random ranges: supports, carves, crossings.
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(0.01, 0.05, n))
+    sensor = np.arange(n) % 8
+    return [Reading(t=float(t[k]), sensor=int(sensor[k]), x=0.01 * k, y=0.0,
+                    theta=2 * math.pi * int(sensor[k]) / 8,
+                    range=float(rng.uniform(0.5, 4.0)), beam_width=PHI) for k in range(n)]
+
+
+def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> None:
+    # The compiled per-row passes must give exactly what the elementwise numpy formulas of
+    # the features, the Table I/source/fate codes and the logistic model give (the oracle).
+    method = make_method("evidence", MethodConfig(history_size=120))
+    assert isinstance(method, EvidenceMethod)
+    post = [r._replace(t=20.0 + r.t) for r in _post_ring(60)]  # crossings
+    method.add_many(ReadingBatch.from_readings(_ring_readings(300, 11) + post))
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    h = method.history
+    slots = h.slots()
+    raw = model.raw(slots)
+    has, _, width, _, support, is_atm, crossings, free, runs, _ = raw
+    maturity = method.maturity(slots)
+    expected = np.column_stack([
+        np.minimum(support, 3.0), np.minimum(model.viewpoints[slots], 3.0),
+        np.minimum(crossings, 3.0), free,
+        np.minimum(model.looked[slots] / model.threshold, 3.0),
+        np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
+        (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
+        np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0)])
+    features = method.features(slots, raw)
+    np.testing.assert_array_equal(features, expected)
+    assert all(len(np.unique(column)) > 1 for column in features.T)  # no column constant
+    cm = method.confidence_model
+    fitted = np.full(len(slots), cm.intercept)
+    for column, weight in zip(expected.T, cm.weights(), strict=True):
+        fitted = fitted + column * weight
+    logistic = 1.0 / (1.0 + np.exp(-(cm.fresh + maturity * (fitted - cm.fresh))))
+    np.testing.assert_array_equal(cm.confidence(features, maturity), logistic)
+    est = model.estimates(slots)
+    processed = model.touched[slots] | (model.counts[slots] > 0) | (model.status[slots] != 0)
+    source = np.where(is_atm, 2, np.where(width < h.beam_width[slots] - 1e-12, 1, 0))
+    np.testing.assert_array_equal(est.processed, processed)
+    np.testing.assert_array_equal(est.source, source)
+    np.testing.assert_array_equal(est.fate, np.where(has, 0, 2))
+    assert set(source.tolist()) == {0, 1, 2}
+
+
+def test_confidence_refuses_features_of_the_wrong_width() -> None:
+    model = ConfidenceModel()
+    with pytest.raises(ValueError, match="features must have shape"):
+        model.confidence(np.zeros((3, len(model.weights()) - 1)))

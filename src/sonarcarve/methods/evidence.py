@@ -46,9 +46,11 @@ from numbers import Real
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import ConfigError
+from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EvidenceParams,
@@ -71,7 +73,7 @@ from sonarcarve.methods.config import (
     MethodConfig,
 )
 from sonarcarve.readings import Reading
-from sonarcarve.typing import SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
            "SensorModel"]
@@ -243,11 +245,89 @@ class ConfidenceModel:
         # depends on how many rows there are, so a point's confidence would change in its last
         # digits with the size of the block it was committed in (and the map with when
         # measures() was called). Elementwise products and sums are the same for any length.
-        fitted = np.full(len(features), self.intercept)
-        for column, weight in zip(np.asarray(features).T, self.weights(), strict=True):
-            fitted = fitted + column * weight
-        logit = self.fresh + maturity * (fitted - self.fresh)
+        # (_logits adds them the same way, a compiled row at a time: the same operations in the
+        # same order as numpy's columns, without a numpy call per feature.)
+        table = np.ascontiguousarray(features, dtype=np.float64)
+        weights = self.weights()
+        if table.ndim != 2 or table.shape[1] != len(weights):
+            msg = f"features must have shape (n, {len(weights)}), got {table.shape}"
+            raise ValueError(msg)
+        n = len(table)
+        ages = np.ascontiguousarray(np.broadcast_to(np.asarray(maturity, dtype=np.float64), (n,)))
+        logit = np.empty(n)
+        _logits(table, weights, self.intercept, self.fresh, ages, logit)
         return np.asarray(1.0 / (1.0 + np.exp(-logit)))
+
+
+@compiled
+def _logits(features: FloatArray, weights: FloatArray, intercept: float, fresh: float,
+            maturity: FloatArray, out: FloatArray) -> None:
+    """``out[q] = fresh + m_q (intercept + Σ_f w_f x_qf - fresh)`` (:class:`ConfidenceModel`),
+    the sum taken in feature order: each row gets exactly the operations a numpy column at a
+    time gives it, whatever the number of rows."""
+    for q in range(features.shape[0]):
+        fitted = intercept
+        for f in range(weights.shape[0]):
+            fitted = fitted + features[q, f] * weights[f]
+        out[q] = fresh + maturity[q] * (fitted - fresh)
+
+
+@compiled_inline
+def _at_most(value: float, cap: float) -> float:
+    """``np.minimum(value, cap)`` of one number (NaN stays NaN)."""
+    return cap if value > cap else value
+
+
+@compiled
+def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
+                   crossings: FloatArray, free: FloatArray, runs: FloatArray, width: FloatArray,
+                   maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
+                   occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
+                   others: FloatArray, through: FloatArray, threshold: float) -> None:
+    """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
+    ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
+    :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
+    two dozen numpy calls per block of arcs; each value is the same elementwise operation."""
+    for q in range(slots.shape[0]):
+        s = slots[q]
+        out[q, 0] = _at_most(support[q], 3.0)
+        out[q, 1] = _at_most(viewpoints[s], 3.0)
+        out[q, 2] = _at_most(crossings[q], 3.0)
+        out[q, 3] = free[q]
+        out[q, 4] = _at_most(looked[s] / threshold, 3.0)
+        extra_runs = runs[q] - 1.0
+        out[q, 5] = _at_most(0.0 if extra_runs < 0.0 else extra_runs, 3.0)
+        out[q, 6] = occluded[s]
+        out[q, 7] = (1.0 if support[q] <= 0.0 else 0.0) * maturity[q]  # unheard
+        out[q, 8] = r[s]
+        out[q, 9] = width[q] / beam_width[s]
+        out[q, 10] = _at_most(others[s], 1.0)
+        out[q, 11] = _at_most(through[s], 3.0)
+
+
+_ATM = int(PointSource.ATM)
+_CARVED = int(PointSource.CARVED)
+_CENTERLINE = int(PointSource.CENTERLINE)
+
+
+@compiled
+def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: FloatArray,
+                beam_width: FloatArray, touched: BoolArray, counts: npt.NDArray[np.int32],
+                status: Int8Array, processed: BoolArray, source: Int8Array,
+                fate: Int8Array) -> None:
+    """Per slot of :meth:`EvidenceModel.estimates`: processed (Table I: evidence, a crossing or
+    carved), the point's source (ATM median, carved where the kept run is narrower than the
+    beam, else the centreline) and its fate (alive or fully carved), in one compiled pass."""
+    for q in range(slots.shape[0]):
+        s = slots[q]
+        processed[q] = touched[s] or counts[s] > 0 or status[s] != EVIDENCE_ALIVE
+        if is_atm[q]:
+            source[q] = _ATM
+        elif width[q] < beam_width[s] - 1e-12:
+            source[q] = _CARVED
+        else:
+            source[q] = _CENTERLINE
+        fate[q] = UNCHANGED if has[q] else FULLY_CARVED
 
 
 class EvidenceModel(ArcModel):
@@ -343,7 +423,10 @@ class EvidenceModel(ArcModel):
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
         self.passed = np.zeros((max(1, (history.capacity - 1) * bins), 6))
-        self.trans = np.zeros(2 * bins + 1)
+        # Scratch of evidence_add: support per bin, the sines of the bin edges and the beam
+        # width they were computed for (NaN: none yet), the bin guess's scale.
+        self.trans = np.zeros(2 * bins + 3)
+        self.trans[2 * bins + 1] = np.nan
         # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
         # when an arc's crossings do not fit (they wait in ``spill``, room for every crossing
         # one new arc can make: 4 (capacity - 1) rows of (row, bearing) float64, 0.64 MB at
@@ -460,15 +543,16 @@ class EvidenceModel(ArcModel):
         """:meth:`estimates` from an already computed :meth:`raw`."""
         has, bearing, width, max_error, _, is_atm, _, _, _, _ = raw
         h = self.history
-        processed = self.touched[slots] | (self.counts[slots] > 0) | (
-            self.status[slots] != EVIDENCE_ALIVE)
-        source = np.where(is_atm, np.int8(PointSource.ATM), np.where(
-            width < h.beam_width[slots] - 1e-12, np.int8(PointSource.CARVED),
-            np.int8(PointSource.CENTERLINE)))
+        n = len(slots)
+        processed = np.empty(n, dtype=np.bool_)
+        source = np.empty(n, dtype=np.int8)
+        fate = np.empty(n, dtype=np.int8)
+        _fill_codes(np.ascontiguousarray(slots, dtype=np.int64), has, is_atm, width,
+                    h.beam_width, self.touched, self.counts, self.status, processed, source,
+                    fate)
         return Estimates(
             alive=has, processed=processed, xy=arc_point(h, slots, bearing), width=width,
-            max_error=max_error, source=source.astype(np.int8),
-            fate=np.where(has, np.int8(UNCHANGED), np.int8(FULLY_CARVED)).astype(np.int8),
+            max_error=max_error, source=source, fate=fate,
         )
 
     def counters(self) -> dict[str, int]:
@@ -551,30 +635,23 @@ class EvidenceMethod(SonarMethod):
                               place_located=self.with_located_placement,
                               sensor=self.sensor),)
 
-    def features(self, slots: SlotArray,
-                 raw: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
-        """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`).
-        """
+    def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
+                 maturity: np.ndarray | None = None) -> np.ndarray:
+        """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`);
+        ``raw`` (:meth:`EvidenceModel.raw`) and ``maturity`` (:meth:`maturity`) of the same
+        slots, when the caller has them already."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
+        maturity = self.maturity(slots) if maturity is None else maturity
         _, _, width, _, support, _, crossings, free, runs, _ = raw
         h = self.history
-        unheard = (support <= 0.0) * self.maturity(slots)
-        return np.column_stack([
-            np.minimum(support, 3.0),
-            np.minimum(model.viewpoints[slots], 3.0),
-            np.minimum(crossings, 3.0),
-            free,
-            np.minimum(model.looked[slots] / model.threshold, 3.0),
-            np.minimum(np.maximum(runs - 1.0, 0.0), 3.0),
-            model.occluded[slots],
-            unheard,
-            h.r[slots],
-            width / h.beam_width[slots],
-            np.minimum(model.others[slots], 1.0),
-            np.minimum(model.through[slots], 3.0),
-        ])
+        out = np.empty((len(slots), len(CONFIDENCE_FEATURES)))
+        _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
+                       free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
+                       model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
+                       model.others, model.through, model.threshold)
+        return out
 
     def maturity(self, slots: SlotArray) -> np.ndarray:
         """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,).
@@ -598,8 +675,9 @@ class EvidenceMethod(SonarMethod):
         raw = model.raw(slots)
         has = raw[0]
         base = model.estimates_from_raw(slots, raw)
-        confidence = self.confidence_model.confidence(self.features(slots, raw),
-                                                      self.maturity(slots))
+        maturity = self.maturity(slots)
+        confidence = self.confidence_model.confidence(self.features(slots, raw, maturity),
+                                                      maturity)
         alive = has & (confidence >= self.config.min_confidence)
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,
