@@ -161,8 +161,12 @@ class SonarHistory:
         start = first % self.storage_size
         head = min(n, self.storage_size - start)  # rows up to the end of the storage, then 0..
         half = 0.5 * beam_width
-        for rows, part in ((slice(start, start + head), slice(0, head)),
-                           (slice(0, n - head), slice(head, n))):
+        # Rows up to the end of the storage, then (if the block wraps) from its start; an
+        # empty second part is skipped: ten assignments of nothing cost ~5 µs a block.
+        parts = [(slice(start, start + head), slice(0, head))]
+        if head < n:
+            parts.append((slice(0, n - head), slice(head, n)))
+        for rows, part in parts:
             self.x[rows] = x[part]
             self.y[rows] = y[part]
             self.r[rows] = r[part]
