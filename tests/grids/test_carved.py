@@ -313,6 +313,79 @@ def test_a_freed_cell_forgets_the_bearings_it_was_heard_from() -> None:
     assert grid.log_odds[i, j] - before == pytest.approx(faded, abs=1e-5)
 
 
+
+L_MAX = math.log(0.97 / 0.03)
+L_HEARD = math.log(0.2 / 0.8)
+
+
+def _face_and_cell_behind(params: CarvedGridParams, behind: tuple[float, float]) -> CarvedGrid:
+    """A box's face at x = 2 heard head-on from (0, 0), and the cell ``behind`` heard only
+    from the north (bearing -90°, another face of the box), every band final at the clamp."""
+    grid = CarvedGrid(0.1, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)),
+                      params=params)
+    north = (behind[0], behind[1] + 1.0)
+    grid.add_many(ReadingBatch.from_readings(
+        [*(_reading(0.1 * k, 0.0, 2.0) for k in range(30)),
+         *(_reading(5.0 + 0.1 * k, -math.pi / 2, 1.0, *north) for k in range(30)),
+         _reading(9.0, math.pi, 0.5, x=-0.3, y=1.3)]))  # far off: the last arc goes final
+    return grid
+
+
+def test_a_beam_through_a_vanished_face_clears_what_stood_behind_it() -> None:
+    # The box is gone: three beams from (0, 0) along x hear the far wall at 4 m. The face's
+    # cell (2.05, 0.05) would have answered them (heard from their bearing): γ logit(0.2) a
+    # beam. The cell (2.45, 0.05) behind it was heard only from the north: from the west it is
+    # inaudible, so alone it gets ROS's fade at 2.45 m (f = 0.0082, nothing). Seen through the
+    # face (0.4 m in front of it on the same ray, within see_through), it gets what the face
+    # gets: 3.476 - 3 x 0.989 x 1.386 = -0.64, cleared. Off (0): it stays at the clamp.
+    face, behind = (2.05, 0.05), (2.45, 0.05)
+    for depth, cleared in ((0.5, True), (0.0, False), (0.3, False)):
+        grid = _face_and_cell_behind(CarvedGridParams(see_through=depth), behind)
+        fi, fj = _cell(grid, *face)
+        bi, bj = _cell(grid, *behind)
+        assert grid.log_odds[fi, fj] == pytest.approx(L_MAX, abs=1e-5)
+        assert grid.log_odds[bi, bj] == pytest.approx(L_MAX, abs=1e-5)
+        grid.add_many(ReadingBatch.from_readings(_reading(20.0 + k, 0.0, 4.0) for k in range(3)))
+        d = math.hypot(*behind)
+        gamma = 1.0 - (math.atan2(behind[1], behind[0]) / (PHI / 2)) ** 2
+        fade = 0.5 * (1.0 - math.tanh(2.0 * (d - 1.2))) * math.log(0.4 / 0.6)
+        expected = L_MAX + 3 * gamma * (L_HEARD if cleared else fade)
+        assert grid.log_odds[bi, bj] == pytest.approx(expected, abs=1e-4)
+        assert (trinary(grid)[bi, bj] == OCCUPIED) is not cleared
+        assert trinary(grid)[fi, fj] != OCCUPIED  # the face itself, cleared in every case
+
+
+def test_a_beam_that_would_not_have_heard_the_face_clears_nothing_behind_it() -> None:
+    # The box still there; silent beams from the south-west meet the face at 46° (it was
+    # heard from bearings within 11° of 0: three sectors or more away, inaudible) and pass
+    # through its cell (2.05, 0.05) to a cell 0.4 m behind it on the same ray: a smooth face
+    # would not have answered them, so they say nothing about the face, nor about what is
+    # behind it: each gives the cell ROS's fade at 2.0 m only.
+    origin, face, behind = (0.95, -1.1), (2.05, 0.05), (2.35, 0.35)
+    grid = _face_and_cell_behind(CarvedGridParams(see_through=math.inf), behind)
+    bi, bj = _cell(grid, *behind)
+    assert grid.log_odds[bi, bj] == pytest.approx(L_MAX, abs=1e-5)
+    theta = math.atan2(face[1] - origin[1], face[0] - origin[0])
+    grid.add_many(ReadingBatch.from_readings(
+        _silent(20.0 + k, theta, *origin, max_range=4.0) for k in range(10)))
+    d_face, d_behind = math.dist(origin, face), math.dist(origin, behind)
+    off = math.atan2(behind[1] - origin[1], behind[0] - origin[0]) - theta
+    gamma = 1.0 - (off / (PHI / 2)) ** 2
+    fade = 0.5 * (1.0 - math.tanh(2.0 * (d_behind - 1.2))) * math.log(0.4 / 0.6)  # -0.015
+    assert grid.log_odds[bi, bj] == pytest.approx(L_MAX + 10 * gamma * fade, abs=1e-4)
+    assert trinary(grid)[bi, bj] == OCCUPIED
+    # Had the face been audible, these beams would have cleared the cell (10 x logit(0.2)):
+    # it is on their ray, 0.4 m behind the face's cell (what _free_behind asks of a cell in
+    # front: a cell nearer, its centre within half a cell's diagonal of the ray).
+    assert 0.1 <= d_behind - d_face <= 0.5 and abs(off) * d_face <= 0.7072 * 0.1
+
+
+@pytest.mark.parametrize("bad", [-0.1, math.nan, True, "0.5"])
+def test_see_through_must_be_a_number_of_metres(bad: object) -> None:
+    with pytest.raises(GridError, match="see_through"):
+        CarvedGridParams(see_through=bad)  # type: ignore[arg-type]
+
+
 # -- fresh arcs: each sensor's newest echo marks at once ----------------------------------------
 
 #: A row of cell centres (y = 0.025 at H = 0.05) and a column (x = 1.825) on it.

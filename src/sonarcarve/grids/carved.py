@@ -137,6 +137,7 @@ from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "DEFAULT_MAX_INCIDENCE",
+    "DEFAULT_SEE_THROUGH",
     "DEFAULT_SPREAD_LENGTH",
     "FREE",
     "HEARD_BINS",
@@ -167,6 +168,9 @@ DEFAULT_SPREAD_LENGTH = 0.2
 #: echoes to glancing free space, and the grid's recall with them (0.20 at 0.05 m against 0.53).
 DEFAULT_MAX_INCIDENCE = math.radians(30.0)
 
+#: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
+#: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
+DEFAULT_SEE_THROUGH = 0.5
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
 #: One bit a sector in each cell's word: more sectors than bits would shift out of it silently.
@@ -184,6 +188,9 @@ if not 0 < HEARD_BINS <= np.iinfo(_HEARD_DTYPE).bits:
 HEARD_NEAR = 1
 
 _TWO_PI = 2.0 * math.pi
+#: Cells believed occupied one beam's free space can hold back for :func:`_free_behind`; the
+#: rest get the plain update.
+_HELD = 512
 _ALIVE = int(ArcFate.ALIVE)
 
 
@@ -333,6 +340,12 @@ class CarvedGridParams:
         2 s is three cycles of such a ring at 40 ms a sonar (0.64 s, the simulator's Scout2),
         so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
         of a slower ring.
+    see_through : float
+        Metres >= 0 (``inf``: no limit; 0: off); :data:`DEFAULT_SEE_THROUGH`. A beam that
+        passes a cell it would have heard (surface-aware audibility) and hears nothing there
+        clears the believed-occupied cells behind that cell on its ray, up to this far behind
+        it, as if it would have heard them too (module docstring, "seen through"). Needs
+        ``surface_aware``.
 
     Raises
     ------
@@ -355,6 +368,7 @@ class CarvedGridParams:
     band_profile: float = 0.0
     fresh_arcs: bool = True
     fresh_seconds: float = 2.0
+    see_through: float = DEFAULT_SEE_THROUGH
 
     def __post_init__(self) -> None:
         _check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -381,6 +395,11 @@ class CarvedGridParams:
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
+        st = self.see_through
+        if isinstance(st, bool) or not isinstance(st, int | float) or not st >= 0.0:
+            msg = (f"carved grid: see_through must be a number >= 0 metres (inf: no limit), "
+                   f"got {st!r}")
+            raise GridError(msg)
         fs = self.fresh_seconds
         if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
                 math.isfinite(fs) and fs > 0.0):
@@ -414,6 +433,7 @@ class _Model(NamedTuple):
     aware: bool
     profile: float  # band_profile
     l_occupied: float  # logit(occupied_threshold)
+    through: float  # see_through, metres (0: off)
 
 
 @compiled_inline
@@ -640,7 +660,8 @@ def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x:
 
 @compiled_inline
 def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
-                x: float, y: float, theta: float, r: float, half: float) -> None:
+                x: float, y: float, theta: float, r: float, half: float,
+                held: FloatArray) -> None:
     """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
     occupied (``base <= 0``), and where ``aware`` on the others
@@ -660,6 +681,7 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
     i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
     t1, t2 = theta - half, theta + half
     u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
+    n_held = 0
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         # Only the row's stretch inside the sector (plus a cell each side; the exact test is
@@ -684,6 +706,16 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
                 miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
             if m.aware and cell > 0.0:
                 audible = _audibility(int(heard[i, j]), _heard_bin(theta + a))
+                if m.through > 0.0 and n_held < held.shape[0]:
+                    held[n_held, 0] = i
+                    held[n_held, 1] = j
+                    held[n_held, 2] = math.sqrt(d2)
+                    held[n_held, 3] = a
+                    held[n_held, 4] = w
+                    held[n_held, 5] = audible
+                    held[n_held, 6] = miss
+                    n_held += 1
+                    continue
                 miss = audible * m.l_heard + (1.0 - audible) * miss
             base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
             # Freed: the surface it was heard from is believed gone, so are its bearings (else
@@ -696,6 +728,33 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
             # as it does when the bits are read.
             if cell > 0.0 and base[i, j] <= 0.0:
                 heard[i, j] = 0
+    if n_held:
+        _free_behind(base, heard, m, held, n_held)
+
+
+@compiled_inline
+def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                 held: FloatArray, n: int) -> None:
+    """The free space of the cells believed occupied that one beam passed (``held``: row,
+    column, distance, bearing off the axis, profile, audibility, faded miss), each as audible
+    as the most audible such cell in front of it on its ray (nearer by at least a cell and by
+    at most ``through``, its ray within half a cell diagonal of that cell's centre): a surface
+    the beam would have heard and did not is gone, and so is what stood behind it."""
+    h = m.h
+    for p in range(n):
+        audible = held[p, 5]
+        d = held[p, 2]
+        for q in range(n):
+            dq = held[q, 2]
+            if (held[q, 5] > audible and dq <= d - h and d - dq <= m.through
+                    and abs(held[p, 3] - held[q, 3]) * dq <= 0.7072 * h):
+                audible = held[q, 5]
+        i, j = int(held[p, 0]), int(held[p, 1])
+        cell = base[i, j]
+        miss = audible * m.l_heard + (1.0 - audible) * held[p, 6]
+        base[i, j] = min(m.l_max, max(m.l_min, cell + held[p, 4] * miss))
+        if cell > 0.0 and base[i, j] <= 0.0:
+            heard[i, j] = 0
 
 
 @compiled
@@ -708,11 +767,12 @@ def _fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m
     final band of every arc it pushed out of the history (``finals.seq + capacity <= seq``)."""
     p = 0
     nf = finals.seq.shape[0]
+    held = np.empty((_HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
     for k in range(x.shape[0]):
         while p < nf and finals.seq[p] + capacity <= seqs[k]:
             _draw_final(base, heard, m, finals, p)
             p += 1
-        _free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k])
+        _free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
     while p < nf:
         _draw_final(base, heard, m, finals, p)
         p += 1
@@ -1049,7 +1109,7 @@ class CarvedGrid(CellGrid):
                              self._l_miss, self._l_heard, self._l_min, self._l_max,
                              self._spread, self._unit, float(p.fade_range),
                              p.surface_aware, float(p.band_profile),
-                             _logit(p.occupied_threshold))
+                             _logit(p.occupied_threshold), float(p.see_through))
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # The points of the fresh arcs (CarvedGridParams.fresh_arcs), apart from ``live`` so
