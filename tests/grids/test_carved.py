@@ -377,7 +377,8 @@ def test_a_beam_that_would_not_have_heard_the_face_clears_nothing_behind_it() ->
     # Had the face been audible, these beams would have cleared the cell (10 x logit(0.2)):
     # it is on their ray, 0.4 m behind the face's cell (what _free_behind asks of a cell in
     # front: a cell nearer, its centre within half a cell's diagonal of the ray).
-    assert 0.1 <= d_behind - d_face <= 0.5 and abs(off) * d_face <= 0.7072 * 0.1
+    assert 0.1 <= d_behind - d_face <= 0.5
+    assert abs(off) * d_face <= 0.7072 * 0.1
 
 
 @pytest.mark.parametrize("bad", [-0.1, math.nan, True, "0.5"])
