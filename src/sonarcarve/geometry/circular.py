@@ -26,6 +26,7 @@ __all__ = [
     "add_cut",
     "merge_runs",
     "new_scratch",
+    "scratch_arrays",
     "sort_prefix",
     "unwrap_above",
 ]
@@ -60,6 +61,13 @@ def new_scratch() -> Scratch:
     """Fresh (uninitialised) work arrays; allocate once per batch, not per arc."""
     bearings = np.empty((3, SCRATCH))  # one allocation for the three float arrays
     return Scratch(bearings[0], bearings[1], bearings[2], np.empty(SCRATCH, dtype=np.bool_))
+
+
+def scratch_arrays() -> tuple[FloatArray, BoolArray]:
+    """Work arrays for a kernel that cannot allocate (:func:`~sonarcarve.geometry._compiled.
+    compiled_borrowing`): ``bearings`` of shape (3, :data:`SCRATCH`), whose rows are the
+    ``cuts, starts, ends`` of a :class:`Scratch`, and its ``flags``. Made once per model."""
+    return np.empty((3, SCRATCH)), np.empty(SCRATCH, dtype=np.bool_)
 
 
 @compiled

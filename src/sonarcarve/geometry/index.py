@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.sector import Sector
 from sonarcarve.typing import IntArray
 
@@ -187,7 +187,7 @@ def _link(index: ArcIndex, entry: int, bucket: int) -> None:
     index.head[bucket] = entry
 
 
-@compiled
+@compiled_borrowing
 def index_insert(index: ArcIndex, slot: int, xmin: float, xmax: float, ymin: float,
                  ymax: float) -> None:
     """Enter the arc of ``slot`` in the cells its box overlaps (or the overflow list)."""
@@ -210,7 +210,7 @@ def index_insert(index: ArcIndex, slot: int, xmin: float, xmax: float, ymin: flo
     index.entries[slot] = k
 
 
-@compiled
+@compiled_borrowing
 def index_remove(index: ArcIndex, slot: int) -> None:
     """Take the arc of ``slot`` out of the index (nothing if it is not in it)."""
     base = slot * MAX_CELLS
@@ -243,7 +243,7 @@ def _visit(index: ArcIndex, bucket: int, tick: int, out: IntArray, count: int) -
     return count
 
 
-@compiled
+@compiled_borrowing
 def query_box(index: ArcIndex, xmin: float, xmax: float, ymin: float, ymax: float,
               out: IntArray) -> int:
     """Slots of the indexed arcs whose cells meet the box, written to ``out``; their count.
@@ -268,7 +268,7 @@ def query_box(index: ArcIndex, xmin: float, xmax: float, ymin: float, ymax: floa
     return _visit(index, mask + 1, tick, out, count)
 
 
-@compiled
+@compiled_borrowing
 def query_sector(index: ArcIndex, sector: Sector, out: IntArray) -> int:
     """Slots of the indexed arcs whose cells meet ``sector`` (radius > 0), written to ``out``;
     their count, or -1 for a sector spanning more than :data:`MAX_QUERY_CELLS` cells.

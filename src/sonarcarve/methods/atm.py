@@ -43,7 +43,7 @@ import numpy.typing as npt
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.geometry import common_chord
-from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry._compiled import compiled, compiled_borrowing, compiled_inline
 from sonarcarve.geometry.index import (
     ArcIndex,
     IndexArrays,
@@ -306,7 +306,7 @@ def _start_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: F
     cos_half[slot] = math.cos(0.5 * beam_width[slot])
 
 
-@compiled
+@compiled_borrowing
 def _add_arcs(
     first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
@@ -333,6 +333,9 @@ def _add_arcs(
     needs for arc ``done`` (0 otherwise). It stops at an arc whose crossings do not fit, having
     taken them back (:func:`_add_arc`) and changed nothing else of that arc that a second call
     would not redo the same way, so the caller grows the store and calls again from ``done``.
+
+    Compiled without reference counting
+    (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`): it only borrows its arrays.
     """
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)

@@ -27,9 +27,9 @@ import math
 import numpy as np
 
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle
-from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import UNDECIDED, arc_clear_of_disk, circle_against_sector
-from sonarcarve.geometry.circular import new_scratch
+from sonarcarve.geometry.circular import scratch_arrays
 from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
     ArcIndex,
@@ -145,13 +145,13 @@ def _carve_found(
     return fully, split
 
 
-@compiled
+@compiled_borrowing
 def _add_arcs(
     first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, tolerance: float, max_incidence: float, index_arrays: IndexArrays,
-    candidates: SlotArray,
+    candidates: SlotArray, bearings: FloatArray, flags: BoolArray,
 ) -> tuple[int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: initialise each as its full beam (section 3), carve the live arcs before it by its
@@ -165,10 +165,17 @@ def _add_arcs(
     :func:`~sonarcarve.geometry.carve_arcs` would change, with the same step, so the results
     are identical. One compiled call
     per block: Python between readings cost more than the carving.
+
+    ``bearings, flags`` are the closed form's work arrays
+    (:func:`~sonarcarve.geometry.circular.scratch_arrays`): the kernel counts no references
+    (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`, half of its time before), so it
+    cannot allocate them.
     """
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)
-    cuts, starts, ends, flags = new_scratch()
+    cuts = bearings[0]
+    starts = bearings[1]
+    ends = bearings[2]
     fully = 0
     split = 0
     for sequence in range(first, first + count):
@@ -194,13 +201,13 @@ def _add_arcs(
     return fully, split
 
 
-@compiled
+@compiled_borrowing
 def _carve_free(
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float, appended: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, tolerance: float, max_incidence: float, index_arrays: IndexArrays,
-    candidates: SlotArray, prune: bool,
+    candidates: SlotArray, prune: bool, bearings: FloatArray, flags: BoolArray,
 ) -> tuple[int, int]:
     """Carve the live arcs (the ``appended`` arcs so far, the newest ``capacity`` of them live)
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
@@ -209,7 +216,9 @@ def _carve_free(
     index holds only the alive arcs (:func:`_carve_found`)."""
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)
-    cuts, starts, ends, flags = new_scratch()
+    cuts = bearings[0]
+    starts = bearings[1]
+    ends = bearings[2]
     sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
     if sector.radius <= 0.0:
         return 0, 0
@@ -273,6 +282,7 @@ class CarvingModel(ArcModel):
         self.carved = np.zeros(size, dtype=bool)
         self.index = make_index(size)
         self._candidates = np.zeros(size, dtype=np.int64)
+        self._bearings, self._flags = scratch_arrays()
         self._fully_carved = 0
         self._split = 0
 
@@ -292,6 +302,7 @@ class CarvingModel(ArcModel):
             first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
             self.lo, self.hi, self.bounds, self.tips, self.status, self.carved,
             self.range_tolerance, self.max_incidence, index_arrays(self.index), self._candidates,
+            self._bearings, self._flags,
         )
         self.count_removed(fully, split)
 
@@ -315,7 +326,7 @@ class CarvingModel(ArcModel):
             reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
             h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.tips,
             self.status, self.carved, self.range_tolerance, self.max_incidence,
-            index_arrays(index), self._candidates, prune,
+            index_arrays(index), self._candidates, prune, self._bearings, self._flags,
         )
         self.count_removed(fully, split)
 

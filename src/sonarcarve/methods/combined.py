@@ -15,8 +15,8 @@ import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
-from sonarcarve.geometry._compiled import compiled
-from sonarcarve.geometry.circular import new_scratch
+from sonarcarve.geometry._compiled import compiled_borrowing
+from sonarcarve.geometry.circular import scratch_arrays
 from sonarcarve.geometry.index import (
     ArcIndex,
     arc_box,
@@ -44,7 +44,7 @@ I32Array = npt.NDArray[np.int32]
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
 
-@compiled
+@compiled_borrowing
 def _add_joint(
     first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
@@ -56,7 +56,7 @@ def _add_joint(
     tally: npt.NDArray[np.int32], stale: BoolArray,
     head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
     stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
-    candidates: SlotArray,
+    candidates: SlotArray, scratch_bearings: FloatArray, scratch_flags: BoolArray,
 ) -> tuple[int, int, int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers) through ATM and carving, in
     order, with one index of every live arc for both: per arc what ATM's ``_add_arcs`` does
@@ -73,11 +73,17 @@ def _add_joint(
 
     The index comes as its eight arrays (``*index``) and one ``candidates`` buffer serves both
     queries: numba's dispatcher unboxes every array argument (about 0.1 µs each, more inside a
-    tuple), which is most of a single ``add()``'s cost.
+    tuple), which is most of a single ``add()``'s cost. ``scratch_bearings, scratch_flags``
+    are carving's work arrays (:func:`~sonarcarve.geometry.circular.scratch_arrays`): the
+    kernel counts no references (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`),
+    so it cannot allocate them.
     """
     storage = x.shape[0]
     index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick, cell_size)
-    cuts, starts, ends, flags = new_scratch()
+    cuts = scratch_bearings[0]
+    starts = scratch_bearings[1]
+    ends = scratch_bearings[2]
+    flags = scratch_flags
     kept = 0
     fully = 0
     split = 0
@@ -110,7 +116,7 @@ def _add_joint(
     return kept, fully, split, first + count, 0
 
 
-@compiled
+@compiled_borrowing
 def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> int:
     """Slots of the live arcs before arc ``sequence``, written to ``out``; their count."""
     found = 0
@@ -255,8 +261,8 @@ class CombinedMethod(SonarMethod):
     def _joint_arguments(self) -> tuple[Any, ...]:
         """The arguments of :func:`_add_joint` after ``first, count``, made once: the arrays
         stay the same (ATM's store is replaced only when it grows), and building the tuple
-        anew was a good part of a single ``add()``. The last is the kernel's candidate buffer
-        (scratch: a new one after a growth is as good)."""
+        anew was a good part of a single ``add()``. The last three are the kernel's candidate
+        buffer and work arrays (scratch: new ones after a growth are as good)."""
         if self._arguments is None:
             h, carving, atm = self.history, self._carving, self._atm
             self._arguments = (
@@ -264,6 +270,7 @@ class CombinedMethod(SonarMethod):
                 carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
                 carving.carved, carving.range_tolerance, carving.max_incidence,
                 *atm.kernel_state(), *atm.index, np.zeros(h.storage_size, dtype=np.int64),
+                *scratch_arrays(),
             )
         return self._arguments
 
