@@ -45,6 +45,7 @@ __all__ = [
     "ArcIndex",
     "IndexArrays",
     "arc_box",
+    "arc_box_of_ends",
     "box_pad",
     "index_arrays",
     "index_insert",
@@ -145,10 +146,16 @@ def arc_box(ox: float, oy: float, r: float, lo: float,
     most four times whatever the angles; an unbounded ``while`` never ended for ``lo`` = 1e20,
     where ``ceil(lo / (π/2))`` overflows int64 (and ``k + 1 == k`` in float64 beyond 2**53).
     """
-    c1 = math.cos(lo)
-    s1 = math.sin(lo)
-    c2 = math.cos(hi)
-    s2 = math.sin(hi)
+    return arc_box_of_ends(ox, oy, r, lo, hi, math.cos(lo), math.sin(lo), math.cos(hi),
+                           math.sin(hi))
+
+
+@compiled_inline
+def arc_box_of_ends(ox: float, oy: float, r: float, lo: float, hi: float, c1: float, s1: float,
+                    c2: float, s2: float) -> tuple[float, float, float, float]:
+    """:func:`arc_box` given ``(c1, s1) = e(lo)`` and ``(c2, s2) = e(hi)``, which a caller may
+    already have (a reading's sector has those of its full beam): the same box, bit for bit,
+    without computing them again."""
     xmin = min(c1, c2)
     xmax = max(c1, c2)
     ymin = min(s1, s2)

@@ -301,8 +301,9 @@ def _start_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: F
     tests of :func:`_add_arc`."""
     counts[slot] = 0
     stale[slot] = True
-    cos_axis[slot] = math.cos(theta[slot])
-    sin_axis[slot] = math.sin(theta[slot])
+    axis = theta[slot]  # read once, so that cos and sin become one sincos call
+    cos_axis[slot] = math.cos(axis)
+    sin_axis[slot] = math.sin(axis)
     cos_half[slot] = math.cos(0.5 * beam_width[slot])
 
 

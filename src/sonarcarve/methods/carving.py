@@ -34,7 +34,7 @@ from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
     ArcIndex,
     IndexArrays,
-    arc_box,
+    arc_box_of_ends,
     index_arrays,
     index_insert,
     index_remove,
@@ -67,10 +67,18 @@ def _clear_of_disk(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Floa
     it unchanged. ``tips[i]`` caches ``e(lo), e(hi)`` (NaN when the interval changed): most arcs
     are tested many times between changes."""
     if math.isnan(tips[i, 0]):
-        tips[i, 0] = math.cos(lo[i])
-        tips[i, 1] = math.sin(lo[i])
-        tips[i, 2] = math.cos(hi[i])
-        tips[i, 3] = math.sin(hi[i])
+        # Angles read once: a store into ``tips`` between reads of ``lo[i]`` (which it might
+        # alias, for the compiler) kept cos and sin of one angle from becoming one sincos call.
+        start = lo[i]
+        end = hi[i]
+        cos_start = math.cos(start)
+        sin_start = math.sin(start)
+        cos_end = math.cos(end)
+        sin_end = math.sin(end)
+        tips[i, 0] = cos_start
+        tips[i, 1] = sin_start
+        tips[i, 2] = cos_end
+        tips[i, 3] = sin_end
     return arc_clear_of_disk(x[i], y[i], r[i], tips[i, 0], tips[i, 1], tips[i, 2], tips[i, 3],
                              sector)
 
@@ -82,18 +90,25 @@ def _start_arc(
     status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
 ) -> Sector:
     """A new arc in ``slot``: alive, not carved, its full beam (section 3) and the circle around
-    it; returns its freespace sector (eq. 3.2), which carves the older arcs."""
-    lo[slot] = theta1[slot]
-    hi[slot] = theta2[slot]
-    cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+    it; returns its freespace sector (eq. 3.2), which carves the older arcs. The arc's
+    ``tips`` are its beam's edge directions, which the sector has computed: ``e(θ1), e(θ2)``
+    of the same angles, the values :func:`_clear_of_disk` would compute."""
+    start = theta1[slot]
+    end = theta2[slot]
+    lo[slot] = start
+    hi[slot] = end
+    cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], start, end)
     bounds[slot, 0] = cx
     bounds[slot, 1] = cy
     bounds[slot, 2] = radius
-    tips[slot, 0] = math.nan
     status[slot] = _ALIVE
     carved[slot] = False
-    return make_sector(x[slot], y[slot], r[slot], theta1[slot], theta2[slot], tolerance,
-                       max_incidence)
+    sector = make_sector(x[slot], y[slot], r[slot], start, end, tolerance, max_incidence)
+    tips[slot, 0] = sector.u1x
+    tips[slot, 1] = sector.u1y
+    tips[slot, 2] = sector.u2x
+    tips[slot, 3] = sector.u2y
+    return sector
 
 
 @compiled_inline
@@ -196,7 +211,10 @@ def _add_arcs(
                 True, cuts, starts, ends, flags)
             fully += arcs_fully
             split += arcs_split
-        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
+        # The box of the full beam, from the edge directions its sector has computed.
+        xmin, xmax, ymin, ymax = arc_box_of_ends(x[slot], y[slot], r[slot], theta1[slot],
+                                                 theta2[slot], sector.u1x, sector.u1y,
+                                                 sector.u2x, sector.u2y)
         index_insert(index, slot, xmin, xmax, ymin, ymax)
     return fully, split
 
@@ -338,7 +356,7 @@ class CarvingModel(ArcModel):
         comparable across methods (an arc only leaves the unprocessed pool by interacting).
         """
         status = self.status[slots]
-        alive = status == ArcFate.ALIVE
+        alive = status == _ALIVE  # the int: comparing with the enum member took 3 µs
         carved = self.carved[slots]
         lo = self.lo[slots]
         hi = self.hi[slots]
