@@ -11,6 +11,7 @@ import pytest
 from sonarcarve.lab.changing_scenes import (
     Change,
     change_latency,
+    grid_tolerance,
     measure_track,
     plot_changing_scene,
     run_changing_scene,
@@ -118,3 +119,20 @@ def test_scene_changes_needs_a_scene() -> None:
     _, sim = simulate_changing_scene("door", 0)
     with pytest.raises(ValueError, match="scene"):
         scene_changes(replace(sim, scene=None))
+
+
+@pytest.mark.parametrize("h", [0.05, 0.1])
+def test_a_cell_beside_one_a_wall_touches_is_explained_whatever_the_rounding(h: float) -> None:
+    # The box scene's grids start 0.5 m left of the wall at x = -1.2, so the wall runs along a
+    # cell boundary: the cells beside the two it touches have centres 1.5 cells from it, which
+    # the module docstring calls explained; the centres as the grid computes them (rounded)
+    # must be, on either side, and those one cell farther out must not be.
+    xmin = -1.2 - 0.5
+    centres = xmin + (np.arange(round(1.0 / h)) + 0.5) * h
+    dist = np.abs(centres - (-1.2))
+    beside = np.isclose(dist, 1.5 * h, rtol=0.0, atol=1e-12)
+    farther = np.isclose(dist, 2.5 * h, rtol=0.0, atol=1e-12)
+    assert beside.sum() == 2
+    assert farther.sum() == 2
+    assert np.all(dist[beside] <= grid_tolerance(h))
+    assert np.all(dist[farther] > grid_tolerance(h))
