@@ -288,8 +288,10 @@ def query_sector(index: ArcIndex, sector: Sector, out: IntArray) -> int:
     fy = sector.fy
     radius = sector.radius
     pad = box_pad(fx, fy, radius)
-    # The sector's box: the origin, both edge ends and the axis directions inside the wedge.
-    xmin, xmax, ymin, ymax = arc_box(fx, fy, radius, sector.a1, sector.a2)
+    # The sector's box: the origin, both edge ends and the axis directions inside the wedge
+    # (the edges' directions are the sector's own u1, u2: cos and sin of a1, a2).
+    xmin, xmax, ymin, ymax = arc_box_of_ends(fx, fy, radius, sector.a1, sector.a2, sector.u1x,
+                                             sector.u1y, sector.u2x, sector.u2y)
     xmin = min(xmin, fx - pad)
     xmax = max(xmax, fx + pad)
     ymin = min(ymin, fy - pad)
