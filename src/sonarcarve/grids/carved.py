@@ -71,6 +71,32 @@ bearing the cell was heard from would have heard it again): ``l += γ(α) (A · 
 a beam that would have heard the surface and did not is strong evidence at any distance, a
 glancing one keeps the faded weak update.
 
+**Seen through** (:attr:`CarvedGridParams.see_through`): audibility is a property of a
+surface, so it cannot clear the cells of an obstacle the returning robot only sees from the
+other side. The changing-scenes box, heard on the way in from below (bearings 101-146°), kept
+the cells of its near corner's arcs until the robot, on the way back, had driven 1.5-2 m past
+it and its rear sensors looked at them from those bearings again (4.4 s after passing at
+0.10 m, specular physics): the beams from above and abeam did pass through those cells, but
+after passing through the box's other faces, which they would have heard (they were heard
+from those bearings) and did not. A beam that passes a surface it would have heard and hears
+nothing there has seen through where the obstacle stood: so a believed-occupied cell gets the
+audibility of the most audible believed-occupied cell in front of it on the beam's ray (nearer
+by a cell or more, the ray within half a cell diagonal of that cell's centre), when that cell is
+at most ``see_through`` in front: the depth of an obstacle, not of a room. A glancing beam,
+which would not have heard the face, clears nothing behind it either, so the walls a specular
+sonar misses keep what stands behind them. Measured (``benchmarks/changing_scenes.py``, box,
+seconds after the robot passes, seeds 0/1/2, no-echo readings): 0.10 m specular +4.4/+4.4/+4.4
+before, +2.4/+0.6/-0.0 with 0.5 m; amplitude physics +3.0/+3.6/+3.6 before, +2.4/+2.4/+2.4;
+0.05 m specular +6.2/+4.4/+4.4 before, +6.2/+1.2/+3.6 (seed 0's last cells are the box's
+near corner itself, heard only from below: no beam from above passes anything to reach them).
+Person and door: the same latencies and phantom shares. Swept 0.3, 0.5, 0.6, 1 and 5 m: 0.3 m
+loses one snapshot on one seed, deeper gives the box nothing more and costs office recall
+(echoes only, 0.05/0.10 m: 0.944/0.955 before, 0.943/0.954 with 0.5 m, 0.942/0.952 with 5 m;
+with no-echo readings 0.893/0.933 before, 0.891/0.930 with 1 m; the opposite-sector rule of
+:data:`HEARD_NEAR` cost up to 0.022); t-junction and doorway maps are the same.
+The cells a beam can hold back for this are bounded (:data:`_HELD`, 512 a beam; the rest get
+the plain update).
+
 A **no-echo** reading (``range`` = +inf, :attr:`~sonarcarve.readings.Reading.no_echo`) has
 free space only: its beam's cells nearer than its ``max_range`` get the free-space update above
 (same profile and fade), and it draws no band; the method carves the live arcs with it.
