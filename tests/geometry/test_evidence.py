@@ -59,7 +59,8 @@ def _binary_search_bin(sine: float, edges: np.ndarray, bins: int) -> int:
     return lo
 
 
-@pytest.mark.parametrize("beam", [math.radians(22.5), math.radians(60.0), math.radians(170.0)])
+@pytest.mark.parametrize("beam", [math.radians(22.5), math.radians(60.0), math.radians(170.0),
+                                  1e-40, 1e-300])  # narrow: guesses beyond int64
 def test_the_bin_of_a_sine_is_the_binary_searchs_bin(beam: float) -> None:
     # The guess treats the sines as evenly spaced; the steps after it must land on the exact
     # bin, also on the edges themselves, beyond the beam and for wide beams (bad guesses).

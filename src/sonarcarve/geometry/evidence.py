@@ -201,7 +201,9 @@ def _bin_of_sine(sine: float, edges: FloatArray, bins: int, scale: float) -> int
     the processor could not predict, for every supporting bin.
     """
     guess = (sine - edges[0]) * scale
-    k = min(int(guess), bins - 1) if guess > 0.0 else 0  # NaN: 0, as the search gave
+    # Clamped as a float before the conversion: for a very narrow beam the guess exceeds the
+    # int64 range, and int() of that is undefined (it gave a huge negative index).
+    k = int(min(guess, bins - 1.0)) if guess > 0.0 else 0  # NaN: 0, as the search gave
     while k < bins - 1 and edges[k + 1] <= sine:
         k += 1
     while k > 0 and edges[k] > sine:
