@@ -490,5 +490,5 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
 
 def test_confidence_refuses_features_of_the_wrong_width() -> None:
     model = ConfidenceModel()
-    with pytest.raises(ValueError, match="features must have shape"):
+    with pytest.raises(ConfigError, match="features must have shape"):
         model.confidence(np.zeros((3, len(model.weights()) - 1)))

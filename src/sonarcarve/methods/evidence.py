@@ -251,7 +251,7 @@ class ConfidenceModel:
         weights = self.weights()
         if table.ndim != 2 or table.shape[1] != len(weights):
             msg = f"features must have shape (n, {len(weights)}), got {table.shape}"
-            raise ValueError(msg)
+            raise ConfigError(msg)  # a wrong argument to the model: a ValueError too
         n = len(table)
         ages = np.ascontiguousarray(np.broadcast_to(np.asarray(maturity, dtype=np.float64), (n,)))
         logit = np.empty(n)
