@@ -104,6 +104,8 @@ def test_sensor_poses_rotate_mounts_with_the_heading() -> None:
         (GOOD_YAML + "colour: red\n", "colour"),
         (GOOD_YAML.replace("beam_width_deg: 30", "beam_width_deg: 200"), "beam_width_deg"),
         (GOOD_YAML.replace("beam_width_deg: 10", "beam_width_deg: 0"), "sensors[1].beam_width_deg"),
+        (GOOD_YAML.replace("beam_width_deg: 10", "beam_width_deg: 1e-9"),
+         "sensors[1].beam_width_deg"),
     ],
 )
 def test_bad_robot_yaml_names_file_and_field(tmp_path: Path, text: str, field: str) -> None:

@@ -21,7 +21,7 @@ from typing import NamedTuple, NoReturn, overload
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.constants import DEFAULT_BEAM_WIDTH
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH, MIN_BEAM_WIDTH
 from sonarcarve.errors import ReadingsError
 from sonarcarve.typing import FloatArray, IntArray
 
@@ -68,7 +68,7 @@ _NOT_POSITIVE = "must be > 0"
 _NEGATIVE = "must be >= 0"
 _NOT_WHOLE = "is not a whole number"
 _TOO_LARGE = f"must be at most {MAX_SENSOR}"
-_BAD_BEAM = "must lie in (0, pi) radians"
+_BAD_BEAM = f"must lie in [{MIN_BEAM_WIDTH:g}, pi) radians"
 _BACKWARDS = "goes backwards in time"
 _NO_MAX_RANGE = "is infinite but 'max_range' is not given"
 _BAD_MAX_RANGE = f"must be a number in (0, {MAX_READING_RANGE:,.0f}] metres, or NaN (unknown)"
@@ -104,7 +104,8 @@ class Reading(NamedTuple):
         Measured range r, metres (> 0); ``inf`` for a no-echo reading (then ``max_range`` must
         be known).
     beam_width : float
-        Beam width φ, radians in (0, π); NaN means the method's default.
+        Beam width φ, radians in [:data:`~sonarcarve.constants.MIN_BEAM_WIDTH`, π); NaN means
+        the method's default.
     max_range : float
         How far the sensor listened, metres (> 0); NaN: unknown.
     """
@@ -243,7 +244,8 @@ class ReadingBatch:
         _first_bad(where, "sensor", self.sensor > MAX_SENSOR, _TOO_LARGE)
         width = self.beam_width
         known = ~np.isnan(width)
-        _first_bad(where, "beam_width", known & ~((width > 0.0) & (width < math.pi)), _BAD_BEAM)
+        in_range = (width >= MIN_BEAM_WIDTH) & (width < math.pi)
+        _first_bad(where, "beam_width", known & ~in_range, _BAD_BEAM)
         limit = self.max_range
         known = ~np.isnan(limit)
         if known.any():
@@ -301,11 +303,10 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     ``t``, ``x``, ``y``, ``theta`` and ``range`` must be finite and within their bounds
     (|t| <= :data:`MAX_TIME` s, |x|, |y| <= :data:`MAX_POSITION` m, |theta| <=
     :data:`MAX_ANGLE` rad, ``0 < range <=`` :data:`MAX_READING_RANGE` m), ``sensor`` a whole
-    number in [0, :data:`MAX_SENSOR`], ``beam_width`` in (0, π) or NaN (the method's
-    default), and ``t`` not earlier than ``previous_t`` (the previous reading's time).
-    ``max_range`` is NaN (unknown) or in (0, :data:`MAX_READING_RANGE`]; ``range`` may be
-    +inf (no echo) when it is known,
-    and a finite ``range`` may not exceed it.
+    number in [0, :data:`MAX_SENSOR`], ``beam_width`` in [``MIN_BEAM_WIDTH``, π) or NaN (the
+    method's default), and ``t`` not earlier than ``previous_t`` (the previous reading's
+    time). ``max_range`` is NaN (unknown) or in (0, :data:`MAX_READING_RANGE`]; ``range`` may
+    be +inf (no echo) when it is known, and a finite ``range`` may not exceed it.
 
     Cheap: one chain of scalar comparisons in the common case (it runs once per echo); only a
     reading that fails it is examined field by field for the message.
@@ -331,7 +332,7 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     if (previous_t <= t and -MAX_TIME <= t <= MAX_TIME and 0.0 < r <= MAX_READING_RANGE
             and -MAX_POSITION <= x <= MAX_POSITION and -MAX_POSITION <= y <= MAX_POSITION
             and -MAX_ANGLE <= theta <= MAX_ANGLE and type(sensor) is int
-            and 0 <= sensor <= MAX_SENSOR and (width != width or 0.0 < width < math.pi)
+            and 0 <= sensor <= MAX_SENSOR and (width != width or MIN_BEAM_WIDTH <= width < math.pi)
             and (limit != limit or r <= limit <= MAX_READING_RANGE)):
         return
     _explain_bad_reading(reading, _Where("", None, reading_id), previous_t)
@@ -370,7 +371,7 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
     if sensor > MAX_SENSOR:
         _raise(where, 0, "sensor", _TOO_LARGE)
     width = reading.beam_width
-    if not (math.isnan(width) or 0.0 < width < math.pi):
+    if not (math.isnan(width) or MIN_BEAM_WIDTH <= width < math.pi):
         _raise(where, 0, "beam_width", _BAD_BEAM)
     if not (math.isnan(limit) or 0.0 < limit <= MAX_READING_RANGE):
         _raise(where, 0, "max_range", _BAD_MAX_RANGE)

@@ -30,6 +30,7 @@ from typing import Any, NoReturn
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.errors import MAX_YAML_BYTES, finite_number, parse_yaml, read_text, shorten
 from sonarcarve.typing import FloatArray, IntArray
@@ -59,6 +60,7 @@ MAX_SENSORS = 1024
 #: firing period in seconds, lengths in metres (ranges, body radius, sensor mounts).
 FIRING_PERIOD_RANGE = (1e-4, 3600.0)
 MAX_LENGTH = 1000.0
+_MIN_BEAM_DEGREES = math.degrees(MIN_BEAM_WIDTH)  # for messages
 
 _TOP_FIELDS = {
     "name", "description", "robot_radius", "range_resolution", "min_range", "max_range",
@@ -137,8 +139,8 @@ class RobotDescription:
             _fail(where, "sensors", f"positions must lie within ±{MAX_LENGTH:g} m of the centre")
         if np.any(np.abs(self.bearing) > 2.0 * math.pi):
             _fail(where, "sensors", "bearings must lie in [-360, 360] degrees")
-        if not np.all((self.beam_width > 0.0) & (self.beam_width < math.pi)):
-            _fail(where, "beam_width", "must lie in (0, 180) degrees")
+        if not np.all((self.beam_width >= MIN_BEAM_WIDTH) & (self.beam_width < math.pi)):
+            _fail(where, "beam_width", f"must lie in [{_MIN_BEAM_DEGREES:g}, 180) degrees")
         if order.size == 0 or np.any((order < 0) | (order >= n)):
             _fail(where, "firing_order", f"must list sensor indices in 0..{n - 1}")
         _check_firing_order(where, order, n)
@@ -300,9 +302,9 @@ def _sensor(source: str, index: int, entry: object,
     values = [_number(source, f"{field}.{name}", _required(source, entry, name, field))
               for name in ("x", "y", "bearing_deg")]
     width = _number(source, f"{field}.beam_width_deg", entry.get("beam_width_deg", default_width))
-    if not 0.0 < width < 180.0:
+    if not MIN_BEAM_WIDTH <= math.radians(width) < math.pi:  # as the robot will check it
         name = f"{field}.beam_width_deg" if "beam_width_deg" in entry else "beam_width_deg"
-        _fail(source, name, f"must lie in (0, 180) degrees, got {width}")
+        _fail(source, name, f"must lie in [{_MIN_BEAM_DEGREES:g}, 180) degrees, got {width}")
     return values[0], values[1], values[2], width
 
 

@@ -58,7 +58,12 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
     huge_theta.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,1\n0.1,0,0,0,1e20,1\n")
     degrees_then_bad = tmp_path / "degrees_then_bad.csv"  # no warning before the error line
     degrees_then_bad.write_text("t,sensor,x,y,theta,range\n0,0,0,0,90,1\n0.1,0,0,0,180,-1\n")
+    needle_beam = tmp_path / "needle_beam.csv"  # evidence carving corrupted memory on this
+    needle_beam.write_text("t,sensor,x,y,theta,range,beam_width\n0,0,0,0,0,1,0.3\n"
+                           "0.1,1,0,0,0,1,1e-40\n")
     return [
+        ([str(needle_beam), "--method", "evidence"],
+         "line 3, column 'beam_width' must lie in [1e-06, pi) radians"),
         ([str(semicolons)], "line 1, missing column(s) t, sensor, x, y, theta, range (header: "
                             "t;sensor;x;y;theta;range); the file looks separated by ';'"),
         ([str(huge_theta)], "line 3, column 'theta' must lie within ±1,000,000 rad"),
@@ -74,7 +79,7 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
         ([str(good), "--method", "nonsense"], "unknown method 'nonsense'"),
         ([str(good), "--history", "0"], "history_size must be a whole number of arcs in [1, "),
         ([str(good), "--history", "100001"], "history_size must be a whole number of arcs"),
-        ([str(good), "--beam-width", "200"], "beam_width must lie in (0, pi) radians"),
+        ([str(good), "--beam-width", "200"], "beam_width must lie in [1e-06, pi) radians"),
         ([str(good), "--range-tolerance", "-1"], "range_tolerance must be finite and >= 0"),
         ([str(good), "--min-transversal", "91"], "min_transversal must lie in [0, pi/2]"),
         ([str(good), "--max-incidence", "-5"], "max_incidence must lie in [0, pi/2]"),

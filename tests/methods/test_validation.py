@@ -46,10 +46,13 @@ BAD_READINGS = [
     ({"sensor": -1}, "sensor", "must be >= 0"),
     ({"sensor": 1.5}, "sensor", "is not a whole number"),
     ({"sensor": 2**31}, "sensor", "must be at most 2147483647"),
-    ({"beam_width": 0.0}, "beam_width", "must lie in (0, pi) radians"),
-    ({"beam_width": math.radians(225.0)}, "beam_width", "must lie in (0, pi) radians"),
-    ({"beam_width": math.pi}, "beam_width", "must lie in (0, pi) radians"),
-    ({"beam_width": math.inf}, "beam_width", "must lie in (0, pi) radians"),
+    ({"beam_width": 0.0}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": math.radians(225.0)}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": math.pi}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": math.inf}, "beam_width", "must lie in [1e-06, pi) radians"),
+    # Underflowing widths: evidence carving divided by zero or indexed out of its bins.
+    ({"beam_width": 5e-324}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": 9.9e-7}, "beam_width", "must lie in [1e-06, pi) radians"),
     ({"t": 0.5}, "t", "goes backwards in time"),  # the previous reading is at t = 1
 ]
 
@@ -119,7 +122,8 @@ def _raw_batch(**change: list[float]) -> ReadingBatch:
     ({"theta": [0.0, math.nan, 0.0]}, "reading 2, column 'theta' is NaN or infinite"),
     ({"t": [0.5, 3.0, 4.0]}, "reading 1, column 't' goes backwards in time"),
     ({"t": [2.0, 3.0, 2.5]}, "reading 3, column 't' goes backwards in time"),
-    ({"beam_width": [0.3, 4.0, 0.3]}, "reading 2, column 'beam_width' must lie in (0, pi)"),
+    ({"beam_width": [0.3, 4.0, 0.3]}, "reading 2, column 'beam_width' must lie in [1e-06, pi)"),
+    ({"beam_width": [0.3, 1e-40, 0.3]}, "reading 2, column 'beam_width' must lie in [1e-06, pi)"),
 ])
 def test_add_many_validates_the_batch_once_and_changes_nothing(
     change: dict[str, list[float]], message: str

@@ -26,6 +26,7 @@ from typing import ClassVar, TypeVar
 import numpy as np
 from numba import njit
 
+from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.geometry import ArcFate
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import (
@@ -582,33 +583,41 @@ def _plainly_valid(batch: ReadingBatch, previous_t: float) -> bool:
         return False
     return bool(_rows_plainly_valid(batch.t, sensor, batch.x, batch.y, batch.theta,
                                     batch.range, batch.beam_width, batch.max_range,
-                                    float(previous_t)))
+                                    float(previous_t), _ROW_BOUNDS))
+
+
+#: The bounds :func:`_rows_plainly_valid` checks, passed as an argument: numba freezes a
+#: global into the compiled code, and its disk cache is keyed on this file only, so a bound
+#: changed in ``readings.py`` would not reach a cached kernel (review finding).
+_ROW_BOUNDS = (float(MAX_TIME), float(MAX_READING_RANGE), float(MAX_POSITION), float(MAX_ANGLE),
+               float(MAX_SENSOR), float(MIN_BEAM_WIDTH))
 
 
 @njit(cache=True)
 def _rows_plainly_valid(t: FloatArray, sensor: np.ndarray, x: FloatArray, y: FloatArray,
                         theta: FloatArray, r: FloatArray, width: FloatArray, limit: FloatArray,
-                        previous_t: float) -> bool:
+                        previous_t: float, bounds: tuple[float, ...]) -> bool:
     """The rules of :meth:`ReadingBatch.validate` row by row, stricter where that is simpler:
     a no-echo row (``range`` = inf, allowed when ``max_range`` is known) fails here. Every
     comparison is false for NaN, so a NaN fails wherever ``validate`` refuses it."""
+    max_time, max_range, max_position, max_angle, max_sensor, min_width = bounds
     last = previous_t
     for k in range(t.shape[0]):
         tk = t[k]
-        if not (last <= tk and -MAX_TIME <= tk <= MAX_TIME):
+        if not (last <= tk and -max_time <= tk <= max_time):
             return False
         last = tk
         rk = r[k]
-        if not (0.0 < rk <= MAX_READING_RANGE):
+        if not (0.0 < rk <= max_range):
             return False
-        if not (-MAX_POSITION <= x[k] <= MAX_POSITION and -MAX_POSITION <= y[k] <= MAX_POSITION
-                and -MAX_ANGLE <= theta[k] <= MAX_ANGLE and 0 <= sensor[k] <= MAX_SENSOR):
+        if not (-max_position <= x[k] <= max_position and -max_position <= y[k] <= max_position
+                and -max_angle <= theta[k] <= max_angle and 0 <= sensor[k] <= max_sensor):
             return False
         w = width[k]
-        if not (w != w or 0.0 < w < math.pi):
+        if not (w != w or min_width <= w < math.pi):
             return False
         m = limit[k]
-        if not (m != m or rk <= m <= MAX_READING_RANGE):
+        if not (m != m or rk <= m <= max_range):
             return False
     return True
 

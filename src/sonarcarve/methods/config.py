@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from numbers import Real
 
-from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH, MIN_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE, check_history_size
@@ -82,10 +82,11 @@ def _refuse(name: str, rule: str, value: object) -> None:
 
 
 def check_beam_width(value: object, name: str = "beam_width") -> float:
-    """φ in radians, in the open interval (0, π); the value as a float, else ConfigError."""
-    rule = "lie in (0, pi) radians"
+    """φ in radians, in [:data:`~sonarcarve.constants.MIN_BEAM_WIDTH`, π); the value as a
+    float, else ConfigError."""
+    rule = f"lie in [{MIN_BEAM_WIDTH:g}, pi) radians"
     width = _number(name, value, rule)
-    if not 0.0 < width < math.pi:
+    if not MIN_BEAM_WIDTH <= width < math.pi:
         _refuse(name, rule, value)
     return width
 
