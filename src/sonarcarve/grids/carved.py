@@ -370,8 +370,9 @@ class CarvedGridParams:
         Metres >= 0 (``inf``: no limit; 0: off); :data:`DEFAULT_SEE_THROUGH`. A beam that
         passes a cell it would have heard (surface-aware audibility) and hears nothing there
         clears the believed-occupied cells behind that cell on its ray, up to this far behind
-        it, as if it would have heard them too (module docstring, "seen through"). Needs
-        ``surface_aware``.
+        it, as if it would have heard them too (module docstring, "seen through"). It acts only
+        with ``surface_aware`` (without it no beam is known to have heard a cell, so nothing is
+        seen through and the value is ignored).
 
     Raises
     ------
