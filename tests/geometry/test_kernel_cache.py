@@ -16,6 +16,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import sonarcarve
 
 # An arc at 1 m, then a reading from the same place that heard nothing up to 2 m: its freespace
@@ -52,3 +54,35 @@ def test_editing_geometry_invalidates_the_dependent_carving_kernel(tmp_path: Pat
     bounds.write_text(text.replace("    return FULLY_CARVED if inside else UNDECIDED\n",
                                    "    return UNCHANGED\n"))
     assert _run(root, cache) == "0"
+
+
+def test_this_numba_lets_borrowing_kernels_skip_reference_counts() -> None:
+    # The option is private to numba: if a release drops it, the kernels still work (next
+    # test) but lose half their speed, and this test says why.
+    from sonarcarve.geometry._compiled import SKIPS_REFERENCE_COUNTS
+
+    assert SKIPS_REFERENCE_COUNTS
+
+
+def test_a_borrowing_kernel_gives_the_same_result_with_and_without_reference_counts(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import numpy as np
+
+    from sonarcarve.geometry import _compiled
+
+    def scaled_sum(values: np.ndarray, out: np.ndarray) -> float:
+        total = 0.0
+        for k in range(values.shape[0]):
+            out[k] = 2.0 * values[k]
+            total += out[k]
+        return total
+
+    values = np.arange(5.0)
+    results = []
+    for skips in (True, False):  # False: a numba without the private ``_nrt`` option
+        monkeypatch.setattr(_compiled, "SKIPS_REFERENCE_COUNTS", skips)
+        kernel = _compiled.compiled_borrowing(scaled_sum)
+        out = np.zeros(5)
+        results.append((kernel(values, out), out.tolist()))
+    assert results == [(20.0, [0.0, 2.0, 4.0, 6.0, 8.0])] * 2

@@ -95,9 +95,28 @@ def compiled_borrowing(func: _F) -> _F:
     return _compile(func, inline=False, nrt=False)
 
 
+def _numba_knows_nrt_option() -> bool:
+    """Whether this numba has the ``_nrt`` target option (0.59 to 0.68 have it).
+
+    It is private: a numba without it would refuse every kernel at its first call ("Unrecognized
+    options"), so it is asked for only where it exists. Without it the borrowing kernels count
+    references like the others: the same results, only slower (they allocate nothing).
+    """
+    try:
+        from numba.core.cpu import CPUTargetOptions
+        from numba.core.options import TargetOptions
+    except ImportError:
+        return False
+    return isinstance(getattr(CPUTargetOptions, "_nrt", None), TargetOptions.Mapping)
+
+
+#: Whether :func:`compiled_borrowing` can switch reference counting off in this numba.
+SKIPS_REFERENCE_COUNTS = _numba_knows_nrt_option()
+
+
 def _compile(func: _F, *, inline: bool, nrt: bool = True) -> _F:
     options: dict[str, Any] = {"inline": "always" if inline else "never"}
-    if not nrt:
+    if not nrt and SKIPS_REFERENCE_COUNTS:
         options["_nrt"] = False  # numba's target option; not in its typed signature
     dispatcher = njit(**options)(func)
     # numba's Dispatcher.enable_caching does exactly this with its own FunctionCache.
