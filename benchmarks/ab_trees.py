@@ -23,9 +23,10 @@ import os
 import statistics
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
+
+from commits import child_env, export_src
 
 WORKTREE = "WORKTREE"
 ROOT = Path(__file__).resolve().parent.parent
@@ -49,21 +50,16 @@ print(json.dumps([n / run(batch) for _ in range(runs)]))
 """
 
 
-def export_src(commit: str, into: Path) -> Path:
+def tree_src(commit: str, into: Path) -> Path:
     """The ``src`` folder of ``commit`` (or of this checkout for ``WORKTREE``)."""
     if commit == WORKTREE:
         return ROOT / "src"
-    archive = into / f"{commit}.tar"
-    subprocess.run(["git", "-C", str(ROOT), "archive", "-o", str(archive), commit, "src"],
-                   check=True)
-    with tarfile.open(archive) as tar:
-        tar.extractall(into / commit, filter="data")
-    return into / commit / "src"
+    return export_src(commit, into / commit)
 
 
 def measure(src: Path, cache: Path, method: str, history: int, readings: int) -> list[float]:
     """Readings per CPU second of two runs in a fresh subprocess on ``src``."""
-    env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_CACHE_DIR": str(cache)}
+    env = child_env(src, cache)
     out = subprocess.run(
         [sys.executable, "-c", MEASURE, method, str(history), str(readings), "2",
          str(ROOT / "benchmarks")],
@@ -80,7 +76,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="ab_trees_") as tmp:
-        trees = {c: export_src(c, Path(tmp)) for c in args.commits}
+        trees = {c: tree_src(c, Path(tmp)) for c in args.commits}
         print(f"load average at the start: {os.getloadavg()[0]:.1f}\n")
         print("| method | history | " + " | ".join(args.commits) + " | "
               + " | ".join(f"{c} / {args.commits[0]}" for c in args.commits[1:]) + " |")

@@ -32,10 +32,11 @@ import os
 import statistics
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
+
+from commits import child_env, export_src
 
 _HERE = Path(__file__).resolve().parent
 _REPO = _HERE.parent
@@ -74,16 +75,7 @@ def measure(method_name: str, readings: int, batch_size: int) -> dict[str, float
 
 def _export(commit: str, folder: Path) -> dict[str, str]:
     root = folder / commit
-    root.mkdir()
-    archive = subprocess.run(["git", "-C", str(_REPO), "archive", commit, "src"], check=True,
-                             capture_output=True).stdout
-    with tempfile.TemporaryFile() as handle:
-        handle.write(archive)
-        handle.seek(0)
-        with tarfile.open(fileobj=handle) as tar:
-            tar.extractall(root, filter="data")
-    return {**os.environ, "PYTHONPATH": str(root / "src"),
-            "NUMBA_CACHE_DIR": str(root / "numba-cache")}
+    return child_env(export_src(commit, root), root / "numba-cache")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -39,12 +39,13 @@ import shutil
 import statistics
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
+
+from commits import child_env, export_src
 
 METHODS = ("centerline", "carve", "atm", "combined", "evidence")
 _REPO = Path(__file__).resolve().parent.parent
@@ -86,17 +87,7 @@ def _side(label: str, commit: str | None, folder: Path) -> Side:
     if commit is None:
         return Side(label, env)
     root = folder / label
-    root.mkdir()
-    archive = subprocess.run(["git", "-C", str(_REPO), "archive", commit, "src"], check=True,
-                             capture_output=True).stdout
-    with tempfile.TemporaryFile() as handle:
-        handle.write(archive)
-        handle.seek(0)
-        with tarfile.open(fileobj=handle) as tar:
-            tar.extractall(root, filter="data")
-    env["PYTHONPATH"] = str(root / "src")
-    env["NUMBA_CACHE_DIR"] = str(root / "numba-cache")
-    return Side(f"{label} ({commit})", env)
+    return Side(f"{label} ({commit})", child_env(export_src(commit, root), root / "numba-cache"))
 
 
 def _run_child(command: list[str], env: dict[str, str]) -> tuple[float, float, int, str]:

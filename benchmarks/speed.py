@@ -44,6 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
+from commits import export_src
+
 REFERENCE_COMMIT = "7445718"
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -77,10 +79,7 @@ print(json.dumps({{"rate": len(batch) / statistics.median(times)}}))
 
 def _reference_tree(folder: Path) -> Path:
     """``src`` of :data:`REFERENCE_COMMIT`, extracted into ``folder``."""
-    archive = subprocess.run(["git", "archive", REFERENCE_COMMIT, "src"], cwd=ROOT, check=True,
-                             capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
-    return folder / "src"
+    return export_src(REFERENCE_COMMIT, folder)
 
 
 def _run(src: Path, name: str, history: int, readings: int, repeats: int,
