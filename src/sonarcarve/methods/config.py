@@ -167,7 +167,7 @@ class MethodConfig:
 
     Every field is checked when the config is made; a bad one raises
     :class:`~sonarcarve.errors.ConfigError` with one line naming the field, for example
-    ``beam_width must lie in (0, pi) radians, got 4.0``. SI units: metres and radians.
+    ``beam_width must lie in [1e-06, pi) radians, got 4.0``. SI units: metres and radians.
 
     Parameters
     ----------
@@ -215,7 +215,7 @@ class MethodConfig:
     >>> MethodConfig(beam_width=4.0)
     Traceback (most recent call last):
     ...
-    sonarcarve.errors.ConfigError: beam_width must lie in (0, pi) radians, got 4.0
+    sonarcarve.errors.ConfigError: beam_width must lie in [1e-06, pi) radians, got 4.0
     """
 
     history_size: int = DEFAULT_HISTORY_SIZE
