@@ -46,7 +46,7 @@ from sonarcarve.geometry import (
     carve_arc,
     carve_arcs,
 )
-from sonarcarve.geometry.bounds import arc_clear_of_disk
+from sonarcarve.geometry.bounds import arc_clear_of_disk, arc_clear_of_wedge
 from sonarcarve.geometry.sector import make_sector
 
 SAMPLES = 2001
@@ -649,5 +649,47 @@ def test_arc_clear_of_disk_only_for_arcs_carving_leaves_unchanged() -> None:
         if nearest > radius * (1.0 + 1e-3) + 1e-3 * (1.0 + abs(ox) + abs(oy)):
             clear_outside += 1
             assert clear, "an arc clearly outside the disk must be found clear"
+    assert said_clear > 1000
+    assert clear_outside > 500
+
+
+def test_arc_clear_of_wedge_only_for_arcs_carving_leaves_unchanged() -> None:
+    """Whenever the test says "clear", every sample of the arc is outside one of the sector's
+    half-planes and the closed form carves nothing; it says so for most arcs clearly outside one.
+    A third of the cases put an edge ray within 1e-15..1e-5 (relative) of the arc's nearest
+    sample, by turning the sector about its origin: near-tangencies of the edge lines."""
+    rng = np.random.default_rng(12)
+    clear_outside = said_clear = 0
+    for k in range(4000):
+        ox, oy = rng.uniform(-3.0, 3.0, 2) * (1e5 if k % 10 == 0 else 1.0)
+        r = rng.uniform(0.05, 5.0)
+        lo = rng.uniform(-8.0, 8.0)
+        hi = lo + (0.0 if k % 17 == 0 else rng.uniform(0.0, 3.1))
+        fx, fy = np.array([ox, oy]) + rng.uniform(-6.0, 6.0, 2)
+        if k % 13 == 0:
+            fx, fy = ox, oy  # coincident origins
+        tau = np.linspace(lo, hi, SAMPLES)
+        px, py = ox + r * np.cos(tau) - fx, oy + r * np.sin(tau) - fy
+        width = rng.uniform(0.0, 3.0)
+        f_lo = rng.uniform(-4.0, 4.0)
+        if k % 3 == 0:  # the lower edge ray through the arc's last sample on its right, nearly
+            bearing = np.arctan2(py, px)
+            f_lo = float(bearing.min()) + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-15, -5)
+        radius = rng.uniform(0.01, 12.0)
+        sector = make_sector(fx, fy, radius, f_lo, f_lo + width, 0.0, OFF)
+        beyond_lo = sector.u1x * py - sector.u1y * px  # < 0: right of the f_lo ray's line
+        beyond_hi = px * sector.u2y - py * sector.u2x  # < 0: left of the f_hi ray's line
+        clear = arc_clear_of_wedge(ox, oy, r, math.cos(lo), math.sin(lo), math.cos(hi),
+                                   math.sin(hi), sector)
+        if clear:
+            said_clear += 1
+            assert beyond_lo.max() < 0.0 or beyond_hi.max() < 0.0
+            fate, _, _ = carve_arc(ox, oy, r, lo, hi, fx, fy, radius, sector.a1, sector.a2)
+            assert fate == ArcFate.UNCHANGED
+        # Samples miss the arc's extreme by up to r (Δτ)²/8 ≈ 3e-6 r.
+        margin = 1e-3 * (1.0 + abs(ox) + abs(oy) + r)
+        if beyond_lo.max() < -margin or beyond_hi.max() < -margin:
+            clear_outside += 1
+            assert clear, "an arc clearly outside a half-plane must be found clear"
     assert said_clear > 1000
     assert clear_outside > 500

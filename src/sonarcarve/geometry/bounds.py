@@ -8,7 +8,13 @@ from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.sector import Sector
 
-__all__ = ["UNDECIDED", "arc_bounding_circle", "arc_clear_of_disk", "circle_against_sector"]
+__all__ = [
+    "UNDECIDED",
+    "arc_bounding_circle",
+    "arc_clear_of_disk",
+    "arc_clear_of_wedge",
+    "circle_against_sector",
+]
 
 #: :func:`circle_against_sector` could not decide: the exact carving must.
 UNDECIDED = -1
@@ -111,3 +117,50 @@ def arc_clear_of_disk(ox: float, oy: float, r: float, clo: float, slo: float, ch
     bx = r * chi - dx
     by = r * shi - dy
     return min(ax * ax + ay * ay, bx * bx + by * by) >= reach * reach
+
+
+@compiled_inline
+def _beyond_edge(ox: float, oy: float, r: float, clo: float, slo: float, chi: float, shi: float,
+                 fx: float, fy: float, ux: float, uy: float, margin: float) -> bool:
+    """Whether every point of the arc has ``u × (p - o_j) < -margin``: the arc lies right of
+    the line through ``o_j`` along the unit vector ``u``, by ``margin``.
+
+    ``u × (p(τ) - o_j) = u × (o_i - o_j) + r sin(τ - a)`` (``u = e(a)``) is largest at the
+    left normal ``n = (-u_y, u_x)``: the largest value on the arc is there if ``n`` is strictly
+    between ``e(lo)`` and ``e(hi)`` (``hi - lo < π``), else at an end.
+    """
+    nx = -uy
+    ny = ux
+    if clo * ny - slo * nx > 0.0 and nx * shi - ny * chi > 0.0:  # the normal is inside
+        return ux * (oy - fy) - uy * (ox - fx) + r < -margin
+    at_lo = ux * (oy + r * slo - fy) - uy * (ox + r * clo - fx)
+    at_hi = ux * (oy + r * shi - fy) - uy * (ox + r * chi - fx)
+    return max(at_lo, at_hi) < -margin
+
+
+@compiled_inline
+def arc_clear_of_wedge(ox: float, oy: float, r: float, clo: float, slo: float, chi: float,
+                       shi: float, sector: Sector) -> bool:
+    """Whether the arc ``o + r e(τ)``, ``τ ∈ [lo, hi]`` (``hi - lo < π``), lies outside one of
+    the sector's two bounding half-planes by a margin: then carving leaves it unchanged.
+
+    ``(clo, slo)``, ``(chi, shi)`` are ``e(lo)`` and ``e(hi)``. The companion of
+    :func:`arc_clear_of_disk` for the wedge: a bounding circle (:func:`arc_bounding_circle`)
+    is as wide as the arc's chord across it, so it often reaches over an edge ray that the
+    arc itself stays clear of; no trigonometry, where the closed form needs atan2, acos, asin
+    and a sincos per sub-interval.
+
+    Exact: every point of the arc is at least ``pad`` = 1e-6 of the coordinates' size outside
+    the half-plane, so the closed form's membership test of that half-plane (eq. 3.2,
+    ``sin(m - a1) ≥ s1``, or the one of ``a2``) fails at every sub-interval's middle by at
+    least ``pad / r``, far above the rounding of ``s``, of ``cos`` and ``sin`` and of this
+    test; the closed form carves nothing (``β < π/2`` only carves less) and returns
+    ``UNCHANGED``, as this test says.
+    """
+    fx = sector.fx
+    fy = sector.fy
+    pad = 1e-6 * (1.0 + abs(ox) + abs(oy) + r + abs(fx) + abs(fy))
+    # Carved points have u1 × (p - o_j) ≥ 0 and (p - o_j) × u2 ≥ 0, i.e. (-u2) × (p - o_j) ≥ 0.
+    return (_beyond_edge(ox, oy, r, clo, slo, chi, shi, fx, fy, sector.u1x, sector.u1y, pad)
+            or _beyond_edge(ox, oy, r, clo, slo, chi, shi, fx, fy, -sector.u2x, -sector.u2y,
+                            pad))

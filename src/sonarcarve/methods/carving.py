@@ -28,7 +28,12 @@ import numpy as np
 
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
-from sonarcarve.geometry.bounds import UNDECIDED, arc_clear_of_disk, circle_against_sector
+from sonarcarve.geometry.bounds import (
+    UNDECIDED,
+    arc_clear_of_disk,
+    arc_clear_of_wedge,
+    circle_against_sector,
+)
 from sonarcarve.geometry.circular import scratch_arrays
 from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
@@ -61,26 +66,39 @@ _ALIVE = int(ArcFate.ALIVE)
 
 
 @compiled_inline
-def _clear_of_disk(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: FloatArray,
-                   hi: FloatArray, tips: FloatArray, sector: Sector) -> bool:
-    """:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk` for arc ``i``: the sector leaves
-    it unchanged. ``tips[i]`` caches ``e(lo), e(hi)`` (NaN when the interval changed): most arcs
-    are tested many times between changes."""
+def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: FloatArray,
+                     hi: FloatArray, tips: FloatArray, sector: Sector) -> bool:
+    """The sector leaves arc ``i`` unchanged, by a test without trigonometry: the arc is clear
+    of its disk (:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk`) or of one of its
+    half-planes (:func:`~sonarcarve.geometry.bounds.arc_clear_of_wedge`).
+
+    ``tips[i]`` caches ``e(lo), e(hi)``, each end NaN when that end moved: most arcs are tested
+    many times between changes, and carving mostly moves one end of an arc (cos and sin of the
+    same double: the same values whenever they are computed).
+    """
     if math.isnan(tips[i, 0]):
-        # Angles read once: a store into ``tips`` between reads of ``lo[i]`` (which it might
+        # The angle read once: a store into ``tips`` between reads of ``lo[i]`` (which it might
         # alias, for the compiler) kept cos and sin of one angle from becoming one sincos call.
         start = lo[i]
-        end = hi[i]
         cos_start = math.cos(start)
         sin_start = math.sin(start)
-        cos_end = math.cos(end)
-        sin_end = math.sin(end)
         tips[i, 0] = cos_start
         tips[i, 1] = sin_start
+    if math.isnan(tips[i, 2]):
+        end = hi[i]
+        cos_end = math.cos(end)
+        sin_end = math.sin(end)
         tips[i, 2] = cos_end
         tips[i, 3] = sin_end
-    return arc_clear_of_disk(x[i], y[i], r[i], tips[i, 0], tips[i, 1], tips[i, 2], tips[i, 3],
-                             sector)
+    ox = x[i]
+    oy = y[i]
+    radius = r[i]
+    clo = tips[i, 0]
+    slo = tips[i, 1]
+    chi = tips[i, 2]
+    shi = tips[i, 3]
+    return (arc_clear_of_disk(ox, oy, radius, clo, slo, chi, shi, sector)
+            or arc_clear_of_wedge(ox, oy, radius, clo, slo, chi, shi, sector))
 
 
 @compiled_inline
@@ -92,7 +110,7 @@ def _start_arc(
     """A new arc in ``slot``: alive, not carved, its full beam (section 3) and the circle around
     it; returns its freespace sector (eq. 3.2), which carves the older arcs. The arc's
     ``tips`` are its beam's edge directions, which the sector has computed: ``e(θ1), e(θ2)``
-    of the same angles, the values :func:`_clear_of_disk` would compute."""
+    of the same angles, the values :func:`_clear_of_sector` would compute."""
     start = theta1[slot]
     end = theta2[slot]
     lo[slot] = start
@@ -136,7 +154,7 @@ def _carve_found(
         new_lo = lo[i]
         new_hi = hi[i]
         if fate == UNDECIDED:
-            if _clear_of_disk(i, x, y, r, lo, hi, tips, sector):
+            if _clear_of_sector(i, x, y, r, lo, hi, tips, sector):
                 continue
             fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
                                                starts, ends, flags)
@@ -144,9 +162,12 @@ def _carve_found(
                 continue
         carved[i] = True
         if fate == SHRUNK:
+            if new_lo != lo[i]:
+                tips[i, 0] = math.nan
+            if new_hi != hi[i]:
+                tips[i, 2] = math.nan
             lo[i] = new_lo
             hi[i] = new_hi
-            tips[i, 0] = math.nan
             bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
                 x[i], y[i], r[i], new_lo, new_hi)
         else:
@@ -276,9 +297,10 @@ class CarvingModel(ArcModel):
         A circle ``(cx, cy, radius)`` containing each carved arc
         (:func:`~sonarcarve.geometry.arc_bounding_circle`): a cheap first test in carving.
     tips : ndarray of float64, shape (history.storage_size, 4)
-        ``cos lo, sin lo, cos hi, sin hi`` of each carved interval, NaN until a test needs them
-        (:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk`: a cheap test before the closed
-        form).
+        ``cos lo, sin lo, cos hi, sin hi`` of each carved interval; ``tips[:, 0]`` (``[:, 2]``)
+        is NaN when ``lo`` (``hi``) has moved since a test needed them
+        (:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk`, ``arc_clear_of_wedge``: cheap
+        tests before the closed form).
     index : ArcIndex
         The live arcs that carving has not removed, by place
         (:mod:`sonarcarve.geometry.index`): a reading carves only those near its sector.
