@@ -14,6 +14,7 @@ __all__ = [
     "arc_clear_of_disk",
     "arc_clear_of_wedge",
     "circle_against_sector",
+    "circle_clear_of_sector",
 ]
 
 #: :func:`circle_against_sector` could not decide: the exact carving must.
@@ -49,6 +50,21 @@ def arc_bounding_circle(ox: float, oy: float, r: float, lo: float,
     reach = r * math.cos(half)
     return (ox + reach * math.cos(mid), oy + reach * math.sin(mid),
             r * math.sin(half) + 1e-9 * r)
+
+
+@compiled_inline
+def circle_clear_of_sector(cx: float, cy: float, rho: float, sector: Sector) -> bool:
+    """Whether the circle ``(cx, cy, rho)`` is clear of the sector's disk or of one of its
+    bounding half-planes: :func:`circle_against_sector`'s ``UNCHANGED``, the same arithmetic,
+    for a caller that needs nothing else (the index's filtered query)."""
+    dx = cx - sector.fx
+    dy = cy - sector.fy
+    left = sector.u1x * dy - sector.u1y * dx
+    right = dx * sector.u2y - dy * sector.u2x
+    if left < -rho or right < -rho:
+        return True
+    radius = sector.radius
+    return dx * dx + dy * dy >= (radius + rho) * (radius + rho)
 
 
 @compiled_inline

@@ -45,6 +45,7 @@ from sonarcarve.geometry.index import (
     index_remove,
     make_index,
     query_sector,
+    query_sector_circles,
 )
 from sonarcarve.geometry.intervals import _carve_core
 from sonarcarve.geometry.sector import Sector, make_sector
@@ -197,7 +198,8 @@ def _add_arcs(
 
     ``index`` holds exactly the live, alive arcs: the arc leaving the history and the arcs
     carving removes are taken out. Each reading carves only the arcs the index returns for its
-    sector (:func:`~sonarcarve.geometry.index.query_sector`), the same arcs the all-pairs
+    sector whose bounding circles it does not leave clear
+    (:func:`~sonarcarve.geometry.index.query_sector_circles`), the same arcs the all-pairs
     :func:`~sonarcarve.geometry.carve_arcs` would change, with the same step, so the results
     are identical. One compiled call
     per block: Python between readings cost more than the carving.
@@ -221,7 +223,8 @@ def _add_arcs(
         sector = _start_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status, carved,
                             tolerance, max_incidence)
         if sector.radius > 0.0:
-            found = query_sector(index, sector, candidates)
+            # The arcs near the sector whose circles it does not leave clear.
+            found = query_sector_circles(index, sector, bounds, candidates)
             if found < 0:  # a huge sector: every live arc before this one
                 found = 0
                 for older in range(max(0, sequence - capacity + 1), sequence):
