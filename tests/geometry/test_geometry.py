@@ -617,6 +617,20 @@ def test_carved_set_matches_shapely(seed: int) -> None:
 # -- the cheap rejection before the closed form (geometry/bounds.py) ----------------------------
 
 
+def _random_arc_and_origin(rng: np.random.Generator, k: int) -> tuple[float, ...]:
+    """Case ``k`` of the cheap-rejection tests: an arc (origin, radius, ``lo``, ``hi``) and a
+    newer reading's origin; every tenth far from the origin (1e5 m), every 17th a point arc,
+    every 13th with both origins at the same place."""
+    ox, oy = rng.uniform(-3.0, 3.0, 2) * (1e5 if k % 10 == 0 else 1.0)
+    r = rng.uniform(0.05, 5.0)
+    lo = rng.uniform(-8.0, 8.0)
+    hi = lo + (0.0 if k % 17 == 0 else rng.uniform(0.0, 3.1))
+    fx, fy = np.array([ox, oy]) + rng.uniform(-6.0, 6.0, 2)
+    if k % 13 == 0:
+        fx, fy = ox, oy  # coincident origins
+    return float(ox), float(oy), r, lo, hi, float(fx), float(fy)
+
+
 def test_arc_clear_of_disk_only_for_arcs_carving_leaves_unchanged() -> None:
     """Whenever the test says "clear", every sample of the arc is outside the open disk and the
     closed form carves nothing; it says so for most arcs clearly outside. Half the cases put the
@@ -624,13 +638,7 @@ def test_arc_clear_of_disk_only_for_arcs_carving_leaves_unchanged() -> None:
     rng = np.random.default_rng(11)
     clear_outside = said_clear = 0
     for k in range(4000):
-        ox, oy = rng.uniform(-3.0, 3.0, 2) * (1e5 if k % 10 == 0 else 1.0)
-        r = rng.uniform(0.05, 5.0)
-        lo = rng.uniform(-8.0, 8.0)
-        hi = lo + (0.0 if k % 17 == 0 else rng.uniform(0.0, 3.1))
-        fx, fy = np.array([ox, oy]) + rng.uniform(-6.0, 6.0, 2)
-        if k % 13 == 0:
-            fx, fy = ox, oy  # coincident origins
+        ox, oy, r, lo, hi, fx, fy = _random_arc_and_origin(rng, k)
         tau = np.linspace(lo, hi, SAMPLES)
         nearest = np.hypot(ox + r * np.cos(tau) - fx, oy + r * np.sin(tau) - fy).min()
         if k % 2:
@@ -661,13 +669,7 @@ def test_arc_clear_of_wedge_only_for_arcs_carving_leaves_unchanged() -> None:
     rng = np.random.default_rng(12)
     clear_outside = said_clear = 0
     for k in range(4000):
-        ox, oy = rng.uniform(-3.0, 3.0, 2) * (1e5 if k % 10 == 0 else 1.0)
-        r = rng.uniform(0.05, 5.0)
-        lo = rng.uniform(-8.0, 8.0)
-        hi = lo + (0.0 if k % 17 == 0 else rng.uniform(0.0, 3.1))
-        fx, fy = np.array([ox, oy]) + rng.uniform(-6.0, 6.0, 2)
-        if k % 13 == 0:
-            fx, fy = ox, oy  # coincident origins
+        ox, oy, r, lo, hi, fx, fy = _random_arc_and_origin(rng, k)
         tau = np.linspace(lo, hi, SAMPLES)
         px, py = ox + r * np.cos(tau) - fx, oy + r * np.sin(tau) - fy
         width = rng.uniform(0.0, 3.0)
