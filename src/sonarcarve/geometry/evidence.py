@@ -77,6 +77,16 @@ only borrow the arrays their caller owns and allocate nothing, so they are compi
 numba's reference counting (``compiled_borrowing``): the same arithmetic, and 13-18 % less
 kernel CPU per reading at a history of 250 (the atomic counts of the arrays their inlined
 helpers bind).
+
+The weighing pass of :func:`evidence_add` is laid out for the processor; each value is the
+same IEEE operation in the same order as in one loop that tests every arc and every bin in
+turn, so the maps are bit for bit those of that loop. The cull tests every older row's
+bounding circle in one loop without branches (the compiler tests eight rows at once), and only
+the rows that pass are visited, oldest first. For each of them, a loop without branches over
+its K bins marks the bins to weigh (free evidence below T, inside the reach and the beam); a
+second computes ``P_detect`` for all K bins at once, when any is marked (``np.divide`` instead
+of ``/``: the same division without numba's zero-divisor test, whose branch kept the loop
+scalar); a third adds the evidence of the marked bins, in bin order.
 """
 
 from __future__ import annotations
@@ -181,11 +191,13 @@ def evidence_threshold(carve_probability: float) -> float:
 
 @compiled_inline
 def _incidence_gain(cos_gamma: float, cos_full: float, cos_zero: float, rough: float) -> float:
+    """``I(γ)`` (module docstring) from ``cos γ``; ``cos_full > cos_zero``. np.divide is
+    ``/`` without numba's zero-divisor test (a branch that keeps a loop scalar)."""
     if cos_gamma >= cos_full:
         return 1.0
     if cos_gamma <= cos_zero:
         return rough
-    return rough + (1.0 - rough) * (cos_gamma - cos_zero) / (cos_full - cos_zero)
+    return rough + float(np.divide((1.0 - rough) * (cos_gamma - cos_zero), cos_full - cos_zero))
 
 
 @compiled_inline
@@ -399,17 +411,29 @@ def _new_beam(slot: int, x: FloatArray, y: FloatArray, r: FloatArray, beam_width
 
 
 @compiled_inline
-def _beyond_beam(cx: float, cy: float, rho: float, beam: _Beam) -> bool:
-    """Cull: an arc's bounding circle (centre ``(cx, cy)``, radius ``rho``) lies beyond the
-    reach of ``j``'s echo circle, or clear of one of the two half-planes whose intersection is
-    ``j``'s beam (φ < π; as ``geometry/bounds.py``)."""
-    dcx = cx - beam.x
-    dcy = cy - beam.y
+def _mark_near(lo: int, hi: int, cx: FloatArray, cy: FloatArray, rho: FloatArray,
+               status: Int8Array, beam: _Beam, near: BoolArray) -> None:
+    """The cull, for rows ``lo .. hi - 1``: ``near[i]`` is False where arc ``i`` is no longer
+    alive or its bounding circle (centre ``(cx[i], cy[i])``, radius ``rho[i]``) lies beyond
+    the reach of ``j``'s echo circle, or clear of one of the two half-planes whose
+    intersection is ``j``'s beam (φ < π; as ``geometry/bounds.py``). No branch: the compiler
+    tests several rows at once."""
+    bx = beam.x
+    by = beam.y
     reach = beam.reach
-    if dcx * dcx + dcy * dcy >= (reach + rho) * (reach + rho):
-        return True
-    below_lower_edge = beam.edge1_x * dcy - beam.edge1_y * dcx < -rho
-    return bool(below_lower_edge or dcx * beam.edge2_y - dcy * beam.edge2_x < -rho)
+    e1x = beam.edge1_x
+    e1y = beam.edge1_y
+    e2x = beam.edge2_x
+    e2y = beam.edge2_y
+    for i in range(lo, hi):
+        dcx = cx[i] - bx
+        dcy = cy[i] - by
+        r = rho[i]
+        far = dcx * dcx + dcy * dcy >= (reach + r) * (reach + r)
+        below_lower_edge = e1x * dcy - e1y * dcx < -r
+        above_upper_edge = dcx * e2y - dcy * e2x < -r
+        near[i] = (status[i] == EVIDENCE_ALIVE) & (not far) & (not below_lower_edge) & (
+            not above_upper_edge)
 
 
 @compiled_inline
@@ -431,10 +455,12 @@ def _occlude_behind(slot: int, rel: float, spread: float, beam: _Beam, free: Flo
 
 @compiled_borrowing
 def evidence_add(
-    slot: int, older: SlotArray,
+    slot: int, first_older: int, n_older: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
     others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -442,14 +468,16 @@ def evidence_add(
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
     params: EvidenceParams, with_atm: bool,
 ) -> tuple[int, int, int, int]:
-    """Add reading ``slot``: initialise its profile, then weigh it against every ``older`` arc.
+    """Add reading ``slot``: initialise its profile, then weigh it against every older arc.
 
     Parameters
     ----------
     slot : int
         The new arc's row.
-    older : ndarray of int64, shape (m,)
-        Live older rows, oldest first.
+    first_older, n_older : int
+        The older rows: ``n_older`` rows from ``first_older`` on, oldest first, wrapping
+        from the last row to row 0 (the history's ring); the arcs not alive among them are
+        skipped.
     x, y, r, theta, beam_width : ndarray, shape (n,)
         The history's rows (metres, radians).
     sensor : ndarray of int64, shape (n,)
@@ -481,6 +509,15 @@ def evidence_add(
         then the sines of its bin edges, the beam width they are for (NaN before the first
         reading) and the scale of :func:`_bin_of_sine`'s guess (kept between readings of the
         same beam width).
+    scratch : ndarray, shape (9, K)
+        Scratch of the bin passes (overwritten): per older arc, its bins' offsets from the
+        new reading and what :func:`detect_probability` computes of them.
+    in_beam : ndarray of bool, shape (K,)
+        Scratch (overwritten): the older arc's bins to weigh.
+    bin_index : ndarray of int64, shape (K,)
+        Scratch (overwritten): their indices, in order.
+    near, near_flags : ndarray of int64 and bool, shape (n,)
+        Scratch (overwritten): the rows that pass the cull, and the cull's verdict per row.
     bx, by, ex, ey : ndarray, shape (n, K)
         Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
     free, support : ndarray, shape (n, K)
@@ -489,8 +526,9 @@ def evidence_add(
         Support per bin times the sine of the angle at which the two echo circles meet there:
         how much the support says about where on the arc the echo came from (updated in
         place; it picks the kept run of a split arc).
-    circle : ndarray, shape (n, 3)
-        A circle containing each full arc (a cheap first test).
+    circle : ndarray, shape (3, n)
+        A circle containing each full arc (a cheap first test): rows centre x, centre y,
+        radius (a row each, so that the cull reads them contiguously).
     cos_axis, sin_axis, cos_half : ndarray, shape (n,)
         Axis direction and ``cos(φ/2)`` per row (filled for ``slot``).
     status : ndarray of int8, shape (n,)
@@ -540,9 +578,9 @@ def evidence_add(
         support[slot, k] = 0.0
         located[slot, k] = 0.0
     c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
-    circle[slot, 0] = c0
-    circle[slot, 1] = c1
-    circle[slot, 2] = c2
+    circle[0, slot] = c0
+    circle[1, slot] = c1
+    circle[2, slot] = c2
     status[slot] = EVIDENCE_ALIVE
     touched[slot] = False
     occluded[slot] = 0.0
@@ -575,17 +613,35 @@ def evidence_add(
     inv_scale = beam.inv_scale
     cos_full = beam.cos_full
     cos_zero = beam.cos_zero
+    max_detect = params.max_detect
+    rough = params.rough
+    s_vx = scratch[0]
+    s_vy = scratch[1]
+    s_d2 = scratch[2]
+    s_d = scratch[3]
+    s_inv = scratch[4]
+    s_sine = scratch[5]
+    s_beam = scratch[6]
+    s_cos = scratch[7]
+    s_p = scratch[8]
     fully = 0
     crossings = 0
     occluding = 0
     n_passed = 0
     spilled = 0
     top_through = 0.0
-    for i in older:
-        if status[i] != EVIDENCE_ALIVE:
-            continue
-        if _beyond_beam(circle[i, 0], circle[i, 1], circle[i, 2], beam):
-            continue
+    # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
+    # rows that pass it, oldest first.
+    storage = x.shape[0]
+    n_near = 0
+    end = first_older + n_older
+    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
+        _mark_near(lo, hi, circle[0], circle[1], circle[2], status, beam, near_flags)
+        for i in range(lo, hi):
+            near[n_near] = i
+            n_near += near_flags[i]
+    for q in range(n_near):
+        i = near[q]
         if with_atm:
             kept, spilled = _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
                                        params.cos_psi, bearings, counts, spill, spilled)
@@ -598,30 +654,62 @@ def evidence_add(
         alive_bins = 0
         top_support = 0.0
         top_looked = 0.0
+        # Pass 1: which bins are left to weigh (free evidence below T) and lie in j's reach
+        # and beam; no branch, so the compiler runs it on several bins at once.
         for k in range(bins):
-            f = free[i, k]
-            if f >= threshold:
-                continue
             vx = bx[i, k] - xj
             vy = by[i, k] - yj
             d2 = vx * vx + vy * vy
             along = vx * cj + vy * sj
+            weigh = not free[i, k] >= threshold
             # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
-            if d2 >= reach2 or along <= 0.0 or along * along < d2 * cos_half2:
-                alive_bins += 1
-                continue
-            d = math.sqrt(d2)
+            outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
+            s_vx[k] = vx
+            s_vy[k] = vy
+            s_d2[k] = d2
+            in_beam[k] = weigh & (not outside)
+            alive_bins += weigh & outside
+        n_in = 0
+        for k in range(bins):  # the bins to weigh, in order
+            bin_index[n_in] = k
+            n_in += in_beam[k]
+        if n_in > 0:
+            # Pass 2: detect_probability, inlined, for every bin (those outside the beam
+            # too: the compiler runs it on several bins at once, which a loop over the bins
+            # in the beam would not allow). np.divide is ``/`` (the same rounding) without
+            # numba's zero-divisor test, whose branch would keep the loop scalar; bins in the
+            # beam have d > 0 (along > 0), and what the others get is not used.
+            for k in range(bins):
+                vx = s_vx[k]
+                vy = s_vy[k]
+                d = math.sqrt(s_d2[k])
+                inv_d = np.divide(1.0, d)
+                sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
+                u = min(np.divide(abs(sine), sin_half), 1.0)
+                p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
+                cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) * inv_d
+                s_d[k] = d
+                s_inv[k] = inv_d
+                s_sine[k] = sine
+                s_beam[k] = p_beam
+                s_cos[k] = cos_gamma
+                s_p[k] = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+        # Pass 3: the evidence, in bin order.
+        for m in range(n_in):
+            k = bin_index[m]
+            d = s_d[k]
             if d >= free_r and abs(d - beam.r) > params.support_tolerance:
                 alive_bins += 1
                 continue
-            # detect_probability, inlined: beam and range (p_beam), then incidence.
-            inv_d = 1.0 / d
-            sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
-            u = min(abs(sine) / sin_half, 1.0)
-            p_beam = params.max_detect * (1.0 - edge_loss * u * u) / (1.0 + d * inv_scale)
-            cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) * inv_d
-            p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, params.rough)
+            vx = s_vx[k]
+            vy = s_vy[k]
+            inv_d = s_inv[k]
+            sine = s_sine[k]
+            p_beam = s_beam[k]
+            cos_gamma = s_cos[k]
+            p = s_p[k]
             if d < free_r:
+                f = free[i, k]
                 touched[i] = True
                 if distinct:
                     top_looked = max(top_looked, p_beam)
@@ -631,6 +719,7 @@ def evidence_add(
                 if established and d < free_r - params.tolerance:
                     # An established surface j looked past at a glancing angle: the bins of j
                     # behind it cannot hold j's echo (sound does not pass through walls).
+                    along = vx * cj + vy * sj
                     occluding += _occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
                                                  half_bin_arc / d, beam, free, threshold)
                     touched[slot] = True
@@ -688,10 +777,12 @@ def evidence_add(
 
 @compiled_borrowing
 def evidence_add_many(
-    first: int, count: int, capacity: int, wrapped: SlotArray,
+    first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
     others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -703,8 +794,7 @@ def evidence_add_many(
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
 
-    ``wrapped`` is ``arange(2 n) % n`` for the ``n`` storage rows (any window of live rows is
-    one contiguous slice of it); the other arrays are those of :func:`evidence_add`.
+    The arrays are those of :func:`evidence_add`.
 
     It stops after the first arc whose crossings did not all fit the store (they are in
     ``spill``; every other part of that arc is done): the caller widens the store, moves the
@@ -730,8 +820,9 @@ def evidence_add_many(
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
         a, b, c, spilled = evidence_add(
-            sequence % storage, wrapped[start : start + live - 1], x, y, r, theta, beam_width,
-            sensor, viewpoints, looked, others, through, passed, trans, bx, by, ex, ey, free,
+            sequence % storage, start, live - 1, x, y, r, theta, beam_width,
+            sensor, viewpoints, looked, others, through, passed, trans, scratch, in_beam,
+            bin_index, near, near_flags, bx, by, ex, ey, free,
             support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
             bearings, counts, spill, params, with_atm)
         fully += a
@@ -789,9 +880,9 @@ def evidence_free(
     for i in older:
         if status[i] != EVIDENCE_ALIVE:
             continue
-        dcx = circle[i, 0] - xj
-        dcy = circle[i, 1] - yj
-        rho = circle[i, 2]
+        dcx = circle[0, i] - xj
+        dcy = circle[1, i] - yj
+        rho = circle[2, i]
         if dcx * dcx + dcy * dcy >= (free_r + rho) * (free_r + rho):
             continue
         if u1x * dcy - u1y * dcx < -rho or dcx * u2y - dcy * u2x < -rho:

@@ -408,7 +408,7 @@ class EvidenceModel(ArcModel):
         self.free = np.zeros((size, bins))
         self.support = np.zeros((size, bins))
         self.located = np.zeros((size, bins))
-        self.circle = np.zeros((size, 3))
+        self.circle = np.zeros((3, size))  # rows: centre x, centre y, radius
         self.cos_axis = np.zeros(size)
         self.sin_axis = np.zeros(size)
         self.cos_half = np.zeros(size)
@@ -427,14 +427,19 @@ class EvidenceModel(ArcModel):
         # width they were computed for (NaN: none yet), the bin guess's scale.
         self.trans = np.zeros(2 * bins + 3)
         self.trans[2 * bins + 1] = np.nan
+        # Scratch of evidence_add: per older arc, its bins' offsets from the new reading and
+        # what it computes for the bins in the new beam; which rows pass the cull.
+        self.scratch = np.zeros((9, bins))
+        self.in_beam = np.zeros(bins, dtype=bool)
+        self.bin_index = np.zeros(bins, dtype=np.int64)
+        self.near = np.zeros(size, dtype=np.int64)
+        self.near_flags = np.zeros(size, dtype=bool)
         # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
         # when an arc's crossings do not fit (they wait in ``spill``, room for every crossing
         # one new arc can make: 4 (capacity - 1) rows of (row, bearing) float64, 0.64 MB at
         # a history of 10,000 arcs).
         self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
-        # Slot numbers laid out twice: any window of live rows is one contiguous slice.
-        self._wrapped = np.arange(2 * size, dtype=np.int64) % size
         self._fully = 0
         self._crossings = 0
         self._occluded_bins = 0
@@ -459,8 +464,9 @@ class EvidenceModel(ArcModel):
         order (after its first two arguments)."""
         h = self.history
         return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
-                self.others, self.through, self.passed, self.trans, self.bx, self.by, self.ex,
-                self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
+                self.others, self.through, self.passed, self.trans, self.scratch, self.in_beam,
+                self.bin_index, self.near, self.near_flags, self.bx, self.by, self.ex, self.ey,
+                self.free, self.support, self.located, self.circle, self.cos_axis,
                 self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
                 self.bearings, self.counts, self.spill, self.params, self.with_atm)
 
@@ -485,7 +491,7 @@ class EvidenceModel(ArcModel):
         end = first + count
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
-                first, end - first, self.history.capacity, self._wrapped, *self._arrays())
+                first, end - first, self.history.capacity, *self._arrays())
             self._count((fully, crossings, occluding))
             if spilled:
                 self._take_spill(spilled)
