@@ -411,13 +411,14 @@ def _new_beam(slot: int, x: FloatArray, y: FloatArray, r: FloatArray, beam_width
 
 
 @compiled_inline
-def _mark_near(lo: int, hi: int, cx: FloatArray, cy: FloatArray, rho: FloatArray,
-               status: Int8Array, beam: _Beam, near: BoolArray) -> None:
-    """The cull, for rows ``lo .. hi - 1``: ``near[i]`` is False where arc ``i`` is no longer
-    alive or its bounding circle (centre ``(cx[i], cy[i])``, radius ``rho[i]``) lies beyond
-    the reach of ``j``'s echo circle, or clear of one of the two half-planes whose
-    intersection is ``j``'s beam (φ < π; as ``geometry/bounds.py``). No branch: the compiler
-    tests several rows at once."""
+def _mark_near(cx: FloatArray, cy: FloatArray, rho: FloatArray, status: Int8Array,
+               beam: _Beam, near: BoolArray) -> None:
+    """The cull, for each row ``i`` of the arrays (slices of the history's rows): ``near[i]``
+    is False where arc ``i`` is no longer alive or its bounding circle (centre ``(cx[i],
+    cy[i])``, radius ``rho[i]``) lies beyond the reach of ``j``'s echo circle, or clear of one
+    of the two half-planes whose intersection is ``j``'s beam (φ < π; as
+    ``geometry/bounds.py``). No branch, and indices from 0 (no test for negative ones): the
+    compiler tests several rows at once."""
     bx = beam.x
     by = beam.y
     reach = beam.reach
@@ -425,7 +426,7 @@ def _mark_near(lo: int, hi: int, cx: FloatArray, cy: FloatArray, rho: FloatArray
     e1y = beam.edge1_y
     e2x = beam.edge2_x
     e2y = beam.edge2_y
-    for i in range(lo, hi):
+    for i in range(near.shape[0]):
         dcx = cx[i] - bx
         dcy = cy[i] - by
         r = rho[i]
@@ -636,7 +637,8 @@ def evidence_add(
     n_near = 0
     end = first_older + n_older
     for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
-        _mark_near(lo, hi, circle[0], circle[1], circle[2], status, beam, near_flags)
+        _mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
+                   near_flags[lo:hi])
         for i in range(lo, hi):
             near[n_near] = i
             n_near += near_flags[i]
