@@ -48,7 +48,7 @@ from sonarcarve.lab.metrics import gap_region
 from sonarcarve.lab.scenarios import Scenario, build_world, run_simulation
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.simulate import Simulation, simulate
-from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.sonar import DEFAULT_PHYSICS, EchoKind
 
 Bounds = tuple[float, float, float, float]
 Factory = Callable[[float, Bounds], OccupancyMap]
@@ -80,6 +80,14 @@ def _layer(params: RangeSensorLayerParams) -> Factory:
 
 def _elfes(h: float, b: Bounds) -> OccupancyMap:
     return OccupancyGrid(h, b)
+
+
+def _scenario(world: str, seed: int, physics: str,
+              path: tuple[tuple[float, float], ...] | None = None) -> Scenario:
+    """The scenario of ``world`` and ``seed`` under the echo model ``physics`` (the default
+    physics adds no override, so its simulations are those of the other benchmarks)."""
+    override = () if physics == DEFAULT_PHYSICS.echo_model else (("echo_model", physics),)
+    return Scenario(world, seed, path=path, physics=override)
 
 
 def _simulate(scenario: Scenario, no_echo: bool) -> Simulation:
@@ -170,7 +178,8 @@ def _measures_table(sims: dict[str, list[Simulation]], h: float,
 
 def _door_table(seeds: int, resolutions: Sequence[float],
                 kinds_by_h: dict[float, list[GridKind]],
-                no_echo: bool = False) -> dict[tuple[float, str], float]:
+                no_echo: bool = False, physics: str = "specular"
+                ) -> dict[tuple[float, str], float]:
     world = build_world(f"doorway:{DOOR_WIDTH:g}")
     gap = world.openings[0]
     region = gap_region(gap[0], gap[1], GAP_DEPTH)
@@ -183,7 +192,8 @@ def _door_table(seeds: int, resolutions: Sequence[float],
                 direction = np.array([math.sin(hd), math.cos(hd)])
                 path = tuple((float(p[0]), float(p[1]))
                              for p in (aim - 4.3 * direction, aim - 0.8 * direction))
-                sim = _simulate(Scenario(f"doorway:{DOOR_WIDTH:g}", seed, path=path), no_echo)
+                sim = _simulate(_scenario(f"doorway:{DOOR_WIDTH:g}", seed, physics, path),
+                                no_echo)
                 stop = first_reading_within(sim, gap, 1.0)
                 runs.append((seed, sim, stop))
     clearance = passage_clearance(runs[0][1].robot.robot_radius)
@@ -278,19 +288,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-echo", action="store_true",
                         help="also feed the firings that heard nothing (range inf: free space "
                              "up to the robot's max range); the layer drops them (ROS default)")
+    parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
+                        help="echo model of the simulated sonar (default specular, the "
+                             "simulator's default physics)")
     args = parser.parse_args(argv)
     tic = time.perf_counter()
+    if args.physics != DEFAULT_PHYSICS.echo_model:
+        print(f"\nPhysics: {args.physics}.")
     if args.no_echo:
         print("\nWith no-echo readings (every firing that heard nothing: free space up to the "
               "robot's max range; ROS's layer drops +Inf unless inf_is_max_reading).")
-    sims = {w: [_simulate(Scenario(w, s), args.no_echo) for s in range(args.seeds)]
-            for w in args.worlds}
-    office = sims.get("office") or [_simulate(Scenario("office", s), args.no_echo)
+    sims = {w: [_simulate(_scenario(w, s, args.physics), args.no_echo)
+                for s in range(args.seeds)] for w in args.worlds}
+    office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
     kinds_by_h = {h: _kinds(_sweep(office, h)) for h in args.resolutions}
     for h in args.resolutions:
         _measures_table(sims, h, kinds_by_h[h])
-    _door_table(args.seeds, args.resolutions, kinds_by_h, args.no_echo)
+    _door_table(args.seeds, args.resolutions, kinds_by_h, args.no_echo, args.physics)
     _cpu_table(office[0], args.resolutions, kinds_by_h)
     if args.figure.name:  # --figure "" skips it
         _figure(office[0], args.resolutions[0], args.figure)

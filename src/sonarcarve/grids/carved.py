@@ -396,6 +396,7 @@ class CarvedGridParams:
     fresh_arcs: bool = True
     fresh_seconds: float = 2.0
     see_through: float = DEFAULT_SEE_THROUGH
+    repeat_weight: float = 0.0
 
     def __post_init__(self) -> None:
         _check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -431,6 +432,10 @@ class CarvedGridParams:
         if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
                 math.isfinite(fs) and fs > 0.0):
             msg = f"carved grid: fresh_seconds must be a finite number > 0, got {fs!r}"
+            raise GridError(msg)
+        rw = self.repeat_weight
+        if isinstance(rw, bool) or not isinstance(rw, int | float) or not 0.0 <= rw <= 1.0:
+            msg = f"carved grid: repeat_weight must be a number in [0, 1], got {rw!r}"
             raise GridError(msg)
         bp = self.band_profile
         if isinstance(bp, bool) or not isinstance(bp, int | float) or not (
@@ -1053,6 +1058,82 @@ def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                 out[i, j] = UNKNOWN
 
 
+@compiled_inline
+def _in_beam(bearing: float, theta: float, half: float) -> bool:
+    """Whether ``bearing`` lies within ``half`` of the beam axis ``theta``."""
+    return abs(_bearing_off(math.cos(bearing), math.sin(bearing), theta)) <= half
+
+
+@compiled_inline
+def _repeats(x1: float, y1: float, r1: float, t1: float, h1: float, x2: float, y2: float,
+             r2: float, t2: float, h2: float, tol: float) -> bool:
+    """Whether the echo ``(x2, y2, r2)`` (beam ``t2 ± h2``) repeats the same sensor's previous
+    echo ``(x1, y1, r1)`` (beam ``t1 ± h1``): whether both are most likely the same reflector.
+
+    Their circles are internally tangent within ``tol`` (``| |P2 - P1| - |r1 - r2| | <= tol``:
+    the range changed by the distance the sensor moved towards or away from the reflector) at a
+    bearing inside both beams (the tangent point lies on the line through both origins, beyond
+    the smaller circle's centre); or the sensor stayed within ``tol`` and heard the same range
+    with each beam's axis inside the other beam. The circles of such echoes lie within ``tol``
+    of each other over a stretch on both sides of the tangent point, and a reflector anywhere
+    on that stretch would have given both ranges: the second echo places the reflector no
+    better than the first, where any other pair of echoes narrows it down."""
+    dx, dy = x2 - x1, y2 - y1
+    d = math.sqrt(dx * dx + dy * dy)
+    dr = r1 - r2
+    if d <= tol:
+        return (abs(dr) <= tol and _in_beam(t2, t1, h1) and _in_beam(t1, t2, h2))
+    if abs(d - abs(dr)) > tol:
+        return False
+    bearing = math.atan2(dy, dx) if dr >= 0.0 else math.atan2(-dy, -dx)
+    return _in_beam(bearing, t1, h1) and _in_beam(bearing, t2, h2)
+
+
+@compiled
+def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
+                   seen_seq: npt.NDArray[np.int64], marked: SlotArray,
+                   preds: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64], first: int,
+                   no_echo: BoolArray, x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta: FloatArray, half: FloatArray, hx: FloatArray, hy: FloatArray,
+                   hr: FloatArray, htheta: FloatArray, hwidth: FloatArray, capacity: int,
+                   tol: float, factor: float) -> int:
+    """For each echo ``k`` of a batch (arc ``seqs[k]``; ``preds[k]``: its sensor's previous
+    echo's arc, -1 for none) that repeats that arc (:func:`_repeats`) while it is still in the
+    history, give the previous arc the weight factor ``factor``: in ``batch_chain[p - first]``
+    if it is an arc of the batch (``first``: the batch's first arc), else in ``chain`` (by
+    slot, rows ``hx..hwidth`` of the history), which then forgets it had seen that arc's state
+    (``seen_seq`` -1) so that the next read recomputes its weight, and whose slot goes into
+    ``marked``. Returns how many slots were marked."""
+    size = chain.shape[0]
+    rows = np.empty(x.shape[0], dtype=np.int64)  # the row of the batch's arc first + i
+    count = 0
+    for k in range(x.shape[0]):
+        if not no_echo[k]:
+            rows[count] = k
+            count += 1
+    n_marked = 0
+    for k in range(x.shape[0]):
+        p = preds[k]
+        if no_echo[k] or p < 0 or seqs[k] - p >= capacity:
+            continue
+        if p >= first:
+            j = rows[p - first]
+            x1, y1, r1, t1, h1 = x[j], y[j], r[j], theta[j], half[j]
+        else:
+            s = p % size
+            x1, y1, r1, t1, h1 = hx[s], hy[s], hr[s], htheta[s], 0.5 * hwidth[s]
+        if not _repeats(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
+            continue
+        if p >= first:
+            batch_chain[p - first] = factor
+        else:
+            chain[p % size] = factor
+            seen_seq[p % size] = -1
+            marked[n_marked] = p % size
+            n_marked += 1
+    return n_marked
+
+
 class _Finals(NamedTuple):
     """Arcs that left the history in a batch, in order: where to draw their final band."""
 
@@ -1155,6 +1236,12 @@ class CarvedGrid(CellGrid):
         self._lo = np.zeros(size)
         self._hi = np.zeros(size)
         self._weight = np.zeros(size)
+        # Per slot, the factor of the arc's weight: repeat_weight if the next echo of its sensor
+        # repeats it (_repeats), else 1.
+        self._chain = np.ones(size)
+        # While a batch is folded in: its arcs' factors, by sequence number from _batch_first.
+        self._batch_first = 0
+        self._batch_chain = np.ones(0)
         # Plain carving: per slot, the model's state (lo, hi, status) those were computed from,
         # and for which arc (-1: none); a read asks only for the estimates of the arcs whose
         # state changed since (_stale_slots). Any other method is asked for every live arc.
@@ -1241,9 +1328,6 @@ class CarvedGrid(CellGrid):
         method = self._method
         history = method.history
         first_seq = history.appended
-        method.add_many(batch)
-        history.flush_retired()  # every arc that left the history is final now
-        finals = self._take_pending()
         half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
         r = batch.range
         no_echo = r == math.inf
@@ -1253,7 +1337,21 @@ class CarvedGrid(CellGrid):
             r = np.where(no_echo, batch.max_range + self.band, r)
         else:
             seqs = first_seq + np.arange(n, dtype=np.int64)
-        self._note_newest(batch.sensor, seqs, no_echo)
+        # Before the method runs: the arcs it retires during the batch are made final (their
+        # weight read) as they retire, and an echo later in the batch may repeat them.
+        newest = dict(self._newest)
+        preds = self._note_newest(batch.sensor, seqs, no_echo)
+        marked = self._mark_repeats(batch, seqs, preds, no_echo, half, first_seq)
+        try:
+            method.add_many(batch)
+        except BaseException:  # a bad batch changes nothing
+            self._newest = newest
+            self._chain[marked] = 1.0
+            self._batch_chain = np.ones(0)
+            raise
+        history.flush_retired()  # every arc that left the history is final now
+        self._keep_batch_chain(history)
+        finals = self._take_pending()
         self._latest_t = max(self._latest_t, float(batch.t.max()))
         _fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
                      np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
@@ -1263,14 +1361,63 @@ class CarvedGrid(CellGrid):
         self._stale = True
 
     def _note_newest(self, sensor: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64],
-                     no_echo: BoolArray) -> None:
+                     no_echo: BoolArray) -> list[int]:
         """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
-        heard nothing (its arc is then no sensor's newest)."""
+        heard nothing (its arc is then no sensor's newest). Returns, for each reading, the
+        sensor's newest arc before it (-1: none, or it heard nothing)."""
         newest = self._newest
+        preds = []
         # In order, the last reading of each sensor wins; a loop, because a robot's batches are
         # a few readings and np.unique costs more than the loop for them.
         for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(), strict=True):
+            preds.append(newest.get(s, -1))
             newest[s] = -1 if silent else seq
+        return preds
+
+    def _mark_repeats(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
+                      preds: list[int], no_echo: BoolArray, half: FloatArray,
+                      first_seq: int) -> SlotArray:
+        """Give the arcs that the batch's echoes repeat (:func:`_repeats`) the weight factor
+        :attr:`CarvedGridParams.repeat_weight`: those of the history in ``_chain`` (by slot;
+        the next read recomputes their weights), the batch's own in ``_batch_chain`` (by
+        sequence number from ``first_seq``: a long batch reuses slots). Returns the slots of
+        the history's arcs it marked."""
+        history = self._method.history
+        n_echo = int(np.count_nonzero(~no_echo))
+        self._batch_first = first_seq
+        self._batch_chain = np.ones(n_echo)
+        if self._params.repeat_weight >= 1.0:
+            return np.zeros(0, dtype=np.int64)
+        marked = np.empty(len(seqs), dtype=np.int64)
+        count = _repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked,
+                               np.asarray(preds, dtype=np.int64), seqs, first_seq, no_echo,
+                               np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
+                               np.ascontiguousarray(batch.range),
+                               np.ascontiguousarray(batch.theta), np.ascontiguousarray(half),
+                               history.x, history.y, history.r, history.theta,
+                               history.beam_width, history.capacity,
+                               self._params.range_tolerance, self._params.repeat_weight)
+        return marked[:count]
+
+    def _keep_batch_chain(self, history: SonarHistory) -> None:
+        """The batch's arcs still in the history take their factors into their slots."""
+        chain = self._batch_chain
+        if len(chain):
+            seqs = self._batch_first + np.arange(len(chain), dtype=np.int64)
+            live = seqs >= history.appended - len(history)
+            self._chain[seqs[live] % history.storage_size] = chain[live]
+        self._batch_first = history.appended
+        self._batch_chain = np.ones(0)
+
+    def _chain_of(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> FloatArray:
+        """Weight factors of the arcs ``seqs`` (in ``slots``): the batch's own from
+        ``_batch_chain``, older ones from ``_chain``."""
+        own = seqs >= self._batch_first
+        out = self._chain[slots]
+        if own.any():
+            out = np.where(own, self._batch_chain[np.where(own, seqs - self._batch_first, 0)],
+                           out)
+        return out
 
     def _on_commit(self, history: SonarHistory, slots: SlotArray, est: Estimates) -> None:
         """Arcs leaving the history: their live contribution out, their final one pending."""
@@ -1282,6 +1429,7 @@ class CarvedGrid(CellGrid):
                        self._model)
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = _intervals(x, y, est)
+        weight *= self._chain_of(slots, seqs)
         self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
                               seqs.astype(np.float64)))
 
@@ -1335,7 +1483,7 @@ class CarvedGrid(CellGrid):
             lo, hi, weight = _carving_intervals(history, carving, stale)
         self._lo[stale] = lo
         self._hi[stale] = hi
-        self._weight[stale] = weight
+        self._weight[stale] = weight * self._chain[stale]
 
     def _fresh(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> BoolArray:
         """Which of the live arcs ``seqs`` (consecutive, in ``slots``) is its sensor's newest

@@ -1,0 +1,207 @@
+"""The carved grid's repeat rule: an echo that repeats its sensor's previous echo (the sensor
+moved towards or away from one reflector) makes the earlier arc count
+:attr:`CarvedGridParams.repeat_weight` (values computed by hand)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError
+from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH, _repeats
+from sonarcarve.methods import MethodConfig, make_method
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
+
+H = 0.05
+BOUNDS = (-0.5, -1.5, 3.5, 1.5)
+L_HIT = math.log(0.7 / 0.3)
+PHI = DEFAULT_BEAM_WIDTH
+HALF = PHI / 2
+TOL = 0.05
+
+
+def _repeat(p1: tuple[float, float], r1: float, t1: float, p2: tuple[float, float], r2: float,
+            t2: float) -> bool:
+    return bool(_repeats(p1[0], p1[1], r1, t1, HALF, p2[0], p2[1], r2, t2, HALF, TOL))
+
+
+def test_which_echo_pairs_repeat() -> None:
+    # Driving 0.25 m straight at a post 2 m ahead: the range shrinks by the distance driven.
+    assert _repeat((0.0, 0.0), 2.0, 0.0, (0.25, 0.0), 1.75, 0.0)
+    # ... within the tolerance (0.04 off), and a post 0.3 m off the track (range 1.7758).
+    assert _repeat((0.0, 0.0), 2.0, 0.0, (0.25, 0.0), 1.79, 0.0)
+    assert _repeat((0.0, 0.0), math.hypot(2.0, 0.3), 0.0, (0.25, 0.0), math.hypot(1.75, 0.3),
+                   0.0)
+    # Driving away from it, the sensor looking back: the same, the other way round.
+    assert _repeat((0.0, 0.0), 1.75, math.pi, (0.25, 0.0), 2.0, math.pi)
+    # Standing still and hearing the same range again, the beam turned a little.
+    assert _repeat((0.0, 0.0), 2.0, 0.0, (0.01, 0.0), 2.02, 0.1)
+    # Not a repeat: the range changed by 0.06 more than the distance driven ...
+    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.25, 0.0), 1.69, 0.0)
+    # ... a side sensor driving along a wall (the same range from 0.25 m further on: the two
+    # echoes come from two points of the wall 0.25 m apart) ...
+    assert not _repeat((0.0, 0.0), 1.0, math.pi / 2, (0.25, 0.0), 1.0, math.pi / 2)
+    # ... the range shrank by the distance driven, but the sensor looks 45° off the track: the
+    # circles touch on the track, outside its beam (they cross inside it, at one point) ...
+    assert not _repeat((0.0, 0.0), 2.0, math.pi / 4, (0.25, 0.0), 1.75, math.pi / 4)
+    # ... standing still, the same range, but the beam turned past half its width ...
+    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.0, 0.0), 2.0, HALF + 0.01)
+    # ... and standing still with another range.
+    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.0, 0.0), 1.9, 0.0)
+
+
+# -- one sensor driving at a corner beside a gap ------------------------------------------------
+
+#: A corner (a door's jamb) 0.25 m left of the track of sensor 0; the gap lies across the
+#: track, where the corner's mirror image is: every circle through the corner centred on the
+#: track passes through it too, so sensor 0 alone cannot tell the two apart.
+CORNER = (2.5, 0.25)
+MIRROR = (2.5, -0.25)
+
+
+def _approach() -> list[Reading]:
+    """Sensor 0 drives along y = 0 looking ahead (0.25 m a step, 5 steps) and hears the
+    corner; sensor 1, 1.5 m to the left, looking 32° right, hears it from the side."""
+    out = []
+    for k in range(5):
+        x = 0.25 * k
+        out.append(Reading(float(k), 0, x, 0.0, 0.0, math.hypot(CORNER[0] - x, CORNER[1])))
+        out.append(Reading(k + 0.5, 1, x, 1.5, math.radians(-32.0),
+                           math.hypot(CORNER[0] - x, CORNER[1] - 1.5)))
+    return out
+
+
+def _near(grid: CarvedGrid, point: tuple[float, float], radius: float) -> np.ndarray:
+    xs, ys = grid.cell_centers()
+    cx, cy = np.meshgrid(xs, ys)
+    return np.hypot(cx - point[0], cy - point[1]) < radius
+
+
+@pytest.mark.parametrize("fresh", [False, True])
+def test_a_sensor_driving_at_a_corner_leaves_the_gap_beside_it_open(fresh: bool) -> None:
+    maps = {}
+    for weight in (0.0, 1.0):
+        grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(repeat_weight=weight,
+                                                             fresh_arcs=fresh))
+        grid.add_many(ReadingBatch.from_readings(_approach()))
+        maps[weight] = grid.trinary()
+        corner, mirror = _near(grid, CORNER, 0.05), _near(grid, MIRROR, 0.1)
+    # Every echo of sensor 0 repeats the one before (its ranges shrink by the 0.25 m it drove:
+    # 2.5125, 2.2638, 2.0156, 1.7678, 1.5207); summed, its five arcs mark the gap as well as
+    # the corner. Counted once, the gap is left with the newest arc's spread value, and the
+    # corner is marked by sensor 1, which hears it from the side: its echoes do not repeat
+    # (the track lies outside its beam) and add up.
+    assert np.any(maps[1.0][mirror] == OCCUPIED)
+    assert not np.any(maps[0.0][mirror] == OCCUPIED)
+    assert np.any(maps[0.0][corner] == OCCUPIED)
+
+
+def _head_on(t: float, x: float, sensor: int = 0) -> Reading:
+    """Sensor ``sensor`` at (x, 0) looking along +x at a wall 2 m from the origin."""
+    return Reading(t, sensor, x, 0.0, 0.0, 2.0 - x)
+
+
+@pytest.mark.parametrize("weight", [0.0, 0.25, 1.0])
+def test_a_repeated_arc_counts_its_weight_live_and_when_it_leaves_the_history(
+        weight: float) -> None:
+    params = CarvedGridParams(repeat_weight=weight, fresh_arcs=False)
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=2)),
+                      params=params)
+    i, j = int(np.argmin(np.abs(grid.cell_centers()[1] - 0.025))), int(
+        np.argmin(np.abs(grid.cell_centers()[0] - 1.975)))
+    first = DEFAULT_SPREAD_LENGTH / (2.0 * PHI) * L_HIT  # s = L / (r φ), r = 2
+    second = DEFAULT_SPREAD_LENGTH / (1.75 * PHI) * L_HIT  # r = 1.75
+    grid.add_many(ReadingBatch.from_readings([_head_on(0.0, 0.0), _head_on(1.0, 0.25)]))
+    # The cell (1.975, 0.025) lies on both arcs, in neither's free space.
+    assert grid.live_log_odds[i, j] == pytest.approx(weight * first + second)
+    # A reading behind pushes the first arc out of the history: final at its weight.
+    grid.add(Reading(2.0, 1, 0.0, 0.0, math.pi, 0.3))
+    assert grid.live_log_odds[i, j] == pytest.approx(second)
+    assert grid.log_odds[i, j] == pytest.approx(weight * first + second, abs=1e-6)
+
+
+def test_a_silent_firing_or_a_late_echo_is_no_repeat() -> None:
+    params = CarvedGridParams(fresh_arcs=False)
+    first = DEFAULT_SPREAD_LENGTH / (2.0 * PHI) * L_HIT
+    second = DEFAULT_SPREAD_LENGTH / (1.75 * PHI) * L_HIT
+    # Sensor 0 heard nothing in between (it fired at the far wall through where the first echo
+    # came from, so the two echoes need not share a reflector): both count. The silent beam
+    # looks away (at π) so as not to carve the first arc.
+    grid = CarvedGrid(H, BOUNDS, params=params)
+    grid.add_many(ReadingBatch.from_readings([
+        _head_on(0.0, 0.0), Reading(0.5, 0, 0.1, 0.0, math.pi, math.inf, math.nan, 3.0),
+        _head_on(1.0, 0.25)]))
+    i, j = int(np.argmin(np.abs(grid.cell_centers()[1] - 0.025))), int(
+        np.argmin(np.abs(grid.cell_centers()[0] - 1.975)))
+    assert grid.live_log_odds[i, j] == pytest.approx(first + second)
+    # The repeat came after the first arc had left the history (history of 1): it was final
+    # already, at its whole weight.
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)),
+                      params=params)
+    grid.add_many(ReadingBatch.from_readings([_head_on(0.0, 0.0), _head_on(1.0, 0.25)]))
+    assert grid.log_odds[i, j] == pytest.approx(first + second, abs=1e-6)
+
+
+# -- exactness with the rule on -----------------------------------------------------------------
+
+def _approaching_ring(n: int, seed: int, no_echo: bool) -> list[Reading]:
+    """A ring of 8 sensors driving at 0.3 m per ring cycle towards an end wall (x = 3.3 m)
+    between side walls (y = ±1.2 m), with a post at (2.6, 0.3); ranges jittered. Sensor 0's
+    echoes repeat one another (the post, then the wall)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(n):
+        sensor = k % 8
+        x = -0.3 + 0.3 * (k // 8) % 2.4
+        theta = sensor * math.pi / 4 + float(rng.normal(0.0, 0.02))
+        c, s = math.cos(theta), math.sin(theta)
+        hits = [d for d in ((1.2 / s) if s > 1e-9 else math.inf,
+                            (-1.2 / s) if s < -1e-9 else math.inf,
+                            ((3.3 - x) / c) if c > 1e-9 else math.inf) if d > 0]
+        post = math.hypot(2.6 - x, 0.3)
+        if abs(math.atan2(0.3, 2.6 - x) - theta) <= HALF:
+            hits.append(post)
+        r = min(hits) + float(rng.normal(0.0, 0.01))
+        if no_echo and (r > 3.0 or rng.random() < 0.1):
+            out.append(Reading(0.04 * k, sensor, x, 0.0, theta, math.inf, math.nan, 3.0))
+        else:
+            out.append(Reading(0.04 * k, sensor, x, 0.0, theta, min(r, 3.4)))
+    return out
+
+
+@pytest.mark.parametrize(("seed", "no_echo"), [(0, False), (1, True)])
+def test_batches_and_reads_do_not_change_the_map_with_repeats(seed: int, no_echo: bool) -> None:
+    readings = _approaching_ring(400, seed, no_echo)
+    config = MethodConfig(history_size=30, max_incidence=math.radians(30.0))
+
+    def grid(weight: float = 0.0) -> CarvedGrid:
+        return CarvedGrid(H, BOUNDS, method=make_method("carve", config),
+                          params=CarvedGridParams(repeat_weight=weight))
+
+    whole = grid()  # one batch of 400, fed in chunks of the history's 30
+    whole.add_many(ReadingBatch.from_readings(readings))
+    pieces, single = grid(), grid()
+    rng = np.random.default_rng(seed)
+    start = 0
+    while start < len(readings):
+        size = int(rng.integers(1, 45))  # some batches longer than the history
+        pieces.add_many(ReadingBatch.from_readings(readings[start:start + size]))
+        pieces.refresh()
+        start += size
+    for reading in readings:
+        single.add(reading)
+    np.testing.assert_allclose(pieces.log_odds, whole.log_odds, rtol=0.0, atol=1e-5)
+    np.testing.assert_allclose(single.log_odds, whole.log_odds, rtol=0.0, atol=1e-5)
+    assert np.array_equal(pieces.trinary(), whole.trinary())
+    # The rule acted on this stream: counting every echo gives another map.
+    counted = grid(1.0)
+    counted.add_many(ReadingBatch.from_readings(readings))
+    assert np.abs(counted.log_odds - whole.log_odds).max() > 0.1
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, math.nan, True, "0"])
+def test_repeat_weight_must_lie_in_0_1(bad: object) -> None:
+    with pytest.raises(GridError, match="repeat_weight"):
+        CarvedGridParams(repeat_weight=bad)  # type: ignore[arg-type]
