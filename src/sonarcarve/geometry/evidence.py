@@ -212,10 +212,22 @@ def _bin_of_sine(sine: float, edges: FloatArray, bins: int, scale: float) -> int
     themselves, so the guess changes only the speed: a binary search took 4-5 branches that
     the processor could not predict, for every supporting bin.
     """
-    guess = (sine - edges[0]) * scale
+    return _bin_from_guess(_sine_guess(sine, edges[0], bins, scale), sine, edges, bins)
+
+
+@compiled_inline
+def _sine_guess(sine: float, first_edge: float, bins: int, scale: float) -> int:
+    """:func:`_bin_of_sine`'s guess (no branch: a loop of these runs on several sines at
+    once)."""
+    guess = (sine - first_edge) * scale
     # Clamped as a float before the conversion: for a very narrow beam the guess exceeds the
     # int64 range, and int() of that is undefined (it gave a huge negative index).
-    k = int(min(guess, bins - 1.0)) if guess > 0.0 else 0  # NaN: 0, as the search gave
+    return int(min(guess, bins - 1.0)) if guess > 0.0 else 0  # NaN: 0, as the search gave
+
+
+@compiled_inline
+def _bin_from_guess(k: int, sine: float, edges: FloatArray, bins: int) -> int:
+    """:func:`_bin_of_sine` stepped from the guess ``k`` (in ``0 .. K - 1``)."""
     while k < bins - 1 and edges[k + 1] <= sine:
         k += 1
     while k > 0 and edges[k] > sine:
@@ -510,13 +522,14 @@ def evidence_add(
         then the sines of its bin edges, the beam width they are for (NaN before the first
         reading) and the scale of :func:`_bin_of_sine`'s guess (kept between readings of the
         same beam width).
-    scratch : ndarray, shape (9, K)
+    scratch : ndarray, shape (10, K)
         Scratch of the bin passes (overwritten): per older arc, its bins' offsets from the
         new reading and what :func:`detect_probability` computes of them.
     in_beam : ndarray of bool, shape (K,)
         Scratch (overwritten): the older arc's bins to weigh.
-    bin_index : ndarray of int64, shape (K,)
-        Scratch (overwritten): their indices, in order.
+    bin_index : ndarray of int64, shape (2, K)
+        Scratch (overwritten): their indices, in order; the guesses of :func:`_bin_of_sine`
+        per bin.
     near, near_flags : ndarray of int64 and bool, shape (n,)
         Scratch (overwritten): the rows that pass the cull, and the cull's verdict per row.
     bx, by, ex, ey : ndarray, shape (n, K)
@@ -625,6 +638,9 @@ def evidence_add(
     s_beam = scratch[6]
     s_cos = scratch[7]
     s_p = scratch[8]
+    s_loc = scratch[9]
+    bin_guess = bin_index[1]
+    first_edge = edges[0]
     fully = 0
     crossings = 0
     occluding = 0
@@ -673,7 +689,7 @@ def evidence_add(
             alive_bins += weigh & outside
         n_in = 0
         for k in range(bins):  # the bins to weigh, in order
-            bin_index[n_in] = k
+            bin_index[0, n_in] = k
             n_in += in_beam[k]
         if n_in > 0:
             # Pass 2: detect_probability, inlined, for every bin (those outside the beam
@@ -695,10 +711,14 @@ def evidence_add(
                 s_sine[k] = sine
                 s_beam[k] = p_beam
                 s_cos[k] = cos_gamma
-                s_p[k] = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+                p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+                s_p[k] = p
+                # What the support path needs: the localised support, the bin of j behind.
+                s_loc[k] = p * abs(ex[i, k] * vy - ey[i, k] * vx) * inv_d
+                bin_guess[k] = _sine_guess(sine, first_edge, bins, edge_scale)
         # Pass 3: the evidence, in bin order.
         for m in range(n_in):
-            k = bin_index[m]
+            k = bin_index[0, m]
             d = s_d[k]
             if d >= free_r and abs(d - beam.r) > params.support_tolerance:
                 alive_bins += 1
@@ -735,7 +755,7 @@ def evidence_add(
                         # Kept for the transmission pass (after j's support is known).
                         passed[n_passed, 0] = i
                         passed[n_passed, 1] = k
-                        passed[n_passed, 2] = _bin_of_sine(sine, edges, bins, edge_scale)
+                        passed[n_passed, 2] = _bin_from_guess(bin_guess[k], sine, edges, bins)
                         passed[n_passed, 3] = p_beam * cos_gamma  # blocked, not echoed
                         passed[n_passed, 4] = factor
                         passed[n_passed, 5] = w
@@ -749,9 +769,9 @@ def evidence_add(
                 # there (tangent circles, one sensor stepping along its axis, say nothing of
                 # *where* on the arc the echo came from).
                 support[i, k] += p
-                kb = _bin_of_sine(sine, edges, bins, edge_scale)
+                kb = _bin_from_guess(bin_guess[k], sine, edges, bins)
                 support[slot, kb] += p
-                loc = p * abs(ex[i, k] * vy - ey[i, k] * vx) * inv_d
+                loc = s_loc[k]
                 located[i, k] += loc
                 located[slot, kb] += loc
                 if other:

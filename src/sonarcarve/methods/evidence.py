@@ -429,9 +429,9 @@ class EvidenceModel(ArcModel):
         self.trans[2 * bins + 1] = np.nan
         # Scratch of evidence_add: per older arc, its bins' offsets from the new reading and
         # what it computes for the bins in the new beam; which rows pass the cull.
-        self.scratch = np.zeros((9, bins))
+        self.scratch = np.zeros((10, bins))
         self.in_beam = np.zeros(bins, dtype=bool)
-        self.bin_index = np.zeros(bins, dtype=np.int64)
+        self.bin_index = np.zeros((2, bins), dtype=np.int64)
         self.near = np.zeros(size, dtype=np.int64)
         self.near_flags = np.zeros(size, dtype=bool)
         # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
