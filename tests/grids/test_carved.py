@@ -114,9 +114,9 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     grid = CarvedGrid(0.1, BOUNDS, method=method)
     rows, cols = grid.shape
     # base, live, points, heard bins; per slot what was drawn (spread and point: 6 numbers and
-    # the arc), its interval and weight, the carving state they came from (3 numbers and the
-    # arc) and a position buffer for the arcs that changed
-    expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 3 * 8 + 4 * 8 + 8)
+    # the arc), its interval, weight and repeat factor, the carving state they came from (3
+    # numbers and the arc) and a position buffer for the arcs that changed
+    expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 4 * 8 + 4 * 8 + 8)
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):

@@ -205,3 +205,25 @@ def test_batches_and_reads_do_not_change_the_map_with_repeats(seed: int, no_echo
 def test_repeat_weight_must_lie_in_0_1(bad: object) -> None:
     with pytest.raises(GridError, match="repeat_weight"):
         CarvedGridParams(repeat_weight=bad)  # type: ignore[arg-type]
+
+
+def test_a_bad_batch_marks_no_repeat() -> None:
+    from sonarcarve.readings import ReadingsError
+
+    params = CarvedGridParams(fresh_arcs=False)
+    clean, tried = CarvedGrid(H, BOUNDS, params=params), CarvedGrid(H, BOUNDS, params=params)
+    for grid in (clean, tried):
+        grid.add(_head_on(0.0, 0.0))
+        grid.add(Reading(3.0, 1, 0.0, 0.0, math.pi, 0.3))  # behind, touches nothing
+    # A repeat of the first echo, but from before the last reading: the method refuses it.
+    with pytest.raises(ReadingsError):
+        tried.add_many(ReadingBatch.from_readings([_head_on(1.0, 0.25)]))
+    # The first arc keeps its whole weight: the next echo does not repeat it (0.5 m driven, 0.8
+    # m nearer), and the cell (1.975, 0.025) is on the first arc alone.
+    for grid in (clean, tried):
+        grid.add(Reading(4.0, 0, 0.5, 0.0, 0.0, 1.2))
+    assert np.array_equal(tried.log_odds, clean.log_odds)
+    i, j = int(np.argmin(np.abs(clean.cell_centers()[1] - 0.025))), int(
+        np.argmin(np.abs(clean.cell_centers()[0] - 1.975)))
+    first = DEFAULT_SPREAD_LENGTH / (2.0 * PHI) * L_HIT
+    assert tried.live_log_odds[i, j] == pytest.approx(first)
