@@ -3,6 +3,8 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/grids.py            # tables, and docs/figures/grids-office.png
+    .venv/bin/python benchmarks/grids.py --no-echo --figure ""     # with the silent firings
+    .venv/bin/python benchmarks/grids.py --physics amplitude --figure ""  # the second model
 
 For the ``office``, ``t-junction`` and ``doorway`` tours (Scout2 ring, seeds 0-2), at 0.05 and
 0.10 m cells, each grid maps the whole log and its trinary map (:func:`~sonarcarve.grids.trinary`)
@@ -21,6 +23,10 @@ least 0.46 m (Scout2 + 5 cm) of the door line with no occupied cell square withi
 strictly, with only free cells)? And CPU per reading of each grid on the office log at both
 resolutions, best of three runs after a warm-up with the grids taking turns, all in one
 process (ratios in one run).
+
+``--physics amplitude`` simulates every run (tours, door approaches, CPU log) with the second
+sonar model (:mod:`sonarcarve.sim.amplitude`) instead of the default specular one, as
+``benchmarks/changing_scenes.py --physics amplitude`` does.
 """
 
 from __future__ import annotations
