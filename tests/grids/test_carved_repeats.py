@@ -122,25 +122,23 @@ def test_a_repeated_arc_counts_its_weight_live_and_when_it_leaves_the_history(
     assert grid.log_odds[i, j] == pytest.approx(weight * first + second, abs=1e-6)
 
 
-def test_a_silent_firing_or_a_late_echo_is_no_repeat() -> None:
+def test_an_echo_repeats_any_earlier_echo_of_its_sensor_still_in_the_history() -> None:
     params = CarvedGridParams(fresh_arcs=False)
     first = DEFAULT_SPREAD_LENGTH / (2.0 * PHI) * L_HIT
     second = DEFAULT_SPREAD_LENGTH / (1.75 * PHI) * L_HIT
-    # Sensor 0 heard nothing in between (it fired at the far wall through where the first echo
-    # came from, so the two echoes need not share a reflector): both count. The silent beam
-    # looks away (at π) so as not to carve the first arc.
+    between = [  # sensor 0 heard nothing, then heard something behind it (at π: carves nothing)
+        Reading(0.4, 0, 0.1, 0.0, math.pi, math.inf, math.nan, 3.0),
+        Reading(0.7, 0, 0.2, 0.0, math.pi, 0.3)]
     grid = CarvedGrid(H, BOUNDS, params=params)
-    grid.add_many(ReadingBatch.from_readings([
-        _head_on(0.0, 0.0), Reading(0.5, 0, 0.1, 0.0, math.pi, math.inf, math.nan, 3.0),
-        _head_on(1.0, 0.25)]))
+    grid.add_many(ReadingBatch.from_readings([_head_on(0.0, 0.0), *between, _head_on(1.0, 0.25)]))
     i, j = int(np.argmin(np.abs(grid.cell_centers()[1] - 0.025))), int(
         np.argmin(np.abs(grid.cell_centers()[0] - 1.975)))
-    assert grid.live_log_odds[i, j] == pytest.approx(first + second)
-    # The repeat came after the first arc had left the history (history of 1): it was final
-    # already, at its whole weight.
-    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)),
+    assert grid.live_log_odds[i, j] == pytest.approx(second)  # the first counts nothing
+    # A repeat heard after the first arc left the history (a history of 2 arcs: the echo
+    # behind pushed it out) comes too late: the first arc was final, at its whole weight.
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=2)),
                       params=params)
-    grid.add_many(ReadingBatch.from_readings([_head_on(0.0, 0.0), _head_on(1.0, 0.25)]))
+    grid.add_many(ReadingBatch.from_readings([_head_on(0.0, 0.0), *between, _head_on(1.0, 0.25)]))
     assert grid.log_odds[i, j] == pytest.approx(first + second, abs=1e-6)
 
 

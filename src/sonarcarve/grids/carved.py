@@ -41,24 +41,27 @@ track, inside the doorway; no beam can carve them there (every beam that reaches
 image passes the jamb first and hears it), and 7-11 arcs of that one sensor summed to 1.8-2.7
 in log-odds over the doorway, closing the door. The ranges cannot tell the jamb from its
 mirror image (0.23 m off the track changes them by 1-2 cm over the whole approach, below the
-range noise); only other sensors, from other places, can. So when an echo *repeats* its
-sensor's previous echo (:func:`_repeats`: ``| |P2 - P1| - |r1 - r2| | <= ε``, the range changed
-by the distance moved towards or away from the reflector within the range tolerance ε, and the
-tangent point's bearing lies inside both beams; or the sensor moved at most ε, heard the same
-range within ε, each beam's axis inside the other beam), the earlier arc's weight is multiplied
-by ``repeat_weight``, live and when it leaves the history: with the default 0 a run of repeats
-counts as its newest echo. Echoes of other sensors, and echoes of one sensor whose circles cross
-rather than touch (a side sensor driving along a wall hears another point of the wall each
-time), still add up. It is decided when the repeat is heard, from the two readings alone (a
-silent firing between them, or a repeat heard after the earlier arc left the history, is no
-repeat), so the map does not depend on batching. A standing obstacle heard only by one sensor's
+range noise); only other sensors, from other places, can. So when an echo *repeats* an
+earlier echo of its sensor still in the history (:func:`_repeats`: ``| |P2 - P1| - |r1 - r2| |
+<= ε``, the range changed by the distance moved towards or away from the reflector within the
+range tolerance ε, and the tangent point's bearing lies inside both beams; or the sensor moved
+at most ε, heard the same range within ε, each beam's axis inside the other beam), the earlier
+arc's weight is multiplied by ``repeat_weight``, live and when it leaves the history: with the
+default 0 a run of repeats counts as its newest echo, whatever was heard between them. Echoes of
+other sensors, and echoes of one sensor whose circles cross rather than touch (a side sensor
+driving along a wall hears another point of the wall each time), still add up. It is decided
+when the repeat is heard, from the two readings alone (a repeat heard after the earlier arc left
+the history is none), so the map does not depend on batching; each echo is compared with the
+earlier arcs of the history (a compiled loop over its slots: CPU per reading unchanged within
+the noise of a shared machine). A standing obstacle heard only by one sensor's
 repeats stays marked by that sensor's newest echo (a whole hit while nothing else explains it,
 below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2 door
-passable at 1 m in 67 -> 83 % / 61 -> 72 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
-89 % / 83 -> 86 % with no-echo readings; amplitude physics 22 -> 31 % / 19 -> 33 %, and 53 / 50
-% unchanged with no-echo readings. What remains is the newest echo's point (below): in 23 of
-the 25 approaches still closed at 0.05 and 0.10 m (specular physics) the door is open without
-it. The price is the evidence the sum gave a wall the robot drives at: office precision /
+passable at 1 m in 67 -> 83 % / 61 -> 78 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
+89 % / 83 -> 86 % with no-echo readings (comparing an echo with its sensor's previous echo only:
+72 % at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 33 %, and 53 / 50
+% unchanged with no-echo readings. What remains is the newest echo's point (below): every
+approach still closed at 0.05 and 0.10 m (specular physics) is open without it. The price is
+the evidence the sum gave a wall the robot drives at: office precision /
 recall 0.718 / 0.943 -> 0.721 / 0.942 (0.05 m) and 0.822 / 0.954 -> 0.824 / 0.952 (0.10 m);
 t-junction recall 0.987 -> 0.975 and 0.998 -> 0.989; doorway 0.844 -> 0.830 and 0.844 ->
 0.824 (all above ROS's layer); in the changing scenes the same latencies and about as many
@@ -405,12 +408,12 @@ class CarvedGridParams:
         so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
         of a slower ring.
     repeat_weight : float
-        In [0, 1]; 0. The factor of an arc's weight once the next echo of its sensor repeats it
+        In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
         (module docstring, "Repeated echoes count once": the sensor moved towards or away from
         one reflector, or stood still, and heard it again): 0 counts a run of repeats as its
         newest echo, 1 counts every echo (the rule before). Measured (seeds 0-2, Fig. 2 door
         at 1 m, echoes only, 0.05 / 0.10 m): 1 passable in 67 / 61 % of approaches, 0.25 in
-        69 / 58 % (0.5 the same), 0 in 83 / 72 %; office precision / recall unchanged within
+        69 / 58 % (0.5 the same), 0 in 83 / 78 %; office precision / recall unchanged within
         0.003.
     see_through : float
         Metres >= 0 (``inf``: no limit; 0: off); :data:`DEFAULT_SEE_THROUGH`. A beam that
@@ -1138,18 +1141,19 @@ def _repeats(x1: float, y1: float, r1: float, t1: float, h1: float, x2: float, y
 @compiled
 def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
                    seen_seq: npt.NDArray[np.int64], marked: SlotArray,
-                   preds: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64], first: int,
-                   no_echo: BoolArray, x: FloatArray, y: FloatArray, r: FloatArray,
-                   theta: FloatArray, half: FloatArray, hx: FloatArray, hy: FloatArray,
-                   hr: FloatArray, htheta: FloatArray, hwidth: FloatArray, capacity: int,
-                   tol: float, factor: float) -> int:
-    """For each echo ``k`` of a batch (arc ``seqs[k]``; ``preds[k]``: its sensor's previous
-    echo's arc, -1 for none) that repeats that arc (:func:`_repeats`) while it is still in the
-    history, give the previous arc the weight factor ``factor``: in ``batch_chain[p - first]``
-    if it is an arc of the batch (``first``: the batch's first arc), else in ``chain`` (by
-    slot, rows ``hx..hwidth`` of the history), which then forgets it had seen that arc's state
-    (``seen_seq`` -1) so that the next read recomputes its weight, and whose slot goes into
-    ``marked``. Returns how many slots were marked."""
+                   seqs: npt.NDArray[np.int64], first: int, no_echo: BoolArray,
+                   sensor: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta: FloatArray, half: FloatArray, hsensor: npt.NDArray[np.int64],
+                   hx: FloatArray, hy: FloatArray, hr: FloatArray, htheta: FloatArray,
+                   hwidth: FloatArray, capacity: int, tol: float, factor: float) -> int:
+    """For each echo ``k`` of a batch (arc ``seqs[k]``), give every earlier arc of the same
+    sensor still in the history that the echo repeats (:func:`_repeats`) the weight factor
+    ``factor``: in ``batch_chain[p - first]`` if it is an arc of the batch (``first``: the
+    batch's first arc), else in ``chain`` (by slot, rows ``hsensor..hwidth`` of the history),
+    which then forgets it had seen that arc's state (``seen_seq`` -1) so that the next read
+    recomputes its weight, and whose slot goes into ``marked`` (only arcs whose factor was 1, so
+    that 1 undoes the marks; each at most once, so ``marked`` needs ``capacity`` places).
+    Returns how many slots were marked."""
     size = chain.shape[0]
     rows = np.empty(x.shape[0], dtype=np.int64)  # the row of the batch's arc first + i
     count = 0
@@ -1159,24 +1163,28 @@ def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
             count += 1
     n_marked = 0
     for k in range(x.shape[0]):
-        p = preds[k]
-        if no_echo[k] or p < 0 or seqs[k] - p >= capacity:
+        if no_echo[k]:
             continue
-        if p >= first:
-            j = rows[p - first]
-            x1, y1, r1, t1, h1 = x[j], y[j], r[j], theta[j], half[j]
-        else:
-            s = p % size
-            x1, y1, r1, t1, h1 = hx[s], hy[s], hr[s], htheta[s], 0.5 * hwidth[s]
-        if not _repeats(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
-            continue
-        if p >= first:
-            batch_chain[p - first] = factor
-        else:
-            chain[p % size] = factor
-            seen_seq[p % size] = -1
-            marked[n_marked] = p % size
-            n_marked += 1
+        for p in range(max(0, seqs[k] - capacity + 1), seqs[k]):
+            if p >= first:
+                j = rows[p - first]
+                if sensor[j] != sensor[k] or batch_chain[p - first] == factor:
+                    continue
+                x1, y1, r1, t1, h1 = x[j], y[j], r[j], theta[j], half[j]
+            else:
+                s = p % size
+                if hsensor[s] != sensor[k] or chain[s] == factor:
+                    continue
+                x1, y1, r1, t1, h1 = hx[s], hy[s], hr[s], htheta[s], 0.5 * hwidth[s]
+            if not _repeats(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
+                continue
+            if p >= first:
+                batch_chain[p - first] = factor
+            else:
+                chain[p % size] = factor
+                seen_seq[p % size] = -1
+                marked[n_marked] = p % size
+                n_marked += 1
     return n_marked
 
 
@@ -1386,8 +1394,8 @@ class CarvedGrid(CellGrid):
         # Before the method runs: the arcs it retires during the batch are made final (their
         # weight read) as they retire, and an echo later in the batch may repeat them.
         newest = dict(self._newest)
-        preds = self._note_newest(batch.sensor, seqs, no_echo)
-        marked = self._mark_repeats(batch, seqs, preds, no_echo, half, first_seq)
+        self._note_newest(batch.sensor, seqs, no_echo)
+        marked = self._mark_repeats(batch, seqs, no_echo, half, first_seq)
         try:
             method.add_many(batch)
         except BaseException:  # a bad batch changes nothing
@@ -1407,40 +1415,35 @@ class CarvedGrid(CellGrid):
         self._stale = True
 
     def _note_newest(self, sensor: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64],
-                     no_echo: BoolArray) -> list[int]:
+                     no_echo: BoolArray) -> None:
         """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
-        heard nothing (its arc is then no sensor's newest). Returns, for each reading, the
-        sensor's newest arc before it (-1: none, or it heard nothing)."""
+        heard nothing (its arc is then no sensor's newest)."""
         newest = self._newest
-        preds = []
         # In order, the last reading of each sensor wins; a loop, because a robot's batches are
         # a few readings and np.unique costs more than the loop for them.
         for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(), strict=True):
-            preds.append(newest.get(s, -1))
             newest[s] = -1 if silent else seq
-        return preds
 
     def _mark_repeats(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
-                      preds: list[int], no_echo: BoolArray, half: FloatArray,
-                      first_seq: int) -> SlotArray:
+                      no_echo: BoolArray, half: FloatArray, first_seq: int) -> SlotArray:
         """Give the arcs that the batch's echoes repeat (:func:`_repeats`) the weight factor
         :attr:`CarvedGridParams.repeat_weight`: those of the history in ``_chain`` (by slot;
         the next read recomputes their weights), the batch's own in ``_batch_chain`` (by
         sequence number from ``first_seq``: a long batch reuses slots). Returns the slots of
-        the history's arcs it marked."""
+        the history's arcs it marked (their factor was 1)."""
         history = self._method.history
         n_echo = int(np.count_nonzero(~no_echo))
         self._batch_first = first_seq
         self._batch_chain = np.ones(n_echo)
         if self._params.repeat_weight >= 1.0:
             return np.zeros(0, dtype=np.int64)
-        marked = np.empty(len(seqs), dtype=np.int64)
-        count = _repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked,
-                               np.asarray(preds, dtype=np.int64), seqs, first_seq, no_echo,
+        marked = np.empty(history.capacity, dtype=np.int64)  # each live arc marked once at most
+        count = _repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked, seqs,
+                               first_seq, no_echo, np.ascontiguousarray(batch.sensor),
                                np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
                                np.ascontiguousarray(batch.range),
                                np.ascontiguousarray(batch.theta), np.ascontiguousarray(half),
-                               history.x, history.y, history.r, history.theta,
+                               history.sensor, history.x, history.y, history.r, history.theta,
                                history.beam_width, history.capacity,
                                self._params.range_tolerance, self._params.repeat_weight)
         return marked[:count]
