@@ -58,7 +58,7 @@ repeats stays marked by that sensor's newest echo (a whole hit while nothing els
 below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2 door
 passable at 1 m in 67 -> 83 % / 61 -> 78 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
 89 % / 83 -> 86 % with no-echo readings (comparing an echo with its sensor's previous echo only:
-72 % at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 33 %, and 53 / 50
+72 % at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 31 %, and 53 / 50
 % unchanged with no-echo readings. What remains is the newest echo's point (below): every
 approach still closed at 0.05 and 0.10 m (specular physics) is open without it (without fresh
 arcs the door is passable in all 36 approaches, both resolutions, both inputs). The price is
