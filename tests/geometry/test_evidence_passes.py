@@ -1,9 +1,11 @@
 """The weighing kernel's layout (cull of all rows at once, then three passes over an arc's
 bins) against the one loop it replaced, bit for bit (the oracle below is that loop, in
-Python, calling the kernel's own compiled helpers)."""
+Python, calling the kernel's own compiled helpers where this change left them alone; the bin
+of a sine, which the change reworked, is searched here in Python)."""
 
 from __future__ import annotations
 
+import bisect
 import copy
 import math
 from typing import Any
@@ -15,7 +17,6 @@ from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
     EVIDENCE_CARVED,
-    _bin_of_sine,
     _crossings,
     _new_beam,
     _occlude_behind,
@@ -23,6 +24,15 @@ from sonarcarve.geometry.evidence import (
 )
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
+from sonarcarve.sim.simulate import simulate
+
+
+def _bin_of_sine(sine: float, edges: Any, bins: int, scale: float) -> int:
+    """The largest ``k`` in ``1 .. K - 1`` with ``edges[k] <= sine``, else 0 (NaN: 0): the
+    binary search the kernel's guess-and-step replaced (``scale`` is the kernel's hint)."""
+    if math.isnan(sine):
+        return 0
+    return bisect.bisect_right([float(e) for e in edges[1:bins]], sine)
 
 
 def _incidence(cos_gamma: float, cos_full: float, cos_zero: float, rough: float) -> float:
@@ -188,20 +198,26 @@ STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoi
          "others", "through", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
 
 
-@pytest.mark.parametrize(("physics", "history", "bins"), [
-    ((), 40, 24), ((("echo_model", "amplitude"),), 25, 16)])
-def test_the_passes_give_the_one_loops_bits(physics: tuple[tuple[str, str], ...],
-                                             history: int, bins: int) -> None:
+def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:
     sim = run_simulation(Scenario("office", 1, max_length=10.0, physics=physics))
-    readings = sim.readings
+    if no_echo:  # silent firings between the echoes: evidence_free reads the same state
+        sim = simulate(sim.world, sim.robot, sim.trajectory, sim.seed, sim.physics,
+                       sim.odometry, no_echo=True)
+    return sim.readings
+
+
+def _run_both(readings: Any, history: int, bins: int, start: int) -> tuple[EvidenceModel, bool]:
+    """The method and its one-loop twin fed the same readings from ``start`` on, 30 at a time,
+    their state compared as bits after every block; the twin's model, and whether any block
+    ended with an occluded bin (occlusion is transient)."""
     method = EvidenceMethod(history_size=history, evidence_bins=bins)
-    method.add_many(readings[:270])  # the ring wrapped: the older rows run past the end
+    method.add_many(readings[:start])  # with start > history the ring wrapped
     oracle = copy.deepcopy(method)
     model = oracle.models[0]
     assert isinstance(model, EvidenceModel)
     model.on_add_many = lambda first, count: _one_loop_add_many(model, first, count)  # type: ignore[method-assign]
     occluded = False
-    for lo in range(270, 510, 30):
+    for lo in range(start, start + 240, 30):
         method.add_many(readings[lo : lo + 30])
         oracle.add_many(readings[lo : lo + 30])
         fast = method.models[0]
@@ -212,12 +228,29 @@ def test_the_passes_give_the_one_loops_bits(physics: tuple[tuple[str, str], ...]
             assert a.dtype == b.dtype, name
             assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), name  # bits, ±0, NaN
         occluded |= bool((model.occluded > 0.0).any())
+    mine, theirs = method.local_map(), oracle.local_map()
+    assert np.array_equal(mine.xy, theirs.xy)
+    assert np.array_equal(mine.confidence, theirs.confidence)
+    return model, occluded
+
+
+@pytest.mark.parametrize(("history", "bins", "no_echo"), [
+    (2, 7, False), (3, 40, False), (17, 13, True)])
+def test_the_passes_match_the_one_loop_from_the_first_reading(history: int, bins: int,
+                                                             no_echo: bool) -> None:
+    """From an empty history on (no older row, then one), with bin counts that are not a
+    multiple of the vector width, and with silent firings in between."""
+    _run_both(_log((), no_echo), history, bins, start=0)
+
+
+@pytest.mark.parametrize(("physics", "history", "bins"), [
+    ((), 40, 24), ((("echo_model", "amplitude"),), 25, 16)])
+def test_the_passes_give_the_one_loops_bits(physics: tuple[tuple[str, str], ...],
+                                             history: int, bins: int) -> None:
+    model, occluded = _run_both(_log(physics, False), history, bins, start=270)
     # Every path was taken: bins carved and bins alive, support, occlusion, crossings.
     assert (model.free >= model.threshold).any()
     assert (model.free < model.threshold).any()
     assert np.count_nonzero(model.support)
     assert occluded
     assert model.counts.any()
-    mine, theirs = method.local_map(), oracle.local_map()
-    assert np.array_equal(mine.xy, theirs.xy)
-    assert np.array_equal(mine.confidence, theirs.confidence)

@@ -81,7 +81,7 @@ helpers bind).
 The weighing pass of :func:`evidence_add` is laid out for the processor; each value is the
 same IEEE operation in the same order as in one loop that tests every arc and every bin in
 turn, so the maps are bit for bit those of that loop. The cull tests every older row's
-bounding circle in one loop without branches (the compiler tests eight rows at once), and only
+bounding circle in one loop without branches (the compiler tests several rows at once), and only
 the rows that pass are visited, oldest first. For each of them, a loop without branches over
 its K bins marks the bins to weigh (free evidence below T, inside the reach and the beam); a
 second computes ``P_detect`` for all K bins at once, when any is marked (``np.divide`` instead
@@ -428,8 +428,8 @@ def _new_beam(slot: int, x: FloatArray, y: FloatArray, r: FloatArray, beam_width
 
 @compiled_inline
 def _mark_near(cx: FloatArray, cy: FloatArray, rho: FloatArray, status: Int8Array,
-               beam: _Beam, near: BoolArray) -> None:
-    """The cull, for each row ``i`` of the arrays (slices of the history's rows): ``near[i]``
+               beam: _Beam, near_flags: BoolArray) -> None:
+    """The cull, for each row ``i`` of the arrays (slices of the history's rows): ``near_flags[i]``
     is False where arc ``i`` is no longer alive or its bounding circle (centre ``(cx[i],
     cy[i])``, radius ``rho[i]``) lies beyond the reach of ``j``'s echo circle, or clear of one
     of the two half-planes whose intersection is ``j``'s beam (φ < π; as
@@ -442,14 +442,14 @@ def _mark_near(cx: FloatArray, cy: FloatArray, rho: FloatArray, status: Int8Arra
     e1y = beam.edge1_y
     e2x = beam.edge2_x
     e2y = beam.edge2_y
-    for i in range(near.shape[0]):
+    for i in range(near_flags.shape[0]):
         dcx = cx[i] - bx
         dcy = cy[i] - by
         r = rho[i]
         far = dcx * dcx + dcy * dcy >= (reach + r) * (reach + r)
         below_lower_edge = e1x * dcy - e1y * dcx < -r
         above_upper_edge = dcx * e2y - dcy * e2x < -r
-        near[i] = (status[i] == EVIDENCE_ALIVE) & (not far) & (not below_lower_edge) & (
+        near_flags[i] = (status[i] == EVIDENCE_ALIVE) & (not far) & (not below_lower_edge) & (
             not above_upper_edge)
 
 
@@ -494,7 +494,9 @@ def evidence_add(
     first_older, n_older : int
         The older rows: ``n_older`` rows from ``first_older`` on, oldest first, wrapping
         from the last row to row 0 (the history's ring); the arcs not alive among them are
-        skipped.
+        skipped. ``0 <= first_older < n`` and ``n_older < n``, ``slot`` not among them (the
+        history's storage is twice its capacity); a longer window is cut to ``n`` rows, since
+        the kernel runs without bounds checks.
     x, y, r, theta, beam_width : ndarray, shape (n,)
         The history's rows (metres, radians).
     sensor : ndarray of int64, shape (n,)
@@ -653,7 +655,13 @@ def evidence_add(
     top_through = 0.0
     # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
     # rows that pass it, oldest first.
+    # Marking every row up front gives the one loop's result because nothing in the loop
+    # below changes another older arc's status or bounding circle, nor the free evidence
+    # of a row other than the arc in hand and the new one (``slot``, never an older row):
+    # status[slot] and the transmission come after the loop. Pass 1 reads free[i] before
+    # pass 3 writes it for the same reason.
     storage = x.shape[0]
+    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
     n_near = 0
     end = first_older + n_older
     for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
@@ -700,7 +708,9 @@ def evidence_add(
             # too: the compiler runs it on several bins at once, which a loop over the bins
             # in the beam would not allow). np.divide is ``/`` (the same rounding) without
             # numba's zero-divisor test, whose branch would keep the loop scalar; bins in the
-            # beam have d > 0 (along > 0), and what the others get is not used.
+            # beam have d > 0 (along > 0) unless d² underflows (a range near 1e-300: then
+            # inv_d = inf and the values stay finite where ``/`` raised ZeroDivisionError);
+            # what the bins outside the beam get is not used.
             for k in range(bins):
                 vx = s_vx[k]
                 vy = s_vy[k]
@@ -1015,7 +1025,7 @@ def _kept_run(free: FloatArray, located: FloatArray, in_bin: FloatArray, s: int,
     runs = 0
     k = 0
     while k < bins:
-        if free[s, k] >= threshold:
+        if not free[s, k] < threshold:  # carved; a NaN counts as carved (else no progress)
             k += 1
             continue
         start = k
