@@ -54,9 +54,9 @@ when the repeat is heard, from the two readings alone (a repeat heard after the 
 the history is none), so the map does not depend on batching; each echo is compared with the
 earlier arcs of the history (a compiled loop over its slots; measured on the office log at
 0.05 m: 0.4 µs a reading when the whole log is one batch, 2-3 µs a reading in 0.2 s batches,
-mostly the call per batch, against 43-46 µs for the rest of ``add_many``). A standing obstacle heard only by one sensor's
-repeats stays marked by that sensor's newest echo (a whole hit while nothing else explains it,
-below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2 door
+mostly the call per batch, against 43-46 µs for the rest of ``add_many``). A standing
+obstacle heard only by one sensor's repeats stays marked by that sensor's newest echo (a whole
+hit while nothing else explains it, below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2 door
 passable at 1 m in 67 -> 83 % / 61 -> 78 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
 89 % / 83 -> 86 % with no-echo readings (comparing an echo with its sensor's previous echo only:
 72 % at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 31 %, and 53 / 50
