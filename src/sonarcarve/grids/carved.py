@@ -29,47 +29,45 @@ Each reading from origin ``o`` along ``θ`` with range ``r`` and beam width ``φ
   NaN). An arc carving removed (fully carved, split, or below the method's confidence)
   contributes nothing.
 
-**Repeated echoes count once** (:attr:`CarvedGridParams.repeat_weight`): the sum treats every
-echo as independent evidence about the cells of its band, but a sensor driving towards (or
-away from) one reflector hears it again and again, the range shrinking by the distance driven.
-Its circles are then all (nearly) internally tangent, their bands lie within the range
-tolerance of each other over a long stretch around the tangent point, and a reflector anywhere
-on that stretch would have given every one of those ranges. Fig. 2's door showed what the sum
-does with them: a sensor driving at a jamb 11° off its axis (its track 0.23 m from the jamb)
-draws circles that all pass through the jamb *and* through the jamb's mirror image across its
-track, inside the doorway; no beam can carve them there (every beam that reaches the mirror
-image passes the jamb first and hears it), and 7-11 arcs of that one sensor summed to 1.8-2.7
-in log-odds over the doorway, closing the door. The ranges cannot tell the jamb from its
-mirror image (0.23 m off the track changes them by 1-2 cm over the whole approach, below the
-range noise); only other sensors, from other places, can. So when an echo *repeats* an
-earlier echo of its sensor still in the history (:func:`_repeats`: ``| |P2 - P1| - |r1 - r2| |
-<= ε``, the range changed by the distance moved towards or away from the reflector within the
-range tolerance ε, and the tangent point's bearing lies inside both beams; or the sensor moved
-at most ε, heard the same range within ε, each beam's axis inside the other beam), the earlier
-arc's weight is multiplied by ``repeat_weight``, live and when it leaves the history: with the
-default 0 a run of repeats counts as its newest echo, whatever was heard between them. Echoes of
-other sensors, and echoes of one sensor whose circles cross rather than touch (a side sensor
-driving along a wall hears another point of the wall each time), still add up. It is decided
-when the repeat is heard, from the two readings alone (a repeat heard after the earlier arc left
-the history is none), so the map does not depend on batching; each echo is compared with the
-earlier arcs of the history (a compiled loop over its slots; measured on the office log at
-0.05 m: 0.4 µs a reading when the whole log is one batch, 2-3 µs a reading in 0.2 s batches,
-mostly the call per batch, against 43-46 µs for the rest of ``add_many``). A standing
-obstacle heard only by one sensor's repeats stays marked by that sensor's newest echo (a whole
-hit while nothing else explains it, below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2 door
-passable at 1 m in 67 -> 83 % / 61 -> 78 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
-89 % / 83 -> 86 % with no-echo readings (comparing an echo with its sensor's previous echo only:
-72 % at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 31 %, and 53 / 50
-% unchanged with no-echo readings. What remains is the newest echo's point (below): every
-approach still closed at 0.05 and 0.10 m (specular physics) is open without it (without fresh
-arcs the door is passable in all 36 approaches, both resolutions, both inputs). The price is
-the evidence the sum gave a wall the robot drives at: office precision / recall 0.718 / 0.943
--> 0.720 / 0.941 (0.05 m) and 0.822 / 0.954 -> 0.825 / 0.952 (0.10 m);
-t-junction recall 0.987 -> 0.975 and 0.998 -> 0.989; doorway 0.844 -> 0.830 and 0.844 ->
-0.824 (all above ROS's layer); in the changing scenes the same latencies and about as many
-phantom cells, but fewer occupied cells while arcs are live (22 % fewer in the door scene at
-0.05 m, amplitude physics), so a larger phantom share. 0.25 keeps most of the pile-up (door
-69 / 58 %, echoes only).
+**Repeated echoes count once** (:attr:`CarvedGridParams.repeat_weight`): the sum treats every echo
+as independent evidence about the cells of its band, but a sensor driving towards (or away from)
+one reflector hears it again and again, the range shrinking by the distance driven. Its circles are
+then all (nearly) internally tangent, their bands lie within the range tolerance of each other over
+a long stretch around the tangent point, and a reflector anywhere on that stretch would have given
+every one of those ranges. Fig. 2's door showed what the sum does with them: a sensor driving at a
+jamb 11° off its axis (its track 0.23 m from the jamb) draws circles that all pass through the jamb
+*and* through the jamb's mirror image across its track, inside the doorway; no beam can carve them
+there (every beam that reaches the mirror image passes the jamb first and hears it), and 7-11 arcs
+of that one sensor summed to 1.8-2.7 in log-odds over the doorway, closing the door. The ranges
+cannot tell the jamb from its mirror image (0.23 m off the track changes them by 1-2 cm over the
+whole approach, below the range noise); only other sensors, from other places, can. So when an echo
+*repeats* an earlier echo of its sensor still in the history (:func:`_repeats`:
+``| |P2 - P1| - |r1 - r2| | <= ε``, the range changed by the distance moved towards or away from
+the reflector within the range tolerance ε, and the tangent point's bearing lies inside both beams;
+or the sensor moved at most ε, heard the same range within ε, each beam's axis inside the other
+beam), the earlier arc's weight is multiplied by ``repeat_weight``, live and when it leaves the
+history: with the default 0 a run of repeats counts as its newest echo, whatever was heard between
+them. Echoes of other sensors, and echoes of one sensor whose circles cross rather than touch (a
+side sensor driving along a wall hears another point of the wall each time), still add up. It is
+decided when the repeat is heard, from the two readings alone (a repeat heard after the earlier arc
+left the history is none), so the map does not depend on batching; each echo is compared with the
+earlier arcs of the history (a compiled loop over its slots; measured on the office log at 0.05 m:
+0.4 µs a reading when the whole log is one batch, 2-3 µs a reading in 0.2 s batches, mostly the
+call per batch, against 43-46 µs for the rest of ``add_many``). A standing obstacle heard only by
+one sensor's repeats stays marked by that sensor's newest echo (a whole hit while nothing else
+explains it, below). Measured (``benchmarks/grids.py``, seeds 0-2; before -> after): the Fig. 2
+door passable at 1 m in 67 -> 83 % / 61 -> 78 % of approaches at 0.05 / 0.10 m, echoes only, 83 ->
+89 % / 83 -> 86 % with no-echo readings (comparing an echo with its sensor's previous echo only: 72
+% at 0.10 m, echoes only); amplitude physics 22 -> 31 % / 19 -> 31 %, and 53 / 50 % unchanged with
+no-echo readings. What remains is the newest echo's point (below): every approach still closed at
+0.05 and 0.10 m (specular physics) is open without it (without fresh arcs the door is passable in
+all 36 approaches, both resolutions, both inputs). The price is the evidence the sum gave a wall
+the robot drives at: office precision / recall 0.718 / 0.943 -> 0.720 / 0.941 (0.05 m) and 0.822 /
+0.954 -> 0.825 / 0.952 (0.10 m); t-junction recall 0.987 -> 0.975 and 0.998 -> 0.989; doorway 0.844
+-> 0.830 and 0.844 -> 0.824 (all above ROS's layer); in the changing scenes the same latencies and
+about as many phantom cells, but fewer occupied cells while arcs are live (22 % fewer in the door
+scene at 0.05 m, amplitude physics), so a larger phantom share. 0.25 keeps most of the pile-up
+(door 69 / 58 %, echoes only).
 
 **The newest echoes mark at once** (:attr:`CarvedGridParams.fresh_arcs`): spread over a
 22.5° arc 3.5 m away, one echo gives its cells 0.12 in log-odds, and the changing scenes' person,
