@@ -14,15 +14,32 @@ from sonarcarve.grids import (
     GridError,
     OccupancyGrid,
     RangeSensorLayer,
+    carved,
     trinary,
 )
 from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH
-from sonarcarve.methods import CarvingMethod, CarvingModel, Estimates, MethodConfig, make_method
+from sonarcarve.methods import (
+    CarvingMethod,
+    CarvingModel,
+    CombinedMethod,
+    Estimates,
+    MethodConfig,
+    make_method,
+)
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import SlotArray
 
 H = 0.05
 BOUNDS = (-0.5, -1.5, 3.5, 1.5)
+
+
+@pytest.fixture(autouse=True)
+def _carving_alone_under_the_grid(monkeypatch: pytest.MonkeyPatch) -> None:
+    """These tests' expected values are worked out by hand for specular-aware carving at 30°,
+    the grid's default method before combined carving; a grid made without a method runs that
+    one here. The default itself: ``test_the_default_method_is_combined_carving``."""
+    monkeypatch.setattr(carved, "DEFAULT_METHOD", "carve")
+    monkeypatch.setattr(carved, "DEFAULT_MAX_INCIDENCE", math.radians(30.0))
 L_HIT = math.log(0.7 / 0.3)
 PHI = DEFAULT_BEAM_WIDTH
 #: The spread rule alone: the tests of how arcs are spread and follow carving read arcs that are
@@ -606,3 +623,13 @@ def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
                            _cos_half(half)) == exact
             cases += 1
     assert cases == 15000
+
+
+def test_the_default_method_is_combined_carving(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Made without a method, the grid runs carving and ATM together (combined) with
+    specular-aware carving at 20°, the measured choice of
+    :data:`~sonarcarve.grids.carved.DEFAULT_METHOD`."""
+    monkeypatch.undo()  # the module's own defaults, not the autouse fixture's
+    grid = CarvedGrid(H, BOUNDS)
+    assert isinstance(grid.method, CombinedMethod)
+    assert grid.method.max_incidence == pytest.approx(math.radians(20.0), abs=1e-15)

@@ -204,6 +204,7 @@ from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "DEFAULT_MAX_INCIDENCE",
+    "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",
     "DEFAULT_SPREAD_LENGTH",
     "FREE",
@@ -230,10 +231,21 @@ Int8Grid = npt.NDArray[np.int8]
 #: with 0.3; 0.2 is the shortest that keeps recall above the range sensor layer's at both
 #: resolutions.
 DEFAULT_SPREAD_LENGTH = 0.2
-#: Critical angle of the default method's specular-aware carving, radians (30°; the
-#: recommendation of ``docs/RESULTS.md``). Paper carving (π/2) loses 45 % of the office's true
-#: echoes to glancing free space, and the grid's recall with them (0.20 at 0.05 m against 0.53).
-DEFAULT_MAX_INCIDENCE = math.radians(30.0)
+#: The method the grid runs by default (:class:`CarvedGrid`): carving and ATM on one history
+#: (the paper's section 4), whose crossings narrow the interval a band is drawn over. Measured
+#: against specular-aware carving alone (``benchmarks/grid_methods.py`` and the issue-10
+#: benchmarks, office, seeds 0-2): occupied precision 0.720 -> 0.790 (0.05 m) and 0.825 ->
+#: 0.901 (0.10 m) under the specular physics, 0.721 -> 0.775 and 0.853 -> 0.935 under the
+#: amplitude physics, recall within ±0.005, phantoms -40 %; the Fig. 2 door 83/78 -> 92/86 %
+#: passable (89/86 -> 97/94 % with no-echo readings); a crossing person forgotten in 0.2 s
+#: instead of 5.2 s. Its price: a map read recomputes every arc (ATM's points move with each
+#: crossing), so reading the map every few readings costs more CPU (``benchmarks/grid_reads.py``).
+DEFAULT_METHOD = "combined"
+#: Critical angle of the default method's specular-aware carving, radians (20°). Paper
+#: carving (π/2) loses 45 % of the office's true echoes to glancing free space, and the grid's
+#: recall with them (0.20 at 0.05 m against 0.53); with combined carving 20° kept recall where
+#: 30° lost 0.004-0.023 of it (office 0.937 / 0.953 against 0.914 / 0.947 at 0.05 / 0.10 m).
+DEFAULT_MAX_INCIDENCE = math.radians(20.0)
 
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
@@ -1214,9 +1226,11 @@ class CarvedGrid(CellGrid):
         ``ceil((xmax - xmin) / h)`` columns and ``ceil((ymax - ymin) / h)`` rows.
     method : SonarMethod, optional
         The carving method the grid runs, fresh (no readings yet); it becomes the grid's own.
-        Default: carving with specular-aware carving at 30°, ``make_method("carve",
-        MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))`` (paper carving is
-        ``make_method("carve")``; see :data:`DEFAULT_MAX_INCIDENCE`). Any method works
+        Default: combined carving and ATM with specular-aware carving at 20°,
+        ``make_method(DEFAULT_METHOD, MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))``
+        (:data:`DEFAULT_METHOD`; specular-aware carving alone, the default before, is
+        ``make_method("carve", MethodConfig(max_incidence=math.radians(30)))``, paper carving
+        ``make_method("carve")``). Any method works
         whose estimates put each point in the middle of its angular interval
         (:class:`~sonarcarve.methods.Estimates` ``xy`` and ``width``); its ``confidence``, where
         given, weighs the occupied band.
@@ -1254,7 +1268,7 @@ class CarvedGrid(CellGrid):
         super().__init__("carved grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
         (xmin, ymin, _, _), (ny, nx) = self._bounds, self._shape
         if method is None:
-            method = make_method("carve", MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
+            method = make_method(DEFAULT_METHOD, MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
         elif method.readings:
             msg = (f"carved grid: the method must be fresh, it has {method.readings} readings "
                    f"already")
