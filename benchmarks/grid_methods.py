@@ -7,10 +7,10 @@ Run from the repository root (on a shared machine, with ``nice``; about 3 minute
     .venv/bin/python benchmarks/grid_methods.py --worlds office t-junction --physics amplitude
 
 :class:`~sonarcarve.grids.CarvedGrid` draws each reading's arc over the interval its method
-leaves; its default method is specular-aware carving at β = 30°. This runs the grid with other
-methods (carving at 20°, combined carving and ATM at 20° and 30°, evidence carving) and the
-default method with the two clearing rules off (``surface_aware``, ``see_through``), on the
-built-in tours (echoes only, seeds 0-2, cells of 0.05 and 0.10 m, the grid origin shifted by a
+leaves; its default method is combined carving and ATM at β = 20°. This runs the grid with other
+methods (carving alone at 30°, the default before, and at 20°; combined at 30°; evidence carving)
+and carving alone at 30° with the two clearing rules off (``surface_aware``, ``see_through``), on
+the built-in tours (echoes only, seeds 0-2, cells of 0.05 and 0.10 m, the grid origin shifted by a
 random fraction of a cell as in ``benchmarks/grids.py``), under the specular physics and the
 amplitude physics (``echo_model="amplitude"``), and prints occupied precision, recall and the
 phantom share (:mod:`sonarcarve.lab.grid_measures`), means over seeds, with ROS's layer
@@ -42,14 +42,14 @@ def _carved(method: Callable[[], SonarMethod], **params: float | bool) -> Maker:
 
 
 GRIDS: dict[str, Maker] = {
-    "carved grid, carve β 30° (default)": _carved(_method("carve", 30)),
+    "carved grid, carve β 30° (the default before)": _carved(_method("carve", 30)),
     "carved grid, carve β 20°": _carved(_method("carve", 20)),
-    "carved grid, combined β 20°": _carved(_method("combined", 20)),
+    "carved grid, combined β 20° (default)": _carved(_method("combined", 20)),
     "carved grid, combined β 30°": _carved(_method("combined", 30)),
     "carved grid, evidence": _carved(_method("evidence")),
-    "carved grid, default, surface_aware off": _carved(_method("carve", 30),
+    "carved grid, carve β 30°, surface_aware off": _carved(_method("carve", 30),
                                                         surface_aware=False),
-    "carved grid, default, see_through 0": _carved(_method("carve", 30), see_through=0.0),
+    "carved grid, carve β 30°, see_through 0": _carved(_method("carve", 30), see_through=0.0),
     "RangeSensorLayer, ROS defaults": lambda h, b: RangeSensorLayer(h, b),
 }
 
