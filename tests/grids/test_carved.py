@@ -14,7 +14,6 @@ from sonarcarve.grids import (
     GridError,
     OccupancyGrid,
     RangeSensorLayer,
-    carved,
     trinary,
 )
 from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH
@@ -33,13 +32,7 @@ H = 0.05
 BOUNDS = (-0.5, -1.5, 3.5, 1.5)
 
 
-@pytest.fixture(autouse=True)
-def _carving_alone_under_the_grid(monkeypatch: pytest.MonkeyPatch) -> None:
-    """These tests' expected values are worked out by hand for specular-aware carving at 30°,
-    the grid's default method before combined carving; a grid made without a method runs that
-    one here. The default itself: ``test_the_default_method_is_combined_carving``."""
-    monkeypatch.setattr(carved, "DEFAULT_METHOD", "carve")
-    monkeypatch.setattr(carved, "DEFAULT_MAX_INCIDENCE", math.radians(30.0))
+pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 L_HIT = math.log(0.7 / 0.3)
 PHI = DEFAULT_BEAM_WIDTH
 #: The spread rule alone: the tests of how arcs are spread and follow carving read arcs that are
@@ -629,7 +622,7 @@ def test_the_default_method_is_combined_carving(monkeypatch: pytest.MonkeyPatch)
     """Made without a method, the grid runs carving and ATM together (combined) with
     specular-aware carving at 20°, the measured choice of
     :data:`~sonarcarve.grids.carved.DEFAULT_METHOD`."""
-    monkeypatch.undo()  # the module's own defaults, not the autouse fixture's
+    monkeypatch.undo()  # the module's own defaults, not those of the carving_alone fixture
     grid = CarvedGrid(H, BOUNDS)
     assert isinstance(grid.method, CombinedMethod)
     assert grid.method.max_incidence == pytest.approx(math.radians(20.0), abs=1e-15)

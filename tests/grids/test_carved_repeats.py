@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError, carved
+from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError
 from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH, _repeats
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
@@ -23,13 +23,7 @@ TOL = 0.05
 
 
 
-@pytest.fixture(autouse=True)
-def _carving_alone_under_the_grid(monkeypatch: pytest.MonkeyPatch) -> None:
-    """These tests' expected values are worked out by hand for specular-aware carving at 30°,
-    the grid's default method before combined carving; a grid made without a method runs that
-    one here. The default itself: ``test_the_default_method_is_combined_carving``."""
-    monkeypatch.setattr(carved, "DEFAULT_METHOD", "carve")
-    monkeypatch.setattr(carved, "DEFAULT_MAX_INCIDENCE", math.radians(30.0))
+pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 
 
 def _repeat(p1: tuple[float, float], r1: float, t1: float, p2: tuple[float, float], r2: float,
