@@ -125,8 +125,10 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     rows, cols = grid.shape
     # base, live, points, heard bins; per slot what was drawn (spread and point: 6 numbers and
     # the arc), its interval, weight and repeat factor, the carving state they came from (3
-    # numbers and the arc) and a position buffer for the arcs that changed
-    expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 4 * 8 + 4 * 8 + 8)
+    # numbers and the arc), the ATM crossings they came from (and a zero count for carving
+    # alone, two int32) and a position buffer for the arcs that changed
+    expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 4 * 8 + 4 * 8 + 2 * 4
+                                                         + 8)
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):
@@ -560,15 +562,24 @@ class _AskEveryArc(CarvingMethod):
     read (it cannot know that they depend on the carving state alone)."""
 
 
-@pytest.mark.parametrize(("seed", "no_echo", "profile"),
-                         [(0, False, 0.0), (1, True, 0.0), (2, False, 1.0)])
+class _AskEveryArcCombined(CombinedMethod):
+    """Combined carving, but a subclass: asked for every live arc at every read."""
+
+
+@pytest.mark.parametrize(("seed", "no_echo", "profile", "name"),
+                         [(0, False, 0.0, "carve"), (1, True, 0.0, "carve"),
+                          (2, False, 1.0, "carve"), (0, False, 0.0, "combined"),
+                          (1, True, 0.0, "combined")])
 def test_reading_only_the_changed_arcs_gives_the_map_of_asking_every_arc(
-        seed: int, no_echo: bool, profile: float) -> None:
+        seed: int, no_echo: bool, profile: float, name: str) -> None:
     params = CarvedGridParams(band_profile=profile)
     config = MethodConfig(history_size=40, max_incidence=math.radians(30.0))
-    fast = CarvedGrid(H, BOUNDS, method=make_method("carve", config), params=params)
-    full = CarvedGrid(H, BOUNDS, method=_AskEveryArc(
+    asker = {"carve": _AskEveryArc, "combined": _AskEveryArcCombined}[name]
+    fast = CarvedGrid(H, BOUNDS, method=make_method(name, config), params=params)
+    full = CarvedGrid(H, BOUNDS, method=asker(
         history_size=40, max_incidence=math.radians(30.0)), params=params)
+    assert fast._carving is not None  # the two read paths
+    assert full._carving is None
     for batch in _ring_stream(600, seed, no_echo):
         fast.add_many(batch)
         full.add_many(batch)

@@ -196,8 +196,10 @@ from sonarcarve.grids.range_sensor_layer import (
 from sonarcarve.history import SonarHistory
 from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
+from sonarcarve.methods.atm import AtmModel
 from sonarcarve.methods.base import Estimates, arc_point
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
+from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
@@ -955,22 +957,27 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
 
 @compiled
 def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
-                 hi: FloatArray, status: npt.NDArray[np.int8], seen: FloatArray,
-                 seen_seq: npt.NDArray[np.int64], out: SlotArray) -> int:
-    """Positions ``k`` (into ``out``, returns how many) of the live arcs whose carving state
-    (``lo, hi, status`` of :class:`~sonarcarve.methods.carving.CarvingModel`, indexed by slot)
-    differs from ``seen`` (``seen_seq``: the arc it was recorded for), recording the new state.
-    An arc whose state is as seen has the same estimate, so its interval need not be asked
-    for again."""
+                 hi: FloatArray, status: npt.NDArray[np.int8],
+                 crossings: npt.NDArray[np.int32], seen: FloatArray,
+                 seen_crossings: npt.NDArray[np.int32], seen_seq: npt.NDArray[np.int64],
+                 out: SlotArray) -> int:
+    """Positions ``k`` (into ``out``, returns how many) of the live arcs whose state differs
+    from ``seen`` (``seen_seq``: the arc it was recorded for), recording the new state: the
+    carving state ``lo, hi, status`` of :class:`~sonarcarve.methods.carving.CarvingModel` and,
+    for combined carving, the number of ATM crossings the arc keeps (``crossings``, all zero
+    for carving alone; indexed by slot). An arc whose state is as seen has the same estimate
+    (ATM's point is the median of the arc's kept crossings, which only grow), so its interval
+    need not be asked for again."""
     count = 0
     for k in range(slots.shape[0]):
         s = slots[k]
         if (seen_seq[s] != seqs[k] or seen[s, 0] != lo[s] or seen[s, 1] != hi[s]
-                or seen[s, 2] != status[s]):
+                or seen[s, 2] != status[s] or seen_crossings[s] != crossings[s]):
             seen_seq[s] = seqs[k]
             seen[s, 0] = lo[s]
             seen[s, 1] = hi[s]
             seen[s, 2] = status[s]
+            seen_crossings[s] = crossings[s]
             out[count] = k
             count += 1
     return count
@@ -1310,11 +1317,14 @@ class CarvedGrid(CellGrid):
         # While a batch is folded in: its arcs' factors, by sequence number from _batch_first.
         self._batch_first = 0
         self._batch_chain = np.ones(0)
-        # Plain carving: per slot, the model's state (lo, hi, status) those were computed from,
-        # and for which arc (-1: none); a read asks only for the estimates of the arcs whose
-        # state changed since (_stale_slots). Any other method is asked for every live arc.
-        self._carving = _plain_carving(method)
+        # Plain carving or combined: per slot, the carving state (lo, hi, status) and the
+        # number of ATM crossings those were computed from, and for which arc (-1: none); a
+        # read asks only for the estimates of the arcs whose state changed since
+        # (_stale_slots). Any other method is asked for every live arc.
+        self._carving, self._atm = _known_models(method)
         self._seen = np.zeros((size, 3), dtype=np.float64)
+        self._seen_crossings = np.zeros(size, dtype=np.int32)
+        self._no_crossings = np.zeros(size, dtype=np.int32)  # carving alone keeps none
         self._seen_seq = np.full(size, -1, dtype=np.int64)
         self._changed = np.zeros(size, dtype=np.int64)
         self._pending: list[tuple[FloatArray, ...]] = []
@@ -1374,7 +1384,8 @@ class CarvedGrid(CellGrid):
         """Memory of the grid's own state (the cell arrays and the per-slot record), bytes;
         the method's history and state come on top, fixed by its history size."""
         per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._lo, self._hi,
-                    self._weight, self._chain, self._seen, self._seen_seq, self._changed)
+                    self._weight, self._chain, self._seen, self._seen_crossings,
+                    self._no_crossings, self._seen_seq, self._changed)
         return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
                    + self._heard.nbytes + sum(a.nbytes for a in per_slot))
 
@@ -1529,21 +1540,29 @@ class CarvedGrid(CellGrid):
         """``_lo, _hi, _weight`` of the live ``slots`` (arcs ``seqs``) as :func:`_intervals`
         gives them from the method's estimates. With plain carving an estimate is a function
         of the arc's row and its model's ``lo, hi, status`` alone
-        (:meth:`~sonarcarve.methods.carving.CarvingModel.estimates`), so only the arcs whose
-        state changed since the last read are computed, from the model's state as its
-        estimates would (:func:`_carving_intervals`)."""
+        (:meth:`~sonarcarve.methods.carving.CarvingModel.estimates`), with combined carving of
+        those and the arc's kept ATM crossings, so only the arcs whose state changed since the
+        last read are computed: for carving alone from the model's state as its estimates
+        would (:func:`_carving_intervals`), for combined by asking the method for them alone
+        (row by row, the same numbers as asking for every arc). Measured for combined
+        (``benchmarks/grid_reads.py``, office, a read every 5 readings): RESULTS."""
         carving = self._carving
         if carving is None:
             stale = slots
             lo, hi, weight = _intervals(history.x[slots], history.y[slots],
                                         self._method.estimates(slots))
         else:
-            count = _stale_slots(slots, seqs, carving.lo, carving.hi, carving.status,
-                                 self._seen, self._seen_seq, self._changed)
+            crossings = self._no_crossings if self._atm is None else self._atm.counts
+            count = _stale_slots(slots, seqs, carving.lo, carving.hi, carving.status, crossings,
+                                 self._seen, self._seen_crossings, self._seen_seq, self._changed)
             if not count:
                 return
             stale = slots[self._changed[:count]]
-            lo, hi, weight = _carving_intervals(history, carving, stale)
+            if self._atm is None:
+                lo, hi, weight = _carving_intervals(history, carving, stale)
+            else:
+                lo, hi, weight = _intervals(history.x[stale], history.y[stale],
+                                            self._method.estimates(stale))
         self._lo[stale] = lo
         self._hi[stale] = hi
         self._weight[stale] = weight * self._chain[stale]
@@ -1616,14 +1635,17 @@ class CarvedGrid(CellGrid):
         return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
 
 
-def _plain_carving(method: SonarMethod) -> CarvingModel | None:
-    """The carving model of a plain :class:`~sonarcarve.methods.carving.CarvingMethod` (no
-    subclass: one that overrides its estimates must be asked), else None."""
-    if type(method) is CarvingMethod and len(method.models) == 1:
-        model = method.models[0]
-        if type(model) is CarvingModel:
-            return model
-    return None
+def _known_models(method: SonarMethod) -> tuple[CarvingModel | None, AtmModel | None]:
+    """The carving model of a plain :class:`~sonarcarve.methods.carving.CarvingMethod`, or the
+    carving and ATM models of a plain :class:`~sonarcarve.methods.combined.CombinedMethod` (no
+    subclass: one that overrides its estimates must be asked), else ``(None, None)``."""
+    models = method.models
+    if type(method) is CarvingMethod and len(models) == 1 and type(models[0]) is CarvingModel:
+        return models[0], None
+    if (type(method) is CombinedMethod and len(models) == 2
+            and type(models[0]) is CarvingModel and type(models[1]) is AtmModel):
+        return models[0], models[1]
+    return None, None
 
 
 def _carving_intervals(history: SonarHistory, model: CarvingModel,
