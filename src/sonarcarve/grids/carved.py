@@ -240,8 +240,9 @@ DEFAULT_SPREAD_LENGTH = 0.2
 #: 0.901 (0.10 m) under the specular physics, 0.721 -> 0.775 and 0.853 -> 0.935 under the
 #: amplitude physics, recall within ±0.005, phantoms -40 %; the Fig. 2 door 83/78 -> 92/86 %
 #: passable (89/86 -> 97/94 % with no-echo readings); a crossing person forgotten in 0.2 s
-#: instead of 5.2 s. Its price: a map read recomputes every arc (ATM's points move with each
-#: crossing), so reading the map every few readings costs more CPU (``benchmarks/grid_reads.py``).
+#: instead of 5.2 s. Its price: more CPU per reading (ATM's crossings and medians), most
+#: visible when the map is read every few readings (``benchmarks/grid_reads.py``: 2.0x / 3.9x
+#: the range sensor layer's at 0.05 / 0.10 m, read every 5 readings, against 1.7x / 2.7x).
 DEFAULT_METHOD = "combined"
 #: Critical angle of the default method's specular-aware carving, radians (20°). Paper
 #: carving (π/2) loses 45 % of the office's true echoes to glancing free space, and the grid's
