@@ -40,8 +40,8 @@ def test_which_echo_pairs_repeat() -> None:
                    0.0)
     # Driving away from it, the sensor looking back: the same, the other way round.
     assert _repeat((0.0, 0.0), 1.75, math.pi, (0.25, 0.0), 2.0, math.pi)
-    # Standing still and hearing the same range again, the beam turned a little.
-    assert _repeat((0.0, 0.0), 2.0, 0.0, (0.01, 0.0), 2.02, 0.1)
+    # Driving 0.11 m at it (just over 2ε = 0.10 m): still a repeat.
+    assert _repeat((0.0, 0.0), 2.0, 0.0, (0.11, 0.0), 1.89, 0.0)
     # Not a repeat: the range changed by 0.06 more than the distance driven ...
     assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.25, 0.0), 1.69, 0.0)
     # ... a side sensor driving along a wall (the same range from 0.25 m further on: the two
@@ -50,10 +50,53 @@ def test_which_echo_pairs_repeat() -> None:
     # ... the range shrank by the distance driven, but the sensor looks 45° off the track: the
     # circles touch on the track, outside its beam (they cross inside it, at one point) ...
     assert not _repeat((0.0, 0.0), 2.0, math.pi / 4, (0.25, 0.0), 1.75, math.pi / 4)
-    # ... standing still, the same range, but the beam turned past half its width ...
-    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.0, 0.0), 2.0, HALF + 0.01)
+    # ... origins 2ε = 0.10 m apart or nearer: any range change fits, so no repeat, whether
+    # the sensor drove at the post, stood still, or crept along a wall ...
+    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.1, 0.0), 1.9, 0.0)
+    assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.0, 0.0), 2.0, 0.0)
+    assert not _repeat((0.0, 0.0), 1.0, math.pi / 2, (0.03, 0.0), 1.0, math.pi / 2)
     # ... and standing still with another range.
     assert not _repeat((0.0, 0.0), 2.0, 0.0, (0.0, 0.0), 1.9, 0.0)
+
+
+def _creeping_ring(step: float) -> list[Reading]:
+    """A 16-sonar ring driving along a corridor (walls at y = ±1 m) ``step`` metres a ring
+    cycle, 40 ms a sonar; beyond 3 m a sonar hears nothing."""
+    rng = np.random.default_rng(0)
+    readings, x, k = [], 0.0, 0
+    while x < 5.0:
+        for sensor in range(16):
+            theta = sensor * 2 * math.pi / 16
+            s = math.sin(theta)
+            r = (1.0 / abs(s) if abs(s) > 1e-9 else math.inf) + float(rng.normal(0.0, 0.005))
+            readings.append(Reading(t=0.04 * k, sensor=sensor, x=x, y=0.0, theta=theta,
+                                    range=r if r <= 3.0 else math.inf, max_range=3.0))
+            k += 1
+        x += step
+    return readings
+
+
+def _wall_columns_marked(readings: list[Reading], repeat_weight: float) -> int:
+    grid = CarvedGrid(0.05, (-0.5, -1.5, 6.5, 1.5),
+                      params=CarvedGridParams(repeat_weight=repeat_weight))
+    for start in range(0, len(readings), 8):
+        grid.add_many(ReadingBatch.from_readings(readings[start:start + 8]))
+    xs, ys = grid.cell_centers()
+    rows, cols = np.abs(ys - 1.0) <= 0.1, (xs > 0.5) & (xs < 4.0)
+    return int((grid.trinary()[np.ix_(rows, cols)] == OCCUPIED).any(axis=0).sum())
+
+
+@pytest.mark.parametrize("step", [0.02, 0.03, 0.045, 0.1])
+def test_a_robot_creeping_along_a_wall_keeps_the_wall(step: float) -> None:
+    """Every side sensor of a ring creeping along a wall hears the same range from origins
+    ``step`` apart. Found in review: with a "stood still" repeat case (origins within ε, the
+    same range), at 2-4.5 cm a cycle each echo repeated the one before, every arc but the
+    newest counted nothing, and the side wall was never marked (0 of 70 columns, against 17-70
+    with the rule off). The rule must mark as much of the wall as counting every echo does."""
+    readings = _creeping_ring(step)
+    with_rule = _wall_columns_marked(readings, 0.0)
+    assert with_rule > 0
+    assert with_rule >= _wall_columns_marked(readings, 1.0)
 
 
 # -- one sensor driving at a corner beside a gap ------------------------------------------------
