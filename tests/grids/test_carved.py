@@ -30,14 +30,14 @@ from sonarcarve.typing import SlotArray
 
 H = 0.05
 BOUNDS = (-0.5, -1.5, 3.5, 1.5)
-
-
-pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 L_HIT = math.log(0.7 / 0.3)
 PHI = DEFAULT_BEAM_WIDTH
 #: The spread rule alone: the tests of how arcs are spread and follow carving read arcs that are
 #: their sensor's newest reading, which the default draws as a point (the fresh-arc tests).
 SPREAD_ONLY = CarvedGridParams(fresh_arcs=False)
+
+
+pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 
 
 def _reading(t: float, theta: float, r: float, x: float = 0.0, y: float = 0.0) -> Reading:
@@ -528,16 +528,18 @@ def test_an_echo_the_map_already_explains_is_only_spread() -> None:
 
 # -- frequent reads: the same map, cheaper ------------------------------------------------------
 
-def _ring_stream(n: int, seed: int, no_echo: bool = False) -> list[ReadingBatch]:
+def _ring_stream(n: int, seed: int, no_echo: bool = False,
+                 spin: float = 0.0) -> list[ReadingBatch]:
     """A ring of 8 sensors on a robot driving along a corridor (walls at y = ±1.2 m, an end wall
     at x = 3.3 m), ranges jittered; batches of 1-7 readings. With ``no_echo`` some firings
-    hear nothing (range +inf, max range 3 m)."""
+    hear nothing (range +inf, max range 3 m); ``spin`` turns the ring by that many radians a
+    reading (so that arcs cross at angles ATM keeps)."""
     rng = np.random.default_rng(seed)
     readings = []
     for k in range(n):
         sensor = k % 8
         x = -0.3 + 0.02 * k / 8
-        theta = sensor * math.pi / 4 + float(rng.normal(0.0, 0.02))
+        theta = sensor * math.pi / 4 + spin * k + float(rng.normal(0.0, 0.02))
         c, s = math.cos(theta), math.sin(theta)
         hits = [d for d in ((1.2 / s) if s > 1e-9 else math.inf,
                             (-1.2 / s) if s < -1e-9 else math.inf,
@@ -585,6 +587,59 @@ def test_reading_only_the_changed_arcs_gives_the_map_of_asking_every_arc(
         full.add_many(batch)
         assert np.array_equal(fast.log_odds, full.log_odds)  # bit for bit, at every read
     assert np.count_nonzero(fast.trinary() == OCCUPIED) > 20  # the walls are there
+
+
+def _wandering_stream(n: int, seed: int) -> list[ReadingBatch]:
+    """A ring of 8 sensors on a robot wandering in a 4.3 m x 2.4 m room (its heading a random
+    walk, 2 cm a reading), some firings silent; batches of 1-40 readings. Its arcs cross at the
+    angles ATM keeps, so combined carving places many points by ATM."""
+    rng = np.random.default_rng(seed)
+    readings, x, y, heading = [], 0.0, 0.0, 0.0
+    for k in range(n):
+        heading += float(rng.normal(0.0, 0.15))
+        x = min(max(x + 0.02 * math.cos(heading), -0.8), 2.5)
+        y = min(max(y + 0.02 * math.sin(heading), -0.8), 0.8)
+        theta = heading + (k % 8) * math.pi / 4 + float(rng.normal(0.0, 0.02))
+        c, s = math.cos(theta), math.sin(theta)
+        hits = [d for d in ((1.2 - y) / s if s > 1e-9 else math.inf,
+                            (-1.2 - y) / s if s < -1e-9 else math.inf,
+                            (3.3 - x) / c if c > 1e-9 else math.inf,
+                            (-1.0 - x) / c if c < -1e-9 else math.inf) if d > 0]
+        r = min(hits) + float(rng.normal(0.0, 0.01))
+        silent = r > 3.0 or rng.random() < 0.15
+        readings.append(Reading(t=0.04 * k, sensor=k % 8, x=x, y=y, theta=theta,
+                                range=math.inf if silent else min(max(r, 0.2), 3.4),
+                                max_range=3.0))
+    batches, start = [], 0
+    while start < n:
+        size = int(rng.integers(1, 41))
+        batches.append(ReadingBatch.from_readings(readings[start:start + size]))
+        start += size
+    return batches
+
+
+def test_reading_only_the_changed_arcs_of_combined_carving_with_atm_points(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Combined carving's read shortcut where ATM places points and its crossing store has to
+    grow (one column to start with): an arc whose carving state and kept crossings did not change
+    keeps its interval, bit for bit the map of asking every arc."""
+    from sonarcarve.maps import PointSource
+    from sonarcarve.methods import atm
+
+    monkeypatch.setattr(atm, "INITIAL_COLUMNS", 1)
+    config = MethodConfig(history_size=40, max_incidence=math.radians(20.0))
+    fast = CarvedGrid(H, (-1.5, -1.5, 3.5, 1.5), method=make_method("combined", config))
+    full = CarvedGrid(H, (-1.5, -1.5, 3.5, 1.5), method=_AskEveryArcCombined(
+        history_size=40, max_incidence=math.radians(20.0)))
+    by_atm = 0
+    for batch in _wandering_stream(800, 0):
+        fast.add_many(batch)
+        full.add_many(batch)
+        assert np.array_equal(fast.log_odds, full.log_odds)
+        slots = full.method.history.slots()
+        by_atm += int(np.count_nonzero(full.method.estimates(slots).source == PointSource.ATM))
+    assert by_atm > 100  # ATM's points were read, not only carving's
+    assert fast.method.models[1].bearings.shape[1] > 1  # the store grew
 
 
 @pytest.mark.parametrize(("no_echo", "fresh"), [(False, True), (True, True), (True, False)])

@@ -12,7 +12,7 @@ import pytest
 from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError
 from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH, _repeats
 from sonarcarve.methods import MethodConfig, make_method
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
+from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
 
 H = 0.05
 BOUNDS = (-0.5, -1.5, 3.5, 1.5)
@@ -20,8 +20,6 @@ L_HIT = math.log(0.7 / 0.3)
 PHI = DEFAULT_BEAM_WIDTH
 HALF = PHI / 2
 TOL = 0.05
-
-
 
 pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 
@@ -253,7 +251,6 @@ def test_repeat_weight_must_lie_in_0_1(bad: object) -> None:
 
 
 def test_a_bad_batch_marks_no_repeat() -> None:
-    from sonarcarve.readings import ReadingsError
 
     params = CarvedGridParams(fresh_arcs=False)
     clean, tried = CarvedGrid(H, BOUNDS, params=params), CarvedGrid(H, BOUNDS, params=params)

@@ -155,11 +155,11 @@ final, in reading order (just before the free space of the reading that pushed i
 map does not depend on how the readings were batched.
 
 Memory: ``base`` (float32), ``live`` (float64), the fresh arcs' points (float32) and the heard
-bearings (uint32), 20 bytes a cell, plus 15 numbers per history slot and the carving method's
-own state (bounded by its history; while a batch is folded in, one more number per echo of the
-batch): bounded by the map size plus the history, never by the
-length of the log (the method's global map, which does grow, is discarded after each batch:
-the grid is the map).
+bearings (uint32), 20 bytes a cell, plus 25 numbers per storage slot (the history stores twice its
+capacity; ``nbytes`` counts them) and the carving method's own state (bounded by its history; while
+a batch is folded in, one more number per echo of the batch): bounded by the map size plus the
+history, never by the length of the log (the method's global map, which does grow, is discarded
+after each batch: the grid is the map).
 
 ``live`` is brought up to date lazily, when the map is read (:attr:`CarvedGrid.log_odds`,
 :meth:`~CarvedGrid.probabilities`, :meth:`~CarvedGrid.trinary`, :meth:`~CarvedGrid.refresh`...),
@@ -1315,7 +1315,7 @@ class CarvedGrid(CellGrid):
         self._lo = np.zeros(size)
         self._hi = np.zeros(size)
         self._weight = np.zeros(size)
-        # Per slot, the factor of the arc's weight: repeat_weight if the next echo of its sensor
+        # Per slot, the factor of the arc's weight: repeat_weight if a later echo of its sensor
         # repeats it (_repeats), else 1.
         self._chain = np.ones(size)
         # While a batch is folded in: its arcs' factors, by sequence number from _batch_first.
@@ -1549,7 +1549,8 @@ class CarvedGrid(CellGrid):
         last read are computed: for carving alone from the model's state as its estimates
         would (:func:`_carving_intervals`), for combined by asking the method for them alone
         (row by row, the same numbers as asking for every arc). Measured for combined
-        (``benchmarks/grid_reads.py``, office, a read every 5 readings): RESULTS."""
+        (``benchmarks/grid_reads.py``, office, a read every 5 readings): the grid's CPU per
+        reading 4.32x -> 3.87x the range sensor layer's at 0.10 m, 1.98x -> 1.97x at 0.05 m."""
         carving = self._carving
         if carving is None:
             stale = slots
