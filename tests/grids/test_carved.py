@@ -447,17 +447,12 @@ def test_a_person_standing_still_stays_marked_reading_after_reading(
     i, j = _cell(grid, FACE_X, ROW_Y)
     for k in range(6):
         grid.add(_front(1.0 + k))
-        if repeat_weight == 0.0:
-            # Each echo repeats the one before (same place, same range): the older arcs count
-            # nothing, and the newest, unexplained, is a whole hit: -0.031 + 0.847 = 0.816.
-            expected = FREE_AT_FACE + L_HIT
-        else:
-            # k older arcs spread (0.236 each) plus the newest: a whole hit while they leave
-            # the face unsure (k <= 2: at most 0.44), its own spread once they mark it (k >= 3:
-            # 3 x 0.236 - 0.031 = 0.68 > 0.619).
-            newest = (L_HIT if k * SPREAD_AT_FACE + FREE_AT_FACE <= L_OCCUPIED
-                      else SPREAD_AT_FACE)
-            expected = FREE_AT_FACE + k * SPREAD_AT_FACE + newest
+        # Echoes from the same place are no repeats (origins within 2ε say nothing about
+        # where the echo came from), so with either repeat_weight: k older arcs spread (0.236
+        # each) plus the newest: a whole hit while they leave the face unsure (k <= 2: at most
+        # 0.44), its own spread once they mark it (k >= 3: 3 x 0.236 - 0.031 = 0.68 > 0.619).
+        newest = L_HIT if k * SPREAD_AT_FACE + FREE_AT_FACE <= L_OCCUPIED else SPREAD_AT_FACE
+        expected = FREE_AT_FACE + k * SPREAD_AT_FACE + newest
         assert grid.log_odds[i, j] == pytest.approx(expected, abs=1e-6), k
         assert trinary(grid)[i, j] == OCCUPIED, k  # occupied after every reading: no flicker
     # The person walks away: the sensor hears the wall behind at 3 m; carving removes every
