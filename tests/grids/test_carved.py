@@ -523,6 +523,17 @@ def test_an_echo_the_map_already_explains_is_only_spread() -> None:
 
 # -- frequent reads: the same map, cheaper ------------------------------------------------------
 
+def _random_batches(readings: list[Reading], rng: np.random.Generator,
+                    largest: int) -> list[ReadingBatch]:
+    """``readings`` in order, in batches of 1 to ``largest`` readings drawn by ``rng``."""
+    batches, start = [], 0
+    while start < len(readings):
+        size = int(rng.integers(1, largest + 1))
+        batches.append(ReadingBatch.from_readings(readings[start:start + size]))
+        start += size
+    return batches
+
+
 def _ring_stream(n: int, seed: int, no_echo: bool = False,
                  spin: float = 0.0) -> list[ReadingBatch]:
     """A ring of 8 sensors on a robot driving along a corridor (walls at y = ±1.2 m, an end wall
@@ -546,12 +557,7 @@ def _ring_stream(n: int, seed: int, no_echo: bool = False,
         else:
             readings.append(Reading(t=0.04 * k, sensor=sensor, x=x, y=0.0, theta=theta,
                                     range=min(r, 3.4)))
-    batches, start = [], 0
-    while start < n:
-        size = int(rng.integers(1, 8))
-        batches.append(ReadingBatch.from_readings(readings[start:start + size]))
-        start += size
-    return batches
+    return _random_batches(readings, rng, 7)
 
 
 class _AskEveryArc(CarvingMethod):
@@ -605,12 +611,7 @@ def _wandering_stream(n: int, seed: int) -> list[ReadingBatch]:
         readings.append(Reading(t=0.04 * k, sensor=k % 8, x=x, y=y, theta=theta,
                                 range=math.inf if silent else min(max(r, 0.2), 3.4),
                                 max_range=3.0))
-    batches, start = [], 0
-    while start < n:
-        size = int(rng.integers(1, 41))
-        batches.append(ReadingBatch.from_readings(readings[start:start + size]))
-        start += size
-    return batches
+    return _random_batches(readings, rng, 40)
 
 
 def test_reading_only_the_changed_arcs_of_combined_carving_with_atm_points(
