@@ -126,7 +126,7 @@ def _table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
               f"{m['p90_ratio']:.2f} | {m['unprocessed']:.1f} | {m['readings_per_s']:,.0f} |")
 
 
-def _robond(config: MethodConfig) -> None:
+def _robond(config: MethodConfig, variants: dict[str, Factory]) -> None:
     from sonarcarve.io.roboND import read_robond
 
     batch = read_robond().batch
@@ -135,7 +135,7 @@ def _robond(config: MethodConfig) -> None:
           "RESULTS\n")
     print("| variant | points | line spread median (cm) | p90 (cm) | isolated (%) |")
     print("|---|---:|---:|---:|---:|")
-    for name, make in VARIANTS.items():
+    for name, make in variants.items():
         gmap = process_readings(batch, make(cfg)).global_map
         spread = line_spread(gmap.xy, 0.25, 5).spread
         ok = np.isfinite(spread)
@@ -178,12 +178,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--physics", nargs="+", default=["specular", "amplitude"])
     parser.add_argument("--skip-robond", action="store_true")
     parser.add_argument("--skip-throughput", action="store_true")
+    parser.add_argument("--variants", nargs="+", choices=list(VARIANTS), metavar="VARIANT",
+                        help="only these rows (default: all; names as in the tables)")
     args = parser.parse_args(argv)
+    variants = {name: VARIANTS[name] for name in (args.variants or VARIANTS)}
     config = MethodConfig()
     for physics in args.physics:
         overrides = () if physics == "specular" else (("echo_model", physics),)
         for world in args.worlds:
-            rows: dict[str, list[dict[str, float]]] = {name: [] for name in VARIANTS}
+            rows: dict[str, list[dict[str, float]]] = {name: [] for name in variants}
             for seed in range(args.seeds):
                 sim = run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
                 center = process_readings(sim.readings, make_method("centerline", config))
@@ -191,11 +194,11 @@ def main(argv: list[str] | None = None) -> int:
                 c_err[center.global_map.reading_id] = segment_distance(
                     center.global_map.xy, sim.world.segments)[0]
                 c_p90 = float(np.nanpercentile(c_err, 90.0))
-                for name, make in VARIANTS.items():
+                for name, make in variants.items():
                     rows[name].append(_measure(sim, make, config, c_err, c_p90))
             _table(f"{world}, physics {physics}: {args.seeds} seeds, mean over seeds", rows)
     if not args.skip_robond:
-        _robond(config)
+        _robond(config, variants)
     if not args.skip_throughput:
         _throughput()
     return 0
