@@ -45,7 +45,7 @@ from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
 from sonarcarve.lab.experiments.real_log import line_spread
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
-from sonarcarve.methods.evidence import EvidenceMethod
+from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod
 from sonarcarve.pipeline import process_readings
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
@@ -66,6 +66,14 @@ def _evidence(*, atm: bool = False, occlusion: bool = False, transmission: bool 
     return make
 
 
+#: The default confidence before the ``repeated`` feature (fitted at 7bc4ab6 by
+#: ``benchmarks/fit_confidence.py`` on the same runs): the comparison row of issue 9's repeats.
+WITHOUT_REPEATS = ConfidenceModel(
+    intercept=-3.645, support=0.277, viewpoints=0.942, crossings=0.668, free=-0.368,
+    looked=0.290, split=-0.555, occluded=-0.471, unheard=-0.013, range=-0.063, width=0.549,
+    others=3.386, through=0.285, repeated=0.0, fresh=2.453, maturity_time=2.0)
+
+
 VARIANTS: dict[str, Factory] = {
     "carve (paper)": lambda c: make_method("carve", c),
     "carve β=30°": lambda c: make_method("carve", replace(c, max_incidence=math.radians(30.0))),
@@ -76,6 +84,10 @@ VARIANTS: dict[str, Factory] = {
     "+ATM": _evidence(atm=True),
     "+confidence": _evidence(confidence=True),
     "evidence (all)": lambda c: make_method("evidence", c),
+    "all, without repeats (fit before them)": lambda c: EvidenceMethod(
+        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+        c.stamp_error, confidence_model=WITHOUT_REPEATS),
     "all, point at the run's middle": lambda c: EvidenceMethod(
         c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
         c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,

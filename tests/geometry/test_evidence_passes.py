@@ -195,7 +195,7 @@ def _one_loop_add_many(m: EvidenceModel, first: int, count: int) -> None:
 
 
 STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoints", "looked",
-         "others", "through", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
+         "others", "through", "repeated", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
 
 
 def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:
@@ -215,7 +215,12 @@ def _run_both(readings: Any, history: int, bins: int, start: int) -> tuple[Evide
     oracle = copy.deepcopy(method)
     model = oracle.models[0]
     assert isinstance(model, EvidenceModel)
-    model.on_add_many = lambda first, count: _one_loop_add_many(model, first, count)  # type: ignore[method-assign]
+
+    def one_loop(first: int, count: int) -> None:  # the repeats are not the passes' business
+        model.mark_repeats(first, count)
+        _one_loop_add_many(model, first, count)
+
+    model.on_add_many = one_loop  # type: ignore[method-assign]
     occluded = False
     for lo in range(start, start + 240, 30):
         method.add_many(readings[lo : lo + 30])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -439,6 +440,17 @@ def test_from_weights_takes_the_fields_default_maturity_time() -> None:
     assert ConfidenceModel.from_weights(-1.0, weights, 2.5, 0.75).maturity_time == 0.75
 
 
+def _approach(t0: float, n: int, sensor: int = 20, sideways: bool = False) -> list[Reading]:
+    # One sensor facing +x hearing a wall at x = 5, a reading every 0.5 s. Head-on: origins
+    # (0.2 k, 30), ranges 5 - 0.2 k: each pair repeats (the circles touch at (5, 30), on the
+    # axis). Sideways: origins (0, 30 + 0.2 k), ranges 5: no pair repeats (origins 0.2 k apart,
+    # the range unchanged: |0.2 k - 0| > ε).
+    return [Reading(t=t0 + 0.5 * k, sensor=sensor, x=0.0 if sideways else 0.2 * k,
+                    y=30.0 + (0.2 * k if sideways else 0.0), theta=0.0,
+                    range=5.0 if sideways else 5.0 - 0.2 * k, beam_width=PHI)
+            for k in range(n)]
+
+
 def _ring_readings(n: int, seed: int) -> list[Reading]:
     # Eight sensors on a robot stepping along x, random ranges: supports, carves, crossings.
     rng = np.random.default_rng(seed)
@@ -455,7 +467,8 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
     method = make_method("evidence", MethodConfig(history_size=120))
     assert isinstance(method, EvidenceMethod)
     post = [r._replace(t=20.0 + r.t) for r in _post_ring(60)]  # crossings
-    method.add_many(ReadingBatch.from_readings(_ring_readings(300, 11) + post))
+    method.add_many(ReadingBatch.from_readings(_ring_readings(300, 11) + post
+                                               + _approach(40.0, 5)))  # repeats
     model = method.models[0]
     assert isinstance(model, EvidenceModel)
     h = method.history
@@ -469,7 +482,8 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
         np.minimum(model.looked[slots] / model.threshold, 3.0),
         np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
         (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
-        np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0)])
+        np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0),
+        model.repeated[slots]])
     features = method.features(slots, raw)
     np.testing.assert_array_equal(features, expected)
     assert all(len(np.unique(column)) > 1 for column in features.T)  # no column constant
@@ -492,3 +506,55 @@ def test_confidence_refuses_features_of_the_wrong_width() -> None:
     model = ConfidenceModel()
     with pytest.raises(ConfigError, match="features must have shape"):
         model.confidence(np.zeros((3, len(model.weights()) - 1)))
+
+
+def _repeat_only_run(sideways: bool, repeat_weight: float) -> tuple[np.ndarray, Any]:
+    # A model that looks at the repeat alone: σ(-2 + w repeated), every arc mature after 1 ms;
+    # the newest arc, 0 s old when the log ends, has the fresh confidence σ(-1) < 0.5.
+    weights = np.zeros(len(evidence_module.CONFIDENCE_FEATURES))
+    weights[evidence_module.CONFIDENCE_FEATURES.index("repeated")] = repeat_weight
+    model = ConfidenceModel.from_weights(-2.0, weights, fresh=-1.0, maturity_time=1e-3)
+    method = EvidenceMethod(confidence_model=model)
+    method.add_many(ReadingBatch.from_readings(_approach(0.0, 8, sideways=sideways)))
+    return _model(method).repeated[method.history.slots()].copy(), method.finish()
+
+
+def test_a_sensor_driving_at_a_wall_has_repeats_and_they_raise_its_confidence() -> None:
+    # Driving at the wall every echo repeats another: all 7 mature ones kept at σ(-2 + 4).
+    repeated, points = _repeat_only_run(sideways=False, repeat_weight=4.0)
+    np.testing.assert_array_equal(repeated, 1.0)
+    assert len(points) == 7
+    np.testing.assert_allclose(points.confidence, 1.0 / (1.0 + math.exp(-2.0)), rtol=1e-12)
+    # Driving past it no echo repeats: all at σ(-2) < 0.5, none kept.
+    repeated, points = _repeat_only_run(sideways=True, repeat_weight=4.0)
+    np.testing.assert_array_equal(repeated, 0.0)
+    assert len(points) == 0
+    # The repeats with a weight of 0 (the feature off): none kept either.
+    assert len(_repeat_only_run(sideways=False, repeat_weight=0.0)[1]) == 0
+
+
+def test_repeats_give_the_same_confidence_in_blocks_and_one_reading_at_a_time() -> None:
+    # The repeat of an arc can arrive in its own block or a later one, its partner can have
+    # wrapped in the ring: every arc must leave with the features (and so the confidence)
+    # that one add() per reading gives it. Two sensors drive at walls among random echoes.
+    readings = sorted(_ring_readings(400, 5) + _approach(0.0, 20, sensor=20)
+                      + _approach(3.0, 20, sensor=21), key=lambda r: r.t)
+    committed = []
+    for blocks in (1, 13, 97):
+        method = make_method("evidence", MethodConfig(history_size=40))
+        assert isinstance(method, EvidenceMethod)
+        rows: list[np.ndarray] = []
+        method.add_commit_listener(lambda _h, slots, _e, m=method, rows=rows: rows.append(
+            m.features(slots)))
+        for start in range(0, len(readings), blocks):
+            method.add_many(ReadingBatch.from_readings(readings[start : start + blocks]),
+                            first_id=start)
+        points = method.finish()
+        committed.append((np.vstack(rows), points))
+    column = evidence_module.CONFIDENCE_FEATURES.index("repeated")
+    one, _ = committed[0]
+    assert 0 < np.count_nonzero(one[:, column]) < len(one)  # the case holds repeats
+    for features, points in committed[1:]:
+        np.testing.assert_array_equal(features, one)
+        np.testing.assert_array_equal(points.reading_id, committed[0][1].reading_id)
+        np.testing.assert_array_equal(points.confidence, committed[0][1].confidence)

@@ -25,11 +25,12 @@ Per arc (see the geometry module for the equations):
   bound is smaller, places the point (``source = atm``);
 * a confidence per point: a logistic model of the evidence the arc has gathered (support,
   support from distinct viewpoints and from other sensors, crossings, free and looked-through
-  evidence, runs, occlusion, the support of the surface the beam passed, range, width;
-  :class:`ConfidenceModel`), its weights fitted on the simulator's
-  truth of one world (``benchmarks/fit_confidence.py``); points below ``min_confidence`` are
-  left out of the maps (the default map), so "removed" means: not in the map the method
-  outputs.
+  evidence, runs, occlusion, the support of the surface the beam passed, range, width,
+  whether the sensor heard the point again as it drove at it: a repeat,
+  :mod:`~sonarcarve.geometry.repeats`; :class:`ConfidenceModel`), its weights fitted on the
+  simulator's truth of one world (``benchmarks/fit_confidence.py``); points below
+  ``min_confidence`` are left out of the maps (the default map), so "removed" means: not in
+  the map the method outputs.
 
 ``processed`` (Table I) is: received evidence (free, support or occlusion) or has a crossing.
 
@@ -60,6 +61,7 @@ from sonarcarve.geometry.evidence import (
     evidence_threshold,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
+from sonarcarve.geometry.repeats import mark_repeats
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import GlobalMap, PointSource
 from sonarcarve.methods.atm import CrossingStore, atm_error_bound
@@ -151,7 +153,8 @@ class SensorModel:
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
 #: docstring): each is known when the arc is committed, and for the local map at any time.
 CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
-                       "occluded", "unheard", "range", "width", "others", "through")
+                       "occluded", "unheard", "range", "width", "others", "through",
+                       "repeated")
 
 
 @dataclass(frozen=True)
@@ -168,8 +171,14 @@ class ConfidenceModel:
     carved by occlusion), ``unheard`` (never supported, times the maturity), ``range``
     (metres), ``width`` (kept run over the full beam), ``others`` (support from other
     sensors, capped at 1: a sensor's own repeated echoes can repeat one systematic error, so
-    they confirm less than another transducer does) and ``through`` (support of the surface
-    the echo's beam passed on its way, capped at 3: multipath echoes read from behind walls).
+    they confirm less than another transducer does), ``through`` (support of the surface
+    the echo's beam passed on its way, capped at 3: multipath echoes read from behind walls)
+    and ``repeated`` (1 if another echo of the arc's sensor in the history is a *repeat* of it,
+    :mod:`sonarcarve.geometry.repeats`: internally tangent circles, the touch point inside
+    both beams, origins more than 2ε apart; the sensor drove at what it hears. Direct echoes
+    heard by one sensor alone, which ``others`` cannot confirm, often have one; spurious
+    echoes almost never do: ``benchmarks/repeat_echoes.py``). Paper, section 6: certainty
+    values per point.
 
     Maturity: the features are fitted on arcs as they leave the history, when the ring has
     looked again many times; a fresh arc has had no chance to be supported or seen through. So
@@ -194,20 +203,22 @@ class ConfidenceModel:
     ``benchmarks/evidence.py``.
     """
 
-    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,459 arcs.
-    intercept: float = -3.645
-    support: float = 0.277
-    viewpoints: float = 0.942
-    crossings: float = 0.668
-    free: float = -0.368
-    looked: float = 0.290
-    split: float = -0.555
-    occluded: float = -0.471
-    unheard: float = -0.013
-    range: float = -0.063
-    width: float = 0.549
-    others: float = 3.386
-    through: float = 0.285
+    # Fitted (see above): office tour, specular physics, seeds 0-2, 38,459 arcs (refitted with
+    # ``repeated``; the weights before it are benchmarks/evidence.py's WITHOUT_REPEATS).
+    intercept: float = -3.543
+    support: float = 0.289
+    viewpoints: float = 0.921
+    crossings: float = 0.680
+    free: float = -0.370
+    looked: float = 0.299
+    split: float = -0.538
+    occluded: float = -0.375
+    unheard: float = 0.017
+    range: float = -0.128
+    width: float = 0.545
+    others: float = 3.299
+    through: float = 0.293
+    repeated: float = 1.205
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
 
@@ -283,7 +294,8 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    crossings: FloatArray, free: FloatArray, runs: FloatArray, width: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
-                   others: FloatArray, through: FloatArray, threshold: float) -> None:
+                   others: FloatArray, through: FloatArray, repeated: FloatArray,
+                   threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -303,6 +315,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 9] = width[q] / beam_width[s]
         out[q, 10] = _at_most(others[s], 1.0)
         out[q, 11] = _at_most(through[s], 3.0)
+        out[q, 12] = repeated[s]
 
 
 _ATM = int(PointSource.ATM)
@@ -419,6 +432,10 @@ class EvidenceModel(ArcModel):
         self.looked = np.zeros(size)
         self.others = np.zeros(size)
         self.through = np.zeros(size)
+        # 1 where the arc has a repeat (geometry/repeats.py) among its sensor's other echoes
+        # in the history, else 0.
+        self.repeated = np.zeros(size)
+        self.range_tolerance = range_tolerance
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -489,12 +506,23 @@ class EvidenceModel(ArcModel):
         when the crossing store has to grow on the way)."""
         self.check_usable()
         end = first + count
+        self.mark_repeats(first, count)
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
                 first, end - first, self.history.capacity, *self._arrays())
             self._count((fully, crossings, occluding))
             if spilled:
                 self._take_spill(spilled)
+
+    def mark_repeats(self, first: int, count: int) -> int:
+        """Mark the repeats (:func:`~sonarcarve.geometry.repeats.mark_repeats`, ε the range
+        tolerance) of arcs ``first .. first + count - 1`` in :attr:`repeated`; the number of
+        pairs found. Each pair is judged when its newer arc arrives, from the two readings
+        alone: the same marks whatever the blocks (and whatever the crossing store's growth
+        in :meth:`on_add_many`)."""
+        h = self.history
+        return int(mark_repeats(first, count, h.capacity, h.x, h.y, h.r, h.theta,
+                                h.beam_width, h.sensor, self.repeated, self.range_tolerance))
 
     def _take_spill(self, spilled: int) -> None:
         """Widen the crossing store for the ``spilled`` crossings in :attr:`spill` and move
@@ -656,7 +684,7 @@ class EvidenceMethod(SonarMethod):
         _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
-                       model.others, model.through, model.threshold)
+                       model.others, model.through, model.repeated, model.threshold)
         return out
 
     def maturity(self, slots: SlotArray) -> np.ndarray:
