@@ -22,9 +22,12 @@ Variants: ``carve`` (paper), ``carve β=30°`` (specular-aware), ``combined`` (p
 ATM); evidence carving with each part alone on top of the free-space evidence (``evidence
 only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission, no confidence
 filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``), ``evidence`` (all
-together, the library defaults) and the same with each point at its run's middle (eq. 3.6)
-instead of at the median of its localised support (once its beam is cut). A last table gives
-the roboND-sonar-8 log's line spread (the sharpness measure of
+together, the library defaults), the same with the confidence fitted before its ``repeated``
+feature (issue 9's repeats: the previous default), with the same fit but ``repeated``'s weight
+set to 0 (what the feature adds beyond the refit), and with each point at its run's middle
+(eq. 3.6) instead of at the median of its localised support (once its beam is cut).
+``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed.
+A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
 ``lab/experiments/real_log.py``) and a throughput table times ``carve``, ``combined`` and
 ``evidence`` at history 250 on ``throughput.py``'s stream (after a warm-up, the three
 interleaved, the best of 5 runs each: on a shared machine the fastest run is the one least
@@ -88,6 +91,10 @@ VARIANTS: dict[str, Factory] = {
         c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
         c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
         c.stamp_error, confidence_model=WITHOUT_REPEATS),
+    "all, repeats' weight 0 (same fit)": lambda c: EvidenceMethod(
+        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+        c.stamp_error, confidence_model=replace(ConfidenceModel(), repeated=0.0)),
     "all, point at the run's middle": lambda c: EvidenceMethod(
         c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
         c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
@@ -136,6 +143,16 @@ def _table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
               f"{_pct(m['floor'])} | {_pct(m['multipath'])} | {m['spurious']:.1f} | "
               f"{m['median_ratio']:.2f} | "
               f"{m['p90_ratio']:.2f} | {m['unprocessed']:.1f} | {m['readings_per_s']:,.0f} |")
+
+
+def _per_seed(rows: dict[str, list[dict[str, float]]]) -> None:
+    """Direct kept and spurious removed per seed (how thin a mean's margin is)."""
+    print("\n| variant | direct kept per seed (%) | spurious removed per seed (%) |")
+    print("|---|---|---|")
+    for name, runs in rows.items():
+        kept = " / ".join(f"{run['direct_kept']:.1f}" for run in runs)
+        removed = " / ".join(_pct(run["spurious"]) for run in runs)
+        print(f"| {name} | {kept} | {removed} |")
 
 
 def _robond(config: MethodConfig, variants: dict[str, Factory]) -> None:
@@ -192,6 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-throughput", action="store_true")
     parser.add_argument("--variants", nargs="+", choices=list(VARIANTS), metavar="VARIANT",
                         help="only these rows (default: all; names as in the tables)")
+    parser.add_argument("--per-seed", action="store_true",
+                        help="also print direct kept and spurious removed per seed")
     args = parser.parse_args(argv)
     variants = {name: VARIANTS[name] for name in (args.variants or VARIANTS)}
     config = MethodConfig()
@@ -209,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
                 for name, make in variants.items():
                     rows[name].append(_measure(sim, make, config, c_err, c_p90))
             _table(f"{world}, physics {physics}: {args.seeds} seeds, mean over seeds", rows)
+            if args.per_seed:
+                _per_seed(rows)
     if not args.skip_robond:
         _robond(config, variants)
     if not args.skip_throughput:
