@@ -230,6 +230,8 @@ def test_combined_leaves_each_model_as_it_runs_alone(stream: str, history: int,
         want = combine_carving_atm(alone_c, alone_a)
         for field in ("alive", "processed", "xy", "width", "max_error", "source", "fate"):
             np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+            assert getattr(got, field).dtype == getattr(want, field).dtype, field
+        assert got.confidence is want.confidence is None
 
 
 def test_a_store_beyond_the_memory_limit_stops_combined_for_good(

@@ -533,26 +533,12 @@ class AtmModel(ArcModel):
         """Add crossings kept by a kernel that the method ran for this model."""
         self._kept += kept
 
-    def estimates(self, slots: SlotArray, points: BoolArray | None = None) -> Estimates:
-        """ATM's estimates for ``slots``; ``points`` (a mask over ``slots``, default all) says
-        which rows' points and widths are wanted: the others are NaN and their medians are not
-        computed (:class:`~sonarcarve.methods.combined.CombinedMethod` asks only where ATM's
-        point can beat carving's). Refused once the model has stopped (:meth:`check_usable`)."""
+    def estimates(self, slots: SlotArray) -> Estimates:
+        """ATM's estimates for ``slots`` (refused once the model has stopped:
+        :meth:`check_usable`)."""
         self.check_usable()
         h = self.history
-        # Medians only of the rows whose crossings changed since they were last asked for
-        # (a writable int64 array: one compiled version of _medians, whatever the caller
-        # passes): local_map() at a history of 10,000 re-sorted every arc's crossings.
-        wanted = self._stale[slots] if points is None else self._stale[slots] & points
-        stale = np.array(slots[wanted], dtype=np.int64)
-        if len(stale):
-            _medians(self.bearings, self.counts, stale, self._median, self._span)
-            self._stale[stale] = False
-        median = self._median[slots]
-        span = self._span[slots]
-        if points is not None:
-            median = np.where(points, median, np.nan)
-            span = np.where(points, span, np.nan)
+        median, span = self.medians(slots)
         has = self.counts[slots] > 0
         beam = h.beam_width[slots]
         return Estimates(
@@ -565,6 +551,21 @@ class AtmModel(ArcModel):
                 np.int8
             ),
         )
+
+    def medians(self, slots: SlotArray) -> tuple[FloatArray, FloatArray]:
+        """Median and span (max − min) of the kept bearings of each of ``slots``, radians
+        relative to its axis; 0 for a row with none.
+
+        Sorted again only for the rows whose crossings changed since they were last asked for
+        (a writable int64 array: one compiled version of :func:`_medians`, whatever the caller
+        passes): ``local_map()`` at a history of 10,000 re-sorted every arc's crossings.
+        """
+        stale = self._stale[slots]
+        if stale.any():
+            rows = np.array(slots[stale], dtype=np.int64)
+            _medians(self.bearings, self.counts, rows, self._median, self._span)
+            self._stale[rows] = False
+        return self._median[slots], self._span[slots]
 
     def counters(self) -> dict[str, int]:
         """``atm_crossings``: transversal crossings kept since the start (each counted once)."""
