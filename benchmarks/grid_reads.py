@@ -4,6 +4,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
 
     nice .venv/bin/python benchmarks/grid_reads.py             # reads every 1/5/25 readings, once
     nice .venv/bin/python benchmarks/grid_reads.py --trinary --every 5 25 0
+    nice .venv/bin/python benchmarks/grid_reads.py --physics amplitude   # the second model
 
 A robot reads its costmap at 5-10 Hz, not once per log (``benchmarks/grids.py`` measures the
 latter). Here the office log (seed 0, echoes only unless ``--no-echo``) is fed to each grid a few
@@ -29,6 +30,7 @@ from sonarcarve.grids import CarvedGrid, RangeSensorLayer, trinary
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.simulate import simulate
+from sonarcarve.sim.sonar import DEFAULT_PHYSICS
 
 MARGIN = 0.5
 Bounds = tuple[float, float, float, float]
@@ -39,11 +41,13 @@ GRIDS: dict[str, Callable[[float, Bounds], Grid]] = {
 }
 
 
-def _readings(world: str, seed: int, no_echo: bool,
-              limit: int | None) -> tuple[ReadingBatch, Bounds]:
+def _readings(world: str, seed: int, no_echo: bool, limit: int | None,
+              physics: str) -> tuple[ReadingBatch, Bounds]:
     """The scenario's log and the grids' bounds: the world's plus :data:`MARGIN` (as
-    ``benchmarks/grids.py``, without its random shift)."""
-    sim = run_simulation(Scenario(world, seed))
+    ``benchmarks/grids.py``, without its random shift). ``physics`` names the simulator's echo
+    model (the default adds no override, so the log is that of the other benchmarks)."""
+    override = () if physics == DEFAULT_PHYSICS.echo_model else (("echo_model", physics),)
+    sim = run_simulation(Scenario(world, seed, physics=override))
     if no_echo:
         sim = simulate(sim.world, sim.robot, sim.trajectory, sim.seed, sim.physics,
                        sim.odometry, no_echo=True)
@@ -110,11 +114,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trinary", action="store_true",
                         help="each read also classifies every cell (both grids)")
     parser.add_argument("--limit", type=int, default=None, help="only the first N readings")
+    parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
+                        help="the simulator's echo model (specular: its default)")
     args = parser.parse_args(argv)
-    batch, bounds = _readings(args.world, args.seed, args.no_echo, args.limit)
+    batch, bounds = _readings(args.world, args.seed, args.no_echo, args.limit, args.physics)
     read = ("refresh (carved grid) / nothing (layer), then trinary of every cell"
             if args.trinary else "refresh (carved grid) / nothing (layer)")
-    print(f"CPU per reading, {args.world} seed {args.seed}, {len(batch):,} readings"
+    print(f"CPU per reading, {args.world} seed {args.seed}, {args.physics} physics, "
+          f"{len(batch):,} readings"
           f"{' with no-echo readings' if args.no_echo else ', echoes only'}; a read: {read}; "
           f"best of {args.repeats}, the grids taking turns, one process; "
           f"load average {os.getloadavg()[0]:.1f} (2 cores)\n")
