@@ -384,26 +384,32 @@ def _shell_sort(values: FloatArray, count: int) -> None:
         gap //= 3
 
 
+@compiled_inline
+def _row_median(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], s: int,
+                median: FloatArray, span: FloatArray, values: FloatArray) -> None:
+    """Median and span (max − min) of row ``s``'s stored bearings, written to ``median[s]``
+    and ``span[s]``; 0 where it has none. ``values`` is a work array of the store's width."""
+    c = counts[s]
+    median[s] = 0.0
+    span[s] = 0.0
+    if c == 0:
+        return
+    for i in range(c):
+        values[i] = bearings[s, i]
+    _shell_sort(values, c)
+    median[s] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
+    span[s] = values[c - 1] - values[0]
+
+
 @compiled
 def _medians(
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray,
     median: FloatArray, span: FloatArray,
 ) -> None:
-    """Median and span (max − min) of the stored bearings of each of ``slots``, written to
-    ``median[slot]`` and ``span[slot]`` (arrays by slot); 0 where it has none."""
+    """:func:`_row_median` of each of ``slots`` (``median`` and ``span`` are by slot)."""
     values = np.empty(bearings.shape[1])
     for k in range(slots.shape[0]):
-        s = slots[k]
-        c = counts[s]
-        median[s] = 0.0
-        span[s] = 0.0
-        if c == 0:
-            continue
-        for i in range(c):
-            values[i] = bearings[s, i]
-        _shell_sort(values, c)
-        median[s] = 0.5 * (values[(c - 1) // 2] + values[c // 2])
-        span[s] = values[c - 1] - values[0]
+        _row_median(bearings, counts, slots[k], median, span, values)
 
 
 class AtmModel(ArcModel):
@@ -464,6 +470,7 @@ class AtmModel(ArcModel):
         self._median = np.zeros(history.storage_size)
         self._span = np.zeros(history.storage_size)
         self._stale = np.ones(history.storage_size, dtype=bool)
+        self._values = np.zeros(0)  # median_state's work array
         self._kept = 0
 
     @property
@@ -566,6 +573,16 @@ class AtmModel(ArcModel):
             _medians(self.bearings, self.counts, rows, self._median, self._span)
             self._stale[rows] = False
         return self._median[slots], self._span[slots]
+
+    def median_state(self) -> tuple[float, FloatArray, npt.NDArray[np.float32], BoolArray,
+                                    FloatArray, FloatArray, FloatArray]:
+        """What a kernel placing ATM's points takes besides the counts
+        (:func:`_row_median`): the error bound, the axes θ, the crossing store, the stale
+        marks, the cached medians and spans, and a work array as wide as the store."""
+        if self._values.shape[0] != self.bearings.shape[1]:
+            self._values = np.zeros(self.bearings.shape[1])
+        return (self.error_bound, self.history.theta, self.bearings, self._stale,
+                self._median, self._span, self._values)
 
     def counters(self) -> dict[str, int]:
         """``atm_crossings``: transversal crossings kept since the start (each counted once)."""

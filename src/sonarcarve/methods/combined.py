@@ -27,7 +27,7 @@ from sonarcarve.geometry.index import (
 )
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.atm import AtmModel, _add_arc
+from sonarcarve.methods.atm import AtmModel, _add_arc, _row_median
 from sonarcarve.methods.atm import _start_arc as _start_atm_arc
 from sonarcarve.methods.base import Estimates, SonarMethod, arc_point
 from sonarcarve.methods.carving import CarvingModel, _carve_found
@@ -45,6 +45,9 @@ I32Array = npt.NDArray[np.int32]
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
 _ALIVE = int(ArcFate.ALIVE)
+_ATM = int(PointSource.ATM)
+_CARVED = int(PointSource.CARVED)
+_CENTERLINE = int(PointSource.CENTERLINE)
 
 
 @compiled_borrowing
@@ -127,6 +130,36 @@ def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> 
         out[found] = older % storage
         found += 1
     return found
+
+
+@compiled_borrowing
+def _choose(
+    slots: SlotArray, status: Int8Array, carved: BoolArray, counts: npt.NDArray[np.int32],
+    alive: BoolArray, processed: BoolArray, bearing: FloatArray, width: FloatArray,
+    max_error: FloatArray, source: Int8Array, error_bound: float, theta: FloatArray,
+    bearings: npt.NDArray[np.float32], stale: BoolArray, median: FloatArray, span: FloatArray,
+    values: FloatArray,
+) -> None:
+    """:func:`combine_carving_atm`, row by row, in place: row ``k`` (``slots[k]``) comes with
+    carving's point bearing, width and bound; where ATM's point wins (the row has kept a
+    crossing and ``error_bound`` is below carving's bound), ATM's bearing ``θ + median``,
+    width (the span), bound and source replace them. ``alive`` and ``processed`` are filled
+    in. A median is sorted again only for a row whose crossings changed (``stale``, as
+    :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        alive[k] = status[s] == _ALIVE
+        processed[k] = carved[s] or not alive[k] or counts[s] > 0
+        source[k] = _CARVED if carved[s] else _CENTERLINE
+        if counts[s] == 0 or not max_error[k] > error_bound:
+            continue
+        if stale[s]:
+            _row_median(bearings, counts, s, median, span, values)
+            stale[s] = False
+        bearing[k] = theta[s] + median[s]
+        width[k] = span[s]
+        max_error[k] = error_bound
+        source[k] = _ATM
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -288,41 +321,30 @@ class CombinedMethod(SonarMethod):
             super()._feed_no_echo(reading, beam_width)
 
     def _estimates(self, slots: SlotArray) -> Estimates:
-        """:func:`combine_carving_atm` of the two models' estimates, bit for bit, computed
-        only where each is chosen.
+        """:func:`combine_carving_atm` of the two models' estimates, bit for bit, each part
+        computed only where it is chosen.
 
-        ATM's point wins where it has a crossing and its bound is below carving's (eq. 5.3 of
-        the carved interval): there the median, span and bound replace carving's, and the
-        point is placed once, at the chosen bearing. ATM's fallback (the centerline) never
-        wins, so it is not computed. The grid asks for a few arcs at every read and for every
-        retiring block, so the two models' full estimates and the selection between them were
-        most of a 5-reading call's CPU time.
+        Carving's interval gives every row's bearing, width and bound (eq. 3.6, 5.3, as
+        :meth:`CarvingModel.estimates` computes them); ATM's point wins where it has a kept
+        crossing and its bound is below carving's, and :func:`_choose` puts its median, span
+        and bound there. The point is then placed once, at the chosen bearing, and ATM's
+        fallback (the centerline, never chosen) is not computed. Why: the carved grid asks for
+        a few arcs at every read and at every retiring block, and the two models' full
+        estimates with the selection between them (about 40 numpy calls) were a fifth of a
+        5-reading call's CPU time (``benchmarks/grid_reads.py``).
         """
         carving, atm, h = self._carving, self._atm, self.history
-        status = carving.status[slots]
-        alive = status == _ALIVE
-        carved = carving.carved[slots]
         lo = carving.lo[slots]
         hi = carving.hi[slots]
         width = hi - lo
         max_error = chord_error(h.r[slots], width)  # as CarvingModel.estimates
         bearing = 0.5 * (lo + hi)
-        source = np.where(carved, np.int8(PointSource.CARVED), np.int8(PointSource.CENTERLINE))
-        has = atm.counts[slots] > 0
-        use_atm = has & (max_error > atm.error_bound)
-        if use_atm.any():
-            chosen = slots[use_atm]
-            median, span = atm.medians(chosen)
-            bearing[use_atm] = h.theta[chosen] + median  # as AtmModel.estimates
-            width[use_atm] = span
-            max_error[use_atm] = atm.error_bound
-            source[use_atm] = PointSource.ATM
-        return Estimates(
-            alive=alive,
-            processed=carved | ~alive | has,
-            xy=arc_point(h, slots, bearing),
-            width=width,
-            max_error=max_error,
-            source=source,  # int8: np.where of two int8 values
-            fate=status,
-        )
+        n = len(slots)
+        alive = np.empty(n, dtype=bool)
+        processed = np.empty(n, dtype=bool)
+        source = np.empty(n, dtype=np.int8)
+        _choose(np.asarray(slots, dtype=np.int64), carving.status, carving.carved, atm.counts,
+                alive, processed, bearing, width, max_error, source, *atm.median_state())
+        return Estimates(alive=alive, processed=processed, xy=arc_point(h, slots, bearing),
+                         width=width, max_error=max_error, source=source,
+                         fate=carving.status[slots])
