@@ -25,7 +25,7 @@ from sonarcarve.methods import (
     make_method,
 )
 from sonarcarve.methods.atm import AtmModel
-from sonarcarve.methods.evidence import ConfidenceModel, SensorModel
+from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, SensorModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 GOOD = Reading(1.0, 0, 0.0, 0.0, 0.0, 2.0)
@@ -353,7 +353,7 @@ def test_confidence_model_refuses_each_bad_field(field: str, value: object) -> N
 def test_confidence_model_accepts_any_finite_weight_and_a_short_maturity() -> None:
     model = ConfidenceModel(maturity_time=1e-9, others=-50.0, intercept=0.0)
     # Fresh at age 0, mature (the fitted logit: intercept only, no feature) from 1e-9 s on.
-    no_features = np.zeros((2, 12))
+    no_features = np.zeros((2, len(CONFIDENCE_FEATURES)))
     confidence = model.confidence(no_features, model.maturity(np.array([0.0, 1.0])))
     np.testing.assert_allclose(confidence, [1 / (1 + math.exp(-model.fresh)), 0.5])
 
