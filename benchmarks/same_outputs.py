@@ -1,0 +1,127 @@
+"""Do two commits give the same bits? Methods' maps and the carved grid, old code against new.
+
+Run from the repository root (on a shared machine, with ``nice``)::
+
+    nice .venv/bin/python benchmarks/same_outputs.py --commits 7bc4ab6 WORKTREE
+
+For a speed change that must not change any output. Each commit's ``src`` is exported with
+``git archive`` (``WORKTREE``: this checkout's ``src``) and run in a child process with its own
+numba cache. A child simulates the office logs (``--seeds``, both echo models) and feeds each
+log to every ``--methods`` method three ways: the whole log in one ``add_many``, blocks of 5
+readings, and one ``add`` per reading (``--singles`` readings of it). It hashes (SHA-256 of the
+raw bytes) every field of the global map that ``finish`` returns and of the local map at the
+end of the stream and after every 1000 readings of the blocks, and, for the carved grid with
+its default method at 0.10 m, the log-odds after each 25-reading block read and at the end.
+The parent prints each hash key's verdict: the same in every commit, or which differ.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from commits import child_env, export_src
+
+WORKTREE = "WORKTREE"
+ROOT = Path(__file__).resolve().parent.parent
+
+# Run in each subprocess: arguments seeds (comma-separated), methods (comma-separated), singles.
+CHILD = r"""
+import hashlib, json, math, sys
+import numpy as np
+from sonarcarve.grids import CarvedGrid
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.methods import MethodConfig, make_method
+
+seeds = [int(s) for s in sys.argv[1].split(",")]
+methods = sys.argv[2].split(",")
+singles = int(sys.argv[3])
+out = {}
+
+def digest(value):
+    return hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()[:16]
+
+def put(key, points):
+    for field, value in sorted(vars(points).items()):
+        if isinstance(value, np.ndarray):
+            out[f"{key} {field}"] = digest(value)
+
+def method(name):
+    config = MethodConfig(max_incidence=math.radians(20.0)) if name != "atm" else None
+    return make_method(name, config)
+
+for physics in ("specular", "amplitude"):
+    override = () if physics == "specular" else (("echo_model", physics),)
+    for seed in seeds:
+        batch = run_simulation(Scenario("office", seed, physics=override)).readings
+        log = f"office {seed} {physics}"
+        for name in methods:
+            whole = method(name)
+            whole.add_many(batch)
+            put(f"{log} {name} whole local", whole.local_map())
+            put(f"{log} {name} whole global", whole.finish())
+            blocks = method(name)
+            for start in range(0, len(batch), 5):
+                blocks.add_many(batch[start:start + 5])
+                if (start + 5) % 1000 == 0:
+                    put(f"{log} {name} blocks local at {start + 5}", blocks.local_map())
+            put(f"{log} {name} blocks global", blocks.finish())
+            one = method(name)
+            for k in range(min(singles, len(batch))):
+                one.add(batch[k])
+            put(f"{log} {name} singles local", one.local_map())
+            put(f"{log} {name} singles global", one.finish())
+        grid = CarvedGrid(0.1, (-0.5, -0.5, 90.5, 60.5))
+        reads = []
+        for start in range(0, len(batch), 25):
+            grid.add_many(batch[start:start + 25])
+            reads.append(digest(grid.log_odds))
+        out[f"{log} carved grid reads every 25"] = digest(np.array(reads))
+        whole_grid = CarvedGrid(0.1, (-0.5, -0.5, 90.5, 60.5))
+        whole_grid.add_many(batch)
+        out[f"{log} carved grid whole"] = digest(whole_grid.log_odds)
+print(json.dumps(out))
+"""
+
+
+def tree_src(commit: str, into: Path) -> Path:
+    """The ``src`` folder of ``commit`` (or of this checkout for ``WORKTREE``)."""
+    if commit == WORKTREE:
+        return ROOT / "src"
+    return export_src(commit, into / commit)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--commits", nargs="+", default=["HEAD", WORKTREE])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    parser.add_argument("--methods", nargs="+", default=["combined", "atm", "carve"])
+    parser.add_argument("--singles", type=int, default=3000,
+                        help="readings fed one add() at a time (the start of each log)")
+    args = parser.parse_args(argv)
+    hashes: dict[str, dict[str, str]] = {}
+    with tempfile.TemporaryDirectory(prefix="sonarcarve-same-") as name:
+        for commit in args.commits:
+            src = tree_src(commit, Path(name))
+            env = child_env(src, Path(name) / f"{commit}-numba")
+            child = subprocess.run(
+                [sys.executable, "-c", CHILD, ",".join(map(str, args.seeds)),
+                 ",".join(args.methods), str(args.singles)],
+                env=env, check=True, capture_output=True, text=True)
+            hashes[commit] = json.loads(child.stdout)
+    first, *others = args.commits
+    differ = 0
+    for key, value in hashes[first].items():
+        changed = [c for c in others if hashes[c].get(key) != value]
+        differ += bool(changed)
+        print(f"{'DIFFERS in ' + ', '.join(changed) if changed else 'same'}: {key}")
+    print(f"\n{len(hashes[first])} outputs, {differ} differ between {', '.join(args.commits)}")
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
