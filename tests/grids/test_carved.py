@@ -521,6 +521,42 @@ def test_an_echo_the_map_already_explains_is_only_spread() -> None:
     assert grid.log_odds[i, j] == pytest.approx(FREE_AT_FACE + 4 * SPREAD_AT_FACE, abs=1e-6)
 
 
+def test_the_mark_goes_where_the_map_makes_the_echo_likely_when_its_middle_is_not() -> None:
+    """Fig. 2's door: a sensor hears a jamb near the edge of its beam; the arc's middle lies in
+    the doorway, where the map holds nothing, while the jamb is already likely (not yet
+    occupied) from another sensor's echo. The mark goes to the jamb, not into the doorway."""
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    # Sensor 1, turned 20° up, hears something at FACE_X; it fires again (backwards), so this
+    # echo is spread only: 0.236 on its band, bearings 8.75..31.25° widened by half a cell at
+    # 1.825 m (0.785°). It overlaps sensor 0's band (|bearing| <= 12.03°) at 7.96..12.03°.
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
+    # Sensor 0 hears the same range straight ahead: its newest echo, explained by no occupied
+    # cell (0.236 < 0.619 on the overlap). Its middle unit (±3.14°, ±3.92° widened) holds only
+    # the ring's free space (< 0), the overlap 0.236 minus the ring's faded free space: the
+    # whole hit goes to the overlap's most likely cell (bearing 7.96..12.03°), drawn over
+    # ±3.14° around it, clipped at the interval's end (11.25°), widened by 0.785°.
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    live = grid.live_log_odds
+    middle = _cell(grid, FACE_X, ROW_Y)
+    # The middle keeps sensor 0's spread value (it held a whole hit, 0.847, before).
+    assert live[middle] == pytest.approx(SPREAD_AT_FACE)
+    assert trinary(grid)[middle] != OCCUPIED
+    # Cell (1.775, 0.325): 1.8002 m from the sensor (on both bands: |1.8002 - 1.825| <= 0.05),
+    # bearing atan(0.3 / 1.775) = 9.593°, inside the mark for any bearing of the likeliest
+    # cell in 7.96..12.03° (its lower end at most 12.03 - 3.14 - 0.785 = 8.1°). Both echoes'
+    # spread values plus the mark's rise to a whole hit: 0.236 + 0.236 + (0.847 - 0.236).
+    jamb = _cell(grid, 1.775, 0.325)
+    assert live[jamb] == pytest.approx(L_HIT + SPREAD_AT_FACE)
+    # The ring's sensor 0 passed it: γ = 1 - (2 x 9.593 / 22.5)², fade at 1.8002 m.
+    alpha = math.atan2(0.3, 1.775)
+    d = math.hypot(1.775, 0.3)
+    ring = (1.0 - (2.0 * alpha / PHI) ** 2) * 0.5 * (1.0 - math.tanh(2.0 * (d - 1.2))) * L_MISS
+    assert grid.log_odds[jamb] == pytest.approx(L_HIT + SPREAD_AT_FACE + ring, abs=1e-6)
+    assert trinary(grid)[jamb] == OCCUPIED
+
+
 # -- frequent reads: the same map, cheaper ------------------------------------------------------
 
 def _random_batches(readings: list[Reading], rng: np.random.Generator,
