@@ -99,6 +99,15 @@ VARIANTS: dict[str, Factory] = {
         c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
         c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
         c.stamp_error, with_located_placement=False),
+    "all, placement before the posterior (located median once cut, ATM from 1 crossing)":
+        lambda c: EvidenceMethod(
+            c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+            c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+            c.stamp_error, with_posterior_placement=False, min_atm_crossings=1),
+    "all, posterior, ATM from 1 crossing": lambda c: EvidenceMethod(
+        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+        c.stamp_error, min_atm_crossings=1),
 }
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 COLUMNS = ("direct_kept", "crosstalk", "floor", "multipath", "spurious", "median_ratio",

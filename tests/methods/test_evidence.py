@@ -287,11 +287,13 @@ def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one()
     assert local.xy[row, 1] < 0.0  # the point is on the lower, located piece
 
 
-def _wall_with_crossings(located: bool, *, carve_lower: bool) -> tuple[np.ndarray, float]:
+def _wall_with_crossings(located: bool, *, carve_lower: bool,
+                         posterior: bool = True) -> tuple[np.ndarray, float]:
     """A wall at x = 2 heard head-on from the origin (sensor 0); optionally its lower half seen
     through head-on by sensor 3; then two other sensors' echoes crossing the arc at a wide
     angle near bearing 0.15. Returns the point of the first echo and its bound."""
-    method = EvidenceMethod(min_confidence=0.0, with_atm=False, with_located_placement=located)
+    method = EvidenceMethod(min_confidence=0.0, with_atm=False, with_located_placement=located,
+                            with_posterior_placement=posterior)
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
     if carve_lower:
         method.add(_reading(0.05, 0.3, -0.35, 0.0, 4.0, sensor=3))
@@ -304,11 +306,12 @@ def _wall_with_crossings(located: bool, *, carve_lower: bool) -> tuple[np.ndarra
     return local.xy[row], float(local.max_error[row])
 
 
-def test_a_point_goes_where_crossing_echoes_locate_the_surface() -> None:
+@pytest.mark.parametrize("posterior", [True, False])
+def test_a_point_goes_where_crossing_echoes_locate_the_surface(posterior: bool) -> None:
     # Once evidence has cut the arc (its lower half seen through), the point moves to where
     # the crossing echoes put the surface, not the middle of what is left; the bound still
     # covers the far end of the surviving piece from there.
-    moved, bound = _wall_with_crossings(True, carve_lower=True)
+    moved, bound = _wall_with_crossings(True, carve_lower=True, posterior=posterior)
     middle, _ = _wall_with_crossings(False, carve_lower=True)
     assert moved[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.04)
     assert moved[1] - middle[1] > 0.1  # the run's middle is lower (its lower end was cut)
@@ -318,10 +321,21 @@ def test_a_point_goes_where_crossing_echoes_locate_the_surface() -> None:
     assert bound >= 2.0 * 2.0 * math.sin(below) - 1e-9
 
 
-def test_an_uncut_beam_keeps_its_point_in_the_middle() -> None:
-    # Nothing has seen through any of it: crossings on a whole beam may be ghosts (two jambs'
-    # circles meet in the doorway), so the point stays at the beam's middle (eq. 3.6).
-    point, _ = _wall_with_crossings(True, carve_lower=False)
+def test_an_uncut_beam_goes_where_crossing_echoes_locate_the_surface() -> None:
+    # Nothing has seen through any of it: every bin's miss factor exp(-F) is 1, so the
+    # posterior is the localised support alone, near bearing 0.15 (the crossings), and the
+    # bound reaches the beam's far edge (-11.25°) from there, plus half a bin.
+    point, bound = _wall_with_crossings(True, carve_lower=False)
+    assert point[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.04)
+    bearing = math.atan2(point[1], point[0])
+    far = bearing + math.radians(11.25) + 0.5 * math.radians(22.5) / 24
+    assert bound == pytest.approx(2.0 * 2.0 * math.sin(0.5 * far), rel=1e-9)
+
+
+def test_the_placement_before_the_posterior_keeps_an_uncut_beams_middle() -> None:
+    # The option off (the rule before issue 9's point accuracy work): crossings on a whole
+    # beam were taken for possible ghosts, and the point stayed at its middle (eq. 3.6).
+    point, _ = _wall_with_crossings(True, carve_lower=False, posterior=False)
     assert abs(point[1]) < 0.02
 
 
@@ -558,3 +572,9 @@ def test_repeats_give_the_same_confidence_in_blocks_and_one_reading_at_a_time() 
         np.testing.assert_array_equal(features, one)
         np.testing.assert_array_equal(points.reading_id, committed[0][1].reading_id)
         np.testing.assert_array_equal(points.confidence, committed[0][1].confidence)
+
+
+@pytest.mark.parametrize("value", [0, -1, 1.5, True, "3"])
+def test_min_atm_crossings_must_be_a_whole_number_of_at_least_one(value: object) -> None:
+    with pytest.raises(ConfigError, match="min_atm_crossings"):
+        EvidenceMethod(min_atm_crossings=value)  # type: ignore[arg-type]

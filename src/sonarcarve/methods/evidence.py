@@ -18,11 +18,14 @@ Per arc (see the geometry module for the equations):
 * split arcs are kept: the surviving run with the most localised support (support times the
   sine of the angle at which the echo circles meet: tangent repeats of one range say nothing of
   the bearing) and ATM crossings, its bound covering every surviving run (honest: the echo may
-  lie in any of them); once evidence has cut the beam, the point sits at the median of the
-  kept run's localised support (the run's middle, eq. 3.6, where it has none; a beam nothing
-  has cut keeps its middle), the bound measured from there;
-* ATM crossings counted only inside the kept run; a crossing confirms the run and, when its
-  bound is smaller, places the point (``source = atm``);
+  lie in any of them);
+* the point at the median of a posterior over the kept run's bins (cut or not): each bin's
+  chance that every newer reading that looked there missed a surface there (``exp(-F)``, its
+  free evidence F) times its localised support (equal weights: the run's middle, eq. 3.6;
+  :func:`~sonarcarve.geometry.evidence.evidence_estimates`), the bound measured from there;
+* ATM crossings counted only inside the kept run; a crossing confirms the run, and from
+  ``min_atm_crossings`` (3) crossings in it their median places the point when its bound
+  (eq. 5.4) is the smaller (``source = atm``; section 4's rule);
 * a confidence per point: a logistic model of the evidence the arc has gathered (support,
   support from distinct viewpoints and from other sensors, crossings, free and looked-through
   evidence, runs, occlusion, the support of the surface the beam passed, range, width,
@@ -43,7 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from numbers import Real
+from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
@@ -93,6 +96,14 @@ def _check_fields(owner: object, rules: dict[str, _Rule]) -> None:
         if isinstance(value, bool) or not isinstance(value, Real) or not ok(float(value)):
             msg = f"{type(owner).__name__}.{name} must {rule}, got {value!r}"
             raise ConfigError(msg)
+
+
+def _check_min_atm_crossings(value: object) -> None:
+    """ConfigError unless ``value`` is an int >= 1 (0 would let an arc with no crossing take
+    ATM's median of nothing)."""
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
+        msg = f"min_atm_crossings must be an int >= 1, got {value!r}"
+        raise ConfigError(msg)
 
 
 def _fraction(v: float) -> bool:
@@ -379,8 +390,18 @@ class EvidenceModel(ArcModel):
     with_transmission : bool
         Transmission evidence (a newer echo confirmed by other sensors behind a bin).
     place_located : bool
-        Once evidence has cut an arc's beam, place its point at the median of its kept run's
-        localised support (where it has any) instead of the run's middle (eq. 3.6).
+        Place the point by the evidence instead of at the kept run's middle (eq. 3.6): with
+        ``place_posterior``, at the median of the posterior over the run's bins
+        (:func:`~sonarcarve.geometry.evidence.evidence_estimates`); without it (the placement
+        before issue 9's point accuracy work), once evidence has cut the beam, at the median
+        of the run's localised support.
+    place_posterior : bool
+        See ``place_located``.
+    min_atm_crossings : int
+        ATM's median inside the kept run places the point only when the run holds at least
+        this many crossings (and its bound, eq. 5.4, is the smaller): with fewer, the median
+        is one or two crossings themselves, which a single ghost moves (1: any crossing, the
+        rule before issue 9's point accuracy work).
     sensor : SensorModel
         The detection model.
     """
@@ -391,13 +412,17 @@ class EvidenceModel(ArcModel):
                  carve_probability: float, min_transversal: float, range_resolution: float,
                  *, with_atm: bool = True, with_occlusion: bool = True,
                  with_transmission: bool = True, place_located: bool = True,
+                 place_posterior: bool = True, min_atm_crossings: int = 3,
                  sensor: SensorModel | None = None) -> None:
         super().__init__(history)
+        _check_min_atm_crossings(min_atm_crossings)
         sensor = SensorModel() if sensor is None else sensor
         self.bins = bins
         self.threshold = evidence_threshold(carve_probability)
         self.with_atm = with_atm
         self.place_located = place_located
+        self.place_posterior = place_posterior
+        self.min_atm_crossings = min_atm_crossings
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
         self.params = EvidenceParams(
             tolerance=range_tolerance, support_tolerance=sensor.support_tolerance,
@@ -566,6 +591,7 @@ class EvidenceModel(ArcModel):
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
             self.threshold, self.atm_bound, self.with_atm, self.place_located,
+            self.place_posterior, self.min_atm_crossings,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -618,6 +644,12 @@ class EvidenceMethod(SonarMethod):
         every point's bound.
     with_atm, with_occlusion, with_transmission, with_located_placement : bool
         Switch parts off (ablation); see :class:`EvidenceModel`.
+    with_posterior_placement : bool
+        The point at the median of the posterior over the kept run (``place_posterior`` of
+        :class:`EvidenceModel`); off: the placement before it.
+    min_atm_crossings : int
+        Crossings the kept run needs before ATM's median places the point (>= 1; see
+        :class:`EvidenceModel`).
     sensor : SensorModel, optional
         The detection model.
     confidence_model : ConfidenceModel, optional
@@ -642,6 +674,8 @@ class EvidenceMethod(SonarMethod):
         with_occlusion: bool = True,
         with_transmission: bool = True,
         with_located_placement: bool = True,
+        with_posterior_placement: bool = True,
+        min_atm_crossings: int = 3,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -655,6 +689,9 @@ class EvidenceMethod(SonarMethod):
         self.with_occlusion = with_occlusion
         self.with_transmission = with_transmission
         self.with_located_placement = with_located_placement
+        self.with_posterior_placement = with_posterior_placement
+        _check_min_atm_crossings(min_atm_crossings)
+        self.min_atm_crossings = min_atm_crossings
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -667,6 +704,8 @@ class EvidenceMethod(SonarMethod):
                               with_atm=self.with_atm, with_occlusion=self.with_occlusion,
                               with_transmission=self.with_transmission,
                               place_located=self.with_located_placement,
+                              place_posterior=self.with_posterior_placement,
+                              min_atm_crossings=self.min_atm_crossings,
                               sensor=self.sensor),)
 
     def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
