@@ -24,8 +24,11 @@ only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission,
 filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``), ``evidence`` (all
 together, the library defaults), the same with the confidence fitted before its ``repeated``
 feature (issue 9's repeats: the previous default), with the same fit but ``repeated``'s weight
-set to 0 (what the feature adds beyond the refit), and with each point at its run's middle
-(eq. 3.6) instead of at the median of its localised support (once its beam is cut).
+set to 0 (what the feature adds beyond the refit), with each point at its run's middle
+(eq. 3.6) instead of at the median of its posterior (once its beam is cut), with the placement
+before that posterior (the median of the localised support once cut, ATM's median from one
+crossing), with the posterior placing the points of uncut beams too, and with ATM's median
+from one crossing in the run (the default needs three).
 ``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed.
 A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
 ``lab/experiments/real_log.py``) and a throughput table times ``carve``, ``combined`` and
@@ -104,6 +107,10 @@ VARIANTS: dict[str, Factory] = {
             c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
             c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
             c.stamp_error, with_posterior_placement=False, min_atm_crossings=1),
+    "all, posterior on uncut beams too": lambda c: EvidenceMethod(
+        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
+        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
+        c.stamp_error, with_uncut_posterior=True),
     "all, posterior, ATM from 1 crossing": lambda c: EvidenceMethod(
         c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
         c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,

@@ -95,12 +95,13 @@ def test_sorting_in_place_leaves_np_sorts_order_bit_for_bit(n: int) -> None:
 
 
 # Placement of a point (evidence_estimates) on one hand-made arc: r = 2 m, axis 0, a beam of
-# 0.4 rad in K = 4 bins of 0.1 rad (edges -0.2, -0.1, 0, 0.1, 0.2).
+# 0.4 rad in K = 4 bins of 0.1 rad (edges -0.2, -0.1, 0, 0.1, 0.2). A bin is carved when its free
+# evidence reaches T (bin 0 below: T + 1, the run is bins 1-3, [-0.1, 0.2], its middle 0.05).
 _T = evidence_threshold(0.8)
 
 
 def _place(free: list[float], located: list[float], crossings: tuple[float, ...] = (), *,
-           posterior: bool = True, min_crossings: int = 3,
+           posterior: bool = True, uncut: bool = False, min_crossings: int = 3,
            atm_bound: float = 0.01) -> tuple[float, float, bool]:
     """(bearing, bound, is_atm) of the arc's point."""
     f = np.array([free], dtype=np.float64)
@@ -112,48 +113,57 @@ def _place(free: list[float], located: list[float], crossings: tuple[float, ...]
     raw = evidence_estimates(
         np.array([0], dtype=np.int64), one, one, np.array([2.0]), one, np.array([0.4]), f,
         loc.copy(), loc, np.zeros(1, dtype=np.int8), bearings, counts, _T, atm_bound, True,
-        True, posterior, min_crossings)
+        True, posterior, uncut, min_crossings)
     return float(raw[1][0]), float(raw[3][0]), bool(raw[5][0])
-
-
-def test_an_uncut_beam_goes_to_the_median_of_its_localised_support() -> None:
-    # Weights exp(-0) * located = 0, 0, 1, 1: half of 2 is reached at the end of bin 2 (0.1).
-    # The placement before the posterior kept an uncut beam at its middle (0).
-    assert _place([0, 0, 0, 0], [0, 0, 1, 1])[0] == pytest.approx(0.1, abs=1e-12)
-    assert _place([0, 0, 0, 0], [0, 0, 1, 1], posterior=False)[0] == pytest.approx(0.0)
 
 
 def test_misses_lower_a_bins_weight_by_the_chance_they_were_all_misses() -> None:
     # Bin 2's free evidence ln 2: newer readings that would have heard a surface there with
-    # P = 1/2 all missed it: weights 0, 0, 1/2, 1; half of 1.5 is 0.25 into bin 3.
-    bearing, _, _ = _place([0, 0, math.log(2.0), 0], [0, 0, 1, 1])
+    # P = 1/2 all missed it. Weights exp(-F) * located over bins 1-3: 0, 1/2, 1; half of 1.5
+    # is 0.25 into bin 3. The rule before ignored the misses: the centre of the bin where the
+    # located support 0, 1, 1 reaches half its sum (bin 2: 0.05).
+    cut = _T + 1.0
+    bearing, _, _ = _place([cut, 0, math.log(2.0), 0], [0, 0, 1, 1])
     assert bearing == pytest.approx(0.1 + 0.25 * 0.1, abs=1e-12)
+    before, _, _ = _place([cut, 0, math.log(2.0), 0], [0, 0, 1, 1], posterior=False)
+    assert before == pytest.approx(0.05, abs=1e-12)
 
 
 def test_without_localised_support_the_misses_alone_place_the_point() -> None:
-    # Weights 1, 1/4, 1/4, 1/4 (free ln 4 on bins 1-3): half of 1.75 is 0.875 into bin 0.
-    bearing, _, _ = _place([0, math.log(4.0), math.log(4.0), math.log(4.0)], [0, 0, 0, 0])
-    assert bearing == pytest.approx(-0.2 + 0.875 * 0.1, abs=1e-12)
+    # Weights 1/4, 1, 1 (free ln 4 on bin 1): half of 2.25 is 1.125, reached 0.875 into bin 2.
+    # The rule before: the run's middle (0.05).
+    cut = _T + 1.0
+    bearing, _, _ = _place([cut, math.log(4.0), 0, 0], [0, 0, 0, 0])
+    assert bearing == pytest.approx(0.0 + 0.875 * 0.1, abs=1e-12)
+    before, _, _ = _place([cut, math.log(4.0), 0, 0], [0, 0, 0, 0], posterior=False)
+    assert before == pytest.approx(0.05, abs=1e-12)
 
 
 def test_equal_weights_give_the_runs_middle_and_the_bound_covers_the_hull() -> None:
-    # Bin 0 carved: the run is bins 1-3, [-0.1, 0.2], equal weights: its middle 0.05 (eq.
-    # 3.6). The bound reaches the far end, 0.15 away, plus half a bin: 2 r sin(0.2 / 2).
+    # Bin 0 carved, no support: equal weights, the run's middle 0.05 (eq. 3.6). The bound
+    # reaches the far end, 0.15 away, plus half a bin: 2 r sin(0.2 / 2).
     bearing, bound, is_atm = _place([_T + 1.0, 0, 0, 0], [0, 0, 0, 0])
     assert bearing == pytest.approx(0.05, abs=1e-12)
     assert bound == pytest.approx(2.0 * 2.0 * math.sin(0.1), abs=1e-12)
     assert not is_atm
 
 
+def test_an_uncut_beam_keeps_its_middle_unless_asked() -> None:
+    # Nothing cut: the middle (0). With posterior_uncut, the localised support 0, 0, 1, 1
+    # (exp(-0) = 1 everywhere): half of 2 is reached at the end of bin 2 (0.1).
+    assert _place([0, 0, 0, 0], [0, 0, 1, 1])[0] == pytest.approx(0.0, abs=1e-12)
+    assert _place([0, 0, 0, 0], [0, 0, 1, 1], uncut=True)[0] == pytest.approx(0.1, abs=1e-12)
+
+
 def test_atms_median_places_the_point_from_three_crossings_in_the_run() -> None:
     # Two crossings (0.05, 0.15): their "median" is their mean, one ghost moves it anywhere:
-    # the posterior places the point (0.1, as in the first test). Three (0.05, 0.12, 0.15):
-    # the median 0.12 with ATM's bound (0.01 here, below the hull's). With min_crossings 1,
-    # as before, two are enough: their mean 0.1.
+    # the uncut beam keeps its middle (0). Three (0.05, 0.12, 0.15): the median 0.12 with
+    # ATM's bound (0.01 here, below the hull's). With min_crossings 1, as before, two are
+    # enough: their mean 0.1.
     two = (0.05, 0.15)
     bearing, bound, is_atm = _place([0, 0, 0, 0], [0, 0, 1, 1], two)
     assert not is_atm
-    assert bearing == pytest.approx(0.1, abs=1e-12)
+    assert bearing == pytest.approx(0.0, abs=1e-12)
     assert bound > 0.01
     bearing, bound, is_atm = _place([0, 0, 0, 0], [0, 0, 1, 1], (0.05, 0.12, 0.15))
     assert is_atm
@@ -166,9 +176,9 @@ def test_atms_median_places_the_point_from_three_crossings_in_the_run() -> None:
 
 def test_atms_median_loses_to_a_smaller_bound() -> None:
     # Section 4's rule stays: ATM's point only where its bound is the smaller. A bound of 5 m
-    # is larger than any on a 2 m arc: the posterior's point stays.
-    bearing, bound, is_atm = _place([0, 0, 0, 0], [0, 0, 1, 1], (0.05, 0.12, 0.15),
-                                    atm_bound=5.0)
+    # is larger than any on a 2 m arc: the posterior's point stays (0.125, as above).
+    bearing, bound, is_atm = _place([_T + 1.0, 0, math.log(2.0), 0], [0, 0, 1, 1],
+                                    (0.05, 0.12, 0.15), atm_bound=5.0)
     assert not is_atm
-    assert bearing == pytest.approx(0.1, abs=1e-12)
+    assert bearing == pytest.approx(0.125, abs=1e-12)
     assert bound < 5.0

@@ -287,13 +287,13 @@ def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one()
     assert local.xy[row, 1] < 0.0  # the point is on the lower, located piece
 
 
-def _wall_with_crossings(located: bool, *, carve_lower: bool,
-                         posterior: bool = True) -> tuple[np.ndarray, float]:
+def _wall_with_crossings(located: bool, *, carve_lower: bool, posterior: bool = True,
+                         uncut: bool = False) -> tuple[np.ndarray, float]:
     """A wall at x = 2 heard head-on from the origin (sensor 0); optionally its lower half seen
     through head-on by sensor 3; then two other sensors' echoes crossing the arc at a wide
     angle near bearing 0.15. Returns the point of the first echo and its bound."""
     method = EvidenceMethod(min_confidence=0.0, with_atm=False, with_located_placement=located,
-                            with_posterior_placement=posterior)
+                            with_posterior_placement=posterior, with_uncut_posterior=uncut)
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
     if carve_lower:
         method.add(_reading(0.05, 0.3, -0.35, 0.0, 4.0, sensor=3))
@@ -321,22 +321,24 @@ def test_a_point_goes_where_crossing_echoes_locate_the_surface(posterior: bool) 
     assert bound >= 2.0 * 2.0 * math.sin(below) - 1e-9
 
 
-def test_an_uncut_beam_goes_where_crossing_echoes_locate_the_surface() -> None:
-    # Nothing has seen through any of it: every bin's miss factor exp(-F) is 1, so the
-    # posterior is the localised support alone, near bearing 0.15 (the crossings), and the
-    # bound reaches the beam's far edge (-11.25°) from there, plus half a bin.
-    point, bound = _wall_with_crossings(True, carve_lower=False)
+def test_an_uncut_beam_keeps_its_point_in_the_middle() -> None:
+    # Nothing has seen through any of it: crossings on a whole beam may be ghosts (two jambs'
+    # circles meet in the doorway), so the point stays at the beam's middle (eq. 3.6), with
+    # the posterior placement (the default) or the one before it.
+    for posterior in (True, False):
+        point, _ = _wall_with_crossings(True, carve_lower=False, posterior=posterior)
+        assert abs(point[1]) < 0.02
+
+
+def test_asked_to_an_uncut_beam_goes_where_crossing_echoes_locate_the_surface() -> None:
+    # with_uncut_posterior: every bin's miss factor exp(-F) is 1, so the posterior is the
+    # localised support alone, near bearing 0.15 (the crossings), and the bound reaches the
+    # beam's far edge (-11.25°) from there, plus half a bin.
+    point, bound = _wall_with_crossings(True, carve_lower=False, uncut=True)
     assert point[1] == pytest.approx(2.0 * math.sin(0.15), abs=0.04)
     bearing = math.atan2(point[1], point[0])
     far = bearing + math.radians(11.25) + 0.5 * math.radians(22.5) / 24
     assert bound == pytest.approx(2.0 * 2.0 * math.sin(0.5 * far), rel=1e-9)
-
-
-def test_the_placement_before_the_posterior_keeps_an_uncut_beams_middle() -> None:
-    # The option off (the rule before issue 9's point accuracy work): crossings on a whole
-    # beam were taken for possible ghosts, and the point stayed at its middle (eq. 3.6).
-    point, _ = _wall_with_crossings(True, carve_lower=False, posterior=False)
-    assert abs(point[1]) < 0.02
 
 
 def test_a_points_confidence_does_not_depend_on_the_rows_beside_it() -> None:

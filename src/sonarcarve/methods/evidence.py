@@ -19,10 +19,12 @@ Per arc (see the geometry module for the equations):
   sine of the angle at which the echo circles meet: tangent repeats of one range say nothing of
   the bearing) and ATM crossings, its bound covering every surviving run (honest: the echo may
   lie in any of them);
-* the point at the median of a posterior over the kept run's bins (cut or not): each bin's
-  chance that every newer reading that looked there missed a surface there (``exp(-F)``, its
-  free evidence F) times its localised support (equal weights: the run's middle, eq. 3.6;
-  :func:`~sonarcarve.geometry.evidence.evidence_estimates`), the bound measured from there;
+* once evidence has cut the beam, the point at the median of a posterior over the kept run's
+  bins: each bin's chance that every newer reading that looked there missed a surface there
+  (``exp(-F)``, its free evidence F) times its localised support (equal weights: the run's
+  middle, eq. 3.6; :func:`~sonarcarve.geometry.evidence.evidence_estimates`), the bound
+  measured from there; a beam nothing has cut keeps its middle (its crossings may be ghosts:
+  two jambs' circles meet in the doorway; ``with_uncut_posterior`` places it too);
 * ATM crossings counted only inside the kept run; a crossing confirms the run, and from
   ``min_atm_crossings`` (3) crossings in it their median places the point when its bound
   (eq. 5.4) is the smaller (``source = atm``; section 4's rule);
@@ -397,6 +399,9 @@ class EvidenceModel(ArcModel):
         of the run's localised support.
     place_posterior : bool
         See ``place_located``.
+    posterior_uncut : bool
+        With ``place_posterior``, place the point of a beam nothing has cut by the posterior
+        too (its localised support; off: its middle, eq. 3.6).
     min_atm_crossings : int
         ATM's median inside the kept run places the point only when the run holds at least
         this many crossings (and its bound, eq. 5.4, is the smaller): with fewer, the median
@@ -412,8 +417,8 @@ class EvidenceModel(ArcModel):
                  carve_probability: float, min_transversal: float, range_resolution: float,
                  *, with_atm: bool = True, with_occlusion: bool = True,
                  with_transmission: bool = True, place_located: bool = True,
-                 place_posterior: bool = True, min_atm_crossings: int = 3,
-                 sensor: SensorModel | None = None) -> None:
+                 place_posterior: bool = True, posterior_uncut: bool = False,
+                 min_atm_crossings: int = 3, sensor: SensorModel | None = None) -> None:
         super().__init__(history)
         _check_min_atm_crossings(min_atm_crossings)
         sensor = SensorModel() if sensor is None else sensor
@@ -422,6 +427,7 @@ class EvidenceModel(ArcModel):
         self.with_atm = with_atm
         self.place_located = place_located
         self.place_posterior = place_posterior
+        self.posterior_uncut = posterior_uncut
         self.min_atm_crossings = min_atm_crossings
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
         self.params = EvidenceParams(
@@ -591,7 +597,7 @@ class EvidenceModel(ArcModel):
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
             self.threshold, self.atm_bound, self.with_atm, self.place_located,
-            self.place_posterior, self.min_atm_crossings,
+            self.place_posterior, self.posterior_uncut, self.min_atm_crossings,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -645,8 +651,11 @@ class EvidenceMethod(SonarMethod):
     with_atm, with_occlusion, with_transmission, with_located_placement : bool
         Switch parts off (ablation); see :class:`EvidenceModel`.
     with_posterior_placement : bool
-        The point at the median of the posterior over the kept run (``place_posterior`` of
-        :class:`EvidenceModel`); off: the placement before it.
+        Once evidence has cut the beam, the point at the median of the posterior over the
+        kept run (``place_posterior`` of :class:`EvidenceModel`); off: the placement before it.
+    with_uncut_posterior : bool
+        The posterior places the points of beams nothing has cut too (``posterior_uncut``;
+        off by default: see :func:`~sonarcarve.geometry.evidence.evidence_estimates`).
     min_atm_crossings : int
         Crossings the kept run needs before ATM's median places the point (>= 1; see
         :class:`EvidenceModel`).
@@ -675,6 +684,7 @@ class EvidenceMethod(SonarMethod):
         with_transmission: bool = True,
         with_located_placement: bool = True,
         with_posterior_placement: bool = True,
+        with_uncut_posterior: bool = False,
         min_atm_crossings: int = 3,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
@@ -690,6 +700,7 @@ class EvidenceMethod(SonarMethod):
         self.with_transmission = with_transmission
         self.with_located_placement = with_located_placement
         self.with_posterior_placement = with_posterior_placement
+        self.with_uncut_posterior = with_uncut_posterior
         _check_min_atm_crossings(min_atm_crossings)
         self.min_atm_crossings = min_atm_crossings
         self.sensor = SensorModel() if sensor is None else sensor
@@ -705,6 +716,7 @@ class EvidenceMethod(SonarMethod):
                               with_transmission=self.with_transmission,
                               place_located=self.with_located_placement,
                               place_posterior=self.with_posterior_placement,
+                              posterior_uncut=self.with_uncut_posterior,
                               min_atm_crossings=self.min_atm_crossings,
                               sensor=self.sensor),)
 
