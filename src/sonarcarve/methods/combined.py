@@ -328,10 +328,13 @@ class CombinedMethod(SonarMethod):
         :meth:`CarvingModel.estimates` computes them); ATM's point wins where it has a kept
         crossing and its bound is below carving's, and :func:`_choose` puts its median, span
         and bound there. The point is then placed once, at the chosen bearing, and ATM's
-        fallback (the centerline, never chosen) is not computed. Why: the carved grid asks for
-        a few arcs at every read and at every retiring block, and the two models' full
-        estimates with the selection between them (about 40 numpy calls) were a fifth of a
-        5-reading call's CPU time (``benchmarks/grid_reads.py``).
+        fallback (the centerline, never chosen) is not computed. The trigonometry stays
+        numpy's (:func:`chord_error`, :func:`arc_point`): numba's libm sine may differ from
+        numpy's vectorised one in the last bit. Why: the carved grid asks for a few arcs at
+        every read and at every retiring block, and the two models' full estimates with the
+        selection between them (about 40 numpy calls, 45-50 µs for 5 arcs, now 10-12) were a
+        quarter of the grid's CPU time at 5 readings a read (office, amplitude physics,
+        0.10 m; ``benchmarks/grid_reads.py``).
         """
         carving, atm, h = self._carving, self._atm, self.history
         lo = carving.lo[slots]
