@@ -117,32 +117,35 @@ door, echoes only, passable in 67/61 % of approaches at 0.05/0.10 m instead of 7
 uncarved echo's point can fall in the doorway).
 
 **Where the mark goes**: the middle of the carved interval, the method's point, unless the map of
-spread arcs (without the arc's own share) holds no cell more likely occupied than not (log-odds
-> 0) where that middle ``L`` would be drawn, and does hold one elsewhere on the band: then the
-``L`` around the band's most likely cell, clipped to the interval. An uncarved echo says only
-that its reflector is somewhere on the arc; where the map already favours one part of the arc
-and says nothing for the middle, that part is the likelier reflector. Why, traced on the Fig. 2
-door (echoes only, combined carving, 0.10 m, seed 0, heading -35°): the blocking cells were the
-point of the sensor aimed along the track, 1.83 m from the near jamb, which lies 11.1° off its
-axis (the beam's edge): its arc was uncarved (the beams through the doorway heard nothing and an
-echoes-only log has no such readings), its middle lay 0.24 m inside the doorway on cells the map
-knew nothing of (log-odds 0), while its band's cells at the jamb held 0.54-0.57 (other sensors'
-spread echoes, below "occupied"), so nothing "explained" the echo and the point went to the
-middle. Where the middle is favoured too (a person standing still, heard again from one place:
-its cells hold the older echoes' spread values) the point stays there, so a standing person does
-not flicker; where the map knows nothing of the arc (a person stepping in front of the robot on
-open floor) it is the middle as before. Measured (``benchmarks/grids.py``, seeds 0-2, 0.05 /
-0.10 m): the Fig. 2 door passable, echoes only, in 92 -> 97 % / 86 -> 94 % of approaches; under
-the amplitude physics 36 -> 33 % / 33 -> 39 % (mean free width 0.405 -> 0.403 / 0.372 -> 0.388
-m); office, t-junction and doorway precision, recall and phantoms within 0.003 under both
-physics (the points touch only the final read's newest arcs); the changing scenes' latencies
-unchanged, phantom shares within 0.8 points (fewer in the door scene). Without the guard on the
-middle (the most likely cell whenever one is more likely occupied than not) a person heard again
-from one place was marked on the cell whose free space happened to be weakest, not at its
-middle (the test of a person standing still: its middle cell 0.44 instead of 1.05 after the
-second echo, not occupied). The remaining closed approaches (0.10 m: heading 45°, offset
-0.15 m, seeds 0 and 1) are the case the mark exists for: the jamb, 9° off the sensor's axis,
-heard for the first time, with nothing else on the map near its arc.
+spread arcs (without the arc's own share) holds no cell more likely occupied than not (log-odds >
+0) where that middle ``L`` would be drawn, and does hold one elsewhere on the band: then the ``L``
+around the band's most likely cell, clipped to the interval. An uncarved echo says only that its
+reflector is somewhere on the arc; where the map already favours one part of the arc and says
+nothing for the middle, that part is the likelier reflector. Why, traced on the Fig. 2 door (echoes
+only, combined carving, 0.10 m, seed 0, heading -35°): the blocking cells were the point of the
+sensor aimed along the track, 1.83 m from the near jamb, which lies 11.1° off its axis (the beam's
+edge): its arc was uncarved (the beams through the doorway heard nothing and an echoes-only log has
+no such readings), its middle lay 0.24 m inside the doorway on cells the map knew nothing of
+(log-odds 0), while its band's cells at the jamb held 0.54-0.57 (other sensors' spread echoes,
+below "occupied"), so nothing "explained" the echo and the point went to the middle. Where the
+middle is favoured too (a person standing still, heard again from one place: its cells hold the
+older echoes' spread values) the point stays there, so a standing person does not flicker; where
+the map knows nothing of the arc (a person stepping in front of the robot on open floor) it is the
+middle as before. Measured (``benchmarks/grids.py``, seeds 0-2, 0.05 / 0.10 m): the Fig. 2 door
+passable, echoes only, in 92 -> 97 % / 86 -> 94 % of approaches; under the amplitude physics 36 ->
+33 % / 33 -> 39 % (mean free width 0.405 -> 0.403 / 0.372 -> 0.388 m); office, t-junction and
+doorway precision and recall within 0.003 and phantoms within 0.008 percentage points under both
+physics (the points touch only the final read's newest arcs); a map read every 5 readings 2.01x /
+3.69x the layer's CPU against 1.84x / 3.35x (``benchmarks/grid_reads.py --every 5``, one run each,
+load 2-5: the likeliest cell needs the bearing of every likely cell of the band, the occupied test
+only of occupied ones); the changing scenes' latencies unchanged, phantom shares within 0.8 points
+(fewer in the door scene). Without the guard on the middle (the most likely cell whenever one is
+more likely occupied than not) a person heard again from one place was marked on the cell whose
+free space happened to be weakest, not at its middle (the test of a person standing still: its
+middle cell 0.44 instead of 1.05 after the second echo, not occupied). The remaining closed
+approaches (0.10 m: heading 45°, offset 0.15 m, seeds 0 and 1) are the case the mark exists for:
+the jamb, 9° off the sensor's axis, heard for the first time, with nothing else on the map near its
+arc.
 
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
