@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from sonarcarve.geometry.repeats import is_repeat, mark_repeats
+from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
+from sonarcarve.readings import Reading, ReadingBatch
 
 EPS = 0.05
 HALF = math.radians(11.25)
@@ -54,8 +56,9 @@ def test_a_tangent_point_outside_a_beam_is_no_repeat() -> None:
 
 
 def test_origins_two_epsilon_apart_or_nearer_are_no_repeat() -> None:
-    # 0.08 m apart (< 2ε = 0.10): the ranges 3.00 and 2.92 touch exactly, but any range change
-    # up to 0.13 would fit there: it says nothing. 0.12 m apart (> 0.10): a repeat.
+    # 0.08 m apart (< 2ε = 0.10): the ranges 3.00 and 2.92 touch exactly, but so close the
+    # range noise alone could give them (a robot creeping along a wall): it says nothing.
+    # 0.12 m apart (> 0.10): a repeat.
     assert not _pair(0.0, 0.0, 3.0, 0.0, 0.08, 0.0, 2.92, 0.0)
     assert not _pair(0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 3.0, 0.0)  # stood still, same range
     assert _pair(0.0, 0.0, 3.0, 0.0, 0.12, 0.0, 2.88, 0.0)
@@ -101,3 +104,81 @@ def test_marks_pairs_of_one_sensor_within_the_window_whatever_the_blocks(
         first += count
     assert pairs == 2  # (0, 2) and (2, 4)
     np.testing.assert_array_equal(repeated[:5], [1.0, 0.0, 1.0, 0.0, 1.0])
+
+
+# Review rev9: each test below fails on a mutation the ones above let through (the ring's
+# wrapped run skipped, the window one arc too long, the full beam width as the half width, the
+# first beam's width for both, tangency within 2ε, 2ε passed as the tolerance).
+
+Row = tuple[float, float, float, float, float, int]  # x, y, r, theta, beam width, sensor
+FULL = 2.0 * HALF
+#: Sensor 1, far away: a filler that pairs with nothing.
+FAR: Row = (50.0, 50.0, 1.0, 0.0, FULL, 1)
+
+
+def _marks(rows: list[Row], storage: int, capacity: int, blocks: tuple[int, ...]) -> list[float]:
+    """``repeated`` of every arc after storing ``rows`` in a ring of ``storage`` rows block by
+    block and marking each block, read as each arc is about to be overwritten (or at the end)."""
+    x, y, r, theta = (np.zeros(storage) for _ in range(4))
+    width = np.full(storage, FULL)
+    sensor = np.full(storage, -1, dtype=np.int64)
+    repeated = np.full(storage, 7.0)  # garbage: every new arc must reset its own flag
+    marks: dict[int, float] = {}
+    first = 0
+    for count in blocks:
+        for s in range(first, first + count):
+            j = s % storage
+            if s >= storage:
+                marks[s - storage] = float(repeated[j])
+            x[j], y[j], r[j], theta[j], width[j], sensor[j] = rows[s]
+        mark_repeats(first, count, capacity, x, y, r, theta, width, sensor, repeated, EPS)
+        first += count
+    assert first == len(rows)
+    for s in range(max(0, first - storage), first):
+        marks[s] = float(repeated[s % storage])
+    return [marks[s] for s in range(len(rows))]
+
+
+def test_the_window_is_the_capacity_minus_one_arcs_before() -> None:
+    # Capacity 3: the history holds an arc and the 2 before it. Arc 3 is 3 after arc 0: out of
+    # its window; arc 2 is 2 after: in. The pair (3.0 m at x 0, 2.0 m at x 1) touches head-on.
+    a, b = (0.0, 0.0, 3.0, 0.0, FULL, 0), (1.0, 0.0, 2.0, 0.0, FULL, 0)
+    for blocks in ((4,), (1, 1, 1, 1), (2, 2)):
+        assert _marks([a, FAR, FAR, b], 6, 3, blocks) == [0.0, 0.0, 0.0, 0.0]
+    for blocks in ((3,), (1, 1, 1), (2, 1)):
+        assert _marks([a, FAR, b], 6, 3, blocks) == [1.0, 0.0, 1.0]
+
+
+def test_pairs_are_found_across_the_ring_wrap() -> None:
+    # 6 rows, capacity 3: arcs 6 and 7 sit in rows 0 and 1; arc 7's window (arcs 5, 6) wraps.
+    rows = [FAR] * 6 + [(0.0, 0.0, 3.0, 0.0, FULL, 0), (1.0, 0.0, 2.0, 0.0, FULL, 0)]
+    for blocks in ((6, 2), (1,) * 8, (3, 3, 1, 1)):
+        assert _marks(rows, 6, 3, blocks)[6:] == [1.0, 1.0]
+
+
+def test_each_echo_is_judged_with_its_own_beam_width() -> None:
+    # Both axes 0.2 rad off the line of motion (the touch point at bearing 0): inside a 0.6 rad
+    # beam (±0.3), outside a 0.3 rad one (±0.15).
+    older = (0.0, 0.0, 3.0, 0.2, 0.6, 0)
+    assert _marks([older, (1.0, 0.0, 2.0, 0.2, 0.3, 0)], 4, 2, (2,)) == [0.0, 0.0]
+    assert _marks([older, (1.0, 0.0, 2.0, 0.2, 0.6, 0)], 4, 2, (2,)) == [1.0, 1.0]
+    assert not is_repeat(0.0, 0.0, 3.0, 0.2, 0.3, 1.0, 0.0, 2.0, 0.2, 0.15, EPS)
+    assert not is_repeat(0.0, 0.0, 3.0, 0.2, 0.15, 1.0, 0.0, 2.0, 0.2, 0.3, EPS)
+
+
+def test_one_and_a_half_epsilon_off_tangency_is_no_repeat() -> None:
+    # |1.0 - (3.0 - 2.075)| = 0.075: more than ε, less than 2ε.
+    assert not _pair(0.0, 0.0, 3.0, 0.0, 1.0, 0.0, 2.075, 0.0)
+
+
+def test_evidence_carving_marks_with_its_range_tolerance() -> None:
+    # Head-on, 0.2 m a step, the range shrinking 0.125 m a step: k steps apart the circles miss
+    # tangency by 0.075 k m, more than ε = 0.05 for every pair (within 2ε for neighbours).
+    readings = [Reading(t=0.5 * k, sensor=3, x=0.2 * k, y=0.0, theta=0.0,
+                        range=5.0 - 0.125 * k, beam_width=FULL) for k in range(8)]
+    method = EvidenceMethod()
+    method.add_many(ReadingBatch.from_readings(readings))
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    assert model.range_tolerance == EPS
+    np.testing.assert_array_equal(model.repeated[method.history.slots()], 0.0)

@@ -1,18 +1,23 @@
 """Repeats: two echoes of one sensor that most likely come from the same point (beyond the paper).
 
 A sonar that drives towards (or away from) the point it hears hears it again at a range that
-changes by exactly the distance it drove. Two echoes of one sensor, origins ``P1``, ``P2`` and
-ranges ``r1``, ``r2``, are a *repeat* when
+changes by the distance it drove (exactly, for a point on its line of motion). Two echoes of
+one sensor, origins ``P1``, ``P2`` and ranges ``r1``, ``r2``, are a *repeat* when
 
-* their origins are more than ``2 ε`` apart (``ε`` the range tolerance): nearer than that any
-  change of range fits within ``ε``, so a sensor standing still or creeping along a wall would
-  "repeat" every echo;
+* their origins are more than ``2 ε`` apart (``ε`` the range tolerance): a sensor standing
+  still or creeping along a wall (2-4.5 cm a ring cycle) hears the same range again within the
+  range noise, and would otherwise "repeat" every echo of a side wall (the carved grid's review
+  finding: a 16-sonar ring lost a whole side wall);
 * their circles are internally tangent within ``ε``: ``| |P2 - P1| - |r1 - r2| | <= ε``;
 * the tangent point lies inside both beams. It lies on the line through both origins, beyond
   the smaller circle's centre: ahead of ``P2`` in the direction ``P2 - P1`` when the range
   shrank (``r1 >= r2``, the sensor drove towards it), behind ``P2`` otherwise.
 
-Such echoes both come from the point on the line of motion (the tangent point), within ``ε``.
+What a repeat says: both ranges fit one static reflector inside both beams while the sensor
+moved more than ``2 ε`` roughly along its axis. It does not say the reflector is the tangent
+point: for short travel every static point well inside the beam fits within ``ε`` (a point 3 m
+away and 10° off the motion is a repeat after 0.1-1 m of travel, 0.52 m from the tangent point;
+review rev9), which is why the test is used as evidence that the echo is real, not to place it.
 Echoes off a wall approached at an angle, crosstalk (another sensor's ping, whose path length
 changes differently with the motion) and floor echoes (a constant range) rarely line up so:
 ``benchmarks/repeat_echoes.py`` measured 0-4 % of spurious echoes with a repeat within 6 s,
@@ -78,8 +83,9 @@ def mark_repeats(first: int, count: int, capacity: int, x: FloatArray, y: FloatA
 
     Each pair is judged once, when its newer arc arrives, from the two readings alone, so the
     marks are the same whether the arcs come one at a time or in blocks (the block's rows and
-    the ``capacity - 1`` before it must all be stored: ``count + capacity - 1 <= n``). Returns
-    how many pairs were repeats."""
+    the up to ``capacity - 1`` stored before it must all be in the ring: ``count + min(first,
+    capacity - 1) <= n``, which the history's first block of twice its capacity meets).
+    Returns how many pairs were repeats."""
     storage = x.shape[0]
     pairs = 0
     same = np.empty(max(capacity, 1), dtype=np.int64)  # rows of the sensor's older arcs
