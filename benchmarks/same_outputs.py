@@ -3,6 +3,7 @@
 Run from the repository root (on a shared machine, with ``nice``)::
 
     nice .venv/bin/python benchmarks/same_outputs.py --commits 7bc4ab6 WORKTREE
+    nice .venv/bin/python benchmarks/same_outputs.py --commits 7bc4ab6 /tmp/tree  # a folder
 
 For a speed change that must not change any output. Each commit's ``src`` is exported with
 ``git archive`` (``WORKTREE``: this checkout's ``src``) and run in a child process with its own
@@ -89,9 +90,12 @@ print(json.dumps(out))
 
 
 def tree_src(commit: str, into: Path) -> Path:
-    """The ``src`` folder of ``commit`` (or of this checkout for ``WORKTREE``)."""
+    """The ``src`` folder of ``commit`` (of this checkout for ``WORKTREE``, of a folder given
+    by its path: a copy of the tree with some files changed)."""
     if commit == WORKTREE:
         return ROOT / "src"
+    if Path(commit).is_dir():
+        return Path(commit) / "src"
     return export_src(commit, into / commit)
 
 
@@ -107,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="sonarcarve-same-") as name:
         for commit in args.commits:
             src = tree_src(commit, Path(name))
-            env = child_env(src, Path(name) / f"{commit}-numba")
+            env = child_env(src, Path(name) / f"{len(hashes)}-numba")
             child = subprocess.run(
                 [sys.executable, "-c", CHILD, ",".join(map(str, args.seeds)),
                  ",".join(args.methods), str(args.singles)],
