@@ -231,8 +231,8 @@ def _cpu_table(sim: Simulation, resolutions: Sequence[float],
                kinds_by_h: dict[float, list[GridKind]]) -> None:
     batch = sim.readings
     print(f"\nCPU per reading: office seed 0, {len(batch):,} readings, whole log in one "
-          f"add_many then the trinary map read once; best of {CPU_REPEATS} runs after a "
-          "warm-up, the grids taking turns, one process\n")
+          f"add_many then the trinary map read once; CPU time, best of {CPU_REPEATS} runs "
+          "after a warm-up, the grids taking turns, one process\n")
     print("| resolution (m) | grid | µs per reading | ratio to the layer (defaults) |")
     print("|---:|---|---:|---:|")
     for h in resolutions:
@@ -241,11 +241,13 @@ def _cpu_table(sim: Simulation, resolutions: Sequence[float],
             trinary(_fill(kind.make, h, sim, 0, batch[:300]))  # compile
         # Turns rather than one grid's runs in a row: load from other processes on a shared
         # machine then falls on every grid alike, and the minimum drops the disturbed runs.
+        # CPU time, not wall clock: time spent waiting for a core does not count (wall-clock
+        # ratios of identical code swung 0.7-1.3 between runs under a load of 3-6).
         for _ in range(CPU_REPEATS):
             for kind in kinds_by_h[h]:
-                tic = time.perf_counter()
+                tic = time.process_time()
                 trinary(_fill(kind.make, h, sim, 0))
-                us = (time.perf_counter() - tic) / len(batch) * 1e6
+                us = (time.process_time() - tic) / len(batch) * 1e6
                 times[kind.label] = min(times[kind.label], us)
         ref = times["RangeSensorLayer, ROS defaults"]
         for label, us in times.items():
