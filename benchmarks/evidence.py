@@ -44,6 +44,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,17 @@ def _evidence(*, atm: bool = False, occlusion: bool = False, transmission: bool 
     return make
 
 
+def _all_with(**options: Any) -> Factory:
+    """Evidence carving with every part (the default) and ``options`` passed to
+    :class:`EvidenceMethod` on top of the config's values."""
+    def make(c: MethodConfig) -> SonarMethod:
+        return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
+                              c.min_transversal, c.range_resolution, c.evidence_bins,
+                              c.carve_probability, c.min_confidence, c.stamp_error,
+                              **options)
+    return make
+
+
 #: The default confidence before the ``repeated`` feature (fitted at 7bc4ab6 by
 #: ``benchmarks/fit_confidence.py`` on the same runs): the comparison row of issue 9's repeats.
 WITHOUT_REPEATS = ConfidenceModel(
@@ -90,31 +102,14 @@ VARIANTS: dict[str, Factory] = {
     "+ATM": _evidence(atm=True),
     "+confidence": _evidence(confidence=True),
     "evidence (all)": lambda c: make_method("evidence", c),
-    "all, without repeats (fit before them)": lambda c: EvidenceMethod(
-        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-        c.stamp_error, confidence_model=WITHOUT_REPEATS),
-    "all, repeats' weight 0 (same fit)": lambda c: EvidenceMethod(
-        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-        c.stamp_error, confidence_model=replace(ConfidenceModel(), repeated=0.0)),
-    "all, point at the run's middle": lambda c: EvidenceMethod(
-        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-        c.stamp_error, with_located_placement=False),
+    "all, without repeats (fit before them)": _all_with(confidence_model=WITHOUT_REPEATS),
+    "all, repeats' weight 0 (same fit)":
+        _all_with(confidence_model=replace(ConfidenceModel(), repeated=0.0)),
+    "all, point at the run's middle": _all_with(with_located_placement=False),
     "all, placement before the posterior (located median once cut, ATM from 1 crossing)":
-        lambda c: EvidenceMethod(
-            c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-            c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-            c.stamp_error, with_posterior_placement=False, min_atm_crossings=1),
-    "all, posterior on uncut beams too": lambda c: EvidenceMethod(
-        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-        c.stamp_error, with_uncut_posterior=True),
-    "all, posterior, ATM from 1 crossing": lambda c: EvidenceMethod(
-        c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
-        c.range_resolution, c.evidence_bins, c.carve_probability, c.min_confidence,
-        c.stamp_error, min_atm_crossings=1),
+        _all_with(with_posterior_placement=False, min_atm_crossings=1),
+    "all, posterior on uncut beams too": _all_with(with_uncut_posterior=True),
+    "all, posterior, ATM from 1 crossing": _all_with(min_atm_crossings=1),
 }
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 COLUMNS = ("direct_kept", "crosstalk", "floor", "multipath", "spurious", "median_ratio",
