@@ -145,8 +145,8 @@ def test_the_window_is_the_capacity_minus_one_arcs_before() -> None:
     a, b = (0.0, 0.0, 3.0, 0.0, FULL, 0), (1.0, 0.0, 2.0, 0.0, FULL, 0)
     for blocks in ((4,), (1, 1, 1, 1), (2, 2)):
         assert _marks([a, FAR, FAR, b], 6, 3, blocks) == [0.0, 0.0, 0.0, 0.0]
-    for blocks in ((3,), (1, 1, 1), (2, 1)):
-        assert _marks([a, FAR, b], 6, 3, blocks) == [1.0, 0.0, 1.0]
+    for split in ((3,), (1, 1, 1), (2, 1)):
+        assert _marks([a, FAR, b], 6, 3, split) == [1.0, 0.0, 1.0]
 
 
 def test_pairs_are_found_across_the_ring_wrap() -> None:
@@ -182,3 +182,41 @@ def test_evidence_carving_marks_with_its_range_tolerance() -> None:
     assert isinstance(model, EvidenceModel)
     assert model.range_tolerance == EPS
     np.testing.assert_array_equal(model.repeated[method.history.slots()], 0.0)
+
+
+def _brute_marks(rows: list[Row]) -> tuple[list[float], int]:
+    """Every pair of one sensor judged by :func:`is_repeat` (the window holds every arc)."""
+    marks = [0.0] * len(rows)
+    pairs = 0
+    for j, (xj, yj, rj, tj, wj, sj) in enumerate(rows):
+        for i in range(j):
+            xi, yi, ri, ti, wi, si = rows[i]
+            if si == sj and is_repeat(xi, yi, ri, ti, 0.5 * wi, xj, yj, rj, tj, 0.5 * wj, EPS):
+                marks[i] = marks[j] = 1.0
+                pairs += 1
+    return marks, pairs
+
+
+def test_marks_every_pair_is_repeat_accepts_at_the_bounds_of_its_tests() -> None:
+    # mark_repeats flags candidate rows by squared distances before is_repeat judges them:
+    # pairs at the very bounds of is_repeat's tests (|d - |Δr|| = ε, d = 2ε, one float step
+    # either side) must get the marks of judging every pair.
+    rows: list[Row] = []
+    for k, (r1, r2) in enumerate([(3.0, 2.0), (2.5, 2.5 - 2 * EPS), (2.0, 2.0 - 0.5 * EPS),
+                                  (1.7, 1.7)]):
+        change = r1 - r2
+        for edge in (change + EPS, change - EPS, 2.0 * EPS):
+            if edge <= 0.0:
+                continue
+            for d in (np.nextafter(edge, 0.0), edge, np.nextafter(edge, 9.0)):
+                x0 = 20.0 * len(rows)  # each pair far from the others
+                rows.append((x0, 0.0, r1, 0.0, FULL, k % 2))
+                rows.append((x0 + float(d), 0.0, r2, 0.0, FULL, k % 2))
+    expected, pairs = _brute_marks(rows)
+    assert 0 < pairs < len(rows) // 2  # both sides of the bounds occur
+    n = len(rows)
+    x, y, r, theta, width = (np.array([row[c] for row in rows] * 2) for c in range(5))
+    sensor = np.array([row[5] for row in rows] * 2, dtype=np.int64)
+    repeated = np.full(2 * n, 7.0)
+    assert mark_repeats(0, n, n, x, y, r, theta, width, sensor, repeated, EPS) == pairs
+    assert repeated[:n].tolist() == expected

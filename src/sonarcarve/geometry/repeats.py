@@ -72,6 +72,37 @@ def is_repeat(x1: float, y1: float, r1: float, theta1: float, half1: float,
     return _within_beam(bearing, theta1, half1) and _within_beam(bearing, theta2, half2)
 
 
+#: Relative slack of :func:`_may_repeat`'s squared test: far above its rounding errors (a few
+#: units in the last place), far below any tolerance that matters; and an absolute one, for
+#: reaches whose square would lose precision as a subnormal number (below 1e-154 m).
+_SLACK = 1e-9
+_FLOOR = 1e-290
+
+
+@compiled_inline
+def _may_repeat(x: FloatArray, y: FloatArray, r: FloatArray, sensor: npt.NDArray[np.int64],
+                xj: float, yj: float, rj: float, sj: int, tolerance: float,
+                flags: npt.NDArray[np.bool_]) -> None:
+    """``flags[i]``: row ``i`` (of the arrays, slices of the history's rows) might repeat the
+    echo ``(xj, yj, rj)`` of sensor ``sj``: the same sensor, and the squared distance ``d²``
+    of the origins within :func:`is_repeat`'s bounds squared, ``(|Δr| - ε)² <= d² <= (|Δr|
+    + ε)²`` and ``d² > (2 ε)²``, each widened by :data:`_SLACK` and :data:`_FLOOR`. Every pair
+    that :func:`is_repeat` accepts is flagged (its tests, ``| d - |Δr| | <= ε`` and ``d > 2 ε``,
+    imply these up to rounding errors far below the slack), and a NaN is never a repeat, so
+    the flags drop only pairs it rejects. No branch and indices from 0: the compiler tests
+    several rows at once."""
+    least2 = 4.0 * tolerance * tolerance * (1.0 - _SLACK) - _FLOOR
+    for i in range(flags.shape[0]):
+        dx = xj - x[i]
+        dy = yj - y[i]
+        d2 = dx * dx + dy * dy
+        change = abs(r[i] - rj)
+        far = change + tolerance
+        near = max(change - tolerance, 0.0)
+        flags[i] = ((sensor[i] == sj) & (d2 <= far * far * (1.0 + _SLACK) + _FLOOR)
+                    & (d2 >= near * near * (1.0 - _SLACK) - _FLOOR) & (d2 >= least2))
+
+
 @compiled
 def mark_repeats(first: int, count: int, capacity: int, x: FloatArray, y: FloatArray,
                  r: FloatArray, theta: FloatArray, beam_width: FloatArray,
@@ -85,29 +116,41 @@ def mark_repeats(first: int, count: int, capacity: int, x: FloatArray, y: FloatA
     marks are the same whether the arcs come one at a time or in blocks (the block's rows and
     the up to ``capacity - 1`` stored before it must all be in the ring: ``count + min(first,
     capacity - 1) <= n``, which the history's first block of twice its capacity meets).
-    Returns how many pairs were repeats."""
+    Returns how many pairs were repeats.
+
+    The older rows are first flagged by :func:`_may_repeat` (a loop the compiler runs on
+    several rows at once), and :func:`is_repeat` judges the flagged ones, oldest first; eight
+    flags are read as one word, so the rows of a word with none set cost one test. The same
+    pairs in the same order as judging every row of the sensor (which this replaced: 0.78 µs
+    an arc at history 1,000)."""
     storage = x.shape[0]
     pairs = 0
-    same = np.empty(max(capacity, 1), dtype=np.int64)  # rows of the sensor's older arcs
+    # Flags of one run of rows, from index 0, whole words of 8 (bools are one byte each).
+    flags = np.zeros((max(capacity, 1) + 7) // 8 * 8, dtype=np.bool_)
+    words = flags.view(np.uint64)
     for sequence in range(first, first + count):
         j = sequence % storage
         repeated[j] = 0.0
         oldest = max(0, sequence - capacity + 1)
         start = oldest % storage
         end = start + sequence - oldest
-        n_same = 0
-        # The older rows in two runs (the ring wraps), oldest first; the rows of the same
-        # sensor gathered without a branch (a compare and a store per row: 1.85 -> 0.78 µs an
-        # arc at history 1,000 against a modulo and a branch per row).
+        xj = x[j]
+        yj = y[j]
+        rj = r[j]
+        # The older rows in two runs (the ring wraps), oldest first.
         for lo, hi in ((start, min(end, storage)), (0, max(end - storage, 0))):
-            for i in range(lo, hi):
-                same[n_same] = i
-                n_same += sensor[i] == sensor[j]
-        for q in range(n_same):
-            i = same[q]
-            if is_repeat(x[i], y[i], r[i], theta[i], 0.5 * beam_width[i], x[j], y[j], r[j],
-                         theta[j], 0.5 * beam_width[j], tolerance):
-                repeated[i] = 1.0
-                repeated[j] = 1.0
-                pairs += 1
+            m = hi - lo
+            _may_repeat(x[lo:hi], y[lo:hi], r[lo:hi], sensor[lo:hi], xj, yj, rj, sensor[j],
+                        tolerance, flags[:m])
+            for w in range((m + 7) // 8):
+                if words[w] == 0:
+                    continue
+                for k in range(8 * w, min(8 * w + 8, m)):
+                    i = lo + k
+                    if flags[k] and is_repeat(
+                            x[i], y[i], r[i], theta[i], 0.5 * beam_width[i], xj, yj, rj,
+                            theta[j], 0.5 * beam_width[j], tolerance):
+                        repeated[i] = 1.0
+                        repeated[j] = 1.0
+                        pairs += 1
     return pairs
