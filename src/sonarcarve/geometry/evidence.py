@@ -988,24 +988,27 @@ def _posterior_weight(located: float, free: float, with_located: bool) -> float:
 
 
 @compiled_inline
-def _posterior_median(located: FloatArray, free: FloatArray, s: int, start: int, end: int,
-                      lo_axis: float, step: float, mid: float) -> float:
+def _posterior_median(located: FloatArray, free: FloatArray, weights: FloatArray, s: int,
+                      start: int, end: int, lo_axis: float, step: float, mid: float) -> float:
     """Bearing of the median of the posterior over bins ``start .. end - 1`` of arc ``s``
     (:func:`_posterior_weight`; uniform inside a bin, so the median is interpolated: a run
-    with equal weights gives its middle, eq. 3.6). ``mid`` where every weight is 0."""
+    with equal weights gives its middle, eq. 3.6). ``mid`` where every weight is 0.
+    ``weights`` (shape (K,), overwritten) keeps each bin's weight between the sum and the
+    median: one ``exp`` a bin, not two."""
     with_located = False
     for k in range(start, end):
         if located[s, k] > 0.0:
             with_located = True
     total = 0.0
     for k in range(start, end):
-        total += _posterior_weight(located[s, k], free[s, k], with_located)
+        weights[k] = _posterior_weight(located[s, k], free[s, k], with_located)
+        total += weights[k]
     if not total > 0.0:
         return mid
     half = 0.5 * total
     acc = 0.0
     for k in range(start, end):
-        w = _posterior_weight(located[s, k], free[s, k], with_located)
+        w = weights[k]
         if w > 0.0 and acc + w >= half:
             return lo_axis + (k + (half - acc) / w) * step
         acc += w
@@ -1027,14 +1030,18 @@ def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: fl
 
 
 @compiled_inline
-def _crossings_per_bin(in_bin: FloatArray, bearings: npt.NDArray[np.float32], s: int,
-                       c: int, half: float, step: float) -> None:
-    """Count arc ``s``'s first ``c`` ATM crossings into ``in_bin`` (shape (K,), overwritten)."""
+def _crossings_per_bin(in_bin: FloatArray, crossing_bin: SlotArray,
+                       bearings: npt.NDArray[np.float32], s: int, c: int, half: float,
+                       step: float) -> None:
+    """Count arc ``s``'s first ``c`` ATM crossings into ``in_bin`` (shape (K,), overwritten),
+    and keep each crossing's bin in ``crossing_bin`` (for :func:`_run_crossings`)."""
     bins = in_bin.shape[0]
     for k in range(bins):
         in_bin[k] = 0.0
     for m in range(c):
-        in_bin[_bin_of(float(bearings[s, m]), half, step, bins)] += 1.0
+        kb = _bin_of(float(bearings[s, m]), half, step, bins)
+        crossing_bin[m] = kb
+        in_bin[kb] += 1.0
 
 
 @compiled_inline
@@ -1120,17 +1127,18 @@ def _sort_in_place(values: FloatArray, n: int) -> None:
 
 
 @compiled_inline
-def _run_crossings(values: FloatArray, bearings: npt.NDArray[np.float32], s: int, c: int,
-                   half: float, step: float, bins: int, start: int, end: int,
+def _run_crossings(values: FloatArray, crossing_bin: SlotArray,
+                   bearings: npt.NDArray[np.float32], s: int, c: int, start: int, end: int,
                    ) -> tuple[int, float]:
     """ATM's crossings of arc ``s`` inside bins ``start .. end - 1`` (copied into ``values``),
-    and their median bearing relative to the axis (0 when there are none)."""
+    and their median bearing relative to the axis (0 when there are none). ``crossing_bin``
+    holds the bins of its first ``c`` crossings (:func:`_crossings_per_bin`: one division a
+    crossing, not two)."""
     kept = 0
     for m in range(c):
-        b = float(bearings[s, m])
-        kb = _bin_of(b, half, step, bins)
+        kb = crossing_bin[m]
         if start <= kb < end:
-            values[kept] = b
+            values[kept] = float(bearings[s, m])
             kept += 1
     if kept == 0:
         return 0, 0.0
@@ -1222,6 +1230,8 @@ def evidence_estimates(
     hull_share = np.zeros(n)
     in_bin = np.zeros(bins)
     values = np.zeros(bearings.shape[1])
+    crossing_bin = np.zeros(bearings.shape[1], dtype=np.int64)
+    weights = np.zeros(bins)
     for q in range(n):
         s = slots[q]
         phi = beam_width[s]
@@ -1231,7 +1241,7 @@ def evidence_estimates(
         c = counts[s] if with_atm else 0
         start = end = first = last = runs = 0
         if status[s] == EVIDENCE_ALIVE:
-            _crossings_per_bin(in_bin, bearings, s, c, half, step)
+            _crossings_per_bin(in_bin, crossing_bin, bearings, s, c, half, step)
             start, end, first, last, runs = _kept_run(free, located, in_bin, s, threshold)
         if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
             bearing[q] = theta[s]
@@ -1246,7 +1256,7 @@ def evidence_estimates(
         mid = 0.5 * (lo + hi)  # eq. 3.6
         cut = end - start < bins
         if place_located and posterior and (cut or posterior_uncut):
-            mid = _posterior_median(located, free, s, start, end, lo_axis, step, mid)
+            mid = _posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
         elif place_located and cut:
             mid = _located_median(located, s, start, end, lo_axis, step, mid)
         width[q] = hi - lo
@@ -1256,7 +1266,7 @@ def evidence_estimates(
         carved_bound = _hull_bound(r[s], mid, hull_lo, hull_hi, step)
         bearing[q] = mid
         max_error[q] = carved_bound
-        kept, median_rel = _run_crossings(values, bearings, s, c, half, step, bins, start, end)
+        kept, median_rel = _run_crossings(values, crossing_bin, bearings, s, c, start, end)
         piece_crossings[q] = kept
         if kept > 0 and kept >= min_crossings:
             median = theta[s] + median_rel
