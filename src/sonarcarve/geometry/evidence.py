@@ -1008,7 +1008,7 @@ def _posterior_median(located: FloatArray, free: FloatArray, weights: FloatArray
     half = 0.5 * total
     acc = 0.0
     for k in range(start, end):
-        w = weights[k]
+        w = float(weights[k])
         if w > 0.0 and acc + w >= half:
             return lo_axis + (k + (half - acc) / w) * step
         acc += w
