@@ -724,3 +724,50 @@ def test_the_default_method_is_combined_carving(monkeypatch: pytest.MonkeyPatch)
     grid = CarvedGrid(H, BOUNDS)
     assert isinstance(grid.method, CombinedMethod)
     assert grid.method.max_incidence == pytest.approx(math.radians(20.0), abs=1e-15)
+
+
+def _mark_scene(sign: float) -> CarvedGrid:
+    """The scene above without the ring (review rev10): sensor 1's echo, turned ``sign`` x 20°,
+    spread only; then sensor 0's echo straight ahead. Every likely cell of sensor 0's band
+    holds the same spread value (0.236), up to rounding."""
+    grid = CarvedGrid(H, BOUNDS)
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, sign * math.radians(20.0), FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    return grid
+
+
+def test_the_mark_among_equally_likely_cells_does_not_depend_on_the_grids_orientation() -> None:
+    # The two scenes are mirror images about the row y = ROW_Y (row 30: centres -1.475 + 0.05 i),
+    # so their maps must be too. Among cells equally likely the mark goes to the one nearest the
+    # middle; taking the first cell the scan meets put it at the lowest row of the overlap, 4
+    # cells off the mirror image (+4.70..+11.15° above, -11.15..-7.80° below).
+    above, below = _mark_scene(+1.0).log_odds, _mark_scene(-1.0).log_odds
+    centre = 30
+    rows = np.arange(1, above.shape[0])
+    np.testing.assert_allclose(above[rows], below[2 * centre - rows], atol=1e-6)
+
+
+def test_the_mark_does_not_depend_on_when_the_map_is_read() -> None:
+    # Review rev10's case: a third sensor's echoes cross sensor 0's band at 7-13°, leaving cells
+    # equal up to the rounding of live's additions and removals, which depends on the reads.
+    # Read after every reading or once at the end: the same map up to that rounding.
+    readings = [
+        Reading(1.0, 1, 0.0, ROW_Y, 0.3490658503988659, 1.825),
+        Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3),
+        Reading(1.2, 2, 2.7923609711293373, -0.7872433751161301, 2.454722562987415,
+                1.4331160031221999),
+        Reading(1.3, 2, 2.7923609711293373, -0.7872433751161301, 2.454722562987415,
+                1.485792877820878),
+        Reading(1.4, 2, 2.7923609711293373, -0.7872433751161301, 5.596315216577208, 0.3),
+        Reading(1.5, 0, 0.0, ROW_Y, 0.0, 1.825),
+    ]
+    config = MethodConfig(max_incidence=math.radians(20.0))
+    often = CarvedGrid(H, BOUNDS, method=make_method("carve", config))
+    once = CarvedGrid(H, BOUNDS, method=make_method("carve", config))
+    for reading in readings:
+        often.add(reading)
+        often.refresh()
+    once.add_many(ReadingBatch.from_readings(readings))
+    np.testing.assert_allclose(often.log_odds, once.log_odds, atol=1e-6)
+    np.testing.assert_array_equal(often.trinary(), once.trinary())

@@ -645,6 +645,12 @@ _EDGE = 1e-9
 #: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
 #: additions and removals (about 1e-15) and of float32 ``base``.
 _LIKELY = 1e-6
+#: Log-odds within which two cells are equally likely where a fresh arc's point is placed: far
+#: above ``live``'s rounding (1e-15), which depends on when the map was read. Cells covered by
+#: the same arcs are equal up to that rounding; a strict ``>`` let the rounding, and the scan
+#: order, pick among them (review rev10: the mark moved with the read schedule and with the
+#: grid's orientation), so equals go to the cell nearest the middle.
+_TIE = 1e-9
 
 
 @compiled_inline
@@ -1137,7 +1143,8 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its point goes
     to: the middle of ``[lo, hi]``, unless that map holds no cell more likely occupied than
     not (above :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold one elsewhere
-    on the band: then the bearing of the band's most likely cell (the first found of equals)."""
+    on the band: then the bearing of the band's most likely cell (of equals within :data:`_TIE`,
+    the one nearest the middle)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
     ny, nx = base.shape
     widen = 0.5 * h / r
@@ -1176,8 +1183,9 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                 off = _bearing_off(dx, dy, mid)
                 if abs(off) <= reach:
                     middle_likely = True
-                if value > best:
-                    best = value
+                if value > best + _TIE or (value >= best - _TIE
+                                           and abs(off) < abs(bearing - mid)):
+                    best = max(best, value)
                     bearing = mid + off
     return False, 0.5 * (lo + hi) if middle_likely else bearing
 
