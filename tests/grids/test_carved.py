@@ -555,6 +555,11 @@ def test_the_mark_goes_where_the_map_makes_the_echo_likely_when_its_middle_is_no
     ring = (1.0 - (2.0 * alpha / PHI) ** 2) * 0.5 * (1.0 - math.tanh(2.0 * (d - 1.2))) * L_MISS
     assert grid.log_odds[jamb] == pytest.approx(L_HIT + SPREAD_AT_FACE + ring, abs=1e-6)
     assert trinary(grid)[jamb] == OCCUPIED
+    # Clipped at the interval's end: cell (1.775, 0.425), bearing atan(0.4 / 1.775) = 12.70°,
+    # 1.8195 m away, lies on sensor 1's band only (sensor 0's ends at 12.03° widened) and keeps
+    # its spread value; an unclipped mark (±3.14° around a cell at 9.6-12°) would reach it (review
+    # rev10).
+    assert live[_cell(grid, 1.775, 0.425)] == pytest.approx(SPREAD_AT_FACE)
 
 
 # -- frequent reads: the same map, cheaper ------------------------------------------------------
