@@ -23,6 +23,7 @@ from sonarcarve.geometry.evidence import (
     _transmission,
 )
 from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.methods import evidence as evidence_method
 from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
 from sonarcarve.sim.simulate import simulate
 
@@ -259,3 +260,14 @@ def test_the_passes_give_the_one_loops_bits(physics: tuple[tuple[str, str], ...]
     assert np.count_nonzero(model.support)
     assert occluded
     assert model.counts.any()
+
+
+@pytest.mark.parametrize("group_arcs", [1, 3])
+def test_the_passes_in_small_groups_give_the_one_loops_bits(monkeypatch: pytest.MonkeyPatch,
+                                                            group_arcs: int) -> None:
+    """The kernel gathers the bins to weigh of a group of older arcs before it weighs them;
+    groups of one and of three arcs (many groups a reading, a group's last arc anywhere in
+    the cull's list) give the one loop's bits too."""
+    monkeypatch.setattr(evidence_method, "_GROUP_ARCS", group_arcs)
+    model, _ = _run_both(_log((), False), 40, 24, start=270)
+    assert model.scratch.shape[1] == group_arcs * 24  # the groups were that small

@@ -82,15 +82,23 @@ The weighing pass of :func:`evidence_add` is laid out for the processor; each va
 same IEEE operation in the same order as in one loop that tests every arc and every bin in
 turn, so the maps are bit for bit those of that loop. The cull tests every older row's
 bounding circle in one loop without branches (the compiler tests several rows at once), and only
-the rows that pass are visited, oldest first. For each of them, a loop without branches over
-its K bins marks the bins to weigh (free evidence below T, inside the reach and the beam); a
-second computes ``P_detect`` for all K bins at once, when any is marked (``np.divide`` instead
-of ``/``: the same division without numba's zero-divisor test, whose branch kept the loop
-scalar; it also guesses the bin of ``j`` behind each bin, which the third pass steps to the
-exact one); a third adds the evidence of the marked bins, in bin order. Against the one loop,
-``benchmarks/throughput.py`` (history 250 / 1,000, the same run) went from 172k / 66k to 246k /
-96k readings/s (1.43x / 1.45x; ``tests/geometry/test_evidence_passes.py`` runs the one loop as
-the oracle).
+the rows that pass are visited, oldest first, in groups. For each arc of a group, a loop without
+branches over its K bins marks the bins to weigh (free evidence below T, inside the reach and
+the beam); an arc with none is done there (pass 3 would add nothing to it), the others' marked
+bins are gathered as the group's entries. A second loop computes ``P_detect`` for every entry of
+the group at once (``np.divide`` instead of ``/``: the same division without numba's
+zero-divisor test, whose branch kept the loop scalar; it also guesses the bin of ``j`` behind
+each bin, which the third pass steps to the exact one); a third adds the evidence, arc after
+arc in the cull's order, each in bin order. Against the one loop, ``benchmarks/throughput.py``
+(history 250 / 1,000, the same run) went from 172k / 66k to 246k / 96k readings/s (1.43x /
+1.45x) with one group per arc (``P_detect`` of all K bins of an arc with any marked); the groups
+(issue 9, 64 arcs) weigh only the marked bins, 7 of an older arc's 24 at history 1,000, in one
+vector loop long enough for the compiler's vector path (it takes the scalar one below 20
+iterations: the runtime tests that the arrays do not overlap cost too much for fewer), and skip
+the arcs with nothing to weigh, 36 of the 65 a reading that pass the cull at history 1,000:
+kernel 10.5 → 9.8 µs a reading at history 1,000, 4.3 → 4.25 at 250 (same run, best of 3;
+``tests/geometry/test_evidence_passes.py`` runs the one loop as the oracle, with groups of 1, 3
+and 64 arcs).
 """
 
 from __future__ import annotations
@@ -528,16 +536,19 @@ def evidence_add(
         then the sines of its bin edges, the beam width they are for (NaN before the first
         reading) and the scale of :func:`_bin_of_sine`'s guess (kept between readings of the
         same beam width).
-    scratch : ndarray, shape (10, K)
-        Scratch of the bin passes (overwritten): per older arc, its bins' offsets from the
-        new reading and what :func:`detect_probability` computes of them.
+    scratch : ndarray, shape (11, G K)
+        Scratch of the bin passes (overwritten), ``G >= 1`` older arcs' bins: one entry per
+        bin to weigh of a group of up to ``G`` arcs, its offset from the new reading and the
+        bin centre's direction (rows 0-4), and what :func:`detect_probability` computes of it
+        (rows 5-10).
     in_beam : ndarray of bool, shape (K,)
         Scratch (overwritten): the older arc's bins to weigh.
-    bin_index : ndarray of int64, shape (2, K)
-        Scratch (overwritten): their indices, in order; the guesses of :func:`_bin_of_sine`
-        per bin.
+    bin_index : ndarray of int64, shape (4, G K)
+        Scratch (overwritten): per entry its bin and the guess of :func:`_bin_of_sine`; per
+        arc of the group its entries and its live bins outside the new beam.
     near, near_flags : ndarray of int64 and bool, shape (n,)
-        Scratch (overwritten): the rows that pass the cull, and the cull's verdict per row.
+        Scratch (overwritten): the rows that pass the cull (then the group's rows with bins
+        to weigh), and the cull's verdict per row.
     bx, by, ex, ey : ndarray, shape (n, K)
         Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
     free, support : ndarray, shape (n, K)
@@ -635,17 +646,24 @@ def evidence_add(
     cos_zero = beam.cos_zero
     max_detect = params.max_detect
     rough = params.rough
-    s_vx = scratch[0]
-    s_vy = scratch[1]
-    s_d2 = scratch[2]
-    s_d = scratch[3]
-    s_inv = scratch[4]
-    s_sine = scratch[5]
-    s_beam = scratch[6]
-    s_cos = scratch[7]
-    s_p = scratch[8]
-    s_loc = scratch[9]
-    bin_guess = bin_index[1]
+    # The bins to weigh of a group of older arcs, one entry each, in arc and bin order:
+    # inputs (rows 0-4) and what pass 2 computes of them (rows 5-10).
+    e_vx = scratch[0]
+    e_vy = scratch[1]
+    e_d2 = scratch[2]
+    e_ex = scratch[3]
+    e_ey = scratch[4]
+    e_d = scratch[5]
+    e_sine = scratch[6]
+    e_beam = scratch[7]
+    e_cos = scratch[8]
+    e_p = scratch[9]
+    e_loc = scratch[10]
+    e_bin = bin_index[0]  # the entry's bin of its older arc
+    e_guess = bin_index[1]  # the guess of the bin of j behind it
+    arc_marked = bin_index[2]  # per arc of the group: its entries
+    arc_alive = bin_index[3]  # per arc of the group: live bins outside j's reach or beam
+    group_size = max(1, scratch.shape[1] // bins)  # arcs a group's entries always hold
     first_edge = edges[0]
     fully = 0
     crossings = 0
@@ -654,12 +672,14 @@ def evidence_add(
     spilled = 0
     top_through = 0.0
     # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
-    # rows that pass it, oldest first.
+    # rows that pass it, oldest first, a group at a time.
     # Marking every row up front gives the one loop's result because nothing in the loop
     # below changes another older arc's status or bounding circle, nor the free evidence
     # of a row other than the arc in hand and the new one (``slot``, never an older row):
-    # status[slot] and the transmission come after the loop. Pass 1 reads free[i] before
-    # pass 3 writes it for the same reason.
+    # status[slot] and the transmission come after the loop. For the same reason pass 1 can
+    # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
+    # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
+    # order, so every value is the one loop's.
     storage = x.shape[0]
     n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
     n_near = 0
@@ -670,138 +690,169 @@ def evidence_add(
         for i in range(lo, hi):
             near[n_near] = i
             n_near += near_flags[i]
-    for q in range(n_near):
-        i = near[q]
-        if with_atm:
-            kept, spilled = _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
-                                       params.cos_psi, bearings, counts, spill, spilled)
-            crossings += kept
-        ox = x[i] - xj
-        oy = y[i] - yj
-        other = sensor[i] != sensor[slot]
-        distinct = other or ox * ox + oy * oy >= beam.spacing2
-        half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
-        alive_bins = 0
-        top_support = 0.0
-        top_looked = 0.0
-        # Pass 1: which bins are left to weigh (free evidence below T) and lie in j's reach
-        # and beam; no branch, so the compiler runs it on several bins at once.
-        for k in range(bins):
-            vx = bx[i, k] - xj
-            vy = by[i, k] - yj
-            d2 = vx * vx + vy * vy
-            along = vx * cj + vy * sj
-            weigh = not free[i, k] >= threshold
-            # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
-            outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
-            s_vx[k] = vx
-            s_vy[k] = vy
-            s_d2[k] = d2
-            in_beam[k] = weigh & (not outside)
-            alive_bins += weigh & outside
-        n_in = 0
-        for k in range(bins):  # the bins to weigh, in order
-            bin_index[0, n_in] = k
-            n_in += in_beam[k]
-        if n_in > 0:
-            # Pass 2: detect_probability, inlined, for every bin (those outside the beam
-            # too: the compiler runs it on several bins at once, which a loop over the bins
-            # in the beam would not allow). np.divide is ``/`` (the same rounding) without
-            # numba's zero-divisor test, whose branch would keep the loop scalar; bins in the
-            # beam have d > 0 (along > 0) unless d² underflows (a range near 1e-300: then
-            # inv_d = inf and the values stay finite where ``/`` raised ZeroDivisionError);
-            # what the bins outside the beam get is not used.
+    q = 0
+    while q < n_near:
+        # Pass 1 and the crossings for the next older arcs, until group_size of them have
+        # bins to weigh (their rows in ``near[group:group_end]``, their bins the entries).
+        group = q
+        group_end = q
+        n_entries = 0
+        while q < n_near and group_end - group < group_size:
+            i = near[q]
+            q += 1
+            if with_atm:
+                kept, spilled = _crossings(slot, i, x, y, r, cos_axis, sin_axis, cos_half,
+                                           params.cos_psi, bearings, counts, spill, spilled)
+                crossings += kept
+            # Pass 1: which bins are left to weigh (free evidence below T) and lie in j's
+            # reach and beam; no branch, so the compiler runs it on several bins at once.
+            alive_bins = 0
+            n_in = 0
             for k in range(bins):
-                vx = s_vx[k]
-                vy = s_vy[k]
-                d = math.sqrt(s_d2[k])
-                inv_d = np.divide(1.0, d)
-                sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
-                u = min(np.divide(abs(sine), sin_half), 1.0)
-                p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
-                cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) * inv_d
-                s_d[k] = d
-                s_inv[k] = inv_d
-                s_sine[k] = sine
-                s_beam[k] = p_beam
-                s_cos[k] = cos_gamma
-                p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
-                s_p[k] = p
-                # What the support path needs: the localised support, the bin of j behind.
-                s_loc[k] = p * abs(ex[i, k] * vy - ey[i, k] * vx) * inv_d
-                bin_guess[k] = _sine_guess(sine, first_edge, bins, edge_scale)
-        # Pass 3: the evidence, in bin order.
-        for m in range(n_in):
-            k = bin_index[0, m]
-            d = s_d[k]
-            if d >= free_r and abs(d - beam.r) > params.support_tolerance:
-                alive_bins += 1
+                vx = bx[i, k] - xj
+                vy = by[i, k] - yj
+                d2 = vx * vx + vy * vy
+                along = vx * cj + vy * sj
+                weigh = not free[i, k] >= threshold
+                # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
+                outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
+                in_beam[k] = weigh & (not outside)
+                alive_bins += weigh & outside
+                n_in += weigh & (not outside)
+            if n_in == 0:
+                # Nothing to weigh: pass 3 would add nothing (its sums would add 0.0 to sums
+                # of non-negative terms, which leaves them as they are).
+                if alive_bins == 0:
+                    status[i] = EVIDENCE_CARVED
+                    fully += 1
                 continue
-            vx = s_vx[k]
-            vy = s_vy[k]
-            inv_d = s_inv[k]
-            sine = s_sine[k]
-            p_beam = s_beam[k]
-            cos_gamma = s_cos[k]
-            p = s_p[k]
-            if d < free_r:
-                f = free[i, k]
-                touched[i] = True
-                if distinct:
-                    top_looked = max(top_looked, p_beam)
-                established = (support[i, k] >= params.establish and f < 0.5 * threshold)
-                if d < free_r - params.tolerance:
-                    top_through = max(top_through, support[i, k])
-                if established and d < free_r - params.tolerance:
-                    # An established surface j looked past at a glancing angle: the bins of j
-                    # behind it cannot hold j's echo (sound does not pass through walls).
-                    along = vx * cj + vy * sj
-                    occluding += _occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
-                                                 half_bin_arc / d, beam, free, threshold)
-                    touched[slot] = True
-                factor = params.protect if established else 1.0
-                w = -math.log1p(-p) * factor
-                f += w
-                free[i, k] = f
-                if f < threshold:
+            near[group_end] = i  # q > group_end: a row already read
+            arc_marked[group_end - group] = n_in
+            arc_alive[group_end - group] = alive_bins
+            group_end += 1
+            e = n_entries
+            for k in range(bins):  # the bins to weigh, in order, as the group's entries
+                e_bin[e] = k
+                e += in_beam[k]
+            for e in range(n_entries, n_entries + n_in):
+                k = e_bin[e]
+                vx = bx[i, k] - xj
+                vy = by[i, k] - yj
+                e_vx[e] = vx
+                e_vy[e] = vy
+                e_d2[e] = vx * vx + vy * vy
+                e_ex[e] = ex[i, k]
+                e_ey[e] = ey[i, k]
+            n_entries += n_in
+        # Pass 2: detect_probability, inlined, for every entry of the group at once (one
+        # loop over all of them: the compiler runs it on several entries at once when they
+        # are many, 20 or more, and the entries are only the bins to weigh, 7 of an older
+        # arc's 24 at history 1,000). np.divide is ``/`` (the same rounding) without numba's
+        # zero-divisor test, whose branch would keep the loop scalar; bins in the beam have
+        # d > 0 (along > 0) unless d² underflows (a range near 1e-300: then inv_d = inf and
+        # the values stay finite where ``/`` raised ZeroDivisionError).
+        for e in range(n_entries):
+            vx = e_vx[e]
+            vy = e_vy[e]
+            d = math.sqrt(e_d2[e])
+            inv_d = np.divide(1.0, d)
+            sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
+            u = min(np.divide(abs(sine), sin_half), 1.0)
+            p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
+            cos_gamma = abs(e_ex[e] * vx + e_ey[e] * vy) * inv_d
+            e_d[e] = d
+            e_sine[e] = sine
+            e_beam[e] = p_beam
+            e_cos[e] = cos_gamma
+            p = p_beam * _incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+            e_p[e] = p
+            # What the support path needs: the localised support, the bin of j behind.
+            e_loc[e] = p * abs(e_ex[e] * vy - e_ey[e] * vx) * inv_d
+            e_guess[e] = _sine_guess(sine, first_edge, bins, edge_scale)
+        # Pass 3: the evidence, arc after arc, in bin order.
+        start = 0
+        for g in range(group, group_end):
+            i = near[g]
+            ox = x[i] - xj
+            oy = y[i] - yj
+            other = sensor[i] != sensor[slot]
+            distinct = other or ox * ox + oy * oy >= beam.spacing2
+            half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
+            alive_bins = arc_alive[g - group]
+            top_support = 0.0
+            top_looked = 0.0
+            stop = start + arc_marked[g - group]
+            for e in range(start, stop):
+                k = e_bin[e]
+                d = e_d[e]
+                if d >= free_r and abs(d - beam.r) > params.support_tolerance:
                     alive_bins += 1
-                    if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-                        # Kept for the transmission pass (after j's support is known).
-                        passed[n_passed, 0] = i
-                        passed[n_passed, 1] = k
-                        passed[n_passed, 2] = _bin_from_guess(bin_guess[k], sine, edges, bins)
-                        passed[n_passed, 3] = p_beam * cos_gamma  # blocked, not echoed
-                        passed[n_passed, 4] = factor
-                        passed[n_passed, 5] = w
-                        n_passed += 1
-            else:  # on j's echo circle: support, not freespace
-                alive_bins += 1
-                touched[i] = True
-                touched[slot] = True
-                top_support = max(top_support, p)
-                # Localised support: times the sine of the angle between the two circles
-                # there (tangent circles, one sensor stepping along its axis, say nothing of
-                # *where* on the arc the echo came from).
-                support[i, k] += p
-                kb = _bin_from_guess(bin_guess[k], sine, edges, bins)
-                support[slot, kb] += p
-                loc = s_loc[k]
-                located[i, k] += loc
-                located[slot, kb] += loc
-                if other:
-                    trans[kb] += p
-        # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
-        if distinct:
-            viewpoints[i] += top_support
-            viewpoints[slot] += top_support
-            if top_looked > 0.0:
-                looked[i] += -math.log1p(-top_looked)
-        if other:
-            others[i] += top_support
-            others[slot] += top_support
-        if alive_bins == 0:
-            status[i] = EVIDENCE_CARVED
-            fully += 1
+                    continue
+                vx = e_vx[e]
+                vy = e_vy[e]
+                sine = e_sine[e]
+                p_beam = e_beam[e]
+                p = e_p[e]
+                if d < free_r:
+                    f = free[i, k]
+                    touched[i] = True
+                    if distinct:
+                        top_looked = max(top_looked, p_beam)
+                    established = (support[i, k] >= params.establish and f < 0.5 * threshold)
+                    if d < free_r - params.tolerance:
+                        top_through = max(top_through, support[i, k])
+                    if established and d < free_r - params.tolerance:
+                        # An established surface j looked past at a glancing angle: the bins
+                        # of j behind it cannot hold j's echo (sound does not pass through
+                        # walls).
+                        along = vx * cj + vy * sj
+                        occluding += _occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
+                                                     half_bin_arc / d, beam, free, threshold)
+                        touched[slot] = True
+                    factor = params.protect if established else 1.0
+                    w = -math.log1p(-p) * factor
+                    f += w
+                    free[i, k] = f
+                    if f < threshold:
+                        alive_bins += 1
+                        if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
+                            # Kept for the transmission pass (after j's support is known).
+                            passed[n_passed, 0] = i
+                            passed[n_passed, 1] = k
+                            passed[n_passed, 2] = _bin_from_guess(e_guess[e], sine, edges, bins)
+                            passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
+                            passed[n_passed, 4] = factor
+                            passed[n_passed, 5] = w
+                            n_passed += 1
+                else:  # on j's echo circle: support, not freespace
+                    alive_bins += 1
+                    touched[i] = True
+                    touched[slot] = True
+                    top_support = max(top_support, p)
+                    # Localised support: times the sine of the angle between the two circles
+                    # there (tangent circles, one sensor stepping along its axis, say nothing
+                    # of *where* on the arc the echo came from).
+                    support[i, k] += p
+                    kb = _bin_from_guess(e_guess[e], sine, edges, bins)
+                    support[slot, kb] += p
+                    loc = e_loc[e]
+                    located[i, k] += loc
+                    located[slot, kb] += loc
+                    if other:
+                        trans[kb] += p
+            start = stop
+            # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
+            if distinct:
+                viewpoints[i] += top_support
+                viewpoints[slot] += top_support
+                if top_looked > 0.0:
+                    looked[i] += -math.log1p(-top_looked)
+            if other:
+                others[i] += top_support
+                others[slot] += top_support
+            if alive_bins == 0:
+                status[i] = EVIDENCE_CARVED
+                fully += 1
     occluded[slot] = occluding / bins
     through[slot] = top_through
     fully += _transmission(slot, passed, n_passed, trans, free, status, params)

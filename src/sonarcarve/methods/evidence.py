@@ -331,6 +331,11 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 12] = repeated[s]
 
 
+#: Older arcs whose bins to weigh the weighing kernel gathers before it weighs them at once
+#: (:func:`~sonarcarve.geometry.evidence.evidence_add`, pass 2): 65 arcs a reading pass its
+#: cull at history 1,000, 20 at 250; the scratch is 11 rows of this many arcs' bins.
+_GROUP_ARCS = 64
+
 _ATM = int(PointSource.ATM)
 _CARVED = int(PointSource.CARVED)
 _CENTERLINE = int(PointSource.CENTERLINE)
@@ -475,11 +480,14 @@ class EvidenceModel(ArcModel):
         # width they were computed for (NaN: none yet), the bin guess's scale.
         self.trans = np.zeros(2 * bins + 3)
         self.trans[2 * bins + 1] = np.nan
-        # Scratch of evidence_add: per older arc, its bins' offsets from the new reading and
-        # what it computes for the bins in the new beam; which rows pass the cull.
-        self.scratch = np.zeros((10, bins))
+        # Scratch of evidence_add: the bins to weigh of a group of older arcs (at most
+        # _GROUP_ARCS), their offsets from the new reading and what it computes of them; the
+        # bins to weigh of one arc; the entries' bins and the group's arcs' counts; which
+        # rows pass the cull.
+        entries = bins * min(_GROUP_ARCS, max(1, history.capacity - 1))
+        self.scratch = np.zeros((11, entries))
         self.in_beam = np.zeros(bins, dtype=bool)
-        self.bin_index = np.zeros((2, bins), dtype=np.int64)
+        self.bin_index = np.zeros((4, entries), dtype=np.int64)
         self.near = np.zeros(size, dtype=np.int64)
         self.near_flags = np.zeros(size, dtype=bool)
         # ATM's crossing store grows on demand, as ATM's does: it starts narrow and widens
