@@ -147,6 +147,42 @@ approaches (0.10 m: heading 45°, offset 0.15 m, seeds 0 and 1) are the case the
 the jamb, 9° off the sensor's axis, heard for the first time, with nothing else on the map near its
 arc.
 
+**Side lobes** (:attr:`CarvedGridParams.side_lobes`, :attr:`~CarvedGridParams.side_lobe_range`):
+a real transducer is not a hard cone; a near reflector is also heard through the first side lobe,
+outside the nominal beam (a circular piston's lies between its first and second nulls, at 1.0-1.9
+times the main lobe's half width). For an echo nearer than ``side_lobe_range`` (2 m) the newest
+echo's mark therefore looks on the echo's circle over the beam widened by ``side_lobes`` (1) half
+widths past each edge: an occupied cell there explains the echo as one inside the carved interval
+does (no mark), and when the map favours no cell where the middle would be drawn and the likeliest
+cell lies past the beam's edge, the whole hit goes around that cell, clipped to the lobe's stretch
+of the circle (the arc draws no spread value there to raise). The arc's spread band is unchanged:
+the lobes only decide where the newest echo's point goes. Why, traced on the Fig. 2 door under
+the amplitude physics (``sim/amplitude.py``; in its office logs 12.9 % of the direct echoes nearer
+than 1 m come from outside the nominal beam, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m): the
+door, echoes only, was passable at 1 m in 33 / 39 % of the 36 approaches (0.05 / 0.10 m; 89 / 86 %
+without fresh arcs). In 19 of the 22 closed at 0.10 m a newest echo's mark made blocking cells
+occupied, and in 11 of those the echo had come through a side lobe: the near jamb 15-21° off the
+axis of the sensor aimed through the door (0.7-1.2 m away; once 57°), the mark in the middle of
+the doorway while the jamb was occupied or likely from other sensors' echoes. Measured
+(``benchmarks/grids.py``, seeds 0-2, 0.05 / 0.10 m, before -> after): amplitude physics, echoes
+only 33 / 39 -> 83 / 78 %, with no-echo readings 58 / 56 -> 92 / 89 %; specular physics 97 / 94 ->
+100 / 94 %, both inputs. ``side_lobes`` 0.5: 69 / 78 %; 2: 83 / 83 %; ``side_lobe_range`` 1 m: 44 /
+44 %, 3 m or every range: 83 / 78 %, but at every range the changing scenes' shut door was never
+marked (the corridor's walls, 12-24° off the axis at its range, explained its echoes) and the
+person at 0.8-1.4 s instead of 1.0; with 2 m every latency is that without side lobes. Tried and
+not kept: diluting a near arc's spread value over its lobes too (as if spread over the widened
+arc): the door 81-100 %, but office recall (specular, 0.05 m) 0.937 -> 0.850 for echoes nearer
+than 2 m, 0.657 nearer than 1.2 m (a wall 1 m beside a side sensor, heard once per pass, never
+reaches "occupied"); nearer than 0.8 m kept recall (0.937; t-junction -0.006 to -0.008) with the
+door at 81 / 86 %, but that bound is half a corridor's width, not a property of sonar. A first
+version subtracted the arc's own spread value from the lobe cells too, where the arc draws
+nothing (72 / 69 %). What still closes the door under the amplitude physics (traced at 0.10 m, 8
+approaches): in 4 the spread of very near echoes (0.6-0.7 m) heard through a side lobe, whose
+uncarved 22.5° arc is so short (0.25 m) that one echo alone (0.68 in log-odds) marks it, doorway
+included; in 3 the jamb at the main beam's edge (7-11° off the axis, 1.2-1.4 m) with nothing on
+the map near its arc, the case the mark exists for; in 1 a side-lobe echo at 0.71 m with nothing
+likely in its lobe.
+
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
 from erasing an obstacle that has gone (the changing-scenes box stayed marked for good). So the
@@ -258,6 +294,8 @@ __all__ = [
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",
+    "DEFAULT_SIDE_LOBES",
+    "DEFAULT_SIDE_LOBE_RANGE",
     "DEFAULT_SPREAD_LENGTH",
     "FREE",
     "HEARD_BINS",
@@ -303,6 +341,18 @@ DEFAULT_MAX_INCIDENCE = math.radians(20.0)
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
 DEFAULT_SEE_THROUGH = 0.5
+#: How far past each edge of its beam an echo may have come from through a side lobe, in half
+#: beam widths (:attr:`CarvedGridParams.side_lobes`): a circular piston's first side lobe lies
+#: between its first and second nulls, at 1.8 times the first null's angle (Bessel zeros 3.83
+#: and 7.02; 12.7° and 23.8° for the 600-series transducer whose null-to-null width is the
+#: quoted 22.5° beam), so about one more half width each side.
+DEFAULT_SIDE_LOBES = 1.0
+#: Echoes nearer than this, metres, may have come through a side lobe
+#: (:attr:`CarvedGridParams.side_lobe_range`): two-way, the first side lobe is about 35 dB
+#: below the axis, so only near reflectors are heard through it. Measured (amplitude physics,
+#: office, seed 0, direct echoes whose true reflector lies outside the nominal beam): 12.9 %
+#: below 1 m, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m.
+DEFAULT_SIDE_LOBE_RANGE = 2.0
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
 #: One bit a sector in each cell's word: more sectors than bits would shift out of it silently.
@@ -475,6 +525,17 @@ class CarvedGridParams:
         2 s is three cycles of such a ring at 40 ms a sonar (0.64 s, the simulator's Scout2),
         so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
         of a slower ring.
+    side_lobes : float
+        Finite number >= 0; :data:`DEFAULT_SIDE_LOBES` (1). How far past each edge of its beam,
+        in half beam widths, a near echo may have come from through a side lobe, for the newest
+        echo's mark (module docstring, "side lobes"): an occupied cell there explains the echo,
+        and the mark goes to a likely one there when the map does not favour the arc's middle.
+        0: the beam alone (the rule before).
+    side_lobe_range : float
+        Metres >= 0 (``inf``: every range); :data:`DEFAULT_SIDE_LOBE_RANGE` (2). Echoes farther
+        than this are judged on their carved interval alone (the lobes are too weak to hear far
+        reflectors; at every range the corridor walls beside a shut door 2.4-4.8 m ahead
+        explained its echoes and it was never marked).
     repeat_weight : float
         In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
         (module docstring, "Repeated echoes count once": the sensor moved towards or away from
@@ -514,6 +575,8 @@ class CarvedGridParams:
     fresh_seconds: float = 2.0
     see_through: float = DEFAULT_SEE_THROUGH
     repeat_weight: float = 0.0
+    side_lobes: float = DEFAULT_SIDE_LOBES
+    side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
 
     def __post_init__(self) -> None:
         _check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -554,6 +617,16 @@ class CarvedGridParams:
         if isinstance(rw, bool) or not isinstance(rw, int | float) or not 0.0 <= rw <= 1.0:
             msg = f"carved grid: repeat_weight must be a number in [0, 1], got {rw!r}"
             raise GridError(msg)
+        sl = self.side_lobes
+        if isinstance(sl, bool) or not isinstance(sl, int | float) or not (
+                math.isfinite(sl) and sl >= 0.0):
+            msg = f"carved grid: side_lobes must be a finite number >= 0, got {sl!r}"
+            raise GridError(msg)
+        sr = self.side_lobe_range
+        if isinstance(sr, bool) or not isinstance(sr, int | float) or not sr >= 0.0:
+            msg = (f"carved grid: side_lobe_range must be a number >= 0 metres (inf: every "
+                   f"range), got {sr!r}")
+            raise GridError(msg)
         bp = self.band_profile
         if isinstance(bp, bool) or not isinstance(bp, int | float) or not (
                 math.isfinite(bp) and bp >= 0.0):
@@ -583,6 +656,8 @@ class _Model(NamedTuple):
     profile: float  # band_profile
     l_occupied: float  # logit(occupied_threshold)
     through: float  # see_through, metres (0: off)
+    lobes: float  # side_lobes: the explanation reaches this many half beam widths past an edge
+    lobe_range: float  # side_lobe_range, metres: only echoes nearer than this
 
 
 @compiled_inline
@@ -966,7 +1041,8 @@ def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                     pseq: npt.NDArray[np.int64], slots: SlotArray,
                     seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
                     lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
-                    with_points: bool, heard: npt.NDArray[np.uint32], m: _Model) -> int:
+                    with_points: bool, heard: npt.NDArray[np.uint32], m: _Model,
+                    theta1: FloatArray, theta2: FloatArray) -> int:
     """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs
     ``slots`` (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
     (:func:`_intervals`) are indexed by slot, ``fresh`` by position. First every arc whose
@@ -987,7 +1063,8 @@ def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
             if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
             changed += _refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
-                                       seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m)
+                                       seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m,
+                                       theta1[slots[k]], theta2[slots[k]])
     return changed
 
 
@@ -997,7 +1074,7 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
                     pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
                     y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
                     weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
-                    m: _Model) -> int:
+                    m: _Model, theta1: float, theta2: float) -> int:
     """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
     ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
     without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
@@ -1007,9 +1084,23 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
     draw, at = fresh and weight[slot] > 0.0, 0.0
     if draw:
-        explained, at = _band_likeliest(base, live, m, x[slot], y[slot], r[slot], lo[slot],
-                                        hi[slot], drawn[slot, 5])
+        explained, at, side = _band_likeliest(base, live, m, x[slot], y[slot], r[slot],
+                                              lo[slot], hi[slot], drawn[slot, 5], theta1,
+                                              theta2)
         draw = not explained
+    if draw and side != 0.0:
+        # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the arc
+        # (the arc draws nothing there to raise).
+        half = 0.5 * m.unit / r[slot]
+        axis = 0.5 * (theta1 + theta2)
+        axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
+        edge = 0.5 * (theta2 - theta1)
+        reach = (1.0 + m.lobes) * edge
+        z1, z2 = (axis + edge, axis + reach) if side > 0.0 else (axis - reach, axis - edge)
+        return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                       max(z1, at - half), min(z2, at + half),
+                       _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True),
+                       heard, m)
     if draw:
         half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
         raise_to_whole = (_arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
@@ -1137,7 +1228,8 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
 
 @compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
 def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
-                    y: float, r: float, lo: float, hi: float, own: float) -> tuple[bool, float]:
+                    y: float, r: float, lo: float, hi: float, own: float, theta1: float,
+                    theta2: float) -> tuple[bool, float, float]:
     """``(explained, bearing)`` of a fresh arc: whether a cell of its band (as :func:`_draw_arc`
     draws it, without a profile) is occupied in the map of spread arcs without the arc's own
     share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its point goes
@@ -1155,31 +1247,61 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     # Where the point would be drawn: the middle unit, widened as _draw_arc widens it.
     reach = min(0.5 * (hi - lo), 0.5 * m.unit / r) + widen
     r_in, r_out = max(0.0, r - band), r + band
-    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
+    # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
+    # near the carved interval's middle, widened by ``lobes`` half widths past each edge.
+    axis = 0.5 * (theta1 + theta2)
+    axis += _TWO_PI * math.floor((mid - axis + math.pi) / _TWO_PI)
+    e_half = 0.0
+    if m.lobes > 0.0 and r <= m.lobe_range:
+        e_half = 0.5 * (1.0 + m.lobes) * (theta2 - theta1) + widen
+    s1, s2 = (min(t1, axis - e_half), max(t2, axis + e_half)) if e_half > 0.0 else (t1, t2)
+    xlo, ylo, xhi, yhi = _sector_box(x, y, s1, s2, r_in, r_out)
     j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
     i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
     cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
+    cos_ax, sin_ax, cos_e = math.cos(axis), math.sin(axis), _cos_half(e_half)
+    b_half = 0.5 * (theta2 - theta1) + widen
+    cos_b = _cos_half(b_half)
     best = _LIKELY
     bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
     middle_likely = False
+    lobe_best = _LIKELY
+    lobe_at = mid + 4.0 * math.pi  # none yet: farther from the middle than any bearing
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 # The cell's value first: most cells are not likely occupied, and need no
-                # geometry.
-                value = min(m.l_max, max(m.l_min, base[i, j] + live[i, j] - own))
-                if not value > _LIKELY:
+                # geometry. On the band it holds the arc's own share, which does not count;
+                # in a side lobe's reach it does not hold it.
+                spread = base[i, j] + live[i, j]
+                value = min(m.l_max, max(m.l_min, spread - own))
+                if not (value > _LIKELY or (e_half > 0.0 and spread > _LIKELY)):
                     continue
                 dx = xmin + (j + 0.5) * h - x
                 d = math.sqrt(dx * dx + dy * dy)
                 if abs(d - r) > band:
                     continue
                 if not _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                    # Outside the carved interval, in reach of a side lobe: the echo may have
+                    # come from a surface there, heard through the lobe.
+                    if (e_half > 0.0
+                            and _within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
+                            and not _within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
+                        value = min(m.l_max, max(m.l_min, spread))
+                        if value > m.l_occupied:
+                            return True, bearing, 0.0
+                        off = _bearing_off(dx, dy, mid)
+                        if value > lobe_best + _TIE or (value >= lobe_best - _TIE
+                                                        and abs(off) < abs(lobe_at - mid)):
+                            lobe_best = max(lobe_best, value)
+                            lobe_at = mid + off
+                    continue
+                if not value > _LIKELY:
                     continue
                 if value > m.l_occupied:
-                    return True, bearing
+                    return True, bearing, 0.0
                 off = _bearing_off(dx, dy, mid)
                 if abs(off) <= reach:
                     middle_likely = True
@@ -1187,7 +1309,10 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                                            and abs(off) < abs(bearing - mid)):
                     best = max(best, value)
                     bearing = mid + off
-    return False, 0.5 * (lo + hi) if middle_likely else bearing
+    if not middle_likely and lobe_best > best + _TIE:
+        side = 1.0 if _bearing_off(math.cos(lobe_at), math.sin(lobe_at), axis) > 0.0 else -1.0
+        return False, lobe_at, side
+    return False, 0.5 * (lo + hi) if middle_likely else bearing, 0.0
 
 
 @compiled_inline
@@ -1383,7 +1508,8 @@ class CarvedGrid(CellGrid):
                              self._l_miss, self._l_heard, self._l_min, self._l_max,
                              self._spread, self._unit, float(p.fade_range),
                              p.surface_aware, float(p.band_profile),
-                             _logit(p.occupied_threshold), float(p.see_through))
+                             _logit(p.occupied_threshold), float(p.see_through),
+                             float(p.side_lobes), float(p.side_lobe_range))
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # The points of the fresh arcs (CarvedGridParams.fresh_arcs), apart from ``live`` so
@@ -1623,7 +1749,8 @@ class CarvedGrid(CellGrid):
             _refresh_kernel(self._base, self._live, self._points, self._drawn,
                             self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
                             history.y, history.r, self._lo, self._hi, self._weight, fresh,
-                            with_points, self._heard, self._model)
+                            with_points, self._heard, self._model, history.theta1,
+                            history.theta2)
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,
