@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 
+from sonarcarve.geometry.repeats import is_repeat
 from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError
-from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH, _repeats
+from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
 
@@ -26,7 +27,7 @@ pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
 
 def _repeat(p1: tuple[float, float], r1: float, t1: float, p2: tuple[float, float], r2: float,
             t2: float) -> bool:
-    return bool(_repeats(p1[0], p1[1], r1, t1, HALF, p2[0], p2[1], r2, t2, HALF, TOL))
+    return bool(is_repeat(p1[0], p1[1], r1, t1, HALF, p2[0], p2[1], r2, t2, HALF, TOL))
 
 
 def test_which_echo_pairs_repeat() -> None:

@@ -58,11 +58,12 @@ there (every beam that reaches the mirror image passes the jamb first and hears 
 of that one sensor summed to 1.8-2.7 in log-odds over the doorway, closing the door. The ranges
 cannot tell the jamb from its mirror image (0.23 m off the track changes them by 1-2 cm over the
 whole approach, below the range noise); only other sensors, from other places, can. So when an echo
-*repeats* an earlier echo of its sensor still in the history (:func:`_repeats`: ``| |P2 - P1| - |r1
-- r2| | <= ε``, the range changed by the distance moved towards or away from the reflector within
-the range tolerance ε, and the tangent point's bearing lies inside both beams; the origins more
-than 2ε apart, because nearer than that any change of range fits within ε and a robot creeping
-along a wall would chain every echo of a side sensor into one and lose the wall: review finding, a
+*repeats* an earlier echo of its sensor still in the history
+(:func:`~sonarcarve.geometry.repeats.is_repeat`: ``| |P2 - P1| - |r1 - r2| | <= ε``, the range
+changed by the distance moved towards or away from the reflector within the range tolerance ε, and
+the tangent point's bearing lies inside both beams; the origins more than 2ε apart, because nearer
+than that any change of range fits within ε and a robot creeping along a wall would chain every echo
+of a side sensor into one and lose the wall: review finding, a
 16-sonar ring moving 2-4.5 cm a cycle lost all of a side wall with the earlier "stood still" case),
 the earlier arc's weight is multiplied by ``repeat_weight``, live and when it leaves the history:
 with the default 0 a run of repeats counts as its newest echo, whatever was heard between them.
@@ -272,6 +273,7 @@ import numpy.typing as npt
 
 from sonarcarve.geometry import ArcFate
 from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.repeats import is_repeat
 from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.grids.elfes import MAX_CELLS, ROS_FADE_RANGE, OccupancyGrid
 from sonarcarve.grids.range_sensor_layer import (
@@ -1080,34 +1082,31 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
     ``unit`` of its carved interval around the point's bearing (the middle, or the most likely
     cell of a band whose middle the map does not favour; clipped to the interval) raised from
-    its spread value to a whole hit; else take its point out. The spread map does not hold the
+    its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
+    (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
+    circle; else take its point out. The spread map does not hold the
     points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
-    draw, at = fresh and weight[slot] > 0.0, 0.0
-    if draw:
+    if fresh and weight[slot] > 0.0:
         explained, at, side = _band_likeliest(base, live, m, x[slot], y[slot], r[slot],
                                               lo[slot], hi[slot], drawn[slot, 5], theta1,
                                               theta2)
-        draw = not explained
-    if draw and side != 0.0:
-        # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the arc
-        # (the arc draws nothing there to raise).
-        half = 0.5 * m.unit / r[slot]
-        axis = 0.5 * (theta1 + theta2)
-        axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
-        edge = 0.5 * (theta2 - theta1)
-        reach = (1.0 + m.lobes) * edge
-        z1, z2 = (axis + edge, axis + reach) if side > 0.0 else (axis - reach, axis - edge)
-        return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                       max(z1, at - half), min(z2, at + half),
-                       _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True),
-                       heard, m)
-    if draw:
-        half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
-        raise_to_whole = (_arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
-                          - drawn[slot, 5])
-        return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                       max(lo[slot], at - half), min(hi[slot], at + half), raise_to_whole,
-                       heard, m)
+        whole = _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+        if not explained and side != 0.0:
+            # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
+            # circle (the arc draws no spread value there to raise).
+            half = 0.5 * m.unit / r[slot]
+            axis = 0.5 * (theta1 + theta2)
+            axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
+            edge = 0.5 * (theta2 - theta1)
+            reach = (1.0 + m.lobes) * edge
+            z1, z2 = (axis + edge, axis + reach) if side > 0.0 else (axis - reach, axis - edge)
+            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                           max(z1, at - half), min(z2, at + half), whole, heard, m)
+        if not explained:
+            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                           max(lo[slot], at - half), min(hi[slot], at + half),
+                           whole - drawn[slot, 5], heard, m)
     if pseq[slot] >= 0:
         _undraw(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
@@ -1341,38 +1340,6 @@ def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                 out[i, j] = UNKNOWN
 
 
-@compiled_inline
-def _in_beam(bearing: float, theta: float, half: float) -> bool:
-    """Whether ``bearing`` lies within ``half`` of the beam axis ``theta``."""
-    return abs(_bearing_off(math.cos(bearing), math.sin(bearing), theta)) <= half
-
-
-@compiled_inline
-def _repeats(x1: float, y1: float, r1: float, t1: float, h1: float, x2: float, y2: float,
-             r2: float, t2: float, h2: float, tol: float) -> bool:
-    """Whether the echo ``(x2, y2, r2)`` (beam ``t2 ± h2``) repeats an earlier echo of the same
-    sensor ``(x1, y1, r1)`` (beam ``t1 ± h1``): whether both are most likely the same reflector.
-
-    Their origins are more than ``2 tol`` apart and their circles internally tangent within
-    ``tol`` (``| |P2 - P1| - |r1 - r2| | <= tol``: the range changed by the distance the sensor
-    moved towards or away from the reflector) at a bearing inside both beams (the tangent point
-    lies on the line through both origins, beyond the smaller circle's centre). Nearer than
-    ``2 tol`` any change of range fits the test, so two such echoes say nothing about where the
-    reflector is (a robot standing still, or creeping along a wall, is not heard repeating; its
-    echoes count as before, and a slow approach still pairs echoes further apart in the
-    history). The circles of such echoes lie within ``tol``
-    of each other over a stretch on both sides of the tangent point, and a reflector anywhere
-    on that stretch would have given both ranges: the second echo places the reflector no
-    better than the first, where any other pair of echoes narrows it down."""
-    dx, dy = x2 - x1, y2 - y1
-    d = math.sqrt(dx * dx + dy * dy)
-    dr = r1 - r2
-    if d <= 2.0 * tol or abs(d - abs(dr)) > tol:
-        return False
-    bearing = math.atan2(dy, dx) if dr >= 0.0 else math.atan2(-dy, -dx)
-    return _in_beam(bearing, t1, h1) and _in_beam(bearing, t2, h2)
-
-
 @compiled
 def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
                    seen_seq: npt.NDArray[np.int64], marked: SlotArray,
@@ -1382,7 +1349,8 @@ def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
                    hx: FloatArray, hy: FloatArray, hr: FloatArray, htheta: FloatArray,
                    hwidth: FloatArray, capacity: int, tol: float, factor: float) -> int:
     """For each echo ``k`` of a batch (arc ``seqs[k]``), give every earlier arc of the same
-    sensor still in the history that the echo repeats (:func:`_repeats`) the weight factor
+    sensor still in the history that the echo repeats
+    (:func:`~sonarcarve.geometry.repeats.is_repeat`) the weight factor
     ``factor``: in ``batch_chain[p - first]`` if it is an arc of the batch (``first``: the
     batch's first arc), else in ``chain`` (by slot, rows ``hsensor..hwidth`` of the history),
     which then forgets it had seen that arc's state (``seen_seq`` -1) so that the next read
@@ -1411,7 +1379,7 @@ def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
                 if hsensor[s] != sensor[k] or chain[s] == factor:
                     continue
                 x1, y1, r1, t1, h1 = hx[s], hy[s], hr[s], htheta[s], 0.5 * hwidth[s]
-            if not _repeats(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
+            if not is_repeat(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
                 continue
             if p >= first:
                 batch_chain[p - first] = factor
@@ -1529,7 +1497,7 @@ class CarvedGrid(CellGrid):
         self._hi = np.zeros(size)
         self._weight = np.zeros(size)
         # Per slot, the factor of the arc's weight: repeat_weight if a later echo of its sensor
-        # repeats it (_repeats), else 1.
+        # repeats it (geometry.repeats.is_repeat), else 1.
         self._chain = np.ones(size)
         # While a batch is folded in: its arcs' factors, by sequence number from _batch_first.
         self._batch_first = 0
@@ -1668,7 +1636,8 @@ class CarvedGrid(CellGrid):
 
     def _mark_repeats(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
                       no_echo: BoolArray, half: FloatArray, first_seq: int) -> SlotArray:
-        """Give the arcs that the batch's echoes repeat (:func:`_repeats`) the weight factor
+        """Give the arcs that the batch's echoes repeat
+        (:func:`~sonarcarve.geometry.repeats.is_repeat`) the weight factor
         :attr:`CarvedGridParams.repeat_weight`: those of the history in ``_chain`` (by slot;
         the next read recomputes their weights), the batch's own in ``_batch_chain`` (by
         sequence number from ``first_seq``: a long batch reuses slots). Returns the slots of
