@@ -148,8 +148,8 @@ approaches (0.10 m: heading 45°, offset 0.15 m, seeds 0 and 1) are the case the
 the jamb, 9° off the sensor's axis, heard for the first time, with nothing else on the map near its
 arc.
 
-**Side lobes** (:attr:`CarvedGridParams.side_lobes`, :attr:`~CarvedGridParams.side_lobe_range`):
-a real transducer is not a hard cone; a near reflector is also heard through the first side lobe,
+**Side lobes** (:attr:`CarvedGridParams.side_lobes`, :attr:`~CarvedGridParams.side_lobe_range`): a
+real transducer is not a hard cone; a near reflector is also heard through the first side lobe,
 outside the nominal beam (a circular piston's lies between its first and second nulls, at 1.0-1.9
 times the main lobe's half width). For an echo nearer than ``side_lobe_range`` (2 m) the newest
 echo's mark therefore looks on the echo's circle over the beam widened by ``side_lobes`` (1) half
@@ -157,32 +157,39 @@ widths past each edge: an occupied cell there explains the echo as one inside th
 does (no mark), and when the map favours no cell where the middle would be drawn and the likeliest
 cell lies past the beam's edge, the whole hit goes around that cell, clipped to the lobe's stretch
 of the circle (the arc draws no spread value there to raise). The arc's spread band is unchanged:
-the lobes only decide where the newest echo's point goes. Why, traced on the Fig. 2 door under
-the amplitude physics (``sim/amplitude.py``; in its office logs 12.9 % of the direct echoes nearer
-than 1 m come from outside the nominal beam, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m): the
-door, echoes only, was passable at 1 m in 33 / 39 % of the 36 approaches (0.05 / 0.10 m; 89 / 86 %
-without fresh arcs). In 19 of the 22 closed at 0.10 m a newest echo's mark made blocking cells
-occupied, and in 11 of those the echo had come through a side lobe: the near jamb 15-21° off the
-axis of the sensor aimed through the door (0.7-1.2 m away; once 57°), the mark in the middle of
-the doorway while the jamb was occupied or likely from other sensors' echoes. Measured
-(``benchmarks/grids.py``, seeds 0-2, 0.05 / 0.10 m, before -> after): amplitude physics, echoes
-only 33 / 39 -> 83 / 78 %, with no-echo readings 58 / 56 -> 92 / 89 %; specular physics 97 / 94 ->
-100 / 94 %, both inputs. ``side_lobes`` 0.5: 69 / 78 %; 2: 83 / 83 %; ``side_lobe_range`` 1 m: 44 /
-44 %, 3 m or every range: 83 / 78 %, but at every range the changing scenes' shut door was never
-marked (the corridor's walls, 12-24° off the axis at its range, explained its echoes) and the
-person at 0.8-1.4 s instead of 1.0; with 2 m every latency is that without side lobes. Tried and
-not kept: diluting a near arc's spread value over its lobes too (as if spread over the widened
-arc): the door 81-100 %, but office recall (specular, 0.05 m) 0.937 -> 0.850 for echoes nearer
-than 2 m, 0.657 nearer than 1.2 m (a wall 1 m beside a side sensor, heard once per pass, never
-reaches "occupied"); nearer than 0.8 m kept recall (0.937; t-junction -0.006 to -0.008) with the
-door at 81 / 86 %, but that bound is half a corridor's width, not a property of sonar. A first
-version subtracted the arc's own spread value from the lobe cells too, where the arc draws
-nothing (72 / 69 %). What still closes the door under the amplitude physics (traced at 0.10 m, 8
-approaches): in 4 the spread of very near echoes (0.6-0.7 m) heard through a side lobe, whose
-uncarved 22.5° arc is so short (0.25 m) that one echo alone (0.68 in log-odds) marks it, doorway
-included; in 3 the jamb at the main beam's edge (7-11° off the axis, 1.2-1.4 m) with nothing on
-the map near its arc, the case the mark exists for; in 1 a side-lobe echo at 0.71 m with nothing
-likely in its lobe.
+the lobes only decide where the newest echo's point goes. Why, traced on the Fig. 2 door under the
+amplitude physics (``sim/amplitude.py``; in its office logs 12.9 % of the direct echoes nearer than
+1 m come from outside the nominal beam, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m): the door,
+echoes only, was passable at 1 m in 33 / 39 % of the 36 approaches (0.05 / 0.10 m; 89 / 86 % without
+fresh arcs). In 19 of the 22 closed at 0.10 m a newest echo's mark made blocking cells occupied, and
+in 11 of those the echo had come through a side lobe: the near jamb 15-21° off the axis of the
+sensor aimed through the door (0.7-1.2 m away; once 57°), the mark in the middle of the doorway
+while the jamb was occupied or likely from other sensors' echoes. Measured (``benchmarks/grids.py``,
+seeds 0-2, 0.05 / 0.10 m, before -> after): amplitude physics, echoes only 33 / 39 -> 83 / 78 %,
+with no-echo readings 58 / 56 -> 92 / 89 %; specular physics 97 / 94 -> 100 / 94 %, both inputs.
+``side_lobes`` 0.5: 69 / 78 %; 2: 83 / 83 %; ``side_lobe_range`` 1 m: 44 / 44 %, 3 m or every range:
+83 / 78 %, but at every range the changing scenes' shut door was never marked (the corridor's walls,
+12-24° off the axis at its range, explained its echoes) and the person at 0.8-1.4 s instead of 1.0;
+with 2 m every latency is that without side lobes (both physics, both inputs, 0.05 and 0.10 m;
+phantom shares within 0.2 points). The price, where the map is read once at the end of a log (only
+the last read's marks move): t-junction recall -0.001 to -0.006 (0.987 -> 0.982 at 0.10 m, specular,
+below ROS's layer's 0.984), office at most -0.001, doorway the same: a robot ending near a corner
+hears the wall ahead, an occupied wall at the same range lies in a lobe and explains the echo, and
+under the specular physics it came through the main lobe. Judging the lobes only when nothing on the
+carved interval is even likely costs less (0.985) and gains less (door 81 / 75 %, specular 97 / 94
+%). CPU: once per log the same, a map read every 5 readings +1-6 % (``benchmarks/grid_reads.py``,
+two rounds, old and new alternating). Tried and not kept: diluting a near arc's spread value over
+its lobes too (as if spread over the widened arc): the door 81-100 %, but office recall (specular,
+0.05 m) 0.937 -> 0.850 for echoes nearer than 2 m, 0.657 nearer than 1.2 m (a wall 1 m beside a side
+sensor, heard once per pass, never reaches "occupied"); nearer than 0.8 m kept recall (0.937;
+t-junction -0.006 to -0.008) with the door at 81 / 86 %, but that bound is half a corridor's width,
+not a property of sonar. A first version subtracted the arc's own spread value from the lobe cells
+too, where the arc draws nothing (72 / 69 %). What still closes the door under the amplitude physics
+(traced at 0.10 m, 8 approaches): in 4 the spread of very near echoes (0.6-0.7 m) heard through a
+side lobe, whose uncarved 22.5° arc is so short (0.25 m) that one echo alone (0.68 in log-odds)
+marks it, doorway included; in 3 the jamb at the main beam's edge (7-11° off the axis, 1.2-1.4 m)
+with nothing on the map near its arc, the case the mark exists for; in 1 a side-lobe echo at 0.71 m
+with nothing likely in its lobe.
 
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
@@ -222,7 +229,15 @@ loses one snapshot on one seed, deeper gives the box nothing more and costs offi
 with no-echo readings 0.893/0.933 before, 0.891/0.930 with 1 m; the opposite-sector rule of
 :data:`HEARD_NEAR` cost up to 0.022); t-junction and doorway maps are the same.
 The cells a beam can hold back for this are bounded (:data:`_HELD`, 512 a beam; the rest get
-the plain update).
+the plain update). Tried for the 0.05 m box and not kept, an occlusion test where the state is
+deterministic: a final band skips a cell when a cell believed occupied (log-odds > 1.5) lies on the
+ray from the sensor up to 0.5 m in front of it, beyond the band's width; the box still cleared
++5.55 s after passing on every seed (``benchmarks/box_trace.py``). The last cells (0.13-0.18 m
+behind the wall the box stood against) get whole hits from arcs of the box's corner heard 2.0-2.4 m
+away and carved to 0-6°, the cells within the band's width and half-cell widening of the arc's end;
+when those arcs leave the history (21-23 s into the run) the wall between the sensor and them is
+not on the map at all (log-odds -0.04 to -0.07 along the ray in front of them), so there is nothing
+to occlude with.
 
 A **no-echo** reading (``range`` = +inf, :attr:`~sonarcarve.readings.Reading.no_echo`) has
 free space only: its beam's cells nearer than its ``max_range`` get the free-space update above
