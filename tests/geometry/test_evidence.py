@@ -3,6 +3,7 @@ kernels (beyond the paper)."""
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -182,3 +183,97 @@ def test_atms_median_loses_to_a_smaller_bound() -> None:
     assert not is_atm
     assert bearing == pytest.approx(0.125, abs=1e-12)
     assert bound < 5.0
+
+
+# Review rev9p: ties, rounding and the ATM rule of the posterior placement.
+_CUT = _T + 1.0
+
+
+@pytest.mark.parametrize(("free", "located"), [
+    ([_CUT, 0, 0, 0], [0, 1, 0, 1]),               # located in bins 1 and 3, bin 2 between
+    ([0, 0, 0, 0, 0, _CUT], [1, 0, 0, 0, 1, 0]),   # K = 6, a gap of three bins
+])
+def test_a_mirror_image_profile_gives_the_mirror_image_point(
+        free: list[float], located: list[float]) -> None:
+    # Equal weights on both sides of bins with none: every point of the gap is a median (the
+    # weight below and above it is half each). The scan from the lower end took the gap's
+    # lower end, so the mirrored profile (bearing -> -bearing) put its point elsewhere than the
+    # mirror of the first: by the gap's whole width. The middle of the gap is the one choice
+    # that does not depend on the direction of the scan (here the middle of the run's
+    # support: bearing 0.05 for the first case, the gap's middle -0.0333... for the second).
+    point = _place(free, located)[0]
+    mirrored = _place(free[::-1], located[::-1])[0]
+    assert point == pytest.approx(-mirrored, abs=1e-12)
+    step = 0.4 / len(free)
+    k = [i for i, v in enumerate(located) if v > 0]  # the two supported bins
+    gap_middle = -0.2 + 0.5 * (k[0] + 1 + k[1]) * step
+    assert point == pytest.approx(gap_middle, abs=1e-12)
+
+
+def test_a_bin_lighter_than_one_ulp_of_the_total_does_not_push_the_point_past_it() -> None:
+    # Weights 1, 0.75 ulp, 1 + ulp over bins 1-3 (bin 0 carved): half the total is reached,
+    # to 1e-16, at the lower edge of bin 3 (0.1). In floating point acc + w rounds up to half
+    # at the tiny bin 2 while half - acc is one ulp: the interpolation's fraction was 4/3, and
+    # the point went a third of a bin into bin 3 (0.1333). The fraction of a bin is at most 1.
+    u = 2.0 ** -52
+    bearing, _, _ = _place([_CUT, 0, 0, 0], [0, 1.0, 0.75 * u, 1.0 + u])
+    assert bearing == pytest.approx(0.1, abs=1e-12)
+
+
+def test_atms_median_needs_a_strictly_smaller_bound() -> None:
+    # Section 4: the estimate with the *smaller* bound; on a tie the posterior's point stays.
+    # The posterior's bound is read with ATM out of reach, then given to ATM as its own.
+    free, located, crossings = [_CUT, 0, 0, 0], [0, 0, 0, 0], (0.05, 0.12, 0.15)
+    point, carved_bound, is_atm = _place(free, located, crossings, atm_bound=10.0)
+    assert not is_atm
+    assert point == pytest.approx(0.05, abs=1e-12)  # equal weights: the run's middle
+    bearing, bound, is_atm = _place(free, located, crossings, atm_bound=carved_bound)
+    assert not is_atm
+    assert bearing == point
+    assert bound == carved_bound
+
+
+def test_on_a_split_arc_atms_median_has_the_hulls_bound_not_eq_5_4s() -> None:
+    # Bins 0 and 2-3 survive (bin 1 carved): two runs, the hull [-0.2, 0.2]. Three crossings in
+    # bin 2 ([0, 0.1]) keep run 2-3; the localised support in bin 3 puts the posterior's point
+    # at bin 3's middle, 0.15: bound 2 r sin((0.35 + 0.05) / 2). ATM's median 0.05 may be
+    # anywhere in the hull too (the echo may be in the other run): its bound is the hull's from
+    # 0.05, 2 r sin((0.25 + 0.05) / 2), not eq. 5.4's 0.01; it is the smaller, so ATM places it.
+    bearing, bound, is_atm = _place([0, _CUT, 0, 0], [0, 0, 0, 1], (0.01, 0.05, 0.08))
+    assert is_atm
+    assert bearing == pytest.approx(0.05, abs=1e-7)  # float32 crossings
+    assert bound == pytest.approx(4.0 * math.sin(0.15), abs=1e-6)
+    # Crossings whose median (0.18) lies farther from the hull's middle than 0.15: the hull
+    # bound from there is the larger, the posterior's point stays (its bound as above).
+    bearing, bound, is_atm = _place([0, _CUT, 0, 0], [0, 0, 0, 1], (0.17, 0.18, 0.19))
+    assert not is_atm
+    assert bearing == pytest.approx(0.15, abs=1e-12)
+    assert bound == pytest.approx(4.0 * math.sin(0.2), abs=1e-12)
+
+
+def test_localised_support_outside_the_kept_run_does_not_weigh_in_it() -> None:
+    # Runs: bin 0 (localised support 0.5) and bins 2-3 (three crossings: kept, 3 > 0.5). The
+    # kept run has no localised support, so its misses alone place the point: weights 1/4, 1
+    # (free ln 4 on bin 2), half of 1.25 reached 0.375 into bin 3: 0.1375. Support in another
+    # run must not switch the kept run's weights to the (zero) localised support (the middle,
+    # 0.1). ATM needs 4 crossings here, so the three only pick the run.
+    bearing, _, is_atm = _place([0, _CUT, math.log(4.0), 0], [0.5, 0, 0, 0],
+                                (0.12, 0.15, 0.18), min_crossings=4)
+    assert not is_atm
+    assert bearing == pytest.approx(0.1 + 0.375 * 0.1, abs=1e-12)
+
+
+def test_the_split_arc_keeps_the_run_with_localised_support_not_the_longer_one() -> None:
+    # Runs: bin 0 with localised support, bins 2-3 without (longer). No crossings: the run with
+    # the support is kept; its point is bin 0's middle, -0.15 (its only weighted bin).
+    bearing, _, _ = _place([0, _CUT, 0, 0], [0.3, 0, 0, 0])
+    assert bearing == pytest.approx(-0.15, abs=1e-12)
+
+
+def test_the_kernels_default_atm_count_is_the_documented_three() -> None:
+    # Nothing in the library calls evidence_estimates without min_crossings, so a drifted
+    # default would go unnoticed until someone did.
+    parameters = inspect.signature(evidence_estimates.py_func).parameters
+    assert parameters["min_crossings"].default == 3
+    assert parameters["posterior"].default is True
+    assert parameters["posterior_uncut"].default is False

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from typing import Any
 
@@ -11,6 +12,7 @@ import pytest
 
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError, SonarcarveError
+from sonarcarve.maps import PointSource
 from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods import evidence as evidence_module
@@ -580,3 +582,55 @@ def test_repeats_give_the_same_confidence_in_blocks_and_one_reading_at_a_time() 
 def test_min_atm_crossings_must_be_a_whole_number_of_at_least_one(value: object) -> None:
     with pytest.raises(ConfigError, match="min_atm_crossings"):
         EvidenceMethod(min_atm_crossings=value)  # type: ignore[arg-type]
+
+
+def _crossed_wall(crossings: int, **options: object) -> tuple[str, float]:
+    """A wall at x = 2 heard head-on from the origin (sensor 0), then ``crossings`` other
+    sensors' echoes through the wall point at bearing 0.12, each crossing the first arc at a
+    wide angle (one ATM crossing each). Returns the first echo's point source and bound."""
+    method = EvidenceMethod(min_confidence=0.0, **options)  # type: ignore[arg-type]
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+    target = (2.0 * math.cos(0.12), 2.0 * math.sin(0.12))
+    for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1), (0.7, 1.3))[:crossings]):
+        method.add(_reading(0.1 + 0.05 * k, ox, oy, math.atan2(target[1] - oy, target[0] - ox),
+                            math.hypot(target[0] - ox, target[1] - oy), sensor=1 + k))
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    assert int(model.counts[int(method.history.slots()[0])]) == crossings
+    local = method.local_map()
+    row = local.reading_id.tolist().index(0)
+    return PointSource(int(local.source[row])).label, float(local.max_error[row])
+
+
+def test_two_crossings_do_not_place_the_point_by_default_three_do() -> None:
+    # ATM's median of two crossings is their mean, which one ghost moves anywhere: by default
+    # (min_atm_crossings 3) the uncut beam keeps its middle; from three, ATM's median.
+    assert _crossed_wall(2)[0] == "centerline"
+    assert _crossed_wall(3)[0] == "atm"
+
+
+def test_min_atm_crossings_reaches_the_placement() -> None:
+    # Asked for 1 (the rule before), two crossings are enough; asked for 4, three are not.
+    assert _crossed_wall(2, min_atm_crossings=1)[0] == "atm"
+    assert _crossed_wall(3, min_atm_crossings=4)[0] == "centerline"
+
+
+@pytest.mark.parametrize(("option", "attribute", "value"), [
+    ("with_posterior_placement", "place_posterior", False),
+    ("with_uncut_posterior", "posterior_uncut", True),
+    ("with_located_placement", "place_located", False),
+    ("min_atm_crossings", "min_atm_crossings", 5),
+])
+def test_each_placement_option_reaches_the_model(option: str, attribute: str,
+                                                 value: object) -> None:
+    method = EvidenceMethod(**{option: value})  # type: ignore[arg-type]
+    assert getattr(method.models[0], attribute) == value
+
+
+def test_the_models_defaults_are_the_methods() -> None:
+    # EvidenceModel is public: built on its own it must place points as the method does.
+    model = inspect.signature(EvidenceModel.__init__).parameters
+    method = inspect.signature(EvidenceMethod.__init__).parameters
+    assert model["min_atm_crossings"].default == method["min_atm_crossings"].default == 3
+    assert model["place_posterior"].default is method["with_posterior_placement"].default is True
+    assert model["posterior_uncut"].default is method["with_uncut_posterior"].default is False

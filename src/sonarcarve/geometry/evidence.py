@@ -1039,7 +1039,9 @@ def _located_median(located: FloatArray, s: int, start: int, end: int, lo_axis: 
 def _posterior_weight(located: float, free: float, with_located: bool) -> float:
     """Unnormalised posterior that the echo came from a bin: ``exp(-F)``, the probability
     that every newer reading that looked there missed a surface there (``F = Σ -log(1 - P)``,
-    the bin's free evidence), times the bin's localised support when the run has any."""
+    the bin's free evidence; strictly, of the evidence left after the ``protect`` factor and
+    with transmission's share added, so a likelihood in that model's sense), times the bin's
+    localised support when the run has any."""
     w = math.exp(-free)
     return w * located if with_located else w
 
@@ -1049,7 +1051,10 @@ def _posterior_median(located: FloatArray, free: FloatArray, weights: FloatArray
                       start: int, end: int, lo_axis: float, step: float, mid: float) -> float:
     """Bearing of the median of the posterior over bins ``start .. end - 1`` of arc ``s``
     (:func:`_posterior_weight`; uniform inside a bin, so the median is interpolated: a run
-    with equal weights gives its middle, eq. 3.6). ``mid`` where every weight is 0.
+    with equal weights gives its middle, eq. 3.6, to rounding). ``mid`` where every weight is
+    0. Where the weight reaches exactly half at the end of a bin followed by bins of weight 0,
+    every point of those bins is a median: their middle is taken (the lower end would depend on
+    the direction of the scan: a mirror-image profile would not give the mirror-image point).
     ``weights`` (shape (K,), overwritten) keeps each bin's weight between the sum and the
     median: one ``exp`` a bin, not two."""
     with_located = False
@@ -1067,7 +1072,16 @@ def _posterior_median(located: FloatArray, free: FloatArray, weights: FloatArray
     for k in range(start, end):
         w = float(weights[k])
         if w > 0.0 and acc + w >= half:
-            return lo_axis + (k + (half - acc) / w) * step
+            # At most the whole bin: a weight below an ulp of ``half`` can round acc + w up to
+            # it while half - acc is still larger than the weight.
+            point = k + min((half - acc) / w, 1.0)
+            if acc + w == half:  # flat at one half over the zero-weight bins after k
+                after = k + 1
+                while after < end and not weights[after] > 0.0:
+                    after += 1
+                if after < end:
+                    point = 0.5 * (k + 1 + after)
+            return lo_axis + point * step
         acc += w
     return mid
 

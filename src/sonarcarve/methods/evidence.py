@@ -406,7 +406,8 @@ class EvidenceModel(ArcModel):
         See ``place_located``.
     posterior_uncut : bool
         With ``place_posterior``, place the point of a beam nothing has cut by the posterior
-        too (its localised support; off: its middle, eq. 3.6).
+        too (``exp(-F)`` times its localised support: no bin of an uncut beam reached the
+        threshold, so the support mostly decides; off: its middle, eq. 3.6).
     min_atm_crossings : int
         ATM's median inside the kept run places the point only when the run holds at least
         this many crossings (and its bound, eq. 5.4, is the smaller): with fewer, the median
@@ -660,7 +661,9 @@ class EvidenceMethod(SonarMethod):
         Switch parts off (ablation); see :class:`EvidenceModel`.
     with_posterior_placement : bool
         Once evidence has cut the beam, the point at the median of the posterior over the
-        kept run (``place_posterior`` of :class:`EvidenceModel`); off: the placement before it.
+        kept run (``place_posterior`` of :class:`EvidenceModel`); off: the located placement
+        of the session before (the placement before issue 9's point accuracy work also needs
+        ``min_atm_crossings=1``).
     with_uncut_posterior : bool
         The posterior places the points of beams nothing has cut too (``posterior_uncut``;
         off by default: see :func:`~sonarcarve.geometry.evidence.evidence_estimates`).
