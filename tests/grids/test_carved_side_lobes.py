@@ -109,6 +109,34 @@ def test_the_mark_goes_to_a_likely_surface_in_reach_of_a_side_lobe() -> None:
     assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD + L_HIT)
 
 
+def _lobe_scene(sign: float, read_often: bool = False) -> CarvedGrid:
+    """The scene above, sensor 1 turned ``sign`` x 20°; read after every reading if
+    ``read_often``."""
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    for reading in (Reading(1.0, 1, 0.0, ROW_Y, sign * math.radians(20.0), FACE_X),
+                    Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3),
+                    Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X)):
+        grid.add(reading)
+        if read_often:
+            grid.refresh()
+    return grid
+
+
+def test_the_mark_in_a_side_lobe_does_not_depend_on_orientation_or_when_the_map_is_read() -> None:
+    # Mirror images about the row y = ROW_Y (row 30 of centres -1.475 + 0.05 i; the ring is
+    # symmetric too): the lobe cells of sensor 1's band are equally likely (0.236), and the mark
+    # goes to the one nearest the middle, whichever side and whatever the scan order (taking the
+    # first the scan meets puts it at 12.4° above and at the lobe's far end, -23°, below).
+    above, below = _lobe_scene(+1.0).log_odds, _lobe_scene(-1.0).log_odds
+    centre = 30
+    rows = np.arange(1, above.shape[0])
+    np.testing.assert_allclose(above[rows], below[2 * centre - rows], atol=1e-6)
+    often = _lobe_scene(+1.0, read_often=True)
+    np.testing.assert_allclose(often.log_odds, above, rtol=0.0, atol=1e-6)
+    assert np.array_equal(trinary(often), trinary(_lobe_scene(+1.0)))
+
+
 @pytest.mark.parametrize(("name", "bad"), [
     ("side_lobes", -1.0), ("side_lobes", math.nan), ("side_lobes", math.inf),
     ("side_lobes", True), ("side_lobes", "1"), ("side_lobe_range", -0.5),
