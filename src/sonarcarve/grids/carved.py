@@ -1436,10 +1436,12 @@ class CarvedGrid(CellGrid):
         ``make_method(DEFAULT_METHOD, MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))``
         (:data:`DEFAULT_METHOD`; specular-aware carving alone, the default before, is
         ``make_method("carve", MethodConfig(max_incidence=math.radians(30)))``, paper carving
-        ``make_method("carve")``). Any method works
-        whose estimates put each point in the middle of its angular interval
-        (:class:`~sonarcarve.methods.Estimates` ``xy`` and ``width``); its ``confidence``, where
-        given, weighs the occupied band.
+        ``make_method("carve")``). Any method works whose estimates give each arc's angular
+        interval: ``width`` around the point's bearing (:class:`~sonarcarve.methods.Estimates`
+        ``xy``), or around ``middle`` where the point is not the interval's middle (evidence
+        carving's posterior point: the band is its kept run, and the newest echo's mark starts
+        from the run's middle, not from that point); its ``confidence``, where given, weighs the
+        occupied band.
     params : CarvedGridParams, optional
         The sensor model (default: :class:`CarvedGridParams` defaults).
 
@@ -1864,12 +1866,15 @@ def _carving_intervals(history: SonarHistory, model: CarvingModel,
 
 
 def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
-    """``(lo, hi, weight)`` of arcs from their estimates: the point's bearing ± width/2, and
-    the confidence (1 where NaN or not modelled; 0 where the arc is not alive)."""
+    """``(lo, hi, weight)`` of arcs from their estimates: the interval's middle (the point's
+    bearing unless the estimates give ``middle``: evidence carving's point is not at the middle of
+    its kept run) ± width/2, and the confidence (1 where NaN or not modelled; 0 where the arc is
+    not alive)."""
     weight = np.ones(len(x)) if est.confidence is None else np.where(
         np.isnan(est.confidence), 1.0, np.clip(est.confidence, 0.0, 1.0))
-    return _interval_ends(np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x), 0.5 * est.width,
-                          np.where(est.alive, weight, 0.0))
+    middle = (np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x) if est.middle is None
+              else est.middle)
+    return _interval_ends(middle, 0.5 * est.width, np.where(est.alive, weight, 0.0))
 
 
 def _interval_ends(bearing: FloatArray, half: FloatArray,
