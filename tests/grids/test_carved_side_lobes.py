@@ -105,8 +105,9 @@ def test_the_mark_goes_to_a_likely_surface_in_reach_of_a_side_lobe() -> None:
     # 9.59°, on both bands (1.8002 m): both spread values, no mark (the rule without side
     # lobes put the mark here).
     assert live[_cell(grid, 1.775, 0.325)] == pytest.approx(2 * SPREAD)
-    # 11.15° (1.8092 m): inside the mark's widened stretch and on both bands.
-    assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD + L_HIT)
+    # 11.15° (1.8092 m): on both bands; the mark starts a cell past the arc's own band, so
+    # the echo counts its spread value here and not a whole hit on top of it.
+    assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD)
 
 
 def _lobe_scene(sign: float, read_often: bool = False) -> CarvedGrid:

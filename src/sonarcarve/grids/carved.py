@@ -191,6 +191,22 @@ marks it, doorway included; in 3 the jamb at the main beam's edge (7-11° off th
 with nothing on the map near its arc, the case the mark exists for; in 1 a side-lobe echo at 0.71 m
 with nothing likely in its lobe.
 
+Review (rev10s) fixes, kept: **first arrival**: a lobe that holds a cell more likely occupied than
+not *nearer* than the echo cannot have produced it (a sonar reports the first echo it hears), so
+that lobe is skipped. Without it mapped corridor walls crossing a near echo's circle 14-24° off the
+axis "explained" an obstacle straight ahead: in a 1.2 m corridor a pole marked at 2.2 m left the map
+at 1.9-1.6 m, 0.4 m from a wall it was never marked at 1.0-1.6 m (tests). Equally likely cells in
+both lobes explain the echo (a symmetric scene got a lopsided map); ``side_lobes`` above
+:data:`MAX_SIDE_LOBES` is refused (lobes reached behind the sensor); the lobe mark starts a cell
+past the beam's edge (it added a whole hit to the arc's own band there). Their price, the door
+under the amplitude physics: 83 / 78 -> 67 / 81 % (all but first arrival: 83 / 81 %; all but the
+mark's start: 67 / 78 %), specular 100 /
+94 -> 97 / 94 %; office and t-junction rows within 0.002 (``benchmarks/grids.py``, seeds 0-2, at
+the fix against bac543c's rule). A safer map beats an open door. Left: a lobe cell that a wall
+running along the beam puts at the lobe's outer edge still explains (the review's 0.4 m / 1.0 m
+case); requiring that the lobe cell was heard from near this ray's bearing (``heard``) would
+cover it, and may give back the door's approaches first arrival closed: not built.
+
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
 from erasing an obstacle that has gone (the changing-scenes box stayed marked for good). So the
@@ -361,15 +377,23 @@ DEFAULT_SEE_THROUGH = 0.5
 #: How far past each edge of its beam an echo may have come from through a side lobe, in half
 #: beam widths (:attr:`CarvedGridParams.side_lobes`): a circular piston's first side lobe lies
 #: between its first and second nulls, at 1.8 times the first null's angle (Bessel zeros 3.83
-#: and 7.02; 12.7° and 23.8° for the 600-series transducer whose null-to-null width is the
-#: quoted 22.5° beam), so about one more half width each side.
+#: and 7.02; 12.7° and 23.8° for the 600-series transducer, whose quoted 22.5° beam is about
+#: its null-to-null width, 25.4°), so about one more half width each side. That holds for beams
+#: quoted null to null, as this project's are; for a beam quoted at half power the first side
+#: lobe lies 2.4-4.3 half widths off the axis (review rev10s): set ``side_lobes`` for the
+#: transducer at hand.
 DEFAULT_SIDE_LOBES = 1.0
-#: Echoes nearer than this, metres, may have come through a side lobe
+#: Echoes at this range or nearer, metres, may have come through a side lobe
 #: (:attr:`CarvedGridParams.side_lobe_range`): two-way, the first side lobe is about 35 dB
 #: below the axis, so only near reflectors are heard through it. Measured (amplitude physics,
 #: office, seed 0, direct echoes whose true reflector lies outside the nominal beam): 12.9 %
 #: below 1 m, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m.
 DEFAULT_SIDE_LOBE_RANGE = 2.0
+#: The most half widths :attr:`CarvedGridParams.side_lobes` may reach past a beam's edge: a
+#: piston's third null lies at 2.7 times its first (Bessel zero 10.17 against 3.83); past it the
+#: lobes are 30 dB or more down one way, and a 22.5° beam widened by 3 half widths each side
+#: still looks ahead of the sensor (±45°), never behind it.
+MAX_SIDE_LOBES = 3.0
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
 #: One bit a sector in each cell's word: more sectors than bits would shift out of it silently.
@@ -636,8 +660,9 @@ class CarvedGridParams:
             raise GridError(msg)
         sl = self.side_lobes
         if isinstance(sl, bool) or not isinstance(sl, int | float) or not (
-                math.isfinite(sl) and sl >= 0.0):
-            msg = f"carved grid: side_lobes must be a finite number >= 0, got {sl!r}"
+                0.0 <= sl <= MAX_SIDE_LOBES):
+            msg = (f"carved grid: side_lobes must be a number in [0, {MAX_SIDE_LOBES:g}] half "
+                   f"beam widths, got {sl!r}")
             raise GridError(msg)
         sr = self.side_lobe_range
         if isinstance(sr, bool) or not isinstance(sr, int | float) or not sr >= 0.0:
@@ -1108,13 +1133,16 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
         whole = _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
-            # circle (the arc draws no spread value there to raise).
+            # circle beyond the arc's own band (it draws no spread value there to raise).
             half = 0.5 * m.unit / r[slot]
             axis = 0.5 * (theta1 + theta2)
             axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
             edge = 0.5 * (theta2 - theta1)
             reach = (1.0 + m.lobes) * edge
-            z1, z2 = (axis + edge, axis + reach) if side > 0.0 else (axis - reach, axis - edge)
+            # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
+            # the mark never adds to the arc's own band (that would be more than a whole hit).
+            inner = edge + m.h / r[slot]
+            z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
             return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                            max(z1, at - half), min(z2, at + half), whole, heard, m)
         if not explained:
@@ -1244,13 +1272,19 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
 def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
                     y: float, r: float, lo: float, hi: float, own: float, theta1: float,
                     theta2: float) -> tuple[bool, float, float]:
-    """``(explained, bearing)`` of a fresh arc: whether a cell of its band (as :func:`_draw_arc`
-    draws it, without a profile) is occupied in the map of spread arcs without the arc's own
-    share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its point goes
-    to: the middle of ``[lo, hi]``, unless that map holds no cell more likely occupied than
-    not (above :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold one elsewhere
-    on the band: then the bearing of the band's most likely cell (of equals within :data:`_TIE`,
-    the one nearest the middle)."""
+    """``(explained, bearing, side)`` of a fresh arc: whether a cell of its band (as
+    :func:`_draw_arc` draws it, without a profile) is occupied in the map of spread arcs without
+    the arc's own share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its
+    point goes to: the middle of ``[lo, hi]``, unless that map holds no cell more likely
+    occupied than not (above :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold
+    one elsewhere on the band: then the bearing of the band's most likely cell (of equals within
+    :data:`_TIE`, the one nearest the middle). Near echoes (``r <= lobe_range``) also look past
+    the beam's edges, ``lobes`` half widths, on the same circle: an occupied cell there explains
+    the echo; when the middle is not favoured and a lobe's likeliest cell beats the band's,
+    ``bearing`` is that cell's and ``side`` its lobe (+1 counter-clockwise of the axis, -1
+    clockwise; 0: on the band). A lobe holding a likely cell nearer than the echo is skipped (it
+    would have heard that first); equally likely cells in both lobes explain the echo (no side
+    is favoured)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
     ny, nx = base.shape
     widen = 0.5 * h / r
@@ -1279,8 +1313,14 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     best = _LIKELY
     bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
     middle_likely = False
-    lobe_best = _LIKELY
-    lobe_at = mid + 4.0 * math.pi  # none yet: farther from the middle than any bearing
+    # Per side (0: clockwise of the axis, 1: counter-clockwise): the likeliest lobe cell, and
+    # whether the lobe holds a likely cell nearer than the echo, which it would have heard first.
+    lobe_best = np.full(2, _LIKELY)
+    lobe_at = np.full(2, mid + 4.0 * math.pi)  # none yet: farther than any bearing
+    blocked = np.zeros(2, dtype=np.bool_)
+    if e_half > 0.0:
+        for s in range(2):
+            blocked[s] = _lobe_nearer(base, live, m, x, y, r_in, axis, b_half, e_half, s)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
@@ -1303,14 +1343,18 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                     if (e_half > 0.0
                             and _within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
                             and not _within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
+                        s = 1 if _bearing_off(dx, dy, axis) > 0.0 else 0
+                        if blocked[s]:
+                            continue
                         value = min(m.l_max, max(m.l_min, spread))
                         if value > m.l_occupied:
                             return True, bearing, 0.0
                         off = _bearing_off(dx, dy, mid)
-                        if value > lobe_best + _TIE or (value >= lobe_best - _TIE
-                                                        and abs(off) < abs(lobe_at - mid)):
-                            lobe_best = max(lobe_best, value)
-                            lobe_at = mid + off
+                        if value > lobe_best[s] + _TIE or (
+                                value >= lobe_best[s] - _TIE
+                                and abs(off) < abs(lobe_at[s] - mid)):
+                            lobe_best[s] = max(lobe_best[s], value)
+                            lobe_at[s] = mid + off
                     continue
                 if not value > _LIKELY:
                     continue
@@ -1323,10 +1367,46 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                                            and abs(off) < abs(bearing - mid)):
                     best = max(best, value)
                     bearing = mid + off
-    if not middle_likely and lobe_best > best + _TIE:
-        side = 1.0 if _bearing_off(math.cos(lobe_at), math.sin(lobe_at), axis) > 0.0 else -1.0
-        return False, lobe_at, side
+    top = max(lobe_best[0], lobe_best[1])
+    if not middle_likely and top > best + _TIE:
+        if abs(lobe_best[0] - lobe_best[1]) <= _TIE:
+            # Equally likely surfaces in both lobes: either may have answered, and picking one
+            # would let rounding and the scan order draw a lopsided map of a symmetric scene.
+            return True, bearing, 0.0
+        s = 1 if lobe_best[1] > lobe_best[0] else 0
+        return False, lobe_at[s], 1.0 if s == 1 else -1.0
     return False, 0.5 * (lo + hi) if middle_likely else bearing, 0.0
+
+
+@compiled_inline
+def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+                 y: float, reach: float, axis: float, b_half: float, e_half: float,
+                 side: int) -> bool:
+    """Whether the side lobe ``side`` (1: counter-clockwise of ``axis``) holds a cell more
+    likely occupied than not nearer than ``reach``: a sonar reports the first echo it hears, so
+    a lobe that would have heard that cell did not hear the echo's surface farther out."""
+    if reach <= 0.0:
+        return False
+    sign = 1.0 if side == 1 else -1.0
+    c = axis + sign * 0.5 * (b_half + e_half)
+    half = 0.5 * (e_half - b_half)
+    t1, t2 = c - half, c + half
+    xmin, ymin, h = m.xmin, m.ymin, m.h
+    ny, nx = base.shape
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, 0.0, reach)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    cc, sc, ch = math.cos(c), math.sin(c), _cos_half(half)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        for j in range(j0, j1 + 1):
+            if not base[i, j] + live[i, j] > _LIKELY:
+                continue
+            dx = xmin + (j + 0.5) * h - x
+            d = math.sqrt(dx * dx + dy * dy)
+            if d < reach and _within(dx, dy, d, c, half, cc, sc, ch):
+                return True
+    return False
 
 
 @compiled_inline
