@@ -145,3 +145,177 @@ def test_the_mark_in_a_side_lobe_does_not_depend_on_orientation_or_when_the_map_
 def test_side_lobe_parameters_must_be_numbers_in_range(name: str, bad: object) -> None:
     with pytest.raises(GridError, match=name):
         CarvedGridParams(**{name: bad})  # type: ignore[arg-type]
+
+
+# Review rev10s: the cases it found (a mapped corridor beside an obstacle ahead, a self-mirror
+# scene, absurd lobe widths, a mark that added to its own band) and the mutants it left.
+
+
+@pytest.mark.parametrize(("half_width", "r"), [(0.6, 1.6), (0.6, 1.9), (0.4, 1.3)])
+def test_an_obstacle_ahead_between_mapped_corridor_walls_is_marked(half_width: float,
+                                                                   r: float) -> None:
+    """A pole or person straight ahead, 1.3-1.9 m away, in a corridor whose walls are mapped
+    (occupied) where they cross the echo's circle 14-22° off the axis, in reach of the side
+    lobes. A sonar reports the first echo: a lobe that could hear that wall would have heard its
+    nearer stretch (at the lobe's outer edge) first, so the wall does not explain the echo and
+    the mark stays on the obstacle (as without side lobes: a whole hit, occupied)."""
+    grid = CarvedGrid(H, (-1.0, -1.5, 4.0, 1.5),
+                      method=make_method("carve", MethodConfig(history_size=1)))
+    walls, t = [], 0.0
+    for k in range(47):  # side sensors map both walls head-on, x = -0.8 .. 3.8
+        x = -0.8 + 0.1 * k
+        walls.append(Reading(t, 1, x, ROW_Y, math.pi / 2, half_width - ROW_Y))
+        walls.append(Reading(t + 0.005, 2, x, ROW_Y, -math.pi / 2, half_width + ROW_Y))
+        t += 0.01
+    grid.add_many(ReadingBatch.from_readings(walls))
+    bearing = math.asin(half_width / r)
+    wall = _cell(grid, r * math.cos(bearing), ROW_Y + half_width)
+    assert trinary(grid)[wall] == OCCUPIED  # the wall where the echo's circle crosses it
+    grid.add(Reading(t + 1.0, 0, 0.0, ROW_Y, 0.0, r))
+    middle = _cell(grid, r, ROW_Y)
+    assert grid.live_log_odds[middle] == pytest.approx(L_HIT)
+    assert trinary(grid)[middle] == OCCUPIED
+
+
+def test_a_scene_that_is_its_own_mirror_image_gets_a_symmetric_map() -> None:
+    """Sensors turned +30° and -30° each leave a spread-only echo (0.236) at FACE_X, in reach of
+    sensor 0's two side lobes; then sensor 0 hears FACE_X straight ahead. The scene is its own
+    mirror image about the row y = ROW_Y (row 30), so the map must be too: a mark on one lobe
+    only would be picked by rounding and the scan order."""
+    grid = CarvedGrid(H, BOUNDS)
+    t = 1.0
+    for sensor, sign in ((1, 1.0), (2, -1.0)):
+        grid.add(Reading(t, sensor, 0.0, ROW_Y, sign * math.radians(30.0), FACE_X))
+        grid.add(Reading(t + 0.1, sensor, 0.0, ROW_Y, math.pi, 0.3))  # spread only
+        t += 0.2
+    grid.add(Reading(t, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    lo = grid.log_odds
+    rows = np.arange(1, lo.shape[0])
+    np.testing.assert_allclose(lo[rows], lo[60 - rows], atol=1e-6)
+
+
+@pytest.mark.parametrize("bad", [3.5, 20.0, 1e6])
+def test_side_lobes_reaching_behind_the_sensor_are_refused(bad: float) -> None:
+    # (1 + side_lobes) half widths of a 22.5° beam: 20 reaches 236° each side, behind the sensor,
+    # where a wall then "explained" a forward echo (review rev10s).
+    with pytest.raises(GridError, match="side_lobes"):
+        CarvedGridParams(side_lobes=bad)
+
+
+def test_a_wall_behind_the_sensor_never_explains_an_echo_ahead() -> None:
+    """Whatever side_lobes is accepted, the lobes stay ahead of the sensor."""
+    grid = CarvedGrid(H, (-2.0, -1.5, 2.0, 1.5),
+                      method=make_method("carve", MethodConfig(history_size=1)),
+                      params=CarvedGridParams(side_lobes=3.0))
+    grid.add_many(ReadingBatch.from_readings(
+        Reading(0.01 * k, 1, 0.0, ROW_Y + 0.1 * (k - 5), math.pi, 1.5) for k in range(11)))
+    grid.add(Reading(1.0, 0, 0.0, ROW_Y, 0.0, 1.5))
+    assert trinary(grid)[_cell(grid, 1.5, ROW_Y)] == OCCUPIED
+
+
+def test_a_lobe_mark_adds_a_whole_hit_and_no_more() -> None:
+    """test_carved_side_lobes.py's likely-surface scene: the mark in the lobe starts past the
+    arc's own (widened) band, so no cell holds the echo's spread value and its whole hit too.
+    Cell (1.775, 0.375), 11.15°, lies on sensor 0's band (|bearing| <= 12.03° widened) and on
+    sensor 1's: both spread values, no mark (bac543c: 2 x 0.236 + 0.847, the echo counted as
+    1.28 hits there)."""
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    live = grid.live_log_odds
+    assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD)
+    assert live[_cell(grid, 1.775, 0.475)] == pytest.approx(SPREAD + L_HIT)  # the mark, 14.23°
+
+
+def test_the_mark_stays_in_the_middle_when_the_map_favours_it() -> None:
+    """Sensor 2 (straight ahead, spread only) makes the middle of sensor 0's arc likely (0.236
+    less the ring's faded free space); sensors 1 and 3 (turned 30°, spread only) make the lobe
+    likelier (2 x 0.236, not occupied: 0.473 < 0.619). The middle is favoured: the mark stays
+    there (a whole hit raised from sensor 0's spread value), none goes to the lobe."""
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    t = 1.0
+    for sensor, theta in ((1, math.radians(30.0)), (3, math.radians(30.0)), (2, 0.0)):
+        grid.add(Reading(t, sensor, 0.0, ROW_Y, theta, FACE_X))
+        grid.add(Reading(t + 0.1, sensor, 0.0, ROW_Y, math.pi, 0.3))
+        t += 0.2
+    grid.add(Reading(t, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    live = grid.live_log_odds
+    assert live[_cell(grid, FACE_X, ROW_Y)] == pytest.approx(SPREAD + L_HIT)
+    assert live[_cell(grid, 1.725, 0.625)] == pytest.approx(2 * SPREAD)  # 19.2°: no mark
+
+
+def test_an_occupied_cell_carved_out_of_the_beam_does_not_explain_the_echo() -> None:
+    """Sensors above the arc (history of one: final) make cells near 6-8° on sensor 0's circle
+    occupied; a silent beam turned 15° then carves sensor 0's interval to -11.25..3.75°. Those
+    cells lie inside the beam but outside the carved interval and short of its edge: neither
+    the band nor a side lobe, so they explain nothing and the mark goes to the interval's
+    middle (-3.75°, a whole hit)."""
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(
+        history_size=1, max_incidence=math.radians(30.0))))
+    grid.add_many(ReadingBatch.from_readings(
+        Reading(0.01 * k, 5 + k, 1.80, 1.0, -math.pi / 2, 0.75) for k in range(3)))
+    grid.add(Reading(1.0, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.radians(15.0), math.inf, math.nan, 3.0))
+    assert trinary(grid)[_cell(grid, 1.80, 0.275)] == OCCUPIED  # 7.8°, carved away
+    mid = math.radians(-3.75)
+    middle = _cell(grid, FACE_X * math.cos(mid), ROW_Y + FACE_X * math.sin(mid))
+    assert grid.live_log_odds[middle] == pytest.approx(L_HIT)
+
+
+def test_an_echo_at_exactly_side_lobe_range_looks_into_the_lobes() -> None:
+    """side_lobe_range is inclusive (the code's ``r <= side_lobe_range``): the occupied surface
+    of test_carved_side_lobes.py's first scene explains an echo at exactly that range."""
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=1)),
+                      params=CarvedGridParams(side_lobe_range=FACE_X))
+    _ring_hears_nothing(grid)
+    grid.add_many(ReadingBatch.from_readings(
+        Reading(1.0 + k, 1 + k, 0.0, ROW_Y, math.radians(30.0), FACE_X) for k in range(3)))
+    grid.add(Reading(5.0, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    assert grid.live_log_odds[_cell(grid, FACE_X, ROW_Y)] == pytest.approx(SPREAD)
+
+
+def _turned_lobe_scene(turn: float, lobe_theta: float) -> CarvedGrid:
+    """The ring; sensor 1 turned ``lobe_theta`` (spread only); sensor 0 straight ahead; every
+    heading turned by ``turn``. FACE_X + 0.0012 puts no cell centre on the band's edge."""
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(
+        max_incidence=math.radians(30.0))))
+    grid.add_many(ReadingBatch.from_readings(
+        Reading(0.1 * k, k, 0.0, ROW_Y, k * math.pi / 4 + turn, math.inf, math.nan, 3.0)
+        for k in range(8)))
+    r = FACE_X + 0.0012
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(lobe_theta) + turn, r))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi + turn, 0.3))
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, turn, r))
+    return grid
+
+
+@pytest.mark.parametrize("turn", [2 * math.pi, -2 * math.pi])
+def test_headings_a_full_turn_apart_give_the_same_map(turn: float) -> None:
+    # The lobe mark (sensor 1's band in sensor 0's upper lobe) with headings given past ±π.
+    np.testing.assert_allclose(_turned_lobe_scene(turn, 20.0).log_odds,
+                               _turned_lobe_scene(0.0, 20.0).log_odds, atol=1e-9)
+
+
+def test_the_lobe_mark_ends_at_the_lobes_reach() -> None:
+    """Sensor 1 turned 33°: its band (21.97..44.03° widened) meets sensor 0's upper lobe only at
+    its outer end (22.5° + 0.78° widened); the mark goes around the likeliest cell there, ±3.14°,
+    clipped at 22.5° (drawn to 23.28°). Cell (1.675, 0.775), 24.1°, 1.835 m: on sensor 1's band,
+    past the lobe: no whole hit."""
+    grid = _turned_lobe_scene(0.0, 33.0)
+    live = grid.live_log_odds
+    assert live[_cell(grid, 1.675, 0.725)] > L_HIT  # 22.7°: the mark
+    assert 0.0 < live[_cell(grid, 1.675, 0.775)] < L_HIT
+
+
+def test_the_lobes_reach_is_widened_by_half_a_cell_as_every_arc() -> None:
+    """Sensor 1 turned 34.3°: its band begins at 23.05° (22.27° widened by 0.78°), so its likely
+    cells meet sensor 0's upper lobe only between 22.5° and the reach widened by half a cell
+    (23.28°), as _draw_arc widens every arc. Those cells take the mark: the middle keeps its
+    spread value (a lobe reach without the widening left the mark in the middle: 0.847)."""
+    grid = _turned_lobe_scene(0.0, 34.3)
+    middle = _cell(grid, FACE_X, ROW_Y)
+    spread = DEFAULT_SPREAD_LENGTH / ((FACE_X + 0.0012) * DEFAULT_BEAM_WIDTH) * L_HIT
+    assert grid.live_log_odds[middle] == pytest.approx(spread)
