@@ -78,16 +78,23 @@ def test_without_side_lobes_or_beyond_their_range_the_echo_is_marked(
     assert trinary(grid)[middle] == OCCUPIED
 
 
+def _likely_surface_in_the_lobe() -> CarvedGrid:
+    """Sensor 1, turned 20° up, hears something at FACE_X and fires again (backwards): spread
+    only, 0.236 on bearings 8.75..31.25° (widened by 0.785°); then sensor 0 hears FACE_X
+    straight ahead."""
+    grid = CarvedGrid(H, BOUNDS)
+    _ring_hears_nothing(grid)
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    return grid
+
+
 def test_the_mark_goes_to_a_likely_surface_in_reach_of_a_side_lobe() -> None:
     """The scene of ``test_carved.py::test_the_mark_goes_where_the_map_makes_the_echo_likely_
     when_its_middle_is_not`` with side lobes: the likeliest cells lie past the beam's edge."""
-    grid = CarvedGrid(H, BOUNDS)
-    _ring_hears_nothing(grid)
-    # Sensor 1, turned 20° up, hears something at FACE_X and fires again (backwards): spread
-    # only, 0.236 on bearings 8.75..31.25° (widened by 0.785°).
-    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
-    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
-    # Sensor 0 hears FACE_X straight ahead. Nothing is occupied. On its band the overlap with
+    grid = _likely_surface_in_the_lobe()
+    # Sensor 0 heard FACE_X straight ahead. Nothing is occupied. On its band the overlap with
     # sensor 1's (7.96..12.03°) holds 0.236 less the ring's faded free space; past its beam's
     # edge (12.03..23.3°, in reach of a side lobe) sensor 1's band holds 0.236 and no free
     # space: likelier. Of those equal cells the one nearest the middle is (1.825, 0.425),
@@ -95,7 +102,6 @@ def test_the_mark_goes_to_a_likely_surface_in_reach_of_a_side_lobe() -> None:
     # (3.14°), clipped to the lobe's stretch (11.25..22.5°): 11.25..15.50°, drawn widened by
     # 0.785°: 10.47..16.28°. The arc's own band there holds no spread value to raise: a
     # whole hit is added.
-    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
     live = grid.live_log_odds
     assert live[_cell(grid, FACE_X, ROW_Y)] == pytest.approx(SPREAD)  # the middle: spread
     in_lobe = _cell(grid, 1.775, 0.475)  # 1.8311 m, 14.23°: sensor 1's band and the mark
@@ -219,11 +225,7 @@ def test_a_lobe_mark_adds_a_whole_hit_and_no_more() -> None:
     Cell (1.775, 0.375), 11.15°, lies on sensor 0's band (|bearing| <= 12.03° widened) and on
     sensor 1's: both spread values, no mark (bac543c: 2 x 0.236 + 0.847, the echo counted as
     1.28 hits there)."""
-    grid = CarvedGrid(H, BOUNDS)
-    _ring_hears_nothing(grid)
-    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
-    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
-    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    grid = _likely_surface_in_the_lobe()
     live = grid.live_log_odds
     assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD)
     assert live[_cell(grid, 1.775, 0.475)] == pytest.approx(SPREAD + L_HIT)  # the mark, 14.23°
