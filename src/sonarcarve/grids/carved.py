@@ -205,7 +205,11 @@ mark's start: 67 / 78 %), specular 100 /
 the fix against bac543c's rule). A safer map beats an open door. Left: a lobe cell that a wall
 running along the beam puts at the lobe's outer edge still explains (the review's 0.4 m / 1.0 m
 case); requiring that the lobe cell was heard from near this ray's bearing (``heard``) would
-cover it, and may give back the door's approaches first arrival closed: not built.
+cover it. Tried instead of first arrival: the door back at 83 / 81 % and every side-lobe test
+passed, but ``heard`` is written only when an arc leaves the history (about 20 s on the tours),
+so walls heard since would again hide an obstacle ahead: not kept. As a condition on first
+arrival's nearer cell: no change (67 / 81 %). Bearings recorded while arcs are live would make
+the first safe.
 
 **Clearing what was heard** (:attr:`CarvedGridParams.surface_aware`): the fade keeps a far
 silent beam from erasing a wall it passed at a glancing angle, but it also keeps every far beam
