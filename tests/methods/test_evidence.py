@@ -492,7 +492,7 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
     h = method.history
     slots = h.slots()
     raw = model.raw(slots)
-    has, _, width, _, support, is_atm, crossings, free, runs, _, _ = raw
+    has, _, width, _, support, is_atm, crossings, free, runs, _ = raw
     maturity = method.maturity(slots)
     expected = np.column_stack([
         np.minimum(support, 3.0), np.minimum(model.viewpoints[slots], 3.0),
@@ -634,32 +634,3 @@ def test_the_models_defaults_are_the_methods() -> None:
     assert model["min_atm_crossings"].default == method["min_atm_crossings"].default == 3
     assert model["place_posterior"].default is method["with_posterior_placement"].default is True
     assert model["posterior_uncut"].default is method["with_uncut_posterior"].default is False
-
-
-def test_the_estimates_middle_and_width_span_the_kept_run_wherever_the_point_is() -> None:
-    # Review rev9p: a wall at x = 2 heard head-on from the origin; a head-on look from
-    # (0.3, -0.35) sees through its lower half (the kept run is the upper part, up to the
-    # beam's edge); two other sensors' echoes cross it near bearing 0.15 rad, where the
-    # posterior puts the point. ``middle ± width / 2`` must be the kept run: "point ± width / 2"
-    # (what the carved grid drew) ran 6° past the beam's edge and left the run's lower third out.
-    method = EvidenceMethod(min_confidence=0.0, with_atm=False)
-    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
-    method.add(_reading(0.05, 0.3, -0.35, 0.0, 4.0, sensor=3))
-    target = (2.0 * math.cos(0.15), 2.0 * math.sin(0.15))
-    for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1))):
-        method.add(_reading(0.1 + 0.05 * k, ox, oy, math.atan2(target[1] - oy, target[0] - ox),
-                            math.hypot(target[0] - ox, target[1] - oy), sensor=1 + k))
-    model = _model(method)
-    slots = method.history.slots()
-    est = method.estimates(slots)
-    kept = np.flatnonzero(model.free[slots[0]] < model.threshold)
-    assert len(kept) < model.bins  # cut
-    assert np.all(np.diff(kept) == 1)  # one run
-    step = PHI / model.bins
-    run_lo, run_hi = -PHI / 2 + kept[0] * step, -PHI / 2 + (kept[-1] + 1) * step
-    assert run_hi == pytest.approx(PHI / 2, abs=1e-12)  # up to the beam's edge
-    point = math.atan2(est.xy[0, 1], est.xy[0, 0])
-    assert point > 0.5 * (run_lo + run_hi) + step  # the point is not at the run's middle
-    assert est.middle is not None
-    assert est.middle[0] - 0.5 * est.width[0] == pytest.approx(run_lo, abs=1e-9)
-    assert est.middle[0] + 0.5 * est.width[0] == pytest.approx(run_hi, abs=1e-9)

@@ -1226,7 +1226,7 @@ def evidence_estimates(
     atm_bound: float, with_atm: bool, place_located: bool, posterior: bool = True,
     posterior_uncut: bool = False, min_crossings: int = 3,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
-           FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+           FloatArray, FloatArray, FloatArray, FloatArray]:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
@@ -1286,10 +1286,6 @@ def evidence_estimates(
         Number of surviving runs.
     hull_share : float
         Surviving hull width over the full beam.
-    middle : float
-        Bearing of the kept run's middle, radians (unwrapped near the axis): the interval
-        ``width`` spans is ``middle ± width / 2``, which holds the point but is not centred on
-        it once the point is placed by the evidence or by ATM.
     """
     n = slots.shape[0]
     bins = free.shape[1]
@@ -1303,7 +1299,6 @@ def evidence_estimates(
     piece_free = np.zeros(n)
     run_count = np.zeros(n)
     hull_share = np.zeros(n)
-    middle = np.zeros(n)
     in_bin = np.zeros(bins)
     values = np.zeros(bearings.shape[1])
     crossing_bin = np.zeros(bearings.shape[1], dtype=np.int64)
@@ -1321,7 +1316,6 @@ def evidence_estimates(
             start, end, first, last, runs = _kept_run(free, located, in_bin, s, threshold)
         if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
             bearing[q] = theta[s]
-            middle[q] = theta[s]
             width[q] = phi
             max_error[q] = _whole_beam_bound(r[s], phi)
             continue
@@ -1331,7 +1325,6 @@ def evidence_estimates(
         hull_lo = lo_axis + first * step
         hull_hi = lo_axis + last * step
         mid = 0.5 * (lo + hi)  # eq. 3.6
-        middle[q] = mid
         cut = end - start < bins
         if place_located and posterior and (cut or posterior_uncut):
             mid = _posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
@@ -1355,4 +1348,4 @@ def evidence_estimates(
                 max_error[q] = bound
                 is_atm[q] = True
     return (has_piece, bearing, width, max_error, piece_support, is_atm, piece_crossings,
-            piece_free, run_count, hull_share, middle)
+            piece_free, run_count, hull_share)

@@ -83,10 +83,6 @@ class Estimates:
     confidence : float or None
         Probability (0-1) that the point is a real surface, for models that estimate it; None
         otherwise (the map then holds NaN).
-    middle : float or None
-        Bearing (radians, from the arc's origin) of the middle of the interval ``width`` spans,
-        for models whose point need not be at that middle (evidence carving places it by the
-        evidence or by ATM); None: the interval is centred on the point.
     """
 
     alive: BoolArray
@@ -97,7 +93,6 @@ class Estimates:
     source: Int8Array
     fate: Int8Array | None = None
     confidence: FloatArray | None = None
-    middle: FloatArray | None = None
 
 
 #: Called with the history, the committed slots (oldest first) and their final estimates.

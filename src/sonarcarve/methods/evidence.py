@@ -616,7 +616,7 @@ class EvidenceModel(ArcModel):
 
     def estimates_from_raw(self, slots: SlotArray, raw: tuple[np.ndarray, ...]) -> Estimates:
         """:meth:`estimates` from an already computed :meth:`raw`."""
-        has, bearing, width, max_error, _, is_atm, _, _, _, _, middle = raw
+        has, bearing, width, max_error, _, is_atm, _, _, _, _ = raw
         h = self.history
         n = len(slots)
         processed = np.empty(n, dtype=np.bool_)
@@ -628,7 +628,6 @@ class EvidenceModel(ArcModel):
         return Estimates(
             alive=has, processed=processed, xy=arc_point(h, slots, bearing), width=width,
             max_error=max_error, source=source, fate=fate,
-            middle=np.arctan2(np.sin(middle), np.cos(middle)),
         )
 
     def counters(self) -> dict[str, int]:
@@ -741,7 +740,7 @@ class EvidenceMethod(SonarMethod):
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
         maturity = self.maturity(slots) if maturity is None else maturity
-        _, _, width, _, support, _, crossings, free, runs, _, _ = raw
+        _, _, width, _, support, _, crossings, free, runs, _ = raw
         h = self.history
         out = np.empty((len(slots), len(CONFIDENCE_FEATURES)))
         _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
@@ -779,7 +778,7 @@ class EvidenceMethod(SonarMethod):
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,
             max_error=base.max_error + self.config.stamp_error, source=base.source,
-            fate=base.fate, confidence=np.where(has, confidence, 0.0), middle=base.middle,
+            fate=base.fate, confidence=np.where(has, confidence, 0.0),
         )
 
     def _commit(self, slots: SlotArray) -> None:
