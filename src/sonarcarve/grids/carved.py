@@ -151,45 +151,45 @@ arc.
 **Side lobes** (:attr:`CarvedGridParams.side_lobes`, :attr:`~CarvedGridParams.side_lobe_range`): a
 real transducer is not a hard cone; a near reflector is also heard through the first side lobe,
 outside the nominal beam (a circular piston's lies between its first and second nulls, at 1.0-1.9
-times the main lobe's half width). For an echo nearer than ``side_lobe_range`` (2 m) the newest
+times the main lobe's half width). For an echo at ``side_lobe_range`` (2 m) or nearer the newest
 echo's mark therefore looks on the echo's circle over the beam widened by ``side_lobes`` (1) half
 widths past each edge: an occupied cell there explains the echo as one inside the carved interval
 does (no mark), and when the map favours no cell where the middle would be drawn and the likeliest
 cell lies past the beam's edge, the whole hit goes around that cell, clipped to the lobe's stretch
 of the circle (the arc draws no spread value there to raise). The arc's spread band is unchanged:
-the lobes only decide where the newest echo's point goes. Why, traced on the Fig. 2 door under the
-amplitude physics (``sim/amplitude.py``; in its office logs 12.9 % of the direct echoes nearer than
-1 m come from outside the nominal beam, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m): the door,
-echoes only, was passable at 1 m in 33 / 39 % of the 36 approaches (0.05 / 0.10 m; 89 / 86 % without
-fresh arcs). In 19 of the 22 closed at 0.10 m a newest echo's mark made blocking cells occupied, and
-in 11 of those the echo had come through a side lobe: the near jamb 15-21° off the axis of the
-sensor aimed through the door (0.7-1.2 m away; once 57°), the mark in the middle of the doorway
-while the jamb was occupied or likely from other sensors' echoes. Measured (``benchmarks/grids.py``,
-seeds 0-2, 0.05 / 0.10 m, before -> after): amplitude physics, echoes only 33 / 39 -> 83 / 78 %,
-with no-echo readings 58 / 56 -> 92 / 89 %; specular physics 97 / 94 -> 100 / 94 %, both inputs.
-``side_lobes`` 0.5: 69 / 78 %; 2: 83 / 83 %; ``side_lobe_range`` 1 m: 44 / 44 %, 3 m or every range:
-83 / 78 %, but at every range the changing scenes' shut door was never marked (the corridor's walls,
-12-24° off the axis at its range, explained its echoes) and the person at 0.8-1.4 s instead of 1.0;
-with 2 m every latency is that without side lobes (both physics, both inputs, 0.05 and 0.10 m;
-phantom shares within 0.2 points). The price, where the map is read once at the end of a log (only
-the last read's marks move): t-junction recall -0.001 to -0.006 (0.987 -> 0.982 at 0.10 m, specular,
-below ROS's layer's 0.984), office at most -0.001, doorway the same: a robot ending near a corner
-hears the wall ahead, an occupied wall at the same range lies in a lobe and explains the echo, and
-under the specular physics it came through the main lobe. Judging the lobes only when nothing on the
-carved interval is even likely costs less (0.985) and gains less (door 81 / 75 %, specular 97 / 94
-%). CPU: once per log the same, a map read every 5 readings +1-6 % (``benchmarks/grid_reads.py``,
-two rounds, old and new alternating). Tried and not kept: diluting a near arc's spread value over
-its lobes too (as if spread over the widened arc): the door 81-100 %, but office recall (specular,
-0.05 m) 0.937 -> 0.850 for echoes nearer than 2 m, 0.657 nearer than 1.2 m (a wall 1 m beside a side
-sensor, heard once per pass, never reaches "occupied"); nearer than 0.8 m kept recall (0.937;
-t-junction -0.006 to -0.008) with the door at 81 / 86 %, but that bound is half a corridor's width,
-not a property of sonar. A first version subtracted the arc's own spread value from the lobe cells
-too, where the arc draws nothing (72 / 69 %). What still closes the door under the amplitude physics
-(traced at 0.10 m, 8 approaches): in 4 the spread of very near echoes (0.6-0.7 m) heard through a
-side lobe, whose uncarved 22.5° arc is so short (0.25 m) that one echo alone (0.68 in log-odds)
-marks it, doorway included; in 3 the jamb at the main beam's edge (7-11° off the axis, 1.2-1.4 m)
-with nothing on the map near its arc, the case the mark exists for; in 1 a side-lobe echo at 0.71 m
-with nothing likely in its lobe.
+the lobes only decide whether the newest echo's point is drawn, and where. Why, traced on the Fig. 2
+door under the amplitude physics (``sim/amplitude.py``; in its office logs 12.9 % of the direct
+echoes nearer than 1 m come from outside the nominal beam, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at
+3-5 m): the door, echoes only, was passable at 1 m in 33 / 39 % of the 36 approaches (0.05 / 0.10 m;
+89 / 86 % without fresh arcs). In 19 of the 22 closed at 0.10 m a newest echo's mark made blocking
+cells occupied, and in 11 of those the echo had come through a side lobe: the near jamb 15-21° off
+the axis of the sensor aimed through the door (0.7-1.2 m away; once 57°), the mark in the middle of
+the doorway while the jamb was occupied or likely from other sensors' echoes. Measured
+(``benchmarks/grids.py``, seeds 0-2, 0.05 / 0.10 m, before -> after): amplitude physics, echoes only
+33 / 39 -> 83 / 78 %, with no-echo readings 58 / 56 -> 92 / 89 %; specular physics 97 / 94 -> 100 /
+94 %, both inputs. ``side_lobes`` 0.5: 69 / 78 %; 2: 83 / 83 %; ``side_lobe_range`` 1 m: 44 / 44 %,
+3 m or every range: 83 / 78 %, but at every range the changing scenes' shut door was never marked
+(the corridor's walls, 12-24° off the axis at its range, explained its echoes) and the person at
+0.8-1.4 s instead of 1.0; with 2 m every latency is that without side lobes (both physics, both
+inputs, 0.05 and 0.10 m; phantom shares within 0.2 points). The price, where the map is read once at
+the end of a log (only the last read's marks move): t-junction recall -0.001 to -0.006 (0.987 ->
+0.982 at 0.10 m, specular, below ROS's layer's 0.984), office at most -0.001, doorway the same: a
+robot ending near a corner hears the wall ahead, an occupied wall at the same range lies in a lobe
+and explains the echo, and under the specular physics it came through the main lobe. Judging the
+lobes only when nothing on the carved interval is even likely costs less (0.985) and gains less
+(door 81 / 75 %, specular 97 / 94 %). CPU: once per log the same, a map read every 5 readings +1-6 %
+(``benchmarks/grid_reads.py``, two rounds, old and new alternating). Tried and not kept: diluting a
+near arc's spread value over its lobes too (as if spread over the widened arc): the door 81-100 %,
+but office recall (specular, 0.05 m) 0.937 -> 0.850 for echoes nearer than 2 m, 0.657 nearer than
+1.2 m (a wall 1 m beside a side sensor, heard once per pass, never reaches "occupied"); nearer than
+0.8 m kept recall (0.937; t-junction -0.006 to -0.008) with the door at 81 / 86 %, but that bound is
+half a corridor's width, not a property of sonar. A first version subtracted the arc's own spread
+value from the lobe cells too, where the arc draws nothing (72 / 69 %). What still closes the door
+under the amplitude physics (traced at 0.10 m, 8 approaches): in 4 the spread of very near echoes
+(0.6-0.7 m) heard through a side lobe, whose uncarved 22.5° arc is so short (0.25 m) that one echo
+alone (0.68 in log-odds) marks it, doorway included; in 3 the jamb at the main beam's edge (7-11°
+off the axis, 1.2-1.4 m) with nothing on the map near its arc, the case the mark exists for; in 1 a
+side-lobe echo at 0.71 m with nothing likely in its lobe.
 
 Review (rev10s) fixes, kept: **first arrival**: a lobe that holds a cell more likely occupied than
 not *nearer* than the echo cannot have produced it (a sonar reports the first echo it hears), so
@@ -571,11 +571,11 @@ class CarvedGridParams:
         so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
         of a slower ring.
     side_lobes : float
-        Finite number >= 0; :data:`DEFAULT_SIDE_LOBES` (1). How far past each edge of its beam,
-        in half beam widths, a near echo may have come from through a side lobe, for the newest
-        echo's mark (module docstring, "side lobes"): an occupied cell there explains the echo,
-        and the mark goes to a likely one there when the map does not favour the arc's middle.
-        0: the beam alone (the rule before).
+        Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (1). How far past
+        each edge of its beam, in half beam widths, a near echo may have come from through a
+        side lobe, for the newest echo's mark (module docstring, "side lobes"): an occupied
+        cell there explains the echo, and the mark goes to a likely one there when the map does
+        not favour the arc's middle. 0: the beam alone (the rule before).
     side_lobe_range : float
         Metres >= 0 (``inf``: every range); :data:`DEFAULT_SIDE_LOBE_RANGE` (2). Echoes farther
         than this are judged on their carved interval alone (the lobes are too weak to hear far
@@ -703,7 +703,7 @@ class _Model(NamedTuple):
     l_occupied: float  # logit(occupied_threshold)
     through: float  # see_through, metres (0: off)
     lobes: float  # side_lobes: the explanation reaches this many half beam widths past an edge
-    lobe_range: float  # side_lobe_range, metres: only echoes nearer than this
+    lobe_range: float  # side_lobe_range, metres: only echoes at this range or nearer
 
 
 @compiled_inline
@@ -1317,14 +1317,16 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     best = _LIKELY
     bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
     middle_likely = False
-    # Per side (0: clockwise of the axis, 1: counter-clockwise): the likeliest lobe cell, and
-    # whether the lobe holds a likely cell nearer than the echo, which it would have heard first.
-    lobe_best = np.full(2, _LIKELY)
-    lobe_at = np.full(2, mid + 4.0 * math.pi)  # none yet: farther than any bearing
-    blocked = np.zeros(2, dtype=np.bool_)
-    if e_half > 0.0:
-        for s in range(2):
-            blocked[s] = _lobe_nearer(base, live, m, x, y, r_in, axis, b_half, e_half, s)
+    # Per lobe (cw: clockwise of the axis, ccw: counter-clockwise): the likeliest cell and its
+    # bearing (none yet: farther than any bearing), and whether the lobe holds a likely cell
+    # nearer than the echo, which it would have heard first. Scalars, not arrays: this runs for
+    # every fresh arc at every read.
+    best_cw, best_ccw = _LIKELY, _LIKELY
+    at_cw = at_ccw = mid + 4.0 * math.pi
+    blocked_cw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
+                                                e_half, 0)
+    blocked_ccw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
+                                                 e_half, 1)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
@@ -1347,18 +1349,18 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                     if (e_half > 0.0
                             and _within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
                             and not _within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
-                        s = 1 if _bearing_off(dx, dy, axis) > 0.0 else 0
-                        if blocked[s]:
+                        ccw = _bearing_off(dx, dy, axis) > 0.0
+                        if blocked_ccw if ccw else blocked_cw:
                             continue
                         value = min(m.l_max, max(m.l_min, spread))
                         if value > m.l_occupied:
                             return True, bearing, 0.0
                         off = _bearing_off(dx, dy, mid)
-                        if value > lobe_best[s] + _TIE or (
-                                value >= lobe_best[s] - _TIE
-                                and abs(off) < abs(lobe_at[s] - mid)):
-                            lobe_best[s] = max(lobe_best[s], value)
-                            lobe_at[s] = mid + off
+                        if ccw:
+                            if _likelier(value, off, best_ccw, at_ccw - mid):
+                                best_ccw, at_ccw = max(best_ccw, value), mid + off
+                        elif _likelier(value, off, best_cw, at_cw - mid):
+                            best_cw, at_cw = max(best_cw, value), mid + off
                     continue
                 if not value > _LIKELY:
                     continue
@@ -1367,19 +1369,24 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                 off = _bearing_off(dx, dy, mid)
                 if abs(off) <= reach:
                     middle_likely = True
-                if value > best + _TIE or (value >= best - _TIE
-                                           and abs(off) < abs(bearing - mid)):
+                if _likelier(value, off, best, bearing - mid):
                     best = max(best, value)
                     bearing = mid + off
-    top = max(lobe_best[0], lobe_best[1])
-    if not middle_likely and top > best + _TIE:
-        if abs(lobe_best[0] - lobe_best[1]) <= _TIE:
+    if not middle_likely and max(best_cw, best_ccw) > best + _TIE:
+        if abs(best_cw - best_ccw) <= _TIE:
             # Equally likely surfaces in both lobes: either may have answered, and picking one
             # would let rounding and the scan order draw a lopsided map of a symmetric scene.
             return True, bearing, 0.0
-        s = 1 if lobe_best[1] > lobe_best[0] else 0
-        return False, lobe_at[s], 1.0 if s == 1 else -1.0
+        return (False, at_ccw, 1.0) if best_ccw > best_cw else (False, at_cw, -1.0)
     return False, 0.5 * (lo + hi) if middle_likely else bearing, 0.0
+
+
+@compiled_inline
+def _likelier(value: float, off: float, best: float, best_off: float) -> bool:
+    """Whether a cell of log-odds ``value``, ``off`` radians from the arc's middle, beats the
+    likeliest so far (``best``, ``best_off`` from the middle): likelier by more than
+    :data:`_TIE`, or as likely within it and nearer the middle."""
+    return value > best + _TIE or (value >= best - _TIE and abs(off) < abs(best_off))
 
 
 @compiled_inline
@@ -1951,10 +1958,10 @@ def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray
     """``(lo, hi, weight)`` of arcs from their estimates: the point's bearing ± width/2, and
     the confidence (1 where NaN or not modelled; 0 where the arc is not alive).
 
-    Centred on the point even where the method says the interval is centred elsewhere
-    (``Estimates.middle``: evidence carving's posterior point, off its kept run's middle), a
-    choice measured, not an oversight (review rev9p found the band leaving the kept run in
-    95-98 % of cut evidence arcs): under evidence carving, office, seeds 0-2, specular,
+    Centred on the point even where the point is not the interval's middle (evidence
+    carving's posterior point, off its kept run's middle), a choice measured, not an
+    oversight (review rev9p found the band leaving the kept run in 95-98 % of cut evidence
+    arcs): under evidence carving, office, seeds 0-2, specular,
     precision / recall / phantoms % at 0.10 m, a band centred on the point 0.864 / 0.947 /
     0.248, over the kept run 0.822 / 0.948 / 0.341, over their overlap 0.850 / 0.948 / 0.278
     (0.05 m: 0.736, 0.698, 0.712 precision; ``benchmarks/grid_methods.py --physics specular``
