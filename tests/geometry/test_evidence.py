@@ -11,12 +11,12 @@ import pytest
 from numba import njit
 
 from sonarcarve.geometry.evidence import (
-    _bin_of_sine,
-    _sort_in_place,
     detect_probability,
     evidence_estimates,
     evidence_threshold,
 )
+from sonarcarve.geometry.evidence.bins import bin_of_sine
+from sonarcarve.geometry.evidence.runs import _sort_in_place
 
 HALF = math.radians(11.25)
 MODEL = (math.sin(HALF), 0.5, math.cos(math.radians(10.0)), math.cos(math.radians(30.0)),
@@ -49,7 +49,7 @@ def test_threshold_is_one_reading_of_that_probability() -> None:
 
 
 def _binary_search_bin(sine: float, edges: np.ndarray, bins: int) -> int:
-    # The search _bin_of_sine replaced (the oracle): the largest k in 1 .. K - 1 with
+    # The search bin_of_sine replaced (the oracle): the largest k in 1 .. K - 1 with
     # edges[k] <= sine, else 0.
     lo, hi = 0, bins
     while hi - lo > 1:
@@ -73,7 +73,7 @@ def test_the_bin_of_a_sine_is_the_binary_searchs_bin(beam: float) -> None:
     sines = np.concatenate([rng.uniform(-1.0, 1.0, 2000), edges, np.nextafter(edges, -2.0),
                             np.nextafter(edges, 2.0), [-1.0, 1.0, 0.0, -0.0, math.nan]])
     for sine in sines.tolist():
-        assert _bin_of_sine(sine, edges, bins, scale) == _binary_search_bin(sine, edges, bins)
+        assert bin_of_sine(sine, edges, bins, scale) == _binary_search_bin(sine, edges, bins)
 
 
 _numba_sort = njit(lambda values: np.sort(values))

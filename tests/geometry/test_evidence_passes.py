@@ -14,14 +14,11 @@ import numpy as np
 import pytest
 
 from sonarcarve.geometry.bounds import arc_bounding_circle
-from sonarcarve.geometry.evidence import (
-    EVIDENCE_ALIVE,
-    EVIDENCE_CARVED,
-    _crossings,
-    _new_beam,
-    _occlude_behind,
-    _transmission,
-)
+from sonarcarve.geometry.evidence import EVIDENCE_ALIVE, EVIDENCE_CARVED
+from sonarcarve.geometry.evidence.beam import new_beam
+from sonarcarve.geometry.evidence.crossings import transversal_crossings
+from sonarcarve.geometry.evidence.occlusion import occlude_behind
+from sonarcarve.geometry.evidence.transmission import weigh_transmission
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import evidence as evidence_method
 from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
@@ -90,7 +87,7 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
     bins = m.bins
     params = m.params
     _init_new_arc(m, slot)
-    beam = _new_beam(slot, h.x, h.y, h.r, h.beam_width, m.cos_axis, m.sin_axis, m.cos_half,
+    beam = new_beam(slot, h.x, h.y, h.r, h.beam_width, m.cos_axis, m.sin_axis, m.cos_half,
                      bins, params)
     edges = m.trans[bins : 2 * bins + 1]
     scale = m.trans[2 * bins + 2]
@@ -103,8 +100,9 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
         if m.status[i] != EVIDENCE_ALIVE or _beyond(*m.circle[:, i], beam):
             continue
         if m.with_atm:
-            _, spilled = _crossings(slot, i, h.x, h.y, h.r, m.cos_axis, m.sin_axis, m.cos_half,
-                                    params.cos_psi, m.bearings, m.counts, m.spill, spilled)
+            _, spilled = transversal_crossings(
+                slot, i, h.x, h.y, h.r, m.cos_axis, m.sin_axis, m.cos_half, params.cos_psi,
+                m.bearings, m.counts, m.spill, spilled)
         ox, oy = h.x[i] - xj, h.y[i] - yj
         other = h.sensor[i] != h.sensor[slot]
         distinct = other or ox * ox + oy * oy >= beam.spacing2
@@ -140,7 +138,7 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
                 if d < beam.free_r - params.tolerance:
                     top_through = max(top_through, m.support[i, k])
                 if established and d < beam.free_r - params.tolerance:
-                    occluding += _occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
+                    occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
                                                  half_bin_arc / d, beam, m.free, threshold)
                     m.touched[slot] = True
                 factor = params.protect if established else 1.0
@@ -177,7 +175,7 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
             m.status[i] = EVIDENCE_CARVED
     m.occluded[slot] = occluding / bins
     m.through[slot] = top_through
-    _transmission(slot, m.passed, n_passed, m.trans, m.free, m.status, params)
+    weigh_transmission(slot, m.passed, n_passed, m.trans, m.free, m.status, params)
     if occluding >= bins:
         m.status[slot] = EVIDENCE_CARVED
     return spilled

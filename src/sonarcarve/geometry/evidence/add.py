@@ -1,0 +1,491 @@
+"""Adding an echo to evidence carving: the new arc's profile, then its weight on every older arc.
+
+A new reading ``j`` that heard an echo at range ``r_j`` gives, at each bin centre ``p`` of an
+older live arc inside its beam (``d = |p - o_j|``):
+
+* freespace evidence ``w = -log(1 - P_detect)`` where ``d < r_j - ε`` (eq. 3.2; times
+  ``protect`` where the bin is established), the bin carved once its evidence reaches ``T``;
+* support ``+ P_detect`` where ``|d - r_j| ≤ ε_s``, to the older bin and, mutually, to the new
+  arc's bin at ``p``'s bearing;
+* occlusion of the new arc's bins behind established surfaces
+  (:mod:`~sonarcarve.geometry.evidence.occlusion`), transmission evidence
+  (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
+  (:mod:`~sonarcarve.geometry.evidence.crossings`).
+
+``P_detect`` is :func:`~sonarcarve.geometry.evidence.model.detect_probability`, inlined. The
+kernel is laid out for the processor (a cull, then three passes over groups of arcs) and gives
+bit for bit the values of one loop over every arc and bin: ``docs/evidence-carving.md``,
+"Evidence, support and the threshold", "Per-arc sums" and "Speed: the weighing kernel's
+layout".
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled_borrowing
+from sonarcarve.geometry.bounds import arc_bounding_circle
+from sonarcarve.geometry.evidence.beam import mark_near, new_beam
+from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
+from sonarcarve.geometry.evidence.crossings import transversal_crossings
+from sonarcarve.geometry.evidence.model import (
+    EVIDENCE_ALIVE,
+    EVIDENCE_CARVED,
+    EvidenceParams,
+    incidence_gain,
+)
+from sonarcarve.geometry.evidence.occlusion import occlude_behind
+from sonarcarve.geometry.evidence.transmission import weigh_transmission
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
+
+__all__ = ["evidence_add", "evidence_add_many"]
+
+
+@compiled_borrowing
+def evidence_add(
+    slot: int, first_older: int, n_older: int,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
+    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    status: Int8Array, touched: BoolArray, occluded: FloatArray,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
+    params: EvidenceParams, with_atm: bool,
+) -> tuple[int, int, int, int]:
+    """Add reading ``slot``: initialise its profile, then weigh it against every older arc.
+
+    Parameters
+    ----------
+    slot : int
+        The new arc's row.
+    first_older, n_older : int
+        The older rows: ``n_older`` rows from ``first_older`` on, oldest first, wrapping
+        from the last row to row 0 (the history's ring); the arcs not alive among them are
+        skipped. ``0 <= first_older < n`` and ``n_older < n``, ``slot`` not among them (the
+        history's storage is twice its capacity); a longer window is cut to ``n`` rows, since
+        the kernel runs without bounds checks.
+    x, y, r, theta, beam_width : ndarray, shape (n,)
+        The history's rows (metres, radians).
+    sensor : ndarray of int64, shape (n,)
+        The history's sensor index per row.
+    viewpoints : ndarray, shape (n,)
+        Support from distinct viewpoints per arc: the sum, over newer or older readings of
+        another sensor or from an origin at least ``viewpoint_spacing`` away whose echo circle
+        passes through the arc, of the largest ``P_detect`` of that support (updated in place).
+    looked : ndarray, shape (n,)
+        "Looked through" evidence per arc: ``-log(1 - P)`` summed over distinct viewpoints
+        whose free sector covers a bin still alive, ``P`` the largest detection over those bins
+        *without* the incidence factor (a phantom in open space has no surface to be glancing
+        at; how much this says about a real surface is left to the confidence fit).
+    others : ndarray, shape (n,)
+        Support from *other sensors* per arc: as ``viewpoints``, but only over readings of
+        another sensor. A systematic phantom (crosstalk off the same wall, a multipath path)
+        repeats for one sensor as the robot moves, so one sensor's repeated echoes confirm
+        each other without being independent; another transducer at another mounting angle
+        is closer to independent (updated in place).
+    through : ndarray, shape (n,)
+        Per new arc, the largest support of an older live bin its free sector passed
+        (nearer than ``r_j - 2ε``): how well heard the surface is that its echo would have had
+        to cross; the graded form of the occlusion rule (filled for ``slot``).
+    passed : ndarray, shape (m, 6)
+        Scratch for the transmission pass: one row per older live bin in the new beam's free
+        sector (``m`` at least the older arcs' bins); overwritten.
+    trans : ndarray, shape (2 K + 3,)
+        Scratch: the new arc's support per bin from other sensors' older echoes (overwritten),
+        then the sines of its bin edges, the beam width they are for (NaN before the first
+        reading) and the scale of the guess of
+        :func:`~sonarcarve.geometry.evidence.bins.bin_of_sine` (kept between readings of the same
+        beam width).
+    scratch : ndarray, shape (11, G K)
+        Scratch of the bin passes (overwritten), ``G >= 1`` older arcs' bins: one entry per
+        bin to weigh of a group of up to ``G`` arcs, its offset from the new reading and the
+        bin centre's direction (rows 0-4), and what
+        :func:`~sonarcarve.geometry.evidence.model.detect_probability` computes of it
+        (rows 5-10).
+    in_beam : ndarray of bool, shape (K,)
+        Scratch (overwritten): the older arc's bins to weigh.
+    bin_index : ndarray of int64, shape (4, G K)
+        Scratch (overwritten): per entry its bin and the guess of
+        :func:`~sonarcarve.geometry.evidence.bins.bin_of_sine`; per arc of the group its entries and
+        its live bins outside the new beam.
+    near, near_flags : ndarray of int64 and bool, shape (n,)
+        Scratch (overwritten): the rows that pass the cull (then the group's rows with bins
+        to weigh), and the cull's verdict per row.
+    bx, by, ex, ey : ndarray, shape (n, K)
+        Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
+    free, support : ndarray, shape (n, K)
+        Evidence of empty space and support per bin (updated in place).
+    located : ndarray, shape (n, K)
+        Support per bin times the sine of the angle at which the two echo circles meet there:
+        how much the support says about where on the arc the echo came from (updated in
+        place; it picks the kept run of a split arc).
+    circle : ndarray, shape (3, n)
+        A circle containing each full arc (a cheap first test): rows centre x, centre y,
+        radius (a row each, so that the cull reads them contiguously).
+    cos_axis, sin_axis, cos_half : ndarray, shape (n,)
+        Axis direction and ``cos(φ/2)`` per row (filled for ``slot``).
+    status : ndarray of int8, shape (n,)
+        ``EVIDENCE_ALIVE`` or ``EVIDENCE_CARVED``.
+    touched : ndarray of bool, shape (n,)
+        The arc has received evidence (processed, Table I).
+    occluded : ndarray, shape (n,)
+        Share of the arc's bins carved by occlusion when it arrived (the multipath flag).
+    bearings, counts : ndarray
+        ATM's crossing store (bearings relative to the axis), as in ``methods/atm.py``:
+        ``bearings`` has a column per crossing the busiest arc has kept so far, ``counts`` the
+        crossings of each row, spilled ones included.
+    spill : ndarray, shape (m, 2)
+        Where crossings go that do not fit their row: ``(row, bearing)`` in the order found;
+        ``m`` at least ``4 (older + 1)`` (an arc meets each older arc at most twice, and each
+        crossing goes to two rows). The caller widens the store and moves them there.
+    params : EvidenceParams
+        The sensor model.
+    with_atm : bool
+        Find ATM crossings too.
+
+    Returns
+    -------
+    fully_carved, crossings, occluded_bins, spilled : int
+        Arcs whose last bin was carved by this reading; ATM crossings kept; bins of the new arc
+        carved by occlusion; rows of ``spill`` used (0: every crossing fitted).
+    """
+    bins = bx.shape[1]
+    # The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
+    # evidence, the bounding circle, and the scratch ``trans``. Written here, not in a helper:
+    # a compiled helper taking these twenty arrays, inlined or not, cost 4-8 % per reading.
+    xj = x[slot]
+    yj = y[slot]
+    rj = r[slot]
+    half_j = 0.5 * beam_width[slot]
+    step_j = beam_width[slot] / bins
+    cos_axis[slot] = math.cos(theta[slot])
+    sin_axis[slot] = math.sin(theta[slot])
+    cos_half[slot] = math.cos(half_j)
+    for k in range(bins):
+        tau = theta[slot] - half_j + (k + 0.5) * step_j
+        ex[slot, k] = math.cos(tau)
+        ey[slot, k] = math.sin(tau)
+        bx[slot, k] = xj + rj * ex[slot, k]
+        by[slot, k] = yj + rj * ey[slot, k]
+        free[slot, k] = 0.0
+        support[slot, k] = 0.0
+        located[slot, k] = 0.0
+    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
+    circle[0, slot] = c0
+    circle[1, slot] = c1
+    circle[2, slot] = c2
+    status[slot] = EVIDENCE_ALIVE
+    touched[slot] = False
+    occluded[slot] = 0.0
+    viewpoints[slot] = 0.0
+    looked[slot] = 0.0
+    others[slot] = 0.0
+    if trans[2 * bins + 1] != beam_width[slot]:  # the edges' beam width (NaN: none yet)
+        # The scratch's second part: sines of j's bin edges; they depend on the beam width
+        # only, so they are kept while it stays the same (a ring of like sensors: always).
+        for k in range(bins + 1):
+            trans[bins + k] = math.sin(-half_j + k * step_j)
+        trans[2 * bins + 1] = beam_width[slot]
+        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
+    for k in range(bins):  # its first part: j's support from other sensors
+        trans[k] = 0.0
+    counts[slot] = 0
+    beam = new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
+    edges = trans[bins : 2 * bins + 1]
+    edge_scale = trans[2 * bins + 2]  # the guess of bin_of_sine
+    # Weigh every older live arc against j (one loop here, not a compiled helper: a helper
+    # taking these arrays, per arc or per reading, inlined or not, measured 3-20 % slower).
+    threshold = params.threshold
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    free_r = beam.free_r
+    reach2 = beam.reach2
+    cos_half2 = beam.cos_half2
+    sin_half = beam.sin_half
+    edge_loss = beam.edge_loss
+    inv_scale = beam.inv_scale
+    cos_full = beam.cos_full
+    cos_zero = beam.cos_zero
+    max_detect = params.max_detect
+    rough = params.rough
+    # The bins to weigh of a group of older arcs, one entry each, in arc and bin order:
+    # inputs (rows 0-4) and what pass 2 computes of them (rows 5-10).
+    e_vx = scratch[0]
+    e_vy = scratch[1]
+    e_d2 = scratch[2]
+    e_ex = scratch[3]
+    e_ey = scratch[4]
+    e_d = scratch[5]
+    e_sine = scratch[6]
+    e_beam = scratch[7]
+    e_cos = scratch[8]
+    e_p = scratch[9]
+    e_loc = scratch[10]
+    e_bin = bin_index[0]  # the entry's bin of its older arc
+    e_guess = bin_index[1]  # the guess of the bin of j behind it
+    arc_marked = bin_index[2]  # per arc of the group: its entries
+    arc_alive = bin_index[3]  # per arc of the group: live bins outside j's reach or beam
+    group_size = max(1, scratch.shape[1] // bins)  # arcs a group's entries always hold
+    first_edge = edges[0]
+    fully = 0
+    crossings = 0
+    occluding = 0
+    n_passed = 0
+    spilled = 0
+    top_through = 0.0
+    # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
+    # rows that pass it, oldest first, a group at a time.
+    # Marking every row up front gives the one loop's result because nothing in the loop
+    # below changes another older arc's status or bounding circle, nor the free evidence
+    # of a row other than the arc in hand and the new one (``slot``, never an older row):
+    # status[slot] and the transmission come after the loop. For the same reason pass 1 can
+    # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
+    # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
+    # order, so every value is the one loop's.
+    storage = x.shape[0]
+    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
+    n_near = 0
+    end = first_older + n_older
+    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
+        mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
+                   near_flags[lo:hi])
+        for i in range(lo, hi):
+            near[n_near] = i
+            n_near += near_flags[i]
+    q = 0
+    while q < n_near:
+        # Pass 1 and the crossings for the next older arcs, until group_size of them have
+        # bins to weigh (their rows in ``near[group:group_end]``, their bins the entries).
+        group = q
+        group_end = q
+        n_entries = 0
+        while q < n_near and group_end - group < group_size:
+            i = near[q]
+            q += 1
+            if with_atm:
+                kept, spilled = transversal_crossings(
+                    slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
+                    counts, spill, spilled)
+                crossings += kept
+            # Pass 1: which bins are left to weigh (free evidence below T) and lie in j's
+            # reach and beam; no branch, so the compiler runs it on several bins at once.
+            alive_bins = 0
+            n_in = 0
+            for k in range(bins):
+                vx = bx[i, k] - xj
+                vy = by[i, k] - yj
+                d2 = vx * vx + vy * vy
+                along = vx * cj + vy * sj
+                weigh = not free[i, k] >= threshold
+                # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
+                outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
+                in_beam[k] = weigh & (not outside)
+                alive_bins += weigh & outside
+                n_in += weigh & (not outside)
+            if n_in == 0:
+                # Nothing to weigh: pass 3 would add nothing (its sums would add 0.0 to sums
+                # of non-negative terms, which leaves them as they are).
+                if alive_bins == 0:
+                    status[i] = EVIDENCE_CARVED
+                    fully += 1
+                continue
+            near[group_end] = i  # q > group_end: a row already read
+            arc_marked[group_end - group] = n_in
+            arc_alive[group_end - group] = alive_bins
+            group_end += 1
+            e = n_entries
+            for k in range(bins):  # the bins to weigh, in order, as the group's entries
+                e_bin[e] = k
+                e += in_beam[k]
+            for e in range(n_entries, n_entries + n_in):
+                k = e_bin[e]
+                vx = bx[i, k] - xj
+                vy = by[i, k] - yj
+                e_vx[e] = vx
+                e_vy[e] = vy
+                e_d2[e] = vx * vx + vy * vy
+                e_ex[e] = ex[i, k]
+                e_ey[e] = ey[i, k]
+            n_entries += n_in
+        # Pass 2: detect_probability, inlined, for every entry of the group at once (one
+        # loop over all of them: the compiler runs it on several entries at once when they
+        # are many, 20 or more, and the entries are only the bins to weigh, 7 of an older
+        # arc's 24 at history 1,000). np.divide is ``/`` (the same rounding) without numba's
+        # zero-divisor test, whose branch would keep the loop scalar; bins in the beam have
+        # d > 0 (along > 0) unless d² underflows (a range near 1e-300: then inv_d = inf and
+        # the values stay finite where ``/`` raised ZeroDivisionError).
+        for e in range(n_entries):
+            vx = e_vx[e]
+            vy = e_vy[e]
+            d = math.sqrt(e_d2[e])
+            inv_d = np.divide(1.0, d)
+            sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
+            u = min(np.divide(abs(sine), sin_half), 1.0)
+            p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
+            cos_gamma = abs(e_ex[e] * vx + e_ey[e] * vy) * inv_d
+            e_d[e] = d
+            e_sine[e] = sine
+            e_beam[e] = p_beam
+            e_cos[e] = cos_gamma
+            p = p_beam * incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+            e_p[e] = p
+            # What the support path needs: the localised support, the bin of j behind.
+            e_loc[e] = p * abs(e_ex[e] * vy - e_ey[e] * vx) * inv_d
+            e_guess[e] = sine_guess(sine, first_edge, bins, edge_scale)
+        # Pass 3: the evidence, arc after arc, in bin order.
+        start = 0
+        for g in range(group, group_end):
+            i = near[g]
+            ox = x[i] - xj
+            oy = y[i] - yj
+            other = sensor[i] != sensor[slot]
+            distinct = other or ox * ox + oy * oy >= beam.spacing2
+            half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
+            alive_bins = arc_alive[g - group]
+            top_support = 0.0
+            top_looked = 0.0
+            stop = start + arc_marked[g - group]
+            for e in range(start, stop):
+                k = e_bin[e]
+                d = e_d[e]
+                if d >= free_r and abs(d - beam.r) > params.support_tolerance:
+                    alive_bins += 1
+                    continue
+                vx = e_vx[e]
+                vy = e_vy[e]
+                sine = e_sine[e]
+                p_beam = e_beam[e]
+                p = e_p[e]
+                if d < free_r:
+                    f = free[i, k]
+                    touched[i] = True
+                    if distinct:
+                        top_looked = max(top_looked, p_beam)
+                    established = (support[i, k] >= params.establish and f < 0.5 * threshold)
+                    if d < free_r - params.tolerance:
+                        top_through = max(top_through, support[i, k])
+                    if established and d < free_r - params.tolerance:
+                        # An established surface j looked past at a glancing angle: the bins
+                        # of j behind it cannot hold j's echo (sound does not pass through
+                        # walls).
+                        along = vx * cj + vy * sj
+                        occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
+                                                     half_bin_arc / d, beam, free, threshold)
+                        touched[slot] = True
+                    factor = params.protect if established else 1.0
+                    w = -math.log1p(-p) * factor
+                    f += w
+                    free[i, k] = f
+                    if f < threshold:
+                        alive_bins += 1
+                        if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
+                            # Kept for the transmission pass (after j's support is known).
+                            passed[n_passed, 0] = i
+                            passed[n_passed, 1] = k
+                            passed[n_passed, 2] = bin_from_guess(e_guess[e], sine, edges, bins)
+                            passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
+                            passed[n_passed, 4] = factor
+                            passed[n_passed, 5] = w
+                            n_passed += 1
+                else:  # on j's echo circle: support, not freespace
+                    alive_bins += 1
+                    touched[i] = True
+                    touched[slot] = True
+                    top_support = max(top_support, p)
+                    # Localised support: times the sine of the angle between the two circles
+                    # there (tangent circles, one sensor stepping along its axis, say nothing
+                    # of *where* on the arc the echo came from).
+                    support[i, k] += p
+                    kb = bin_from_guess(e_guess[e], sine, edges, bins)
+                    support[slot, kb] += p
+                    loc = e_loc[e]
+                    located[i, k] += loc
+                    located[slot, kb] += loc
+                    if other:
+                        trans[kb] += p
+            start = stop
+            # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
+            if distinct:
+                viewpoints[i] += top_support
+                viewpoints[slot] += top_support
+                if top_looked > 0.0:
+                    looked[i] += -math.log1p(-top_looked)
+            if other:
+                others[i] += top_support
+                others[slot] += top_support
+            if alive_bins == 0:
+                status[i] = EVIDENCE_CARVED
+                fully += 1
+    occluded[slot] = occluding / bins
+    through[slot] = top_through
+    fully += weigh_transmission(slot, passed, n_passed, trans, free, status, params)
+    if occluding >= bins:
+        status[slot] = EVIDENCE_CARVED
+        fully += 1
+    return fully, crossings, occluding, spilled
+
+
+@compiled_borrowing
+def evidence_add_many(
+    first: int, count: int, capacity: int,
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
+    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    status: Int8Array, touched: BoolArray, occluded: FloatArray,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
+    params: EvidenceParams, with_atm: bool,
+) -> tuple[int, int, int, int, int]:
+    """:func:`evidence_add` for the arcs of sequence numbers ``first .. first + count - 1``,
+    in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
+    per block of readings (no Python between arcs), the same result as one call per arc.
+
+    The arrays are those of :func:`evidence_add`.
+
+    It stops after the first arc whose crossings did not all fit the store (they are in
+    ``spill``; every other part of that arc is done): the caller widens the store, moves the
+    spilled crossings to the ends of their rows and calls again for the arcs after it. The
+    crossings are then stored as a store wide enough from the start would hold them.
+
+    Returns
+    -------
+    fully_carved, crossings, occluded_bins : int
+        The sums of :func:`evidence_add`'s counts over the arcs done.
+    done : int
+        Sequence number after the last arc done (``first + count`` when all are).
+    spilled : int
+        Rows of ``spill`` the last arc done used: 0 when no arc spilled. It can be > 0 with
+        ``done == first + count`` (the block's last arc spilled, as every single ``add()``
+        that spills), so the caller moves the spill whenever it is > 0, whatever ``done``.
+    """
+    storage = x.shape[0]
+    fully = 0
+    crossings = 0
+    occluding = 0
+    for sequence in range(first, first + count):
+        live = min(sequence + 1, capacity)
+        start = (sequence + 1 - live) % storage
+        a, b, c, spilled = evidence_add(
+            sequence % storage, start, live - 1, x, y, r, theta, beam_width,
+            sensor, viewpoints, looked, others, through, passed, trans, scratch, in_beam,
+            bin_index, near, near_flags, bx, by, ex, ey, free,
+            support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
+            bearings, counts, spill, params, with_atm)
+        fully += a
+        crossings += b
+        occluding += c
+        if spilled:
+            return fully, crossings, occluding, sequence + 1, spilled
+    return fully, crossings, occluding, first + count, 0
+
