@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from sonarcarve.grids import carved
+from sonarcarve.grids.carved import grid as carved
 
 
 @pytest.fixture

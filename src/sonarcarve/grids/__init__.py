@@ -8,16 +8,9 @@ costmap plugin (:mod:`.range_sensor_layer`). All three are :class:`OccupancyMap`
 ``probabilities()`` as an array, and :func:`trinary` (occupied 100, free 0, unknown -1).
 """
 
-from sonarcarve.grids.carved import (
-    FREE,
-    OCCUPIED,
-    UNKNOWN,
-    CarvedGrid,
-    CarvedGridParams,
-    OccupancyMap,
-    trinary,
-)
+from sonarcarve.grids.carved import CarvedGrid, CarvedGridParams, trinary
 from sonarcarve.grids.elfes import GridError, OccupancyGrid, SonarConeModel
+from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from sonarcarve.grids.range_sensor_layer import (
     FREE_SPACE,
     LETHAL_OBSTACLE,

@@ -1,0 +1,182 @@
+"""An arc's occupied band: the log-odds it adds (:func:`_arc_value`), and drawing, moving and
+taking back a band in a grid (:func:`_draw_arc`, :func:`_redraw`, :func:`_undraw`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.grids.carved.heard import _heard_bin
+from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.scan import (
+    _bearing_off,
+    _cell_range,
+    _cos_half,
+    _ring_columns,
+    _sector_box,
+    _within,
+)
+from sonarcarve.typing import FloatArray
+
+
+@compiled_inline
+def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model,
+               fresh: bool = False) -> float:
+    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``; a
+    ``fresh`` arc (the newest reading of its sensor, :attr:`CarvedGridParams.fresh_arcs`)
+    ``c · logit(p_hit)``, unspread."""
+    if not weight > 0.0:
+        return 0.0
+    s = 1.0
+    if m.spread > 0.0 and not fresh:
+        length = r * (hi - lo)
+        if length > m.unit:
+            s = m.unit / length
+    return weight * s * m.l_hit
+
+
+@compiled_inline
+def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
+              m: _Model, x: float, y: float, r: float, lo: float, hi: float,
+              value: float) -> None:
+    """Add ``value`` to the cells of the arc's band (clamped into ``[l_min, l_max]`` if
+    ``clamp``): centre within ``band`` of the circle, bearing within ``[lo, hi]`` widened by
+    ``h / 2r``. A final (``clamp``) band with ``value > 0`` also records in ``heard`` the
+    bearing each cell was heard from."""
+    if value == 0.0:
+        return
+    xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
+    ny, nx = grid.shape
+    widen = 0.5 * h / r
+    t1 = lo - widen
+    t2 = hi + widen
+    mid = 0.5 * (t1 + t2)
+    half = 0.5 * (t2 - t1)
+    r_in = max(0.0, r - band)
+    r_out = r + band
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    # Only a plain live draw needs no bearing: it then takes the cheap bearing test.
+    plain = not clamp and not profile > 0.0
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if plain:
+                    if _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                        grid[i, j] += value
+                    continue
+                off = _bearing_off(dx, dy, mid)
+                if abs(off) > half:
+                    continue
+                v = value
+                if profile > 0.0:
+                    u = off / half
+                    v *= min(1.0, profile * (1.0 - u * u))
+                if clamp:
+                    grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + v))
+                    if v > 0.0:
+                        heard[i, j] |= 1 << _heard_bin(mid + off)
+                else:
+                    grid[i, j] += v
+
+
+@compiled  # its own function: inlined into the refresh loop, that loop ran 2x slower
+def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
+            drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
+            r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
+            m: _Model) -> int:
+    """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
+    changed anything. The same arc drawn before with another interval or value is moved in
+    one pass (:func:`_move_arc`: the same additions, cell by cell, as taking it out and
+    drawing it again)."""
+    if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
+            and drawn[slot, 5] == value):
+        return 0
+    if (drawn_seq[slot] >= 0 and drawn[slot, 0] == x and drawn[slot, 1] == y
+            and drawn[slot, 2] == r):
+        _move_arc(live, heard, m, x, y, r, drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5],
+                  lo, hi, value)
+    else:
+        if drawn_seq[slot] >= 0:
+            _undraw(live, heard, m, drawn, slot)
+        _draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
+    drawn[slot, 0] = x
+    drawn[slot, 1] = y
+    drawn[slot, 2] = r
+    drawn[slot, 3] = lo
+    drawn[slot, 4] = hi
+    drawn[slot, 5] = value
+    drawn_seq[slot] = seq
+    return 1
+
+
+@compiled_inline
+def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
+              x: float, y: float, r: float,
+              lo0: float, hi0: float, value0: float, lo1: float, hi1: float,
+              value1: float) -> None:
+    """``_draw_arc(live, ..., lo0, hi0, value0)`` then ``_draw_arc(live, ..., lo1, hi1,
+    value1)`` for one arc (same origin and radius), in one pass over the cells: each cell of
+    the band gets the same two additions in the same order (so the same sum, bit for bit), and
+    its distance and bearing are computed once instead of twice."""
+    if value0 == 0.0 or value1 == 0.0:  # one of the two draws nothing
+        _draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0)
+        _draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1)
+        return
+    xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
+    ny, nx = live.shape
+    widen = 0.5 * h / r
+    r_in = max(0.0, r - band)
+    r_out = r + band
+    ta0, tb0 = lo0 - widen, hi0 + widen
+    ta1, tb1 = lo1 - widen, hi1 + widen
+    mid0, half0 = 0.5 * (ta0 + tb0), 0.5 * (tb0 - ta0)
+    mid1, half1 = 0.5 * (ta1 + tb1), 0.5 * (tb1 - ta1)
+    xlo0, ylo0, xhi0, yhi0 = _sector_box(x, y, ta0, tb0, r_in, r_out)
+    xlo1, ylo1, xhi1, yhi1 = _sector_box(x, y, ta1, tb1, r_in, r_out)
+    j0, j1 = _cell_range(min(xlo0, xlo1), max(xhi0, xhi1), xmin, h, nx)
+    i0, i1 = _cell_range(min(ylo0, ylo1), max(yhi0, yhi1), ymin, h, ny)
+    cm0, sm0, ch0 = math.cos(mid0), math.sin(mid0), _cos_half(half0)
+    cm1, sm1, ch1 = math.cos(mid1), math.sin(mid1), _cos_half(half1)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if profile > 0.0:
+                    off = _bearing_off(dx, dy, mid0)
+                    if abs(off) <= half0:
+                        u = off / half0
+                        live[i, j] += value0 * min(1.0, profile * (1.0 - u * u))
+                    off = _bearing_off(dx, dy, mid1)
+                    if abs(off) <= half1:
+                        u = off / half1
+                        live[i, j] += value1 * min(1.0, profile * (1.0 - u * u))
+                    continue
+                if _within(dx, dy, d, mid0, half0, cm0, sm0, ch0):
+                    live[i, j] += value0
+                if _within(dx, dy, d, mid1, half1, cm1, sm1, ch1):
+                    live[i, j] += value1
+
+
+@compiled_inline
+def _undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
+            drawn: FloatArray, slot: int) -> None:
+    """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``."""
+    _draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
+              drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])

@@ -1,0 +1,147 @@
+"""One reading's free space: the beam's cells nearer than its echo (:func:`_free_space`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled_inline
+from sonarcarve.grids.carved.heard import _audibility, _heard_bin
+from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.scan import _cell_range, _sector_box
+from sonarcarve.typing import FloatArray
+
+#: Cells believed occupied one beam's free space can hold back for :func:`_free_behind`; the
+#: rest get the plain update.
+_HELD = 512
+
+
+@compiled_inline
+def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x: float,
+              u2y: float) -> tuple[float, float]:
+    """``(lo, hi)`` of ``dx`` on the line ``dy`` (relative to the apex) inside the sector of
+    radius ``reach`` between the unit directions ``u1`` (clockwise edge) and ``u2``; empty
+    when ``lo > hi``. The sector is the disk cut by two half-planes when ``half < π/2``."""
+    rest = reach * reach - dy * dy
+    if rest < 0.0:
+        return 1.0, 0.0
+    hi = math.sqrt(rest)
+    lo = -hi
+    if half >= 0.5 * math.pi:
+        return lo, hi
+    # Counter-clockwise of u1: u1x dy - u1y dx >= 0.
+    if u1y > 0.0:
+        hi = min(hi, u1x * dy / u1y)
+    elif u1y < 0.0:
+        lo = max(lo, u1x * dy / u1y)
+    elif u1x * dy < 0.0:
+        return 1.0, 0.0
+    # Clockwise of u2: u2y dx - u2x dy >= 0.
+    if u2y > 0.0:
+        lo = max(lo, u2x * dy / u2y)
+    elif u2y < 0.0:
+        hi = min(hi, u2x * dy / u2y)
+    elif u2x * dy > 0.0:
+        return 1.0, 0.0
+    return lo, hi
+
+
+@compiled_inline
+def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                x: float, y: float, theta: float, r: float, half: float,
+                held: FloatArray) -> None:
+    """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
+    ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
+    occupied (``base <= 0``), and where ``aware`` on the others
+    ``γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the cell's
+    :func:`_audibility` from the beam's bearing (``aware`` False: the fade for all).
+
+    A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
+    from (module docstring)."""
+    reach = r - m.band
+    if reach <= 0.0:
+        return
+    xmin, ymin, h, l_miss, fade = m.xmin, m.ymin, m.h, m.l_miss, m.fade
+    ny, nx = base.shape
+    c, s, cos_half = math.cos(theta), math.sin(theta), math.cos(half)
+    xlo, ylo, xhi, yhi = _sector_box(x, y, theta - half, theta + half, 0.0, reach)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    t1, t2 = theta - half, theta + half
+    u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
+    n_held = 0
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        # Only the row's stretch inside the sector (plus a cell each side; the exact test is
+        # per cell below): most of the bounding box of a slanted beam lies outside it.
+        lo, hi = _row_span(dy, reach, half, u1x, u1y, u2x, u2y)
+        if lo > hi:
+            continue
+        ja, jb = _cell_range(x + lo, x + hi, xmin, h, nx)
+        for j in range(max(j0, ja), min(j1, jb) + 1):
+            dx = xmin + (j + 0.5) * h - x
+            d2 = dx * dx + dy * dy
+            if d2 >= reach * reach:
+                continue
+            along = dx * c + dy * s
+            if along < math.sqrt(d2) * cos_half:
+                continue
+            a = math.atan2(dy * c - dx * s, along)
+            w = 1.0 - (a / half) ** 2
+            cell = base[i, j]
+            miss = l_miss
+            if fade < math.inf:
+                miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
+            if m.aware and cell > 0.0:
+                audible = _audibility(int(heard[i, j]), _heard_bin(theta + a))
+                if m.through > 0.0 and n_held < held.shape[0]:
+                    held[n_held, 0] = i
+                    held[n_held, 1] = j
+                    held[n_held, 2] = math.sqrt(d2)
+                    held[n_held, 3] = a
+                    held[n_held, 4] = w
+                    held[n_held, 5] = audible
+                    held[n_held, 6] = miss
+                    n_held += 1
+                    continue
+                miss = audible * m.l_heard + (1.0 - audible) * miss
+            base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
+            # Freed: the surface it was heard from is believed gone, so are its bearings (else
+            # a later, different surface here would be cleared at full strength from them).
+            # Now, at the crossing, and not when a band next marks the cell: the bits are read
+            # only while base > 0, which only a final band restores, so the bearings kept are
+            # exactly those heard since the cell was freed; forgetting them at every free-space
+            # update below 0 would drop the bands that raised the cell back, and forgetting at
+            # the next band would keep only that band's. The stored (float32) value decides,
+            # as it does when the bits are read.
+            if cell > 0.0 and base[i, j] <= 0.0:
+                heard[i, j] = 0
+    if n_held:
+        _free_behind(base, heard, m, held, n_held)
+
+
+@compiled_inline
+def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                 held: FloatArray, n: int) -> None:
+    """The free space of the cells believed occupied that one beam passed (``held``: row,
+    column, distance, bearing off the axis, profile, audibility, faded miss), each as audible
+    as the most audible such cell in front of it on its ray (nearer by at least a cell and by
+    at most ``through``, its ray within half a cell diagonal of that cell's centre): a surface
+    the beam would have heard and did not is gone, and so is what stood behind it."""
+    h = m.h
+    for p in range(n):
+        audible = held[p, 5]
+        d = held[p, 2]
+        for q in range(n):
+            dq = held[q, 2]
+            if (held[q, 5] > audible and dq <= d - h and d - dq <= m.through
+                    and abs(held[p, 3] - held[q, 3]) * dq <= 0.7072 * h):
+                audible = held[q, 5]
+        i, j = int(held[p, 0]), int(held[p, 1])
+        cell = base[i, j]
+        miss = audible * m.l_heard + (1.0 - audible) * held[p, 6]
+        base[i, j] = min(m.l_max, max(m.l_min, cell + held[p, 4] * miss))
+        if cell > 0.0 and base[i, j] <= 0.0:
+            heard[i, j] = 0

@@ -1,0 +1,152 @@
+"""The compiled entry points :class:`~sonarcarve.grids.carved.CarvedGrid` calls: a batch's final
+updates, arcs leaving the history, a read's refresh of the overlays, and the trinary map."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.grids.carved.band import _arc_value, _draw_arc, _redraw, _undraw
+from sonarcarve.grids.carved.free_space import _HELD, _free_space
+from sonarcarve.grids.carved.mark import _refresh_points
+from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
+from sonarcarve.typing import BoolArray, FloatArray, SlotArray
+
+
+class _Finals(NamedTuple):
+    """Arcs that left the history in a batch, in order: where to draw their final band."""
+
+    x: FloatArray
+    y: FloatArray
+    r: FloatArray
+    lo: FloatArray
+    hi: FloatArray
+    weight: FloatArray
+    seq: npt.NDArray[np.int64]
+
+
+@compiled
+def _fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                 x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
+                 half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
+                 finals: _Finals) -> None:
+    """The final updates of a batch in reading order: before the free space of reading ``k``
+    (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
+    final band of every arc it pushed out of the history (``finals.seq + capacity <= seq``)."""
+    p = 0
+    nf = finals.seq.shape[0]
+    held = np.empty((_HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
+    for k in range(x.shape[0]):
+        while p < nf and finals.seq[p] + capacity <= seqs[k]:
+            _draw_final(base, heard, m, finals, p)
+            p += 1
+        _free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
+    while p < nf:
+        _draw_final(base, heard, m, finals, p)
+        p += 1
+
+
+@compiled_inline
+def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+                finals: _Finals, p: int) -> None:
+    """Arc ``p`` of ``finals`` into ``base``, for good."""
+    value = _arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
+    _draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
+              finals.hi[p], value)
+
+
+@compiled
+def _undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
+                   drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+                   heard: npt.NDArray[np.uint32], m: _Model) -> None:
+    """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        if drawn_seq[slot] != seqs[k]:
+            continue
+        _undraw(live, heard, m, drawn, slot)
+        drawn_seq[slot] = -1
+
+
+@compiled
+def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], drawn: FloatArray,
+                    drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                    pseq: npt.NDArray[np.int64], slots: SlotArray,
+                    seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                    lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
+                    with_points: bool, heard: npt.NDArray[np.uint32], m: _Model,
+                    theta1: FloatArray, theta2: FloatArray) -> int:
+    """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs
+    ``slots`` (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
+    (:func:`_intervals`) are indexed by slot, ``fresh`` by position. First every arc whose
+    interval or value changed is redrawn into ``live``, then the points are judged on the whole
+    updated spread map (:func:`_refresh_points`). Returns how many arcs and points changed."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        value = _arc_value(r[s], lo[s], hi[s], weight[s], m)
+        # _redraw's own test first: most arcs did not change, and the call costs more.
+        if (drawn_seq[s] == seqs[k] and drawn[s, 3] == lo[s] and drawn[s, 4] == hi[s]
+                and drawn[s, 5] == value):
+            continue
+        changed += _redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
+                           hi[s], value, heard, m)
+    if with_points:
+        for k in range(slots.shape[0]):
+            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
+                continue
+            changed += _refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
+                                       seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m,
+                                       theta1[slots[k]], theta2[slots[k]])
+    return changed
+
+
+@compiled
+def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
+                 hi: FloatArray, status: npt.NDArray[np.int8],
+                 crossings: npt.NDArray[np.int32], seen: FloatArray,
+                 seen_crossings: npt.NDArray[np.int32], seen_seq: npt.NDArray[np.int64],
+                 out: SlotArray) -> int:
+    """Positions ``k`` (into ``out``, returns how many) of the live arcs whose state differs
+    from ``seen`` (``seen_seq``: the arc it was recorded for), recording the new state: the
+    carving state ``lo, hi, status`` of :class:`~sonarcarve.methods.carving.CarvingModel` and,
+    for combined carving, the number of ATM crossings the arc keeps (``crossings``, all zero
+    for carving alone; indexed by slot). An arc whose state is as seen has the same estimate
+    (ATM's point is the median of the arc's kept crossings, which only grow), so its interval
+    need not be asked for again."""
+    count = 0
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        if (seen_seq[s] != seqs[k] or seen[s, 0] != lo[s] or seen[s, 1] != hi[s]
+                or seen[s, 2] != status[s] or seen_crossings[s] != crossings[s]):
+            seen_seq[s] = seqs[k]
+            seen[s, 0] = lo[s]
+            seen[s, 1] = hi[s]
+            seen[s, 2] = status[s]
+            seen_crossings[s] = crossings[s]
+            out[count] = k
+            count += 1
+    return count
+
+
+@compiled
+def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], l_min: float, l_max: float,
+                    l_occupied: float, l_free: float, out: Int8Grid) -> None:
+    """Occupied (100) where ``clamp(base + (live + points)) > l_occupied``, free (0) below
+    ``l_free``, else unknown (-1)."""
+    ny, nx = base.shape
+    for i in range(ny):
+        for j in range(nx):
+            lo = min(l_max, max(l_min, base[i, j] + (live[i, j] + points[i, j])))
+            if lo > l_occupied:
+                out[i, j] = OCCUPIED
+            elif lo < l_free:
+                out[i, j] = FREE
+            else:
+                out[i, j] = UNKNOWN

@@ -1,0 +1,229 @@
+"""The newest echo's mark: where a fresh arc's whole hit goes, on its band or in a side lobe,
+or none where the map explains the echo (:func:`_refresh_points`, :func:`_band_likeliest`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.grids.carved.band import _arc_value, _redraw, _undraw
+from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.scan import (
+    _TWO_PI,
+    _bearing_off,
+    _cell_range,
+    _cos_half,
+    _ring_columns,
+    _sector_box,
+    _within,
+)
+from sonarcarve.typing import FloatArray
+
+#: Log-odds above which a cell counts as more likely occupied than not where a fresh arc's
+#: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
+#: additions and removals (about 1e-15) and of float32 ``base``.
+_LIKELY = 1e-6
+#: Log-odds within which two cells are equally likely where a fresh arc's point is placed: far
+#: above ``live``'s rounding (1e-15), which depends on when the map was read. Cells covered by
+#: the same arcs are equal up to that rounding; a strict ``>`` let the rounding, and the scan
+#: order, pick among them (review rev10: the mark moved with the read schedule and with the
+#: grid's orientation), so equals go to the cell nearest the middle.
+_TIE = 1e-9
+
+
+@compiled_inline
+def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
+                    points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
+                    pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
+                    y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
+                    weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
+                    m: _Model, theta1: float, theta2: float) -> int:
+    """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
+    ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
+    without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
+    ``unit`` of its carved interval around the point's bearing (the middle, or the most likely
+    cell of a band whose middle the map does not favour; clipped to the interval) raised from
+    its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
+    (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
+    circle; else take its point out. The spread map does not hold the
+    points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
+    if fresh and weight[slot] > 0.0:
+        explained, at, side = _band_likeliest(base, live, m, x[slot], y[slot], r[slot],
+                                              lo[slot], hi[slot], drawn[slot, 5], theta1,
+                                              theta2)
+        whole = _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+        if not explained and side != 0.0:
+            # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
+            # circle beyond the arc's own band (it draws no spread value there to raise).
+            half = 0.5 * m.unit / r[slot]
+            axis = 0.5 * (theta1 + theta2)
+            axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
+            edge = 0.5 * (theta2 - theta1)
+            reach = (1.0 + m.lobes) * edge
+            # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
+            # the mark never adds to the arc's own band (that would be more than a whole hit).
+            inner = edge + m.h / r[slot]
+            z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
+            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                           max(z1, at - half), min(z2, at + half), whole, heard, m)
+        if not explained:
+            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                           max(lo[slot], at - half), min(hi[slot], at + half),
+                           whole - drawn[slot, 5], heard, m)
+    if pseq[slot] >= 0:
+        _undraw(points, heard, m, pdrawn, slot)
+        pseq[slot] = -1
+        return 1
+    return 0
+
+
+@compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
+def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+                    y: float, r: float, lo: float, hi: float, own: float, theta1: float,
+                    theta2: float) -> tuple[bool, float, float]:
+    """``(explained, bearing, side)`` of a fresh arc: whether a cell of its band (as
+    :func:`_draw_arc` draws it, without a profile) is occupied in the map of spread arcs without
+    the arc's own share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its
+    point goes to: the middle of ``[lo, hi]``, unless that map holds no cell more likely
+    occupied than not (above :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold
+    one elsewhere on the band: then the bearing of the band's most likely cell (of equals within
+    :data:`_TIE`, the one nearest the middle). Near echoes (``r <= lobe_range``) also look past
+    the beam's edges, ``lobes`` half widths, on the same circle: an occupied cell there explains
+    the echo; when the middle is not favoured and a lobe's likeliest cell beats the band's,
+    ``bearing`` is that cell's and ``side`` its lobe (+1 counter-clockwise of the axis, -1
+    clockwise; 0: on the band). A lobe holding a likely cell nearer than the echo is skipped (it
+    would have heard that first); equally likely cells in both lobes explain the echo (no side
+    is favoured)."""
+    xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
+    ny, nx = base.shape
+    widen = 0.5 * h / r
+    t1 = lo - widen
+    t2 = hi + widen
+    mid = 0.5 * (t1 + t2)
+    half = 0.5 * (t2 - t1)
+    # Where the point would be drawn: the middle unit, widened as _draw_arc widens it.
+    reach = min(0.5 * (hi - lo), 0.5 * m.unit / r) + widen
+    r_in, r_out = max(0.0, r - band), r + band
+    # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
+    # near the carved interval's middle, widened by ``lobes`` half widths past each edge.
+    axis = 0.5 * (theta1 + theta2)
+    axis += _TWO_PI * math.floor((mid - axis + math.pi) / _TWO_PI)
+    e_half = 0.0
+    if m.lobes > 0.0 and r <= m.lobe_range:
+        e_half = 0.5 * (1.0 + m.lobes) * (theta2 - theta1) + widen
+    s1, s2 = (min(t1, axis - e_half), max(t2, axis + e_half)) if e_half > 0.0 else (t1, t2)
+    xlo, ylo, xhi, yhi = _sector_box(x, y, s1, s2, r_in, r_out)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
+    cos_ax, sin_ax, cos_e = math.cos(axis), math.sin(axis), _cos_half(e_half)
+    b_half = 0.5 * (theta2 - theta1) + widen
+    cos_b = _cos_half(b_half)
+    best = _LIKELY
+    bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
+    middle_likely = False
+    # Per lobe (cw: clockwise of the axis, ccw: counter-clockwise): the likeliest cell and its
+    # bearing (none yet: farther than any bearing), and whether the lobe holds a likely cell
+    # nearer than the echo, which it would have heard first. Scalars, not arrays: this runs for
+    # every fresh arc at every read.
+    best_cw, best_ccw = _LIKELY, _LIKELY
+    at_cw = at_ccw = mid + 4.0 * math.pi
+    blocked_cw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
+                                                e_half, 0)
+    blocked_ccw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
+                                                 e_half, 1)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        for part in range(2):
+            for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
+                # The cell's value first: most cells are not likely occupied, and need no
+                # geometry. On the band it holds the arc's own share, which does not count;
+                # in a side lobe's reach it does not hold it.
+                spread = base[i, j] + live[i, j]
+                value = min(m.l_max, max(m.l_min, spread - own))
+                if not (value > _LIKELY or (e_half > 0.0 and spread > _LIKELY)):
+                    continue
+                dx = xmin + (j + 0.5) * h - x
+                d = math.sqrt(dx * dx + dy * dy)
+                if abs(d - r) > band:
+                    continue
+                if not _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                    # Outside the carved interval, in reach of a side lobe: the echo may have
+                    # come from a surface there, heard through the lobe.
+                    if (e_half > 0.0
+                            and _within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
+                            and not _within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
+                        ccw = _bearing_off(dx, dy, axis) > 0.0
+                        if blocked_ccw if ccw else blocked_cw:
+                            continue
+                        value = min(m.l_max, max(m.l_min, spread))
+                        if value > m.l_occupied:
+                            return True, bearing, 0.0
+                        off = _bearing_off(dx, dy, mid)
+                        if ccw:
+                            if _likelier(value, off, best_ccw, at_ccw - mid):
+                                best_ccw, at_ccw = max(best_ccw, value), mid + off
+                        elif _likelier(value, off, best_cw, at_cw - mid):
+                            best_cw, at_cw = max(best_cw, value), mid + off
+                    continue
+                if not value > _LIKELY:
+                    continue
+                if value > m.l_occupied:
+                    return True, bearing, 0.0
+                off = _bearing_off(dx, dy, mid)
+                if abs(off) <= reach:
+                    middle_likely = True
+                if _likelier(value, off, best, bearing - mid):
+                    best = max(best, value)
+                    bearing = mid + off
+    if not middle_likely and max(best_cw, best_ccw) > best + _TIE:
+        if abs(best_cw - best_ccw) <= _TIE:
+            # Equally likely surfaces in both lobes: either may have answered, and picking one
+            # would let rounding and the scan order draw a lopsided map of a symmetric scene.
+            return True, bearing, 0.0
+        return (False, at_ccw, 1.0) if best_ccw > best_cw else (False, at_cw, -1.0)
+    return False, 0.5 * (lo + hi) if middle_likely else bearing, 0.0
+
+
+@compiled_inline
+def _likelier(value: float, off: float, best: float, best_off: float) -> bool:
+    """Whether a cell of log-odds ``value``, ``off`` radians from the arc's middle, beats the
+    likeliest so far (``best``, ``best_off`` from the middle): likelier by more than
+    :data:`_TIE`, or as likely within it and nearer the middle."""
+    return value > best + _TIE or (value >= best - _TIE and abs(off) < abs(best_off))
+
+
+@compiled_inline
+def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+                 y: float, reach: float, axis: float, b_half: float, e_half: float,
+                 side: int) -> bool:
+    """Whether the side lobe ``side`` (1: counter-clockwise of ``axis``) holds a cell more
+    likely occupied than not nearer than ``reach``: a sonar reports the first echo it hears, so
+    a lobe that would have heard that cell did not hear the echo's surface farther out."""
+    if reach <= 0.0:
+        return False
+    sign = 1.0 if side == 1 else -1.0
+    c = axis + sign * 0.5 * (b_half + e_half)
+    half = 0.5 * (e_half - b_half)
+    t1, t2 = c - half, c + half
+    xmin, ymin, h = m.xmin, m.ymin, m.h
+    ny, nx = base.shape
+    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, 0.0, reach)
+    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    cc, sc, ch = math.cos(c), math.sin(c), _cos_half(half)
+    for i in range(i0, i1 + 1):
+        dy = ymin + (i + 0.5) * h - y
+        for j in range(j0, j1 + 1):
+            if not base[i, j] + live[i, j] > _LIKELY:
+                continue
+            dx = xmin + (j + 0.5) * h - x
+            d = math.sqrt(dx * dx + dy * dy)
+            if d < reach and _within(dx, dy, d, c, half, cc, sc, ch):
+                return True
+    return False

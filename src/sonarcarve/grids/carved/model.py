@@ -1,0 +1,51 @@
+"""The grid's geometry and sensor model as the compiled kernels take it (:class:`_Model`)."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from sonarcarve.grids.carved.params import CarvedGridParams
+
+
+def _logit(p: float) -> float:
+    return math.log(p / (1.0 - p))
+
+
+class _Model(NamedTuple):
+    """The grid's geometry and sensor model as the kernels use them (metres, log-odds), one
+    argument instead of fourteen positional numbers that could be swapped unnoticed."""
+
+    xmin: float
+    ymin: float
+    h: float
+    band: float  # b, half-width of the occupied band
+    l_hit: float
+    l_miss: float
+    l_heard: float  # logit(p_miss_heard)
+    l_min: float
+    l_max: float
+    spread: float  # 1.0: spread each echo over its carved interval, 0.0: not
+    unit: float  # max(spread_length, h)
+    fade: float  # d_f, inf: no fade
+    aware: bool
+    profile: float  # band_profile
+    l_occupied: float  # logit(occupied_threshold)
+    through: float  # see_through, metres (0: off)
+    lobes: float  # side_lobes: the explanation reaches this many half beam widths past an edge
+    lobe_range: float  # side_lobe_range, metres: only echoes at this range or nearer
+
+
+def _model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
+              band: float) -> _Model:
+    """The kernels' model of a grid whose cells start at ``(xmin, ymin)``, of side ``h``, whose
+    occupied band is ``band`` wide each side of the circle (metres), under ``params``."""
+    p = params
+    return _Model(xmin=xmin, ymin=ymin, h=h, band=band, l_hit=_logit(p.p_hit),
+                  l_miss=_logit(p.p_miss), l_heard=_logit(p.p_miss_heard),
+                  l_min=_logit(p.p_min), l_max=_logit(p.p_max),
+                  spread=1.0 if p.spread else 0.0, unit=max(p.spread_length, h),
+                  fade=float(p.fade_range), aware=p.surface_aware,
+                  profile=float(p.band_profile), l_occupied=_logit(p.occupied_threshold),
+                  through=float(p.see_through), lobes=float(p.side_lobes),
+                  lobe_range=float(p.side_lobe_range))

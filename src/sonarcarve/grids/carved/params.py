@@ -1,0 +1,249 @@
+"""The carved grid's parameters: :class:`CarvedGridParams` and the measured defaults."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from sonarcarve.grids.cells import GridError
+from sonarcarve.grids.elfes import ROS_FADE_RANGE
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
+
+__all__ = [
+    "DEFAULT_MAX_INCIDENCE",
+    "DEFAULT_METHOD",
+    "DEFAULT_SEE_THROUGH",
+    "DEFAULT_SIDE_LOBES",
+    "DEFAULT_SIDE_LOBE_RANGE",
+    "DEFAULT_SPREAD_LENGTH",
+    "MAX_SIDE_LOBES",
+    "CarvedGridParams",
+]
+
+#: Length over which one echo counts as a whole hit, metres
+#: (:attr:`CarvedGridParams.spread_length`).
+#: Measured (``benchmarks/grids.py``, office, seeds 0-1, 0.05 and 0.10 m cells, fade 1.2 m, β 30°):
+#: occupied precision / recall 0.81 / 0.84 at 0.05 m with 0.1, 0.72 / 0.95 with 0.2, 0.64 / 0.96
+#: with 0.3; 0.2 is the shortest that keeps recall above the range sensor layer's at both
+#: resolutions.
+DEFAULT_SPREAD_LENGTH = 0.2
+#: The method the grid runs by default (:class:`CarvedGrid`): carving and ATM on one history
+#: (the paper's section 4), whose crossings narrow the interval a band is drawn over. Measured
+#: against specular-aware carving alone (``benchmarks/grid_methods.py`` and the issue-10
+#: benchmarks, office, seeds 0-2): occupied precision 0.720 -> 0.790 (0.05 m) and 0.825 ->
+#: 0.901 (0.10 m) under the specular physics, 0.721 -> 0.775 and 0.853 -> 0.935 under the
+#: amplitude physics, recall within ±0.005, phantoms -40 %; the Fig. 2 door 83/78 -> 92/86 %
+#: passable (89/86 -> 97/94 % with no-echo readings); a crossing person forgotten in 0.2 s
+#: instead of 5.2 s. Its price: more CPU per reading (ATM's crossings and medians), most
+#: visible when the map is read every few readings (``benchmarks/grid_reads.py``: 2.0x / 3.9x
+#: the range sensor layer's at 0.05 / 0.10 m, read every 5 readings, against 1.7x / 2.7x).
+DEFAULT_METHOD = "combined"
+#: Critical angle of the default method's specular-aware carving, radians (20°). Paper
+#: carving (π/2) loses 45 % of the office's true echoes to glancing free space, and the grid's
+#: recall with them (0.20 at 0.05 m against 0.53); with combined carving 20° kept recall where
+#: 30° lost 0.004-0.023 of it (office 0.937 / 0.953 against 0.914 / 0.947 at 0.05 / 0.10 m).
+DEFAULT_MAX_INCIDENCE = math.radians(20.0)
+#: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
+#: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
+DEFAULT_SEE_THROUGH = 0.5
+#: How far past each edge of its beam an echo may have come from through a side lobe, in half
+#: beam widths (:attr:`CarvedGridParams.side_lobes`): a circular piston's first side lobe lies
+#: between its first and second nulls, at 1.8 times the first null's angle (Bessel zeros 3.83
+#: and 7.02; 12.7° and 23.8° for the 600-series transducer, whose quoted 22.5° beam is about
+#: its null-to-null width, 25.4°), so about one more half width each side. That holds for beams
+#: quoted null to null, as this project's are; for a beam quoted at half power the first side
+#: lobe lies 2.4-4.3 half widths off the axis (review rev10s): set ``side_lobes`` for the
+#: transducer at hand.
+DEFAULT_SIDE_LOBES = 1.0
+#: Echoes at this range or nearer, metres, may have come through a side lobe
+#: (:attr:`CarvedGridParams.side_lobe_range`): two-way, the first side lobe is about 35 dB
+#: below the axis, so only near reflectors are heard through it. Measured (amplitude physics,
+#: office, seed 0, direct echoes whose true reflector lies outside the nominal beam): 12.9 %
+#: below 1 m, 6.6 % at 1-2 m, 0.4 % at 2-3 m, 0.1 % at 3-5 m.
+DEFAULT_SIDE_LOBE_RANGE = 2.0
+#: The most half widths :attr:`CarvedGridParams.side_lobes` may reach past a beam's edge: a
+#: piston's third null lies at 2.7 times its first (Bessel zero 10.17 against 3.83); past it the
+#: lobes are 30 dB or more down one way, and a 22.5° beam widened by 3 half widths each side
+#: still looks ahead of the sensor (±45°), never behind it.
+MAX_SIDE_LOBES = 3.0
+
+
+def _check_probability(name: str, value: object, lo: float, hi: float) -> float:
+    ok = (not isinstance(value, bool) and isinstance(value, int | float)
+          and math.isfinite(value) and lo < value < hi)
+    if not ok:
+        msg = f"carved grid: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
+        raise GridError(msg)
+    return float(value)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class CarvedGridParams:
+    """Parameters of the carved grid's sensor model (module docstring).
+
+    Attributes
+    ----------
+    p_hit : float
+        Probability a whole hit gives a cell (an arc carved down to one cell, confidence 1), in
+        (0.5, 1); octomap's 0.7.
+    p_miss : float
+        Probability one reading's free space gives an on-axis cell, in (0, 0.5); octomap's 0.4.
+    p_min, p_max : float
+        Clamp of the final log-odds, ``p_min < 0.5 < p_max``; octomap's 0.12 and 0.97.
+    occupied_threshold, free_threshold : float
+        :meth:`CarvedGrid.trinary` calls a cell occupied above the first and free below the
+        second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196 (ROS
+        map_saver's ``free_thresh``). Compared in log-odds (``l > logit(occupied)``), which
+        equals comparing :meth:`CarvedGrid.probabilities` with the threshold up to rounding:
+        a cell within a few ulp of a threshold's logit may fall on the other side.
+    range_tolerance : float
+        ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm.
+    spread : bool
+        Spread each echo over its carved interval (``s`` in the module docstring); False gives
+        every cell of the carved band a whole hit (Elfes' rule, on the carved interval).
+    spread_length : float
+        ``L``, metres >= 0: an arc carved to this length or shorter gives its cells a whole hit
+        (the cell side where larger); :data:`DEFAULT_SPREAD_LENGTH`.
+    fade_range : float
+        ``d_f``, metres > 0, of the free-space fade; ``inf``: no fade. Default ROS's 1.2 m.
+    surface_aware : bool
+        Weigh the free space at cells believed occupied by the beam's audibility (module
+        docstring); False: the fade everywhere, the rule of the grid before issue 10's clearing
+        work, equal to it up to rounding order (the fade is now applied as
+        ``γ · (logit(p_miss) · f)``, before as ``(γ · f) · logit(p_miss)``).
+    p_miss_heard : float
+        Probability one on-axis beam that would have heard a cell's surface and passed it leaves
+        the cell, in (0, 0.5); 0.2. Measured on the changing-scenes box with no-echo readings,
+        seeds 0-2: 0.4 (octomap's miss) never clears it, 0.2 clears it 4.4 s after the robot
+        passes at 0.10 m (4.4-6.2 s at 0.05 m), 0.12 gives 3.0-4.4 s.
+    band_profile : float
+        0 (default): every cell of the carved band gets the same value. ``k > 0``: a cell at
+        ``u`` (-1..1) across the widened carved interval gets ``min(1, k (1 - u²))`` of it, the
+        beam's angular profile laid over the interval. Measured (office, seeds 0-2): 1.0 raises
+        precision (0.78/0.88 at 0.05/0.10 m) and the Fig. 2 door (81/78 % passable) but drops
+        recall to the layer's (0.895 at 0.05 m); so off.
+    fresh_arcs : bool
+        Each sensor's newest echo, when no occupied cell on its carved band explains it, is a
+        whole hit on the middle ``spread_length`` of its carved interval (its spread value on
+        the rest) until that sensor fires again (module docstring: a person stepping in front
+        of the robot is marked after one reading). Where the map favours another part of the
+        band and not the middle, the whole hit goes around the band's most likely cell instead
+        (module docstring, "where the mark goes": the Fig. 2 door, echoes only, 92 -> 97 % /
+        86 -> 94 % passable at 0.05 / 0.10 m). False: every live arc spread, the rule
+        before.
+    fresh_seconds : float
+        Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
+        grid has seen; 2.0. A log that drops silent firings (echoes only, or max-range readings
+        filtered out) never shows the sensor "firing again", and without this bound a person
+        heard once would stay marked until the arc left the history (20 s on a 16-sonar ring).
+        2 s is three cycles of such a ring at 40 ms a sonar (0.64 s, the simulator's Scout2),
+        so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
+        of a slower ring.
+    side_lobes : float
+        Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (1). How far past
+        each edge of its beam, in half beam widths, a near echo may have come from through a
+        side lobe, for the newest echo's mark (module docstring, "side lobes"): an occupied
+        cell there explains the echo, and the mark goes to a likely one there when the map does
+        not favour the arc's middle. 0: the beam alone (the rule before).
+    side_lobe_range : float
+        Metres >= 0 (``inf``: every range); :data:`DEFAULT_SIDE_LOBE_RANGE` (2). Echoes farther
+        than this are judged on their carved interval alone (the lobes are too weak to hear far
+        reflectors; at every range the corridor walls beside a shut door 2.4-4.8 m ahead
+        explained its echoes and it was never marked).
+    repeat_weight : float
+        In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
+        (module docstring, "Repeated echoes count once": the sensor moved towards or away from
+        one reflector and heard it again): 0 counts a run of repeats as its
+        newest echo, 1 counts every echo (the rule before). Measured (seeds 0-2, Fig. 2 door
+        at 1 m, echoes only, 0.05 / 0.10 m): 1 passable in 67 / 61 % of approaches, 0.25 in
+        69 / 58 % (0.5 the same), 0 in 83 / 78 %; office precision / recall unchanged within
+        0.003.
+    see_through : float
+        Metres >= 0 (``inf``: no limit; 0: off); :data:`DEFAULT_SEE_THROUGH`. A beam that
+        passes a cell it would have heard (surface-aware audibility) and hears nothing there
+        clears the believed-occupied cells behind that cell on its ray, up to this far behind
+        it, as if it would have heard them too (module docstring, "seen through"). It acts only
+        with ``surface_aware`` (without it no beam is known to have heard a cell, so nothing is
+        seen through and the value is ignored).
+
+    Raises
+    ------
+    GridError
+        A value out of its range.
+    """
+
+    p_hit: float = 0.7
+    p_miss: float = 0.4
+    p_min: float = 0.12
+    p_max: float = 0.97
+    occupied_threshold: float = 0.65
+    free_threshold: float = 0.196
+    range_tolerance: float = DEFAULT_RANGE_TOLERANCE
+    spread: bool = True
+    spread_length: float = DEFAULT_SPREAD_LENGTH
+    fade_range: float = ROS_FADE_RANGE
+    surface_aware: bool = True
+    p_miss_heard: float = 0.2
+    band_profile: float = 0.0
+    fresh_arcs: bool = True
+    fresh_seconds: float = 2.0
+    see_through: float = DEFAULT_SEE_THROUGH
+    repeat_weight: float = 0.0
+    side_lobes: float = DEFAULT_SIDE_LOBES
+    side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
+
+    def __post_init__(self) -> None:
+        _check_probability("p_hit", self.p_hit, 0.5, 1.0)
+        _check_probability("p_miss", self.p_miss, 0.0, 0.5)
+        _check_probability("p_min", self.p_min, 0.0, 0.5)
+        _check_probability("p_max", self.p_max, 0.5, 1.0)
+        _check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
+        _check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
+        tol = self.range_tolerance
+        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (
+                math.isfinite(tol) and tol >= 0.0):
+            msg = f"carved grid: range_tolerance must be a finite number >= 0 metres, got {tol!r}"
+            raise GridError(msg)
+        for name in ("spread_length", "fade_range"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not (
+                    value >= 0.0 if name == "spread_length" else value > 0.0) or (
+                    name == "spread_length" and not math.isfinite(value)):
+                rule = "a finite number >= 0" if name == "spread_length" else "> 0 (inf: none)"
+                msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
+                raise GridError(msg)
+        _check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
+        for name in ("spread", "surface_aware", "fresh_arcs"):
+            if not isinstance(getattr(self, name), bool):
+                msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
+                raise GridError(msg)
+        st = self.see_through
+        if isinstance(st, bool) or not isinstance(st, int | float) or not st >= 0.0:
+            msg = (f"carved grid: see_through must be a number >= 0 metres (inf: no limit), "
+                   f"got {st!r}")
+            raise GridError(msg)
+        fs = self.fresh_seconds
+        if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
+                math.isfinite(fs) and fs > 0.0):
+            msg = f"carved grid: fresh_seconds must be a finite number > 0, got {fs!r}"
+            raise GridError(msg)
+        rw = self.repeat_weight
+        if isinstance(rw, bool) or not isinstance(rw, int | float) or not 0.0 <= rw <= 1.0:
+            msg = f"carved grid: repeat_weight must be a number in [0, 1], got {rw!r}"
+            raise GridError(msg)
+        sl = self.side_lobes
+        if isinstance(sl, bool) or not isinstance(sl, int | float) or not (
+                0.0 <= sl <= MAX_SIDE_LOBES):
+            msg = (f"carved grid: side_lobes must be a number in [0, {MAX_SIDE_LOBES:g}] half "
+                   f"beam widths, got {sl!r}")
+            raise GridError(msg)
+        sr = self.side_lobe_range
+        if isinstance(sr, bool) or not isinstance(sr, int | float) or not sr >= 0.0:
+            msg = (f"carved grid: side_lobe_range must be a number >= 0 metres (inf: every "
+                   f"range), got {sr!r}")
+            raise GridError(msg)
+        bp = self.band_profile
+        if isinstance(bp, bool) or not isinstance(bp, int | float) or not (
+                math.isfinite(bp) and bp >= 0.0):
+            msg = f"carved grid: band_profile must be a finite number >= 0, got {bp!r}"
+            raise GridError(msg)
