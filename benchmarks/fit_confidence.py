@@ -3,9 +3,12 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/fit_confidence.py
+    nice .venv/bin/python benchmarks/fit_confidence.py --worlds office random:4 random:5 --seeds 2
 
-Training data: ONE world and physics (default: the office tour, specular physics, seeds 0-2).
-Each arc that leaves the history with a surviving piece is one sample: its features at that
+Training data: the runs of every ``--worlds`` world under every ``--physics`` physics (default:
+ONE world and physics, the office tour under the specular physics, seeds 0-2; the arcs of
+several runs are pooled, each arc one sample, and the direct share behind ``fresh`` is the
+pool's). Each arc that leaves the history with a surviving piece is one sample: its features at that
 moment (:meth:`~sonarcarve.methods.evidence.EvidenceMethod.features`, the order of
 :data:`~sonarcarve.methods.evidence.CONFIDENCE_FEATURES`) and its label, 1 for a direct echo and
 0 for a spurious one (crosstalk, floor, multipath). The weights minimise the mean log-loss plus
@@ -136,6 +139,32 @@ def collect(world: str, physics: str, seeds: range,
                    total_by_kind, snapshots)
 
 
+def pooled(parts: list[Samples]) -> Samples:
+    """The arcs of several :func:`collect` runs as one training set."""
+    if len(parts) == 1:
+        return parts[0]
+    by_kind: dict[int, int] = {}
+    for part in parts:
+        for k, count in part.total_by_kind.items():
+            by_kind[k] = by_kind.get(k, 0) + count
+    return Samples(np.vstack([p.features for p in parts]),
+                   np.concatenate([p.maturity for p in parts]),
+                   np.concatenate([p.direct for p in parts]),
+                   np.concatenate([p.kind for p in parts]),
+                   sum(p.total_direct for p in parts), by_kind, _pooled_local(parts))
+
+
+def _pooled_local(parts: list[Samples]) -> LocalSamples | None:
+    """The local-map samples of every part, or None when a part has none."""
+    local = [p.local for p in parts if p.local is not None]
+    if len(local) < len(parts):
+        return None
+    return LocalSamples(np.vstack([loc.features for loc in local]),
+                        np.concatenate([loc.unsupported for loc in local]),
+                        np.concatenate([loc.age for loc in local]),
+                        np.concatenate([loc.direct for loc in local]))
+
+
 def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
                every: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """Add ``readings`` in blocks of ``every``; after each, the features, whether it was never
@@ -247,11 +276,38 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def fit_model(train: Samples, ridge: float,
+              maturity_grid: tuple[float, ...]) -> tuple[ConfidenceModel, list[float]]:
+    """Weights fitted on the mature arcs at commit, ``fresh`` from the direct share, then the
+    maturity time on ``maturity_grid`` (:func:`fit_maturity`); and the grid's log-losses."""
+    mature = train.maturity >= 1.0
+    intercept, weights = fit(train.features[mature], train.direct[mature], ridge)
+    share = float(train.direct.mean())
+    fresh = float(np.log(share / (1.0 - share)))
+    model = ConfidenceModel.from_weights(intercept, weights, fresh)
+    assert train.local is not None  # snapshot_every >= 1 (_positive_int)
+    maturity_time, losses = fit_maturity(model, train.local, maturity_grid)
+    return replace(model, maturity_time=maturity_time), losses
+
+
+def print_model(model: ConfidenceModel) -> None:
+    """``model`` as ``ConfidenceModel`` keyword arguments (paste-able)."""
+    print("ConfidenceModel(")
+    print(f"    intercept={model.intercept:.3f},")
+    print(f"    fresh={model.fresh:.3f},")
+    print(f"    maturity_time={model.maturity_time:g},")
+    for name, w in zip(CONFIDENCE_FEATURES, model.weights(), strict=True):
+        print(f"    {name}={w:.3f},")
+    print(")")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Fit on one world and physics, print the weights, check on the others."""
+    """Fit on the training worlds and physics, print the weights, check on the others."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--world", default="office")
-    parser.add_argument("--physics", default="specular")
+    parser.add_argument("--worlds", "--world", nargs="+", default=["office"],
+                        help="training worlds (every one under every --physics)")
+    parser.add_argument("--physics", nargs="+", default=["specular"],
+                        help="training physics: specular, or an echo_model such as amplitude")
     parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1")
     parser.add_argument("--ridge", type=float, default=1e-3)
     parser.add_argument("--keep", type=float, default=0.90)
@@ -264,37 +320,27 @@ def main(argv: list[str] | None = None) -> int:
         "t-junction/specular", "doorway/specular", "office/amplitude", "t-junction/amplitude",
         "doorway/amplitude"], help="held-out world/physics pairs")
     args = parser.parse_args(argv)
-    train = collect(args.world, args.physics, range(args.seeds),
-                    snapshot_every=args.snapshot_every)
-    mature = train.maturity >= 1.0
-    intercept, weights = fit(train.features[mature], train.direct[mature], args.ridge)
-    share = float(train.direct.mean())
-    fresh = float(np.log(share / (1.0 - share)))
-    model = ConfidenceModel.from_weights(intercept, weights, fresh)
-    assert train.local is not None  # snapshot_every >= 1 (_positive_int)
-    maturity_time, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
-    model = replace(model, maturity_time=maturity_time)
+    train = pooled([collect(world, physics, range(args.seeds),
+                            snapshot_every=args.snapshot_every)
+                    for physics in args.physics for world in args.worlds])
+    model, losses = fit_model(train, args.ridge, tuple(args.maturity_grid))
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
                                   args.keep)
-    print(f"fitted on {args.world}, {args.physics} physics, seeds 0-{args.seeds - 1}: "
+    worlds, physics = ", ".join(args.worlds), ", ".join(args.physics)
+    print(f"fitted on {worlds}, {physics} physics, seeds 0-{args.seeds - 1}: "
           f"{len(train.direct)} arcs ({int(train.direct.sum())} direct)\n")
-    print("ConfidenceModel(")
-    print(f"    intercept={intercept:.3f},")
-    print(f"    fresh={fresh:.3f},")
-    print(f"    maturity_time={maturity_time:g},")
-    for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True):
-        print(f"    {name}={w:.3f},")
-    print(")")
+    print_model(model)
+    assert train.local is not None  # every part was collected with snapshots
     print(f"local-map log-loss by maturity time ({len(train.local.direct)} samples): "
           + ", ".join(f"{t:g} s {loss:.4f}" for t, loss in
                       zip(args.maturity_grid, losses, strict=True)))
     print(f"min_confidence (largest keeping ≥ {100 * args.keep:.0f} % of direct): {threshold:.2f}")
     thresholds = (0.5, threshold)
-    report(f"train: {args.world}/{args.physics}", train, model, thresholds)
+    report(f"train: {'+'.join(args.worlds)}/{'+'.join(args.physics)}", train, model, thresholds)
     for pair in args.check:
-        world, physics = pair.split("/")
-        report(f"held out: {world}/{physics}", collect(world, physics, range(args.seeds)),
-               model, thresholds)
+        world, check_physics = pair.split("/")
+        report(f"held out: {world}/{check_physics}",
+               collect(world, check_physics, range(args.seeds)), model, thresholds)
     return 0
 
 
