@@ -5,7 +5,7 @@ values per point, noise in range. The geometry and the sensor model are in
 :mod:`sonarcarve.geometry.evidence`; this module keeps the per-arc state over a shared
 :class:`~sonarcarve.history.SonarHistory` and turns it into points.
 
-Per arc (see the geometry module for the equations):
+Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
 
 * a profile of ``K`` bins across the full beam, each with evidence that it is empty (log-odds
   of misses of newer readings, weighted by how likely each was to hear a surface there) and
@@ -517,8 +517,8 @@ class EvidenceModel(ArcModel):
         return self.store.counts
 
     def _arrays(self) -> tuple[Any, ...]:
-        """The history's rows, the per-arc state and the model, in :func:`evidence_add`'s
-        order (after its first two arguments)."""
+        """The history's rows, the per-arc state and the model, in the order of
+        :func:`~sonarcarve.geometry.evidence.evidence_add` (after its first two arguments)."""
         h = self.history
         return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
                 self.others, self.through, self.passed, self.trans, self.scratch, self.in_beam,

@@ -12,11 +12,15 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
-``P_detect`` is :func:`~sonarcarve.geometry.evidence.model.detect_probability`, inlined. The
-kernel is laid out for the processor (a cull, then three passes over groups of arcs) and gives
-bit for bit the values of one loop over every arc and bin: ``docs/evidence-carving.md``,
-"Evidence, support and the threshold", "Per-arc sums" and "Speed: the weighing kernel's
-layout".
+:func:`evidence_add` is a sequence of passes, each an inlined helper: the new arc's profile
+(:func:`_init_new_arc`), the cull of the older rows
+(:func:`~sonarcarve.geometry.evidence.beam.mark_near`), then per group of older arcs the bins
+to weigh (:func:`_mark_bins`, :func:`_gather_entries`), their ``P_detect``
+(:func:`_detect_entries`, :func:`~sonarcarve.geometry.evidence.model.detect_probability`
+inlined) and their evidence (:func:`_weigh_arc`), and last the transmission. Laid out for the
+processor, it gives bit for bit the values of one loop over every arc and bin:
+``docs/evidence-carving.md``, "Evidence, support and the threshold", "Per-arc sums" and
+"Speed: the weighing kernel's layout".
 """
 
 from __future__ import annotations
@@ -26,9 +30,9 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.geometry._compiled import compiled_borrowing
+from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import arc_bounding_circle
-from sonarcarve.geometry.evidence.beam import mark_near, new_beam
+from sonarcarve.geometry.evidence.beam import Beam, mark_near, new_beam
 from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
 from sonarcarve.geometry.evidence.model import (
@@ -42,6 +46,261 @@ from sonarcarve.geometry.evidence.transmission import weigh_transmission
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["evidence_add", "evidence_add_many"]
+
+
+@compiled_inline
+def _init_new_arc(
+    slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
+    beam_width: FloatArray, viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
+    trans: FloatArray, bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, status: Int8Array,
+    touched: BoolArray, occluded: FloatArray, counts: npt.NDArray[np.int32],
+) -> None:
+    """The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
+    evidence, the bounding circle, and the scratch ``trans`` (arrays of :func:`evidence_add`)."""
+    bins = bx.shape[1]
+    xj = x[slot]
+    yj = y[slot]
+    rj = r[slot]
+    half_j = 0.5 * beam_width[slot]
+    step_j = beam_width[slot] / bins
+    cos_axis[slot] = math.cos(theta[slot])
+    sin_axis[slot] = math.sin(theta[slot])
+    cos_half[slot] = math.cos(half_j)
+    for k in range(bins):
+        tau = theta[slot] - half_j + (k + 0.5) * step_j
+        ex[slot, k] = math.cos(tau)
+        ey[slot, k] = math.sin(tau)
+        bx[slot, k] = xj + rj * ex[slot, k]
+        by[slot, k] = yj + rj * ey[slot, k]
+        free[slot, k] = 0.0
+        support[slot, k] = 0.0
+        located[slot, k] = 0.0
+    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
+    circle[0, slot] = c0
+    circle[1, slot] = c1
+    circle[2, slot] = c2
+    status[slot] = EVIDENCE_ALIVE
+    touched[slot] = False
+    occluded[slot] = 0.0
+    viewpoints[slot] = 0.0
+    looked[slot] = 0.0
+    others[slot] = 0.0
+    if trans[2 * bins + 1] != beam_width[slot]:  # the edges' beam width (NaN: none yet)
+        # The scratch's second part: sines of j's bin edges; they depend on the beam width
+        # only, so they are kept while it stays the same (a ring of like sensors: always).
+        for k in range(bins + 1):
+            trans[bins + k] = math.sin(-half_j + k * step_j)
+        trans[2 * bins + 1] = beam_width[slot]
+        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
+    for k in range(bins):  # its first part: j's support from other sensors
+        trans[k] = 0.0
+    counts[slot] = 0
+
+
+@compiled_inline
+def _mark_bins(i: int, beam: Beam, threshold: float, bx: FloatArray, by: FloatArray,
+               free: FloatArray, in_beam: BoolArray) -> tuple[int, int]:
+    """Pass 1 for older arc ``i``: ``in_beam[k]`` where bin ``k`` is left to weigh (free
+    evidence below T) and lies in j's reach and beam. Returns the live bins outside them and
+    the bins marked. No branch, so the compiler runs it on several bins at once."""
+    xj = beam.x
+    yj = beam.y
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    reach2 = beam.reach2
+    cos_half2 = beam.cos_half2
+    alive_bins = 0
+    n_in = 0
+    for k in range(bx.shape[1]):
+        vx = bx[i, k] - xj
+        vy = by[i, k] - yj
+        d2 = vx * vx + vy * vy
+        along = vx * cj + vy * sj
+        weigh = not free[i, k] >= threshold
+        # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
+        outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
+        in_beam[k] = weigh & (not outside)
+        alive_bins += weigh & outside
+        n_in += weigh & (not outside)
+    return alive_bins, n_in
+
+
+@compiled_inline
+def _gather_entries(i: int, first: int, n_in: int, beam: Beam, in_beam: BoolArray,
+                    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+                    scratch: FloatArray, e_bin: SlotArray) -> None:
+    """The ``n_in`` bins of arc ``i`` marked by pass 1, in order, as the group's entries from
+    ``first`` on: each bin (``e_bin``), its offset from the new reading and the bin centre's
+    direction (``scratch`` rows 0-4)."""
+    xj = beam.x
+    yj = beam.y
+    e_vx = scratch[0]
+    e_vy = scratch[1]
+    e_d2 = scratch[2]
+    e_ex = scratch[3]
+    e_ey = scratch[4]
+    e = first
+    for k in range(bx.shape[1]):
+        e_bin[e] = k
+        e += in_beam[k]
+    for e in range(first, first + n_in):
+        k = e_bin[e]
+        vx = bx[i, k] - xj
+        vy = by[i, k] - yj
+        e_vx[e] = vx
+        e_vy[e] = vy
+        e_d2[e] = vx * vx + vy * vy
+        e_ex[e] = ex[i, k]
+        e_ey[e] = ey[i, k]
+
+
+@compiled_inline
+def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
+                    edges: FloatArray, edge_scale: float, scratch: FloatArray,
+                    e_guess: SlotArray) -> None:
+    """Pass 2: :func:`~sonarcarve.geometry.evidence.model.detect_probability`, inlined, for
+    the first ``n_entries`` entries of ``scratch`` (rows 0-4 in, rows 5-10 out: distance,
+    sine of the angle to j's axis, ``P_beam``, ``cos γ``, ``P_detect``, localised support),
+    and the guess of the bin of j behind each (``e_guess``).
+
+    One loop over all of them: the compiler runs it on several entries at once when they are
+    many, 20 or more, and the entries are only the bins to weigh, 7 of an older arc's 24 at
+    history 1,000. np.divide is ``/`` (the same rounding) without numba's zero-divisor test,
+    whose branch would keep the loop scalar; bins in the beam have d > 0 (along > 0) unless
+    d² underflows (a range near 1e-300: then inv_d = inf and the values stay finite where
+    ``/`` raised ZeroDivisionError).
+    """
+    bins = edges.shape[0] - 1
+    first_edge = edges[0]
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    sin_half = beam.sin_half
+    edge_loss = beam.edge_loss
+    inv_scale = beam.inv_scale
+    cos_full = beam.cos_full
+    cos_zero = beam.cos_zero
+    e_vx = scratch[0]
+    e_vy = scratch[1]
+    e_d2 = scratch[2]
+    e_ex = scratch[3]
+    e_ey = scratch[4]
+    e_d = scratch[5]
+    e_sine = scratch[6]
+    e_beam = scratch[7]
+    e_cos = scratch[8]
+    e_p = scratch[9]
+    e_loc = scratch[10]
+    for e in range(n_entries):
+        vx = e_vx[e]
+        vy = e_vy[e]
+        d = math.sqrt(e_d2[e])
+        inv_d = np.divide(1.0, d)
+        sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
+        u = min(np.divide(abs(sine), sin_half), 1.0)
+        p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
+        cos_gamma = abs(e_ex[e] * vx + e_ey[e] * vy) * inv_d
+        e_d[e] = d
+        e_sine[e] = sine
+        e_beam[e] = p_beam
+        e_cos[e] = cos_gamma
+        p = p_beam * incidence_gain(cos_gamma, cos_full, cos_zero, rough)
+        e_p[e] = p
+        # What the support path needs: the localised support, the bin of j behind.
+        e_loc[e] = p * abs(e_ex[e] * vy - e_ey[e] * vx) * inv_d
+        e_guess[e] = sine_guess(sine, first_edge, bins, edge_scale)
+
+
+@compiled_inline
+def _weigh_arc(
+    slot: int, i: int, start: int, stop: int, alive_bins: int, other: bool, distinct: bool,
+    half_bin_arc: float, beam: Beam, params: EvidenceParams, edges: FloatArray,
+    scratch: FloatArray, e_bin: SlotArray, e_guess: SlotArray, free: FloatArray,
+    support: FloatArray, located: FloatArray, touched: BoolArray, trans: FloatArray,
+    passed: FloatArray, n_passed: int, occluding: int, top_through: float,
+) -> tuple[int, float, float, int, int, float]:
+    """Pass 3 for older arc ``i``: the evidence of entries ``start .. stop - 1`` (its marked
+    bins, in bin order): freespace evidence, occlusion of j's bins behind established ones and
+    the rows kept for transmission where nearer than ``r_j - ε``, support where on j's echo
+    circle. ``alive_bins`` counts its live bins outside j's reach or beam (pass 1).
+
+    Returns ``alive_bins`` with the entries' live bins added, the arc's largest support and
+    "looked" ``P_beam``, and the updated ``n_passed``, ``occluding`` and ``top_through``.
+    """
+    bins = free.shape[1]
+    threshold = params.threshold
+    free_r = beam.free_r
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    e_vx = scratch[0]
+    e_vy = scratch[1]
+    e_d = scratch[5]
+    e_sine = scratch[6]
+    e_beam = scratch[7]
+    e_cos = scratch[8]
+    e_p = scratch[9]
+    e_loc = scratch[10]
+    top_support = 0.0
+    top_looked = 0.0
+    for e in range(start, stop):
+        k = e_bin[e]
+        d = e_d[e]
+        if d >= free_r and abs(d - beam.r) > params.support_tolerance:
+            alive_bins += 1
+            continue
+        vx = e_vx[e]
+        vy = e_vy[e]
+        sine = e_sine[e]
+        p_beam = e_beam[e]
+        p = e_p[e]
+        if d < free_r:
+            f = free[i, k]
+            touched[i] = True
+            if distinct:
+                top_looked = max(top_looked, p_beam)
+            established = (support[i, k] >= params.establish and f < 0.5 * threshold)
+            if d < free_r - params.tolerance:
+                top_through = max(top_through, support[i, k])
+            if established and d < free_r - params.tolerance:
+                # An established surface j looked past at a glancing angle: the bins of j
+                # behind it cannot hold j's echo (sound does not pass through walls).
+                along = vx * cj + vy * sj
+                occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
+                                            half_bin_arc / d, beam, free, threshold)
+                touched[slot] = True
+            factor = params.protect if established else 1.0
+            w = -math.log1p(-p) * factor
+            f += w
+            free[i, k] = f
+            if f < threshold:
+                alive_bins += 1
+                if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
+                    # Kept for the transmission pass (after j's support is known).
+                    passed[n_passed, 0] = i
+                    passed[n_passed, 1] = k
+                    passed[n_passed, 2] = bin_from_guess(e_guess[e], sine, edges, bins)
+                    passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
+                    passed[n_passed, 4] = factor
+                    passed[n_passed, 5] = w
+                    n_passed += 1
+        else:  # on j's echo circle: support, not freespace
+            alive_bins += 1
+            touched[i] = True
+            touched[slot] = True
+            top_support = max(top_support, p)
+            # Localised support: times the sine of the angle between the two circles there
+            # (tangent circles, one sensor stepping along its axis, say nothing of *where* on
+            # the arc the echo came from).
+            support[i, k] += p
+            kb = bin_from_guess(e_guess[e], sine, edges, bins)
+            support[slot, kb] += p
+            loc = e_loc[e]
+            located[i, k] += loc
+            located[slot, kb] += loc
+            if other:
+                trans[kb] += p
+    return alive_bins, top_support, top_looked, n_passed, occluding, top_through
 
 
 @compiled_borrowing
@@ -157,83 +416,21 @@ def evidence_add(
         carved by occlusion; rows of ``spill`` used (0: every crossing fitted).
     """
     bins = bx.shape[1]
-    # The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
-    # evidence, the bounding circle, and the scratch ``trans``. Written here, not in a helper:
-    # a compiled helper taking these twenty arrays, inlined or not, cost 4-8 % per reading.
-    xj = x[slot]
-    yj = y[slot]
-    rj = r[slot]
-    half_j = 0.5 * beam_width[slot]
-    step_j = beam_width[slot] / bins
-    cos_axis[slot] = math.cos(theta[slot])
-    sin_axis[slot] = math.sin(theta[slot])
-    cos_half[slot] = math.cos(half_j)
-    for k in range(bins):
-        tau = theta[slot] - half_j + (k + 0.5) * step_j
-        ex[slot, k] = math.cos(tau)
-        ey[slot, k] = math.sin(tau)
-        bx[slot, k] = xj + rj * ex[slot, k]
-        by[slot, k] = yj + rj * ey[slot, k]
-        free[slot, k] = 0.0
-        support[slot, k] = 0.0
-        located[slot, k] = 0.0
-    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
-    circle[0, slot] = c0
-    circle[1, slot] = c1
-    circle[2, slot] = c2
-    status[slot] = EVIDENCE_ALIVE
-    touched[slot] = False
-    occluded[slot] = 0.0
-    viewpoints[slot] = 0.0
-    looked[slot] = 0.0
-    others[slot] = 0.0
-    if trans[2 * bins + 1] != beam_width[slot]:  # the edges' beam width (NaN: none yet)
-        # The scratch's second part: sines of j's bin edges; they depend on the beam width
-        # only, so they are kept while it stays the same (a ring of like sensors: always).
-        for k in range(bins + 1):
-            trans[bins + k] = math.sin(-half_j + k * step_j)
-        trans[2 * bins + 1] = beam_width[slot]
-        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
-    for k in range(bins):  # its first part: j's support from other sensors
-        trans[k] = 0.0
-    counts[slot] = 0
+    # The passes are inlined helpers (compiled_inline) and this kernel counts no references
+    # (compiled_borrowing), so they compile to the code of one body: the same bits and speed
+    # as that body (docs/evidence-carving.md, "Speed: the weighing kernel's layout").
+    _init_new_arc(slot, x, y, r, theta, beam_width, viewpoints, looked, others, trans, bx, by,
+                  ex, ey, free, support, located, circle, cos_axis, sin_axis, cos_half, status,
+                  touched, occluded, counts)
     beam = new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
     edges = trans[bins : 2 * bins + 1]
     edge_scale = trans[2 * bins + 2]  # the guess of bin_of_sine
-    # Weigh every older live arc against j (one loop here, not a compiled helper: a helper
-    # taking these arrays, per arc or per reading, inlined or not, measured 3-20 % slower).
     threshold = params.threshold
-    cj = beam.cos_axis
-    sj = beam.sin_axis
-    free_r = beam.free_r
-    reach2 = beam.reach2
-    cos_half2 = beam.cos_half2
-    sin_half = beam.sin_half
-    edge_loss = beam.edge_loss
-    inv_scale = beam.inv_scale
-    cos_full = beam.cos_full
-    cos_zero = beam.cos_zero
-    max_detect = params.max_detect
-    rough = params.rough
-    # The bins to weigh of a group of older arcs, one entry each, in arc and bin order:
-    # inputs (rows 0-4) and what pass 2 computes of them (rows 5-10).
-    e_vx = scratch[0]
-    e_vy = scratch[1]
-    e_d2 = scratch[2]
-    e_ex = scratch[3]
-    e_ey = scratch[4]
-    e_d = scratch[5]
-    e_sine = scratch[6]
-    e_beam = scratch[7]
-    e_cos = scratch[8]
-    e_p = scratch[9]
-    e_loc = scratch[10]
     e_bin = bin_index[0]  # the entry's bin of its older arc
     e_guess = bin_index[1]  # the guess of the bin of j behind it
     arc_marked = bin_index[2]  # per arc of the group: its entries
     arc_alive = bin_index[3]  # per arc of the group: live bins outside j's reach or beam
     group_size = max(1, scratch.shape[1] // bins)  # arcs a group's entries always hold
-    first_edge = edges[0]
     fully = 0
     crossings = 0
     occluding = 0
@@ -255,7 +452,7 @@ def evidence_add(
     end = first_older + n_older
     for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
         mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
-                   near_flags[lo:hi])
+                  near_flags[lo:hi])
         for i in range(lo, hi):
             near[n_near] = i
             n_near += near_flags[i]
@@ -274,21 +471,7 @@ def evidence_add(
                     slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
                     counts, spill, spilled)
                 crossings += kept
-            # Pass 1: which bins are left to weigh (free evidence below T) and lie in j's
-            # reach and beam; no branch, so the compiler runs it on several bins at once.
-            alive_bins = 0
-            n_in = 0
-            for k in range(bins):
-                vx = bx[i, k] - xj
-                vy = by[i, k] - yj
-                d2 = vx * vx + vy * vy
-                along = vx * cj + vy * sj
-                weigh = not free[i, k] >= threshold
-                # Outside j's reach or beam (along ≥ d cos(φ/2), squared: no root).
-                outside = (d2 >= reach2) | (along <= 0.0) | (along * along < d2 * cos_half2)
-                in_beam[k] = weigh & (not outside)
-                alive_bins += weigh & outside
-                n_in += weigh & (not outside)
+            alive_bins, n_in = _mark_bins(i, beam, threshold, bx, by, free, in_beam)
             if n_in == 0:
                 # Nothing to weigh: pass 3 would add nothing (its sums would add 0.0 to sums
                 # of non-negative terms, which leaves them as they are).
@@ -300,116 +483,26 @@ def evidence_add(
             arc_marked[group_end - group] = n_in
             arc_alive[group_end - group] = alive_bins
             group_end += 1
-            e = n_entries
-            for k in range(bins):  # the bins to weigh, in order, as the group's entries
-                e_bin[e] = k
-                e += in_beam[k]
-            for e in range(n_entries, n_entries + n_in):
-                k = e_bin[e]
-                vx = bx[i, k] - xj
-                vy = by[i, k] - yj
-                e_vx[e] = vx
-                e_vy[e] = vy
-                e_d2[e] = vx * vx + vy * vy
-                e_ex[e] = ex[i, k]
-                e_ey[e] = ey[i, k]
+            _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
             n_entries += n_in
-        # Pass 2: detect_probability, inlined, for every entry of the group at once (one
-        # loop over all of them: the compiler runs it on several entries at once when they
-        # are many, 20 or more, and the entries are only the bins to weigh, 7 of an older
-        # arc's 24 at history 1,000). np.divide is ``/`` (the same rounding) without numba's
-        # zero-divisor test, whose branch would keep the loop scalar; bins in the beam have
-        # d > 0 (along > 0) unless d² underflows (a range near 1e-300: then inv_d = inf and
-        # the values stay finite where ``/`` raised ZeroDivisionError).
-        for e in range(n_entries):
-            vx = e_vx[e]
-            vy = e_vy[e]
-            d = math.sqrt(e_d2[e])
-            inv_d = np.divide(1.0, d)
-            sine = (cj * vy - sj * vx) * inv_d  # of the bin's angle to j's axis
-            u = min(np.divide(abs(sine), sin_half), 1.0)
-            p_beam = np.divide(max_detect * (1.0 - edge_loss * u * u), 1.0 + d * inv_scale)
-            cos_gamma = abs(e_ex[e] * vx + e_ey[e] * vy) * inv_d
-            e_d[e] = d
-            e_sine[e] = sine
-            e_beam[e] = p_beam
-            e_cos[e] = cos_gamma
-            p = p_beam * incidence_gain(cos_gamma, cos_full, cos_zero, rough)
-            e_p[e] = p
-            # What the support path needs: the localised support, the bin of j behind.
-            e_loc[e] = p * abs(e_ex[e] * vy - e_ey[e] * vx) * inv_d
-            e_guess[e] = sine_guess(sine, first_edge, bins, edge_scale)
-        # Pass 3: the evidence, arc after arc, in bin order.
+        # Pass 2: P_detect of every entry of the group at once (one loop the compiler
+        # vectorises when the entries are many).
+        _detect_entries(n_entries, beam, params.max_detect, params.rough, edges, edge_scale,
+                        scratch, e_guess)
+        # Pass 3: the evidence, arc after arc, in bin order, then the arc's sums.
         start = 0
         for g in range(group, group_end):
             i = near[g]
-            ox = x[i] - xj
-            oy = y[i] - yj
+            ox = x[i] - beam.x
+            oy = y[i] - beam.y
             other = sensor[i] != sensor[slot]
             distinct = other or ox * ox + oy * oy >= beam.spacing2
             half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
-            alive_bins = arc_alive[g - group]
-            top_support = 0.0
-            top_looked = 0.0
             stop = start + arc_marked[g - group]
-            for e in range(start, stop):
-                k = e_bin[e]
-                d = e_d[e]
-                if d >= free_r and abs(d - beam.r) > params.support_tolerance:
-                    alive_bins += 1
-                    continue
-                vx = e_vx[e]
-                vy = e_vy[e]
-                sine = e_sine[e]
-                p_beam = e_beam[e]
-                p = e_p[e]
-                if d < free_r:
-                    f = free[i, k]
-                    touched[i] = True
-                    if distinct:
-                        top_looked = max(top_looked, p_beam)
-                    established = (support[i, k] >= params.establish and f < 0.5 * threshold)
-                    if d < free_r - params.tolerance:
-                        top_through = max(top_through, support[i, k])
-                    if established and d < free_r - params.tolerance:
-                        # An established surface j looked past at a glancing angle: the bins
-                        # of j behind it cannot hold j's echo (sound does not pass through
-                        # walls).
-                        along = vx * cj + vy * sj
-                        occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
-                                                     half_bin_arc / d, beam, free, threshold)
-                        touched[slot] = True
-                    factor = params.protect if established else 1.0
-                    w = -math.log1p(-p) * factor
-                    f += w
-                    free[i, k] = f
-                    if f < threshold:
-                        alive_bins += 1
-                        if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-                            # Kept for the transmission pass (after j's support is known).
-                            passed[n_passed, 0] = i
-                            passed[n_passed, 1] = k
-                            passed[n_passed, 2] = bin_from_guess(e_guess[e], sine, edges, bins)
-                            passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
-                            passed[n_passed, 4] = factor
-                            passed[n_passed, 5] = w
-                            n_passed += 1
-                else:  # on j's echo circle: support, not freespace
-                    alive_bins += 1
-                    touched[i] = True
-                    touched[slot] = True
-                    top_support = max(top_support, p)
-                    # Localised support: times the sine of the angle between the two circles
-                    # there (tangent circles, one sensor stepping along its axis, say nothing
-                    # of *where* on the arc the echo came from).
-                    support[i, k] += p
-                    kb = bin_from_guess(e_guess[e], sine, edges, bins)
-                    support[slot, kb] += p
-                    loc = e_loc[e]
-                    located[i, k] += loc
-                    located[slot, kb] += loc
-                    if other:
-                        trans[kb] += p
+            alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
+                slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
+                beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
+                trans, passed, n_passed, occluding, top_through)
             start = stop
             # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
             if distinct:
