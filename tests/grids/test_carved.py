@@ -700,7 +700,9 @@ def test_a_map_read_after_every_batch_is_the_map_read_once(no_echo: bool, fresh:
 
 
 def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
-    from sonarcarve.grids.carved.scan import _bearing_off, _cos_half, _within
+    from sonarcarve.grids.carved.scan import bearing_off as _bearing_off
+    from sonarcarve.grids.carved.scan import cos_bound as _cos_half
+    from sonarcarve.grids.carved.scan import within as _within
 
     rng = np.random.default_rng(0)
     cases = 0

@@ -1,5 +1,12 @@
-"""An arc's occupied band: the log-odds it adds (:func:`_arc_value`), and drawing, moving and
-taking back a band in a grid (:func:`_draw_arc`, :func:`_redraw`, :func:`_undraw`)."""
+"""An arc's occupied band: its value, and drawing, moving and taking it back in a grid.
+
+An arc adds ``l_k = c · s · logit(p_hit)``, ``s = min(1, L / (r (θ2' - θ1')))``, to each cell of its
+band (:func:`arc_value`; a fresh arc ``c · logit(p_hit)``): the cells whose centre lies within
+``b`` of the circle of radius ``r`` and whose bearing lies in the carved interval widened by
+``h / 2r`` (:func:`draw_arc`). A live arc whose interval or value changed is moved in one pass
+(:func:`redraw`, :func:`_move_arc`): the same additions as taking it out (:func:`undraw`) and
+drawing it again. ``docs/carved-grid.md``, "The sensor model" and "Following carving over time".
+"""
 
 from __future__ import annotations
 
@@ -9,25 +16,27 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.heard import _heard_bin
-from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.heard import heard_bin
+from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.carved.scan import (
-    _bearing_off,
-    _cell_range,
-    _cos_half,
-    _ring_columns,
-    _sector_box,
-    _within,
+    bearing_off,
+    cell_range,
+    cos_bound,
+    ring_columns,
+    sector_box,
+    within,
 )
 from sonarcarve.typing import FloatArray
 
+__all__ = ["arc_value", "draw_arc", "redraw", "undraw"]
+
 
 @compiled_inline
-def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model,
-               fresh: bool = False) -> float:
-    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``; a
-    ``fresh`` arc (the newest reading of its sensor, :attr:`CarvedGridParams.fresh_arcs`)
-    ``c · logit(p_hit)``, unspread."""
+def arc_value(r: float, lo: float, hi: float, weight: float, m: Model,
+              fresh: bool = False) -> float:
+    """Log-odds one arc adds to each cell of its carved band: ``c · s · logit(p_hit)``; a ``fresh``
+    arc (the newest reading of its sensor,
+    :attr:`~sonarcarve.grids.carved.CarvedGridParams.fresh_arcs`) ``c · logit(p_hit)``, unspread."""
     if not weight > 0.0:
         return 0.0
     s = 1.0
@@ -39,9 +48,9 @@ def _arc_value(r: float, lo: float, hi: float, weight: float, m: _Model,
 
 
 @compiled_inline
-def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
-              m: _Model, x: float, y: float, r: float, lo: float, hi: float,
-              value: float) -> None:
+def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
+             m: Model, x: float, y: float, r: float, lo: float, hi: float,
+             value: float) -> None:
     """Add ``value`` to the cells of the arc's band (clamped into ``[l_min, l_max]`` if
     ``clamp``): centre within ``band`` of the circle, bearing within ``[lo, hi]`` widened by
     ``h / 2r``. A final (``clamp``) band with ``value > 0`` also records in ``heard`` the
@@ -57,15 +66,15 @@ def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np
     half = 0.5 * (t2 - t1)
     r_in = max(0.0, r - band)
     r_out = r + band
-    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, r_in, r_out)
-    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    xlo, ylo, xhi, yhi = sector_box(x, y, t1, t2, r_in, r_out)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
     # Only a plain live draw needs no bearing: it then takes the cheap bearing test.
     plain = not clamp and not profile > 0.0
-    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), cos_bound(half)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 dx = xmin + (j + 0.5) * h - x
@@ -73,10 +82,10 @@ def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np
                 if abs(d - r) > band:
                     continue
                 if plain:
-                    if _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                    if within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
                         grid[i, j] += value
                     continue
-                off = _bearing_off(dx, dy, mid)
+                off = bearing_off(dx, dy, mid)
                 if abs(off) > half:
                     continue
                 v = value
@@ -86,16 +95,16 @@ def _draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np
                 if clamp:
                     grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + v))
                     if v > 0.0:
-                        heard[i, j] |= 1 << _heard_bin(mid + off)
+                        heard[i, j] |= 1 << heard_bin(mid + off)
                 else:
                     grid[i, j] += v
 
 
 @compiled  # its own function: inlined into the refresh loop, that loop ran 2x slower
-def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
-            drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
-            r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
-            m: _Model) -> int:
+def redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
+           drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
+           r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
+           m: Model) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
     changed anything. The same arc drawn before with another interval or value is moved in
     one pass (:func:`_move_arc`: the same additions, cell by cell, as taking it out and
@@ -109,8 +118,8 @@ def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
                   lo, hi, value)
     else:
         if drawn_seq[slot] >= 0:
-            _undraw(live, heard, m, drawn, slot)
-        _draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
+            undraw(live, heard, m, drawn, slot)
+        draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
     drawn[slot, 0] = x
     drawn[slot, 1] = y
     drawn[slot, 2] = r
@@ -122,17 +131,17 @@ def _redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
 
 
 @compiled_inline
-def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
+def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: Model,
               x: float, y: float, r: float,
               lo0: float, hi0: float, value0: float, lo1: float, hi1: float,
               value1: float) -> None:
-    """``_draw_arc(live, ..., lo0, hi0, value0)`` then ``_draw_arc(live, ..., lo1, hi1,
+    """``draw_arc(live, ..., lo0, hi0, value0)`` then ``draw_arc(live, ..., lo1, hi1,
     value1)`` for one arc (same origin and radius), in one pass over the cells: each cell of
     the band gets the same two additions in the same order (so the same sum, bit for bit), and
     its distance and bearing are computed once instead of twice."""
     if value0 == 0.0 or value1 == 0.0:  # one of the two draws nothing
-        _draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0)
-        _draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1)
+        draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0)
+        draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1)
         return
     xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
     ny, nx = live.shape
@@ -143,15 +152,15 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
     ta1, tb1 = lo1 - widen, hi1 + widen
     mid0, half0 = 0.5 * (ta0 + tb0), 0.5 * (tb0 - ta0)
     mid1, half1 = 0.5 * (ta1 + tb1), 0.5 * (tb1 - ta1)
-    xlo0, ylo0, xhi0, yhi0 = _sector_box(x, y, ta0, tb0, r_in, r_out)
-    xlo1, ylo1, xhi1, yhi1 = _sector_box(x, y, ta1, tb1, r_in, r_out)
-    j0, j1 = _cell_range(min(xlo0, xlo1), max(xhi0, xhi1), xmin, h, nx)
-    i0, i1 = _cell_range(min(ylo0, ylo1), max(yhi0, yhi1), ymin, h, ny)
-    cm0, sm0, ch0 = math.cos(mid0), math.sin(mid0), _cos_half(half0)
-    cm1, sm1, ch1 = math.cos(mid1), math.sin(mid1), _cos_half(half1)
+    xlo0, ylo0, xhi0, yhi0 = sector_box(x, y, ta0, tb0, r_in, r_out)
+    xlo1, ylo1, xhi1, yhi1 = sector_box(x, y, ta1, tb1, r_in, r_out)
+    j0, j1 = cell_range(min(xlo0, xlo1), max(xhi0, xhi1), xmin, h, nx)
+    i0, i1 = cell_range(min(ylo0, ylo1), max(yhi0, yhi1), ymin, h, ny)
+    cm0, sm0, ch0 = math.cos(mid0), math.sin(mid0), cos_bound(half0)
+    cm1, sm1, ch1 = math.cos(mid1), math.sin(mid1), cos_bound(half1)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 dx = xmin + (j + 0.5) * h - x
@@ -159,24 +168,24 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
                 if abs(d - r) > band:
                     continue
                 if profile > 0.0:
-                    off = _bearing_off(dx, dy, mid0)
+                    off = bearing_off(dx, dy, mid0)
                     if abs(off) <= half0:
                         u = off / half0
                         live[i, j] += value0 * min(1.0, profile * (1.0 - u * u))
-                    off = _bearing_off(dx, dy, mid1)
+                    off = bearing_off(dx, dy, mid1)
                     if abs(off) <= half1:
                         u = off / half1
                         live[i, j] += value1 * min(1.0, profile * (1.0 - u * u))
                     continue
-                if _within(dx, dy, d, mid0, half0, cm0, sm0, ch0):
+                if within(dx, dy, d, mid0, half0, cm0, sm0, ch0):
                     live[i, j] += value0
-                if _within(dx, dy, d, mid1, half1, cm1, sm1, ch1):
+                if within(dx, dy, d, mid1, half1, cm1, sm1, ch1):
                     live[i, j] += value1
 
 
 @compiled_inline
-def _undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: _Model,
-            drawn: FloatArray, slot: int) -> None:
+def undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: Model,
+           drawn: FloatArray, slot: int) -> None:
     """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``."""
-    _draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
-              drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])
+    draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
+             drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])

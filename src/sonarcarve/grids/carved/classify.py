@@ -1,4 +1,6 @@
-"""Any grid's cells as occupied, free or unknown (:func:`trinary`), each grid by its own rule."""
+"""Any grid's cells as occupied, free or unknown (:func:`trinary`), each grid by its own rule: ROS
+``nav_msgs/OccupancyGrid``'s 100, 0 and -1 (``docs/carved-grid.md``, "The grids' shared protocol").
+"""
 
 from __future__ import annotations
 
@@ -20,15 +22,15 @@ __all__ = ["trinary"]
 def trinary(grid: OccupancyMap) -> Int8Grid:
     """Occupied (100), free (0) or unknown (-1) for every cell, shape ``grid.shape``.
 
-    Each grid with its own rule: :class:`CarvedGrid` with its
-    :attr:`CarvedGridParams.occupied_threshold` and ``free_threshold``, compared in log-odds
-    (:meth:`CarvedGrid.trinary`: equal to comparing probabilities up to rounding within a few
-    ulp of the thresholds);
+    Each grid with its own rule: :class:`~sonarcarve.grids.carved.CarvedGrid` with its
+    :attr:`~sonarcarve.grids.carved.CarvedGridParams.occupied_threshold` and ``free_threshold``,
+    compared in log-odds (:meth:`~sonarcarve.grids.carved.CarvedGrid.trinary`: equal to comparing
+    probabilities up to rounding within a few ulp of the thresholds);
     :class:`~sonarcarve.grids.RangeSensorLayer` as it writes its master costmap
-    (:meth:`~sonarcarve.grids.RangeSensorLayer.costs`: lethal above ``mark_threshold``, free
-    below ``clear_threshold``); :class:`~sonarcarve.grids.OccupancyGrid` (Elfes) occupied above
-    its default threshold (0.65) and free below 0.196 (map_saver's ``free_thresh``); any other
-    :class:`OccupancyMap` by probability with those two thresholds.
+    (:meth:`~sonarcarve.grids.RangeSensorLayer.costs`: lethal above ``mark_threshold``, free below
+    ``clear_threshold``); :class:`~sonarcarve.grids.OccupancyGrid` (Elfes) occupied above its
+    default threshold (0.65) and free below 0.196 (map_saver's ``free_thresh``); any other
+    :class:`~sonarcarve.grids.OccupancyMap` by probability with those two thresholds.
 
     Examples
     --------

@@ -1,4 +1,11 @@
-"""One reading's free space: the beam's cells nearer than its echo (:func:`_free_space`)."""
+"""One reading's free space: the beam's cells nearer than ``r - b``, final at once.
+
+``l += γ(α) f(d) · logit(p_miss)``, ``γ(α) = 1 - (2α/φ)²``, ``f(d) = (1 - tanh(2 (d - d_f))) / 2``
+(``docs/carved-grid.md``, "The sensor model"); at a cell believed occupied (``base > 0``)
+``l += γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the audibility of its
+surface from the beam's bearing ("Clearing what was heard"), raised to that of the most audible such
+cell at most ``see_through`` in front of it on its ray (:func:`_free_behind`, "Seen through").
+"""
 
 from __future__ import annotations
 
@@ -8,14 +15,16 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_inline
-from sonarcarve.grids.carved.heard import _audibility, _heard_bin
-from sonarcarve.grids.carved.model import _Model
-from sonarcarve.grids.carved.scan import _cell_range, _sector_box
+from sonarcarve.grids.carved.heard import audibility, heard_bin
+from sonarcarve.grids.carved.model import Model
+from sonarcarve.grids.carved.scan import cell_range, sector_box
 from sonarcarve.typing import FloatArray
+
+__all__ = ["HELD", "free_space"]
 
 #: Cells believed occupied one beam's free space can hold back for :func:`_free_behind`; the
 #: rest get the plain update.
-_HELD = 512
+HELD = 512
 
 
 @compiled_inline
@@ -49,26 +58,27 @@ def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x:
 
 
 @compiled_inline
-def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
-                x: float, y: float, theta: float, r: float, half: float,
-                held: FloatArray) -> None:
+def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
+               x: float, y: float, theta: float, r: float, half: float,
+               held: FloatArray) -> None:
     """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
     occupied (``base <= 0``), and where ``aware`` on the others
     ``γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the cell's
-    :func:`_audibility` from the beam's bearing (``aware`` False: the fade for all).
+    :func:`~sonarcarve.grids.carved.heard.audibility` from the beam's bearing (``aware`` False: the
+    fade for all).
 
     A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
-    from (module docstring)."""
+    from (``docs/carved-grid.md``, "Clearing what was heard")."""
     reach = r - m.band
     if reach <= 0.0:
         return
     xmin, ymin, h, l_miss, fade = m.xmin, m.ymin, m.h, m.l_miss, m.fade
     ny, nx = base.shape
     c, s, cos_half = math.cos(theta), math.sin(theta), math.cos(half)
-    xlo, ylo, xhi, yhi = _sector_box(x, y, theta - half, theta + half, 0.0, reach)
-    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
+    xlo, ylo, xhi, yhi = sector_box(x, y, theta - half, theta + half, 0.0, reach)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
     t1, t2 = theta - half, theta + half
     u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
     n_held = 0
@@ -79,7 +89,7 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
         lo, hi = _row_span(dy, reach, half, u1x, u1y, u2x, u2y)
         if lo > hi:
             continue
-        ja, jb = _cell_range(x + lo, x + hi, xmin, h, nx)
+        ja, jb = cell_range(x + lo, x + hi, xmin, h, nx)
         for j in range(max(j0, ja), min(j1, jb) + 1):
             dx = xmin + (j + 0.5) * h - x
             d2 = dx * dx + dy * dy
@@ -95,7 +105,7 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
             if fade < math.inf:
                 miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
             if m.aware and cell > 0.0:
-                audible = _audibility(int(heard[i, j]), _heard_bin(theta + a))
+                audible = audibility(int(heard[i, j]), heard_bin(theta + a))
                 if m.through > 0.0 and n_held < held.shape[0]:
                     held[n_held, 0] = i
                     held[n_held, 1] = j
@@ -123,7 +133,7 @@ def _free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
 
 
 @compiled_inline
-def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
+def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
                  held: FloatArray, n: int) -> None:
     """The free space of the cells believed occupied that one beam passed (``held``: row,
     column, distance, bearing off the axis, profile, audibility, faded miss), each as audible

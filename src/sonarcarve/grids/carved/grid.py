@@ -1,4 +1,8 @@
-"""The carved grid itself, :class:`CarvedGrid`: its state, the updates, and reading the map."""
+"""The carved grid, :class:`CarvedGrid`: its state (``base``, ``live``, the marks, the heard
+bearings, a record per history slot), folding readings in, and reading the map
+``l = clamp(base + live)``. ``docs/carved-grid.md``, "Following carving over time", "Memory" and
+"Reading the map".
+"""
 
 from __future__ import annotations
 
@@ -7,24 +11,24 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.grids.carved.heard import _HEARD_DTYPE
-from sonarcarve.grids.carved.intervals import _carving_intervals, _intervals, _known_models
+from sonarcarve.grids.carved.heard import HEARD_DTYPE
+from sonarcarve.grids.carved.intervals import carving_intervals, intervals, known_models
 from sonarcarve.grids.carved.kernels import (
-    _Finals,
-    _fold_kernel,
-    _refresh_kernel,
-    _stale_slots,
-    _trinary_kernel,
-    _undraw_kernel,
+    Finals,
+    fold_kernel,
+    refresh_kernel,
+    stale_slots,
+    trinary_kernel,
+    undraw_kernel,
 )
-from sonarcarve.grids.carved.model import _logit, _model_of
+from sonarcarve.grids.carved.model import logit, model_of
 from sonarcarve.grids.carved.params import (
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
     CarvedGridParams,
-    _check_probability,
+    check_probability,
 )
-from sonarcarve.grids.carved.repeats import _repeat_kernel
+from sonarcarve.grids.carved.repeats import repeat_kernel
 from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.grids.elfes import MAX_CELLS
 from sonarcarve.grids.occupancy import Int8Grid
@@ -38,7 +42,7 @@ from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 __all__ = ["CarvedGrid"]
 
 class CarvedGrid(CellGrid):
-    """Log-odds occupancy grid whose occupied bands are the carved arcs (module docstring).
+    """Log-odds occupancy grid whose occupied bands are the carved arcs (``docs/carved-grid.md``).
 
     Parameters
     ----------
@@ -53,12 +57,13 @@ class CarvedGrid(CellGrid):
         ``make_method(DEFAULT_METHOD, MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))``
         (:data:`DEFAULT_METHOD`; specular-aware carving alone, the default before, is
         ``make_method("carve", MethodConfig(max_incidence=math.radians(30)))``, paper carving
-        ``make_method("carve")``). Any method works: the band is drawn ``width`` wide around
-        the point's bearing (:class:`~sonarcarve.methods.Estimates` ``xy``; for evidence
-        carving, whose point is off its kept run's middle, a measured choice: :func:`_intervals`);
-        its ``confidence``, where given, weighs the occupied band.
+        ``make_method("carve")``). Any method works: the band is drawn ``width`` wide around the
+        point's bearing (:class:`~sonarcarve.methods.Estimates` ``xy``; for evidence carving, whose
+        point is off its kept run's middle, a measured choice:
+        :func:`~sonarcarve.grids.carved.intervals.intervals`); its ``confidence``, where given,
+        weighs the occupied band.
     params : CarvedGridParams, optional
-        The sensor model (default: :class:`CarvedGridParams` defaults).
+        The sensor model (default: :class:`~sonarcarve.grids.carved.CarvedGridParams` defaults).
 
     Attributes
     ----------
@@ -98,7 +103,7 @@ class CarvedGrid(CellGrid):
             raise GridError(msg)
         self._params = params if params is not None else CarvedGridParams()
         self._method = method
-        self._model = _model_of(self._params, xmin, ymin, self._resolution, self.band)
+        self._model = model_of(self._params, xmin, ymin, self._resolution, self.band)
         self._l_min, self._l_max = self._model.l_min, self._model.l_max
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
@@ -106,7 +111,7 @@ class CarvedGrid(CellGrid):
         # that whether an echo is explained is judged on the spread arcs alone.
         self._points = np.zeros((ny, nx), dtype=np.float32)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
-        self._heard = np.zeros((ny, nx), dtype=_HEARD_DTYPE)
+        self._heard = np.zeros((ny, nx), dtype=HEARD_DTYPE)
         size = method.history.storage_size
         # Per slot, what was drawn into ``live``: x, y, r, lo, hi, value; and the arc's
         # sequence number (its position in the stream of arcs), -1 for nothing.
@@ -114,7 +119,7 @@ class CarvedGrid(CellGrid):
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
         self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
         self._pseq = np.full(size, -1, dtype=np.int64)
-        # Per slot, the interval and weight (_intervals) of the live arc at the last read.
+        # Per slot, the interval and weight (intervals) of the live arc at the last read.
         self._lo = np.zeros(size)
         self._hi = np.zeros(size)
         self._weight = np.zeros(size)
@@ -127,8 +132,8 @@ class CarvedGrid(CellGrid):
         # Plain carving or combined: per slot, the carving state (lo, hi, status) and the
         # number of ATM crossings those were computed from, and for which arc (-1: none); a
         # read asks only for the estimates of the arcs whose state changed since
-        # (_stale_slots). Any other method is asked for every live arc.
-        self._carving, self._atm = _known_models(method)
+        # (stale_slots). Any other method is asked for every live arc.
+        self._carving, self._atm = known_models(method)
         self._seen = np.zeros((size, 3), dtype=np.float64)
         self._seen_crossings = np.zeros(size, dtype=np.int32)
         self._no_crossings = np.zeros(size, dtype=np.int32)  # carving alone keeps none
@@ -205,8 +210,8 @@ class CarvedGrid(CellGrid):
     def add_many(self, batch: ReadingBatch) -> None:
         """Fold every reading of ``batch`` in, in order.
 
-        The method checks the whole batch first (:meth:`SonarMethod.add_many`): a bad batch
-        raises :class:`~sonarcarve.readings.ReadingsError` and changes nothing.
+        The method checks the whole batch first (:meth:`~sonarcarve.methods.SonarMethod.add_many`):
+        a bad batch raises :class:`~sonarcarve.readings.ReadingsError` and changes nothing.
         """
         n = len(batch)
         if not n:
@@ -239,10 +244,10 @@ class CarvedGrid(CellGrid):
         self._keep_batch_chain(history)
         finals = self._take_pending()
         self._latest_t = max(self._latest_t, float(batch.t.max()))
-        _fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
-                     np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
-                     np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
-                     history.capacity, finals)
+        fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
+                    np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
+                    np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
+                    history.capacity, finals)
         self.readings += n
         self._stale = True
 
@@ -260,10 +265,10 @@ class CarvedGrid(CellGrid):
                       no_echo: BoolArray, half: FloatArray, first_seq: int) -> SlotArray:
         """Give the arcs that the batch's echoes repeat
         (:func:`~sonarcarve.geometry.repeats.is_repeat`) the weight factor
-        :attr:`CarvedGridParams.repeat_weight`: those of the history in ``_chain`` (by slot;
-        the next read recomputes their weights), the batch's own in ``_batch_chain`` (by
-        sequence number from ``first_seq``: a long batch reuses slots). Returns the slots of
-        the history's arcs it marked (their factor was 1)."""
+        :attr:`~sonarcarve.grids.carved.CarvedGridParams.repeat_weight`: those of the history in
+        ``_chain`` (by slot; the next read recomputes their weights), the batch's own in
+        ``_batch_chain`` (by sequence number from ``first_seq``: a long batch reuses slots). Returns
+        the slots of the history's arcs it marked (their factor was 1)."""
         history = self._method.history
         n_echo = int(np.count_nonzero(~no_echo))
         self._batch_first = first_seq
@@ -271,14 +276,14 @@ class CarvedGrid(CellGrid):
         if self._params.repeat_weight >= 1.0:
             return np.zeros(0, dtype=np.int64)
         marked = np.empty(history.capacity, dtype=np.int64)  # each live arc marked once at most
-        count = _repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked, seqs,
-                               first_seq, no_echo, np.ascontiguousarray(batch.sensor),
-                               np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
-                               np.ascontiguousarray(batch.range),
-                               np.ascontiguousarray(batch.theta), np.ascontiguousarray(half),
-                               history.sensor, history.x, history.y, history.r, history.theta,
-                               history.beam_width, history.capacity,
-                               self._params.range_tolerance, self._params.repeat_weight)
+        count = repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked, seqs,
+                              first_seq, no_echo, np.ascontiguousarray(batch.sensor),
+                              np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
+                              np.ascontiguousarray(batch.range),
+                              np.ascontiguousarray(batch.theta), np.ascontiguousarray(half),
+                              history.sensor, history.x, history.y, history.r, history.theta,
+                              history.beam_width, history.capacity,
+                              self._params.range_tolerance, self._params.repeat_weight)
         return marked[:count]
 
     def _keep_batch_chain(self, history: SonarHistory) -> None:
@@ -305,24 +310,24 @@ class CarvedGrid(CellGrid):
         """Arcs leaving the history: their live contribution out, their final one pending."""
         seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
         self._next_final += len(slots)
-        _undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
-                       self._model)
-        _undraw_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
-                       self._model)
+        undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
+                      self._model)
+        undraw_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
+                      self._model)
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
-        lo, hi, weight = _intervals(x, y, est)
+        lo, hi, weight = intervals(x, y, est)
         weight *= self._chain_of(slots, seqs)
         self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
                               seqs.astype(np.float64)))
 
-    def _take_pending(self) -> _Finals:
+    def _take_pending(self) -> Finals:
         if self._pending:
             cols = [np.concatenate(c) for c in zip(*self._pending, strict=True)]
         else:
             cols = [np.zeros(0) for _ in range(7)]
         self._pending = []
-        return _Finals(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5],
-                       cols[6].astype(np.int64))
+        return Finals(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5],
+                      cols[6].astype(np.int64))
 
     def _sync(self) -> None:
         """Bring ``live`` (and the points) up to date with the method's current carved
@@ -337,42 +342,43 @@ class CarvedGrid(CellGrid):
             self._update_intervals(history, slots, seqs)
             with_points = self._params.fresh_arcs
             fresh = self._fresh(slots, seqs) if with_points else np.zeros(len(slots), dtype=bool)
-            _refresh_kernel(self._base, self._live, self._points, self._drawn,
-                            self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
-                            history.y, history.r, self._lo, self._hi, self._weight, fresh,
-                            with_points, self._heard, self._model, history.theta1,
-                            history.theta2)
+            refresh_kernel(self._base, self._live, self._points, self._drawn,
+                           self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
+                           history.y, history.r, self._lo, self._hi, self._weight, fresh,
+                           with_points, self._heard, self._model, history.theta1,
+                           history.theta2)
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,
                           seqs: npt.NDArray[np.int64]) -> None:
-        """``_lo, _hi, _weight`` of the live ``slots`` (arcs ``seqs``) as :func:`_intervals`
-        gives them from the method's estimates. With plain carving an estimate is a function
-        of the arc's row and its model's ``lo, hi, status`` alone
-        (:meth:`~sonarcarve.methods.carving.CarvingModel.estimates`), with combined carving of
-        those and the arc's kept ATM crossings, so only the arcs whose state changed since the
-        last read are computed: for carving alone from the model's state as its estimates
-        would (:func:`_carving_intervals`), for combined by asking the method for them alone
-        (row by row, the same numbers as asking for every arc). Measured for combined
-        (``benchmarks/grid_reads.py``, office, a read every 5 readings): the grid's CPU per
-        reading 4.32x -> 3.87x the range sensor layer's at 0.10 m, 1.98x -> 1.97x at 0.05 m."""
+        """``_lo, _hi, _weight`` of the live ``slots`` (arcs ``seqs``) as
+        :func:`~sonarcarve.grids.carved.intervals.intervals` gives them from the method's
+        estimates. With plain carving an estimate is a function of the arc's row and its model's
+        ``lo, hi, status`` alone (:meth:`~sonarcarve.methods.carving.CarvingModel.estimates`), with
+        combined carving of those and the arc's kept ATM crossings, so only the arcs whose state
+        changed since the last read are computed: for carving alone from the model's state as its
+        estimates would (:func:`~sonarcarve.grids.carved.intervals.carving_intervals`), for
+        combined by asking the method for them alone (row by row, the same numbers as asking for
+        every arc). Measured for combined (``benchmarks/grid_reads.py``, office, a read every 5
+        readings): the grid's CPU per reading 4.32x -> 3.87x the range sensor layer's at 0.10 m,
+        1.98x -> 1.97x at 0.05 m."""
         carving = self._carving
         if carving is None:
             stale = slots
-            lo, hi, weight = _intervals(history.x[slots], history.y[slots],
-                                        self._method.estimates(slots))
+            lo, hi, weight = intervals(history.x[slots], history.y[slots],
+                                       self._method.estimates(slots))
         else:
             crossings = self._no_crossings if self._atm is None else self._atm.counts
-            count = _stale_slots(slots, seqs, carving.lo, carving.hi, carving.status, crossings,
-                                 self._seen, self._seen_crossings, self._seen_seq, self._changed)
+            count = stale_slots(slots, seqs, carving.lo, carving.hi, carving.status, crossings,
+                                self._seen, self._seen_crossings, self._seen_seq, self._changed)
             if not count:
                 return
             stale = slots[self._changed[:count]]
             if self._atm is None:
-                lo, hi, weight = _carving_intervals(history, carving, stale)
+                lo, hi, weight = carving_intervals(history, carving, stale)
             else:
-                lo, hi, weight = _intervals(history.x[stale], history.y[stale],
-                                            self._method.estimates(stale))
+                lo, hi, weight = intervals(history.x[stale], history.y[stale],
+                                           self._method.estimates(stale))
         self._lo[stale] = lo
         self._hi[stale] = hi
         self._weight[stale] = weight * self._chain[stale]
@@ -415,9 +421,10 @@ class CarvedGrid(CellGrid):
         return np.asarray(1.0 / (1.0 + np.exp(-self.log_odds)))
 
     def trinary(self) -> Int8Grid:
-        """:data:`OCCUPIED` (100) where the log-odds :attr:`log_odds` is above
-        ``logit(`` :attr:`CarvedGridParams.occupied_threshold` ``)``, :data:`FREE` (0) below
-        ``logit(free_threshold)``, else :data:`UNKNOWN` (-1).
+        """:data:`~sonarcarve.grids.OCCUPIED` (100) where the log-odds :attr:`log_odds` is above
+        ``logit(`` :attr:`~sonarcarve.grids.carved.CarvedGridParams.occupied_threshold` ``)``,
+        :data:`~sonarcarve.grids.FREE` (0) below ``logit(free_threshold)``, else
+        :data:`~sonarcarve.grids.UNKNOWN` (-1).
 
         Compared in log-odds, one pass, no temporary grids. The logistic is monotone, so this
         is comparing :meth:`probabilities` with the thresholds, up to rounding: a cell whose
@@ -425,18 +432,18 @@ class CarvedGrid(CellGrid):
         """
         self._sync()
         out = np.empty(self.shape, dtype=np.int8)
-        _trinary_kernel(self._base, self._live, self._points, self._l_min, self._l_max,
-                        _logit(self._params.occupied_threshold),
-                        _logit(self._params.free_threshold), out)
+        trinary_kernel(self._base, self._live, self._points, self._l_min, self._l_max,
+                       logit(self._params.occupied_threshold),
+                       logit(self._params.free_threshold), out)
         return out
 
     def occupied_mask(self, threshold: float | None = None) -> BoolArray:
         """Cells whose log-odds is above ``logit(threshold)`` (default
-        :attr:`CarvedGridParams.occupied_threshold`), shape :attr:`shape`: the probability
-        above ``threshold`` up to rounding, as :meth:`trinary`."""
-        limit = self._params.occupied_threshold if threshold is None else _check_probability(
+        :attr:`~sonarcarve.grids.carved.CarvedGridParams.occupied_threshold`), shape :attr:`shape`:
+        the probability above ``threshold`` up to rounding, as :meth:`trinary`."""
+        limit = self._params.occupied_threshold if threshold is None else check_probability(
             "threshold", threshold, 0.0, 1.0)
-        return np.asarray(self.log_odds > _logit(limit))
+        return np.asarray(self.log_odds > logit(limit))
 
     def occupied_points(self, threshold: float | None = None) -> FloatArray:
         """Centres of the occupied cells (:meth:`occupied_mask`), shape (n, 2), row-major."""

@@ -1,5 +1,11 @@
-"""Where each cell was heard from: :data:`HEARD_BINS` sectors of bearing, one bit each, and the
-audibility of a cell's surface to a beam from a given bearing."""
+"""Where each cell was heard from, and how audible its surface is to a beam from a bearing.
+
+A final band records in each cell it marks the bearing the cell was heard from, one bit in one of
+:data:`HEARD_BINS` sectors of 11.25° (:func:`heard_bin`); a beam from sector ``k`` would have heard
+that cell's surface with audibility ``A`` = 1 within :data:`HEARD_NEAR` sector of a bearing it was
+heard from, 1/2 one sector farther, else 0 (:func:`audibility`). ``docs/carved-grid.md``, "Clearing
+what was heard".
+"""
 
 from __future__ import annotations
 
@@ -8,16 +14,16 @@ import math
 import numpy as np
 
 from sonarcarve.geometry._compiled import compiled_inline
-from sonarcarve.grids.carved.scan import _TWO_PI
+from sonarcarve.grids.carved.scan import TWO_PI
 
-__all__ = ["HEARD_BINS", "HEARD_NEAR"]
+__all__ = ["HEARD_BINS", "HEARD_DTYPE", "HEARD_NEAR", "audibility", "heard_bin"]
 
 #: Sectors of bearing in which the carved grid records where each cell was heard from.
 HEARD_BINS = 32
 #: One bit a sector in each cell's word: more sectors than bits would shift out of it silently.
-_HEARD_DTYPE = np.uint32
-if not 0 < HEARD_BINS <= np.iinfo(_HEARD_DTYPE).bits:
-    raise AssertionError(f"HEARD_BINS must lie in 1..{np.iinfo(_HEARD_DTYPE).bits}, "
+HEARD_DTYPE = np.uint32
+if not 0 < HEARD_BINS <= np.iinfo(HEARD_DTYPE).bits:
+    raise AssertionError(f"HEARD_BINS must lie in 1..{np.iinfo(HEARD_DTYPE).bits}, "
                          f"got {HEARD_BINS}")
 #: A beam within this many sectors of a bearing a cell was heard from would hear it again (one
 #: more sector: half as likely). Measured: 2 changes the box's clearing time by nothing and
@@ -30,14 +36,14 @@ HEARD_NEAR = 1
 
 
 @compiled_inline
-def _heard_bin(bearing: float) -> int:
+def heard_bin(bearing: float) -> int:
     """Bin of a ray's bearing (origin to cell) among :data:`HEARD_BINS` equal sectors."""
-    k = math.floor((bearing + math.pi) / _TWO_PI * HEARD_BINS)
+    k = math.floor((bearing + math.pi) / TWO_PI * HEARD_BINS)
     return k % HEARD_BINS
 
 
 @compiled_inline
-def _audibility(heard: int, k: int) -> float:
+def audibility(heard: int, k: int) -> float:
     """How likely a ray in bin ``k`` was to hear the surface of a cell heard from the bins
     set in ``heard``: 1 within one bin (11.25°) of a bin it was heard from, 1/2 at two bins,
     else 0."""

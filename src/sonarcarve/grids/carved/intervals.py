@@ -1,4 +1,8 @@
-"""The interval and weight each live arc's band is drawn with, from the method's estimates."""
+"""The interval ``[θ1', θ2']`` and weight ``c`` each live arc's band is drawn with, from the
+method's estimates: the point's bearing ± width/2 and the confidence (:func:`intervals`); for plain
+carving from its model's state, without the estimates' other fields (:func:`carving_intervals`).
+``docs/carved-grid.md``, "The sensor model" and "Reading the map".
+"""
 
 from __future__ import annotations
 
@@ -13,10 +17,12 @@ from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.typing import FloatArray, SlotArray
 
+__all__ = ["carving_intervals", "intervals", "known_models"]
+
 _ALIVE = int(ArcFate.ALIVE)
 
 
-def _known_models(method: SonarMethod) -> tuple[CarvingModel | None, AtmModel | None]:
+def known_models(method: SonarMethod) -> tuple[CarvingModel | None, AtmModel | None]:
     """The carving model of a plain :class:`~sonarcarve.methods.carving.CarvingMethod`, or the
     carving and ATM models of a plain :class:`~sonarcarve.methods.combined.CombinedMethod` (no
     subclass: one that overrides its estimates must be asked), else ``(None, None)``."""
@@ -29,9 +35,9 @@ def _known_models(method: SonarMethod) -> tuple[CarvingModel | None, AtmModel | 
     return None, None
 
 
-def _carving_intervals(history: SonarHistory, model: CarvingModel,
-                       slots: SlotArray) -> tuple[FloatArray, ...]:
-    """``_intervals(x, y, model.estimates(slots))`` for plain carving, with the same
+def carving_intervals(history: SonarHistory, model: CarvingModel,
+                      slots: SlotArray) -> tuple[FloatArray, ...]:
+    """``intervals(x, y, model.estimates(slots))`` for plain carving, with the same
     operations on the same numbers (so the same bits: the tests compare it with the method's
     estimates), without the fields of the estimates the grid does not read (half the cost)."""
     lo, hi = model.lo[slots], model.hi[slots]
@@ -41,7 +47,7 @@ def _carving_intervals(history: SonarHistory, model: CarvingModel,
                           0.5 * (hi - lo), weight)
 
 
-def _intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
+def intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
     """``(lo, hi, weight)`` of arcs from their estimates: the point's bearing ± width/2, and
     the confidence (1 where NaN or not modelled; 0 where the arc is not alive).
 

@@ -1,5 +1,13 @@
-"""The compiled entry points :class:`~sonarcarve.grids.carved.CarvedGrid` calls: a batch's final
-updates, arcs leaving the history, a read's refresh of the overlays, and the trinary map."""
+"""The compiled entry points :class:`~sonarcarve.grids.carved.CarvedGrid` calls.
+
+A batch's final updates in reading order (:func:`fold_kernel`: the final band of each arc that left
+the history, then the reading's free space, into ``base``); the live contribution of the arcs
+leaving the history taken out (:func:`undraw_kernel`); a read's refresh of ``live`` and of the
+marks, arc by arc where its interval or value changed (:func:`refresh_kernel`), asking for the
+estimates of only the arcs whose carving state changed (:func:`stale_slots`); and the trinary map,
+``clamp(base + live)`` against the thresholds' logits (:func:`trinary_kernel`).
+``docs/carved-grid.md``, "Following carving over time" and "Reading the map".
+"""
 
 from __future__ import annotations
 
@@ -9,15 +17,24 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import _arc_value, _draw_arc, _redraw, _undraw
-from sonarcarve.grids.carved.free_space import _HELD, _free_space
-from sonarcarve.grids.carved.mark import _refresh_points
-from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
+from sonarcarve.grids.carved.free_space import HELD, free_space
+from sonarcarve.grids.carved.mark import refresh_points
+from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
+__all__ = [
+    "Finals",
+    "fold_kernel",
+    "refresh_kernel",
+    "stale_slots",
+    "trinary_kernel",
+    "undraw_kernel",
+]
 
-class _Finals(NamedTuple):
+
+class Finals(NamedTuple):
     """Arcs that left the history in a batch, in order: where to draw their final band."""
 
     x: FloatArray
@@ -30,88 +47,90 @@ class _Finals(NamedTuple):
 
 
 @compiled
-def _fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
-                 x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
-                 half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
-                 finals: _Finals) -> None:
+def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
+                x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
+                half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
+                finals: Finals) -> None:
     """The final updates of a batch in reading order: before the free space of reading ``k``
     (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
     final band of every arc it pushed out of the history (``finals.seq + capacity <= seq``)."""
     p = 0
     nf = finals.seq.shape[0]
-    held = np.empty((_HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
+    held = np.empty((HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
     for k in range(x.shape[0]):
         while p < nf and finals.seq[p] + capacity <= seqs[k]:
             _draw_final(base, heard, m, finals, p)
             p += 1
-        _free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
+        free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
     while p < nf:
         _draw_final(base, heard, m, finals, p)
         p += 1
 
 
 @compiled_inline
-def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: _Model,
-                finals: _Finals, p: int) -> None:
+def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
+                finals: Finals, p: int) -> None:
     """Arc ``p`` of ``finals`` into ``base``, for good."""
-    value = _arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
-    _draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
-              finals.hi[p], value)
+    value = arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
+    draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
+             finals.hi[p], value)
 
 
 @compiled
-def _undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
-                   drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
-                   heard: npt.NDArray[np.uint32], m: _Model) -> None:
+def undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
+                  drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+                  heard: npt.NDArray[np.uint32], m: Model) -> None:
     """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
     for k in range(slots.shape[0]):
         slot = slots[k]
         if drawn_seq[slot] != seqs[k]:
             continue
-        _undraw(live, heard, m, drawn, slot)
+        undraw(live, heard, m, drawn, slot)
         drawn_seq[slot] = -1
 
 
 @compiled
-def _refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
-                    points: npt.NDArray[np.float32], drawn: FloatArray,
-                    drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
-                    pseq: npt.NDArray[np.int64], slots: SlotArray,
-                    seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                    lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
-                    with_points: bool, heard: npt.NDArray[np.uint32], m: _Model,
-                    theta1: FloatArray, theta2: FloatArray) -> int:
-    """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs
-    ``slots`` (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
-    (:func:`_intervals`) are indexed by slot, ``fresh`` by position. First every arc whose
-    interval or value changed is redrawn into ``live``, then the points are judged on the whole
-    updated spread map (:func:`_refresh_points`). Returns how many arcs and points changed."""
+def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], drawn: FloatArray,
+                   drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], slots: SlotArray,
+                   seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
+                   with_points: bool, heard: npt.NDArray[np.uint32], m: Model,
+                   theta1: FloatArray, theta2: FloatArray) -> int:
+    """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs ``slots``
+    (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
+    (:func:`~sonarcarve.grids.carved.intervals.intervals`) are indexed by slot, ``fresh`` by
+    position. First every arc whose interval or value changed is redrawn into ``live``, then the
+    points are judged on the whole updated spread map
+    (:func:`~sonarcarve.grids.carved.mark.refresh_points`). Returns how many arcs and points
+    changed."""
     changed = 0
     for k in range(slots.shape[0]):
         s = slots[k]
-        value = _arc_value(r[s], lo[s], hi[s], weight[s], m)
-        # _redraw's own test first: most arcs did not change, and the call costs more.
+        value = arc_value(r[s], lo[s], hi[s], weight[s], m)
+        # redraw's own test first: most arcs did not change, and the call costs more.
         if (drawn_seq[s] == seqs[k] and drawn[s, 3] == lo[s] and drawn[s, 4] == hi[s]
                 and drawn[s, 5] == value):
             continue
-        changed += _redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
-                           hi[s], value, heard, m)
+        changed += redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
+                          hi[s], value, heard, m)
     if with_points:
         for k in range(slots.shape[0]):
             if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
-            changed += _refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
-                                       seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m,
-                                       theta1[slots[k]], theta2[slots[k]])
+            changed += refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
+                                      seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m,
+                                      theta1[slots[k]], theta2[slots[k]])
     return changed
 
 
 @compiled
-def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
-                 hi: FloatArray, status: npt.NDArray[np.int8],
-                 crossings: npt.NDArray[np.int32], seen: FloatArray,
-                 seen_crossings: npt.NDArray[np.int32], seen_seq: npt.NDArray[np.int64],
-                 out: SlotArray) -> int:
+def stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
+                hi: FloatArray, status: npt.NDArray[np.int8],
+                crossings: npt.NDArray[np.int32], seen: FloatArray,
+                seen_crossings: npt.NDArray[np.int32], seen_seq: npt.NDArray[np.int64],
+                out: SlotArray) -> int:
     """Positions ``k`` (into ``out``, returns how many) of the live arcs whose state differs
     from ``seen`` (``seen_seq``: the arc it was recorded for), recording the new state: the
     carving state ``lo, hi, status`` of :class:`~sonarcarve.methods.carving.CarvingModel` and,
@@ -135,9 +154,9 @@ def _stale_slots(slots: SlotArray, seqs: npt.NDArray[np.int64], lo: FloatArray,
 
 
 @compiled
-def _trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
-                    points: npt.NDArray[np.float32], l_min: float, l_max: float,
-                    l_occupied: float, l_free: float, out: Int8Grid) -> None:
+def trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], l_min: float, l_max: float,
+                   l_occupied: float, l_free: float, out: Int8Grid) -> None:
     """Occupied (100) where ``clamp(base + (live + points)) > l_occupied``, free (0) below
     ``l_free``, else unknown (-1)."""
     ny, nx = base.shape

@@ -1,5 +1,12 @@
-"""The newest echo's mark: where a fresh arc's whole hit goes, on its band or in a side lobe,
-or none where the map explains the echo (:func:`_refresh_points`, :func:`_band_likeliest`)."""
+"""The newest echo's mark: a whole hit ``c · logit(p_hit)`` for each sensor's newest arc that the
+map does not explain (:func:`refresh_points`).
+
+Explained: a cell of the arc's band, or for a near echo of a side lobe past its beam's edges, is
+occupied in the map of spread arcs without the arc's own share (:func:`_band_likeliest`). The mark
+covers the middle ``L`` of the carved interval, unless that map favours another part of the band, or
+a side lobe, and not the middle: then it goes around the likeliest cell there.
+``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark goes" and "Side lobes".
+"""
 
 from __future__ import annotations
 
@@ -9,18 +16,20 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import _arc_value, _redraw, _undraw
-from sonarcarve.grids.carved.model import _Model
+from sonarcarve.grids.carved.band import arc_value, redraw, undraw
+from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.carved.scan import (
-    _TWO_PI,
-    _bearing_off,
-    _cell_range,
-    _cos_half,
-    _ring_columns,
-    _sector_box,
-    _within,
+    TWO_PI,
+    bearing_off,
+    cell_range,
+    cos_bound,
+    ring_columns,
+    sector_box,
+    within,
 )
 from sonarcarve.typing import FloatArray
+
+__all__ = ["refresh_points"]
 
 #: Log-odds above which a cell counts as more likely occupied than not where a fresh arc's
 #: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
@@ -35,12 +44,12 @@ _TIE = 1e-9
 
 
 @compiled_inline
-def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
-                    points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
-                    pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
-                    y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
-                    weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
-                    m: _Model, theta1: float, theta2: float) -> int:
+def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
+                   y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
+                   weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
+                   m: Model, theta1: float, theta2: float) -> int:
     """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
     ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
     without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
@@ -54,50 +63,50 @@ def _refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
         explained, at, side = _band_likeliest(base, live, m, x[slot], y[slot], r[slot],
                                               lo[slot], hi[slot], drawn[slot, 5], theta1,
                                               theta2)
-        whole = _arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+        whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
             # circle beyond the arc's own band (it draws no spread value there to raise).
             half = 0.5 * m.unit / r[slot]
             axis = 0.5 * (theta1 + theta2)
-            axis += _TWO_PI * math.floor((at - axis + math.pi) / _TWO_PI)
+            axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
             edge = 0.5 * (theta2 - theta1)
             reach = (1.0 + m.lobes) * edge
             # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
             # the mark never adds to the arc's own band (that would be more than a whole hit).
             inner = edge + m.h / r[slot]
             z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
-            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                           max(z1, at - half), min(z2, at + half), whole, heard, m)
+            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                          max(z1, at - half), min(z2, at + half), whole, heard, m)
         if not explained:
             half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
-            return _redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                           max(lo[slot], at - half), min(hi[slot], at + half),
-                           whole - drawn[slot, 5], heard, m)
+            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                          max(lo[slot], at - half), min(hi[slot], at + half),
+                          whole - drawn[slot, 5], heard, m)
     if pseq[slot] >= 0:
-        _undraw(points, heard, m, pdrawn, slot)
+        undraw(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
         return 1
     return 0
 
 
 @compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
-def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x: float,
                     y: float, r: float, lo: float, hi: float, own: float, theta1: float,
                     theta2: float) -> tuple[bool, float, float]:
     """``(explained, bearing, side)`` of a fresh arc: whether a cell of its band (as
-    :func:`_draw_arc` draws it, without a profile) is occupied in the map of spread arcs without
-    the arc's own share ``own``, ``clamp(base + live - own) > l_occupied``, and the bearing its
-    point goes to: the middle of ``[lo, hi]``, unless that map holds no cell more likely
-    occupied than not (above :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold
-    one elsewhere on the band: then the bearing of the band's most likely cell (of equals within
-    :data:`_TIE`, the one nearest the middle). Near echoes (``r <= lobe_range``) also look past
-    the beam's edges, ``lobes`` half widths, on the same circle: an occupied cell there explains
-    the echo; when the middle is not favoured and a lobe's likeliest cell beats the band's,
-    ``bearing`` is that cell's and ``side`` its lobe (+1 counter-clockwise of the axis, -1
-    clockwise; 0: on the band). A lobe holding a likely cell nearer than the echo is skipped (it
-    would have heard that first); equally likely cells in both lobes explain the echo (no side
-    is favoured)."""
+    :func:`~sonarcarve.grids.carved.band.draw_arc` draws it, without a profile) is occupied in the
+    map of spread arcs without the arc's own share ``own``,
+    ``clamp(base + live - own) > l_occupied``, and the bearing its point goes to: the middle of
+    ``[lo, hi]``, unless that map holds no cell more likely occupied than not (above
+    :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold one elsewhere on the band:
+    then the bearing of the band's most likely cell (of equals within :data:`_TIE`, the one nearest
+    the middle). Near echoes (``r <= lobe_range``) also look past the beam's edges, ``lobes`` half
+    widths, on the same circle: an occupied cell there explains the echo; when the middle is not
+    favoured and a lobe's likeliest cell beats the band's, ``bearing`` is that cell's and ``side``
+    its lobe (+1 counter-clockwise of the axis, -1 clockwise; 0: on the band). A lobe holding a
+    likely cell nearer than the echo is skipped (it would have heard that first); equally likely
+    cells in both lobes explain the echo (no side is favoured)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
     ny, nx = base.shape
     widen = 0.5 * h / r
@@ -105,24 +114,24 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     t2 = hi + widen
     mid = 0.5 * (t1 + t2)
     half = 0.5 * (t2 - t1)
-    # Where the point would be drawn: the middle unit, widened as _draw_arc widens it.
+    # Where the point would be drawn: the middle unit, widened as draw_arc widens it.
     reach = min(0.5 * (hi - lo), 0.5 * m.unit / r) + widen
     r_in, r_out = max(0.0, r - band), r + band
     # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
     # near the carved interval's middle, widened by ``lobes`` half widths past each edge.
     axis = 0.5 * (theta1 + theta2)
-    axis += _TWO_PI * math.floor((mid - axis + math.pi) / _TWO_PI)
+    axis += TWO_PI * math.floor((mid - axis + math.pi) / TWO_PI)
     e_half = 0.0
     if m.lobes > 0.0 and r <= m.lobe_range:
         e_half = 0.5 * (1.0 + m.lobes) * (theta2 - theta1) + widen
     s1, s2 = (min(t1, axis - e_half), max(t2, axis + e_half)) if e_half > 0.0 else (t1, t2)
-    xlo, ylo, xhi, yhi = _sector_box(x, y, s1, s2, r_in, r_out)
-    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
-    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), _cos_half(half)
-    cos_ax, sin_ax, cos_e = math.cos(axis), math.sin(axis), _cos_half(e_half)
+    xlo, ylo, xhi, yhi = sector_box(x, y, s1, s2, r_in, r_out)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
+    cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), cos_bound(half)
+    cos_ax, sin_ax, cos_e = math.cos(axis), math.sin(axis), cos_bound(e_half)
     b_half = 0.5 * (theta2 - theta1) + widen
-    cos_b = _cos_half(b_half)
+    cos_b = cos_bound(b_half)
     best = _LIKELY
     bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
     middle_likely = False
@@ -133,12 +142,12 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
     best_cw, best_ccw = _LIKELY, _LIKELY
     at_cw = at_ccw = mid + 4.0 * math.pi
     blocked_cw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
-                                                e_half, 0)
+                                               e_half, 0)
     blocked_ccw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
-                                                 e_half, 1)
+                                                e_half, 1)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
-        a0, a1, b0, b1 = _ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
+        a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 # The cell's value first: most cells are not likely occupied, and need no
@@ -152,19 +161,19 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                 d = math.sqrt(dx * dx + dy * dy)
                 if abs(d - r) > band:
                     continue
-                if not _within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                if not within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
                     # Outside the carved interval, in reach of a side lobe: the echo may have
                     # come from a surface there, heard through the lobe.
                     if (e_half > 0.0
-                            and _within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
-                            and not _within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
-                        ccw = _bearing_off(dx, dy, axis) > 0.0
+                            and within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
+                            and not within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
+                        ccw = bearing_off(dx, dy, axis) > 0.0
                         if blocked_ccw if ccw else blocked_cw:
                             continue
                         value = min(m.l_max, max(m.l_min, spread))
                         if value > m.l_occupied:
                             return True, bearing, 0.0
-                        off = _bearing_off(dx, dy, mid)
+                        off = bearing_off(dx, dy, mid)
                         if ccw:
                             if _likelier(value, off, best_ccw, at_ccw - mid):
                                 best_ccw, at_ccw = max(best_ccw, value), mid + off
@@ -175,7 +184,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, 
                     continue
                 if value > m.l_occupied:
                     return True, bearing, 0.0
-                off = _bearing_off(dx, dy, mid)
+                off = bearing_off(dx, dy, mid)
                 if abs(off) <= reach:
                     middle_likely = True
                 if _likelier(value, off, best, bearing - mid):
@@ -199,7 +208,7 @@ def _likelier(value: float, off: float, best: float, best_off: float) -> bool:
 
 
 @compiled_inline
-def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: float,
+def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x: float,
                  y: float, reach: float, axis: float, b_half: float, e_half: float,
                  side: int) -> bool:
     """Whether the side lobe ``side`` (1: counter-clockwise of ``axis``) holds a cell more
@@ -213,10 +222,10 @@ def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: 
     t1, t2 = c - half, c + half
     xmin, ymin, h = m.xmin, m.ymin, m.h
     ny, nx = base.shape
-    xlo, ylo, xhi, yhi = _sector_box(x, y, t1, t2, 0.0, reach)
-    j0, j1 = _cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = _cell_range(ylo, yhi, ymin, h, ny)
-    cc, sc, ch = math.cos(c), math.sin(c), _cos_half(half)
+    xlo, ylo, xhi, yhi = sector_box(x, y, t1, t2, 0.0, reach)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
+    cc, sc, ch = math.cos(c), math.sin(c), cos_bound(half)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         for j in range(j0, j1 + 1):
@@ -224,6 +233,6 @@ def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: _Model, x: 
                 continue
             dx = xmin + (j + 0.5) * h - x
             d = math.sqrt(dx * dx + dy * dy)
-            if d < reach and _within(dx, dy, d, c, half, cc, sc, ch):
+            if d < reach and within(dx, dy, d, c, half, cc, sc, ch):
                 return True
     return False

@@ -1,4 +1,8 @@
-"""The grid's geometry and sensor model as the compiled kernels take it (:class:`_Model`)."""
+"""The grid as its compiled kernels take it: :class:`Model`, the geometry and the sensor model in
+log-odds (``l_hit = logit(p_hit)``, ``l_miss = logit(p_miss)``, the clamp ``[l_min, l_max]``, the
+band half-width ``b = (h + ε) / 2``), built from :class:`~sonarcarve.grids.carved.CarvedGridParams`
+by :func:`model_of` (``docs/carved-grid.md``, "The sensor model").
+"""
 
 from __future__ import annotations
 
@@ -7,12 +11,14 @@ from typing import NamedTuple
 
 from sonarcarve.grids.carved.params import CarvedGridParams
 
+__all__ = ["Model", "logit", "model_of"]
 
-def _logit(p: float) -> float:
+
+def logit(p: float) -> float:
     return math.log(p / (1.0 - p))
 
 
-class _Model(NamedTuple):
+class Model(NamedTuple):
     """The grid's geometry and sensor model as the kernels use them (metres, log-odds), one
     argument instead of fourteen positional numbers that could be swapped unnoticed."""
 
@@ -36,16 +42,16 @@ class _Model(NamedTuple):
     lobe_range: float  # side_lobe_range, metres: only echoes at this range or nearer
 
 
-def _model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
-              band: float) -> _Model:
+def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
+             band: float) -> Model:
     """The kernels' model of a grid whose cells start at ``(xmin, ymin)``, of side ``h``, whose
     occupied band is ``band`` wide each side of the circle (metres), under ``params``."""
     p = params
-    return _Model(xmin=xmin, ymin=ymin, h=h, band=band, l_hit=_logit(p.p_hit),
-                  l_miss=_logit(p.p_miss), l_heard=_logit(p.p_miss_heard),
-                  l_min=_logit(p.p_min), l_max=_logit(p.p_max),
-                  spread=1.0 if p.spread else 0.0, unit=max(p.spread_length, h),
-                  fade=float(p.fade_range), aware=p.surface_aware,
-                  profile=float(p.band_profile), l_occupied=_logit(p.occupied_threshold),
-                  through=float(p.see_through), lobes=float(p.side_lobes),
-                  lobe_range=float(p.side_lobe_range))
+    return Model(xmin=xmin, ymin=ymin, h=h, band=band, l_hit=logit(p.p_hit),
+                 l_miss=logit(p.p_miss), l_heard=logit(p.p_miss_heard),
+                 l_min=logit(p.p_min), l_max=logit(p.p_max),
+                 spread=1.0 if p.spread else 0.0, unit=max(p.spread_length, h),
+                 fade=float(p.fade_range), aware=p.surface_aware,
+                 profile=float(p.band_profile), l_occupied=logit(p.occupied_threshold),
+                 through=float(p.see_through), lobes=float(p.side_lobes),
+                 lobe_range=float(p.side_lobe_range))

@@ -1,4 +1,10 @@
-"""The carved grid's parameters: :class:`CarvedGridParams` and the measured defaults."""
+"""The carved grid's parameters, :class:`CarvedGridParams`, and the measured defaults.
+
+The symbols are those of the sensor model (``docs/carved-grid.md``, "The sensor model"): ``p_hit``
+and ``p_miss`` the band's and the free space's probabilities, ``L`` = ``spread_length``, ``d_f`` =
+``fade_range``, ε = ``range_tolerance``; every rule added to the model has its own section there,
+named in its parameter's description.
+"""
 
 from __future__ import annotations
 
@@ -18,6 +24,7 @@ __all__ = [
     "DEFAULT_SPREAD_LENGTH",
     "MAX_SIDE_LOBES",
     "CarvedGridParams",
+    "check_probability",
 ]
 
 #: Length over which one echo counts as a whole hit, metres
@@ -27,16 +34,16 @@ __all__ = [
 #: with 0.3; 0.2 is the shortest that keeps recall above the range sensor layer's at both
 #: resolutions.
 DEFAULT_SPREAD_LENGTH = 0.2
-#: The method the grid runs by default (:class:`CarvedGrid`): carving and ATM on one history
-#: (the paper's section 4), whose crossings narrow the interval a band is drawn over. Measured
-#: against specular-aware carving alone (``benchmarks/grid_methods.py`` and the issue-10
-#: benchmarks, office, seeds 0-2): occupied precision 0.720 -> 0.790 (0.05 m) and 0.825 ->
-#: 0.901 (0.10 m) under the specular physics, 0.721 -> 0.775 and 0.853 -> 0.935 under the
-#: amplitude physics, recall within ±0.005, phantoms -40 %; the Fig. 2 door 83/78 -> 92/86 %
-#: passable (89/86 -> 97/94 % with no-echo readings); a crossing person forgotten in 0.2 s
-#: instead of 5.2 s. Its price: more CPU per reading (ATM's crossings and medians), most
-#: visible when the map is read every few readings (``benchmarks/grid_reads.py``: 2.0x / 3.9x
-#: the range sensor layer's at 0.05 / 0.10 m, read every 5 readings, against 1.7x / 2.7x).
+#: The method the grid runs by default (:class:`~sonarcarve.grids.carved.CarvedGrid`): carving and
+#: ATM on one history (the paper's section 4), whose crossings narrow the interval a band is drawn
+#: over. Measured against specular-aware carving alone (``benchmarks/grid_methods.py`` and the
+#: issue-10 benchmarks, office, seeds 0-2): occupied precision 0.720 -> 0.790 (0.05 m) and 0.825 ->
+#: 0.901 (0.10 m) under the specular physics, 0.721 -> 0.775 and 0.853 -> 0.935 under the amplitude
+#: physics, recall within ±0.005, phantoms -40 %; the Fig. 2 door 83/78 -> 92/86 % passable (89/86
+#: -> 97/94 % with no-echo readings); a crossing person forgotten in 0.2 s instead of 5.2 s. Its
+#: price: more CPU per reading (ATM's crossings and medians), most visible when the map is read
+#: every few readings (``benchmarks/grid_reads.py``: 2.0x / 3.9x the range sensor layer's at 0.05 /
+#: 0.10 m, read every 5 readings, against 1.7x / 2.7x).
 DEFAULT_METHOD = "combined"
 #: Critical angle of the default method's specular-aware carving, radians (20°). Paper
 #: carving (π/2) loses 45 % of the office's true echoes to glancing free space, and the grid's
@@ -68,7 +75,7 @@ DEFAULT_SIDE_LOBE_RANGE = 2.0
 MAX_SIDE_LOBES = 3.0
 
 
-def _check_probability(name: str, value: object, lo: float, hi: float) -> float:
+def check_probability(name: str, value: object, lo: float, hi: float) -> float:
     ok = (not isinstance(value, bool) and isinstance(value, int | float)
           and math.isfinite(value) and lo < value < hi)
     if not ok:
@@ -79,7 +86,7 @@ def _check_probability(name: str, value: object, lo: float, hi: float) -> float:
 
 @dataclass(frozen=True)
 class CarvedGridParams:
-    """Parameters of the carved grid's sensor model (module docstring).
+    """Parameters of the carved grid's sensor model (``docs/carved-grid.md``).
 
     Attributes
     ----------
@@ -91,15 +98,16 @@ class CarvedGridParams:
     p_min, p_max : float
         Clamp of the final log-odds, ``p_min < 0.5 < p_max``; octomap's 0.12 and 0.97.
     occupied_threshold, free_threshold : float
-        :meth:`CarvedGrid.trinary` calls a cell occupied above the first and free below the
-        second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196 (ROS
-        map_saver's ``free_thresh``). Compared in log-odds (``l > logit(occupied)``), which
-        equals comparing :meth:`CarvedGrid.probabilities` with the threshold up to rounding:
-        a cell within a few ulp of a threshold's logit may fall on the other side.
+        :meth:`~sonarcarve.grids.carved.CarvedGrid.trinary` calls a cell occupied above the first
+        and free below the second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196
+        (ROS map_saver's ``free_thresh``). Compared in log-odds (``l > logit(occupied)``), which
+        equals comparing :meth:`~sonarcarve.grids.carved.CarvedGrid.probabilities` with the
+        threshold up to rounding: a cell within a few ulp of a threshold's logit may fall on the
+        other side.
     range_tolerance : float
         ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm.
     spread : bool
-        Spread each echo over its carved interval (``s`` in the module docstring); False gives
+        Spread each echo over its carved interval (``s`` in ``docs/carved-grid.md``); False gives
         every cell of the carved band a whole hit (Elfes' rule, on the carved interval).
     spread_length : float
         ``L``, metres >= 0: an arc carved to this length or shorter gives its cells a whole hit
@@ -107,10 +115,10 @@ class CarvedGridParams:
     fade_range : float
         ``d_f``, metres > 0, of the free-space fade; ``inf``: no fade. Default ROS's 1.2 m.
     surface_aware : bool
-        Weigh the free space at cells believed occupied by the beam's audibility (module
-        docstring); False: the fade everywhere, the rule of the grid before issue 10's clearing
-        work, equal to it up to rounding order (the fade is now applied as
-        ``γ · (logit(p_miss) · f)``, before as ``(γ · f) · logit(p_miss)``).
+        Weigh the free space at cells believed occupied by the beam's audibility
+        (``docs/carved-grid.md``, "Clearing what was heard"); False: the fade everywhere, the rule
+        of the grid before issue 10's clearing work, equal to it up to rounding order (the fade is
+        now applied as ``γ · (logit(p_miss) · f)``, before as ``(γ · f) · logit(p_miss)``).
     p_miss_heard : float
         Probability one on-axis beam that would have heard a cell's surface and passed it leaves
         the cell, in (0, 0.5); 0.2. Measured on the changing-scenes box with no-echo readings,
@@ -123,13 +131,13 @@ class CarvedGridParams:
         precision (0.78/0.88 at 0.05/0.10 m) and the Fig. 2 door (81/78 % passable) but drops
         recall to the layer's (0.895 at 0.05 m); so off.
     fresh_arcs : bool
-        Each sensor's newest echo, when no occupied cell on its carved band explains it, is a
-        whole hit on the middle ``spread_length`` of its carved interval (its spread value on
-        the rest) until that sensor fires again (module docstring: a person stepping in front
-        of the robot is marked after one reading). Where the map favours another part of the
-        band and not the middle, the whole hit goes around the band's most likely cell instead
-        (module docstring, "where the mark goes": the Fig. 2 door, echoes only, 92 -> 97 % /
-        86 -> 94 % passable at 0.05 / 0.10 m). False: every live arc spread, the rule
+        Each sensor's newest echo, when no occupied cell on its carved band explains it, is a whole
+        hit on the middle ``spread_length`` of its carved interval (its spread value on the rest)
+        until that sensor fires again ("The newest echoes mark at once": a person stepping in front
+        of the robot is marked after one reading). Where the map favours another part of the band
+        and not the middle, the whole hit goes around the band's most likely cell instead ("Where
+        the mark goes": the Fig. 2 door, echoes only, 92 -> 97 % / 86 -> 94 % passable at 0.05 /
+        0.10 m). False: every live arc spread, the rule
         before.
     fresh_seconds : float
         Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
@@ -142,7 +150,7 @@ class CarvedGridParams:
     side_lobes : float
         Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (1). How far past
         each edge of its beam, in half beam widths, a near echo may have come from through a
-        side lobe, for the newest echo's mark (module docstring, "side lobes"): an occupied
+        side lobe, for the newest echo's mark ("Side lobes"): an occupied
         cell there explains the echo, and the mark goes to a likely one there when the map does
         not favour the arc's middle. 0: the beam alone (the rule before).
     side_lobe_range : float
@@ -152,7 +160,7 @@ class CarvedGridParams:
         explained its echoes and it was never marked).
     repeat_weight : float
         In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
-        (module docstring, "Repeated echoes count once": the sensor moved towards or away from
+        ("Repeated echoes count once": the sensor moved towards or away from
         one reflector and heard it again): 0 counts a run of repeats as its
         newest echo, 1 counts every echo (the rule before). Measured (seeds 0-2, Fig. 2 door
         at 1 m, echoes only, 0.05 / 0.10 m): 1 passable in 67 / 61 % of approaches, 0.25 in
@@ -162,7 +170,7 @@ class CarvedGridParams:
         Metres >= 0 (``inf``: no limit; 0: off); :data:`DEFAULT_SEE_THROUGH`. A beam that
         passes a cell it would have heard (surface-aware audibility) and hears nothing there
         clears the believed-occupied cells behind that cell on its ray, up to this far behind
-        it, as if it would have heard them too (module docstring, "seen through"). It acts only
+        it, as if it would have heard them too ("Seen through"). It acts only
         with ``surface_aware`` (without it no beam is known to have heard a cell, so nothing is
         seen through and the value is ignored).
 
@@ -193,12 +201,12 @@ class CarvedGridParams:
     side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
 
     def __post_init__(self) -> None:
-        _check_probability("p_hit", self.p_hit, 0.5, 1.0)
-        _check_probability("p_miss", self.p_miss, 0.0, 0.5)
-        _check_probability("p_min", self.p_min, 0.0, 0.5)
-        _check_probability("p_max", self.p_max, 0.5, 1.0)
-        _check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
-        _check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
+        check_probability("p_hit", self.p_hit, 0.5, 1.0)
+        check_probability("p_miss", self.p_miss, 0.0, 0.5)
+        check_probability("p_min", self.p_min, 0.0, 0.5)
+        check_probability("p_max", self.p_max, 0.5, 1.0)
+        check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
+        check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
         tol = self.range_tolerance
         if isinstance(tol, bool) or not isinstance(tol, int | float) or not (
                 math.isfinite(tol) and tol >= 0.0):
@@ -212,7 +220,7 @@ class CarvedGridParams:
                 rule = "a finite number >= 0" if name == "spread_length" else "> 0 (inf: none)"
                 msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
                 raise GridError(msg)
-        _check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
+        check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
         for name in ("spread", "surface_aware", "fresh_arcs"):
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"

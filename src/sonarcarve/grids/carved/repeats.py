@@ -1,4 +1,8 @@
-"""Repeated echoes: the earlier arcs of a sensor that a batch's echoes repeat."""
+"""Repeated echoes count once: each echo of a batch gives the earlier arcs of its sensor that it
+repeats (:func:`~sonarcarve.geometry.repeats.is_repeat`: ``| |P2 - P1| - |r1 - r2| | <= ε``) the
+weight factor ``repeat_weight`` (:func:`repeat_kernel`). ``docs/carved-grid.md``, "Repeated echoes
+count once".
+"""
 
 from __future__ import annotations
 
@@ -9,15 +13,17 @@ from sonarcarve.geometry._compiled import compiled
 from sonarcarve.geometry.repeats import is_repeat
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
+__all__ = ["repeat_kernel"]
+
 
 @compiled
-def _repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
-                   seen_seq: npt.NDArray[np.int64], marked: SlotArray,
-                   seqs: npt.NDArray[np.int64], first: int, no_echo: BoolArray,
-                   sensor: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                   theta: FloatArray, half: FloatArray, hsensor: npt.NDArray[np.int64],
-                   hx: FloatArray, hy: FloatArray, hr: FloatArray, htheta: FloatArray,
-                   hwidth: FloatArray, capacity: int, tol: float, factor: float) -> int:
+def repeat_kernel(chain: FloatArray, batch_chain: FloatArray,
+                  seen_seq: npt.NDArray[np.int64], marked: SlotArray,
+                  seqs: npt.NDArray[np.int64], first: int, no_echo: BoolArray,
+                  sensor: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                  theta: FloatArray, half: FloatArray, hsensor: npt.NDArray[np.int64],
+                  hx: FloatArray, hy: FloatArray, hr: FloatArray, htheta: FloatArray,
+                  hwidth: FloatArray, capacity: int, tol: float, factor: float) -> int:
     """For each echo ``k`` of a batch (arc ``seqs[k]``), give every earlier arc of the same
     sensor still in the history that the echo repeats
     (:func:`~sonarcarve.geometry.repeats.is_repeat`) the weight factor
