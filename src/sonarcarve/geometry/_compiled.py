@@ -30,13 +30,16 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 KERNEL_FOLDERS = ("geometry", "grids", "methods")
 
 
-def _sources_stamp() -> str:
-    """SHA-256 over the names and contents of every ``.py`` file in :data:`KERNEL_FOLDERS`."""
-    package = Path(__file__).resolve().parent.parent
+def _sources_stamp(package: Path | None = None) -> str:
+    """SHA-256 over the paths and contents of every ``.py`` file in :data:`KERNEL_FOLDERS`
+    of ``package`` (default: this ``sonarcarve``), their subpackages included: kernels live in
+    packages such as ``grids/carved/``, and a file left out would let an edit to it run stale
+    compiled code from the cache."""
+    package = Path(__file__).resolve().parent.parent if package is None else package
     digest = hashlib.sha256()
     for folder in KERNEL_FOLDERS:
-        for path in sorted((package / folder).glob("*.py")):
-            digest.update(f"{folder}/{path.name}\0".encode())
+        for path in sorted((package / folder).rglob("*.py")):
+            digest.update(f"{path.relative_to(package).as_posix()}\0".encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()
 
