@@ -1,5 +1,5 @@
 """The carved grid's newest-echo mark and side lobes: a near echo may come from past its beam's
-edge (values computed by hand from the rule in ``carved.py``'s docstring)."""
+edge (values computed by hand from the rule in docs/carved-grid.md, *Side lobes*)."""
 
 from __future__ import annotations
 

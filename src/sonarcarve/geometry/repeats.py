@@ -25,8 +25,8 @@ against 19-33 % of the direct echoes evidence carving lost (8-19 % of those it k
 
 The paper's section 6 proposes certainty values per point; this is one piece of evidence for
 them (the ``repeated`` feature of :class:`~sonarcarve.methods.evidence.ConfidenceModel`). The
-carved grid (``grids/carved.py``, ``_repeats``) applies the same test for another purpose, to
-stop counting a sensor's repeats as independent evidence; it could call :func:`is_repeat`.
+carved grid (``grids/carved/repeats.py``) calls :func:`is_repeat` for another purpose, to
+stop counting a sensor's repeats as independent evidence.
 
 What is exact: the tangency and beam tests on the readings' own numbers; nothing is binned.
 """
