@@ -80,6 +80,15 @@ def test_bad_paths_are_one_line_errors(readings: Path, tmp_path: Path,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["readings.csv"]
 
 
+def test_an_empty_csv_names_the_file(tmp_path: Path,
+                                     capsys: pytest.CaptureFixture[str]) -> None:
+    csv = tmp_path / "empty.csv"
+    csv.write_text("t,sensor,x,y,theta,range\n")
+    assert main(["grid", str(csv), "--out", str(tmp_path / "g.yaml")]) == 2
+    assert capsys.readouterr().err == f"sonarcarve: error: {csv}: no readings to map\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv"]
+
+
 def test_ranges_in_millimetres_warn_one_line_and_exit_0(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     batch = ReadingBatch.from_readings(

@@ -1,4 +1,12 @@
-"""``sonarcarve grid``: map a readings CSV into an occupancy grid, as a ROS map_server map."""
+"""``sonarcarve grid``: map a log (readings CSV or ROS bag) into an occupancy grid, as a ROS
+map_server map.
+
+A bag is read as ``sonarcarve process`` reads it: the bag options of
+:mod:`sonarcarve.cli.options` give a :class:`~sonarcarve.fleet.BagOptions`, whose
+:meth:`~sonarcarve.fleet.BagOptions.read` and :meth:`~sonarcarve.fleet.BagOptions.readings`
+give the readings (with ``--no-echo``, the silent firings as no-echo readings, which the grids
+take as free space).
+"""
 
 from __future__ import annotations
 
@@ -12,7 +20,17 @@ import numpy as np
 import typer
 
 from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.cli.options import (
+    FrameOpt,
+    NoEchoOpt,
+    OdomTopicOpt,
+    RangeTopicOpt,
+    RobotOpt,
+    bag_options,
+    refuse_bag_options,
+)
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.grids import (
     CarvedGrid,
     OccupancyGrid,
@@ -26,7 +44,7 @@ from sonarcarve.io.readings_csv import read_readings_csv
 from sonarcarve.io.sanity import likely_mistakes
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, ReadingBatch
 
-__all__ = ["GRID_MODELS", "build_grid", "grid", "readings_extent"]
+__all__ = ["GRID_MODELS", "build_grid", "grid", "read_log_for_grid", "readings_extent"]
 
 Bounds = tuple[float, float, float, float]
 
@@ -98,12 +116,40 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     return built
 
 
+def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
+    """The readings of ``source``: a ROS bag (:func:`~sonarcarve.fleet.is_bag`) read with
+    ``bag`` as ``sonarcarve process`` reads it, else a readings CSV (whose no-echo rows, range
+    inf, are in it already).
+
+    Raises
+    ------
+    ReadingsError, RosbagError, RobotError
+        A log (or robot file) that cannot be read: one line naming it.
+    GridUsageError
+        No readings to map, naming ``source`` (and, for a bag whose Range messages all heard
+        nothing, ``--no-echo``).
+    """
+    if not is_bag(source):
+        batch, silent = read_readings_csv(source), 0
+    else:
+        log = bag.read(source)
+        batch, silent = bag.readings(log), len(log.no_echo)
+    if not len(batch):
+        hint = (f" (its {silent:,} Range messages heard nothing, +Inf; --no-echo maps them as "
+                "free space)" if silent else "")
+        msg = f"{source}: no readings to map{hint}"
+        raise GridUsageError(msg)
+    return batch
+
+
 @app.command()
 def grid(
     readings: Annotated[Path, typer.Argument(
-        metavar="READINGS.csv",
-        help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]` (as for "
-             "`sonarcarve process`).")],
+        metavar="READINGS.csv|BAG",
+        help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width][,max_range]` "
+             "(as for `sonarcarve process`; rows with range `inf` are no-echo readings). Or a "
+             "ROS bag: `*.bag` (ROS 1), `*.mcap`, `*.db3` or a rosbag2 folder, read as "
+             "`sonarcarve process` reads it (Range + odometry + TF; see the bag options).")],
     out: Annotated[Path, typer.Option(
         "--out", "-o", metavar="GRID.yaml",
         help="The map_server YAML to write; the trinary image GRID.pgm is written beside it. "
@@ -116,8 +162,20 @@ def grid(
         metavar="METRES", help="Cell side, metres.")] = 0.05,
     margin: Annotated[float, typer.Option(
         metavar="METRES", help="Margin around the readings' extent, metres.")] = 0.5,
+    robot: RobotOpt = None,
+    range_topic: RangeTopicOpt = None,
+    odom_topic: OdomTopicOpt = None,
+    frame: FrameOpt = None,
+    no_echo: NoEchoOpt = False,
 ) -> None:
     """Map READINGS.csv into an occupancy grid and write it as a ROS map_server map.
+
+    The input is a readings CSV or a ROS bag (ROS 1 `.bag`, `.mcap`, `.db3` or a rosbag2
+    folder: sensor_msgs/Range per transducer, odometry and TF), a bag read as `sonarcarve
+    process` reads it, with the same bag options. A bag's silent firings (REP 117 +Inf) are
+    left out unless --no-echo keeps them as no-echo readings, as a CSV's rows with range inf
+    always are: the carved and Elfes grids take their beams, up to max_range, as free space;
+    ROS's range-sensor-layer drops +Inf, as ROS does. The bag options apply to bags only.
 
     Writes GRID.yaml (image, resolution, origin, negate 0, occupied_thresh, free_thresh) and
     GRID.pgm beside it (trinary: occupied 0, free 254, unknown 205), both or neither. The grid
@@ -127,14 +185,21 @@ def grid(
     give one `sonarcarve: warning:` line each on stderr; the exit code is still 0.
 
     Example: `sonarcarve grid readings.csv --model carved --resolution 0.05 --out grid.yaml`
+
+    Example: `sonarcarve grid run.mcap --no-echo --resolution 0.05 --out grid.yaml`
+
+    Example: `sonarcarve grid run.bag --robot p3dx-front --model elfes --out grid.yaml` (a
+    ROS 1 bag without TF mounts)
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
         raise GridUsageError(msg)
+    bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
+    refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
-    batch = read_readings_csv(readings)
+    batch = read_log_for_grid(readings, bag)
     built = build_grid(batch, model, resolution, margin)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
@@ -142,8 +207,9 @@ def grid(
     rows, cols = built.shape
     for line in likely_mistakes(batch):  # after the writing: a failed run prints one line only
         print(f"sonarcarve: warning: {line}", file=sys.stderr)
+    silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
-        ("readings", f"{len(batch):,}"),
+        ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),
         ("cells", f"{cols} x {rows} of {built.resolution:g} m"),
         ("occupied / free / unknown",
          f"{np.count_nonzero(cells == 100):,} / {np.count_nonzero(cells == 0):,} / "

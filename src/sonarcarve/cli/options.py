@@ -1,8 +1,9 @@
 """Options more than one command takes, declared once: how to read a ROS bag, bag outputs.
 
-``sonarcarve convert rosbag`` and ``sonarcarve process`` read bags the same way; each takes
-the four options below in its signature and turns them into a
-:class:`~sonarcarve.fleet.BagOptions` with :func:`bag_options`.
+``sonarcarve convert rosbag``, ``sonarcarve process`` and ``sonarcarve grid`` read bags the
+same way; each takes the options below in its signature and turns them into a
+:class:`~sonarcarve.fleet.BagOptions` with :func:`bag_options`; :func:`refuse_bag_options`
+refuses them for a readings CSV input.
 """
 
 from __future__ import annotations
@@ -13,13 +14,15 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.fleet import BagOptions
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
 from sonarcarve.robot import load_robot
 
 __all__ = [
     "BAG_PANEL",
+    "BagOptionsError",
     "FrameOpt",
     "NoEchoOpt",
     "OdomTopicOpt",
@@ -27,6 +30,7 @@ __all__ = [
     "RobotOpt",
     "bag_options",
     "check_new_bag",
+    "refuse_bag_options",
 ]
 
 #: The help panel the bag options are listed under.
@@ -72,6 +76,26 @@ def bag_options(robot: str | None, range_topic: list[str] | None, odom_topic: st
     return BagOptions(robot=robot, range_topics=tuple(range_topic or ()),
                       odom_topic=odom_topic, frame=frame, beam_width=beam_width,
                       no_echo=no_echo)
+
+
+class BagOptionsError(SonarcarveError):
+    """Bag options given with an input that is not a ROS bag."""
+
+
+def refuse_bag_options(source: Path, bag: BagOptions) -> None:
+    """Refuse bag options for a ``source`` that is not a bag (:func:`~sonarcarve.fleet.is_bag`):
+    a readings CSV can use none of them, and silently ignoring one (``--no-echo``, say) would
+    hide a mistake.
+
+    Raises
+    ------
+    BagOptionsError
+        One line naming ``source`` and the options.
+    """
+    if bag.given and not is_bag(source):
+        msg = (f"{source} is a readings CSV; --robot, --range-topic, --odom-topic, --frame "
+               "and --no-echo apply to ROS bag inputs only")
+        raise BagOptionsError(msg)
 
 
 def check_new_bag(path: Path, *, inputs: Iterable[Path] = (), label: str) -> Path:
