@@ -21,7 +21,7 @@ from sonarcarve.geometry.evidence.occlusion import occlude_behind
 from sonarcarve.geometry.evidence.transmission import weigh_transmission
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import evidence as evidence_method
-from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
+from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel, SensorModel
 from sonarcarve.sim.simulate import simulate
 
 
@@ -205,11 +205,12 @@ def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:
     return sim.readings
 
 
-def _run_both(readings: Any, history: int, bins: int, start: int) -> tuple[EvidenceModel, bool]:
+def _run_both(readings: Any, history: int, bins: int, start: int,
+              sensor: SensorModel | None = None) -> tuple[EvidenceModel, bool]:
     """The method and its one-loop twin fed the same readings from ``start`` on, 30 at a time,
     their state compared as bits after every block; the twin's model, and whether any block
     ended with an occluded bin (occlusion is transient)."""
-    method = EvidenceMethod(history_size=history, evidence_bins=bins)
+    method = EvidenceMethod(history_size=history, evidence_bins=bins, sensor=sensor)
     method.add_many(readings[:start])  # with start > history the ring wrapped
     oracle = copy.deepcopy(method)
     model = oracle.models[0]
@@ -258,6 +259,15 @@ def test_the_passes_give_the_one_loops_bits(physics: tuple[tuple[str, str], ...]
     assert np.count_nonzero(model.support)
     assert occluded
     assert model.counts.any()
+
+
+def test_the_passes_match_the_one_loop_with_a_support_band_narrower_than_the_range_tolerance(
+) -> None:
+    """With the two tolerances equal (the defaults) no bin lies between the free reach
+    ``r_j - ε`` and the support band ``r_j ± ε_s``: the bins there are neither weighed nor
+    supported, only counted alive (review revsplit: a ``break`` for that ``continue`` passed
+    every other test)."""
+    _run_both(_log((), False), 40, 24, start=270, sensor=SensorModel(support_tolerance=0.02))
 
 
 @pytest.mark.parametrize("group_arcs", [1, 3])
