@@ -168,7 +168,7 @@ def grid(
     frame: FrameOpt = None,
     no_echo: NoEchoOpt = False,
 ) -> None:
-    """Map READINGS.csv into an occupancy grid and write it as a ROS map_server map.
+    """Map a readings CSV or a ROS bag into an occupancy grid, written as a ROS map_server map.
 
     The input is a readings CSV or a ROS bag (ROS 1 `.bag`, `.mcap`, `.db3` or a rosbag2
     folder: sensor_msgs/Range per transducer, odometry and TF), a bag read as `sonarcarve

@@ -33,7 +33,7 @@ lazy_command("simulate", "sonarcarve.cli.simulate",
              "Simulate a sonar log with ground truth: drive a robot through a world, record "
              "echoes.")
 lazy_command("process", "sonarcarve.cli.process",
-             "Map READINGS.csv with one method and write its global map to --out.")
+             "Map a readings CSV or a ROS bag with one method and write its global map to --out.")
 lazy_command("convert", "sonarcarve.cli.convert",
              "Convert a data set's files into the readings CSV "
              "(t,sensor,x,y,theta,range,beam_width).")
@@ -41,7 +41,8 @@ lazy_command("worlds", "sonarcarve.cli.worlds",
              "List the simulator's worlds: size, walls, area, gaps (doors, openings), tour "
              "length.")
 lazy_command("grid", "sonarcarve.cli.grid",
-             "Map READINGS.csv into an occupancy grid and write it as a ROS map_server map.")
+             "Map a readings CSV or a ROS bag into an occupancy grid, written as a ROS "
+             "map_server map.")
 lazy_command("plot", "sonarcarve.cli.plot",
              "Draw a map CSV to a figure: points coloured by source, the robot's path, a grid "
              "map.")

@@ -215,7 +215,7 @@ def process(
     workers: _WorkersOpt = None,
     scheduler: _SchedulerOpt = None,
 ) -> int:
-    """Map READINGS.csv with one method and write its global map to --out.
+    """Map a readings CSV or a ROS bag with one method and write its global map to --out.
 
     INPUT is a readings CSV or a ROS bag (file or rosbag2 folder); the ending of --out picks
     the output: `.csv` the global map, `.mcap` / `.bag` / a folder name a ROS bag for Foxglove
