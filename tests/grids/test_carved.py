@@ -700,9 +700,7 @@ def test_a_map_read_after_every_batch_is_the_map_read_once(no_echo: bool, fresh:
 
 
 def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
-    from sonarcarve.grids.carved.scan import bearing_off as _bearing_off
-    from sonarcarve.grids.carved.scan import cos_bound as _cos_half
-    from sonarcarve.grids.carved.scan import within as _within
+    from sonarcarve.grids.carved.scan import bearing_off, cos_bound, within
 
     rng = np.random.default_rng(0)
     cases = 0
@@ -718,9 +716,9 @@ def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
             d = float(rng.uniform(0.1, 6.0))
             dx, dy = d * math.cos(bearing), d * math.sin(bearing)
             d = math.sqrt(dx * dx + dy * dy)
-            exact = abs(_bearing_off(dx, dy, mid)) <= half
-            assert _within(dx, dy, d, mid, half, math.cos(mid), math.sin(mid),
-                           _cos_half(half)) == exact
+            exact = abs(bearing_off(dx, dy, mid)) <= half
+            assert within(dx, dy, d, mid, half, math.cos(mid), math.sin(mid),
+                           cos_bound(half)) == exact
             cases += 1
     assert cases == 15000
 

@@ -315,7 +315,7 @@ def test_the_lobe_mark_ends_at_the_lobes_reach() -> None:
 def test_the_lobes_reach_is_widened_by_half_a_cell_as_every_arc() -> None:
     """Sensor 1 turned 34.3°: its band begins at 23.05° (22.27° widened by 0.78°), so its likely
     cells meet sensor 0's upper lobe only between 22.5° and the reach widened by half a cell
-    (23.28°), as _draw_arc widens every arc. Those cells take the mark: the middle keeps its
+    (23.28°), as band.draw_arc widens every arc. Those cells take the mark: the middle keeps its
     spread value (a lobe reach without the widening left the mark in the middle: 0.847)."""
     grid = _turned_lobe_scene(0.0, 34.3)
     middle = _cell(grid, FACE_X, ROW_Y)

@@ -10,8 +10,8 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
 * a profile of ``K`` bins across the full beam, each with evidence that it is empty (log-odds
   of misses of newer readings, weighted by how likely each was to hear a surface there) and
   support (newer echo circles through it); a bin is carved at ``T = -log(1 - P_carve)``;
-* occlusion: bins of a new arc behind a surface the history holds with confidence, that the new
-  beam met at a glancing angle, are carved (multipath echoes read too long, behind walls);
+* occlusion: bins of a new arc behind a surface the history holds with confidence are carved
+  (multipath echoes read too long, behind walls the beam met at a glancing angle);
 * transmission: a newer beam that passed a bin obliquely and whose echo beyond it is confirmed
   by other sensors says the sound went through (times ``cos γ``, so a beam running along a
   wall does not carve it);

@@ -263,8 +263,9 @@ def _weigh_arc(
             if d < free_r - params.tolerance:
                 top_through = max(top_through, support[i, k])
             if established and d < free_r - params.tolerance:
-                # An established surface j looked past at a glancing angle: the bins of j
-                # behind it cannot hold j's echo (sound does not pass through walls).
+                # An established surface j looked past (at any angle: docs/evidence-carving.md,
+                # "Occlusion"): the bins of j behind it cannot hold j's echo (sound does not
+                # pass through walls).
                 along = vx * cj + vy * sj
                 occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
                                             half_bin_arc / d, beam, free, threshold)
@@ -417,8 +418,9 @@ def evidence_add(
     """
     bins = bx.shape[1]
     # The passes are inlined helpers (compiled_inline) and this kernel counts no references
-    # (compiled_borrowing), so they compile to the code of one body: the same bits and speed
-    # as that body (docs/evidence-carving.md, "Speed: the weighing kernel's layout").
+    # (compiled_borrowing), so they compile to the code of one body: the same bits, and the
+    # same speed where numba can compile without reference counting (measured on numba 0.6x;
+    # docs/evidence-carving.md, "Speed: the weighing kernel's layout").
     _init_new_arc(slot, x, y, r, theta, beam_width, viewpoints, looked, others, trans, bx, by,
                   ex, ey, free, support, located, circle, cos_axis, sin_axis, cos_half, status,
                   touched, occluded, counts)

@@ -5,8 +5,8 @@ least ``S_est``, free evidence below ``T/2``) and lies in the new reading's free
 than ``r_j - 2ε``, says that ``j``'s echo did not come from behind it: the bins of ``j`` within
 that point's angular half-bin seen from ``o_j`` are carved (a multipath echo reads too long,
 behind a wall its beam met at a glancing angle); the point itself takes ``j``'s evidence times
-``protect``. ``docs/evidence-carving.md``, "Occlusion" (and why the docstring this came from
-described a ``P_detect < ½`` condition the code does not test).
+``protect``. ``docs/evidence-carving.md``, "Occlusion" (also: the ``P_detect < ½`` condition
+the docstring this came from described, which the code never tested, and why it stays out).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ __all__ = ["occlude_behind"]
 def occlude_behind(slot: int, rel: float, spread: float, beam: Beam, free: FloatArray,
                    threshold: float) -> int:
     """Carve the bins of the new arc within ``rel ± spread`` (bearings relative to its axis):
-    they lie behind an established surface it looked past at a glancing angle, and sound does
-    not pass through walls. Returns the bins this carved."""
+    they lie behind an established surface it looked past, and sound does not pass through
+    walls. Returns the bins this carved."""
     bins = free.shape[1]
     k0 = bin_of(rel - spread, beam.half, beam.step, bins)
     k1 = bin_of(rel + spread, beam.half, beam.step, bins)

@@ -20,7 +20,7 @@ def logit(p: float) -> float:
 
 class Model(NamedTuple):
     """The grid's geometry and sensor model as the kernels use them (metres, log-odds), one
-    argument instead of fourteen positional numbers that could be swapped unnoticed."""
+    argument instead of eighteen positional numbers that could be swapped unnoticed."""
 
     xmin: float
     ymin: float
