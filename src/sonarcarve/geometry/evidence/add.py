@@ -419,7 +419,7 @@ def evidence_add(
     bins = bx.shape[1]
     # The passes are inlined helpers (compiled_inline) and this kernel counts no references
     # (compiled_borrowing), so they compile to the code of one body: the same bits, and the
-    # same speed where numba can compile without reference counting (measured on numba 0.6x;
+    # same speed where numba can compile without reference counting (measured on numba 0.68;
     # docs/evidence-carving.md, "Speed: the weighing kernel's layout").
     _init_new_arc(slot, x, y, r, theta, beam_width, viewpoints, looked, others, trans, bx, by,
                   ex, ey, free, support, located, circle, cos_axis, sin_axis, cos_half, status,
