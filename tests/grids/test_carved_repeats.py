@@ -270,3 +270,24 @@ def test_a_bad_batch_marks_no_repeat() -> None:
         np.argmin(np.abs(clean.cell_centers()[0] - 1.975)))
     first = DEFAULT_SPREAD_LENGTH / (2.0 * PHI) * L_HIT
     assert tried.live_log_odds[i, j] == pytest.approx(first)
+
+
+@pytest.mark.parametrize("batch", [1, 7, 400])
+def test_sensor_numbers_do_not_change_the_map(batch: int) -> None:
+    # The kernel finds each sensor's earlier arcs by an array indexed by sensor number when the
+    # numbers are small, by scanning back otherwise: the two must mark the same arcs.
+    readings = _approaching_ring(400, 1, True)
+    far = [r._replace(sensor=r.sensor * 10**8 + 3) for r in readings]
+    config = MethodConfig(history_size=30, max_incidence=math.radians(30.0))
+
+    def run(rs: list[Reading], weight: float = 0.0) -> CarvedGrid:
+        grid = CarvedGrid(H, BOUNDS, method=make_method("carve", config),
+                          params=CarvedGridParams(repeat_weight=weight))
+        for start in range(0, len(rs), batch):
+            grid.add_many(ReadingBatch.from_readings(rs[start:start + batch]))
+            grid.refresh()
+        return grid
+
+    near_map = run(readings).log_odds
+    assert not np.array_equal(near_map, run(readings, 1.0).log_odds)  # repeats matter here
+    np.testing.assert_array_equal(run(far).log_odds, near_map)

@@ -22,6 +22,7 @@ from sonarcarve.grids.carved.scan import (
     bearing_off,
     cell_range,
     cos_bound,
+    not_within,
     ring_columns,
     sector_box,
     within,
@@ -85,6 +86,8 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
                     if within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
                         grid[i, j] += value
                     continue
+                if not_within(dx, dy, d, cos_mid, sin_mid, cos_half):
+                    continue  # no arctangent for the cells clearly outside the interval
                 off = bearing_off(dx, dy, mid)
                 if abs(off) > half:
                     continue

@@ -17,7 +17,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.heard import audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.scan import cell_range, sector_box
+from sonarcarve.grids.carved.scan import EDGE, cell_range, sector_box
 from sonarcarve.typing import FloatArray
 
 __all__ = ["HELD", "free_space"]
@@ -58,6 +58,27 @@ def _row_span(dy: float, reach: float, half: float, u1x: float, u1y: float, u2x:
 
 
 @compiled_inline
+def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
+    """What lets :func:`free_space` skip a cell whose update cannot change it, with no
+    arctangent and no fade: ``floor``, the stored (float32) ``l_min``, and ``inside``, a cosine
+    bound that puts a cell's bearing strictly inside the beam.
+
+    A cell at ``floor`` is not believed occupied (``l_min < 0``), so its update is
+    ``min(l_max, max(l_min, floor + γ(α) f(d) · logit(p_miss)))``. Where ``γ(α) >= 0`` and
+    ``logit(p_miss) <= 0`` the sum is at most ``floor``, so the clamp gives a value in
+    ``[l_min, floor]`` (or ``l_min`` when ``floor < l_min``), and float32 rounding, monotone, takes
+    every such value back to ``floor = float32(l_min)``: the cell keeps its bits. ``γ(α) >= 0``
+    needs ``|α| <= φ/2`` for the computed ``α``; the beam's own cosine test admits cells within
+    rounding of the edge, so a cell is skipped only when its cosine to the axis is above
+    ``cos(φ/2)`` by :data:`~sonarcarve.grids.carved.scan.EDGE` (far above the arctangent's
+    rounding, 1e-16). ``floor`` is NaN (never equal) when ``logit(p_miss) > 0``, ``l_min >= 0`` or
+    ``l_min > l_max``, where the argument does not hold."""
+    if not (m.l_miss <= 0.0 and m.l_min < 0.0 and m.l_min <= m.l_max):
+        return math.nan, 2.0
+    return float(np.float32(m.l_min)), cos_half + EDGE
+
+
+@compiled_inline
 def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
                x: float, y: float, theta: float, r: float, half: float,
                held: FloatArray) -> None:
@@ -81,6 +102,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
     i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
     t1, t2 = theta - half, theta + half
     u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
+    floor, inside = _floor_and_inside(m, cos_half)
     n_held = 0
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
@@ -98,9 +120,11 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             along = dx * c + dy * s
             if along < math.sqrt(d2) * cos_half:
                 continue
+            cell = base[i, j]
+            if cell == floor and along > math.sqrt(d2) * inside:
+                continue  # at the clamp's floor, and the update provably keeps it there
             a = math.atan2(dy * c - dx * s, along)
             w = 1.0 - (a / half) ** 2
-            cell = base[i, j]
             miss = l_miss
             if fade < math.inf:
                 miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))

@@ -4,7 +4,7 @@ The scans every kernel shares: the cells of the box around the sector ``r_in <= 
 bearings ``[t1, t2]`` (:func:`sector_box`, :func:`cell_range`) and, row by row, only the columns
 of the ring (:func:`ring_columns`), each with a cell of slack (the exact test is the caller's); and
 the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half`` (:func:`bearing_off`), done with a dot
-product except within :data:`_EDGE` of the edge (:func:`within`: the same answer, bit for bit).
+product except within :data:`EDGE` of the edge (:func:`within`: the same answer, bit for bit).
 Metres and radians; ``docs/carved-grid.md``, "The sensor model".
 """
 
@@ -15,10 +15,12 @@ import math
 from sonarcarve.geometry._compiled import compiled_inline
 
 __all__ = [
+    "EDGE",
     "TWO_PI",
     "bearing_off",
     "cell_range",
     "cos_bound",
+    "not_within",
     "ring_columns",
     "sector_box",
     "within",
@@ -27,7 +29,7 @@ __all__ = [
 TWO_PI = 2.0 * math.pi
 #: Margin of :func:`within`'s dot-product test: far above its rounding (about 1e-15)
 #: and that of the bearing test it stands for, so the two never disagree outside it.
-_EDGE = 1e-9
+EDGE = 1e-9
 
 
 @compiled_inline
@@ -82,15 +84,24 @@ def within(dx: float, dy: float, d: float, mid: float, half: float, cos_mid: flo
     :func:`~sonarcarve.grids.carved.band.draw_arc`, with the arctangent only near the interval's
     edges: ``(dx, dy)`` (length ``d``) is within ``half`` of the direction ``(cos_mid, sin_mid)``
     when its cosine to it is above ``cos_half`` (-2 when ``half >= π``: every bearing), and the
-    cosine decides wherever it is more than :data:`_EDGE` from ``cos_half``: there both tests'
+    cosine decides wherever it is more than :data:`EDGE` from ``cos_half``: there both tests'
     rounding (1e-15) cannot change the answer, so the answer is the same bit for bit."""
     if d > 0.0:
         q = (dx * cos_mid + dy * sin_mid) / d - cos_half
-        if q > _EDGE:
+        if q > EDGE:
             return True
-        if q < -_EDGE:
+        if q < -EDGE:
             return False
     return abs(bearing_off(dx, dy, mid)) <= half
+
+
+@compiled_inline
+def not_within(dx: float, dy: float, d: float, cos_mid: float, sin_mid: float,
+               cos_half: float) -> bool:
+    """True only where :func:`within` is False by its cosine alone (more than :data:`EDGE`
+    below ``cos_half``): there ``|bearing_off(dx, dy, mid)| > half`` too, so a caller that needs
+    the bearing itself can skip the arctangent for such cells and get the same answer."""
+    return d > 0.0 and (dx * cos_mid + dy * sin_mid) / d - cos_half < -EDGE
 
 
 @compiled_inline
