@@ -63,7 +63,8 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
     arctangent and no fade: ``floor``, the stored (float32) ``l_min``, and ``inside``, a cosine
     bound that puts a cell's bearing strictly inside the beam.
 
-    A cell at ``floor`` is not believed occupied (``l_min < 0``), so its update is
+    A cell at ``floor`` (< 0, not -0.0, which would equal a fresh cell's 0.0) is not believed
+    occupied, so its update is
     ``min(l_max, max(l_min, floor + γ(α) f(d) · logit(p_miss)))``. Where ``γ(α) >= 0`` and
     ``logit(p_miss) <= 0`` the sum is at most ``floor``, so the clamp gives a value in
     ``[l_min, floor]`` (or ``l_min`` when ``floor < l_min``), and float32 rounding, monotone, takes
@@ -71,11 +72,12 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
     needs ``|α| <= φ/2`` for the computed ``α``; the beam's own cosine test admits cells within
     rounding of the edge, so a cell is skipped only when its cosine to the axis is above
     ``cos(φ/2)`` by :data:`~sonarcarve.grids.carved.scan.EDGE` (far above the arctangent's
-    rounding, 1e-16). ``floor`` is NaN (never equal) when ``logit(p_miss) > 0``, ``l_min >= 0`` or
-    ``l_min > l_max``, where the argument does not hold."""
-    if not (m.l_miss <= 0.0 and m.l_min < 0.0 and m.l_min <= m.l_max):
+    rounding, 1e-16). ``floor`` is NaN (never equal) when ``logit(p_miss) > 0``, ``floor >= 0``
+    or ``l_min > l_max``, where the argument does not hold."""
+    floor = float(np.float32(m.l_min))
+    if not (m.l_miss <= 0.0 and floor < 0.0 and m.l_min <= m.l_max):
         return math.nan, 2.0
-    return float(np.float32(m.l_min)), cos_half + EDGE
+    return floor, cos_half + EDGE
 
 
 @compiled_inline
