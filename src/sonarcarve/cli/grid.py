@@ -4,8 +4,8 @@ map_server map.
 A bag is read as ``sonarcarve process`` reads it: the bag options of
 :mod:`sonarcarve.cli.options` give a :class:`~sonarcarve.fleet.BagOptions`, whose
 :meth:`~sonarcarve.fleet.BagOptions.read` and :meth:`~sonarcarve.fleet.BagOptions.readings`
-give the readings (with ``--no-echo``, the silent firings as no-echo readings, which the grids
-take as free space).
+give the readings (with ``--no-echo``, the silent firings as no-echo readings, which the carved
+and Elfes grids take as free space; the range-sensor-layer drops them, as ROS's does).
 """
 
 from __future__ import annotations

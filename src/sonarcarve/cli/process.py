@@ -28,6 +28,7 @@ from sonarcarve.cli.options import (
     RobotOpt,
     bag_options,
     check_new_bag,
+    refuse_bag_options,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
@@ -273,10 +274,7 @@ def process(
         raise ParameterError(msg)
     source = _single_input(inputs, workers, scheduler)
     output = _output_kind(out)
-    if not is_bag(source) and bag.given:
-        msg = (f"{source} is a readings CSV; --robot, --range-topic, --odom-topic, --frame "
-               "and --no-echo apply to ROS bag inputs only")
-        raise ParameterError(msg)
+    refuse_bag_options(source, bag)
     if output.label != "csv" and (reading_filter is not None or map_filter is not None):
         msg = (f"--out {out}: the filters (--max-range, --min-range, --jump-threshold, "
                "--max-error, --outlier-radius) apply to a map CSV output only")
