@@ -28,6 +28,7 @@ from sonarcarve.grids.carved.params import (
     CarvedGridParams,
     check_probability,
 )
+from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
 from sonarcarve.grids.cells import CellGrid, GridError
 from sonarcarve.grids.elfes import MAX_CELLS
@@ -143,6 +144,7 @@ class CarvedGrid(CellGrid):
         self._next_final = 0  # sequence number of the next arc to leave the history
         # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
         self._newest: dict[int, int] = {}
+        self._periods = FiringPeriods()  # how long until a sensor has fired again
         self._latest_t = -math.inf  # time of the newest reading seen (fresh_seconds counts back)
         self._stale = False
         self.readings = 0
@@ -240,6 +242,7 @@ class CarvedGrid(CellGrid):
             self._chain[marked] = 1.0
             self._batch_chain = np.ones(0)
             raise
+        self._periods.note(batch.sensor, batch.t)
         history.flush_retired()  # every arc that left the history is final now
         self._keep_batch_chain(history)
         finals = self._take_pending()
@@ -385,12 +388,20 @@ class CarvedGrid(CellGrid):
 
     def _fresh(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> BoolArray:
         """Which of the live arcs ``seqs`` (consecutive, in ``slots``) is its sensor's newest
-        reading, heard at most ``fresh_seconds`` before the newest reading seen."""
+        reading, heard at most ``fresh_seconds`` before the newest reading seen, and less than
+        ``fresh_periods`` of its sensor's firing periods before it."""
         fresh = np.zeros(len(seqs), dtype=bool)
         at = np.fromiter(self._newest.values(), dtype=np.int64, count=len(self._newest))
         at -= seqs[0]
         at = at[(at >= 0) & (at < len(seqs))]
-        young = self._method.history.t[slots[at]] >= self._latest_t - self._params.fresh_seconds
+        history, params = self._method.history, self._params
+        t = history.t[slots[at]]
+        young = t >= self._latest_t - params.fresh_seconds
+        if params.fresh_periods < math.inf and len(at):
+            # By then the sensor has fired again; a firing the log does not show heard nothing,
+            # and the echo is no longer in the sensor's current view.
+            periods = self._periods.periods(history.sensor[slots[at]])
+            young &= t > self._latest_t - params.fresh_periods * periods
         fresh[at[young]] = True
         return fresh
 

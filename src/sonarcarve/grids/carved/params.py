@@ -50,6 +50,10 @@ DEFAULT_METHOD = "combined"
 #: recall with them (0.20 at 0.05 m against 0.53); with combined carving 20° kept recall where
 #: 30° lost 0.004-0.023 of it (office 0.937 / 0.953 against 0.914 / 0.947 at 0.05 / 0.10 m).
 DEFAULT_MAX_INCIDENCE = math.radians(20.0)
+#: How many of its sensor's firing periods a newest echo's mark lasts at most
+#: (:attr:`CarvedGridParams.fresh_periods`): past one period the sensor has fired again; the
+#: rest is room for the jitter of real firing times.
+DEFAULT_FRESH_PERIODS = 1.1
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
 DEFAULT_SEE_THROUGH = 0.5
@@ -155,6 +159,13 @@ class CarvedGridParams:
         2 s is three cycles of such a ring at 40 ms a sonar (0.64 s, the simulator's Scout2),
         so a sensor that keeps hearing an obstacle keeps it marked; set it to 2-3 ring periods
         of a slower ring.
+    fresh_periods : float
+        Number >= 1 (``inf``: off); :data:`DEFAULT_FRESH_PERIODS`. A newest echo stays fresh less
+        than this many of its sensor's firing periods (the period as the log shows it,
+        :class:`~sonarcarve.grids.carved.periods.FiringPeriods`): by then the sensor has fired
+        again, and a log without that reading dropped a firing that heard nothing, so the mark
+        ends as it would with the silent firing in the log ("Stale marks"). Below 1 a sensor's
+        own next echo could come after its mark ended, so it is refused.
     side_lobes : float
         Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (0: the beam alone).
         How far past each edge of its beam, in half beam widths, a near echo may have come from
@@ -204,6 +215,7 @@ class CarvedGridParams:
     band_profile: float = 0.0
     fresh_arcs: bool = True
     fresh_seconds: float = 2.0
+    fresh_periods: float = DEFAULT_FRESH_PERIODS
     see_through: float = DEFAULT_SEE_THROUGH
     repeat_weight: float = 0.0
     side_lobes: float = DEFAULT_SIDE_LOBES
@@ -243,6 +255,11 @@ class CarvedGridParams:
         if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
                 math.isfinite(fs) and fs > 0.0):
             msg = f"carved grid: fresh_seconds must be a finite number > 0, got {fs!r}"
+            raise GridError(msg)
+        fp = self.fresh_periods
+        if isinstance(fp, bool) or not isinstance(fp, int | float) or not fp >= 1.0:
+            msg = (f"carved grid: fresh_periods must be a number >= 1 firing period (inf: off), "
+                   f"got {fp!r}")
             raise GridError(msg)
         rw = self.repeat_weight
         if isinstance(rw, bool) or not isinstance(rw, int | float) or not 0.0 <= rw <= 1.0:
