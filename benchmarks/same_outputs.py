@@ -1,19 +1,23 @@
-"""Do two commits give the same bits? Methods' maps and the carved grid, old code against new.
+"""Do two commits give the same bits? Methods' maps and the grids, old code against new.
 
 Run from the repository root (on a shared machine, with ``nice``)::
 
     nice .venv/bin/python benchmarks/same_outputs.py --commits 7bc4ab6 WORKTREE
     nice .venv/bin/python benchmarks/same_outputs.py --commits 7bc4ab6 /tmp/tree  # a folder
+    nice .venv/bin/python benchmarks/same_outputs.py --methods --worlds office doorway \
+        --resolutions 0.05 0.10  # the grids alone
 
 For a speed change that must not change any output. Each commit's ``src`` is exported with
 ``git archive`` (``WORKTREE``: this checkout's ``src``) and run in a child process with its own
-numba cache. A child simulates the office logs (``--seeds``, both echo models) and feeds each
-log to every ``--methods`` method three ways: the whole log in one ``add_many``, blocks of 5
-readings, and one ``add`` per reading (``--singles`` readings of it). It hashes (SHA-256 of the
-raw bytes) every field of the global map that ``finish`` returns and of the local map at the
-end of the stream and after every 1000 readings of the blocks, and, for the carved grid with
-its default method at 0.10 m, the log-odds after each 25-reading block read and at the end.
-The parent prints each hash key's verdict: the same in every commit, or which differ.
+numba cache. A child simulates the logs of ``--worlds`` (``--seeds``, both echo models) and
+feeds each log to every ``--methods`` method three ways: the whole log in one ``add_many``,
+blocks of 5 readings, and one ``add`` per reading (``--singles`` readings of it). It hashes
+(SHA-256 of the raw bytes) every field of the global map that ``finish`` returns and of the
+local map at the end of the stream and after every 1000 readings of the blocks. At each of
+``--resolutions`` it feeds the log to the carved grid (its default method) and the Elfes grid,
+each made ``around`` the world, whole and in blocks of 5 readings, and hashes the log-odds at
+the end, and the carved grid's after each 25-reading block read. The parent prints each hash
+key's verdict: the same in every commit, or which differ.
 """
 
 from __future__ import annotations
@@ -30,17 +34,20 @@ from commits import child_env, export_src
 WORKTREE = "WORKTREE"
 ROOT = Path(__file__).resolve().parent.parent
 
-# Run in each subprocess: arguments seeds (comma-separated), methods (comma-separated), singles.
+# Run in each subprocess: arguments seeds, methods, worlds, resolutions (each comma-separated),
+# singles.
 CHILD = r"""
 import hashlib, json, math, sys
 import numpy as np
-from sonarcarve.grids import CarvedGrid
+from sonarcarve.grids import CarvedGrid, OccupancyGrid
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import MethodConfig, make_method
 
 seeds = [int(s) for s in sys.argv[1].split(",")]
-methods = sys.argv[2].split(",")
-singles = int(sys.argv[3])
+methods = [m for m in sys.argv[2].split(",") if m]
+worlds = sys.argv[3].split(",")
+resolutions = [float(h) for h in sys.argv[4].split(",")]
+singles = int(sys.argv[5])
 out = {}
 
 def digest(value):
@@ -55,36 +62,47 @@ def method(name):
     config = MethodConfig(max_incidence=math.radians(20.0)) if name != "atm" else None
     return make_method(name, config)
 
-for physics in ("specular", "amplitude"):
-    override = () if physics == "specular" else (("echo_model", physics),)
-    for seed in seeds:
-        batch = run_simulation(Scenario("office", seed, physics=override)).readings
-        log = f"office {seed} {physics}"
-        for name in methods:
-            whole = method(name)
+def grids(log, bounds, batch):
+    for h in resolutions:
+        for label, kind in (("carved grid", CarvedGrid), ("elfes grid", OccupancyGrid)):
+            whole = kind.around(bounds, h)
             whole.add_many(batch)
-            put(f"{log} {name} whole local", whole.local_map())
-            put(f"{log} {name} whole global", whole.finish())
-            blocks = method(name)
+            out[f"{log} {label} {h:g} m whole"] = digest(whole.log_odds)
+            blocks = kind.around(bounds, h)
             for start in range(0, len(batch), 5):
                 blocks.add_many(batch[start:start + 5])
-                if (start + 5) % 1000 == 0:
-                    put(f"{log} {name} blocks local at {start + 5}", blocks.local_map())
-            put(f"{log} {name} blocks global", blocks.finish())
-            one = method(name)
-            for k in range(min(singles, len(batch))):
-                one.add(batch[k])
-            put(f"{log} {name} singles local", one.local_map())
-            put(f"{log} {name} singles global", one.finish())
-        grid = CarvedGrid(0.1, (-0.5, -0.5, 90.5, 60.5))
+            out[f"{log} {label} {h:g} m blocks of 5"] = digest(blocks.log_odds)
+        grid = CarvedGrid.around(bounds, h)
         reads = []
         for start in range(0, len(batch), 25):
             grid.add_many(batch[start:start + 25])
             reads.append(digest(grid.log_odds))
-        out[f"{log} carved grid reads every 25"] = digest(np.array(reads))
-        whole_grid = CarvedGrid(0.1, (-0.5, -0.5, 90.5, 60.5))
-        whole_grid.add_many(batch)
-        out[f"{log} carved grid whole"] = digest(whole_grid.log_odds)
+        out[f"{log} carved grid {h:g} m reads every 25"] = digest(np.array(reads))
+
+for world in worlds:
+    for physics in ("specular", "amplitude"):
+        override = () if physics == "specular" else (("echo_model", physics),)
+        for seed in seeds:
+            sim = run_simulation(Scenario(world, seed, physics=override))
+            batch = sim.readings
+            log = f"{world} {seed} {physics}"
+            for name in methods:
+                whole = method(name)
+                whole.add_many(batch)
+                put(f"{log} {name} whole local", whole.local_map())
+                put(f"{log} {name} whole global", whole.finish())
+                blocks = method(name)
+                for start in range(0, len(batch), 5):
+                    blocks.add_many(batch[start:start + 5])
+                    if (start + 5) % 1000 == 0:
+                        put(f"{log} {name} blocks local at {start + 5}", blocks.local_map())
+                put(f"{log} {name} blocks global", blocks.finish())
+                one = method(name)
+                for k in range(min(singles, len(batch))):
+                    one.add(batch[k])
+                put(f"{log} {name} singles local", one.local_map())
+                put(f"{log} {name} singles global", one.finish())
+            grids(log, sim.world.bounds, batch)
 print(json.dumps(out))
 """
 
@@ -103,7 +121,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--commits", nargs="+", default=["HEAD", WORKTREE])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
-    parser.add_argument("--methods", nargs="+", default=["combined", "atm", "carve"])
+    parser.add_argument("--methods", nargs="*", default=["combined", "atm", "carve"],
+                        help="methods to compare (none: the grids alone)")
+    parser.add_argument("--worlds", nargs="+", default=["office"])
+    parser.add_argument("--resolutions", type=float, nargs="+", default=[0.1],
+                        help="cell sizes of the grids, metres")
     parser.add_argument("--singles", type=int, default=3000,
                         help="readings fed one add() at a time (the start of each log)")
     args = parser.parse_args(argv)
@@ -114,7 +136,8 @@ def main(argv: list[str] | None = None) -> int:
             env = child_env(src, Path(name) / f"{len(hashes)}-numba")
             child = subprocess.run(
                 [sys.executable, "-c", CHILD, ",".join(map(str, args.seeds)),
-                 ",".join(args.methods), str(args.singles)],
+                 ",".join(args.methods), ",".join(args.worlds),
+                 ",".join(map(str, args.resolutions)), str(args.singles)],
                 env=env, check=True, capture_output=True, text=True)
             hashes[commit] = json.loads(child.stdout)
     first, *others = args.commits

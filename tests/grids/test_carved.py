@@ -700,7 +700,7 @@ def test_a_map_read_after_every_batch_is_the_map_read_once(no_echo: bool, fresh:
 
 
 def test_the_cheap_bearing_test_decides_as_the_arctangent() -> None:
-    from sonarcarve.grids.carved.scan import bearing_off, cos_bound, within
+    from sonarcarve.grids.scan import bearing_off, cos_bound, within
 
     rng = np.random.default_rng(0)
     cases = 0

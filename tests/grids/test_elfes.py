@@ -14,9 +14,9 @@ from sonarcarve.grids.elfes import (
     GridError,
     OccupancyGrid,
     SonarConeModel,
-    _beam_box,
     _update_numpy,
 )
+from sonarcarve.grids.scan import sector_box
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.sim.world import World
 
@@ -212,6 +212,7 @@ def test_compiled_and_numpy_updates_match_a_brute_force_reference(resolution: fl
 
 
 def test_the_beam_box_is_the_bounding_box_of_the_sector() -> None:
+    # The grid scans the box of the sector r_in = 0 (the beam with its apex) around each beam.
     rng = np.random.default_rng(11)
     for _ in range(300):
         x, y = rng.uniform(-3, 3, 2)
@@ -221,7 +222,8 @@ def test_the_beam_box_is_the_bounding_box_of_the_sector() -> None:
         py = np.concatenate(([y], y + reach * np.sin(tau)))
         expected = (px.min(), py.min(), px.max(), py.max())
         # Sampled every 0.16 mrad: the true extremes lie at most 1e-8 m beyond the samples.
-        box = _beam_box(float(x), float(y), float(theta), float(phi), reach)
+        box = sector_box(float(x), float(y), float(theta - phi / 2), float(theta + phi / 2),
+                         0.0, reach)
         np.testing.assert_allclose(box, expected, atol=1e-7)
 
 

@@ -1,8 +1,9 @@
 """What every grid checks of its cells: a resolution and bounds, and how many cells they make.
 
-One check for :class:`~sonarcarve.grids.OccupancyGrid`,
-:class:`~sonarcarve.grids.RangeSensorLayer` and :class:`~sonarcarve.grids.CarvedGrid`, so their
-errors read alike and a limit cannot be forgotten by one of them.
+One check for :class:`~sonarcarve.grids.OccupancyGrid`, :class:`~sonarcarve.grids.RangeSensorLayer`
+and :class:`~sonarcarve.grids.CarvedGrid` (and one of the margin of a grid made ``around`` an
+extent, :func:`bounds_around`), so their errors read alike and a limit cannot be forgotten by one
+of them.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
-__all__ = ["CellGrid", "GridError", "grid_cells"]
+__all__ = ["CellGrid", "GridError", "bounds_around", "grid_cells"]
 
 Bounds = tuple[float, float, float, float]
 
@@ -63,6 +64,29 @@ def grid_cells(label: str, resolution: object, bounds: object, max_cells: int,
                f"({limit_name}); use a coarser resolution or smaller bounds")
         raise GridError(msg)
     return float(h), (xmin, ymin, xmax, ymax), nx, ny
+
+
+def bounds_around(label: str, extent: Bounds, margin: float) -> Bounds:
+    """``extent = (xmin, ymin, xmax, ymax)`` grown by ``margin`` metres on every side: the
+    bounds of a grid made ``around`` it, or :class:`GridError` (its message starting with
+    ``label``) for a negative or non-finite margin. The extent itself is checked by the grid
+    (:func:`grid_cells`): a flat extent needs a margin.
+
+    Examples
+    --------
+    >>> bounds_around("grid", (0.0, 0.0, 4.0, 3.0), 0.5)
+    (-0.5, -0.5, 4.5, 3.5)
+    >>> try:
+    ...     bounds_around("carved grid", (0.0, 0.0, 4.0, 3.0), -1.0)
+    ... except GridError as err:
+    ...     print(err)
+    carved grid: margin must be a finite number >= 0 metres, got -1.0
+    """
+    if not (math.isfinite(margin) and margin >= 0.0):
+        msg = f"{label}: margin must be a finite number >= 0 metres, got {margin!r}"
+        raise GridError(msg)
+    xmin, ymin, xmax, ymax = extent
+    return xmin - margin, ymin - margin, xmax + margin, ymax + margin
 
 
 class CellGrid:

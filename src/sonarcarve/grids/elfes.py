@@ -50,15 +50,14 @@ A cell is judged by its centre only: the grid's resolution is the map's resoluti
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
 
-from sonarcarve.grids.cells import CellGrid, GridError
+from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.grids.cells import CellGrid, GridError, bounds_around
+from sonarcarve.grids.scan import cell_range, sector_box
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import FloatArray
@@ -84,17 +83,8 @@ ROS_FADE_RANGE = 1.2
 #: Most cells a grid may have: 2**28 float32 cells are 1 GiB (a 0.05 m grid of 819 m x 819 m).
 MAX_CELLS = 2**28
 
-_TWO_PI = 2.0 * math.pi
 #: Slope of ROS range_sensor_layer's distance fade, 1/m (its ``delta(phi)``: ``tanh(2 (d - phi))``).
 _FADE_SLOPE = 2.0
-
-_F = TypeVar("_F", bound=Callable[..., Any])
-
-
-def _compiled(func: _F) -> _F:
-    """``numba.njit(cache=True)``, typed so that mypy keeps the function's signature."""
-    return cast(_F, njit(cache=True)(func))
-
 
 def _logit(p: float) -> float:
     return math.log(p / (1.0 - p))
@@ -235,12 +225,7 @@ class OccupancyGrid(CellGrid):
         GridError
             A negative or non-finite margin; a flat extent and no margin.
         """
-        if not (math.isfinite(margin) and margin >= 0.0):
-            msg = f"grid: margin must be a finite number >= 0 metres, got {margin!r}"
-            raise GridError(msg)
-        xmin, ymin, xmax, ymax = extent
-        bounds = (xmin - margin, ymin - margin, xmax + margin, ymax + margin)
-        return cls(resolution, bounds, model or SonarConeModel())
+        return cls(resolution, bounds_around("grid", extent, margin), model or SonarConeModel())
 
     # -- shape -------------------------------------------------------------------------------
 
@@ -320,46 +305,17 @@ class OccupancyGrid(CellGrid):
         return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
 
 
-def _beam_box(x: float, y: float, theta: float, phi: float,
-              reach: float) -> tuple[float, float, float, float]:
-    """Bounding box of the sector of radius ``reach`` from ``(x, y)`` over ``θ ± φ/2``."""
-    t1 = theta - 0.5 * phi
-    t2 = theta + 0.5 * phi
-    xlo = min(x, x + reach * math.cos(t1), x + reach * math.cos(t2))
-    xhi = max(x, x + reach * math.cos(t1), x + reach * math.cos(t2))
-    ylo = min(y, y + reach * math.sin(t1), y + reach * math.sin(t2))
-    yhi = max(y, y + reach * math.sin(t1), y + reach * math.sin(t2))
-    # A sector's box also reaches the circle's extreme points at the cardinal bearings inside it.
-    for k in range(4):
-        a = 0.5 * math.pi * k
-        a += _TWO_PI * math.ceil((t1 - a) / _TWO_PI)
-        if a <= t2:
-            if k == 0:
-                xhi = x + reach
-            elif k == 1:
-                yhi = y + reach
-            elif k == 2:
-                xlo = x - reach
-            else:
-                ylo = y - reach
-    return xlo, ylo, xhi, yhi
-
-
-_beam_box_kernel = _compiled(_beam_box)
-
-
-def _box_indices(xlo: float, ylo: float, xhi: float, yhi: float, xmin: float, ymin: float,
-                 h: float, nx: int, ny: int) -> tuple[int, int, int, int]:
-    """Columns ``j0..j1`` and rows ``i0..i1`` whose centres may lie in the box (one cell of
-    slack each side against rounding; the cone test decides each cell exactly)."""
-    j0 = max(0, math.floor((xlo - xmin) / h - 0.5) - 1)
-    j1 = min(nx - 1, math.ceil((xhi - xmin) / h - 0.5) + 1)
-    i0 = max(0, math.floor((ylo - ymin) / h - 0.5) - 1)
-    i1 = min(ny - 1, math.ceil((yhi - ymin) / h - 0.5) + 1)
+@compiled_inline
+def _beam_cells(x: float, y: float, theta: float, half: float, reach: float, xmin: float,
+                ymin: float, h: float, nx: int, ny: int) -> tuple[int, int, int, int]:
+    """Columns ``j0..j1`` and rows ``i0..i1`` whose centres may lie in the beam: those of the
+    bounding box of the sector of radius ``reach`` from ``(x, y)`` over ``θ ± half``
+    (:func:`~sonarcarve.grids.scan.sector_box` with ``r_in = 0``), one cell of slack each side
+    against rounding (the cone test decides each cell exactly)."""
+    xlo, ylo, xhi, yhi = sector_box(x, y, theta - half, theta + half, 0.0, reach)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
     return j0, j1, i0, i1
-
-
-_box_indices_kernel = _compiled(_box_indices)
 
 
 def _update_py(log_odds: GridArray, xmin: float, ymin: float, h: float,
@@ -374,8 +330,7 @@ def _update_py(log_odds: GridArray, xmin: float, ymin: float, h: float,
         xk, yk, rk, half = x[k], y[k], r[k], 0.5 * phi[k]
         c, s, cos_half = math.cos(theta[k]), math.sin(theta[k]), math.cos(half)
         reach = rk + band
-        xlo, ylo, xhi, yhi = _beam_box_kernel(xk, yk, theta[k], phi[k], reach)
-        j0, j1, i0, i1 = _box_indices_kernel(xlo, ylo, xhi, yhi, xmin, ymin, h, nx, ny)
+        j0, j1, i0, i1 = _beam_cells(xk, yk, theta[k], half, reach, xmin, ymin, h, nx, ny)
         for i in range(i0, i1 + 1):
             dy = ymin + (i + 0.5) * h - yk
             for j in range(j0, j1 + 1):
@@ -398,7 +353,7 @@ def _update_py(log_odds: GridArray, xmin: float, ymin: float, h: float,
 #: Compiled update. Measured against the numpy version below (``benchmarks/grid_baseline.py``,
 #: engine table, office, 13,534 readings, one core): 33k against 15k readings/s at 0.05 m,
 #: 444k against 20k at 0.20 m. numpy pays a fixed cost per reading, the loop only per cell.
-_update_kernel = _compiled(_update_py)
+_update_kernel = compiled(_update_py)
 
 
 def _update_numpy(log_odds: GridArray, xmin: float, ymin: float, h: float,
@@ -414,7 +369,7 @@ def _update_numpy(log_odds: GridArray, xmin: float, ymin: float, h: float,
     for xk, yk, tk, rk, pk in zip(x.tolist(), y.tolist(), theta.tolist(), r.tolist(),
                                   phi.tolist(), strict=True):
         reach = rk + band
-        j0, j1, i0, i1 = _box_indices(*_beam_box(xk, yk, tk, pk, reach), xmin, ymin, h, nx, ny)
+        j0, j1, i0, i1 = _beam_cells(xk, yk, tk, 0.5 * pk, reach, xmin, ymin, h, nx, ny)
         if j1 < j0 or i1 < i0:
             continue
         dx = xmin + (np.arange(j0, j1 + 1) + 0.5) * h - xk

@@ -17,7 +17,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.heard import audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.scan import EDGE, cell_range, sector_box
+from sonarcarve.grids.scan import EDGE, cell_range, sector_box
 from sonarcarve.typing import FloatArray
 
 __all__ = ["HELD", "free_space"]
@@ -71,7 +71,7 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
     every such value back to ``floor = float32(l_min)``: the cell keeps its bits. ``γ(α) >= 0``
     needs ``|α| <= φ/2`` for the computed ``α``; the beam's own cosine test admits cells within
     rounding of the edge, so a cell is skipped only when its cosine to the axis is above
-    ``cos(φ/2)`` by :data:`~sonarcarve.grids.carved.scan.EDGE` (far above the arctangent's
+    ``cos(φ/2)`` by :data:`~sonarcarve.grids.scan.EDGE` (far above the arctangent's
     rounding, 1e-16). ``floor`` is NaN (never equal) when ``logit(p_miss) > 0``, ``floor >= 0``
     or ``l_min > l_max``, where the argument does not hold."""
     floor = float(np.float32(m.l_min))

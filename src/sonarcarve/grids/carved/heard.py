@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from sonarcarve.geometry._compiled import compiled_inline
-from sonarcarve.grids.carved.scan import TWO_PI
+from sonarcarve.grids.scan import TWO_PI
 
 __all__ = ["HEARD_BINS", "HEARD_DTYPE", "HEARD_NEAR", "audibility", "heard_bin"]
 

@@ -18,7 +18,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, redraw, undraw
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.scan import (
+from sonarcarve.grids.scan import (
     TWO_PI,
     bearing_off,
     cell_range,

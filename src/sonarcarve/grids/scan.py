@@ -1,11 +1,13 @@
 """Which cells an annular sector covers, and whether a cell's bearing lies in an interval.
 
-The scans every kernel shares: the cells of the box around the sector ``r_in <= d <= r_out``,
-bearings ``[t1, t2]`` (:func:`sector_box`, :func:`cell_range`) and, row by row, only the columns
-of the ring (:func:`ring_columns`), each with a cell of slack (the exact test is the caller's); and
-the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half`` (:func:`bearing_off`), done with a dot
-product except within :data:`EDGE` of the edge (:func:`within`: the same answer, bit for bit).
-Metres and radians; ``docs/carved-grid.md``, "The sensor model".
+The scans the grids' kernels share (the Elfes grid's beam is the sector with ``r_in = 0``; the
+carved grid's kernels use all of them): the cells of the box around the sector
+``r_in <= d <= r_out``, bearings ``[t1, t2]`` (:func:`sector_box`, :func:`cell_range`) and, row by
+row, only the columns of the ring (:func:`ring_columns`), each with a cell of slack (the exact test
+is the caller's); and the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half``
+(:func:`bearing_off`), done with a dot product except within :data:`EDGE` of the edge
+(:func:`within`: the same answer, bit for bit). Metres and radians; ``docs/carved-grid.md``,
+"The sensor model".
 """
 
 from __future__ import annotations
