@@ -10,11 +10,12 @@ what was tried and not kept: ``docs/carved-grid.md``.
 
 The modules from the bottom up, each importing only those before it (an import-linter contract
 in ``pyproject.toml`` checks the layers): :mod:`.params` (the parameters and their measured
-defaults), :mod:`.model` (them as the kernels take them), :mod:`.scan` (which cells a sector
-covers), :mod:`.heard` (where a cell was heard from), :mod:`.band` (an arc's band),
-:mod:`.free_space` and :mod:`.mark` (a reading's free space; the newest echo's mark),
-:mod:`.kernels`, :mod:`.repeats` and :mod:`.intervals` (what the grid calls), :mod:`.grid`
-(:class:`CarvedGrid`) and :mod:`.classify` (:func:`trinary`, for any grid).
+defaults), :mod:`.model` (them as the kernels take them), :mod:`~sonarcarve.grids.scan` (which
+cells a sector covers; outside the package, the Elfes grid uses it too), :mod:`.heard` (where a
+cell was heard from), :mod:`.band` (an arc's band), :mod:`.free_space` and :mod:`.mark` (a
+reading's free space; the newest echo's mark), :mod:`.kernels`, :mod:`.repeats` and
+:mod:`.intervals` (what the grid calls), :mod:`.grid` (:class:`CarvedGrid`) and :mod:`.classify`
+(:func:`trinary`, for any grid).
 """
 
 from __future__ import annotations
