@@ -12,6 +12,7 @@ import pytest
 from sonarcarve.geometry.repeats import is_repeat
 from sonarcarve.grids import OCCUPIED, CarvedGrid, CarvedGridParams, GridError
 from sonarcarve.grids.carved import DEFAULT_SPREAD_LENGTH
+from sonarcarve.grids.carved.repeats import repeat_kernel
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
 
@@ -272,22 +273,116 @@ def test_a_bad_batch_marks_no_repeat() -> None:
     assert tried.live_log_odds[i, j] == pytest.approx(first)
 
 
-@pytest.mark.parametrize("batch", [1, 7, 400])
-def test_sensor_numbers_do_not_change_the_map(batch: int) -> None:
-    # The kernel finds each sensor's earlier arcs by an array indexed by sensor number when the
-    # numbers are small, by scanning back otherwise: the two must mark the same arcs.
-    readings = _approaching_ring(400, 1, True)
-    far = [r._replace(sensor=r.sensor * 10**8 + 3) for r in readings]
-    config = MethodConfig(history_size=30, max_incidence=math.radians(30.0))
+# -- the walk over each sensor's earlier arcs -------------------------------------------------
 
-    def run(rs: list[Reading], weight: float = 0.0) -> CarvedGrid:
-        grid = CarvedGrid(H, BOUNDS, method=make_method("carve", config),
-                          params=CarvedGridParams(repeat_weight=weight))
-        for start in range(0, len(rs), batch):
-            grid.add_many(ReadingBatch.from_readings(rs[start:start + batch]))
-            grid.refresh()
-        return grid
 
-    near_map = run(readings).log_odds
-    assert not np.array_equal(near_map, run(readings, 1.0).log_odds)  # repeats matter here
-    np.testing.assert_array_equal(run(far).log_odds, near_map)
+def _walk_over_every_arc(chain: np.ndarray, batch_chain: np.ndarray, seen_seq: np.ndarray,
+                         marked: np.ndarray, seqs: np.ndarray, first: int, no_echo: np.ndarray,
+                         sensor: np.ndarray, x: np.ndarray, y: np.ndarray, r: np.ndarray,
+                         theta: np.ndarray, half: np.ndarray, hsensor: np.ndarray,
+                         hx: np.ndarray, hy: np.ndarray, hr: np.ndarray, htheta: np.ndarray,
+                         hwidth: np.ndarray, capacity: int, tol: float, factor: float) -> int:
+    """The oracle: ``repeat_kernel``'s loop before c208a0f (``git show
+    c208a0f^:src/sonarcarve/grids/carved/repeats.py``) in plain Python. Each echo tries every
+    arc of its window, oldest first, whatever its sensor."""
+    size = chain.shape[0]
+    rows = np.empty(x.shape[0], dtype=np.int64)  # the row of the batch's arc first + i
+    count = 0
+    for k in range(x.shape[0]):
+        if not no_echo[k]:
+            rows[count] = k
+            count += 1
+    n_marked = 0
+    for k in range(x.shape[0]):
+        if no_echo[k]:
+            continue
+        for p in range(max(0, seqs[k] - capacity + 1), seqs[k]):
+            if p >= first:
+                j = rows[p - first]
+                if sensor[j] != sensor[k] or batch_chain[p - first] == factor:
+                    continue
+                x1, y1, r1, t1, h1 = x[j], y[j], r[j], theta[j], half[j]
+            else:
+                s = p % size
+                if hsensor[s] != sensor[k] or chain[s] == factor:
+                    continue
+                x1, y1, r1, t1, h1 = hx[s], hy[s], hr[s], htheta[s], 0.5 * hwidth[s]
+            if not is_repeat(x1, y1, r1, t1, h1, x[k], y[k], r[k], theta[k], half[k], tol):
+                continue
+            if p >= first:
+                batch_chain[p - first] = factor
+            else:
+                chain[p % size] = factor
+                seen_seq[p % size] = -1
+                marked[n_marked] = p % size
+                n_marked += 1
+    return n_marked
+
+
+#: Sensor numbers of the random cases: small ones (the kernel looks a sensor's newest arc up in
+#: an array), large ones and a mix (it scans back instead).
+SENSOR_IDS = {"small": np.arange(6), "large": 10**8 + 3 + 10**8 * np.arange(6),
+              "mixed": np.array([0, 1, 5, 2**31 - 1, 10**8 + 3, 70])}
+
+
+def _arcs(rng: np.random.Generator, n: int, ids: np.ndarray, headings: np.ndarray,
+          targets: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``n`` arcs ``(sensor, x, y, r, theta, width)``: each sensor drives along its heading
+    towards its target, so that its echoes often repeat one another; one in five ranges is
+    random, one in five beam widths not the default."""
+    which = rng.integers(0, len(ids), n)
+    dist = rng.uniform(0.3, 3.0, n)
+    heading = headings[which]
+    side = rng.normal(0.0, 0.02, n)
+    x = targets[which, 0] - dist * np.cos(heading) - side * np.sin(heading)
+    y = targets[which, 1] - dist * np.sin(heading) + side * np.cos(heading)
+    r = np.where(rng.random(n) < 0.2, rng.uniform(0.3, 3.0, n), dist + rng.normal(0.0, 0.02, n))
+    theta = heading + rng.normal(0.0, 0.05, n)
+    width = np.where(rng.random(n) < 0.2, rng.uniform(0.1, 0.8, n), PHI)
+    return ids[which], x, y, r, theta, width
+
+
+def _walk_case(rng: np.random.Generator, ids: np.ndarray) -> dict[str, object]:
+    """``repeat_kernel``'s arguments for a random batch after a random history (of a random
+    capacity, after a random number of arcs: the ring of slots wraps), a fifth of the batch's
+    readings no-echo ones, a sixth of the history's arcs already marked."""
+    capacity = int(rng.integers(2, 13))
+    size = 2 * capacity  # SonarHistory.storage_size
+    first = int(rng.integers(0, 6 * capacity))  # arcs appended before the batch
+    n = int(rng.integers(1, 3 * capacity))  # some batches longer than the history
+    headings = rng.uniform(-math.pi, math.pi, len(ids))
+    targets = rng.uniform(-3.0, 3.0, (len(ids), 2))
+    no_echo = rng.random(n) < 0.2
+    sensor, x, y, r, theta, width = _arcs(rng, n, ids, headings, targets)
+    hsensor, hx, hy, hr, htheta, hwidth = _arcs(rng, size, ids, headings, targets)
+    factor = float(rng.choice([0.0, 0.25]))
+    return {"chain": np.where(rng.random(size) < 1 / 6, factor, 1.0),
+            "batch_chain": np.ones(int(np.count_nonzero(~no_echo))),
+            "seen_seq": rng.integers(0, 1000, size), "marked": np.full(capacity, -7),
+            "seqs": first + np.cumsum(~no_echo) - 1, "first": first, "no_echo": no_echo,
+            "sensor": sensor, "x": x, "y": y, "r": np.where(no_echo, math.inf, r),
+            "theta": theta, "half": 0.5 * width, "hsensor": hsensor, "hx": hx, "hy": hy,
+            "hr": hr, "htheta": htheta, "hwidth": hwidth, "capacity": capacity, "tol": TOL,
+            "factor": factor}
+
+
+@pytest.mark.parametrize("ids", sorted(SENSOR_IDS))
+def test_the_walk_over_a_sensors_own_arcs_marks_what_the_walk_over_every_arc_marked(
+        ids: str) -> None:
+    rng = np.random.default_rng(sorted(SENSOR_IDS).index(ids))
+    history_marks = batch_marks = 0
+    for _ in range(300):
+        case = _walk_case(rng, SENSOR_IDS[ids])
+        new = {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in case.items()}
+        old = {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in case.items()}
+        count = repeat_kernel(**new)
+        assert count == _walk_over_every_arc(**old)
+        for name in ("chain", "batch_chain", "seen_seq"):
+            np.testing.assert_array_equal(new[name], old[name], err_msg=name)
+        # The same slots, in another order (the walk goes newest first).
+        assert sorted(new["marked"][:count]) == sorted(old["marked"][:count])
+        history_marks += count
+        batch_marks += int(np.count_nonzero(new["batch_chain"] != 1.0))
+    # The cases exercise both kinds of marks, often.
+    assert history_marks > 200
+    assert batch_marks > 200
