@@ -30,7 +30,7 @@ from sonarcarve.grids.carved.params import (
 )
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
-from sonarcarve.grids.cells import CellGrid, GridError
+from sonarcarve.grids.cells import CellGrid, GridError, bounds_around
 from sonarcarve.grids.elfes import MAX_CELLS
 from sonarcarve.grids.occupancy import Int8Grid
 from sonarcarve.history import SonarHistory
@@ -169,12 +169,7 @@ class CarvedGrid(CellGrid):
         GridError
             A negative or non-finite margin; a flat extent and no margin.
         """
-        if not (math.isfinite(margin) and margin >= 0.0):
-            msg = f"carved grid: margin must be a finite number >= 0 metres, got {margin!r}"
-            raise GridError(msg)
-        xmin, ymin, xmax, ymax = extent
-        return cls(resolution, (xmin - margin, ymin - margin, xmax + margin, ymax + margin),
-                   method, params)
+        return cls(resolution, bounds_around("carved grid", extent, margin), method, params)
 
     # -- geometry ----------------------------------------------------------------------------
 
