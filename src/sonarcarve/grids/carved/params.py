@@ -145,9 +145,10 @@ class CarvedGridParams:
     fresh_arcs : bool
         Each sensor's newest echo, when no occupied cell on its carved band explains it, is a whole
         hit on the middle ``spread_length`` of its carved interval (its spread value on the rest)
-        until that sensor fires again ("The newest echoes mark at once": a person stepping in front
-        of the robot is marked after one reading). Where the map favours another part of the band
-        and not the middle, the whole hit goes around the band's most likely cell instead ("Where
+        until that sensor fires again, or would have (``fresh_periods``) ("The newest echoes mark
+        at once": a person stepping in front of the robot is marked after one reading). Where the
+        map favours another part of the band and not the middle, the whole hit goes around the
+        band's most likely cell instead ("Where
         the mark goes": the Fig. 2 door, echoes only, 92 -> 97 % / 86 -> 94 % passable at 0.05 /
         0.10 m). False: every live arc spread, the rule
         before.
