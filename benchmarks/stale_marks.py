@@ -80,7 +80,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--every must be a whole number >= 1, got {args.every}")
     batch = read_robond().batch
     print(f"\nroboND log: {len(batch)} readings; gaps between two readings of one sensor "
-          "against its period as the grid knew it then (rank n/4 of its newest 16 gaps)\n")
+          "against its period as the grid knew it then (rank n/4 of its newest 16 gaps, when "
+          "they fit one period; gaps while it had none are not counted)\n")
     _gap_table(batch)
     print(f"\nCarved grid, occupied cells: at the end of the log / mean over reads every "
           f"{args.every} readings\n")

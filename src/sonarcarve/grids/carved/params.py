@@ -165,8 +165,10 @@ class CarvedGridParams:
         than this many of its sensor's firing periods (the period as the log shows it,
         :class:`~sonarcarve.grids.carved.periods.FiringPeriods`): by then the sensor has fired
         again, and a log without that reading dropped a firing that heard nothing, so the mark
-        ends as it would with the silent firing in the log ("Stale marks"). Below 1 a sensor's
-        own next echo could come after its mark ended, so it is refused.
+        ends as it would with the silent firing in the log ("Stale marks"). It acts only on a
+        sensor whose gaps fit one fixed period; below 1 a sensor's own next echo could come
+        after its mark ended, so it is refused. A log that drops readings whose value did not
+        change (rather than firings that heard nothing) breaks its premise: use ``inf`` there.
     side_lobes : float
         Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (0: the beam alone).
         How far past each edge of its beam, in half beam widths, a near echo may have come from
