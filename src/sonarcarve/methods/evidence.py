@@ -407,17 +407,18 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
 
 
 @compiled
-def _judge_each(live: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
-                cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+def _judge_each(live: SlotArray, judge: BoolArray, x: FloatArray, y: FloatArray,
+                r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
                 status: Int8Array, viewpoints: FloatArray, behind: FloatArray,
                 params: EvidenceParams, scratch: FloatArray) -> None:
-    """:meth:`EvidenceModel.judge_live`: each live arc (oldest first) judged against the live
-    arcs after it (at most :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS`), as
+    """:meth:`EvidenceModel.judge_live`: each live arc (oldest first) where ``judge`` is set
+    judged against the live arcs after it (at most
+    :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS`), as
     :func:`~sonarcarve.geometry.evidence.evidence_add_many` judges the arc that leaves."""
     n = live.shape[0]
     for q in range(n):
         j = live[q]
-        if status[j] != EVIDENCE_ALIVE or q + 1 == n:
+        if not judge[q] or status[j] != EVIDENCE_ALIVE or q + 1 == n:
             continue
         newer = min(n - q - 1, NEWER_ARCS)
         depth = depth_behind_newer(j, live[q + 1], newer, x, y, r, cos_axis, sin_axis,
@@ -656,26 +657,28 @@ class EvidenceModel(ArcModel):
         (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`)."""
         if self._judged_all:
             return
-        self._judge_live_into(self.behind)
+        self._judge_live_into(self.behind, np.ones(len(self.history.slots()), dtype=np.bool_))
         self._judged_all = True
 
-    def behind_at_end(self, slots: SlotArray) -> np.ndarray:
-        """:attr:`behind` of ``slots`` as :meth:`judge_live` would leave it were the log to
-        end now; the state is not changed (what the global map would be now:
-        :meth:`EvidenceMethod.measures`). Shape (n,)."""
+    def behind_at_end(self, slots: SlotArray, judge: BoolArray) -> np.ndarray:
+        """:attr:`behind` of the arcs in the history ``slots`` (all of them, oldest first:
+        ``history.slots()``) as :meth:`judge_live` would leave it were the log to end now,
+        where ``judge`` is set (elsewhere :meth:`behind_of`); the state is not changed
+        (:meth:`EvidenceMethod.measures`). Shape (n,)."""
         slots = np.asarray(slots, dtype=np.int64)
         if self._judged_all:
             return np.asarray(self.behind[slots])
         judged = self.behind.copy()
-        self._judge_live_into(judged)
-        return np.asarray(judged[slots])
+        self._judge_live_into(judged, np.ascontiguousarray(judge, dtype=np.bool_))
+        return np.where(judge, judged[slots], self.behind_of(slots))
 
-    def _judge_live_into(self, behind: FloatArray) -> None:
-        """Raise ``behind`` (one value per row) of every arc in the history to its depth
-        behind the arcs after it (:func:`_judge_each`)."""
+    def _judge_live_into(self, behind: FloatArray, judge: BoolArray) -> None:
+        """Raise ``behind`` (one value per row) of each arc in the history where ``judge``
+        (one value per arc, oldest first) is set to its depth behind the arcs after it
+        (:func:`_judge_each`)."""
         h = self.history
         live = np.ascontiguousarray(h.slots(), dtype=np.int64)
-        _judge_each(live, h.x, h.y, h.r, self.cos_axis, self.sin_axis, self.cos_half,
+        _judge_each(live, judge, h.x, h.y, h.r, self.cos_axis, self.sin_axis, self.cos_half,
                     self.status, self.viewpoints, behind, self.params, self.behind_scratch)
 
     def _take_spill(self, spilled: int) -> None:
@@ -881,17 +884,16 @@ class EvidenceMethod(SonarMethod):
         now = max(self._last_t, newest)
         return self.confidence_model.maturity(now - h.t[slots])
 
-    def _estimates(self, slots: SlotArray, behind: np.ndarray | None = None) -> Estimates:
-        """The model's points with their confidence; low-confidence points are not alive.
-        ``behind``: as :meth:`features`."""
+    def _estimates(self, slots: SlotArray) -> Estimates:
+        """The model's points with their confidence; low-confidence points are not alive."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots)
         has = raw[0]
         base = model.estimates_from_raw(slots, raw)
         maturity = self.maturity(slots)
-        confidence = self.confidence_model.confidence(
-            self.features(slots, raw, maturity, behind), maturity)
+        confidence = self.confidence_model.confidence(self.features(slots, raw, maturity),
+                                                      maturity)
         alive = has & (confidence >= self.config.min_confidence)
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,
@@ -919,13 +921,38 @@ class EvidenceMethod(SonarMethod):
     def measures(self) -> Measures:
         """As :meth:`SonarMethod.measures`; ``fully_carved`` counts every arc the evidence
         removed (no bin left, or confidence below ``min_confidence``), committed or still in
-        the history (as :meth:`finish` would leave it now: judged against the arcs after it,
-        :meth:`EvidenceModel.behind_at_end`); ``split`` is 0 (split arcs keep a piece)."""
+        the history (as :meth:`finish` would leave it now: :meth:`_removed_at_end`); ``split``
+        is 0 (split arcs keep a piece)."""
         self.history.flush_retired()  # count retired rows as committed (as global_map does)
         base = super().measures()
-        slots = self.history.slots()
+        removed = self._removed_at_end(self.history.slots())
+        return replace(base, fully_carved=self._removed_committed + removed, split=0)
+
+    def _removed_at_end(self, slots: SlotArray) -> int:
+        """How many of the arcs in the history (``slots``, oldest first) :meth:`finish` would
+        leave out were the log to end now: no bin left, or confidence below
+        ``min_confidence`` once judged against the arcs after them
+        (:meth:`EvidenceModel.judge_live`). Only the arcs whose fate the judging can change
+        are judged (64 rows an arc, and the pipeline samples the measures often): the
+        ``behind`` feature only grows, at most to ``min(r, 3) / r`` (the depth is shorter than
+        the range and capped at 3 m), and the confidence is monotone in it."""
+        if not len(slots):
+            return 0
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
-        live_removed = (int(np.count_nonzero(~self._estimates(
-            slots, model.behind_at_end(slots)).alive)) if len(slots) else 0)
-        return replace(base, fully_carved=self._removed_committed + live_removed, split=0)
+        raw = model.raw(slots)
+        has = raw[0]
+        maturity = self.maturity(slots)
+        threshold = self.config.min_confidence
+        features = self.features(slots, raw, maturity)
+        kept = has & (self.confidence_model.confidence(features, maturity) >= threshold)
+        r = self.history.r[slots]
+        features[:, CONFIDENCE_FEATURES.index("behind")] = np.minimum(r, 3.0) / r
+        deepest = has & (self.confidence_model.confidence(features, maturity) >= threshold)
+        unsure = kept != deepest
+        if unsure.any():
+            behind = model.behind_at_end(slots, unsure)
+            confidence = self.confidence_model.confidence(
+                self.features(slots, raw, maturity, behind), maturity)
+            kept = has & (confidence >= threshold)
+        return int(np.count_nonzero(~kept))
