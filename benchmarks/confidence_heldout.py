@@ -65,20 +65,13 @@ KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 _FLOORS = ConfidenceModel(
     intercept=-2.656, fresh=2.477, maturity_time=2.0, support=0.227, viewpoints=0.753,
     crossings=0.619, free=-0.319, looked=0.214, split=-0.618, occluded=-0.584, unheard=-0.171,
-    range=-0.136, width=0.498, others=3.104, through=0.271, repeated=1.355, behind=0.0)
+    range=-0.136, width=0.498, others=3.104, through=0.271, repeated=1.355)
 _FLOORS_BOTH = ConfidenceModel(
     intercept=0.065, fresh=3.116, maturity_time=2.0, support=0.448, viewpoints=0.554,
     crossings=0.729, free=-0.254, looked=-0.096, split=-0.726, occluded=-0.768, unheard=0.031,
-    range=-0.385, width=0.116, others=2.350, through=0.314, repeated=0.915, behind=0.0)
-#: The library's default before the ``behind`` feature (office fit, 13 features): the same
-#: run then measures the change.
-WITHOUT_BEHIND = ConfidenceModel(
-    intercept=-3.543, fresh=2.453, maturity_time=2.0, support=0.289, viewpoints=0.921,
-    crossings=0.680, free=-0.370, looked=0.299, split=-0.538, occluded=-0.375, unheard=0.017,
-    range=-0.128, width=0.545, others=3.299, through=0.293, repeated=1.205, behind=0.0)
+    range=-0.385, width=0.116, others=2.350, through=0.314, repeated=0.915)
 MODELS: dict[str, ConfidenceModel] = {
     "default (office fit)": ConfidenceModel(),
-    "default before behind (office fit)": WITHOUT_BEHIND,
     # The weights are fitted at the library's 2 s; the script picks 1.5 s for them (a local-map
     # log-loss 0.1172 against 0.1177 at 2 s): both are measured.
     "office + random:4-11 fit": _FLOORS,

@@ -17,7 +17,7 @@ from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods import evidence as evidence_module
 from sonarcarve.methods.atm import CrossingStoreError
-from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceModel
+from sonarcarve.methods.evidence import ConfidenceModel, EvidenceModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
@@ -79,81 +79,6 @@ def test_multipath_echo_behind_an_established_wall_is_flagged() -> None:
     ids = _ids(method)
     assert 5 not in ids
     assert {0, 1, 2, 3, 4} <= ids  # the wall stays
-
-
-def _image_then_wall(history: int) -> tuple[EvidenceMethod, list[Reading]]:
-    # Sensors 5 and 6, 0.1 m apart, hear a mirror image 3 m ahead (a multipath path: the two
-    # agree, each supports the other); then five sensors hear, head-on from the same places,
-    # the wall 1 m ahead that the image lies behind. Their beams stop at the wall, so none of
-    # them looks through the image: only the wall in front of it says it is not there.
-    readings = [_reading(0.05 * k, 0.0, 0.1 * k, 0.0, 3.0, sensor=5 + k) for k in range(2)]
-    readings += [_reading(3.0 + 0.05 * k, 0.0, 0.1 * (k % 2) + 0.02 * k, 0.0, 1.0, k % 5)
-                 for k in range(10)]
-    method = EvidenceMethod(history_size=history)
-    return method, readings
-
-
-@pytest.mark.parametrize("history", [10, 40])
-def test_an_echo_behind_a_wall_heard_after_it_is_removed(history: int) -> None:
-    # The wall is established only after the image arrived, so the occlusion rule (on arrival)
-    # cannot flag it; the image is judged when it leaves the history (10) or when the log ends
-    # (40), 2 m behind the wall.
-    method, readings = _image_then_wall(history)
-    method.add_many(ReadingBatch.from_readings(readings))
-    model = _model(method)
-    points = method.finish()
-    ids = set(points.reading_id.tolist())
-    assert not ids & {0, 1}  # the image is out of the map
-    assert set(range(2, 12)) <= ids  # the wall stays
-    # Its depth behind the wall: 3 m - 1 m (the nearest wall point lies on its axis, 1 m
-    # ahead, within 2 cm sideways); the wall's echoes have nothing in front of them.
-    slots = np.arange(12) % method.history.storage_size
-    np.testing.assert_allclose(model.behind[slots[:2]], 2.0, atol=0.03)
-    np.testing.assert_array_equal(model.behind[slots[2:]], 0.0)
-    # The feature is that depth as a share of the echo's range: 2 m of its 3 m.
-    column = method.features(slots)[:, CONFIDENCE_FEATURES.index("behind")]
-    np.testing.assert_allclose(column[:2], 2.0 / 3.0, atol=0.01)
-    np.testing.assert_array_equal(column[2:], 0.0)
-    assert method.confidence_model.behind < 0.0
-
-
-def test_a_longer_echo_with_the_same_evidence_is_not_trusted_more() -> None:
-    # An echo read through an opening into unexplored space has nothing in front of it
-    # (behind 0) and little support: its range alone must not raise its confidence (the doorway
-    # under specular physics kept its 4.65 m multipath echoes when the range weighed up).
-    model = ConfidenceModel()
-    rng = np.random.default_rng(5)
-    near = rng.uniform(0.0, 1.0, (200, len(CONFIDENCE_FEATURES)))
-    far = near.copy()
-    column = CONFIDENCE_FEATURES.index("range")
-    near[:, column] = 2.0
-    far[:, column] = 5.0
-    assert np.all(model.confidence(far) <= model.confidence(near))
-
-
-def test_measures_before_finish_count_the_echoes_finish_removes() -> None:
-    # The image (history 40) is still in the history when the log ends, so it is judged then;
-    # the measures taken just before must count it as removed already, as the map will.
-    method, readings = _image_then_wall(history=40)
-    method.add_many(ReadingBatch.from_readings(readings))
-    removed = method.measures().fully_carved
-    points = method.finish()
-    assert removed == len(readings) - len(points) == 2
-
-
-def test_behind_is_judged_in_blocks_as_one_reading_at_a_time() -> None:
-    # The image leaves the history inside a block of add_many, or on one add() of its own.
-    points = []
-    for blocks in (False, True):
-        method, readings = _image_then_wall(history=10)
-        if blocks:
-            method.add_many(ReadingBatch.from_readings(readings))
-        else:
-            for reading in readings:
-                method.add(reading)
-        points.append(method.finish())
-    np.testing.assert_array_equal(points[0].reading_id, points[1].reading_id)
-    np.testing.assert_array_equal(points[0].confidence, points[1].confidence)
 
 
 def test_split_arc_keeps_a_piece_with_an_honest_bound() -> None:
@@ -566,11 +491,9 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
     assert isinstance(model, EvidenceModel)
     h = method.history
     slots = h.slots()
-    model.judge_live()  # as finish() does: every arc judged against the arcs after it
     raw = model.raw(slots)
     has, _, width, _, support, is_atm, crossings, free, runs, _ = raw
     maturity = method.maturity(slots)
-    behind = np.minimum(model.behind[slots], 3.0)  # 0 where there is nothing in front
     expected = np.column_stack([
         np.minimum(support, 3.0), np.minimum(model.viewpoints[slots], 3.0),
         np.minimum(crossings, 3.0), free,
@@ -578,7 +501,7 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
         np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
         (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
         np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0),
-        model.repeated[slots], behind / h.r[slots]])
+        model.repeated[slots]])
     features = method.features(slots, raw)
     np.testing.assert_array_equal(features, expected)
     assert all(len(np.unique(column)) > 1 for column in features.T)  # no column constant

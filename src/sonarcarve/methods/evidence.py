@@ -32,9 +32,7 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
   support from distinct viewpoints and from other sensors, crossings, free and looked-through
   evidence, runs, occlusion, the support of the surface the beam passed, range, width,
   whether the sensor heard the point again as it drove at it: a repeat,
-  :mod:`~sonarcarve.geometry.repeats`; how far the echo lies behind a surface the history
-  holds inside its beam, :mod:`~sonarcarve.geometry.evidence.behind`;
-  :class:`ConfidenceModel`), its weights fitted on the
+  :mod:`~sonarcarve.geometry.repeats`; :class:`ConfidenceModel`), its weights fitted on the
   simulator's truth of one world (``benchmarks/fit_confidence.py``); points below
   ``min_confidence`` are left out of the maps (the default map), so "removed" means: not in
   the map the method outputs.
@@ -67,7 +65,6 @@ from sonarcarve.geometry.evidence import (
     evidence_free,
     evidence_threshold,
 )
-from sonarcarve.geometry.evidence.behind import NEWER_ARCS, depth_behind_newer
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
@@ -170,7 +167,7 @@ class SensorModel:
 #: docstring): each is known when the arc is committed, and for the local map at any time.
 CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
                        "occluded", "unheard", "range", "width", "others", "through",
-                       "repeated", "behind")
+                       "repeated")
 
 
 @dataclass(frozen=True)
@@ -193,38 +190,8 @@ class ConfidenceModel:
     :mod:`sonarcarve.geometry.repeats`: internally tangent circles, the touch point inside
     both beams, origins more than 2ε apart; the sensor drove at what it hears. Direct echoes
     heard by one sensor alone, which ``others`` cannot confirm, often have one; spurious
-    echoes almost never do: ``benchmarks/repeat_echoes.py``) and ``behind`` (a share of the
-    range: ``min(r - d, 3) / r`` for the nearest confident point inside the arc's beam nearer
-    than ``r - 2ε``, ``d`` its distance, 0 if none; taken on arrival over the older arcs'
-    established bins and, when the arc leaves the history, over the axis points of the 64 arcs
-    after it heard from distinct viewpoints, :mod:`~sonarcarve.geometry.evidence.behind`; 0
-    while the arc is in the history). Paper, section 6: certainty values per point.
-
-    Why ``behind``: with the 13 features before it, no refit nor threshold removed 85 % of the
-    spurious echoes of the held-out floors under specular physics without dropping the
-    doorway's direct echoes under amplitude physics to 60-65 % (a lone true echo, one sensor, no
-    crossing, short runs, looks spurious to them; multipath was the kind left, 74.8 % removed).
-    A multipath echo reads too long, behind a wall the ring hears directly, mostly *after* the
-    echo arrived (so the occlusion rule, which looks on arrival, misses it); a door jamb's echo
-    has nothing nearer inside its beam. Measured with ``benchmarks/confidence_heldout.py
-    --thresholds 0.5 --models "default (office fit)" "default before behind (office fit)"
-    --development-seeds 10`` (the model before it is its ``WITHOUT_BEHIND``), same run:
-    held-out floors, specular, direct kept / spurious removed 96.1 / 79.8 → 96.1 / 81.1 %
-    (multipath 74.8 → 77.7); specular-rough 90.1 / 78.0 → 90.3 / 79.1; doorway, amplitude,
-    kept 86.0 → 87.7 (10 seeds); amplitude-brick 90.6 / 85.2 → 90.6 / 84.6 (loses).
-
-    Why a share of the range and not metres: fitted in metres (the first version), the depth
-    explains most long multipath echoes and the refit weighed ``range`` *up* (+0.32 a metre,
-    -0.13 before), so long echoes with nothing confirmed in front of them, read through an
-    opening into unexplored space, were kept: the doorway under specular physics removed 58.3 %
-    of its spurious echoes (seeds 0-2) instead of 100 %. As a share, the refit keeps ``range``
-    negative (-0.064) and the doorway at 100 %; of the six development world/physics pairs of
-    ``benchmarks/evidence.py --physics specular amplitude --variants "carve (paper)" "evidence
-    (all)" --skip-throughput`` (seeds 0-2), 5 meet both 85 % targets instead of 4 (only the
-    t-junction under specular physics misses, 98.9 / 71.2 against 98.5 / 74.4 in metres). The
-    metres gained more on the held-out floors (specular 82.1, rough 79.9, brick 92.1 / 86.0),
-    and the doorway under specular physics removes 70.4 % on 10 seeds (59.9 in metres, 76.6
-    before ``behind``) (``docs/evidence-carving.md``, "Behind").
+    echoes almost never do: ``benchmarks/repeat_echoes.py``). Paper, section 6: certainty
+    values per point.
 
     Maturity: the features are fitted on arcs as they leave the history, when the ring has
     looked again many times; a fresh arc has had no chance to be supported or seen through. So
@@ -246,32 +213,25 @@ class ConfidenceModel:
         .venv/bin/python benchmarks/fit_confidence.py
 
     and are checked on the other worlds and on the amplitude physics by
-    ``benchmarks/evidence.py``. With ``behind`` the script's own pick of the maturity time is
-    1.5 s (local-map log-loss 0.1056 against 0.1068 at 2 s; 1 s ties at 0.1056: ``behind`` is 0
-    in the local map, so a shorter time there trades the feature's absence for the fresh prior
-    sooner); it stays 2 s
-    for the reason above (young direct echoes leaving the local map), and the weights are
-    fitted at 2 s.
+    ``benchmarks/evidence.py``.
     """
 
     # Fitted (see above): office tour, specular physics, seeds 0-2, 38,459 arcs (refitted with
-    # ``behind`` as a share of the range; the weights before it are
-    # benchmarks/confidence_heldout.py's WITHOUT_BEHIND).
-    intercept: float = -3.219
-    support: float = 0.283
-    viewpoints: float = 0.950
-    crossings: float = 0.681
-    free: float = -0.403
-    looked: float = 0.245
-    split: float = -0.523
-    occluded: float = -0.155
-    unheard: float = -0.033
-    range: float = -0.064
-    width: float = 0.517
-    others: float = 3.053
-    through: float = 0.433
-    repeated: float = 1.026
-    behind: float = -1.893
+    # ``repeated``; the weights before it are benchmarks/evidence.py's WITHOUT_REPEATS).
+    intercept: float = -3.543
+    support: float = 0.289
+    viewpoints: float = 0.921
+    crossings: float = 0.680
+    free: float = -0.370
+    looked: float = 0.299
+    split: float = -0.538
+    occluded: float = -0.375
+    unheard: float = 0.017
+    range: float = -0.128
+    width: float = 0.545
+    others: float = 3.299
+    through: float = 0.293
+    repeated: float = 1.205
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
 
@@ -348,7 +308,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
                    others: FloatArray, through: FloatArray, repeated: FloatArray,
-                   behind: FloatArray, threshold: float) -> None:
+                   threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -369,11 +329,6 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 10] = _at_most(others[s], 1.0)
         out[q, 11] = _at_most(through[s], 3.0)
         out[q, 12] = repeated[s]
-        # A share of the echo's range, not metres: a weight on metres of depth lets the refit
-        # weigh ``range`` up (long echoes tend to have depth behind them), which keeps long
-        # echoes with nothing in front, through an opening into unexplored space.
-        depth = _at_most(behind[q], 3.0)
-        out[q, 13] = depth / r[s] if depth > 0.0 else 0.0
 
 
 #: Older arcs whose bins to weigh the weighing kernel gathers before it weighs them at once
@@ -404,27 +359,6 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
         else:
             source[q] = _CENTERLINE
         fate[q] = UNCHANGED if has[q] else FULLY_CARVED
-
-
-@compiled
-def _judge_each(live: SlotArray, judge: BoolArray, x: FloatArray, y: FloatArray,
-                r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-                status: Int8Array, viewpoints: FloatArray, behind: FloatArray,
-                params: EvidenceParams, scratch: FloatArray) -> None:
-    """:meth:`EvidenceModel.judge_live`: each live arc (oldest first) where ``judge`` is set
-    judged against the live arcs after it (at most
-    :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS`), as
-    :func:`~sonarcarve.geometry.evidence.evidence_add_many` judges the arc that leaves."""
-    n = live.shape[0]
-    for q in range(n):
-        j = live[q]
-        if not judge[q] or status[j] != EVIDENCE_ALIVE or q + 1 == n:
-            continue
-        newer = min(n - q - 1, NEWER_ARCS)
-        depth = depth_behind_newer(j, live[q + 1], newer, x, y, r, cos_axis, sin_axis,
-                                   cos_half, status, viewpoints, params.establish,
-                                   2.0 * params.tolerance, scratch)
-        behind[j] = max(behind[j], depth)
 
 
 class EvidenceModel(ArcModel):
@@ -535,13 +469,6 @@ class EvidenceModel(ArcModel):
         self.looked = np.zeros(size)
         self.others = np.zeros(size)
         self.through = np.zeros(size)
-        # How far each arc's echo lies behind a surface the history holds inside its beam
-        # (geometry/evidence/behind.py): set on arrival, raised when the arc leaves.
-        self.behind = np.zeros(size)
-        self.behind_scratch = np.zeros(size)  # scratch of the depth behind the newer arcs
-        # Arcs of sequence number below this have been judged against the newer arcs too
-        # (all of them once the log has ended: judge_live()).
-        self._judged_all = False
         # 1 where the arc has a repeat (geometry/repeats.py) among its sensor's other echoes
         # in the history, else 0.
         self.repeated = np.zeros(size)
@@ -594,8 +521,7 @@ class EvidenceModel(ArcModel):
         :func:`~sonarcarve.geometry.evidence.evidence_add` (after its first two arguments)."""
         h = self.history
         return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
-                self.others, self.through, self.behind, self.passed, self.trans, self.scratch,
-                self.in_beam,
+                self.others, self.through, self.passed, self.trans, self.scratch, self.in_beam,
                 self.bin_index, self.near, self.near_flags, self.bx, self.by, self.ex, self.ey,
                 self.free, self.support, self.located, self.circle, self.cos_axis,
                 self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
@@ -623,8 +549,7 @@ class EvidenceModel(ArcModel):
         self.mark_repeats(first, count)
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
-                first, end - first, self.history.capacity, self.behind_scratch,
-                *self._arrays())
+                first, end - first, self.history.capacity, *self._arrays())
             self._count((fully, crossings, occluding))
             if spilled:
                 self._take_spill(spilled)
@@ -638,48 +563,6 @@ class EvidenceModel(ArcModel):
         h = self.history
         return int(mark_repeats(first, count, h.capacity, h.x, h.y, h.r, h.theta,
                                 h.beam_width, h.sensor, self.repeated, self.range_tolerance))
-
-    def behind_of(self, slots: SlotArray) -> np.ndarray:
-        """:attr:`behind` of ``slots`` for the arcs judged against the newer arcs (they have
-        left the history, or the log has ended: :meth:`judge_live`), 0 for the others: an arc
-        still in the history has not been judged yet (the confidence is fitted on arcs as they
-        leave). Shape (n,)."""
-        h = self.history
-        slots = np.asarray(slots, dtype=np.int64)
-        if self._judged_all:
-            return np.asarray(self.behind[slots])
-        age = (h.appended - 1 - slots) % h.storage_size  # arcs added since, this one 0
-        return np.where(age >= h.capacity, self.behind[slots], 0.0)
-
-    def judge_live(self) -> None:
-        """The end of the log: every arc still in the history judged against the arcs after
-        it, as it would have been had it left
-        (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`)."""
-        if self._judged_all:
-            return
-        self._judge_live_into(self.behind, np.ones(len(self.history.slots()), dtype=np.bool_))
-        self._judged_all = True
-
-    def behind_at_end(self, slots: SlotArray, judge: BoolArray) -> np.ndarray:
-        """:attr:`behind` of the arcs in the history ``slots`` (all of them, oldest first:
-        ``history.slots()``) as :meth:`judge_live` would leave it were the log to end now,
-        where ``judge`` is set (elsewhere :meth:`behind_of`); the state is not changed
-        (:meth:`EvidenceMethod.measures`). Shape (n,)."""
-        slots = np.asarray(slots, dtype=np.int64)
-        if self._judged_all:
-            return np.asarray(self.behind[slots])
-        judged = self.behind.copy()
-        self._judge_live_into(judged, np.ascontiguousarray(judge, dtype=np.bool_))
-        return np.where(judge, judged[slots], self.behind_of(slots))
-
-    def _judge_live_into(self, behind: FloatArray, judge: BoolArray) -> None:
-        """Raise ``behind`` (one value per row) of each arc in the history where ``judge``
-        (one value per arc, oldest first) is set to its depth behind the arcs after it
-        (:func:`_judge_each`)."""
-        h = self.history
-        live = np.ascontiguousarray(h.slots(), dtype=np.int64)
-        _judge_each(live, judge, h.x, h.y, h.r, self.cos_axis, self.sin_axis, self.cos_half,
-                    self.status, self.viewpoints, behind, self.params, self.behind_scratch)
 
     def _take_spill(self, spilled: int) -> None:
         """Widen the crossing store for the ``spilled`` crossings in :attr:`spill` and move
@@ -849,12 +732,10 @@ class EvidenceMethod(SonarMethod):
                               sensor=self.sensor),)
 
     def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
-                 maturity: np.ndarray | None = None,
-                 behind: np.ndarray | None = None) -> np.ndarray:
+                 maturity: np.ndarray | None = None) -> np.ndarray:
         """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`);
         ``raw`` (:meth:`EvidenceModel.raw`) and ``maturity`` (:meth:`maturity`) of the same
-        slots, when the caller has them already; ``behind`` in metres (default
-        :meth:`EvidenceModel.behind_of`)."""
+        slots, when the caller has them already."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
@@ -865,8 +746,7 @@ class EvidenceMethod(SonarMethod):
         _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
-                       model.others, model.through, model.repeated,
-                       model.behind_of(slots) if behind is None else behind, model.threshold)
+                       model.others, model.through, model.repeated, model.threshold)
         return out
 
     def maturity(self, slots: SlotArray) -> np.ndarray:
@@ -908,51 +788,12 @@ class EvidenceMethod(SonarMethod):
             listener(self.history, slots, est)
         self._global.commit(self._points(slots, GlobalMap, est))
 
-    def finish(self) -> GlobalMap:
-        """As :meth:`SonarMethod.finish`; the arcs still in the history are first judged
-        against the arcs after them (:meth:`EvidenceModel.judge_live`), as an arc that leaves
-        the history is, so that their ``behind`` feature means the same."""
-        self._check_usable()
-        model = self.models[0]
-        assert isinstance(model, EvidenceModel)
-        model.judge_live()
-        return super().finish()
-
     def measures(self) -> Measures:
         """As :meth:`SonarMethod.measures`; ``fully_carved`` counts every arc the evidence
         removed (no bin left, or confidence below ``min_confidence``), committed or still in
-        the history (as :meth:`finish` would leave it now: :meth:`_removed_at_end`); ``split``
-        is 0 (split arcs keep a piece)."""
+        the history; ``split`` is 0 (split arcs keep a piece)."""
         self.history.flush_retired()  # count retired rows as committed (as global_map does)
         base = super().measures()
-        removed = self._removed_at_end(self.history.slots())
-        return replace(base, fully_carved=self._removed_committed + removed, split=0)
-
-    def _removed_at_end(self, slots: SlotArray) -> int:
-        """How many of the arcs in the history (``slots``, oldest first) :meth:`finish` would
-        leave out were the log to end now: no bin left, or confidence below
-        ``min_confidence`` once judged against the arcs after them
-        (:meth:`EvidenceModel.judge_live`). Only the arcs whose fate the judging can change
-        are judged (64 rows an arc, and the pipeline samples the measures often): the
-        ``behind`` feature only grows, at most to ``min(r, 3) / r`` (the depth is shorter than
-        the range and capped at 3 m), and the confidence is monotone in it."""
-        if not len(slots):
-            return 0
-        model = self.models[0]
-        assert isinstance(model, EvidenceModel)
-        raw = model.raw(slots)
-        has = raw[0]
-        maturity = self.maturity(slots)
-        threshold = self.config.min_confidence
-        features = self.features(slots, raw, maturity)
-        kept = has & (self.confidence_model.confidence(features, maturity) >= threshold)
-        r = self.history.r[slots]
-        features[:, CONFIDENCE_FEATURES.index("behind")] = np.minimum(r, 3.0) / r
-        deepest = has & (self.confidence_model.confidence(features, maturity) >= threshold)
-        unsure = kept != deepest
-        if unsure.any():
-            behind = model.behind_at_end(slots, unsure)
-            confidence = self.confidence_model.confidence(
-                self.features(slots, raw, maturity, behind), maturity)
-            kept = has & (confidence >= threshold)
-        return int(np.count_nonzero(~kept))
+        slots = self.history.slots()
+        live_removed = int(np.count_nonzero(~self.estimates(slots).alive)) if len(slots) else 0
+        return replace(base, fully_carved=self._removed_committed + live_removed, split=0)

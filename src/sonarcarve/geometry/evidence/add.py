@@ -33,7 +33,6 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence.beam import Beam, mark_near, new_beam
-from sonarcarve.geometry.evidence.behind import NEWER_ARCS, depth_behind_newer
 from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
 from sonarcarve.geometry.evidence.model import (
@@ -219,17 +218,15 @@ def _weigh_arc(
     half_bin_arc: float, beam: Beam, params: EvidenceParams, edges: FloatArray,
     scratch: FloatArray, e_bin: SlotArray, e_guess: SlotArray, free: FloatArray,
     support: FloatArray, located: FloatArray, touched: BoolArray, trans: FloatArray,
-    passed: FloatArray, n_passed: int, occluding: int, top_through: float, top_behind: float,
-) -> tuple[int, float, float, int, int, float, float]:
+    passed: FloatArray, n_passed: int, occluding: int, top_through: float,
+) -> tuple[int, float, float, int, int, float]:
     """Pass 3 for older arc ``i``: the evidence of entries ``start .. stop - 1`` (its marked
     bins, in bin order): freespace evidence, occlusion of j's bins behind established ones and
     the rows kept for transmission where nearer than ``r_j - ε``, support where on j's echo
     circle. ``alive_bins`` counts its live bins outside j's reach or beam (pass 1).
 
     Returns ``alive_bins`` with the entries' live bins added, the arc's largest support and
-    "looked" ``P_beam``, and the updated ``n_passed``, ``occluding``, ``top_through`` and
-    ``top_behind`` (how far j's echo lies behind an established bin it passed:
-    :mod:`~sonarcarve.geometry.evidence.behind`).
+    "looked" ``P_beam``, and the updated ``n_passed``, ``occluding`` and ``top_through``.
     """
     bins = free.shape[1]
     threshold = params.threshold
@@ -273,7 +270,6 @@ def _weigh_arc(
                 occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
                                             half_bin_arc / d, beam, free, threshold)
                 touched[slot] = True
-                top_behind = max(top_behind, beam.r - d)
             factor = params.protect if established else 1.0
             w = -math.log1p(-p) * factor
             f += w
@@ -305,7 +301,7 @@ def _weigh_arc(
             located[slot, kb] += loc
             if other:
                 trans[kb] += p
-    return alive_bins, top_support, top_looked, n_passed, occluding, top_through, top_behind
+    return alive_bins, top_support, top_looked, n_passed, occluding, top_through
 
 
 @compiled_borrowing
@@ -313,9 +309,9 @@ def evidence_add(
     slot: int, first_older: int, n_older: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
-    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
-    near: SlotArray, near_flags: BoolArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -358,11 +354,6 @@ def evidence_add(
         Per new arc, the largest support of an older live bin its free sector passed
         (nearer than ``r_j - 2ε``): how well heard the surface is that its echo would have had
         to cross; the graded form of the occlusion rule (filled for ``slot``).
-    behind : ndarray, shape (n,)
-        Per new arc, ``r_j - d`` for the nearest established older bin its free sector passed
-        (nearer than ``r_j - 2ε``), 0 if none: how far behind a surface the history holds its
-        echo lies (filled for ``slot``; :func:`evidence_add_many` raises it when the arc
-        leaves the history, :mod:`~sonarcarve.geometry.evidence.behind`).
     passed : ndarray, shape (m, 6)
         Scratch for the transmission pass: one row per older live bin in the new beam's free
         sector (``m`` at least the older arcs' bins); overwritten.
@@ -448,7 +439,6 @@ def evidence_add(
     n_passed = 0
     spilled = 0
     top_through = 0.0
-    top_behind = 0.0
     # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
     # rows that pass it, oldest first, a group at a time.
     # Marking every row up front gives the one loop's result because nothing in the loop
@@ -511,11 +501,10 @@ def evidence_add(
             distinct = other or ox * ox + oy * oy >= beam.spacing2
             half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
             stop = start + arc_marked[g - group]
-            (alive_bins, top_support, top_looked, n_passed, occluding, top_through,
-             top_behind) = _weigh_arc(
+            alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
                 slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
                 beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
-                trans, passed, n_passed, occluding, top_through, top_behind)
+                trans, passed, n_passed, occluding, top_through)
             start = stop
             # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
             if distinct:
@@ -531,7 +520,6 @@ def evidence_add(
                 fully += 1
     occluded[slot] = occluding / bins
     through[slot] = top_through
-    behind[slot] = top_behind
     fully += weigh_transmission(slot, passed, n_passed, trans, free, status, params)
     if occluding >= bins:
         status[slot] = EVIDENCE_CARVED
@@ -539,33 +527,14 @@ def evidence_add(
     return fully, crossings, occluding, spilled
 
 
-@compiled_inline
-def judge_leaving(start: int, n_live: int, x: FloatArray, y: FloatArray, r: FloatArray,
-                  cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-                  status: Int8Array, viewpoints: FloatArray, behind: FloatArray,
-                  params: EvidenceParams, scratch: FloatArray) -> None:
-    """The arc leaving the history, ``start - 1`` (the row before the live ones from ``start``
-    on, ring order): ``behind`` raised to its depth behind the ``n_live`` first of them
-    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`; nothing for an arc
-    already carved)."""
-    storage = x.shape[0]
-    leaving = start - 1 if start > 0 else storage - 1
-    if status[leaving] != EVIDENCE_ALIVE:
-        return
-    depth = depth_behind_newer(leaving, start, n_live, x, y, r, cos_axis, sin_axis, cos_half,
-                               status, viewpoints, params.establish, 2.0 * params.tolerance,
-                               scratch)
-    behind[leaving] = max(behind[leaving], depth)
-
-
 @compiled_borrowing
 def evidence_add_many(
-    first: int, count: int, capacity: int, behind_scratch: FloatArray,
+    first: int, count: int, capacity: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
-    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
-    near: SlotArray, near_flags: BoolArray,
+    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
+    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
+    near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -577,12 +546,7 @@ def evidence_add_many(
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
 
-    The arrays are those of :func:`evidence_add`, and ``behind_scratch`` (shape (n,),
-    overwritten) for the depth behind the newer arcs. Before arc ``s`` is added, the arc it pushes
-    out of the history (``s - capacity``) has its ``behind`` raised to the depth behind the
-    :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS` arcs after it
-    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`): the state it leaves
-    with, the same whatever the blocks.
+    The arrays are those of :func:`evidence_add`.
 
     It stops after the first arc whose crossings did not all fit the store (they are in
     ``spill``; every other part of that arc is done): the caller widens the store, moves the
@@ -607,12 +571,9 @@ def evidence_add_many(
     for sequence in range(first, first + count):
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
-        if sequence >= capacity:
-            judge_leaving(start, min(capacity - 1, NEWER_ARCS), x, y, r, cos_axis, sin_axis,
-                          cos_half, status, viewpoints, behind, params, behind_scratch)
         a, b, c, spilled = evidence_add(
             sequence % storage, start, live - 1, x, y, r, theta, beam_width,
-            sensor, viewpoints, looked, others, through, behind, passed, trans, scratch, in_beam,
+            sensor, viewpoints, looked, others, through, passed, trans, scratch, in_beam,
             bin_index, near, near_flags, bx, by, ex, ey, free,
             support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
             bearings, counts, spill, params, with_atm)
