@@ -237,7 +237,8 @@ class CarvedGrid(CellGrid):
             self._chain[marked] = 1.0
             self._batch_chain = np.ones(0)
             raise
-        self._periods.note(batch.sensor, batch.t)
+        if self._params.fresh_periods < math.inf:  # only the rule reads the periods
+            self._periods.note(batch.sensor, batch.t)
         history.flush_retired()  # every arc that left the history is final now
         self._keep_batch_chain(history)
         finals = self._take_pending()
