@@ -132,3 +132,52 @@ def test_a_log_with_no_echo_readings_maps_over_their_max_range(tmp_path: Path,
     assert m.origin[1] == pytest.approx(-2.5, abs=1e-9)
     rows, _ = m.cells.shape
     assert m.origin[1] + rows * 0.1 == pytest.approx(1.5, abs=0.1)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--fresh-periods", "0.5"], "--fresh-periods must be a number >= 1 firing period"),
+    (["--fresh-periods", "nan"], "--fresh-periods must be a number >= 1 firing period"),
+    (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),
+    (["--fresh-periods", "inf", "--model", "range-sensor-layer"],
+     "applies to --model carved only, not range-sensor-layer"),
+])
+def test_bad_fresh_periods_are_one_line_errors(readings: Path, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str],
+                                               args: list[str], message: str) -> None:
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(readings), "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert message in err
+    assert not out.exists()
+
+
+def _echoes_then_silence(path: Path) -> None:
+    """A turning robot's sensor 0 firing every 0.1 s: six echoes from far walls in other
+    directions (its firing period), then one from an obstacle 1 m ahead at 0.6 s, then its
+    firings hear nothing and are left out of the log; sensor 1 logs on, away from the obstacle,
+    for 0.7 s."""
+    turning = [Reading(t=0.1 * k, sensor=0, x=0.0, y=0.0, theta=math.pi / 2 + 0.5 * k,
+                       range=3.0) for k in range(6)]
+    ahead = [Reading(t=0.6, sensor=0, x=0.0, y=0.0, theta=0.0, range=1.0)]
+    later = [Reading(t=0.6 + 0.1 * k, sensor=1, x=0.0, y=0.0, theta=math.pi, range=3.0)
+             for k in range(1, 8)]
+    write_readings_csv(ReadingBatch.from_readings(turning + ahead + later), path)
+
+
+@pytest.mark.parametrize(("periods", "marked"), [(None, False), ("inf", True), ("20", True)])
+def test_fresh_periods_decides_how_long_the_newest_echo_stays_marked(
+        tmp_path: Path, periods: str | None, marked: bool) -> None:
+    """0.7 s after the obstacle's echo its sensor has missed 6 firings: by default (1.1
+    periods) the mark has ended, and one echo's spread alone does not mark the obstacle; with
+    ``inf`` (kept up to 2 s) or 20 periods the mark is still there."""
+    log = tmp_path / "log.csv"
+    _echoes_then_silence(log)
+    out = tmp_path / "grid.yaml"
+    extra = [] if periods is None else ["--fresh-periods", periods]
+    assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
+    m = read_map_server(out)
+    j = int((1.0 - m.origin[0]) / 0.05)
+    i = int((0.0 - m.origin[1]) / 0.05)
+    ahead = m.cells[max(0, i - 2):i + 3, max(0, j - 2):j + 3]
+    assert bool(np.any(ahead == 100)) is marked

@@ -33,6 +33,7 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.grids import (
     CarvedGrid,
+    CarvedGridParams,
     OccupancyGrid,
     OccupancyMap,
     RangeSensorLayer,
@@ -53,20 +54,22 @@ class GridUsageError(SonarcarveError):
     """A bad option of ``sonarcarve grid``: unknown model, resolution or margin out of range."""
 
 
-def _carved(resolution: float, bounds: Bounds) -> OccupancyMap:
-    return CarvedGrid(resolution, bounds)
+def _carved(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
+    params = None if fresh_periods is None else CarvedGridParams(fresh_periods=fresh_periods)
+    return CarvedGrid(resolution, bounds, params=params)
 
 
-def _layer(resolution: float, bounds: Bounds) -> OccupancyMap:
+def _layer(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
     return RangeSensorLayer(resolution, bounds)
 
 
-def _elfes(resolution: float, bounds: Bounds) -> OccupancyMap:
+def _elfes(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
     return OccupancyGrid(resolution, bounds)
 
 
-#: ``--model`` name -> grid factory ``(resolution, bounds)``.
-GRID_MODELS: dict[str, Callable[[float, Bounds], OccupancyMap]] = {
+#: ``--model`` name -> grid factory ``(resolution, bounds, fresh_periods)``; ``fresh_periods``
+#: (None: the default) is the carved grid's alone, and :func:`build_grid` refuses it for the rest.
+GRID_MODELS: dict[str, Callable[[float, Bounds, float | None], OccupancyMap]] = {
     "carved": _carved,
     "range-sensor-layer": _layer,
     "elfes": _elfes,
@@ -88,15 +91,31 @@ def readings_extent(batch: ReadingBatch, margin: float) -> Bounds:
             float(x.max()) + margin, float(y.max()) + margin)
 
 
+def _check_fresh_periods(model: str, fresh_periods: float | None) -> None:
+    """Refuse ``--fresh-periods`` for a model other than the carved grid, or out of its range
+    (:attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`)."""
+    if fresh_periods is None:
+        return
+    if model != "carved":
+        msg = f"--fresh-periods applies to --model carved only, not {model}"
+        raise GridUsageError(msg)
+    if not fresh_periods >= 1.0:  # also NaN
+        msg = f"--fresh-periods must be a number >= 1 firing period (inf: off), got {fresh_periods}"
+        raise GridUsageError(msg)
+
+
 def build_grid(batch: ReadingBatch, model: str, resolution: float,
-               margin: float = 0.5) -> OccupancyMap:
-    """The grid ``model`` over the readings' extent plus ``margin``, with every reading in.
+               margin: float = 0.5, fresh_periods: float | None = None) -> OccupancyMap:
+    """The grid ``model`` over the readings' extent plus ``margin``, with every reading in;
+    ``fresh_periods`` (carved grid only; None: its default) as
+    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`.
 
     Raises
     ------
     GridUsageError
         An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), or no readings.
+        >= 0), ``fresh_periods`` below 1 or for a model other than the carved grid, or no
+        readings.
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
@@ -107,10 +126,11 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     if not (math.isfinite(margin) and margin >= 0.0):
         msg = f"--margin must be a finite number >= 0 (metres), got {margin}"
         raise GridUsageError(msg)
+    _check_fresh_periods(model, fresh_periods)
     if not len(batch):
         msg = "no readings to map"
         raise GridUsageError(msg)
-    built = GRID_MODELS[model](resolution, readings_extent(batch, margin))
+    built = GRID_MODELS[model](resolution, readings_extent(batch, margin), fresh_periods)
     assert isinstance(built, CarvedGrid | RangeSensorLayer | OccupancyGrid)
     built.add_many(batch)
     return built
@@ -162,6 +182,14 @@ def grid(
         metavar="METRES", help="Cell side, metres.")] = 0.05,
     margin: Annotated[float, typer.Option(
         metavar="METRES", help="Margin around the readings' extent, metres.")] = 0.5,
+    fresh_periods: Annotated[float | None, typer.Option(
+        metavar="PERIODS",
+        help="--model carved only: a sensor's newest echo marks the map at once until the "
+             "sensor has fired again; in a log without its silent firings, until this many of "
+             "its firing periods have passed (learnt from the log; default 1.1). `inf`: keep "
+             "the mark up to 2 s, for logs that drop readings whose value did not change "
+             "(naive polling, stale-repeat filters), where a missing reading does not mean "
+             "the sensor heard nothing.")] = None,
     robot: RobotOpt = None,
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
@@ -190,17 +218,21 @@ def grid(
 
     Example: `sonarcarve grid run.bag --robot p3dx-front --model elfes --out grid.yaml` (a
     ROS 1 bag without TF mounts)
+
+    Example: `sonarcarve grid polled.csv --fresh-periods inf --out grid.yaml` (a log that
+    left out readings equal to the one before)
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
         raise GridUsageError(msg)
+    _check_fresh_periods(model, fresh_periods)  # before anything is read
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
     batch = read_log_for_grid(readings, bag)
-    built = build_grid(batch, model, resolution, margin)
+    built = build_grid(batch, model, resolution, margin, fresh_periods)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
