@@ -52,6 +52,11 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--resolution", "0"], "--resolution must be a finite number > 0"),
     (["--resolution", "abc"], "'abc' is not a number"),
     (["--margin", "-1"], "--margin must be a finite number >= 0"),
+    (["--fresh-periods", "0.5"], "--fresh-periods must be a number >= 1 firing period"),
+    (["--fresh-periods", "nan"], "--fresh-periods must be a number >= 1 firing period"),
+    (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),
+    (["--fresh-periods", "inf", "--model", "range-sensor-layer"],
+     "applies to --model carved only, not range-sensor-layer"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -132,24 +137,6 @@ def test_a_log_with_no_echo_readings_maps_over_their_max_range(tmp_path: Path,
     assert m.origin[1] == pytest.approx(-2.5, abs=1e-9)
     rows, _ = m.cells.shape
     assert m.origin[1] + rows * 0.1 == pytest.approx(1.5, abs=0.1)
-
-
-@pytest.mark.parametrize(("args", "message"), [
-    (["--fresh-periods", "0.5"], "--fresh-periods must be a number >= 1 firing period"),
-    (["--fresh-periods", "nan"], "--fresh-periods must be a number >= 1 firing period"),
-    (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),
-    (["--fresh-periods", "inf", "--model", "range-sensor-layer"],
-     "applies to --model carved only, not range-sensor-layer"),
-])
-def test_bad_fresh_periods_are_one_line_errors(readings: Path, tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str],
-                                               args: list[str], message: str) -> None:
-    out = tmp_path / "grid.yaml"
-    assert main(["grid", str(readings), "--out", str(out), *args]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1
-    assert message in err
-    assert not out.exists()
 
 
 def _echoes_then_silence(path: Path) -> None:
