@@ -65,14 +65,16 @@ DEFAULT_SEE_THROUGH = 0.5
 #: quoted null to null, as this project's are; for a beam quoted at half power the first side
 #: lobe lies 2.4-4.3 half widths off the axis (review rev10s): set ``side_lobes`` for the
 #: transducer at hand.
-#: Off (0) from 2026-12-02 until a lobe cell had to be heard from near the bearing of the ray to
-#: it: mapped corridor walls, heard only by side sensors, explained an obstacle straight ahead at
-#: some ranges (helper door10b's sweep: a 1.0 m corridor at 1.10-1.30 m with 0.05 m cells), and
-#: the mark is the only thing that makes such an obstacle occupied. With that condition (live
-#: arcs and final bands; docs/carved-grid.md, "Side lobes") the sweep marks it at every range,
-#: and the Fig. 2 door under the amplitude physics opens in 89 / 86 % of approaches (56 / 53 %
-#: without side lobes; 0.05 / 0.10 m, echoes only).
-DEFAULT_SIDE_LOBES = 1.0
+#: 0, off by default (2026-12-02): with 1, an obstacle straight ahead in a corridor whose walls
+#: are mapped went unmarked at some ranges (helper door10b's sweep), and the mark is the only
+#: thing that makes such an obstacle occupied. A lobe cell now counts only if it was heard from
+#: near the bearing of the ray to it (live arcs and final bands; docs/carved-grid.md, "Side
+#: lobes"): that marks the obstacle at every range when the walls were heard by side sensors
+#: (±90°), and opens the Fig. 2 door under the amplitude physics in 89 / 86 % of approaches (56 /
+#: 53 % without side lobes), but not when sensors turned 22.5° also heard the walls at their
+#: beam's edge (33.75°, one 11.25° sector from a lobe ray's 22.5°): helper lobe10s's sweep left
+#: the obstacle unmarked at most ranges at 0.05 m. Still opt-in.
+DEFAULT_SIDE_LOBES = 0.0
 #: Echoes at this range or nearer, metres, may have come through a side lobe
 #: (:attr:`CarvedGridParams.side_lobe_range`): two-way, the first side lobe is about 35 dB
 #: below the axis, so only near reflectors are heard through it. Measured (amplitude physics,
@@ -169,11 +171,13 @@ class CarvedGridParams:
         after its mark ended, so it is refused. A log that drops readings whose value did not
         change (rather than firings that heard nothing) breaks its premise: use ``inf`` there.
     side_lobes : float
-        Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (1; 0: the beam alone).
+        Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (0: the beam alone).
         How far past each edge of its beam, in half beam widths, a near echo may have come from
         through a side lobe, for the newest echo's mark ("Side lobes"): an occupied cell there,
         heard from near the bearing of the sensor's ray to it, explains the echo, and the mark
-        goes to a likely one there when the map does not favour the arc's middle.
+        goes to a likely one there when the map does not favour the arc's middle. 1 opens more
+        doors under diffuse echoes but can leave an obstacle straight ahead in a mapped corridor
+        unmarked (:data:`DEFAULT_SIDE_LOBES`).
     side_lobe_range : float
         Metres >= 0 (``inf``: every range); :data:`DEFAULT_SIDE_LOBE_RANGE` (2). Echoes farther
         than this are judged on their carved interval alone (the lobes are too weak to hear far
