@@ -20,8 +20,8 @@ ROW_Y, FACE_X = 0.025, 1.825
 L_HIT = math.log(0.7 / 0.3)  # 0.847
 #: An echo at FACE_X spread over the whole 22.5° beam: 0.2 / (1.825 x 0.3927) of a hit.
 SPREAD = DEFAULT_SPREAD_LENGTH / (FACE_X * DEFAULT_BEAM_WIDTH) * L_HIT  # 0.236
-#: The side-lobe rule is opt-in since it was found to hide obstacles ahead (below): these tests
-#: turn it on, one lobe of one half width, as its default was before.
+#: The side-lobe rule is opt-in since it was found to hide obstacles ahead (below, and
+#: test_carved_side_lobes_heard.py): these tests turn it on, one lobe of one half width.
 LOBES = CarvedGridParams(side_lobes=1.0)
 
 pytestmark = pytest.mark.usefixtures("carving_alone_under_the_grid")
@@ -188,18 +188,21 @@ def _wall_on_the_band_in_the_beam(grid: CarvedGrid, r: float) -> bool:
     return bool((on_band & in_beam & (trinary(grid) == OCCUPIED)).any())
 
 
+@pytest.mark.parametrize("params", [CarvedGridParams(), LOBES], ids=["default", "side lobes"])
 @pytest.mark.parametrize("h", [0.05, 0.10])
 @pytest.mark.parametrize("half_width", [0.4, 0.5, 0.6])
 def test_by_default_an_obstacle_ahead_in_a_mapped_corridor_is_marked_at_every_range(
-        h: float, half_width: float) -> None:
+        h: float, half_width: float, params: CarvedGridParams) -> None:
     """Helper door10b's sweep (2026-12-02): with the side-lobe rule on, an obstacle straight
     ahead in a 0.8-1.2 m corridor whose walls are mapped went unmarked at ranges between the
     cases of the test below (1.0 m corridor: 1.10-1.30 m at 0.05 m cells), where the wall
     crosses the echo's circle at a lobe's outer edge and first arrival finds nothing nearer to
-    block with. The default grid (no side lobes) marks it at every range from 1 to 2 m, in 1 cm
-    steps, except where an occupied wall cell lies on the echo's own band inside the beam (the
-    map explains the echo there: decided from the map, review revday)."""
-    walls = _mapped_corridor(h, half_width, CarvedGridParams())
+    block with. The default grid (no side lobes), and the rule with side_lobes=1 now that a lobe
+    cell counts only if it was heard from near the ray's bearing (these walls were heard from
+    ±90°), mark it at every range from 1 to 2 m, in 1 cm steps, except where an occupied wall
+    cell lies on the echo's own band inside the beam (the map explains the echo there: decided
+    from the map, review revday)."""
+    walls = _mapped_corridor(h, half_width, params)
     tested = 0
     for r in np.arange(1.0, 2.0001, 0.01):
         if _wall_on_the_band_in_the_beam(walls, float(r)):
@@ -216,9 +219,9 @@ def test_an_obstacle_ahead_between_mapped_corridor_walls_is_marked(half_width: f
                                                                    r: float) -> None:
     """A pole or person straight ahead, 1.3-1.9 m away, in a corridor whose walls are mapped
     (occupied) where they cross the echo's circle 14-22° off the axis, in reach of the side
-    lobes. A sonar reports the first echo: a lobe that could hear that wall would have heard its
-    nearer stretch (at the lobe's outer edge) first, so the wall does not explain the echo and
-    the mark stays on the obstacle (as without side lobes: a whole hit, occupied)."""
+    lobes. The walls were heard only from ±90°, across the ray: a wall met that way does not
+    echo back along the ray, so it does not explain the echo and the mark stays on the obstacle
+    (as without side lobes: a whole hit, occupied)."""
     grid = CarvedGrid(H, (-1.0, -1.5, 4.0, 1.5),
                       method=make_method("carve", MethodConfig(history_size=1)),
                       params=LOBES)

@@ -119,9 +119,9 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
         for k in range(slots.shape[0]):
             if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
-            changed += refresh_points(base, live, points, drawn, pdrawn, pseq, slots[k],
-                                      seqs[k], x, y, r, lo, hi, weight, fresh[k], heard, m,
-                                      theta1[slots[k]], theta2[slots[k]])
+            changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
+                                      slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],
+                                      heard, m, theta1[slots[k]], theta2[slots[k]])
     return changed
 
 

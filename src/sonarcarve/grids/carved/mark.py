@@ -2,9 +2,10 @@
 map does not explain (:func:`refresh_points`).
 
 Explained: a cell of the arc's band, or for a near echo of a side lobe past its beam's edges, is
-occupied in the map of spread arcs without the arc's own share (:func:`_band_likeliest`). The mark
-covers the middle ``L`` of the carved interval, unless that map favours another part of the band, or
-a side lobe, and not the middle: then it goes around the likeliest cell there.
+occupied in the map of spread arcs without the arc's own share (:func:`_band_likeliest`); a lobe
+cell counts only if it was heard from near the bearing of the ray to it (:func:`_heard_near`).
+The mark covers the middle ``L`` of the carved interval, unless that map favours another part of
+the band, or a side lobe, and not the middle: then it goes around the likeliest cell there.
 ``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark goes" and "Side lobes".
 """
 
@@ -17,6 +18,7 @@ import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, redraw, undraw
+from sonarcarve.grids.carved.heard import HEARD_BINS, HEARD_NEAR, audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.scan import (
     TWO_PI,
@@ -45,7 +47,8 @@ _TIE = 1e-9
 
 @compiled_inline
 def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
-                   points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
+                   points: npt.NDArray[np.float32], drawn: FloatArray,
+                   drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
                    pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
                    y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
                    weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
@@ -60,9 +63,9 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     circle; else take its point out. The spread map does not hold the
     points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
     if fresh and weight[slot] > 0.0:
-        explained, at, side = _band_likeliest(base, live, m, x[slot], y[slot], r[slot],
-                                              lo[slot], hi[slot], drawn[slot, 5], theta1,
-                                              theta2)
+        explained, at, side = _band_likeliest(base, live, heard, drawn, drawn_seq, slot, m,
+                                              x[slot], y[slot], r[slot], lo[slot], hi[slot],
+                                              drawn[slot, 5], theta1, theta2)
         whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
@@ -91,7 +94,9 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
 
 
 @compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
-def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x: float,
+def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
+                    heard: npt.NDArray[np.uint32], drawn: FloatArray,
+                    drawn_seq: npt.NDArray[np.int64], slot: int, m: Model, x: float,
                     y: float, r: float, lo: float, hi: float, own: float, theta1: float,
                     theta2: float) -> tuple[bool, float, float]:
     """``(explained, bearing, side)`` of a fresh arc: whether a cell of its band (as
@@ -104,9 +109,10 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x
     the middle). Near echoes (``r <= lobe_range``) also look past the beam's edges, ``lobes`` half
     widths, on the same circle: an occupied cell there explains the echo; when the middle is not
     favoured and a lobe's likeliest cell beats the band's, ``bearing`` is that cell's and ``side``
-    its lobe (+1 counter-clockwise of the axis, -1 clockwise; 0: on the band). A lobe holding a
-    likely cell nearer than the echo is skipped (it would have heard that first); equally likely
-    cells in both lobes explain the echo (no side is favoured)."""
+    its lobe (+1 counter-clockwise of the axis, -1 clockwise; 0: on the band). A lobe cell counts
+    only if it was heard from near the bearing of this sensor's ray to it (:func:`_heard_near`,
+    the arc's own ``slot`` aside; ``heard``, ``drawn``, ``drawn_seq``: the record of final bands and
+    the live arcs); equally likely cells in both lobes explain the echo (no side is favoured)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
     ny, nx = base.shape
     widen = 0.5 * h / r
@@ -136,15 +142,10 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x
     bearing = 0.5 * (lo + hi)  # the middle, unless a likelier cell is found
     middle_likely = False
     # Per lobe (cw: clockwise of the axis, ccw: counter-clockwise): the likeliest cell and its
-    # bearing (none yet: farther than any bearing), and whether the lobe holds a likely cell
-    # nearer than the echo, which it would have heard first. Scalars, not arrays: this runs for
-    # every fresh arc at every read.
+    # bearing (none yet: farther than any bearing). Scalars, not arrays: this runs for every
+    # fresh arc at every read.
     best_cw, best_ccw = _LIKELY, _LIKELY
     at_cw = at_ccw = mid + 4.0 * math.pi
-    blocked_cw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
-                                               e_half, 0)
-    blocked_ccw = e_half > 0.0 and _lobe_nearer(base, live, m, x, y, r_in, axis, b_half,
-                                                e_half, 1)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
@@ -168,16 +169,22 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x
                             and within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
                             and not within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
                         ccw = bearing_off(dx, dy, axis) > 0.0
-                        if blocked_ccw if ccw else blocked_cw:
-                            continue
                         value = min(m.l_max, max(m.l_min, spread))
-                        if value > m.l_occupied:
-                            return True, bearing, 0.0
                         off = bearing_off(dx, dy, mid)
+                        occupied = value > m.l_occupied
+                        likelier = (_likelier(value, off, best_ccw, at_ccw - mid) if ccw
+                                    else _likelier(value, off, best_cw, at_cw - mid))
+                        # Only a surface heard from near this ray's bearing could have echoed
+                        # back along it (the check is costly, so only for cells that count).
+                        if not (occupied or likelier) or not _heard_near(
+                                heard, drawn, drawn_seq, slot, m, i, j, x + dx, y + dy,
+                                heard_bin(mid + off)):
+                            continue
+                        if occupied:
+                            return True, bearing, 0.0
                         if ccw:
-                            if _likelier(value, off, best_ccw, at_ccw - mid):
-                                best_ccw, at_ccw = max(best_ccw, value), mid + off
-                        elif _likelier(value, off, best_cw, at_cw - mid):
+                            best_ccw, at_ccw = max(best_ccw, value), mid + off
+                        else:
                             best_cw, at_cw = max(best_cw, value), mid + off
                     continue
                 if not value > _LIKELY:
@@ -208,31 +215,35 @@ def _likelier(value: float, off: float, best: float, best_off: float) -> bool:
 
 
 @compiled_inline
-def _lobe_nearer(base: npt.NDArray[np.float32], live: FloatArray, m: Model, x: float,
-                 y: float, reach: float, axis: float, b_half: float, e_half: float,
-                 side: int) -> bool:
-    """Whether the side lobe ``side`` (1: counter-clockwise of ``axis``) holds a cell more
-    likely occupied than not nearer than ``reach``: a sonar reports the first echo it hears, so
-    a lobe that would have heard that cell did not hear the echo's surface farther out."""
-    if reach <= 0.0:
-        return False
-    sign = 1.0 if side == 1 else -1.0
-    c = axis + sign * 0.5 * (b_half + e_half)
-    half = 0.5 * (e_half - b_half)
-    t1, t2 = c - half, c + half
-    xmin, ymin, h = m.xmin, m.ymin, m.h
-    ny, nx = base.shape
-    xlo, ylo, xhi, yhi = sector_box(x, y, t1, t2, 0.0, reach)
-    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
-    cc, sc, ch = math.cos(c), math.sin(c), cos_bound(half)
-    for i in range(i0, i1 + 1):
-        dy = ymin + (i + 0.5) * h - y
-        for j in range(j0, j1 + 1):
-            if not base[i, j] + live[i, j] > _LIKELY:
-                continue
-            dx = xmin + (j + 0.5) * h - x
-            d = math.sqrt(dx * dx + dy * dy)
-            if d < reach and within(dx, dy, d, c, half, cc, sc, ch):
-                return True
+def _heard_near(heard: npt.NDArray[np.uint32], drawn: FloatArray,
+                drawn_seq: npt.NDArray[np.int64], own: int, m: Model, i: int, j: int,
+                cx: float, cy: float, k: int) -> bool:
+    """Whether cell ``(i, j)`` (centre ``cx, cy``) was heard from within :data:`HEARD_NEAR`
+    bins of bin ``k``, the bearing of a ray from a sensor to it: recorded in ``heard`` by a final
+    band (audibility 1), or on the band of a live arc other than slot ``own`` (drawn in ``live``
+    with a value above 0: ``drawn_seq >= 0``), its bearing from that arc's origin binned as a
+    final band records it. A wall heard only across the ray (a corridor's side walls, heard by
+    side sensors) would not echo back along it; a cell with no record explains nothing.
+    ``docs/carved-grid.md``, "Side lobes"."""
+    if audibility(heard[i, j], k) == 1.0:
+        return True
+    band, h = m.band, m.h
+    for s in range(drawn_seq.shape[0]):
+        if s == own or drawn_seq[s] < 0 or not drawn[s, 5] > 0.0:
+            continue
+        dx = cx - drawn[s, 0]
+        dy = cy - drawn[s, 1]
+        r = drawn[s, 2]
+        if abs(math.sqrt(dx * dx + dy * dy) - r) > band:
+            continue
+        # The band as draw_arc draws it: the interval widened by half a cell.
+        widen = 0.5 * h / r
+        t1, t2 = drawn[s, 3] - widen, drawn[s, 4] + widen
+        mid = 0.5 * (t1 + t2)
+        off = bearing_off(dx, dy, mid)
+        if abs(off) > 0.5 * (t2 - t1):
+            continue
+        apart = (heard_bin(mid + off) - k) % HEARD_BINS
+        if min(apart, HEARD_BINS - apart) <= HEARD_NEAR:
+            return True
     return False

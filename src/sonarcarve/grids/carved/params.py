@@ -66,13 +66,14 @@ DEFAULT_SEE_THROUGH = 0.5
 #: lobe lies 2.4-4.3 half widths off the axis (review rev10s): set ``side_lobes`` for the
 #: transducer at hand.
 #: 0, off by default (2026-12-02): with 1, an obstacle straight ahead in a corridor whose walls
-#: are mapped went unmarked at some ranges (helper door10b's sweep: a 1.0 m corridor at 1.10-1.30
-#: m with 0.05 m cells, 1.2 m at 1.35-1.55 m), where a wall crosses the echo's circle at a
-#: lobe's outer edge and first arrival finds nothing nearer to block with: the mark is the only
-#: thing that makes such an obstacle occupied. The rule opens the Fig. 2 door under the amplitude
-#: physics (33 / 39 -> 67 / 81 % at 0.05 / 0.10 m) and changes nothing under the specular one;
-#: a safe map comes first. A safe version needs the bearings each cell was heard from while its
-#: arcs are live (docs/carved-grid.md, "Side lobes").
+#: are mapped went unmarked at some ranges (helper door10b's sweep), and the mark is the only
+#: thing that makes such an obstacle occupied. A lobe cell now counts only if it was heard from
+#: near the bearing of the ray to it (live arcs and final bands; docs/carved-grid.md, "Side
+#: lobes"): that marks the obstacle at every range when the walls were heard by side sensors
+#: (±90°), and opens the Fig. 2 door under the amplitude physics in 89 / 86 % of approaches (56 /
+#: 53 % without side lobes), but not when sensors turned 22.5° also heard the walls at their
+#: beam's edge (33.75°, one 11.25° sector from a lobe ray's 22.5°): helper lobe10s's sweep left
+#: the obstacle unmarked at most ranges at 0.05 m. Still opt-in.
 DEFAULT_SIDE_LOBES = 0.0
 #: Echoes at this range or nearer, metres, may have come through a side lobe
 #: (:attr:`CarvedGridParams.side_lobe_range`): two-way, the first side lobe is about 35 dB
@@ -172,10 +173,11 @@ class CarvedGridParams:
     side_lobes : float
         Number in [0, :data:`MAX_SIDE_LOBES`]; :data:`DEFAULT_SIDE_LOBES` (0: the beam alone).
         How far past each edge of its beam, in half beam widths, a near echo may have come from
-        through a side lobe, for the newest echo's mark ("Side lobes"): an occupied cell there
-        explains the echo, and the mark goes to a likely one there when the map does not favour
-        the arc's middle. 1 opens more doors under diffuse echoes but can leave an obstacle
-        straight ahead in a mapped corridor unmarked at some ranges (:data:`DEFAULT_SIDE_LOBES`).
+        through a side lobe, for the newest echo's mark ("Side lobes"): an occupied cell there,
+        heard from near the bearing of the sensor's ray to it, explains the echo, and the mark
+        goes to a likely one there when the map does not favour the arc's middle. 1 opens more
+        doors under diffuse echoes but can leave an obstacle straight ahead in a mapped corridor
+        unmarked (:data:`DEFAULT_SIDE_LOBES`).
     side_lobe_range : float
         Metres >= 0 (``inf``: every range); :data:`DEFAULT_SIDE_LOBE_RANGE` (2). Echoes farther
         than this are judged on their carved interval alone (the lobes are too weak to hear far
