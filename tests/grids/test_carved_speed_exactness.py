@@ -1,4 +1,5 @@
-"""The carved grid's speed-ups that must not change a bit: free space's quick update.
+"""The carved grid's speed-ups that must not change a bit: free space's quick update, the final
+band's heard bin.
 
 :func:`~sonarcarve.grids.carved.free_space.free_space` computes a plain cell's update with cheap
 stand-ins for its arctangent and fade and keeps the result only when an error bound proves it
@@ -15,8 +16,11 @@ import numpy as np
 import pytest
 
 from sonarcarve.grids import CarvedGridParams, scan
+from sonarcarve.grids.carved import band
 from sonarcarve.grids.carved import free_space as fs
+from sonarcarve.grids.carved.heard import HEARD_BINS, heard_bin
 from sonarcarve.grids.carved.model import Model, model_of
+from sonarcarve.grids.scan import bearing_off
 
 H = 0.1
 XMIN, YMIN = -2.0, -2.0
@@ -131,3 +135,19 @@ def test_free_space_stores_the_exact_updates_bits(changes: dict[str, float],
         fs.free_space(base, heard, m, x, y, theta, r, half, held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
 
+
+def test_a_final_bands_heard_bin_is_the_exact_bearings() -> None:
+    # Cells all round, and cells within 1e-16..1e-9 rad of a bin's edge (where a bearing off
+    # by its rounding would land in the next bin), against the bin of the exact bearing.
+    rng = np.random.default_rng(5)
+    edges = -math.pi + 2.0 * math.pi / HEARD_BINS * np.arange(HEARD_BINS + 1)
+    for k in range(20000):
+        if k % 2:
+            bearing = rng.choice(edges) + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-16, -9)
+        else:
+            bearing = rng.uniform(-math.pi, math.pi)
+        mid = bearing + rng.uniform(-0.25, 0.25)
+        d = rng.uniform(0.05, 6.0)
+        dx, dy = d * math.cos(bearing), d * math.sin(bearing)
+        exact = heard_bin(mid + bearing_off(dx, dy, mid))
+        assert band._heard_bin_of(dx, dy, mid, math.cos(mid), math.sin(mid)) == exact
