@@ -1,5 +1,5 @@
 """The carved grid's speed-ups that must not change a bit: free space's quick update, the final
-band's heard bin.
+band's heard bin, ATM's stored bearings.
 
 :func:`~sonarcarve.grids.carved.free_space.free_space` computes a plain cell's update with cheap
 stand-ins for its arctangent and fade and keeps the result only when an error bound proves it
@@ -21,6 +21,7 @@ from sonarcarve.grids.carved import free_space as fs
 from sonarcarve.grids.carved.heard import HEARD_BINS, heard_bin
 from sonarcarve.grids.carved.model import Model, model_of
 from sonarcarve.grids.scan import bearing_off
+from sonarcarve.methods import atm
 
 H = 0.1
 XMIN, YMIN = -2.0, -2.0
@@ -151,3 +152,19 @@ def test_a_final_bands_heard_bin_is_the_exact_bearings() -> None:
         dx, dy = d * math.cos(bearing), d * math.sin(bearing)
         exact = heard_bin(mid + bearing_off(dx, dy, mid))
         assert band._heard_bin_of(dx, dy, mid, math.cos(mid), math.sin(mid)) == exact
+
+
+def test_atm_stores_the_exact_bearings_float32() -> None:
+    # Crossings all across the beam, and bearings within 1e-17..1e-12 of a float32 rounding
+    # midpoint (where a bearing off by the series' error would round the other way).
+    rng = np.random.default_rng(9)
+    for k in range(20000):
+        along = rng.uniform(0.05, 6.0)
+        bearing = rng.uniform(-0.199, 0.199)
+        if k % 2:
+            low = np.float32(bearing)
+            mid = 0.5 * (float(low) + float(np.nextafter(low, np.float32(1.0))))
+            bearing = mid + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-17, -12)
+        cross = along * math.tan(bearing)
+        got = np.float32(atm._bearing32(cross, along))
+        assert got.view(np.uint32) == np.float32(math.atan2(cross, along)).view(np.uint32)

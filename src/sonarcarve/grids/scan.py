@@ -6,7 +6,7 @@ carved grid's kernels use all of them): the cells of the box around the sector
 row, only the columns of the ring (:func:`ring_columns`), each with a cell of slack (the exact test
 is the caller's); and the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half``
 (:func:`bearing_off`), done with a dot product except within :data:`EDGE` of the edge
-(:func:`within`: the same answer, bit for bit); and a short series for the arctangent of a
+(:func:`within`: the same answer, bit for bit); and ATM's short series for the arctangent of a
 bearing near an axis (:func:`atan_series`), with a bound on its error for the callers that prove
 from it that the exact arctangent would give the same result. Metres and radians;
 ``docs/carved-grid.md``, "The sensor model".
@@ -17,6 +17,9 @@ from __future__ import annotations
 import math
 
 from sonarcarve.geometry._compiled import compiled_inline
+
+# The series is ATM's (the methods sit below the grids); the grids' kernels use it too.
+from sonarcarve.methods.atm import SERIES_ERROR, SERIES_T, atan_series
 
 __all__ = [
     "EDGE",
@@ -37,14 +40,6 @@ TWO_PI = 2.0 * math.pi
 #: Margin of :func:`within`'s dot-product test: far above its rounding (about 1e-15)
 #: and that of the bearing test it stands for, so the two never disagree outside it.
 EDGE = 1e-9
-#: Largest ``|tan|`` of a bearing for which :func:`atan_series` holds its bound (a 22.5°
-#: beam's cells are within 0.199 of its axis); the callers take libm's ``atan2`` past it.
-SERIES_T = 0.2
-#: Bound on ``|atan_series(t) - atan2(t·x, x)|`` for ``|t| <= SERIES_T``: the Taylor series'
-#: remainder (alternating, terms falling: below the first term left out, ``T^23 / 23``,
-#: 4e-18) plus the rounding of the division and of Horner's scheme (at most a dozen roundings
-#: of numbers below 0.21: 3e-16) and libm's ``atan2`` error (a few ulp of 0.2, 1e-16).
-SERIES_ERROR = SERIES_T ** 23 / 23.0 + 1e-15
 
 
 @compiled_inline
@@ -144,13 +139,3 @@ def ring_columns(dy: float, r_in: float, r_out: float, x: float, xmin: float, h:
         return min(a0, b0), max(a1, b1), 1, 0
     return a0, a1, b0, b1
 
-
-@compiled_inline
-def atan_series(t: float) -> float:
-    """``atan(t)`` for ``|t| <= SERIES_T`` from its Taylor series through ``t^21``
-    (error below :data:`SERIES_ERROR`): a dozen multiplications instead of libm's ``atan2``."""
-    t2 = t * t
-    tail = 1.0 / 17.0 - t2 * (1.0 / 19.0 - t2 * (1.0 / 21.0))
-    tail = 1.0 / 11.0 - t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0 - t2 * tail))
-    return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0 - t2 * (1.0 / 7.0 - t2 * (
-        1.0 / 9.0 - t2 * tail)))))

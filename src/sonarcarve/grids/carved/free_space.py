@@ -130,6 +130,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
     u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
     floor, inside = _floor_and_inside(m, cos_half)
     dw = _profile_error(half)
+    inv_half2 = 1.0 / (half * half)
     n_held = 0
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
@@ -151,8 +152,8 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             if cell == floor and along > math.sqrt(d2) * inside:
                 continue  # at the clamp's floor, and the update provably keeps it there
             if not (m.aware and cell > 0.0):
-                quick = _quick_update(cell, dy * c - dx * s, along, math.sqrt(d2), half, dw,
-                                      m)
+                quick = _quick_update(cell, dy * c - dx * s, along, math.sqrt(d2), inv_half2,
+                                      dw, m)
                 if quick == quick:  # not NaN: decided, the exact update's very bits
                     base[i, j] = quick
                     if cell > 0.0 and quick <= 0.0:
@@ -195,16 +196,18 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
 def _profile_error(half: float) -> float:
     """Bound on the error of ``w = 1 - (a / half)^2`` when ``a`` is the series' (``|a| <=
     atan(SERIES_T) < SERIES_T``, off by at most ``δa =`` :data:`SERIES_ERROR`):
-    ``(2 |a| + δa) δa / half^2``, plus a few roundings of 1."""
+    ``(2 |a| + δa) δa / half^2``, plus the roundings of either way of computing ``w`` (three
+    each, below 1)."""
     da = SERIES_ERROR
-    return (2.0 * SERIES_T + da) * da / (half * half) + 4.0 * 2.0 ** -53
+    return (2.0 * SERIES_T + da) * da / (half * half) + 8.0 * 2.0 ** -53
 
 
 @compiled_inline
-def _quick_update(cell: float, cross: float, along: float, d: float, half: float,
+def _quick_update(cell: float, cross: float, along: float, d: float, inv_half2: float,
                   dw: float, m: Model) -> float:
     """The stored (float32) value of :func:`free_space`'s plain update of a cell ``cell`` at
-    distance ``d``, ``(along, cross)`` from the apex along and across the axis, or NaN when
+    distance ``d``, ``(along, cross)`` from the apex along and across the axis, in a beam of
+    half-width ``half`` (``inv_half2 = 1 / half^2``), or NaN when
     this cannot tell it (:func:`_stored`). The arctangent is the series' (:func:`atan_series`:
     ``w`` off by at most ``dw``, :func:`_profile_error`); the fade is first
     ``1 / (1 + exp(4 (d - d_f)))`` (off by at most :data:`FADE_ERROR`), then, where that leaves
@@ -217,7 +220,7 @@ def _quick_update(cell: float, cross: float, along: float, d: float, half: float
     if not (along > 0.0 and abs(cross) <= SERIES_T * along):
         return math.nan
     a = atan_series(cross / along)
-    w = 1.0 - (a / half) ** 2
+    w = 1.0 - a * a * inv_half2  # no division: it lengthens the chain; the rounding is in dw
     if not m.fade < math.inf:
         return _stored(cell, w * m.l_miss, dw * abs(m.l_miss), m)
     miss = m.l_miss / (1.0 + math.exp(4.0 * (d - m.fade)))
