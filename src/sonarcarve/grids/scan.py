@@ -6,8 +6,10 @@ carved grid's kernels use all of them): the cells of the box around the sector
 row, only the columns of the ring (:func:`ring_columns`), each with a cell of slack (the exact test
 is the caller's); and the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half``
 (:func:`bearing_off`), done with a dot product except within :data:`EDGE` of the edge
-(:func:`within`: the same answer, bit for bit). Metres and radians; ``docs/carved-grid.md``,
-"The sensor model".
+(:func:`within`: the same answer, bit for bit); and ATM's short series for the arctangent of a
+bearing near an axis (:func:`atan_series`), with a bound on its error for the callers that prove
+from it that the exact arctangent would give the same result. Metres and radians;
+``docs/carved-grid.md``, "The sensor model".
 """
 
 from __future__ import annotations
@@ -16,9 +18,15 @@ import math
 
 from sonarcarve.geometry._compiled import compiled_inline
 
+# The series is ATM's (the methods sit below the grids); the grids' kernels use it too.
+from sonarcarve.methods.atm import SERIES_ERROR, SERIES_T, atan_series
+
 __all__ = [
     "EDGE",
+    "SERIES_ERROR",
+    "SERIES_T",
     "TWO_PI",
+    "atan_series",
     "bearing_off",
     "cell_range",
     "cos_bound",
@@ -130,3 +138,4 @@ def ring_columns(dy: float, r_in: float, r_out: float, x: float, xmin: float, h:
     if b0 <= a1 + 1:  # the two stretches touch: one
         return min(a0, b0), max(a1, b1), 1, 0
     return a0, a1, b0, b1
+

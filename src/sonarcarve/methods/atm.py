@@ -69,10 +69,13 @@ __all__ = [
     "INITIAL_COLUMNS",
     "MAX_ATM_STATE_BYTES",
     "MIN_INDEXED_TRANSVERSAL",
+    "SERIES_ERROR",
+    "SERIES_T",
     "AtmMethod",
     "AtmModel",
     "CrossingStore",
     "CrossingStoreError",
+    "atan_series",
     "atm_error_bound",
     "grown_columns",
 ]
@@ -95,6 +98,18 @@ INITIAL_COLUMNS = 32
 #: nearly tangent circles are too ill-conditioned to be sure they fall in the padded boxes of
 #: :mod:`sonarcarve.geometry.index` (with ψ ≥ 1e-4 they are off by at most about 1e-12 r).
 MIN_INDEXED_TRANSVERSAL = 1e-4
+
+
+#: Largest ``|tan|`` of a bearing for which :func:`atan_series` holds its bound (a 22.5°
+#: beam's cells are within 0.199 of its axis); the callers take libm's ``atan2`` past it.
+SERIES_T = 0.2
+#: Bound on ``|atan_series(t) - atan2(t·x, x)|`` for ``|t| <= SERIES_T``: the Taylor series'
+#: remainder (alternating, terms falling: below the first term left out, ``T^19 / 19``,
+#: 2.8e-15) plus the rounding of the division and of the sum (at most a dozen roundings of
+#: numbers below 1, times ``t``: 3e-16) and libm's ``atan2`` error (a few ulp of 0.2, 1e-16).
+SERIES_ERROR = SERIES_T ** 19 / 19.0 + 1e-15
+#: Margin of :func:`_bearing32` around the series' bearing: its error bound, four times over.
+BEARING_MARGIN = 4.0 * SERIES_ERROR
 
 
 class CrossingStoreError(SonarcarveError, MemoryError):
@@ -203,6 +218,35 @@ def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
 
 
 @compiled_inline
+def atan_series(t: float) -> float:
+    """``atan(t)`` for ``|t| <= SERIES_T`` from its Taylor series through ``t^17`` (error below
+    :data:`SERIES_ERROR`), instead of libm's ``atan2``. Evaluated in pairs of terms (Estrin's
+    scheme, not Horner's): the same dozen roundings, half the chain of dependent operations."""
+    u = t * t
+    u2 = u * u
+    u4 = u2 * u2
+    low = (1.0 - u * (1.0 / 3.0)) + u2 * (1.0 / 5.0 - u * (1.0 / 7.0))
+    high = (1.0 / 9.0 - u * (1.0 / 11.0)) + u2 * (1.0 / 13.0 - u * (1.0 / 15.0))
+    return t * (low + u4 * (high + u4 * (1.0 / 17.0)))
+
+
+@compiled_inline
+def _bearing32(cross: float, along: float) -> float:
+    """``atan2(cross, along)`` as the crossing store keeps it (float32), from
+    :func:`atan_series` where every value within :data:`BEARING_MARGIN` of the series' rounds
+    to one nonzero float32 (rounding is monotone, so the exact bearing rounds to it too: the
+    same bits; zero is left open, -0.0 and 0.0 compare equal), else from ``atan2``. A kept
+    crossing lies inside the beam, so ``|cross| / along`` is at most ``tan(φ/2)``, 0.199 for
+    the Polaroid's 22.5°."""
+    if along > 0.0 and abs(cross) <= SERIES_T * along:
+        a = atan_series(cross / along)
+        low = np.float32(a - BEARING_MARGIN)
+        if low == np.float32(a + BEARING_MARGIN) and low != 0.0:
+            return float(low)
+    return math.atan2(cross, along)
+
+
+@compiled_inline
 def _add_arc(
     x: FloatArray,
     y: FloatArray,
@@ -236,7 +280,7 @@ def _add_arc(
     with ``cos γ = (rj² + ri² − d²) / (2 rj ri)`` it reads ``|rj² + ri² − d²| ≤ 2 rj ri cos ψ``,
     which for ψ > 0 also implies that the circles cross (``|cos γ| < 1``). The beam test
     compares ``(p − o)·axis`` with ``r cos(φ/2)`` (``|τ − θ| ≤ φ/2`` for ``φ < π``); only kept
-    crossings pay for an ``atan2``.
+    crossings pay for an arctangent (:func:`_bearing32`).
     """
     width = bearings.shape[1]
     xj, yj, rj = x[slot], y[slot], r[slot]
@@ -276,9 +320,9 @@ def _add_arc(
             full = full or counts[slot] >= width or counts[i] >= width
             if full:
                 continue  # only counted from now on: see the docstring
-            bearings[slot, counts[slot]] = math.atan2(cj * py - sj * px, along_j)
+            bearings[slot, counts[slot]] = _bearing32(cj * py - sj * px, along_j)
             counts[slot] += 1
-            bearings[i, counts[i]] = math.atan2(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
+            bearings[i, counts[i]] = _bearing32(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
             counts[i] += 1
             stale[i] = True
             tally[k, 1] += 1

@@ -19,6 +19,8 @@ from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.heard import heard_bin
 from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.scan import (
+    SERIES_T,
+    atan_series,
     bearing_off,
     cell_range,
     cos_bound,
@@ -86,6 +88,12 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
                     if within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
                         grid[i, j] += value
                     continue
+                if clamp and not profile > 0.0:  # the bearing picks only the heard bin
+                    if within(dx, dy, d, mid, half, cos_mid, sin_mid, cos_half):
+                        grid[i, j] = min(m.l_max, max(m.l_min, grid[i, j] + value))
+                        if value > 0.0:
+                            heard[i, j] |= 1 << _heard_bin_of(dx, dy, mid, cos_mid, sin_mid)
+                    continue
                 if not_within(dx, dy, d, cos_mid, sin_mid, cos_half):
                     continue  # no arctangent for the cells clearly outside the interval
                 off = bearing_off(dx, dy, mid)
@@ -101,6 +109,29 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
                         heard[i, j] |= 1 << heard_bin(mid + off)
                 else:
                     grid[i, j] += v
+
+
+#: Bound used by :func:`_heard_bin_of` on how far its bearing can be from ``bearing_off``'s:
+#: :data:`~sonarcarve.grids.scan.SERIES_ERROR` plus a few roundings of numbers up to 2π in
+#: each (``atan2``, the rotation by ``mid``, the wrap), below 1e-14 in all.
+BIN_MARGIN = 1e-12
+
+
+@compiled_inline
+def _heard_bin_of(dx: float, dy: float, mid: float, cos_mid: float, sin_mid: float) -> int:
+    """``heard_bin(mid + bearing_off(dx, dy, mid))``, the bin a final band records for the
+    cell at ``(dx, dy)`` from the arc's origin, without an arctangent where the series
+    (:func:`~sonarcarve.grids.scan.atan_series` of the cell's direction turned by ``-mid``)
+    decides it: the bins of the bearings :data:`BIN_MARGIN` either side of the series' are one,
+    and the bin is monotone in the bearing, so the exact bearing's is that bin too."""
+    along = dx * cos_mid + dy * sin_mid
+    cross = dy * cos_mid - dx * sin_mid
+    if along > 0.0 and abs(cross) <= SERIES_T * along:
+        off = atan_series(cross / along)
+        k = heard_bin(mid + (off - BIN_MARGIN))
+        if k == heard_bin(mid + (off + BIN_MARGIN)):
+            return k
+    return heard_bin(mid + bearing_off(dx, dy, mid))
 
 
 @compiled  # its own function: inlined into the refresh loop, that loop ran 2x slower

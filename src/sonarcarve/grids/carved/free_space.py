@@ -5,6 +5,11 @@
 ``l += γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the audibility of its
 surface from the beam's bearing ("Clearing what was heard"), raised to that of the most audible such
 cell at most ``see_through`` in front of it on its ray (:func:`_free_behind`, "Seen through").
+
+A cell not believed occupied is updated with a series for ``α`` and an exponential for the fade
+where their error bounds prove the stored float32 is the exact update's (:func:`_quick_update`):
+the same bits for about a third of the arithmetic (an ``atan2`` and a ``tanh`` were two thirds
+of the free space's CPU time).
 """
 
 from __future__ import annotations
@@ -17,7 +22,14 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.heard import audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.scan import EDGE, cell_range, sector_box
+from sonarcarve.grids.scan import (
+    EDGE,
+    SERIES_ERROR,
+    SERIES_T,
+    atan_series,
+    cell_range,
+    sector_box,
+)
 from sonarcarve.typing import FloatArray
 
 __all__ = ["HELD", "free_space"]
@@ -25,6 +37,18 @@ __all__ = ["HELD", "free_space"]
 #: Cells believed occupied one beam's free space can hold back for :func:`_free_behind`; the
 #: rest get the plain update.
 HELD = 512
+
+#: Bound on ``|1 / (1 + exp(4(d - d_f))) - (1 - tanh(2(d - d_f))) / 2|`` as computed: the two
+#: are the same function (``1 - tanh u = 2 / (1 + e^2u)``) and each is computed to a few ulp of
+#: 1 (libm's ``exp`` and ``tanh``, one subtraction or addition, one division): below 1e-15
+#: (measured on 0-8 m: 2.2e-16).
+FADE_ERROR = 2e-15
+#: Factor on the error bounds in :func:`_stored`: room for what the bounds' arithmetic left
+#: out (products of two errors, the rounding of the product ``w · miss``).
+MARGIN_SAFETY = 8.0
+#: Relative rounding allowed for in :func:`_stored`: of the sum ``cell + w · miss`` (exact and
+#: quick: half an ulp each) and of the sum's margin, well inside ``2^-50``.
+SUM_ROUNDING = 2.0 ** -50
 
 
 @compiled_inline
@@ -105,6 +129,8 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
     t1, t2 = theta - half, theta + half
     u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
     floor, inside = _floor_and_inside(m, cos_half)
+    dw = _profile_error(half)
+    inv_half2 = 1.0 / (half * half)
     n_held = 0
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
@@ -125,6 +151,14 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             cell = base[i, j]
             if cell == floor and along > math.sqrt(d2) * inside:
                 continue  # at the clamp's floor, and the update provably keeps it there
+            if not (m.aware and cell > 0.0):
+                quick = _quick_update(cell, dy * c - dx * s, along, math.sqrt(d2), inv_half2,
+                                      dw, m)
+                if quick == quick:  # not NaN: decided, the exact update's very bits
+                    base[i, j] = quick
+                    if cell > 0.0 and quick <= 0.0:
+                        heard[i, j] = 0
+                    continue
             a = math.atan2(dy * c - dx * s, along)
             w = 1.0 - (a / half) ** 2
             miss = l_miss
@@ -156,6 +190,64 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                 heard[i, j] = 0
     if n_held:
         _free_behind(base, heard, m, held, n_held)
+
+
+@compiled_inline
+def _profile_error(half: float) -> float:
+    """Bound on the error of ``w = 1 - (a / half)^2`` when ``a`` is the series' (``|a| <=
+    atan(SERIES_T) < SERIES_T``, off by at most ``δa =`` :data:`SERIES_ERROR`):
+    ``(2 |a| + δa) δa / half^2``, plus the roundings of either way of computing ``w`` (three
+    each, below 1)."""
+    da = SERIES_ERROR
+    return (2.0 * SERIES_T + da) * da / (half * half) + 8.0 * 2.0 ** -53
+
+
+@compiled_inline
+def _quick_update(cell: float, cross: float, along: float, d: float, inv_half2: float,
+                  dw: float, m: Model) -> float:
+    """The stored (float32) value of :func:`free_space`'s plain update of a cell ``cell`` at
+    distance ``d``, ``(along, cross)`` from the apex along and across the axis, in a beam of
+    half-width ``half`` (``inv_half2 = 1 / half^2``), or NaN when
+    this cannot tell it (:func:`_stored`). The arctangent is the series' (:func:`atan_series`:
+    ``w`` off by at most ``dw``, :func:`_profile_error`); the fade is first
+    ``1 / (1 + exp(4 (d - d_f)))`` (off by at most :data:`FADE_ERROR`), then, where that leaves
+    the bits open (mostly a far cell whose faded update is below the fade's own rounding), the
+    exact update's.
+
+    Left to the exact path: a bearing past :data:`SERIES_T`, a beam of ``half >= π/2``
+    (``along <= 0``), and what the margins leave open (measured: 4 of 845,000 updates, office
+    log, amplitude physics, 0.10 m cells)."""
+    if not (along > 0.0 and abs(cross) <= SERIES_T * along):
+        return math.nan
+    a = atan_series(cross / along)
+    w = 1.0 - a * a * inv_half2  # no division: it lengthens the chain; the rounding is in dw
+    if not m.fade < math.inf:
+        return _stored(cell, w * m.l_miss, dw * abs(m.l_miss), m)
+    miss = m.l_miss / (1.0 + math.exp(4.0 * (d - m.fade)))
+    quick = _stored(cell, w * miss, dw * abs(miss) + (1.0 + dw) * abs(m.l_miss) * FADE_ERROR,
+                    m)
+    if quick == quick:
+        return quick
+    miss = m.l_miss * (0.5 * (1.0 - math.tanh(2.0 * (d - m.fade))))
+    return _stored(cell, w * miss, dw * abs(miss), m)
+
+
+@compiled_inline
+def _stored(cell: float, change: float, error: float, m: Model) -> float:
+    """``float32(clamp(cell + exact))``, the exact update's stored value, from ``change``, off
+    ``exact`` by at most ``error``; NaN when that does not decide it.
+
+    Decided when every sum within the margin (``error`` times :data:`MARGIN_SAFETY`, plus
+    :data:`SUM_ROUNDING`) of ``cell + change`` clamps and rounds to one nonzero float32: the
+    exact sum lies in that range, and clamping and rounding are monotone, so it stores the same
+    bits (zero is left open: -0.0 and 0.0 compare equal)."""
+    total = cell + change
+    margin = MARGIN_SAFETY * error + SUM_ROUNDING * abs(total)
+    low = np.float32(min(m.l_max, max(m.l_min, total - margin)))
+    high = np.float32(min(m.l_max, max(m.l_min, total + margin)))
+    if low == high and low != 0.0:
+        return float(low)
+    return math.nan
 
 
 @compiled_inline
