@@ -6,7 +6,7 @@ carved grid's kernels use all of them): the cells of the box around the sector
 row, only the columns of the ring (:func:`ring_columns`), each with a cell of slack (the exact test
 is the caller's); and the bearing test ``|wrap(atan2(dy, dx) - mid)| <= half``
 (:func:`bearing_off`), done with a dot product except within :data:`EDGE` of the edge
-(:func:`within`: the same answer, bit for bit); and ATM's short series for the arctangent of a
+(:func:`within`: the same answer, bit for bit); and the short series for the arctangent of a
 bearing near an axis (:func:`atan_series`), with a bound on its error for the callers that prove
 from it that the exact arctangent would give the same result. Metres and radians;
 ``docs/carved-grid.md``, "The sensor model".
@@ -17,9 +17,7 @@ from __future__ import annotations
 import math
 
 from sonarcarve.geometry._compiled import compiled_inline
-
-# The series is ATM's (the methods sit below the grids); the grids' kernels use it too.
-from sonarcarve.methods.atm import SERIES_ERROR, SERIES_T, atan_series
+from sonarcarve.geometry.arctan import SERIES_ERROR, SERIES_T, atan_series
 
 __all__ = [
     "EDGE",

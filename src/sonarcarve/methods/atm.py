@@ -44,6 +44,7 @@ from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.geometry import common_chord
 from sonarcarve.geometry._compiled import compiled, compiled_borrowing, compiled_inline
+from sonarcarve.geometry.arctan import SERIES_ERROR, SERIES_T, atan_series
 from sonarcarve.geometry.index import (
     ArcIndex,
     IndexArrays,
@@ -69,13 +70,10 @@ __all__ = [
     "INITIAL_COLUMNS",
     "MAX_ATM_STATE_BYTES",
     "MIN_INDEXED_TRANSVERSAL",
-    "SERIES_ERROR",
-    "SERIES_T",
     "AtmMethod",
     "AtmModel",
     "CrossingStore",
     "CrossingStoreError",
-    "atan_series",
     "atm_error_bound",
     "grown_columns",
 ]
@@ -100,14 +98,6 @@ INITIAL_COLUMNS = 32
 MIN_INDEXED_TRANSVERSAL = 1e-4
 
 
-#: Largest ``|tan|`` of a bearing for which :func:`atan_series` holds its bound (a 22.5°
-#: beam's cells are within 0.199 of its axis); the callers take libm's ``atan2`` past it.
-SERIES_T = 0.2
-#: Bound on ``|atan_series(t) - atan2(t·x, x)|`` for ``|t| <= SERIES_T``: the Taylor series'
-#: remainder (alternating, terms falling: below the first term left out, ``T^19 / 19``,
-#: 2.8e-15) plus the rounding of the division and of the sum (at most a dozen roundings of
-#: numbers below 1, times ``t``: 3e-16) and libm's ``atan2`` error (a few ulp of 0.2, 1e-16).
-SERIES_ERROR = SERIES_T ** 19 / 19.0 + 1e-15
 #: Margin of :func:`_bearing32` around the series' bearing: its error bound, four times over.
 BEARING_MARGIN = 4.0 * SERIES_ERROR
 
@@ -215,19 +205,6 @@ def atm_error_bound(min_transversal: float, range_resolution: float) -> float:
     if min_transversal == 0.0:
         return math.inf
     return range_resolution * (1.0 / math.sin(min_transversal) + 1.0 / math.tan(min_transversal))
-
-
-@compiled_inline
-def atan_series(t: float) -> float:
-    """``atan(t)`` for ``|t| <= SERIES_T`` from its Taylor series through ``t^17`` (error below
-    :data:`SERIES_ERROR`), instead of libm's ``atan2``. Evaluated in pairs of terms (Estrin's
-    scheme, not Horner's): the same dozen roundings, half the chain of dependent operations."""
-    u = t * t
-    u2 = u * u
-    u4 = u2 * u2
-    low = (1.0 - u * (1.0 / 3.0)) + u2 * (1.0 / 5.0 - u * (1.0 / 7.0))
-    high = (1.0 / 9.0 - u * (1.0 / 11.0)) + u2 * (1.0 / 13.0 - u * (1.0 / 15.0))
-    return t * (low + u4 * (high + u4 * (1.0 / 17.0)))
 
 
 @compiled_inline
