@@ -154,6 +154,21 @@ def test_a_final_bands_heard_bin_is_the_exact_bearings() -> None:
         assert band._heard_bin_of(dx, dy, mid, math.cos(mid), math.sin(mid)) == exact
 
 
+@pytest.mark.parametrize("turns", [1e3, 1e5, -1e5])
+def test_the_heard_bin_is_the_exact_bearings_for_an_interval_written_many_turns_out(
+        turns: float) -> None:
+    # The bearings' rounding grows with |mid|: near 2π·1e5 a 1e-12 margin was too small and
+    # bins came out one off at their edges (review rev10c). Cells within 1e-9 of bin edges.
+    rng = np.random.default_rng(6)
+    edges = -math.pi + 2.0 * math.pi / HEARD_BINS * np.arange(HEARD_BINS + 1)
+    for _ in range(5000):
+        bearing = rng.choice(edges) + rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-12, -9)
+        mid = bearing + rng.uniform(-0.25, 0.25) + 2.0 * math.pi * turns
+        dx, dy = math.cos(bearing), math.sin(bearing)
+        exact = heard_bin(mid + bearing_off(dx, dy, mid))
+        assert band._heard_bin_of(dx, dy, mid, math.cos(mid), math.sin(mid)) == exact
+
+
 def test_atm_stores_the_exact_bearings_float32() -> None:
     # Crossings all across the beam, and bearings within 1e-17..1e-12 of a float32 rounding
     # midpoint (where a bearing off by the series' error would round the other way).

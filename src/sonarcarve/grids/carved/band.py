@@ -115,6 +115,11 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
 #: :data:`~sonarcarve.grids.scan.SERIES_ERROR` plus a few roundings of numbers up to 2π in
 #: each (``atan2``, the rotation by ``mid``, the wrap), below 1e-14 in all.
 BIN_MARGIN = 1e-12
+#: Largest ``|mid|`` (radians) for which :data:`BIN_MARGIN` holds: the roundings of ``mid`` and
+#: of ``mid + off`` grow with ``|mid|`` (an ulp of 64 is 1.4e-14; review rev10c found bins off
+#: by one at ``|mid|`` near 2π·1e5). Carving's intervals come from ``atan2``, within a few
+#: radians of zero; an interval written a thousand turns out takes the arctangent.
+BIN_MID_MAX = 64.0
 
 
 @compiled_inline
@@ -123,10 +128,11 @@ def _heard_bin_of(dx: float, dy: float, mid: float, cos_mid: float, sin_mid: flo
     cell at ``(dx, dy)`` from the arc's origin, without an arctangent where the series
     (:func:`~sonarcarve.grids.scan.atan_series` of the cell's direction turned by ``-mid``)
     decides it: the bins of the bearings :data:`BIN_MARGIN` either side of the series' are one,
-    and the bin is monotone in the bearing, so the exact bearing's is that bin too."""
+    and the bin is monotone in the bearing, so the exact bearing's is that bin too (for
+    ``|mid| <=`` :data:`BIN_MID_MAX`, where that margin holds)."""
     along = dx * cos_mid + dy * sin_mid
     cross = dy * cos_mid - dx * sin_mid
-    if along > 0.0 and abs(cross) <= SERIES_T * along:
+    if abs(mid) <= BIN_MID_MAX and along > 0.0 and abs(cross) <= SERIES_T * along:
         off = atan_series(cross / along)
         k = heard_bin(mid + (off - BIN_MARGIN))
         if k == heard_bin(mid + (off + BIN_MARGIN)):
