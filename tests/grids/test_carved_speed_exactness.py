@@ -169,6 +169,25 @@ def test_the_heard_bin_is_the_exact_bearings_for_an_interval_written_many_turns_
         assert band._heard_bin_of(dx, dy, mid, math.cos(mid), math.sin(mid)) == exact
 
 
+def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
+    # A band over 10 bins: each cell records the bin it lies in as seen from the arc's origin,
+    # one bit, not the bin of the interval's middle (a mutant the review rev10c found passing).
+    m = _model()
+    grid = np.zeros(SHAPE, np.float32)
+    heard = np.zeros(SHAPE, np.uint32)
+    x, y = 0.03, -0.02
+    band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5)
+    rows, cols = np.nonzero(heard)
+    assert len(rows) > 40
+    bins = set()
+    for i, j in zip(rows, cols, strict=True):
+        dx, dy = XMIN + (j + 0.5) * H - x, YMIN + (i + 0.5) * H - y
+        k = heard_bin(math.atan2(dy, dx))
+        assert int(heard[i, j]) == 1 << k
+        bins.add(k)
+    assert len(bins) >= 9
+
+
 def test_atm_stores_the_exact_bearings_float32() -> None:
     # Crossings all across the beam, and bearings within 1e-17..1e-12 of a float32 rounding
     # midpoint (where a bearing off by the series' error would round the other way).
