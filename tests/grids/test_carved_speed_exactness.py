@@ -179,6 +179,19 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
     band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5)
     rows, cols = np.nonzero(heard)
     assert len(rows) > 40
+    # And exactly the band's cells, as draw_arc defines it (plain Python: centre within the band
+    # of the circle, bearing within the interval widened by half a cell), each given the value.
+    widen = 0.5 * H / 1.5
+    mid, half = 0.0, 1.0 + widen
+    expected = np.zeros(SHAPE, bool)
+    for i in range(SHAPE[0]):
+        for j in range(SHAPE[1]):
+            dx, dy = XMIN + (j + 0.5) * H - x, YMIN + (i + 0.5) * H - y
+            if (abs(math.hypot(dx, dy) - 1.5) <= m.band
+                    and abs(bearing_off(dx, dy, mid)) <= half):
+                expected[i, j] = True
+    assert np.array_equal(heard != 0, expected)
+    assert np.array_equal(grid != 0, expected)
     bins = set()
     for i, j in zip(rows, cols, strict=True):
         dx, dy = XMIN + (j + 0.5) * H - x, YMIN + (i + 0.5) * H - y
