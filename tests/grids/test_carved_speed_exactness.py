@@ -137,6 +137,30 @@ def test_free_space_stores_the_exact_updates_bits(changes: dict[str, float],
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
 
 
+def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quick_path() -> None:
+    # With surface_aware off, cells believed occupied take the plain update too (the quick path
+    # included): the same bits, and a cell it brings from above 0 to 0 or below forgets where it
+    # was heard from, the others keep it (a mutant the review rev10c found passing).
+    m = _model(surface_aware=False)  # type: ignore[arg-type]
+    rng = np.random.default_rng(12)
+    held = np.empty((fs.HELD, 7))
+    freed = 0
+    for _ in range(30):
+        base = np.where(rng.random(SHAPE) < 0.5, _random_base(rng, m),
+                        rng.uniform(0.0, 0.3, SHAPE)).astype(np.float32)
+        heard = np.full(SHAPE, 0b101, dtype=np.uint32)
+        before = base.copy()
+        x, y = rng.uniform(-1.5, 1.5, 2)
+        theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
+        expected = _exact_free_space(base, m, x, y, theta, r, 0.5 * math.radians(22.5))
+        fs.free_space(base, heard, m, x, y, theta, r, 0.5 * math.radians(22.5), held)
+        np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
+        crossed = (before > 0.0) & (base <= 0.0)
+        freed += int(crossed.sum())
+        np.testing.assert_array_equal(heard == 0, crossed)
+    assert freed > 20
+
+
 def test_a_final_bands_heard_bin_is_the_exact_bearings() -> None:
     # Cells all round, and cells within 1e-16..1e-9 rad of a bin's edge (where a bearing off
     # by its rounding would land in the next bin), against the bin of the exact bearing.
