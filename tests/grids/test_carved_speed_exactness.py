@@ -141,7 +141,7 @@ def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quic
     # With surface_aware off, cells believed occupied take the plain update too (the quick path
     # included): the same bits, and a cell it brings from above 0 to 0 or below forgets where it
     # was heard from, the others keep it (a mutant the review rev10c found passing).
-    m = _model(surface_aware=False)  # type: ignore[arg-type]
+    m = _model(surface_aware=False)
     rng = np.random.default_rng(12)
     held = np.empty((fs.HELD, 7))
     freed = 0
