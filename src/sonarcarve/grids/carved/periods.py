@@ -104,9 +104,17 @@ def _fitted_period(ordered: list[float]) -> float:
     if n < MIN_GAPS:
         return math.inf
     period = ordered[int(GAP_QUANTILE * n)]
+    # Plain Python, run once per reading when the map is read often: the tolerance once, no
+    # builtin calls in the loop, and out at the first miss too many (the same answer).
+    tolerance = FIT_TOLERANCE * period
+    allowed = n // 8
     misses = 0
     for gap in ordered:
-        k = max(1, round(gap / period))
-        if k > MAX_MULTIPLE or abs(gap - k * period) > FIT_TOLERANCE * period:
+        k = round(gap / period)
+        if k < 1:
+            k = 1
+        if k > MAX_MULTIPLE or abs(gap - k * period) > tolerance:
             misses += 1
-    return period if misses <= n // 8 else math.inf
+            if misses > allowed:
+                return math.inf
+    return period
