@@ -5,6 +5,7 @@ marks"), and odd gaps in the log cannot end marks early."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -177,32 +178,23 @@ def test_before_its_period_is_known_fresh_seconds_bounds_a_mark() -> None:
     assert not _occupied(grid)
 
 
-def test_a_sensor_that_keeps_hearing_an_obstacle_keeps_it_marked_through_jitter() -> None:
+@pytest.mark.parametrize("read_after", [lambda step: 0.9 * step, lambda step: step - 0.001],
+                         ids=["at 0.9 of each step", "just before each next echo"])
+def test_a_sensor_that_keeps_hearing_an_obstacle_keeps_it_marked_through_jitter(
+        read_after: Callable[[float], float]) -> None:
     # The obstacle stays; sensor 0 fires every 0.5 s +- 5 %, and the log's clock moves on between
-    # its firings: occupied at every read.
+    # its firings: occupied at every read, also just before each next echo (review rev10p:
+    # reading at 0.9 of each step alone let fresh_periods 1.0 pass).
     rng = np.random.default_rng(7)
     grid = _sensor0_fires_every_period(FIVE_FIRINGS)
     t = ECHO_AT
     for _ in range(20):
         step = PERIOD * (1.0 + rng.uniform(-0.05, 0.05))
-        grid.add(_behind(t + 0.9 * step))
+        grid.add(_behind(t + read_after(step)))
         assert _occupied(grid), t
         t += step
         grid.add(_ahead(t))
         assert _occupied(grid), t
-
-
-def test_marked_just_before_each_next_echo_through_jitter() -> None:
-    # (review rev10p: reading at 0.9 of each step let fresh_periods 1.0 pass)
-    rng = np.random.default_rng(7)
-    grid = _sensor0_fires_every_period(FIVE_FIRINGS)
-    t = ECHO_AT
-    for _ in range(20):
-        step = PERIOD * (1.0 + rng.uniform(-0.05, 0.05))
-        grid.add(_behind(t + step - 0.001))
-        assert _occupied(grid), t
-        t += step
-        grid.add(_ahead(t))
 
 
 def test_each_sensor_keeps_its_own_period() -> None:
