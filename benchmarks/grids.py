@@ -42,6 +42,7 @@ import numpy as np
 
 from sonarcarve.grids import (
     CarvedGrid,
+    CarvedGridParams,
     OccupancyGrid,
     OccupancyMap,
     RangeSensorLayer,
@@ -156,12 +157,23 @@ def _sweep(office: Sequence[Simulation], h: float) -> RangeSensorLayerParams:
     return best
 
 
-def _kinds(best: RangeSensorLayerParams) -> list[GridKind]:
-    return [GridKind("carved grid", _carved),
-            GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
-            GridKind(f"RangeSensorLayer, phi {best.phi:g}, clear_on_max_reading "
-                     f"{str(best.clear_on_max_reading).lower()}", _layer(best)),
-            GridKind("Elfes/octomap grid", _elfes)]
+def _carved_with_side_lobes(lobes: float) -> Factory:
+    def make(h: float, b: Bounds) -> OccupancyMap:
+        return CarvedGrid(h, b, params=CarvedGridParams(side_lobes=lobes))
+    return make
+
+
+def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None) -> list[GridKind]:
+    kinds = [GridKind("carved grid", _carved)]
+    if side_lobes is not None:  # the opt-in rule as a row of its own
+        kinds.append(GridKind(f"carved grid, side_lobes {side_lobes:g}",
+                              _carved_with_side_lobes(side_lobes)))
+    return [
+        *kinds,
+        GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
+        GridKind(f"RangeSensorLayer, phi {best.phi:g}, clear_on_max_reading "
+                 f"{str(best.clear_on_max_reading).lower()}", _layer(best)),
+        GridKind("Elfes/octomap grid", _elfes)]
 
 
 def _measures_table(sims: dict[str, list[Simulation]], h: float,
@@ -302,6 +314,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--door-width", type=float, default=DOOR_WIDTH,
                         help="width of the Fig. 2 experiment's door, metres (default 0.85, the "
                              "width the grids were developed on; 0.75 and 1.0 are held out)")
+    parser.add_argument("--side-lobes", type=float, default=None, metavar="HALF_WIDTHS",
+                        help="add a row for the carved grid with the opt-in side-lobe rule "
+                             "(CarvedGridParams.side_lobes, e.g. 1)")
     parser.add_argument("--doors-only", action="store_true",
                         help="only the door table (the layer's phi sweep on the office still "
                              "runs: it picks the layer's best settings)")
@@ -319,7 +334,7 @@ def main(argv: list[str] | None = None) -> int:
                 for s in range(args.seeds)] for w in worlds}
     office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
-    kinds_by_h = {h: _kinds(_sweep(office, h)) for h in args.resolutions}
+    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes) for h in args.resolutions}
     if not args.doors_only:
         for h in args.resolutions:
             _measures_table(sims, h, kinds_by_h[h])
