@@ -4,6 +4,7 @@ marks"), and odd gaps in the log cannot end marks early."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 
@@ -148,6 +149,54 @@ def test_the_period_is_worked_out_again_after_it_was_read() -> None:
     periods.note(np.zeros(16, dtype=np.int64), 2.5 + np.arange(1, 17, dtype=float))
     assert periods.period(0) == pytest.approx(1.0)
 
+
+def _reference_period(gaps: list[float]) -> float:
+    """The period by its definition, in plain Python (the oracle of the compiled fit): the
+    ``⌊n/4⌋``-th shortest of the newest 16 gaps if at most ``⌊n/8⌋`` of them lie farther than a
+    tenth of it from a whole multiple 1-8 of it; ``inf`` otherwise or for fewer than 4 gaps."""
+    newest = sorted(gaps[-16:])
+    n = len(newest)
+    if n < 4:
+        return math.inf
+    period = newest[n // 4]
+    misses = sum(1 for gap in newest
+                 if not any(abs(gap - k * period) <= 0.1 * period for k in range(1, 9)))
+    return period if misses <= n // 8 else math.inf
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_compiled_periods_agree_with_their_definition(seed: int) -> None:
+    # Several sensors on schedules that fit, drop firings, jitter, repeat a stamp or drift,
+    # noted in batches of 1-7 readings and asked for between batches (some sensors never seen).
+    rng = np.random.default_rng(seed)
+    n_sensors = 5
+    base = rng.uniform(0.05, 0.6, n_sensors)
+    jitter = np.array([0.0, 0.03, 0.06, 0.09, 0.3])  # a fixed schedule ... an erratic one
+    clock = np.zeros(n_sensors)
+    log: dict[int, list[float]] = {s: [] for s in range(n_sensors)}
+    periods, checked = FiringPeriods(), 0
+    for _ in range(120):
+        sensors, times = [], []
+        for _ in range(int(rng.integers(1, 8))):
+            s = int(rng.integers(n_sensors))
+            step = base[s] * (rng.choice([0, 1, 1, 1, 1, 1, 2, 3, 9])
+                              * (1 + rng.uniform(-jitter[s], jitter[s])))
+            clock[s] += step
+            sensors.append(s)
+            times.append(float(clock[s]))
+        order = np.argsort(times, kind="stable")  # a batch's times do not decrease
+        sensor, t = np.array(sensors)[order], np.array(times)[order]
+        periods.note(sensor.astype(np.int64), t)
+        for s, ts in zip(sensor.tolist(), t.tolist(), strict=True):
+            log[s].append(ts)
+        asked = rng.choice(n_sensors + 2, size=3)
+        got = periods.periods(asked.astype(np.int64))
+        for s, value in zip(asked.tolist(), got.tolist(), strict=True):
+            times_s = log.get(s, [])
+            gaps = [b - a for a, b in itertools.pairwise(times_s) if b > a]
+            assert value == _reference_period(gaps), (s, gaps[-16:])
+            checked += math.isfinite(value)
+    assert checked > 20  # the logs do give periods, not only inf
 
 # -- the mark ----------------------------------------------------------------------------------
 

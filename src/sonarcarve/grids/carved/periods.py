@@ -24,15 +24,15 @@ ring that slows to a whole multiple of its period from one whose log drops firin
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.geometry._compiled import compiled
 from sonarcarve.typing import FloatArray
 
 __all__ = ["FIT_TOLERANCE", "GAP_QUANTILE", "GAP_WINDOW", "MAX_MULTIPLE", "MIN_GAPS",
-           "FiringPeriods"]
+           "FiringPeriods", "fitted_period", "note_kernel", "period_kernel"]
 
 GAP_WINDOW = 16
 """Gaps remembered per sensor: the newest, so the period follows a ring that changes its rate."""
@@ -61,58 +61,106 @@ would pass for a 5 ms period)."""
 class FiringPeriods:
     """Per sensor: the time of its newest reading and its newest gaps. The period is worked out
     when it is asked for, once per sensor whose gaps changed: a read happens once per many
-    readings, so each reading costs only an append."""
+    readings, so each reading costs only an append.
+
+    The state is a row of arrays per sensor (its id maps to its row), and noting and fitting
+    are compiled (:func:`note_kernel`, :func:`period_kernel`): read every 5 readings, the
+    per-sensor Python of the first version (a deque, a sort and a loop per fit) cost about a
+    tenth of the carved grid's time (``benchmarks/grid_reads.py``)."""
 
     def __init__(self) -> None:
-        self._last: dict[int, float] = {}
-        self._gaps: dict[int, deque[float]] = {}
-        self._changed: set[int] = set()
-        self._period: dict[int, float] = {}
+        self._rows: dict[int, int] = {}  # sensor id -> its row in the arrays
+        self._last = np.full(0, math.nan)  # newest reading's time (NaN: none yet)
+        self._gaps = np.zeros((0, GAP_WINDOW))  # a ring of the newest gaps
+        self._count = np.zeros(0, dtype=np.int64)  # gaps ever noted
+        self._period = np.full(0, math.inf)  # the fit, while not changed
+        self._changed = np.zeros(0, dtype=np.bool_)
 
     def note(self, sensor: npt.NDArray[np.int64], t: FloatArray) -> None:
         """Take a batch's readings, in order (times do not decrease: the batch was validated). A
         reading at the same time as the sensor's previous one is no new firing and adds no gap."""
-        last, gaps, changed = self._last, self._gaps, self._changed
-        for s, ts in zip(sensor.tolist(), t.tolist(), strict=True):
-            before = last.get(s)
-            last[s] = ts
-            if before is not None and ts > before:
-                if s not in gaps:
-                    gaps[s] = deque(maxlen=GAP_WINDOW)
-                gaps[s].append(ts - before)
-                changed.add(s)
+        rows = self._rows
+        at = np.array([rows.setdefault(s, len(rows)) for s in sensor.tolist()], dtype=np.int64)
+        if len(rows) > len(self._last):
+            self._grow(len(rows))
+        note_kernel(at, np.ascontiguousarray(t, dtype=np.float64), self._last, self._gaps,
+                    self._count, self._changed)
 
     def period(self, sensor: int) -> float:
         """The sensor's firing period in seconds; ``inf`` while fewer than :data:`MIN_GAPS` gaps
         are known or when they do not fit one period."""
-        if sensor in self._changed:
-            self._changed.discard(sensor)
-            self._period[sensor] = _fitted_period(sorted(self._gaps[sensor]))
-        return self._period.get(sensor, math.inf)
+        return float(self.periods(np.array([sensor], dtype=np.int64))[0])
 
     def periods(self, sensors: npt.NDArray[np.int64]) -> FloatArray:
         """:meth:`period` of each sensor."""
-        return np.array([self.period(s) for s in sensors.tolist()], dtype=np.float64)
+        rows = self._rows
+        at = np.array([rows.get(s, -1) for s in sensors.tolist()], dtype=np.int64)
+        out = np.empty(len(at))
+        period_kernel(at, self._gaps, self._count, self._changed, self._period, out)
+        return out
+
+    def _grow(self, n: int) -> None:
+        """Rows for ``n`` sensors (at least twice as many as before: amortised appends)."""
+        old = len(self._last)
+        size = max(n, 2 * old, 8)
+        extra = size - old
+        self._last = np.concatenate((self._last, np.full(extra, math.nan)))
+        self._gaps = np.concatenate((self._gaps, np.zeros((extra, GAP_WINDOW))))
+        self._count = np.concatenate((self._count, np.zeros(extra, dtype=np.int64)))
+        self._period = np.concatenate((self._period, np.full(extra, math.inf)))
+        self._changed = np.concatenate((self._changed, np.zeros(extra, dtype=np.bool_)))
 
 
-def _fitted_period(ordered: list[float]) -> float:
+@compiled
+def note_kernel(rows: npt.NDArray[np.int64], t: FloatArray, last: FloatArray,
+                gaps: FloatArray, count: npt.NDArray[np.int64],
+                changed: npt.NDArray[np.bool_]) -> None:
+    """Each reading ``k`` of sensor row ``rows[k]`` at ``t[k]``: a gap ``t[k] - last`` into the
+    row's ring (its oldest gap out once :data:`GAP_WINDOW` are held) when ``t[k]`` is later than
+    the row's ``last`` (NaN, the row's first reading, is not)."""
+    for k in range(rows.shape[0]):
+        row, ts = rows[k], t[k]
+        before = last[row]
+        last[row] = ts
+        if ts > before:  # False for NaN
+            gaps[row, count[row] % GAP_WINDOW] = ts - before
+            count[row] += 1
+            changed[row] = True
+
+
+@compiled
+def period_kernel(rows: npt.NDArray[np.int64], gaps: FloatArray,
+                  count: npt.NDArray[np.int64], changed: npt.NDArray[np.bool_],
+                  period: FloatArray, out: FloatArray) -> None:
+    """``out[k]``: the period of row ``rows[k]`` (``inf`` for -1, a sensor never seen), refitted
+    (:func:`fitted_period`) if its gaps changed since it was last asked for."""
+    for k in range(rows.shape[0]):
+        row = rows[k]
+        if row < 0:
+            out[k] = math.inf
+            continue
+        if changed[row]:
+            changed[row] = False
+            n = min(count[row], GAP_WINDOW)
+            period[row] = fitted_period(np.sort(gaps[row, :n]))
+        out[k] = period[row]
+
+
+@compiled
+def fitted_period(ordered: FloatArray) -> float:
     """The gap of rank ``⌊q n⌋`` of the ``n`` gaps ``ordered`` (shortest first) if at most
     ``⌊n/8⌋`` of them miss a whole multiple ``k`` of it (``1 <= k <=`` :data:`MAX_MULTIPLE`) by
     more than :data:`FIT_TOLERANCE` of it, else ``inf`` (also for fewer than :data:`MIN_GAPS`
-    gaps)."""
-    n = len(ordered)
+    gaps). ``k`` is the nearest whole number, halves to even, as Python's ``round``."""
+    n = ordered.shape[0]
     if n < MIN_GAPS:
         return math.inf
-    period = ordered[int(GAP_QUANTILE * n)]
-    # Plain Python, run once per reading when the map is read often: the tolerance once, no
-    # builtin calls in the loop, and out at the first miss too many (the same answer).
+    period = float(ordered[int(GAP_QUANTILE * n)])
     tolerance = FIT_TOLERANCE * period
     allowed = n // 8
     misses = 0
     for gap in ordered:
-        k = round(gap / period)
-        if k < 1:
-            k = 1
+        k = max(np.rint(gap / period), 1.0)
         if k > MAX_MULTIPLE or abs(gap - k * period) > tolerance:
             misses += 1
             if misses > allowed:
