@@ -194,10 +194,10 @@ class ConfidenceModel:
     both beams, origins more than 2ε apart; the sensor drove at what it hears. Direct echoes
     heard by one sensor alone, which ``others`` cannot confirm, often have one; spurious
     echoes almost never do: ``benchmarks/repeat_echoes.py``) and ``behind`` (metres, capped
-    at 3: ``r - d`` for the nearest axis point ``d`` away, inside the arc's beam nearer than
-    ``r - 2ε``, of the 64 arcs after it that are alive and heard from distinct viewpoints; 0 if
-    none; :mod:`~sonarcarve.geometry.evidence.behind`). Paper, section 6: certainty values per
-    point.
+    at 3: ``r - d``, ``d`` the distance from the arc's origin to the nearest axis point inside
+    its beam nearer than ``r - 2ε`` among the 64 arcs after it that are alive and heard from
+    distinct viewpoints; 0 if none; :mod:`~sonarcarve.geometry.evidence.behind`). Paper,
+    section 6: certainty values per point.
 
     ``behind`` is judged only when the arc leaves the history, so it is 0 for every arc in the
     history, and for the arcs still there when a log ends (committed unjudged): the live map
@@ -207,7 +207,11 @@ class ConfidenceModel:
     the arcs that leave the history, judged, can score lower. A multipath echo reads too long,
     behind a wall the ring hears directly, mostly *after* the echo arrived (the occlusion rule,
     which looks on arrival, misses it); a door jamb's echo has nothing nearer inside its beam.
-    Taken on arrival too and all weights refitted (reverted commits 8f1edc4, 9f7da7a), it made
+    Measured in one run against the weight 0: held-out floors, specular physics, direct kept /
+    spurious removed 96.1 / 79.8 → 95.9 / 82.2 % (multipath 74.8 → 79.4), rough 90.1 / 78.0 →
+    89.9 / 80.3, brick 90.6 / 85.2 → 90.1 / 85.2; office / specular removed 86.0 → 88.5,
+    t-junction / specular 68.2 → 70.4, the other development pairs unchanged but for 0.1 of
+    kept. Taken on arrival too and all weights refitted (reverted commits 8f1edc4, 9f7da7a), it made
     the live map keep a person who had left for seconds, and the refit weighed ``range`` up
     (``docs/evidence-carving.md``, "Behind").
 
