@@ -24,7 +24,8 @@ only``: graded evidence, split arcs kept, no ATM, no occlusion, no transmission,
 filter; ``+occlusion``; ``+transmission``; ``+ATM``; ``+confidence``), ``evidence`` (all
 together, the library defaults), the same with the confidence fitted before its ``repeated``
 feature (issue 9's repeats: the previous default), with the same fit but ``repeated``'s weight
-set to 0 (what the feature adds beyond the refit), with each point at its run's middle
+set to 0 (what the feature adds beyond the refit), with ``behind``'s weight 0 (the default
+before that feature: only its weight was fitted), with each point at its run's middle
 (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with the placement
 before that posterior (the median of the localised support once cut, ATM's median from one
 crossing), with the posterior placing the points of uncut beams too, and with ATM's median
@@ -89,7 +90,7 @@ def _all_with(**options: Any) -> Factory:
 WITHOUT_REPEATS = ConfidenceModel(
     intercept=-3.645, support=0.277, viewpoints=0.942, crossings=0.668, free=-0.368,
     looked=0.290, split=-0.555, occluded=-0.471, unheard=-0.013, range=-0.063, width=0.549,
-    others=3.386, through=0.285, repeated=0.0, fresh=2.453, maturity_time=2.0)
+    others=3.386, through=0.285, repeated=0.0, behind=0.0, fresh=2.453, maturity_time=2.0)
 
 
 VARIANTS: dict[str, Factory] = {
@@ -105,6 +106,8 @@ VARIANTS: dict[str, Factory] = {
     "all, without repeats (fit before them)": _all_with(confidence_model=WITHOUT_REPEATS),
     "all, repeats' weight 0 (same fit)":
         _all_with(confidence_model=replace(ConfidenceModel(), repeated=0.0)),
+    "all, behind's weight 0 (before behind)":
+        _all_with(confidence_model=replace(ConfidenceModel(), behind=0.0)),
     "all, point at the run's middle": _all_with(with_located_placement=False),
     "all, placement before the posterior (located median once cut, ATM from 1 crossing)":
         _all_with(with_posterior_placement=False, min_atm_crossings=1),

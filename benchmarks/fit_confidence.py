@@ -4,6 +4,7 @@ Run from the repository root::
 
     .venv/bin/python benchmarks/fit_confidence.py
     nice .venv/bin/python benchmarks/fit_confidence.py --worlds office random:4 random:5 --seeds 2
+    nice .venv/bin/python benchmarks/fit_confidence.py --only behind
 
 Training data: the runs of every ``--worlds`` world under every ``--physics`` physics (default:
 ONE world and physics, the office tour under the specular physics, seeds 0-2; the arcs of
@@ -24,6 +25,11 @@ script run again. A ``min_confidence`` is then
 chosen by one rule on the same training data: the largest threshold, on a 0.05 grid, that keeps
 at least ``--keep`` (90 %) of *all* direct echoes (fully carved ones count as lost); shares are
 printed for it and for 0.5 (the library default: the decision of a calibrated probability).
+
+``--only NAME ...`` fits only those features' weights (:func:`fit_only`): the intercept, the
+other weights, ``fresh`` and the maturity time stay the library default's. A new feature that
+is 0 wherever the live map reads it (``behind``: judged only when the arc leaves the history)
+then leaves that map as it was, bit for bit.
 
 Printed: the weights as ``ConfidenceModel`` keyword arguments, the threshold, and a reliability
 table (predicted confidence against the observed share of direct echoes, per decile of
@@ -227,6 +233,28 @@ def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
     return float(w[0]), w[1:]
 
 
+def fit_only(features: np.ndarray, labels: np.ndarray, names: tuple[str, ...],
+             base: ConfidenceModel, ridge: float, steps: int = 50) -> ConfidenceModel:
+    """``base`` with only the weights of ``names`` refitted: mean log-loss +
+    ``ridge/2 |w|²`` over those weights (Newton's method), the logit of every sample offset by
+    ``base``'s intercept and its other weights' terms, which are held."""
+    columns = [CONFIDENCE_FEATURES.index(name) for name in names]
+    held = base.weights()
+    held[columns] = 0.0
+    offset = base.intercept + features @ held
+    a = features[:, columns]
+    w = np.zeros(len(columns))
+    for _ in range(steps):
+        p = 1.0 / (1.0 + np.exp(-(offset + a @ w)))
+        grad = a.T @ (p - labels) / len(a) + ridge * w
+        hess = (a * (p * (1.0 - p))[:, None]).T @ a / len(a) + (ridge + 1e-9) * np.eye(len(w))
+        step = np.linalg.solve(hess, grad)
+        w -= step
+        if np.max(np.abs(step)) < 1e-10:
+            break
+    return replace(base, **{name: float(v) for name, v in zip(names, w, strict=True)})
+
+
 def threshold_keeping(confidence: np.ndarray, samples: Samples, keep: float) -> float:
     """Largest threshold on a 0.05 grid keeping ≥ ``keep`` of all direct echoes."""
     best = 0.0
@@ -316,6 +344,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--maturity-grid", type=float, nargs="+",
                         default=[0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0],
                         help="maturity times tried, seconds")
+    parser.add_argument("--only", nargs="+", choices=CONFIDENCE_FEATURES, metavar="FEATURE",
+                        help="fit only these features' weights, the rest held at the "
+                             "library default's (fit_only)")
     parser.add_argument("--check", nargs="*", default=[
         "t-junction/specular", "doorway/specular", "office/amplitude", "t-junction/amplitude",
         "doorway/amplitude"], help="held-out world/physics pairs")
@@ -323,7 +354,14 @@ def main(argv: list[str] | None = None) -> int:
     train = pooled([collect(world, physics, range(args.seeds),
                             snapshot_every=args.snapshot_every)
                     for physics in args.physics for world in args.worlds])
-    model, losses = fit_model(train, args.ridge, tuple(args.maturity_grid))
+    if args.only:
+        mature = train.maturity >= 1.0
+        model = fit_only(train.features[mature], train.direct[mature], tuple(args.only),
+                         ConfidenceModel(), args.ridge)
+        assert train.local is not None  # snapshot_every >= 1 (_positive_int)
+        _, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
+    else:
+        model, losses = fit_model(train, args.ridge, tuple(args.maturity_grid))
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
                                   args.keep)
     worlds, physics = ", ".join(args.worlds), ", ".join(args.physics)

@@ -12,12 +12,13 @@ import pytest
 
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError, SonarcarveError
+from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods import evidence as evidence_module
 from sonarcarve.methods.atm import CrossingStoreError
-from sonarcarve.methods.evidence import ConfidenceModel, EvidenceModel
+from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceModel
 from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
@@ -79,6 +80,113 @@ def test_multipath_echo_behind_an_established_wall_is_flagged() -> None:
     ids = _ids(method)
     assert 5 not in ids
     assert {0, 1, 2, 3, 4} <= ids  # the wall stays
+
+
+def _image_then_wall(history: int,
+                     model: ConfidenceModel | None = None) -> tuple[EvidenceMethod, list[Reading]]:
+    # Sensors 5 and 6, 0.1 m apart, hear a mirror image 3 m ahead (a multipath path: the two
+    # agree, each supports the other); then five sensors hear, head-on from the same places,
+    # the wall 1 m ahead that the image lies behind. Their beams stop at the wall, so none of
+    # them looks through the image: only the wall in front of it says it is not there.
+    readings = [_reading(0.05 * k, 0.0, 0.1 * k, 0.0, 3.0, sensor=5 + k) for k in range(2)]
+    readings += [_reading(3.0 + 0.05 * k, 0.0, 0.1 * (k % 2) + 0.02 * k, 0.0, 1.0, k % 5)
+                 for k in range(10)]
+    method = EvidenceMethod(history_size=history, min_confidence=0.0, confidence_model=model)
+    return method, readings
+
+
+def _committed_confidence(history: int, model: ConfidenceModel | None) -> dict[int, float]:
+    """The confidence of every reading's point in the global map of :func:`_image_then_wall`."""
+    method, readings = _image_then_wall(history, model)
+    method.add_many(ReadingBatch.from_readings(readings))
+    points = method.finish()
+    return dict(zip(points.reading_id.tolist(), points.confidence.tolist(), strict=True))
+
+
+def test_an_echo_behind_a_wall_heard_after_it_is_judged_when_it_leaves() -> None:
+    # The wall is established only after the image arrived, so the occlusion rule (on arrival)
+    # cannot flag it; the image is judged when it leaves the history (10 arcs), 2 m behind
+    # the wall.
+    method, readings = _image_then_wall(history=10)
+    model = _model(method)
+    seen: dict[int, float] = {}
+
+    def listener(history: object, slots: np.ndarray, est: object) -> None:
+        column = method.features(slots)[:, CONFIDENCE_FEATURES.index("behind")]
+        seen.update(zip(method.history.reading_id[slots].tolist(), column.tolist(),
+                        strict=True))
+
+    method.add_commit_listener(listener)  # type: ignore[arg-type]
+    method.add_many(ReadingBatch.from_readings(readings[:10]))
+    # Nothing has left the history yet: no arc has a depth.
+    np.testing.assert_array_equal(model.behind, 0.0)
+    method.add_many(ReadingBatch.from_readings(readings[10:]))
+    method.finish()
+    # 3 m less the nearest wall point on its axis, 1 m ahead within 2 cm sideways (at most
+    # 3 - sqrt(1 + 0.02²) = 1.9998); the wall's echoes have nothing in front of them, and
+    # those still in the history when the log ends are committed with 0.
+    assert seen[0] == pytest.approx(2.0, abs=0.01)
+    assert seen[1] == pytest.approx(2.0, abs=0.01)
+    assert all(seen[k] == 0.0 for k in range(2, 12))
+    assert ConfidenceModel().behind < 0.0
+
+
+@pytest.mark.parametrize("history", [10, 40])
+def test_behind_lowers_only_the_confidence_of_arcs_judged_as_they_leave(history: int) -> None:
+    # With history 10 the image leaves (judged: its committed confidence falls by the weight
+    # times its 2 m depth in logit); with 40 it is still in the history when the log ends and
+    # keeps behind 0: the same confidence as with the weight 0. The wall's points never change.
+    with_it = _committed_confidence(history, None)
+    without = _committed_confidence(history, dataclasses.replace(ConfidenceModel(), behind=0.0))
+    assert with_it.keys() == without.keys() == set(range(12))
+    for k in range(2, 12):
+        assert with_it[k] == without[k]
+    for k in (0, 1):
+        if history == 10:
+            logit = math.log(without[k] / (1.0 - without[k]))
+            lowered = 1.0 / (1.0 + math.exp(-(logit + 2.0 * ConfidenceModel().behind)))
+            assert with_it[k] == pytest.approx(lowered, abs=2e-3)  # depth 1.9998 m, mature
+        else:
+            assert with_it[k] == without[k]
+
+
+def test_the_live_map_does_not_depend_on_behind() -> None:
+    # 6 m of the office tour (327 readings: the 60 rows of history are reused), read every 7
+    # readings: the local map with the fitted weight is the one with the weight 0, bit for
+    # bit, while the global maps differ (arcs judged as they leave: 32 with a depth).
+    readings = run_simulation(Scenario("office", 1, max_length=6.0)).readings
+    without = dataclasses.replace(ConfidenceModel(), behind=0.0)
+    methods = [EvidenceMethod(history_size=60, confidence_model=model)
+               for model in (ConfidenceModel(), without)]
+    judged: list[float] = []
+    model = _model(methods[0])
+    methods[0].add_commit_listener(
+        lambda history, slots, est: judged.extend(model.behind[slots].tolist()))
+    for start in range(0, len(readings), 7):
+        for method in methods:
+            method.add_many(readings[start:start + 7])
+        ours, before = (method.local_map() for method in methods)
+        np.testing.assert_array_equal(ours.reading_id, before.reading_id)
+        np.testing.assert_array_equal(ours.confidence, before.confidence)
+        np.testing.assert_array_equal(ours.xy, before.xy)
+    ours, before = (method.finish() for method in methods)
+    assert sum(depth > 0.0 for depth in judged) > 10
+    assert len(ours) < len(before)
+
+
+def test_behind_is_judged_in_blocks_as_one_reading_at_a_time() -> None:
+    # The image leaves the history inside a block of add_many, or on one add() of its own.
+    points = []
+    for blocks in (False, True):
+        method, readings = _image_then_wall(history=10)
+        if blocks:
+            method.add_many(ReadingBatch.from_readings(readings))
+        else:
+            for reading in readings:
+                method.add(reading)
+        points.append(method.finish())
+    np.testing.assert_array_equal(points[0].reading_id, points[1].reading_id)
+    np.testing.assert_array_equal(points[0].confidence, points[1].confidence)
 
 
 def test_split_arc_keeps_a_piece_with_an_honest_bound() -> None:
@@ -501,10 +609,13 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
         np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
         (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
         np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0),
-        model.repeated[slots]])
+        model.repeated[slots], np.minimum(model.behind[slots], 3.0)])
     features = method.features(slots, raw)
     np.testing.assert_array_equal(features, expected)
-    assert all(len(np.unique(column)) > 1 for column in features.T)  # no column constant
+    # No column constant, but behind: 0 for every arc in the history (judged as it leaves).
+    behind = CONFIDENCE_FEATURES.index("behind")
+    assert all(len(np.unique(column)) > 1 for column in np.delete(features, behind, axis=1).T)
+    np.testing.assert_array_equal(features[:, behind], 0.0)
     cm = method.confidence_model
     fitted = np.full(len(slots), cm.intercept)
     for column, weight in zip(expected.T, cm.weights(), strict=True):

@@ -26,6 +26,8 @@ Modules, from the model up:
 * :mod:`~sonarcarve.geometry.evidence.crossings`: ATM's crossings and their store;
 * :mod:`~sonarcarve.geometry.evidence.occlusion`, :mod:`~sonarcarve.geometry.evidence.transmission`:
   the two rules about sound passing (or not) through a surface;
+* :mod:`~sonarcarve.geometry.evidence.behind`: how far an arc leaving the history lies behind
+  surfaces the arcs after it confirm (a feature of the confidence, not a carving rule);
 * :mod:`~sonarcarve.geometry.evidence.add`: an echo weighed against the older arcs
   (:func:`evidence_add`, :func:`evidence_add_many`);
 * :mod:`~sonarcarve.geometry.evidence.free`: a no-echo reading (:func:`evidence_free`);

@@ -33,6 +33,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence.beam import Beam, mark_near, new_beam
+from sonarcarve.geometry.evidence.behind import NEWER_ARCS, depth_behind_newer
 from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
 from sonarcarve.geometry.evidence.model import (
@@ -309,9 +310,9 @@ def evidence_add(
     slot: int, first_older: int, n_older: int,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
-    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
-    near_flags: BoolArray,
+    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
+    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
+    near: SlotArray, near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -354,6 +355,12 @@ def evidence_add(
         Per new arc, the largest support of an older live bin its free sector passed
         (nearer than ``r_j - 2ε``): how well heard the surface is that its echo would have had
         to cross; the graded form of the occlusion rule (filled for ``slot``).
+    behind : ndarray, shape (n,)
+        Per arc, how far its echo lies behind a surface the history holds inside its beam,
+        judged only when the arc leaves the history (:func:`evidence_add_many`,
+        :mod:`~sonarcarve.geometry.evidence.behind`): set to 0 for ``slot`` here, so an arc
+        in the history always has 0 (its confidence, and so the live map, do not depend on
+        the feature).
     passed : ndarray, shape (m, 6)
         Scratch for the transmission pass: one row per older live bin in the new beam's free
         sector (``m`` at least the older arcs' bins); overwritten.
@@ -520,6 +527,7 @@ def evidence_add(
                 fully += 1
     occluded[slot] = occluding / bins
     through[slot] = top_through
+    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
     fully += weigh_transmission(slot, passed, n_passed, trans, free, status, params)
     if occluding >= bins:
         status[slot] = EVIDENCE_CARVED
@@ -527,14 +535,32 @@ def evidence_add(
     return fully, crossings, occluding, spilled
 
 
+@compiled_inline
+def judge_leaving(start: int, n_live: int, x: FloatArray, y: FloatArray, r: FloatArray,
+                  cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+                  status: Int8Array, viewpoints: FloatArray, behind: FloatArray,
+                  params: EvidenceParams, scratch: FloatArray) -> None:
+    """The arc leaving the history, ``start - 1`` (the row before the live ones from ``start``
+    on, ring order): its ``behind`` set to its depth behind the ``n_live`` first of them
+    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`, the margin ``2ε``);
+    left 0 for an arc already carved (it has no point to judge)."""
+    storage = x.shape[0]
+    leaving = start - 1 if start > 0 else storage - 1
+    if status[leaving] != EVIDENCE_ALIVE:
+        return
+    behind[leaving] = depth_behind_newer(leaving, start, n_live, x, y, r, cos_axis, sin_axis,
+                                         cos_half, status, viewpoints, params.establish,
+                                         2.0 * params.tolerance, scratch)
+
+
 @compiled_borrowing
 def evidence_add_many(
-    first: int, count: int, capacity: int,
+    first: int, count: int, capacity: int, behind_scratch: FloatArray,
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, passed: FloatArray, trans: FloatArray,
-    scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray, near: SlotArray,
-    near_flags: BoolArray,
+    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
+    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
+    near: SlotArray, near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
@@ -546,7 +572,12 @@ def evidence_add_many(
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
 
-    The arrays are those of :func:`evidence_add`.
+    The arrays are those of :func:`evidence_add`, and ``behind_scratch`` (shape (n,),
+    overwritten) for the depth behind the newer arcs. Before arc ``s`` is added, the arc it
+    pushes out of the history (``s - capacity``) gets its ``behind``: the depth behind the
+    :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS` arcs after it
+    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`), judged on the state it
+    leaves with, so the same whatever the blocks. Arcs still in the history keep 0.
 
     It stops after the first arc whose crossings did not all fit the store (they are in
     ``spill``; every other part of that arc is done): the caller widens the store, moves the
@@ -571,9 +602,12 @@ def evidence_add_many(
     for sequence in range(first, first + count):
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
+        if sequence >= capacity:
+            judge_leaving(start, min(capacity - 1, NEWER_ARCS), x, y, r, cos_axis, sin_axis,
+                          cos_half, status, viewpoints, behind, params, behind_scratch)
         a, b, c, spilled = evidence_add(
             sequence % storage, start, live - 1, x, y, r, theta, beam_width,
-            sensor, viewpoints, looked, others, through, passed, trans, scratch, in_beam,
+            sensor, viewpoints, looked, others, through, behind, passed, trans, scratch, in_beam,
             bin_index, near, near_flags, bx, by, ex, ey, free,
             support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
             bearings, counts, spill, params, with_atm)
