@@ -185,21 +185,29 @@ def test_the_spread_ends_when_its_echo_leaves_the_history() -> None:
     np.testing.assert_allclose(grid.live_log_odds[:, xs > 0.2], 0.0, atol=1e-6)
 
 
-def test_the_spread_ends_when_its_sensor_fires_again() -> None:
+def test_a_live_echo_keeps_its_spread_after_its_sensor_fires_again() -> None:
     grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=2)),
                       params=SPREAD_LOBES)
     for k in range(6):  # each jamb echo pushes the one two before it out
         grid.add(Reading(0.1 * k, 1 + k % 2, *ORIGIN, (1 - 2 * (k % 2)) * JAMB_TURN, R))
     grid.add(Reading(1.0, 0, *ORIGIN, 0.0, R))
     assert grid.live_log_odds[_middle(grid)] == pytest.approx(0.5 * SPREAD)
-    # It fires again, backwards: its echo ahead is live, no longer its newest, at its spread
-    # value on its band and nothing past it.
+    # It fires again, backwards: its echo ahead is no longer its newest but still live, and
+    # still explained by the jambs alone: spread over its lobes, as every near live arc.
     grid.add(Reading(1.1, 0, *ORIGIN, math.pi, 0.3))
     live = grid.live_log_odds
-    band = _cells_on_circle(grid, R, DEFAULT_BEAM_WIDTH / 2 + 0.5 * H / R)
-    assert all(live[c] == pytest.approx(SPREAD) for c in band)
+    assert live[_middle(grid)] == pytest.approx(0.5 * SPREAD)
     xs, _ = grid.cell_centers()
-    assert float(live[:, xs > 0.2].sum()) == pytest.approx(len(band) * SPREAD)
+    wide = _cells_on_circle(grid, R, DEFAULT_BEAM_WIDTH + 0.5 * H / R)
+    assert float(live[:, xs > 0.2].sum()) == pytest.approx(len(wide) * 0.5 * SPREAD)
+    # Without the spread the same echo holds its whole spread value on its band.
+    grid = CarvedGrid(H, BOUNDS, method=make_method("carve", MethodConfig(history_size=2)),
+                      params=LOBES)
+    for k in range(6):
+        grid.add(Reading(0.1 * k, 1 + k % 2, *ORIGIN, (1 - 2 * (k % 2)) * JAMB_TURN, R))
+    grid.add(Reading(1.0, 0, *ORIGIN, 0.0, R))
+    grid.add(Reading(1.1, 0, *ORIGIN, math.pi, 0.3))
+    assert grid.live_log_odds[_middle(grid)] == pytest.approx(SPREAD)
 
 
 def test_reading_the_map_often_or_once_gives_the_same_spread() -> None:

@@ -134,7 +134,9 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                           hi[s], value, heard, m)
     if with_points:
         for k in range(slots.shape[0]):
-            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
+            # No point, and none to draw (with side_lobe_spread, a near arc may take a spread).
+            if (not fresh[k] and pseq[slots[k]] < 0
+                    and not (m.lobe_spread and r[slots[k]] <= m.lobe_range)):
                 continue
             changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
                                       slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],

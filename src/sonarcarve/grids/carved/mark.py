@@ -65,40 +65,60 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
     circle; else take its point out. The spread map does not hold the
     points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
-    if fresh and weight[slot] > 0.0:
+    # With side_lobe_spread every near live arc is judged, fresh or not (its spread).
+    near = m.lobe_spread and r[slot] <= m.lobe_range
+    if (fresh or near) and weight[slot] > 0.0:
         explained, at, side = _band_likeliest(base, live, heard, drawn, drawn_seq, slot, m,
                                               x[slot], y[slot], r[slot], lo[slot], hi[slot],
                                               drawn[slot, 5], theta1, theta2)
         if side == SPREAD_SIDE:
             return _spread_over_lobes(points, pdrawn, pseq, slot, seq, drawn, heard, m,
                                       theta1, theta2)
-        if pseq[slot] >= 0 and pdrawn[slot, 8] != 0.0:
-            # It held a spread, which redraw cannot move: take it out, draw the mark anew
-            # (redraw then returns 1, as it draws into an empty slot).
-            undraw_mark(points, heard, m, pdrawn, slot)
-            pseq[slot] = -1
-            if explained:
-                return 1
-        whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
-        if not explained and side != 0.0:
-            # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
-            # circle beyond the arc's own band (it draws no spread value there to raise).
-            half = 0.5 * m.unit / r[slot]
-            axis = 0.5 * (theta1 + theta2)
-            axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
-            edge = 0.5 * (theta2 - theta1)
-            reach = (1.0 + m.lobes) * edge
-            # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
-            # the mark never adds to the arc's own band (that would be more than a whole hit).
-            inner = edge + m.h / r[slot]
-            z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
-            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                          max(z1, at - half), min(z2, at + half), whole, heard, m)
-        if not explained:
-            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
-            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                          max(lo[slot], at - half), min(hi[slot], at + half),
-                          whole - drawn[slot, 5], heard, m)
+        if fresh:
+            return _mark(points, drawn, pdrawn, pseq, slot, seq, x, y, r, lo, hi, weight,
+                         heard, m, theta1, theta2, explained, at, side)
+    if pseq[slot] >= 0:
+        undraw_mark(points, heard, m, pdrawn, slot)
+        pseq[slot] = -1
+        return 1
+    return 0
+
+
+@compiled_inline
+def _mark(points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
+          pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray, y: FloatArray,
+          r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
+          heard: npt.NDArray[np.uint32], m: Model, theta1: float, theta2: float,
+          explained: bool, at: float, side: float) -> int:
+    """The fresh arc's mark as :func:`_band_likeliest` placed it (``explained``: none, taken
+    out). Returns 1 if it changed."""
+    if pseq[slot] >= 0 and pdrawn[slot, 8] != 0.0:
+        # It held a spread, which redraw cannot move: take it out, draw the mark anew
+        # (redraw then returns 1, as it draws into an empty slot).
+        undraw_mark(points, heard, m, pdrawn, slot)
+        pseq[slot] = -1
+        if explained:
+            return 1
+    whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+    if not explained and side != 0.0:
+        # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
+        # circle beyond the arc's own band (it draws no spread value there to raise).
+        half = 0.5 * m.unit / r[slot]
+        axis = 0.5 * (theta1 + theta2)
+        axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
+        edge = 0.5 * (theta2 - theta1)
+        reach = (1.0 + m.lobes) * edge
+        # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
+        # the mark never adds to the arc's own band (that would be more than a whole hit).
+        inner = edge + m.h / r[slot]
+        z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
+        return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                      max(z1, at - half), min(z2, at + half), whole, heard, m)
+    if not explained:
+        half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+        return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                      max(lo[slot], at - half), min(hi[slot], at + half),
+                      whole - drawn[slot, 5], heard, m)
     if pseq[slot] >= 0:
         undraw_mark(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
