@@ -184,12 +184,14 @@ class CarvedGridParams:
         reflectors; at every range the corridor walls beside a shut door 2.4-4.8 m ahead
         explained its echoes and it was never marked).
     side_lobe_spread : bool
-        False (default). With ``side_lobes`` 1 only (refused otherwise): a newest echo within
-        ``side_lobe_range`` that an occupied cell in reach of its side lobes explains (heard
-        from near the ray's bearing, as ``side_lobes`` judges it) and no cell of its carved band
-        does is spread over its carved interval plus the lobes at half its spread value (an
-        overlay in the marks, while the echo is its sensor's newest): the jamb heard through a
-        lobe no longer marks the doorway its band lies across ("Side lobes, spread").
+        False (default). With ``side_lobes`` 1 only (refused otherwise): a live arc within
+        ``side_lobe_range`` (its sensor's newest echo or not) that an occupied cell in reach of
+        its side lobes explains (heard from near the ray's bearing, as ``side_lobes`` judges it)
+        and no cell of its carved band does holds half its spread value over its carved interval
+        plus the lobes instead of its spread value on its band (an overlay in the marks, judged
+        at every read while the arc is live): a jamb heard through a lobe no longer marks the
+        doorway its short band lies across ("Side lobes, spread"). Costs CPU when the map is
+        read often (every near live arc is judged at each read).
     repeat_weight : float
         In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
         ("Repeated echoes count once": the sensor moved towards or away from
