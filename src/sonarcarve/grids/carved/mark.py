@@ -6,7 +6,10 @@ occupied in the map of spread arcs without the arc's own share (:func:`_band_lik
 cell counts only if it was heard from near the bearing of the ray to it (:func:`_heard_near`).
 The mark covers the middle ``L`` of the carved interval, unless that map favours another part of
 the band, or a side lobe, and not the middle: then it goes around the likeliest cell there.
-``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark goes" and "Side lobes".
+With the opt-in ``side_lobe_spread`` a near live arc (newest or not) that a side lobe explains and
+its band does not holds half its spread value over its interval plus the lobes instead, an overlay
+in the same array (:func:`_spread_over_lobes`). ``docs/carved-grid.md``, "The newest echoes mark at
+once", "Where the mark goes", "Side lobes" and "Side lobes, spread".
 """
 
 from __future__ import annotations
@@ -63,8 +66,10 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     cell of a band whose middle the map does not favour; clipped to the interval) raised from
     its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
     (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
-    circle; else take its point out. The spread map does not hold the
-    points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
+    circle; else take its point out. With ``side_lobe_spread``, a fresh or live arc within
+    ``lobe_range`` that a lobe explains and its band does not takes its spread over the lobes
+    instead (:func:`_spread_over_lobes`). The spread map does not hold the points, so the arcs'
+    order does not matter. Returns 1 if its point changed."""
     # With side_lobe_spread every near live arc is judged, fresh or not (its spread).
     near = m.lobe_spread and r[slot] <= m.lobe_range
     if (fresh or near) and weight[slot] > 0.0:
