@@ -36,7 +36,6 @@ from pathlib import Path
 
 import numpy as np
 
-from sonarcarve.grids import CarvedGrid, CarvedGridParams
 from sonarcarve.lab.changing_scenes import (
     GRID_KINDS,
     METHOD_NAMES,
@@ -52,14 +51,6 @@ SCENES = ("person", "door", "box")
 FIGURE = Path("docs/figures/changing-scenes.png")
 FIGURE_MAPS = ("carve", "carved grid", "range sensor layer", "elfes grid")
 TARGET_SECONDS = 3.0
-#: ``--side-lobe-spread``: the carved grid with the opt-in side-lobe rule, without and with its
-#: spread over the lobes.
-SPREAD_GRIDS = {
-    "carved grid, side_lobes 1": lambda h, b: CarvedGrid(
-        h, b, params=CarvedGridParams(side_lobes=1.0)),
-    "carved grid, side_lobes 1, spread": lambda h, b: CarvedGrid(
-        h, b, params=CarvedGridParams(side_lobes=1.0, side_lobe_spread=True)),
-}
 
 
 def _cell(values: Sequence[float]) -> str:
@@ -91,17 +82,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
                         help="echo model simulated, as in the other benchmarks (default: "
                              "specular, the simulator's default physics)")
-    parser.add_argument("--side-lobe-spread", action="store_true",
-                        help="add rows for the carved grid with the opt-in side-lobe rule "
-                             "(CarvedGridParams(side_lobes=1)), without and with its spread "
-                             "over the lobes (side_lobe_spread=True)")
     args = parser.parse_args(argv)
     args.no_echo = not args.echoes_only
     physics = (DEFAULT_PHYSICS if args.physics == DEFAULT_PHYSICS.echo_model
                else SonarPhysics(echo_model=args.physics))
     seeds = range(args.seeds)
-    extra = SPREAD_GRIDS if args.side_lobe_spread else {}
-    grids = (*GRID_KINDS, *extra, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
+    grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
     if args.no_echo:
         print("\nWith no-echo readings (every firing that heard nothing: free space up to the "
               "robot's max range).")
@@ -112,8 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for h_index, h in enumerate(args.resolutions):
         methods = METHOD_NAMES if h_index == 0 else ()
         runs = {name: [run_changing_scene(name, seed, h, methods=methods, grids=grids,
-                                          no_echo=args.no_echo, physics=physics,
-                                          extra_grids=extra)
+                                          no_echo=args.no_echo, physics=physics)
                        for seed in seeds]
                 for name in SCENES}
         _print_tables(runs, h, seeds, with_methods=h_index == 0)

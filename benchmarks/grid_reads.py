@@ -28,7 +28,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 
-from sonarcarve.grids import CarvedGrid, CarvedGridParams, RangeSensorLayer, trinary
+from sonarcarve.grids import CarvedGrid, RangeSensorLayer, trinary
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.simulate import simulate
@@ -78,28 +78,14 @@ def _run(make: Callable[[], Grid], batch: ReadingBatch, every: int, classify: bo
     return (time.process_time() - tic) / n * 1e6
 
 
-#: ``--side-lobe-spread``: the carved grid with the opt-in side-lobe rule, without and with
-#: its spread over the lobes (CarvedGridParams.side_lobes, side_lobe_spread), timed in turns
-#: with the two above.
-SPREAD_GRIDS: dict[str, Callable[[float, Bounds], Grid]] = {
-    "side_lobes 1": lambda h, b: CarvedGrid(h, b, params=CarvedGridParams(side_lobes=1.0)),
-    "side_lobes 1, spread": lambda h, b: CarvedGrid(
-        h, b, params=CarvedGridParams(side_lobes=1.0, side_lobe_spread=True)),
-}
-
-
 def _table(batch: ReadingBatch, bounds: Bounds, resolutions: Sequence[float],
-           schedules: Sequence[int], repeats: int, classify: bool,
-           spread: bool = False) -> None:
+           schedules: Sequence[int], repeats: int, classify: bool) -> None:
     seconds = (batch.t[-1] - batch.t[0]) / max(1, len(batch) - 1)
-    grids = {**GRIDS, **(SPREAD_GRIDS if spread else {})}
-    extra = ("" if not spread else " carved, side_lobes 1 (µs) | with the spread (µs) | ratio "
-             "spread / side_lobes 1 | ratio spread / carved |")
     print("| resolution (m) | read every (readings) | between reads (s) | carved grid (µs per "
-          "reading) | layer (µs per reading) | ratio carved / layer |" + extra)
-    print("|---:|---:|---:|---:|---:|---:|" + ("---:|" * 4 if spread else ""))
+          "reading) | layer (µs per reading) | ratio carved / layer |")
+    print("|---:|---:|---:|---:|---:|---:|")
     for h in resolutions:
-        makers = {label: (lambda f=f, h=h: f(h, bounds)) for label, f in grids.items()}
+        makers = {label: (lambda f=f, h=h: f(h, bounds)) for label, f in GRIDS.items()}
         for make in makers.values():  # compile and warm up
             _run(make, batch[:300], 5, classify)
         for every in schedules:
@@ -112,13 +98,8 @@ def _table(batch: ReadingBatch, bounds: Bounds, resolutions: Sequence[float],
             carved, layer = best["carved grid"], best["RangeSensorLayer, ROS defaults"]
             label = "once per log" if every == 0 else str(every)
             gap = "-" if every == 0 else f"{every * seconds:.2f}"
-            more = ""
-            if spread:
-                lobes, spreads = best["side_lobes 1"], best["side_lobes 1, spread"]
-                more = (f" {lobes:.1f} | {spreads:.1f} | {spreads / lobes:.2f} | "
-                        f"{spreads / carved:.2f} |")
             print(f"| {h:.2f} | {label} | {gap} | {carved:.1f} | {layer:.1f} | "
-                  f"{carved / layer:.2f} |{more}", flush=True)
+                  f"{carved / layer:.2f} |", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -137,9 +118,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--limit", type=int, default=None, help="only the first N readings")
     parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
                         help="the simulator's echo model (specular: its default)")
-    parser.add_argument("--side-lobe-spread", action="store_true",
-                        help="also time the carved grid with side_lobes 1, without and with "
-                             "side_lobe_spread, in turns with the others (four more columns)")
     args = parser.parse_args(argv)
     batch, bounds = _readings(args.world, args.seed, args.no_echo, args.limit, args.physics)
     read = ("refresh (carved grid) / nothing (layer), then trinary of every cell"
@@ -149,8 +127,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{' with no-echo readings' if args.no_echo else ', echoes only'}; a read: {read}; "
           f"CPU time, best of {args.repeats}, the grids taking turns, one process; "
           f"load average {os.getloadavg()[0]:.1f} (2 cores)\n")
-    _table(batch, bounds, args.resolutions, args.every, args.repeats, args.trinary,
-           args.side_lobe_spread)
+    _table(batch, bounds, args.resolutions, args.every, args.repeats, args.trinary)
     print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
     return 0
 

@@ -157,22 +157,17 @@ def _sweep(office: Sequence[Simulation], h: float) -> RangeSensorLayerParams:
     return best
 
 
-def _carved_with_side_lobes(lobes: float, spread: bool = False) -> Factory:
+def _carved_with_side_lobes(lobes: float) -> Factory:
     def make(h: float, b: Bounds) -> OccupancyMap:
-        return CarvedGrid(h, b, params=CarvedGridParams(side_lobes=lobes,
-                                                        side_lobe_spread=spread))
+        return CarvedGrid(h, b, params=CarvedGridParams(side_lobes=lobes))
     return make
 
 
-def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
-           side_lobe_spread: bool = False) -> list[GridKind]:
+def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None) -> list[GridKind]:
     kinds = [GridKind("carved grid", _carved)]
     if side_lobes is not None:  # the opt-in rule as a row of its own
         kinds.append(GridKind(f"carved grid, side_lobes {side_lobes:g}",
                               _carved_with_side_lobes(side_lobes)))
-    if side_lobe_spread:  # the opt-in spread (side_lobes 1, the only value it takes) too
-        kinds.append(GridKind("carved grid, side_lobes 1, side_lobe_spread",
-                              _carved_with_side_lobes(1.0, True)))
     return [
         *kinds,
         GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
@@ -322,10 +317,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--side-lobes", type=float, default=None, metavar="HALF_WIDTHS",
                         help="add a row for the carved grid with the opt-in side-lobe rule "
                              "(CarvedGridParams.side_lobes, e.g. 1)")
-    parser.add_argument("--side-lobe-spread", action="store_true",
-                        help="add a row for the carved grid with side_lobes 1 and the opt-in "
-                             "spread of a lobe-explained near echo over its lobes "
-                             "(CarvedGridParams.side_lobe_spread)")
     parser.add_argument("--doors-only", action="store_true",
                         help="only the door table (the layer's phi sweep on the office still "
                              "runs: it picks the layer's best settings)")
@@ -343,8 +334,7 @@ def main(argv: list[str] | None = None) -> int:
                 for s in range(args.seeds)] for w in worlds}
     office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
-    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes,
-                                       args.side_lobe_spread) for h in args.resolutions}
+    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes) for h in args.resolutions}
     if not args.doors_only:
         for h in args.resolutions:
             _measures_table(sims, h, kinds_by_h[h])

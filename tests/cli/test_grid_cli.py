@@ -57,8 +57,6 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),
     (["--fresh-periods", "inf", "--model", "range-sensor-layer"],
      "applies to --model carved only, not range-sensor-layer"),
-    (["--side-lobe-spread", "--model", "elfes"],
-     "--side-lobe-spread applies to --model carved only, not elfes"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -170,32 +168,3 @@ def test_fresh_periods_decides_how_long_the_newest_echo_stays_marked(
     i = int((0.0 - m.origin[1]) / 0.05)
     ahead = m.cells[max(0, i - 2):i + 3, max(0, j - 2):j + 3]
     assert bool(np.any(ahead == 100)) is marked
-
-
-def _jambs_then_ahead(path: Path) -> None:
-    """Sensors turned ±30° each hear a jamb 0.63 m away three times, then the sensor straight
-    ahead hears the same range: nothing on its own arc, only the jambs past its beam's edge
-    (the scene of ``tests/grids/test_carved_side_lobe_spread.py``, with the default history)."""
-    rows = [Reading(t=0.1 * k, sensor=1 + k // 3, x=0.0, y=0.0,
-                    theta=math.radians(30.0) * (1 - 2 * (k // 3)), range=0.63)
-            for k in range(6)]
-    rows.append(Reading(t=0.7, sensor=0, x=0.0, y=0.0, theta=0.0, range=0.63))
-    write_readings_csv(ReadingBatch.from_readings(rows), path)
-
-
-@pytest.mark.parametrize(("extra", "blocked"), [([], True), (["--side-lobe-spread"], False)])
-def test_side_lobe_spread_opens_the_doorway_a_lobe_heard_jamb_blocked(
-        tmp_path: Path, extra: list[str], blocked: bool) -> None:
-    log = tmp_path / "log.csv"
-    _jambs_then_ahead(log)
-    out = tmp_path / "grid.yaml"
-    assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
-    m = read_map_server(out)
-    ys = m.origin[1] + (np.arange(m.cells.shape[0]) + 0.5) * 0.05
-    xs = m.origin[0] + (np.arange(m.cells.shape[1]) + 0.5) * 0.05
-    # The opening: cells within 0.05 m of the echo's circle, within 10° of straight ahead.
-    yy, xx = np.meshgrid(ys, xs, indexing="ij")
-    opening = (np.abs(np.hypot(xx, yy) - 0.63) <= 0.05) & (np.abs(np.arctan2(yy, xx))
-                                                            <= math.radians(10.0))
-    assert np.count_nonzero(opening) >= 5
-    assert bool(np.any(m.cells[opening] == 100)) is blocked

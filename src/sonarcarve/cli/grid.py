@@ -54,22 +54,22 @@ class GridUsageError(SonarcarveError):
     """A bad option of ``sonarcarve grid``: unknown model, resolution or margin out of range."""
 
 
-def _carved(resolution: float, bounds: Bounds, params: CarvedGridParams | None) -> OccupancyMap:
+def _carved(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
+    params = None if fresh_periods is None else CarvedGridParams(fresh_periods=fresh_periods)
     return CarvedGrid(resolution, bounds, params=params)
 
 
-def _layer(resolution: float, bounds: Bounds, params: CarvedGridParams | None) -> OccupancyMap:
+def _layer(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
     return RangeSensorLayer(resolution, bounds)
 
 
-def _elfes(resolution: float, bounds: Bounds, params: CarvedGridParams | None) -> OccupancyMap:
+def _elfes(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
     return OccupancyGrid(resolution, bounds)
 
 
-#: ``--model`` name -> grid factory ``(resolution, bounds, params)``; ``params`` (None: the
-#: defaults; from ``--fresh-periods`` and ``--side-lobe-spread``) is the carved grid's alone, and
-#: :func:`build_grid` refuses those options for the rest.
-GRID_MODELS: dict[str, Callable[[float, Bounds, CarvedGridParams | None], OccupancyMap]] = {
+#: ``--model`` name -> grid factory ``(resolution, bounds, fresh_periods)``; ``fresh_periods``
+#: (None: the default) is the carved grid's alone, and :func:`build_grid` refuses it for the rest.
+GRID_MODELS: dict[str, Callable[[float, Bounds, float | None], OccupancyMap]] = {
     "carved": _carved,
     "range-sensor-layer": _layer,
     "elfes": _elfes,
@@ -91,14 +91,9 @@ def readings_extent(batch: ReadingBatch, margin: float) -> Bounds:
             float(x.max()) + margin, float(y.max()) + margin)
 
 
-def _check_fresh_periods(model: str, fresh_periods: float | None,
-                         side_lobe_spread: bool = False) -> None:
-    """Refuse ``--fresh-periods`` or ``--side-lobe-spread`` for a model other than the carved
-    grid, or ``--fresh-periods`` out of its range
+def _check_fresh_periods(model: str, fresh_periods: float | None) -> None:
+    """Refuse ``--fresh-periods`` for a model other than the carved grid, or out of its range
     (:attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`)."""
-    if side_lobe_spread and model != "carved":
-        msg = f"--side-lobe-spread applies to --model carved only, not {model}"
-        raise GridUsageError(msg)
     if fresh_periods is None:
         return
     if model != "carved":
@@ -110,21 +105,17 @@ def _check_fresh_periods(model: str, fresh_periods: float | None,
 
 
 def build_grid(batch: ReadingBatch, model: str, resolution: float,
-               margin: float = 0.5, fresh_periods: float | None = None,
-               side_lobe_spread: bool = False) -> OccupancyMap:
+               margin: float = 0.5, fresh_periods: float | None = None) -> OccupancyMap:
     """The grid ``model`` over the readings' extent plus ``margin``, with every reading in;
     ``fresh_periods`` (carved grid only; None: its default) as
-    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`; ``side_lobe_spread`` (carved grid
-    only) turns on the side-lobe rule with its spread
-    (:attr:`~sonarcarve.grids.CarvedGridParams.side_lobes` 1,
-    :attr:`~sonarcarve.grids.CarvedGridParams.side_lobe_spread`).
+    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`.
 
     Raises
     ------
     GridUsageError
         An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), ``fresh_periods`` below 1 or for a model other than the carved grid,
-        ``side_lobe_spread`` for a model other than the carved grid, or no readings.
+        >= 0), ``fresh_periods`` below 1 or for a model other than the carved grid, or no
+        readings.
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
@@ -135,18 +126,11 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     if not (math.isfinite(margin) and margin >= 0.0):
         msg = f"--margin must be a finite number >= 0 (metres), got {margin}"
         raise GridUsageError(msg)
-    _check_fresh_periods(model, fresh_periods, side_lobe_spread)
+    _check_fresh_periods(model, fresh_periods)
     if not len(batch):
         msg = "no readings to map"
         raise GridUsageError(msg)
-    params = None
-    if fresh_periods is not None or side_lobe_spread:
-        defaults = CarvedGridParams()
-        params = CarvedGridParams(
-            fresh_periods=defaults.fresh_periods if fresh_periods is None else fresh_periods,
-            side_lobes=1.0 if side_lobe_spread else defaults.side_lobes,
-            side_lobe_spread=side_lobe_spread)
-    built = GRID_MODELS[model](resolution, readings_extent(batch, margin), params)
+    built = GRID_MODELS[model](resolution, readings_extent(batch, margin), fresh_periods)
     assert isinstance(built, CarvedGrid | RangeSensorLayer | OccupancyGrid)
     built.add_many(batch)
     return built
@@ -206,14 +190,6 @@ def grid(
              "the mark up to 2 s, for logs that drop readings whose value did not change "
              "(naive polling, stale-repeat filters), where a missing reading does not mean "
              "the sensor heard nothing.")] = None,
-    side_lobe_spread: Annotated[bool, typer.Option(
-        "--side-lobe-spread",
-        help="--model carved only, opt-in: near echoes may have come through a side lobe "
-             "(one half beam width past each edge, within 2 m), and a near echo that a "
-             "surface there explains, and nothing on its own arc, is spread over its arc and "
-             "the lobes at half its value: opens doorways whose jamb a sensor heard through a "
-             "lobe, but can leave an obstacle straight ahead in a mapped corridor unmarked "
-             "(docs/carved-grid.md, \"Side lobes\"). Off by default.")] = False,
     robot: RobotOpt = None,
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
@@ -245,21 +221,18 @@ def grid(
 
     Example: `sonarcarve grid polled.csv --fresh-periods inf --out grid.yaml` (a log that
     left out readings equal to the one before)
-
-    Example: `sonarcarve grid readings.csv --side-lobe-spread --out grid.yaml` (doorways a
-    near jamb heard through a side lobe closed; opt-in, see its help)
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
         raise GridUsageError(msg)
-    _check_fresh_periods(model, fresh_periods, side_lobe_spread)  # before anything is read
+    _check_fresh_periods(model, fresh_periods)  # before anything is read
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
     batch = read_log_for_grid(readings, bag)
-    built = build_grid(batch, model, resolution, margin, fresh_periods, side_lobe_spread)
+    built = build_grid(batch, model, resolution, margin, fresh_periods)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)

@@ -45,7 +45,7 @@ there (or seen, for a moving one). NaN when that never happens.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple, Protocol
 
@@ -432,19 +432,15 @@ def run_changing_scene(name: str, seed: int, resolution: float = 0.1,
                        methods: Sequence[str] = METHOD_NAMES,
                        grids: Sequence[str] = tuple(GRID_KINDS),
                        period: float = SNAPSHOT_PERIOD, *, no_echo: bool = False,
-                       physics: SonarPhysics = DEFAULT_PHYSICS,
-                       extra_grids: Mapping[str, Callable[[float, Bounds], Grid]] | None = None,
-                       ) -> SceneRun:
+                       physics: SonarPhysics = DEFAULT_PHYSICS) -> SceneRun:
     """Simulate a changing scene and measure every map on it (module docstring).
 
     ``no_echo`` feeds the maps the no-echo readings too (free space up to the robot's max
-    range); ``grids`` may then also name :data:`NO_ECHO_GRID_KINDS`, and the labels of
-    ``extra_grids`` (label -> factory, as :data:`GRID_KINDS`: e.g. a grid with other
-    parameters). ``physics``: the sonar model simulated (e.g.
-    ``SonarPhysics(echo_model="amplitude")``, the second model).
+    range); ``grids`` may then also name :data:`NO_ECHO_GRID_KINDS`. ``physics``: the sonar
+    model simulated (e.g. ``SonarPhysics(echo_model="amplitude")``, the second model).
     """
     cs, sim = simulate_changing_scene(name, seed, no_echo=no_echo, physics=physics)
-    kinds = GRID_KINDS | NO_ECHO_GRID_KINDS | dict(extra_grids or {})
+    kinds = GRID_KINDS | NO_ECHO_GRID_KINDS
     changes = scene_changes(sim)
     xmin, ymin, xmax, ymax = sim.world.bounds
     bounds = (xmin - 0.5, ymin - 0.5, xmax + 0.5, ymax + 0.5)

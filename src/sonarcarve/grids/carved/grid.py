@@ -20,7 +20,6 @@ from sonarcarve.grids.carved.kernels import (
     stale_slots,
     trinary_kernel,
     undraw_kernel,
-    undraw_marks_kernel,
 )
 from sonarcarve.grids.carved.model import logit, model_of
 from sonarcarve.grids.carved.params import (
@@ -119,9 +118,7 @@ class CarvedGrid(CellGrid):
         # sequence number (its position in the stream of arcs), -1 for nothing.
         self._drawn = np.zeros((size, 6), dtype=np.float64)
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
-        # The same for the points, and for a spread over the side lobes the band it takes
-        # out of the spread map: lo, hi, value (0: none; mark.undraw_mark).
-        self._pdrawn = np.zeros((size, 9), dtype=np.float64)
+        self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
         self._pseq = np.full(size, -1, dtype=np.int64)
         # Per slot, the interval and weight (intervals) of the live arc at the last read.
         self._lo = np.zeros(size)
@@ -314,8 +311,8 @@ class CarvedGrid(CellGrid):
         self._next_final += len(slots)
         undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
                       self._model)
-        undraw_marks_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
-                            self._model)
+        undraw_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
+                      self._model)
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = intervals(x, y, est)
         weight *= self._chain_of(slots, seqs)

@@ -3,8 +3,7 @@
 A batch's final updates in reading order (:func:`fold_kernel`: the final band of each arc that left
 the history, then the reading's free space, into ``base``); the live contribution of the arcs
 leaving the history taken out (:func:`undraw_kernel`); a read's refresh of ``live`` and of the
-marks, arc by arc where its interval or value changed (:func:`refresh_kernel`; the marks of the arcs
-leaving it taken out by :func:`undraw_marks_kernel`), asking for the
+marks, arc by arc where its interval or value changed (:func:`refresh_kernel`), asking for the
 estimates of only the arcs whose carving state changed (:func:`stale_slots`); and the trinary map,
 ``clamp(base + live)`` against the thresholds' logits (:func:`trinary_kernel`).
 ``docs/carved-grid.md``, "Following carving over time" and "Reading the map".
@@ -20,7 +19,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, free_space
-from sonarcarve.grids.carved.mark import refresh_points, undraw_mark
+from sonarcarve.grids.carved.mark import refresh_points
 from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
@@ -32,7 +31,6 @@ __all__ = [
     "stale_slots",
     "trinary_kernel",
     "undraw_kernel",
-    "undraw_marks_kernel",
 ]
 
 
@@ -92,21 +90,6 @@ def undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
 
 
 @compiled
-def undraw_marks_kernel(points: npt.NDArray[np.float32], pdrawn: FloatArray,
-                        pseq: npt.NDArray[np.int64], slots: SlotArray,
-                        seqs: npt.NDArray[np.int64], heard: npt.NDArray[np.uint32],
-                        m: Model) -> None:
-    """Take the marks (or spreads over the side lobes) of arcs ``seqs`` (in ``slots``) out of
-    ``points`` (:func:`~sonarcarve.grids.carved.mark.undraw_mark`)."""
-    for k in range(slots.shape[0]):
-        slot = slots[k]
-        if pseq[slot] != seqs[k]:
-            continue
-        undraw_mark(points, heard, m, pdrawn, slot)
-        pseq[slot] = -1
-
-
-@compiled
 def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                    points: npt.NDArray[np.float32], drawn: FloatArray,
                    drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
@@ -134,9 +117,7 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                           hi[s], value, heard, m)
     if with_points:
         for k in range(slots.shape[0]):
-            # No point, and none to draw (with side_lobe_spread, a near arc may take a spread).
-            if (not fresh[k] and pseq[slots[k]] < 0
-                    and not (m.lobe_spread and r[slots[k]] <= m.lobe_range)):
+            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
             changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
                                       slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],

@@ -6,10 +6,7 @@ occupied in the map of spread arcs without the arc's own share (:func:`_band_lik
 cell counts only if it was heard from near the bearing of the ray to it (:func:`_heard_near`).
 The mark covers the middle ``L`` of the carved interval, unless that map favours another part of
 the band, or a side lobe, and not the middle: then it goes around the likeliest cell there.
-With the opt-in ``side_lobe_spread`` a near live arc (newest or not) that a side lobe explains and
-its band does not holds half its spread value over its interval plus the lobes instead, an overlay
-in the same array (:func:`_spread_over_lobes`). ``docs/carved-grid.md``, "The newest echoes mark at
-once", "Where the mark goes", "Side lobes" and "Side lobes, spread".
+``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark goes" and "Side lobes".
 """
 
 from __future__ import annotations
@@ -20,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
+from sonarcarve.grids.carved.band import arc_value, redraw, undraw
 from sonarcarve.grids.carved.heard import HEARD_BINS, HEARD_NEAR, audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
 from sonarcarve.grids.scan import (
@@ -34,7 +31,7 @@ from sonarcarve.grids.scan import (
 )
 from sonarcarve.typing import FloatArray
 
-__all__ = ["SPREAD_SIDE", "refresh_points", "undraw_mark"]
+__all__ = ["refresh_points"]
 
 #: Log-odds above which a cell counts as more likely occupied than not where a fresh arc's
 #: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
@@ -46,9 +43,6 @@ _LIKELY = 1e-6
 #: order, pick among them (review rev10: the mark moved with the read schedule and with the
 #: grid's orientation), so equals go to the cell nearest the middle.
 _TIE = 1e-9
-#: The ``side`` :func:`_band_likeliest` returns for an echo an occupied cell in reach of a side
-#: lobe explains and no cell of its band does, with ``side_lobe_spread`` (±1: a lobe's mark).
-SPREAD_SIDE = 2.0
 
 
 @compiled_inline
@@ -66,124 +60,37 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     cell of a band whose middle the map does not favour; clipped to the interval) raised from
     its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
     (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
-    circle; else take its point out. With ``side_lobe_spread``, a fresh or live arc within
-    ``lobe_range`` that a lobe explains and its band does not takes its spread over the lobes
-    instead (:func:`_spread_over_lobes`). The spread map does not hold the points, so the arcs'
-    order does not matter. Returns 1 if its point changed."""
-    # With side_lobe_spread every near live arc is judged, fresh or not (its spread).
-    near = m.lobe_spread and r[slot] <= m.lobe_range
-    if (fresh or near) and weight[slot] > 0.0:
+    circle; else take its point out. The spread map does not hold the
+    points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
+    if fresh and weight[slot] > 0.0:
         explained, at, side = _band_likeliest(base, live, heard, drawn, drawn_seq, slot, m,
                                               x[slot], y[slot], r[slot], lo[slot], hi[slot],
                                               drawn[slot, 5], theta1, theta2)
-        if side == SPREAD_SIDE:
-            return _spread_over_lobes(points, pdrawn, pseq, slot, seq, drawn, heard, m,
-                                      theta1, theta2)
-        if fresh:
-            return _mark(points, drawn, pdrawn, pseq, slot, seq, x, y, r, lo, hi, weight,
-                         heard, m, theta1, theta2, explained, at, side)
+        whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
+        if not explained and side != 0.0:
+            # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
+            # circle beyond the arc's own band (it draws no spread value there to raise).
+            half = 0.5 * m.unit / r[slot]
+            axis = 0.5 * (theta1 + theta2)
+            axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
+            edge = 0.5 * (theta2 - theta1)
+            reach = (1.0 + m.lobes) * edge
+            # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
+            # the mark never adds to the arc's own band (that would be more than a whole hit).
+            inner = edge + m.h / r[slot]
+            z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
+            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                          max(z1, at - half), min(z2, at + half), whole, heard, m)
+        if not explained:
+            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+            return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
+                          max(lo[slot], at - half), min(hi[slot], at + half),
+                          whole - drawn[slot, 5], heard, m)
     if pseq[slot] >= 0:
-        undraw_mark(points, heard, m, pdrawn, slot)
+        undraw(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
         return 1
     return 0
-
-
-@compiled_inline
-def _mark(points: npt.NDArray[np.float32], drawn: FloatArray, pdrawn: FloatArray,
-          pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray, y: FloatArray,
-          r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
-          heard: npt.NDArray[np.uint32], m: Model, theta1: float, theta2: float,
-          explained: bool, at: float, side: float) -> int:
-    """The fresh arc's mark as :func:`_band_likeliest` placed it (``explained``: none, taken
-    out). Returns 1 if it changed."""
-    if pseq[slot] >= 0 and pdrawn[slot, 8] != 0.0:
-        # It held a spread, which redraw cannot move: take it out, draw the mark anew
-        # (redraw then returns 1, as it draws into an empty slot).
-        undraw_mark(points, heard, m, pdrawn, slot)
-        pseq[slot] = -1
-        if explained:
-            return 1
-    whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
-    if not explained and side != 0.0:
-        # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
-        # circle beyond the arc's own band (it draws no spread value there to raise).
-        half = 0.5 * m.unit / r[slot]
-        axis = 0.5 * (theta1 + theta2)
-        axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
-        edge = 0.5 * (theta2 - theta1)
-        reach = (1.0 + m.lobes) * edge
-        # Drawn widened by half a cell, as every arc: start a cell past the beam's edge so
-        # the mark never adds to the arc's own band (that would be more than a whole hit).
-        inner = edge + m.h / r[slot]
-        z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
-        return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                      max(z1, at - half), min(z2, at + half), whole, heard, m)
-    if not explained:
-        half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
-        return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                      max(lo[slot], at - half), min(hi[slot], at + half),
-                      whole - drawn[slot, 5], heard, m)
-    if pseq[slot] >= 0:
-        undraw_mark(points, heard, m, pdrawn, slot)
-        pseq[slot] = -1
-        return 1
-    return 0
-
-
-@compiled_inline
-def undraw_mark(points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
-                pdrawn: FloatArray, slot: int) -> None:
-    """Take what slot ``slot`` drew into ``points`` out: its mark (``pdrawn[slot, :6]``, as
-    :func:`~sonarcarve.grids.carved.band.undraw`), or its spread over the lobes
-    (:func:`_spread_over_lobes`: that, the wide half value, and the band taken out of the spread
-    map, ``pdrawn[slot, 6:9]``: lo, hi, value; value 0 for a mark)."""
-    undraw(points, heard, m, pdrawn, slot)
-    draw_arc(points, False, heard, m, pdrawn[slot, 0], pdrawn[slot, 1], pdrawn[slot, 2],
-             pdrawn[slot, 6], pdrawn[slot, 7], -pdrawn[slot, 8])
-    pdrawn[slot, 8] = 0.0
-
-
-@compiled_inline
-def _spread_over_lobes(points: npt.NDArray[np.float32], pdrawn: FloatArray,
-                       pseq: npt.NDArray[np.int64], slot: int, seq: int, drawn: FloatArray,
-                       heard: npt.NDArray[np.uint32], m: Model, theta1: float,
-                       theta2: float) -> int:
-    """The overlay of a fresh near arc explained by its side lobes alone
-    (:attr:`~sonarcarve.grids.carved.CarvedGridParams.side_lobe_spread`): half its spread
-    value ``v`` (``drawn[slot]``: the band it holds in ``live``) over its carved interval
-    plus the lobes, the beam ``[theta1, theta2]`` widened by ``lobes`` half widths each side
-    (written near the interval's middle), and ``-v`` over its band, so that the map holds
-    ``v / 2`` on both. Recorded in ``pdrawn[slot]``: the wide part in columns 0-5, the band's
-    lo, hi and ``-v`` in 6-8. Returns 1 if the overlay changed."""
-    x, y, r = drawn[slot, 0], drawn[slot, 1], drawn[slot, 2]
-    lo, hi, own = drawn[slot, 3], drawn[slot, 4], drawn[slot, 5]
-    mid = 0.5 * (lo + hi)
-    axis = 0.5 * (theta1 + theta2)
-    axis += TWO_PI * math.floor((mid - axis + math.pi) / TWO_PI)
-    reach = 0.5 * (1.0 + m.lobes) * (theta2 - theta1)
-    w1, w2 = min(lo, axis - reach), max(hi, axis + reach)
-    half = 0.5 * own
-    if (pseq[slot] == seq and pdrawn[slot, 0] == x and pdrawn[slot, 1] == y
-            and pdrawn[slot, 2] == r and pdrawn[slot, 3] == w1 and pdrawn[slot, 4] == w2
-            and pdrawn[slot, 5] == half and pdrawn[slot, 6] == lo and pdrawn[slot, 7] == hi
-            and pdrawn[slot, 8] == -own):
-        return 0
-    if pseq[slot] >= 0:
-        undraw_mark(points, heard, m, pdrawn, slot)
-    draw_arc(points, False, heard, m, x, y, r, w1, w2, half)
-    draw_arc(points, False, heard, m, x, y, r, lo, hi, -own)
-    pdrawn[slot, 0] = x
-    pdrawn[slot, 1] = y
-    pdrawn[slot, 2] = r
-    pdrawn[slot, 3] = w1
-    pdrawn[slot, 4] = w2
-    pdrawn[slot, 5] = half
-    pdrawn[slot, 6] = lo
-    pdrawn[slot, 7] = hi
-    pdrawn[slot, 8] = -own
-    pseq[slot] = seq
-    return 1
 
 
 @compiled  # its own function: inlined, the refresh loop ran 4x slower (numba 0.68)
@@ -239,7 +146,6 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     # fresh arc at every read.
     best_cw, best_ccw = _LIKELY, _LIKELY
     at_cw = at_ccw = mid + 4.0 * math.pi
-    by_lobe = False  # an occupied lobe cell explains the echo (only looked on with lobe_spread)
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
@@ -262,8 +168,6 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
                     if (e_half > 0.0
                             and within(dx, dy, d, axis, e_half, cos_ax, sin_ax, cos_e)
                             and not within(dx, dy, d, axis, b_half, cos_ax, sin_ax, cos_b)):
-                        if by_lobe:
-                            continue  # explained by a lobe already: only the band counts now
                         ccw = bearing_off(dx, dy, axis) > 0.0
                         value = min(m.l_max, max(m.l_min, spread))
                         off = bearing_off(dx, dy, mid)
@@ -277,12 +181,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
                                 heard_bin(mid + off)):
                             continue
                         if occupied:
-                            if not m.lobe_spread:
-                                return True, bearing, 0.0
-                            # Explained by a lobe: whether its band explains it too decides
-                            # the spread (CarvedGridParams.side_lobe_spread), so look on.
-                            by_lobe = True
-                            continue
+                            return True, bearing, 0.0
                         if ccw:
                             best_ccw, at_ccw = max(best_ccw, value), mid + off
                         else:
@@ -298,8 +197,6 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
                 if _likelier(value, off, best, bearing - mid):
                     best = max(best, value)
                     bearing = mid + off
-    if by_lobe:
-        return True, bearing, SPREAD_SIDE
     if not middle_likely and max(best_cw, best_ccw) > best + _TIE:
         if abs(best_cw - best_ccw) <= _TIE:
             # Equally likely surfaces in both lobes: either may have answered, and picking one

@@ -40,7 +40,6 @@ class Model(NamedTuple):
     through: float  # see_through, metres (0: off)
     lobes: float  # side_lobes: the explanation reaches this many half beam widths past an edge
     lobe_range: float  # side_lobe_range, metres: only echoes at this range or nearer
-    lobe_spread: bool  # side_lobe_spread: a lobe-explained newest echo spread over its lobes
 
 
 def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
@@ -55,4 +54,4 @@ def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
                  fade=float(p.fade_range), aware=p.surface_aware,
                  profile=float(p.band_profile), l_occupied=logit(p.occupied_threshold),
                  through=float(p.see_through), lobes=float(p.side_lobes),
-                 lobe_range=float(p.side_lobe_range), lobe_spread=p.side_lobe_spread)
+                 lobe_range=float(p.side_lobe_range))

@@ -183,15 +183,6 @@ class CarvedGridParams:
         than this are judged on their carved interval alone (the lobes are too weak to hear far
         reflectors; at every range the corridor walls beside a shut door 2.4-4.8 m ahead
         explained its echoes and it was never marked).
-    side_lobe_spread : bool
-        False (default). With ``side_lobes`` 1 only (refused otherwise): a live arc within
-        ``side_lobe_range`` (its sensor's newest echo or not) that an occupied cell in reach of
-        its side lobes explains (heard from near the ray's bearing, as ``side_lobes`` judges it)
-        and no cell of its carved band does holds half its spread value over its carved interval
-        plus the lobes instead of its spread value on its band (an overlay in the marks, judged
-        at every read while the arc is live): a jamb heard through a lobe no longer marks the
-        doorway its short band lies across ("Side lobes, spread"). Costs CPU when the map is
-        read often (every near live arc is judged at each read).
     repeat_weight : float
         In [0, 1]; 0. The factor of an arc's weight once a later echo of its sensor repeats it
         ("Repeated echoes count once": the sensor moved towards or away from
@@ -234,7 +225,6 @@ class CarvedGridParams:
     repeat_weight: float = 0.0
     side_lobes: float = DEFAULT_SIDE_LOBES
     side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
-    side_lobe_spread: bool = False
 
     def __post_init__(self) -> None:
         check_probability("p_hit", self.p_hit, 0.5, 1.0)
@@ -257,7 +247,7 @@ class CarvedGridParams:
                 msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
                 raise GridError(msg)
         check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
-        for name in ("spread", "surface_aware", "fresh_arcs", "side_lobe_spread"):
+        for name in ("spread", "surface_aware", "fresh_arcs"):
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
@@ -285,12 +275,6 @@ class CarvedGridParams:
                 0.0 <= sl <= MAX_SIDE_LOBES):
             msg = (f"carved grid: side_lobes must be a number in [0, {MAX_SIDE_LOBES:g}] half "
                    f"beam widths, got {sl!r}")
-            raise GridError(msg)
-        if self.side_lobe_spread and sl != 1.0:
-            # Half the value over the beam widened by one half width each side: the arc's
-            # evidence spread over twice its beam, which only one half width a side gives.
-            msg = (f"carved grid: side_lobe_spread needs side_lobes 1 (half the value over a "
-                   f"beam twice as wide), got side_lobes {sl!r}")
             raise GridError(msg)
         sr = self.side_lobe_range
         if isinstance(sr, bool) or not isinstance(sr, int | float) or not sr >= 0.0:
