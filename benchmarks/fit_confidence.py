@@ -214,15 +214,13 @@ def _log_loss(confidence: np.ndarray, direct: np.ndarray) -> float:
                           + (1 - direct) * np.log(np.clip(1 - confidence, 1e-12, 1.0))))
 
 
-def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
-        steps: int = 50) -> tuple[float, np.ndarray]:
-    """Intercept and weights minimising mean log-loss + ``ridge/2 |w|²`` (Newton's method)."""
-    a = np.column_stack([np.ones(len(features)), features])
+def _newton(a: np.ndarray, labels: np.ndarray, penalty: np.ndarray, offset: np.ndarray | float,
+            steps: int) -> np.ndarray:
+    """Weights ``w`` minimising the mean log-loss of ``offset + a @ w`` plus
+    ``sum(penalty/2 w²)`` (Newton's method, from 0)."""
     w = np.zeros(a.shape[1])
-    penalty = np.full(a.shape[1], ridge)
-    penalty[0] = 0.0  # the intercept is not shrunk
     for _ in range(steps):
-        p = 1.0 / (1.0 + np.exp(-(a @ w)))
+        p = 1.0 / (1.0 + np.exp(-(offset + a @ w)))
         grad = a.T @ (p - labels) / len(a) + penalty * w
         hess = (a * (p * (1.0 - p))[:, None]).T @ a / len(a) + np.diag(penalty) + 1e-9 * np.eye(
             a.shape[1])
@@ -230,6 +228,16 @@ def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
         w -= step
         if np.max(np.abs(step)) < 1e-10:
             break
+    return w
+
+
+def fit(features: np.ndarray, labels: np.ndarray, ridge: float,
+        steps: int = 50) -> tuple[float, np.ndarray]:
+    """Intercept and weights minimising mean log-loss + ``ridge/2 |w|²`` (Newton's method)."""
+    a = np.column_stack([np.ones(len(features)), features])
+    penalty = np.full(a.shape[1], ridge)
+    penalty[0] = 0.0  # the intercept is not shrunk
+    w = _newton(a, labels, penalty, 0.0, steps)
     return float(w[0]), w[1:]
 
 
@@ -242,16 +250,7 @@ def fit_only(features: np.ndarray, labels: np.ndarray, names: tuple[str, ...],
     held = base.weights()
     held[columns] = 0.0
     offset = base.intercept + features @ held
-    a = features[:, columns]
-    w = np.zeros(len(columns))
-    for _ in range(steps):
-        p = 1.0 / (1.0 + np.exp(-(offset + a @ w)))
-        grad = a.T @ (p - labels) / len(a) + ridge * w
-        hess = (a * (p * (1.0 - p))[:, None]).T @ a / len(a) + (ridge + 1e-9) * np.eye(len(w))
-        step = np.linalg.solve(hess, grad)
-        w -= step
-        if np.max(np.abs(step)) < 1e-10:
-            break
+    w = _newton(features[:, columns], labels, np.full(len(columns), ridge), offset, steps)
     return replace(base, **{name: float(v) for name, v in zip(names, w, strict=True)})
 
 
