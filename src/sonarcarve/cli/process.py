@@ -225,9 +225,11 @@ def process(
     every INPUT is mapped in parallel to FOLDER/NAME.map.csv with a summary (summary.csv);
     the exit code is then 2 if any log failed, 0 if all were mapped.
 
-    The map CSV has one row per surviving reading: `id,t,sensor,x,y,source,width,max_error`
-    (`source` is the model that placed the point: centerline, carved or atm; `width` the final
-    angular width in radians; `max_error` the error bound in metres).
+    The map CSV has one row per surviving reading:
+    `id,t,sensor,x,y,source,width,max_error,confidence` (`source` is the model that placed the
+    point: centerline, carved or atm; `width` the final angular width in radians; `max_error`
+    the error bound in metres; `confidence` the probability that the point is a real surface,
+    given by `--method evidence` and empty for the other methods).
 
     A run that succeeds on probably wrong units (theta in degrees, ranges in centimetres or
     millimetres, --beam-width in radians) prints one `sonarcarve: warning:` line for each on
