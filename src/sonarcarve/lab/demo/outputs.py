@@ -64,7 +64,7 @@ def output_captions(result: DemoResult, *, animation: bool = False) -> list[tupl
     column, so each caption is kept within 49 characters (an 80-column terminal)."""
     out = [(name, FIGURE_TEXT[key]) for key, name in FIGURE_FILES.items()]
     if animation:
-        out.append((ANIMATION_FILE, "that approach, animated: carving opens the door"))
+        out.append((ANIMATION_FILE, "that approach, animated, measured in every frame"))
     if result.grids:
         out.append((GRID_FIGURE_FILE, GRID_FIGURE_TEXT))
     for grid in result.grids:
