@@ -745,3 +745,73 @@ def test_the_models_defaults_are_the_methods() -> None:
     assert model["min_atm_crossings"].default == method["min_atm_crossings"].default == 3
     assert model["place_posterior"].default is method["with_posterior_placement"].default is True
     assert model["posterior_uncut"].default is method["with_uncut_posterior"].default is False
+
+
+def _held_back_run(readings: list[Reading], bound: float | None,
+                   ) -> tuple[EvidenceMethod, set[int], set[int]]:
+    """The method with ``live_max_error=bound`` fed ``readings``: its local map's reading ids,
+    then its global map's at the end."""
+    method = EvidenceMethod(min_confidence=0.0, live_max_error=bound)
+    for reading in readings:
+        method.add(reading)
+    live = _ids(method)
+    return method, live, set(method.finish().reading_id.tolist())
+
+
+def test_the_live_view_holds_back_an_uncut_beam_whose_bound_is_wide() -> None:
+    # One echo at 3 m that nothing has looked through: its point is the beam's middle, with a
+    # bound of 2 r sin(e/2), e = φ/2 plus half a bin (eq. 5.3, the binned ends): 0.6127 m.
+    # Held back from the live view at a bound just under that, kept in the global map (which
+    # holds nothing back); shown with a bound just over it, and with none.
+    far = [_reading(0.0, 0.0, 0.0, 0.0, 3.0)]
+    bound = 2.0 * 3.0 * math.sin(0.5 * (0.5 * PHI + 0.5 * PHI / 24))
+    _, live, committed = _held_back_run(far, bound - 0.005)
+    assert live == set()
+    assert committed == {0}
+    _, shown, _ = _held_back_run(far, None)
+    assert shown == {0}
+    _, shown, _ = _held_back_run(far, bound + 0.005)
+    assert shown == {0}
+
+
+def test_the_live_view_shows_an_uncut_beam_whose_bound_is_narrow() -> None:
+    # The same echo at 1 m: bound about 0.2 m, under 0.3 m: shown.
+    _, live, _ = _held_back_run([_reading(0.0, 0.0, 0.0, 0.0, 1.0)], 0.3)
+    assert live == {0}
+
+
+def test_a_held_back_point_shows_again_once_a_beam_cuts_its_arc() -> None:
+    # The far echo's middle seen through head-on by a closer, narrower look (the split arc of
+    # test_split_arc_keeps_a_piece_with_an_honest_bound): the arc is cut, its point placed by
+    # the evidence; the live view shows it although its bound (over both surviving pieces)
+    # is still wider than 0.3 m.
+    method, live, _ = _held_back_run([_reading(0.0, 0.0, 0.0, 0.0, 3.0),
+                                      _reading(0.05, 0.5, 0.0, 0.0, 4.0, sensor=1)], 0.3)
+    assert 0 in live
+    base = method.estimates(np.array([0]))
+    assert base.source[0] == PointSource.CARVED
+    local = method.local_map()
+    assert local.max_error[local.reading_id.tolist().index(0)] > 0.3
+
+
+def test_holding_back_changes_neither_the_global_map_nor_the_removed_count() -> None:
+    readings = _ring_readings(300, seed=4)
+    maps = []
+    for bound in (None, 0.1):
+        method = EvidenceMethod(history_size=50, live_max_error=bound)
+        for k in range(0, len(readings), 37):
+            method.add_many(ReadingBatch.from_readings(readings[k:k + 37]))
+        removed = method.measures().fully_carved
+        shown = len(method.local_map())
+        maps.append((method.finish(), removed, shown))
+    (base, base_removed, base_shown), (held, held_removed, held_shown) = maps
+    assert held_shown < base_shown  # the live view did hold points back
+    assert base_removed == held_removed
+    assert np.array_equal(base.reading_id, held.reading_id)
+    assert np.array_equal(base.xy, held.xy)
+
+
+@pytest.mark.parametrize("value", [-0.1, math.nan, "0.2", True])
+def test_live_max_error_must_be_none_or_a_bound(value: object) -> None:
+    with pytest.raises(ConfigError):
+        EvidenceMethod(live_max_error=value)  # type: ignore[arg-type]
