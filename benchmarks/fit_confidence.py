@@ -32,9 +32,13 @@ is 0 wherever the live map reads it (``behind``: judged only when the arc leaves
 then leaves that map as it was, bit for bit.
 
 ``--carve-probability P`` fits the confidence of evidence carving run with that P_carve (its
-features change with it: ``free`` and ``looked`` are in units of the threshold, and what survives
-changes); ``--save FILE`` writes the fitted model's fields as JSON (``latency_openings.py
---variant`` and ``evidence.py --variant`` read it).
+features change with it: ``free`` and ``looked`` are in units of the threshold, and what
+survives changes). ``--without NAME ...`` leaves features out of the full fit (weight 0):
+``behind``, which the live map never sees, is then fitted alone by ``--only behind --base
+FILE``, the other weights held at FILE's, as the library's was (at P_carve 0.8 the two steps
+give the library's weights to the third decimal). ``--save FILE`` writes the fitted model's
+fields as JSON (``latency_openings.py --variant``, ``evidence.py --variant`` and ``heldout.py
+--variant`` read it).
 
 Printed: the weights as ``ConfidenceModel`` keyword arguments, the threshold, and a reliability
 table (predicted confidence against the observed share of direct echoes, per decile of
@@ -363,6 +367,13 @@ def main(argv: list[str] | None = None) -> int:
         "doorway/amplitude"], help="held-out world/physics pairs")
     parser.add_argument("--carve-probability", type=float, default=None,
                         help="P_carve of the runs (default: the library's)")
+    parser.add_argument("--without", nargs="+", default=[], choices=CONFIDENCE_FEATURES,
+                        metavar="FEATURE",
+                        help="full fit with these features left out (weight 0), e.g. behind, "
+                             "to fit it alone afterwards with --only and --base")
+    parser.add_argument("--base", metavar="JSON",
+                        help="with --only: the model whose other weights are held (default: "
+                             "the library's)")
     parser.add_argument("--save", metavar="JSON",
                         help="also write the fitted model's fields to this file")
     args = parser.parse_args(argv)
@@ -372,11 +383,17 @@ def main(argv: list[str] | None = None) -> int:
                     for physics in args.physics for world in args.worlds])
     if args.only:
         mature = train.maturity >= 1.0
+        base = (ConfidenceModel() if args.base is None else ConfidenceModel(
+            **json.loads(Path(args.base).read_text(encoding="utf-8"))))
         model = fit_only(train.features[mature], train.direct[mature], tuple(args.only),
-                         ConfidenceModel(), args.ridge)
+                         base, args.ridge)
         assert train.local is not None  # snapshot_every >= 1 (_positive_int)
         _, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
     else:
+        if args.without:
+            train.features[:, [CONFIDENCE_FEATURES.index(n) for n in args.without]] = 0.0
+            assert train.local is not None
+            train.local.features[:, [CONFIDENCE_FEATURES.index(n) for n in args.without]] = 0.0
         model, losses = fit_model(train, args.ridge, tuple(args.maturity_grid))
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
                                   args.keep)

@@ -16,7 +16,7 @@ trees compared.
 
 ``--hold-back M [M ...]`` adds, for ``evidence``, rows of its live view with the points of uncut
 beams whose bound exceeds ``M`` metres held back
-(:func:`~sonarcarve.methods.evidence.live_held_back`; ``fig13`` names Fig. 13's threshold, ATM's
+(:func:`live_held_back`; ``fig13`` names Fig. 13's threshold, ATM's
 bound, and ``robot`` the simulated robot's radius), measured on the SAME runs as the base rows
 (the hold-back changes no state, so the live view with it is the base run's view filtered);
 ``any:M`` holds back every point over the bound, cut or not (Fig. 13's rule as the paper applies
@@ -38,6 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.lab.analyses import ANALYSES, fig13_threshold
 from sonarcarve.lab.experiments import office, openings
@@ -45,8 +46,9 @@ from sonarcarve.lab.experiments.jobs import _sample_stops
 from sonarcarve.lab.instrument import RunRecord, record_run
 from sonarcarve.lab.plan import Job, Settings
 from sonarcarve.lab.scenarios import run_simulation
+from sonarcarve.maps import PointSource
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
-from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, live_held_back
+from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod
 from sonarcarve.sim.motion import ROBOT_RADIUS
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
@@ -89,9 +91,28 @@ def _jobs(plan: list[Job], methods: Sequence[str], physics: str) -> list[Job]:
             for j in chosen]
 
 
+def live_held_back(source: npt.ArrayLike, max_error: npt.ArrayLike, bound: float, *,
+                   uncut_only: bool = True) -> npt.NDArray[np.bool_]:
+    """Points a live view would hold back: bound (``max_error``, eq. 5.3) over ``bound``
+    metres, and, with ``uncut_only``, placed at the middle of a beam nothing has cut nor
+    localised (source ``centerline``: no ATM median, no kept run narrower than the beam).
+    Fig. 13's max-error thresholding, applied to the local map.
+
+    >>> live_held_back([0, 0, 1, 2], [0.3, 0.1, 0.3, 0.3], 0.2).tolist()
+    [True, False, False, False]
+    >>> live_held_back([0, 0, 1, 2], [0.3, 0.1, 0.3, 0.3], 0.2, uncut_only=False).tolist()
+    [True, False, True, True]
+    """
+    over = np.asarray(max_error, dtype=np.float64) > bound
+    if uncut_only:
+        over &= np.asarray(source) == int(PointSource.CENTERLINE)
+    return np.asarray(over)
+
+
 def _held(record: RunRecord, bound: float, uncut_only: bool) -> RunRecord:
-    """``record`` with its snapshots' points held back as the live view would hold them
-    (:func:`~sonarcarve.methods.evidence.live_held_back`); the global map is the same."""
+    """``record`` with its snapshots' points held back as a live view would hold them
+    (:func:`live_held_back`); the global map is the same. (Built in the method as
+    ``EvidenceMethod(live_max_error=...)`` at ed3d534, measured, reverted: it loses latency.)"""
     s = record.samples
     held = live_held_back(s.source, s.max_error, bound, uncut_only=uncut_only)
     return dataclasses.replace(record, samples=dataclasses.replace(s, alive=s.alive & ~held))

@@ -85,29 +85,7 @@ from sonarcarve.readings import Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
-           "SensorModel", "live_held_back"]
-
-
-def live_held_back(source: npt.ArrayLike, max_error: npt.ArrayLike, bound: float | None, *,
-                   uncut_only: bool = True) -> BoolArray:
-    """Points the live view holds back: bound (``max_error``, eq. 5.3) over ``bound`` metres,
-    and, with ``uncut_only``, placed at the middle of a beam nothing has cut nor localised
-    (source ``centerline``: no ATM median, no kept run narrower than the beam). ``None``:
-    nothing is held back. Fig. 13's max-error thresholding, for the local map
-    (:class:`EvidenceMethod`, ``live_max_error``).
-
-    >>> live_held_back([0, 0, 1, 2], [0.3, 0.1, 0.3, 0.3], 0.2).tolist()
-    [True, False, False, False]
-    >>> live_held_back([0, 0, 1, 2], [0.3, 0.1, 0.3, 0.3], 0.2, uncut_only=False).tolist()
-    [True, False, True, True]
-    """
-    error = np.asarray(max_error, dtype=np.float64)
-    if bound is None:
-        return np.zeros(error.shape, dtype=np.bool_)
-    over = error > bound
-    if uncut_only:
-        over &= np.asarray(source) == int(PointSource.CENTERLINE)
-    return np.asarray(over)
+           "SensorModel"]
 
 
 #: A field's rule: what a valid value satisfies, and how the error message says it.
@@ -723,13 +701,6 @@ class EvidenceMethod(SonarMethod):
     min_atm_crossings : int
         Crossings the kept run needs before ATM's median places the point (>= 1; see
         :class:`EvidenceModel`).
-    live_max_error : float, optional
-        The live view (:meth:`local_map`, :meth:`estimates`) holds back the points of beams
-        nothing has cut nor localised whose bound exceeds this, metres
-        (:func:`live_held_back`: Fig. 13's max-error thresholding, on the local map only); a
-        held point shows again once a beam cuts its arc or crossings place it, and is
-        committed to the global map as it would be without the option. None (the default):
-        nothing is held back.
     sensor : SensorModel, optional
         The detection model.
     confidence_model : ConfidenceModel, optional
@@ -757,7 +728,6 @@ class EvidenceMethod(SonarMethod):
         with_posterior_placement: bool = True,
         with_uncut_posterior: bool = False,
         min_atm_crossings: int = 3,
-        live_max_error: float | None = None,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -775,12 +745,6 @@ class EvidenceMethod(SonarMethod):
         self.with_uncut_posterior = with_uncut_posterior
         _check_min_atm_crossings(min_atm_crossings)
         self.min_atm_crossings = min_atm_crossings
-        if live_max_error is not None and (
-                isinstance(live_max_error, bool) or not isinstance(live_max_error, Real)
-                or not live_max_error >= 0.0):
-            msg = f"live_max_error must be None or a number >= 0 metres, got {live_max_error!r}"
-            raise ConfigError(msg)
-        self.live_max_error = live_max_error
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -833,15 +797,6 @@ class EvidenceMethod(SonarMethod):
         return self.confidence_model.maturity(now - h.t[slots])
 
     def _estimates(self, slots: SlotArray) -> Estimates:
-        """The live view: :meth:`_final_estimates` with the points :func:`live_held_back`
-        holds back (``live_max_error``) not alive."""
-        est = self._final_estimates(slots)
-        if self.live_max_error is None:
-            return est
-        held = live_held_back(est.source, est.max_error, self.live_max_error)
-        return replace(est, alive=est.alive & ~held)
-
-    def _final_estimates(self, slots: SlotArray) -> Estimates:
         """The model's points with their confidence; low-confidence points are not alive."""
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
@@ -859,8 +814,7 @@ class EvidenceMethod(SonarMethod):
         )
 
     def _commit(self, slots: SlotArray) -> None:
-        self._check_usable()
-        est = self._final_estimates(slots)  # the global map holds nothing back
+        est = self.estimates(slots)
         self._removed_committed += int(np.count_nonzero(~est.alive))
         for listener in self._listeners:
             listener(self.history, slots, est)
@@ -873,7 +827,5 @@ class EvidenceMethod(SonarMethod):
         self.history.flush_retired()  # count retired rows as committed (as global_map does)
         base = super().measures()
         slots = self.history.slots()
-        self._check_usable()
-        live_removed = (int(np.count_nonzero(~self._final_estimates(slots).alive))
-                        if len(slots) else 0)
+        live_removed = int(np.count_nonzero(~self.estimates(slots).alive)) if len(slots) else 0
         return replace(base, fully_carved=self._removed_committed + live_removed, split=0)
