@@ -30,7 +30,9 @@ before that feature: only its weight was fitted), with each point at its run's m
 before that posterior (the median of the localised support once cut, ATM's median from one
 crossing), with the posterior placing the points of uncut beams too, and with ATM's median
 from one crossing in the run (the default needs three).
-``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed.
+``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed;
+``--variant P[:JSON]`` adds a row of evidence carving with P_carve ``P`` (and the confidence
+model ``fit_confidence.py --save`` wrote).
 A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
 ``lab/experiments/real_log.py``) and a throughput table times ``carve``, ``combined`` and
 ``evidence`` at history 250 on ``throughput.py``'s stream (after a warm-up, the three
@@ -49,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from latency_openings import parse_variant, variant_method
 from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
 from sonarcarve.lab.experiments.real_log import line_spread
 from sonarcarve.lab.metrics import segment_distance
@@ -225,8 +228,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="only these rows (default: all; names as in the tables)")
     parser.add_argument("--per-seed", action="store_true",
                         help="also print direct kept and spurious removed per seed")
+    parser.add_argument("--variant", nargs="+", default=[], type=parse_variant,
+                        metavar="P[:JSON]",
+                        help="add rows: evidence with P_carve P (and the confidence model of "
+                             "JSON, as fit_confidence.py --save writes it)")
     args = parser.parse_args(argv)
     variants = {name: VARIANTS[name] for name in (args.variants or VARIANTS)}
+    for variant in args.variant:
+        variants[variant[0]] = (lambda c, v=variant: variant_method(c, v))
     config = MethodConfig()
     for physics in args.physics:
         overrides = () if physics == "specular" else (("echo_model", physics),)

@@ -31,6 +31,15 @@ other weights, ``fresh`` and the maturity time stay the library default's. A new
 is 0 wherever the live map reads it (``behind``: judged only when the arc leaves the history)
 then leaves that map as it was, bit for bit.
 
+``--carve-probability P`` fits the confidence of evidence carving run with that P_carve (its
+features change with it: ``free`` and ``looked`` are in units of the threshold, and what
+survives changes). ``--without NAME ...`` leaves features out of the full fit (weight 0):
+``behind``, which the live map never sees, is then fitted alone by ``--only behind --base
+FILE``, the other weights held at FILE's, as the library's was (at P_carve 0.8 the two steps
+give the library's weights to the third decimal). ``--save FILE`` writes the fitted model's
+fields as JSON (``latency_openings.py --variant``, ``evidence.py --variant`` and ``heldout.py
+--variant`` read it).
+
 Printed: the weights as ``ConfidenceModel`` keyword arguments, the threshold, and a reliability
 table (predicted confidence against the observed share of direct echoes, per decile of
 confidence) on the training data and on each held-out world and physics (``--check``).
@@ -39,8 +48,11 @@ confidence) on the training data and on each held-out world and physics (``--che
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
+import json
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -97,9 +109,11 @@ class LocalSamples:
 
 
 def collect(world: str, physics: str, seeds: range,
-            model: ConfidenceModel | None = None, snapshot_every: int = 0) -> Samples:
+            model: ConfidenceModel | None = None, snapshot_every: int = 0,
+            carve_probability: float | None = None) -> Samples:
     """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs (and,
-    with ``snapshot_every``, the local map's arcs every that many readings)."""
+    with ``snapshot_every``, the local map's arcs every that many readings); evidence carving
+    with the library's configuration, or ``carve_probability`` for P_carve."""
     local: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     rows: list[np.ndarray] = []
     maturities: list[np.ndarray] = []
@@ -108,6 +122,8 @@ def collect(world: str, physics: str, seeds: range,
     total_by_kind: dict[int, int] = {}
     overrides = () if physics == "specular" else (("echo_model", physics),)
     config = MethodConfig(min_confidence=0.0)
+    if carve_probability is not None:
+        config = replace(config, carve_probability=carve_probability)
     for seed in seeds:
         sim = run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
         method = EvidenceMethod(
@@ -349,17 +365,35 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", nargs="*", default=[
         "t-junction/specular", "doorway/specular", "office/amplitude", "t-junction/amplitude",
         "doorway/amplitude"], help="held-out world/physics pairs")
+    parser.add_argument("--carve-probability", type=float, default=None,
+                        help="P_carve of the runs (default: the library's)")
+    parser.add_argument("--without", nargs="+", default=[], choices=CONFIDENCE_FEATURES,
+                        metavar="FEATURE",
+                        help="full fit with these features left out (weight 0), e.g. behind, "
+                             "to fit it alone afterwards with --only and --base")
+    parser.add_argument("--base", metavar="JSON",
+                        help="with --only: the model whose other weights are held (default: "
+                             "the library's)")
+    parser.add_argument("--save", metavar="JSON",
+                        help="also write the fitted model's fields to this file")
     args = parser.parse_args(argv)
     train = pooled([collect(world, physics, range(args.seeds),
-                            snapshot_every=args.snapshot_every)
+                            snapshot_every=args.snapshot_every,
+                            carve_probability=args.carve_probability)
                     for physics in args.physics for world in args.worlds])
     if args.only:
         mature = train.maturity >= 1.0
+        base = (ConfidenceModel() if args.base is None else ConfidenceModel(
+            **json.loads(Path(args.base).read_text(encoding="utf-8"))))
         model = fit_only(train.features[mature], train.direct[mature], tuple(args.only),
-                         ConfidenceModel(), args.ridge)
+                         base, args.ridge)
         assert train.local is not None  # snapshot_every >= 1 (_positive_int)
         _, losses = fit_maturity(model, train.local, tuple(args.maturity_grid))
     else:
+        if args.without:
+            train.features[:, [CONFIDENCE_FEATURES.index(n) for n in args.without]] = 0.0
+            assert train.local is not None
+            train.local.features[:, [CONFIDENCE_FEATURES.index(n) for n in args.without]] = 0.0
         model, losses = fit_model(train, args.ridge, tuple(args.maturity_grid))
     threshold = threshold_keeping(model.confidence(train.features, train.maturity), train,
                                   args.keep)
@@ -367,6 +401,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"fitted on {worlds}, {physics} physics, seeds 0-{args.seeds - 1}: "
           f"{len(train.direct)} arcs ({int(train.direct.sum())} direct)\n")
     print_model(model)
+    if args.save:
+        Path(args.save).write_text(json.dumps(dataclasses.asdict(model), indent=1),
+                                   encoding="utf-8")
     assert train.local is not None  # every part was collected with snapshots
     print(f"local-map log-loss by maturity time ({len(train.local.direct)} samples): "
           + ", ".join(f"{t:g} s {loss:.4f}" for t, loss in
@@ -377,7 +414,8 @@ def main(argv: list[str] | None = None) -> int:
     for pair in args.check:
         world, check_physics = pair.split("/")
         report(f"held out: {world}/{check_physics}",
-               collect(world, check_physics, range(args.seeds)), model, thresholds)
+               collect(world, check_physics, range(args.seeds),
+                       carve_probability=args.carve_probability), model, thresholds)
     return 0
 
 

@@ -28,6 +28,8 @@ parameters picked before any run (not tuned on these results) as plausible other
   :class:`~sonarcarve.sim.amplitude.AmplitudeModel`) and 4 dB of level noise instead of 2.
 
 Means over seeds; each row also counts in how many (world, seed) runs the target held.
+``--variant P[:JSON]`` adds point rows of evidence carving with P_carve ``P`` (and the confidence
+model ``fit_confidence.py --save`` wrote); ``--skip-grids`` leaves the costmaps out.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from latency_openings import Variant, parse_variant, variant_method
 from sonarcarve import make_method
 from sonarcarve.grids import CarvedGrid, RangeSensorLayer
 from sonarcarve.lab.grid_measures import grid_measures
@@ -82,8 +85,9 @@ def _simulate(world_spec: str, seed: int, physics: SonarPhysics) -> Simulation:
     return simulate(world, load_robot("scout2"), trajectory, seed, physics=physics)
 
 
-def _point_rows(sim: Simulation) -> dict[str, dict[str, float]]:
-    """Per method: direct kept, spurious removed, median and p90 error ratios to centerline."""
+def _point_rows(sim: Simulation, variants: Sequence[Variant] = ()) -> dict[str, dict[str, float]]:
+    """Per method (and evidence ``variants``): direct kept, spurious removed, median and p90
+    error ratios to centerline."""
     kind = sim.truth.kind
     direct = kind == EchoKind.DIRECT
     config = MethodConfig()
@@ -91,8 +95,11 @@ def _point_rows(sim: Simulation) -> dict[str, dict[str, float]]:
     center_err = np.full(len(kind), np.nan)
     center_err[center.reading_id] = segment_distance(center.xy, sim.world.segments)[0]
     rows = {}
-    for name in METHODS:
-        gmap = process_readings(sim.readings, make_method(name, config)).global_map
+    makers = {name: (lambda c, n=name: make_method(n, c)) for name in METHODS}
+    for variant in variants:
+        makers[variant[0]] = lambda c, v=variant: variant_method(c, v)
+    for name, make in makers.items():
+        gmap = process_readings(sim.readings, make(config)).global_map
         kept = np.zeros(len(kind), dtype=bool)
         kept[gmap.reading_id] = True
         err = segment_distance(gmap.xy, sim.world.segments)[0]
@@ -131,7 +138,7 @@ def _points_table(title: str, runs: Sequence[dict[str, dict[str, float]]]) -> No
     print("| method | spurious share of echoes (%) | direct kept (%) | spurious removed (%) | "
           "median error / centerline's | p90 / centerline's | runs meeting all four targets |")
     print("|---|---:|---:|---:|---:|---:|---:|")
-    for name in METHODS:
+    for name in runs[0]:
         rows = [run[name] for run in runs]
         met = sum(r["kept"] >= KEEP and r["removed"] >= REMOVE and r["median"] <= MEDIAN_RATIO
                   and r["p90"] <= P90_RATIO for r in rows)
@@ -161,6 +168,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--worlds", nargs="+", default=list(WORLDS))
     parser.add_argument("--seeds", type=int, default=2, help="seeds 0..n-1 per world")
     parser.add_argument("--physics", nargs="+", default=list(PHYSICS), choices=list(PHYSICS))
+    parser.add_argument("--variant", nargs="+", default=[], type=parse_variant,
+                        metavar="P[:JSON]",
+                        help="add point rows: evidence with P_carve P (and the confidence model "
+                             "of JSON, as fit_confidence.py --save writes it)")
+    parser.add_argument("--skip-grids", action="store_true")
     args = parser.parse_args(argv)
     for physics_name in args.physics:
         physics = PHYSICS[physics_name]
@@ -168,13 +180,15 @@ def main(argv: list[str] | None = None) -> int:
         for world in args.worlds:
             for seed in range(args.seeds):
                 sim = _simulate(world, seed, physics)
-                points.append(_point_rows(sim))
-                grids.append(_grid_rows(sim))
+                points.append(_point_rows(sim, args.variant))
+                if not args.skip_grids:
+                    grids.append(_grid_rows(sim))
                 print(f"  {physics_name}, {world}, seed {seed}: {len(sim.readings):,} readings",
                       flush=True)
         where = f"{', '.join(args.worlds)}; seeds 0-{args.seeds - 1}; physics: {physics_name}"
         _points_table(f"points, {where}; mean over runs", points)
-        _grids_table(f"grids, {where}; mean over runs", grids)
+        if grids:
+            _grids_table(f"grids, {where}; mean over runs", grids)
     return 0
 
 
