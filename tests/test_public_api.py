@@ -47,9 +47,9 @@ def test_every_public_error_of_the_product_is_reexported() -> None:
         module = importlib.import_module(module_name)
         for name, value in vars(module).items():
             if (isinstance(value, type) and issubclass(value, SonarcarveError)
-                    and value.__module__ == module_name and not name.startswith("_")):
-                if getattr(sonarcarve, name, None) is not value:
-                    missing.append(f"{module_name}.{name}")
+                    and value.__module__ == module_name and not name.startswith("_")
+                    and getattr(sonarcarve, name, None) is not value):
+                missing.append(f"{module_name}.{name}")
     assert missing == []
     assert "SonarcarveError" in sonarcarve.__all__
 
@@ -103,5 +103,5 @@ def test_process_readings_refuses_a_method_name_and_says_what_to_pass() -> None:
 
 
 def test_a_filter_bound_that_is_no_number_is_named() -> None:
-    with pytest.raises(sonarcarve.FilterError, match="max_range must be .* got str '3'"):
+    with pytest.raises(sonarcarve.FilterError, match=r"max_range must be .* got str '3'"):
         sonarcarve.ReadingFilter(max_range="3")  # type: ignore[arg-type]

@@ -331,7 +331,8 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     """
     try:
         t, sensor, x, y, theta, r, width, limit = reading
-        if (isinstance(reading, Reading) and previous_t <= t and -MAX_TIME <= t <= MAX_TIME and 0.0 < r <= MAX_READING_RANGE
+        if (isinstance(reading, Reading) and previous_t <= t and -MAX_TIME <= t <= MAX_TIME
+                and 0.0 < r <= MAX_READING_RANGE
                 and -MAX_POSITION <= x <= MAX_POSITION and -MAX_POSITION <= y <= MAX_POSITION
                 and -MAX_ANGLE <= theta <= MAX_ANGLE and type(sensor) is int
                 and 0 <= sensor <= MAX_SENSOR
