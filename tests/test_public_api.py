@@ -105,3 +105,9 @@ def test_process_readings_refuses_a_method_name_and_says_what_to_pass() -> None:
 def test_a_filter_bound_that_is_no_number_is_named() -> None:
     with pytest.raises(sonarcarve.FilterError, match=r"max_range must be .* got str '3'"):
         sonarcarve.ReadingFilter(max_range="3")  # type: ignore[arg-type]
+
+
+def test_a_parameter_that_is_no_number_reads_as_english() -> None:
+    with pytest.raises(sonarcarve.ConfigError,
+                       match=r"min_transversal must be a number and lie in \(0, pi/2\] radians"):
+        MethodConfig(min_transversal="x")  # type: ignore[arg-type]

@@ -30,6 +30,7 @@ from sonarcarve.cli.options import (
     check_new_bag,
     refuse_bag_options,
 )
+from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
@@ -507,9 +508,16 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
             incidence_deg: float | None) -> MethodConfig:
     """The options in SI units; :class:`MethodConfig` checks every value (one-line errors).
 
-    The config speaks radians; an error about an option given in degrees is prefixed with the
-    option as typed, so that "got 3.49" is not read as the user's number.
+    The config speaks radians and its own field names; the options given in degrees are
+    checked here first, in degrees, and any other error names the option (``--history``), not
+    the field (``history_size``).
     """
+    _check_degrees("--beam-width", beam_width_deg, 0.0, 180.0, closed_high=False,
+                   low_ok=math.degrees(MIN_BEAM_WIDTH))
+    _check_degrees("--min-transversal", transversal_deg, 0.0, 90.0, closed_high=True)
+    if incidence_deg is not None:
+        _check_degrees("--max-incidence", incidence_deg, 0.0, 90.0, closed_high=True,
+                       closed_low=True)
     incidence = DEFAULT_MAX_INCIDENCE
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
@@ -519,14 +527,34 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
                             min_transversal=math.radians(transversal_deg),
                             max_incidence=incidence)
     except ConfigError as err:
-        typed = {"beam_width": f"--beam-width {beam_width_deg:g}",
-                 "min_transversal": f"--min-transversal {transversal_deg:g}",
-                 "max_incidence": f"--max-incidence {incidence_deg}"}
-        field = str(err).split(" ", 1)[0]
-        if field in typed:
-            msg = f"{typed[field]} (degrees): {err}"
-            raise ConfigError(msg) from None
-        raise
+        raise ConfigError(option_message(str(err))) from None
+
+
+#: MethodConfig's field -> the option that sets it, for its error messages.
+_OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tolerance",
+                    "beam_width": "--beam-width", "min_transversal": "--min-transversal",
+                    "max_incidence": "--max-incidence"}
+
+
+def option_message(message: str) -> str:
+    """A :class:`MethodConfig` error with its leading field name replaced by the option."""
+    field, _, rest = message.partition(" ")
+    option = _OPTION_OF_FIELD.get(field)
+    return f"{option} {rest}" if option is not None else message
+
+
+def _check_degrees(option: str, value: float, low: float, high: float, *,
+                   closed_high: bool, closed_low: bool = False,
+                   low_ok: float | None = None) -> None:
+    """Refuse an angle option outside its interval, in degrees, as the user typed it."""
+    above_low = value >= low if closed_low else value > low
+    if low_ok is not None:
+        above_low = above_low and value >= low_ok
+    below_high = value <= high if closed_high else value < high
+    if not (math.isfinite(value) and above_low and below_high):
+        interval = f"{'[' if closed_low else '('}{low:g}, {high:g}{']' if closed_high else ')'}"
+        msg = f"{option} must lie in {interval} degrees, got {value:g}"
+        raise ParameterError(msg)
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,
