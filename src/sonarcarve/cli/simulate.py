@@ -22,7 +22,14 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import atomic_path, check_output_file
 from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, load_robot
 from sonarcarve.sim.bag import write_simulation_bag
-from sonarcarve.sim.motion import DEFAULT_DT, MAX_POSES, Trajectory, explore, follow_waypoints, with_odometry_drift
+from sonarcarve.sim.motion import (
+    DEFAULT_DT,
+    MAX_POSES,
+    Trajectory,
+    explore,
+    follow_waypoints,
+    with_odometry_drift,
+)
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import DEFAULT_PHYSICS, ECHO_MODELS, SonarPhysics
 from sonarcarve.sim.truth import TRUTH_SUFFIX, truth_path, write_simulation, write_truth_json
