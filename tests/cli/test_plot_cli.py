@@ -130,7 +130,7 @@ def test_a_map_of_other_readings_names_the_map_file_and_line(
         run: tuple[Path, Path, GlobalMap], tmp_path: Path,
         capsys: pytest.CaptureFixture[str]) -> None:
     # UX review, finding 13: the message named neither the map nor its line.
-    readings, map_csv, global_map = run
+    readings, map_csv, _ = run
     lines = map_csv.read_text().splitlines(keepends=True)
     fields = lines[2].split(",")
     lines[2] = ",".join(["99999", *fields[1:]])
