@@ -114,7 +114,7 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     ------
     GridUsageError
         An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), ``fresh_periods`` below 1 or for a model other than the carved grid, or no
+        >= 0), a resolution larger than the area mapped, ``fresh_periods`` below 1 or for a model other than the carved grid, or no
         readings.
     """
     if model not in GRID_MODELS:
@@ -130,7 +130,13 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     if not len(batch):
         msg = "no readings to map"
         raise GridUsageError(msg)
-    built = GRID_MODELS[model](resolution, readings_extent(batch, margin), fresh_periods)
+    bounds = readings_extent(batch, margin)
+    width, height = bounds[2] - bounds[0], bounds[3] - bounds[1]
+    if resolution > max(width, height):
+        msg = (f"--resolution {resolution:g} m is larger than the area mapped ({width:.3g} x "
+               f"{height:.3g} m: the readings' extent plus --margin); a cell must be smaller")
+        raise GridUsageError(msg)
+    built = GRID_MODELS[model](resolution, bounds, fresh_periods)
     assert isinstance(built, CarvedGrid | RangeSensorLayer | OccupancyGrid)
     built.add_many(batch)
     return built
@@ -179,7 +185,9 @@ def grid(
         help="carved (arc carving's grid) | range-sensor-layer (ROS's layer, its defaults) | "
              "elfes (the Elfes/octomap log-odds grid).")] = "carved",
     resolution: Annotated[float, typer.Option(
-        metavar="METRES", help="Cell side, metres.")] = 0.05,
+        metavar="METRES",
+        help="Cell side, metres; at most the longer side of the area mapped (the readings' "
+             "extent plus --margin): a larger cell would put the whole map in one cell.")] = 0.05,
     margin: Annotated[float, typer.Option(
         metavar="METRES", help="Margin around the readings' extent, metres.")] = 0.5,
     fresh_periods: Annotated[float | None, typer.Option(
