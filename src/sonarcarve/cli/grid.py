@@ -114,8 +114,8 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     ------
     GridUsageError
         An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), a resolution larger than the area mapped, ``fresh_periods`` below 1 or for a model other than the carved grid, or no
-        readings.
+        >= 0), a resolution larger than the area mapped, ``fresh_periods`` below 1 or for a
+        model other than the carved grid, or no readings.
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
