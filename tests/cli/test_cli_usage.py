@@ -189,3 +189,52 @@ def test_the_entry_point_stays_a_function_after_a_run() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     assert "CALLABLE True" in done.stdout
+
+
+def test_ctrl_c_exits_130_with_one_line_saying_nothing_was_written(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # UX review, finding 16: rc 130 and a clean state, but not a word on stderr.
+    import sonarcarve.cli.simulate as simulate_cli
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(simulate_cli, "simulate", interrupted)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--world", "doorway", "--out", str(out)]) == 130
+    assert capsys.readouterr().err == "sonarcarve: interrupted; nothing written\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_in_a_real_process_prints_the_line(tmp_path: Path) -> None:
+    import os
+    import signal
+    import time
+
+    code = ("import sys, time\nfrom sonarcarve.cli import main\nimport sonarcarve.cli.simulate "
+            "as s\ndef slow(*a, **k):\n    print('READY', flush=True)\n    time.sleep(60)\n"
+            "s.simulate = slow\nsys.exit(main(sys.argv[1:]))")
+    out = tmp_path / "sim.csv"
+    proc = subprocess.Popen([sys.executable, "-c", code, "simulate", "--world", "doorway",
+                             "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "READY"
+    time.sleep(0.2)
+    os.kill(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err == "sonarcarve: interrupted; nothing written\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (["sweep", "--out", "sw"], "the runs finished so far are kept: the same command resumes"),
+    (["process", "a.csv", "b.csv", "--out-dir", "fl"], "the maps finished before are kept"),
+    (["grid", "r.csv", "--out", "g.yaml"], "interrupted; nothing written"),
+])
+def test_the_interrupted_line_tells_what_each_command_kept(args: list[str], said: str) -> None:
+    from sonarcarve.cli.main import interrupted_message
+
+    assert said in interrupted_message(args)
