@@ -39,6 +39,7 @@ from typing import Any
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path, atomic_text, make_output_dir
+from sonarcarve.io.errors import load_yaml
 from sonarcarve.lab.experiments.jobs import run_job
 from sonarcarve.lab.plan import ALL_METHODS, Job
 from sonarcarve.lab.scenarios import Scenario, run_simulation
@@ -216,13 +217,11 @@ def load_sweep_spec(path: str | Path, **overrides: Any) -> SweepSpec:
         length: 12       # metres of the tour; null: all of it
         sample_every: 32
     """
-    yaml = require("yaml", "cli", "sweep files")
+    require("yaml", "cli", "sweep files")
     label = f"sweep file {path}"
-    try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
-        msg = f"{label}: cannot read ({' '.join(str(err).split())})"
-        raise SweepError(msg) from None
+    # The shared reader: "s.yaml: line 2, column 1: invalid YAML (...)", a missing or binary
+    # file in one plain line, aliases limited (as robot and map_server YAML files).
+    data = load_yaml(path, error_type=SweepError)
     data = {} if data is None else data
     if not isinstance(data, dict):
         msg = f"{label}: expected a mapping with grid, worlds, seeds, methods"
