@@ -93,8 +93,14 @@ def test_process_help_states_units_and_the_unprocessed_measure(
     for phrase in ("t in seconds", "metres", "radians counter-clockwise from +x",
                    "range in metres", "beam_width in radians", "used only for readings "
                    "without a beam_width value", "mean % of history rows",
-                   "count as processed", "[default: 20]"):
+                   "count as processed", "[default: 20]",
+                   # UX review, finding 15: the optional column, inf rows, units, off.
+                   "max_range in metres (optional", "inf for a reading that heard nothing",
+                   "--min-transversal DEGREES", "--range-tolerance METRES",
+                   "--max-incidence DEGREES", "--max-range METRES", "--max-error METRES"):
         assert phrase in text, phrase
+    assert " FLOAT " not in text
+    assert text.count("[default: (off)]") == 6  # β and the five optional filters
 
 
 def test_worlds_help_shows_one_example_per_line(capsys: pytest.CaptureFixture[str]) -> None:

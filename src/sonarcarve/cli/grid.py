@@ -100,7 +100,8 @@ def _check_fresh_periods(model: str, fresh_periods: float | None) -> None:
         msg = f"--fresh-periods applies to --model carved only, not {model}"
         raise GridUsageError(msg)
     if not fresh_periods >= 1.0:  # also NaN
-        msg = f"--fresh-periods must be a number >= 1 firing period (inf: off), got {fresh_periods}"
+        msg = (f"--fresh-periods must be a number >= 1 firing period (inf: keep the mark up to "
+               f"2 s), got {fresh_periods}")
         raise GridUsageError(msg)
 
 

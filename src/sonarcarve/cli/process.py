@@ -101,13 +101,15 @@ class Output(NamedTuple):
 # The command's options, one alias each, so that the command's signature reads as a list.
 _InputsArg = Annotated[list[Path], typer.Argument(
     metavar="READINGS.csv|BAG",
-    help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
-         "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
-         "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
-         "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
-         "absent: --beam-width applies). Or a ROS bag: `*.bag` (ROS 1), `*.mcap`, `*.db3` or "
-         "a rosbag2 folder, read as `sonarcarve convert rosbag` reads it (Range + odometry + "
-         "TF; see the bag options). Several logs need --out-dir.")]
+    help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width][,max_range]`, "
+         "one echo per row: t in seconds (never decreasing), sensor a whole number >= 0, x, y "
+         "the sensor's position in metres, theta its axis in radians counter-clockwise from "
+         "+x (world frame), range in metres (> 0, or `inf` for a reading that heard nothing: "
+         "then max_range must be given), beam_width in radians (optional; blank or absent: "
+         "--beam-width applies), max_range in metres (optional: how far the sensor listened; "
+         "a no-echo row's free space reaches it). Or a ROS bag: `*.bag` (ROS 1), `*.mcap`, "
+         "`*.db3` or a rosbag2 folder, read as `sonarcarve convert rosbag` reads it (Range + "
+         "odometry + TF; see the bag options). Several logs need --out-dir.")]
 _OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", metavar="OUT",
     help="Where to write, for one INPUT; the ending picks what: `.csv` the global map CSV; "
@@ -158,11 +160,15 @@ _BeamWidthOpt = Annotated[float, typer.Option(
     help="Beam width φ in degrees, used only for readings without a beam_width value (no "
          "such column, or a blank cell); a beam_width column, in radians, wins.")]
 _ToleranceOpt = Annotated[float, typer.Option(
+    metavar="METRES",
     help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper).")]
 _DEFAULT_TRANSVERSAL_DEG = round(math.degrees(DEFAULT_MIN_TRANSVERSAL), 6)
 _TransversalOpt = Annotated[float, typer.Option(
-    help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
+    metavar="DEGREES",
+    help="ψ in degrees, in (0, 90]: ATM's minimum angle between two arcs at their "
+         "intersection.")]
 _IncidenceOpt = Annotated[float | None, typer.Option(
+    metavar="DEGREES", show_default="off",
     help="β in degrees, in [0, 90]: specular-aware carving (beyond the paper; off by "
          "default). A newer reading then does not carve the part of an older arc whose "
          "implied wall (facing the older sensor) it would meet at more than β from the "
@@ -170,22 +176,28 @@ _IncidenceOpt = Annotated[float | None, typer.Option(
          "reading's free space says nothing there. 90 = off = the paper. Example: "
          "--max-incidence 30.")]
 _MaxRangeOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop readings farther than this, metres (reading filter; off by default). The "
          f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
          "sensors' height and floor.", rich_help_panel="Filters")]
 _MinRangeOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop readings nearer than this, metres (reading filter).",
     rich_help_panel="Filters")]
 _JumpOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop a reading whose range differs by more than this (metres) from the same "
          "sensor's previous reading: a jumping sensor is ignored for one reading.",
     rich_help_panel="Filters")]
 _OutlierRadiusOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Map filter: drop points with fewer than --outlier-neighbours other points within "
          "this radius, metres.", rich_help_panel="Filters")]
 _NeighboursOpt = Annotated[int, typer.Option(
+    metavar="POINTS",
     help="k of the outlier test (needs --outlier-radius).", rich_help_panel="Filters")]
 _MaxErrorOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Map filter: drop points whose error bound max_error exceeds this, metres "
          "(paper, Fig. 13b).", rich_help_panel="Filters")]
 
