@@ -147,7 +147,9 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "sonarcarve"
 #: What the CLI's shell (entry point, root group, --version, --help) may import: the standard
 #: library, typer (with click) and rich, and these light modules of the package.
 SHELL_MAY_IMPORT = {"sonarcarve.errors", "sonarcarve._version", "sonarcarve.cli",
-                    "sonarcarve.cli.app", "sonarcarve.cli.main"}
+                    "sonarcarve.cli.app", "sonarcarve.cli.main",
+                    # imported by a command as it runs; it imports numba only then
+                    "sonarcarve.cli.compile_notice"}
 
 
 def _imports(path: Path) -> set[str]:
