@@ -30,7 +30,7 @@ import io
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from itertools import product
 from pathlib import Path
@@ -302,12 +302,27 @@ def _job(spec: SweepSpec, world: str, seed: int, method: str,
             scenario = replace(scenario, physics=(("range_noise", float(value)),))
         else:  # range_tolerance, or any MethodConfig field by its own name
             changes[name] = value
+    for name, (low, high, interval) in _DEGREE_RULES.items():
+        given = values.get(name)
+        if given is not None and not (math.isfinite(given) and low(given) and high(given)):
+            msg = (f"sweep point {dict(values)}: {name} must lie in {interval} degrees, "
+                   f"got {given:g}")
+            raise SweepError(msg)
     try:
         config = replace(config, **changes)
     except (TypeError, ValueError) as err:
         msg = f"sweep point {dict(values)}: {' '.join(str(err).split())}"
         raise SweepError(msg) from None
     return Job(("sweep-run",), scenario, method, config, "sweep", spec.sample_every)
+
+
+#: The parameters given in degrees, checked in degrees (the config's own rule, in radians,
+#: would quote the converted value): name -> (lower test, upper test, the interval as text).
+_DEGREE_RULES: dict[str, tuple[Callable[[float], bool], Callable[[float], bool], str]] = {
+    "min_transversal_deg": (lambda v: v > 0.0, lambda v: v <= 90.0, "(0, 90]"),
+    "max_incidence_deg": (lambda v: v >= 0.0, lambda v: v <= 90.0, "[0, 90]"),
+    "beam_width_deg": (lambda v: v > 0.0, lambda v: v < 180.0, "(0, 180)"),
+}
 
 
 def _run_id(spec: SweepSpec, world: str, seed: int, method: str, job: Job) -> str:
