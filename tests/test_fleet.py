@@ -65,6 +65,12 @@ def test_each_log_gets_a_map_and_a_summary_line(logs: list[Path], serial: Path) 
     broken = summary[1]
     assert broken["error"]
     assert "\n" not in broken["error"]
+    # A failed log has empty measures, not zeros that read as data (UX review, finding 14).
+    with (serial / "summary.csv").open() as handle:
+        cells = list(csv.DictReader(handle))[1]
+    assert {name: value for name, value in cells.items() if name not in ("log", "error")} == {
+        "map": "", "readings": "", "points": "", "fully_carved": "", "split": "",
+        "unprocessed": "", "seconds": ""}
     assert int(summary[0]["points"]) > 0
     assert all(row["error"] == "" for i, row in enumerate(summary) if i != 1)
 

@@ -17,7 +17,20 @@ from typing import TYPE_CHECKING, Any
 from sonarcarve._version import __version__
 
 if TYPE_CHECKING:
-    from sonarcarve.filters import MapFilter, ReadingFilter, filter_map, filter_readings
+    from sonarcarve.errors import (
+        ConfigError,
+        MethodStateError,
+        ReadingTypeError,
+        SonarcarveError,
+    )
+    from sonarcarve.extras import MissingExtraError
+    from sonarcarve.filters import (
+        FilterError,
+        MapFilter,
+        ReadingFilter,
+        filter_map,
+        filter_readings,
+    )
     from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
     from sonarcarve.grids import (
         CarvedGrid,
@@ -28,12 +41,15 @@ if TYPE_CHECKING:
     )
     from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
     from sonarcarve.io import (
+        InputError,
+        OutputError,
         read_map_csv,
         read_readings_csv,
         read_rosbag,
         write_map_csv,
         write_readings_csv,
     )
+    from sonarcarve.io.rosbag import RosbagError
     from sonarcarve.maps import (
         CallbackSink,
         CountingSink,
@@ -55,12 +71,31 @@ if TYPE_CHECKING:
         SonarMethod,
         make_method,
     )
-    from sonarcarve.pipeline import ProcessResult, process_readings
-    from sonarcarve.polling import PolledLog, SonarPoller, naive_stamps, poll_readings
+    from sonarcarve.methods.atm import CrossingStoreError
+    from sonarcarve.pipeline import ProcessError, ProcessResult, process_readings
+    from sonarcarve.polling import (
+        PolledLog,
+        PollingError,
+        SonarPoller,
+        naive_stamps,
+        poll_readings,
+    )
     from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch, ReadingsError
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
+    "SonarcarveError": "sonarcarve.errors",
+    "ConfigError": "sonarcarve.errors",
+    "MethodStateError": "sonarcarve.errors",
+    "ReadingTypeError": "sonarcarve.errors",
+    "InputError": "sonarcarve.io",
+    "OutputError": "sonarcarve.io",
+    "RosbagError": "sonarcarve.io.rosbag",
+    "FilterError": "sonarcarve.filters",
+    "CrossingStoreError": "sonarcarve.methods.atm",
+    "ProcessError": "sonarcarve.pipeline",
+    "PollingError": "sonarcarve.polling",
+    "MissingExtraError": "sonarcarve.extras",
     "ArcFate": "sonarcarve.geometry",
     "AtmMethod": "sonarcarve.methods",
     "CarvedGrid": "sonarcarve.grids",
@@ -120,28 +155,40 @@ __all__ = [
     "CarvingMethod",
     "CenterlineMethod",
     "CombinedMethod",
+    "ConfigError",
     "CountingSink",
+    "CrossingStoreError",
     "EvidenceMethod",
+    "FilterError",
     "GlobalMap",
     "GlobalMapSink",
     "GridError",
+    "InputError",
     "LocalMap",
     "MapFilter",
     "Measures",
     "MethodConfig",
+    "MethodStateError",
+    "MissingExtraError",
     "OccupancyGrid",
+    "OutputError",
     "PointSource",
     "PolledLog",
+    "PollingError",
+    "ProcessError",
     "ProcessResult",
     "RangeSensorLayer",
     "Reading",
     "ReadingBatch",
     "ReadingFilter",
+    "ReadingTypeError",
     "ReadingsError",
+    "RosbagError",
     "SonarConeModel",
     "SonarHistory",
     "SonarMethod",
     "SonarPoller",
+    "SonarcarveError",
     "__version__",
     "arc_remainder",
     "carve_arc",

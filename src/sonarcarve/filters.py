@@ -29,6 +29,7 @@ do not vouch for their neighbours.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Generic, TypeVar
@@ -81,7 +82,12 @@ class DropReason(IntEnum):
 
 
 def _check_positive(name: str, value: float | None) -> None:
-    if value is not None and not (math.isfinite(value) and value > 0.0):
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        msg = f"{name} must be a finite number > 0 (metres), got {type(value).__name__} {value!r}"
+        raise FilterError(msg)
+    if not (math.isfinite(value) and value > 0.0):
         msg = f"{name} must be a finite number > 0 (metres), got {value}"
         raise FilterError(msg)
 

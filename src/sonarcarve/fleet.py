@@ -303,11 +303,20 @@ def map_logs(
 
 
 def write_summary(rows: Sequence[FleetRow], path: str | Path) -> None:
-    """Write the summary table (one line per log, the :class:`FleetRow` fields) atomically."""
+    """Write the summary table (one line per log, the :class:`FleetRow` fields) atomically.
+
+    A failed log's measures are empty cells, not 0 (a 0 reads as data), as in the terminal's
+    table; its ``error`` cell says why.
+    """
     text = io.StringIO()
     writer = csv.writer(text, lineterminator="\n")
-    writer.writerow([f.name for f in fields(FleetRow)])
+    names = [f.name for f in fields(FleetRow)]
+    writer.writerow(names)
     for row in rows:
-        writer.writerow([repr(v) if isinstance(v, float) else v for v in astuple(row)])
+        cells = [repr(v) if isinstance(v, float) else v for v in astuple(row)]
+        if not row.ok:
+            cells = [cell if name in ("log", "error") else ""
+                     for name, cell in zip(names, cells, strict=True)]
+        writer.writerow(cells)
     with atomic_text(path) as handle:
         handle.write(text.getvalue())

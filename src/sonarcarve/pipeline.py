@@ -10,7 +10,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ReadingTypeError, SonarcarveError
 from sonarcarve.filters import (
     DropReason,
     MapFilter,
@@ -139,6 +139,10 @@ def process_readings(
         ``sample_every`` < 1, a method that has already been fed readings, or both ``sink``
         and ``map_filter``.
     """
+    if not isinstance(batch, ReadingBatch):
+        msg = (f"process_readings needs a ReadingBatch, got {type(batch).__name__}: build one "
+               "with ReadingBatch.from_readings or read_readings_csv")
+        raise ReadingTypeError(msg)
     return process_chunks([batch], method, sample_every=sample_every, on_progress=on_progress,
                           reading_filter=reading_filter, map_filter=map_filter, sink=sink)
 
@@ -203,6 +207,14 @@ def process_chunks(
 def _check_run(method: SonarMethod, sample_every: int | None, map_filter: MapFilter | None,
                sink: GlobalMapSink | None) -> None:
     """Refuse what :func:`process_chunks` cannot do (its ``Raises``)."""
+    if not isinstance(method, SonarMethod):
+        # A method name is refused rather than accepted: its parameters would then need a
+        # second way in (MethodConfig goes to make_method), and the slip is easy to name.
+        made = (f"make_method({method!r})" if isinstance(method, str)
+                else "make_method(name, MethodConfig(...))")
+        msg = (f"process_readings needs a method object, got {type(method).__name__} "
+               f"{method!r:.40}: pass {made}")
+        raise ProcessError(msg)
     if sample_every is not None and sample_every < 1:
         # 0 would silently mean the default, and a negative step would process nothing.
         msg = f"sample_every must be at least 1 reading, got {sample_every}"

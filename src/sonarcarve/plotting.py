@@ -299,8 +299,11 @@ class MapOrigins(NamedTuple):
 
 
 def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
-                source: str = "readings") -> MapOrigins:
+                source: str = "readings", map_file: str | None = None) -> MapOrigins:
     """Look up each map point's reading (``id`` = row of the readings it was made from).
+
+    ``map_file``: the map CSV ``points`` were read from whole (:func:`read_map_csv`, point k on
+    line k + 2); the errors then name its file and line instead of the point's index.
 
     Raises
     ------
@@ -310,9 +313,13 @@ def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
     """
     ids = points.reading_id
     n = len(readings)
+
+    def point(k: int) -> str:
+        return f"map point {k}" if map_file is None else f"{map_file}: line {k + 2}, map point"
+
     if len(ids) and int(ids.max()) >= n:
         bad = int(np.argmax(ids >= n))
-        msg = (f"map point {bad} has id {int(ids[bad])} but {source} has {n} rows: "
+        msg = (f"{point(bad)} has id {int(ids[bad])} but {source} has {n} rows: "
                "not the readings this map was made from")
         raise InputError(msg)
     # Times are compared loosely: a tool that rewrote one of the files may round them.
@@ -321,7 +328,7 @@ def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
     if not np.all(same):
         bad = int(np.argmin(same))
         rid = int(ids[bad])
-        msg = (f"map point {bad} (id {rid}, t {float(points.t[bad])!r}, sensor "
+        msg = (f"{point(bad)} (id {rid}, t {float(points.t[bad])!r}, sensor "
                f"{int(points.sensor[bad])}) does not match row {rid} of {source} (t "
                f"{float(readings.t[rid])!r}, sensor {int(readings.sensor[rid])}): not the "
                "readings this map was made from")

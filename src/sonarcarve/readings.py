@@ -14,6 +14,7 @@ unknown). It is free space only: no arc, no point. ``range`` may be +inf only wh
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, fields
 from typing import NamedTuple, NoReturn, overload
@@ -22,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, MIN_BEAM_WIDTH
-from sonarcarve.errors import ReadingsError
+from sonarcarve.errors import ReadingsError, ReadingTypeError
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
@@ -328,14 +329,35 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
     ...
     sonarcarve.errors.ReadingsError: reading 18, column 'theta' must lie within ±1,000,000 rad
     """
-    t, sensor, x, y, theta, r, width, limit = reading
-    if (previous_t <= t and -MAX_TIME <= t <= MAX_TIME and 0.0 < r <= MAX_READING_RANGE
-            and -MAX_POSITION <= x <= MAX_POSITION and -MAX_POSITION <= y <= MAX_POSITION
-            and -MAX_ANGLE <= theta <= MAX_ANGLE and type(sensor) is int
-            and 0 <= sensor <= MAX_SENSOR and (width != width or MIN_BEAM_WIDTH <= width < math.pi)
-            and (limit != limit or r <= limit <= MAX_READING_RANGE)):
-        return
+    try:
+        t, sensor, x, y, theta, r, width, limit = reading
+        if (isinstance(reading, Reading) and previous_t <= t and -MAX_TIME <= t <= MAX_TIME
+                and 0.0 < r <= MAX_READING_RANGE
+                and -MAX_POSITION <= x <= MAX_POSITION and -MAX_POSITION <= y <= MAX_POSITION
+                and -MAX_ANGLE <= theta <= MAX_ANGLE and type(sensor) is int
+                and 0 <= sensor <= MAX_SENSOR
+                and (width != width or MIN_BEAM_WIDTH <= width < math.pi)
+                and (limit != limit or r <= limit <= MAX_READING_RANGE)):
+            return
+    except (TypeError, ValueError):
+        pass  # a field of the wrong type, or no 8-tuple: _check_types words it
     _explain_bad_reading(reading, _Where("", None, reading_id), previous_t)
+
+
+def _check_types(reading: object, where: _Where) -> None:
+    """:class:`ReadingTypeError` for something that is no :class:`Reading` or has a field that is no
+    real number (``"abc"``, ``None``, ``1+2j``), naming the field."""
+    if not isinstance(reading, Reading):
+        size = f" of {len(reading)} values" if isinstance(reading, tuple) else ""
+        msg = (f"{where.row(0)}: expected a Reading(t, sensor, x, y, theta, range[, "
+               f"beam_width, max_range]), got {type(reading).__name__}{size}")
+        raise ReadingTypeError(msg)
+    for name, value in zip(Reading._fields, reading, strict=True):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+            msg = (f"{where.row(0)}, column {name!r} must be a real number, got "
+                   f"{type(value).__name__} {shown}")
+            raise ReadingTypeError(msg)
 
 
 def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> None:
@@ -343,6 +365,7 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
 
     (The fast test in :func:`check_reading` also sends here a whole float or numpy sensor.)
     """
+    _check_types(reading, where)
     for name, (bound, beyond) in _BOUNDS.items():
         value = getattr(reading, name)
         if not math.isfinite(value):

@@ -93,8 +93,14 @@ def test_process_help_states_units_and_the_unprocessed_measure(
     for phrase in ("t in seconds", "metres", "radians counter-clockwise from +x",
                    "range in metres", "beam_width in radians", "used only for readings "
                    "without a beam_width value", "mean % of history rows",
-                   "count as processed", "[default: 20]"):
+                   "count as processed", "[default: 20]",
+                   # UX review, finding 15: the optional column, inf rows, units, off.
+                   "max_range in metres (optional", "inf for a reading that heard nothing",
+                   "--min-transversal DEGREES", "--range-tolerance METRES",
+                   "--max-incidence DEGREES", "--max-range METRES", "--max-error METRES"):
         assert phrase in text, phrase
+    assert " FLOAT " not in text
+    assert text.count("[default: (off)]") == 6  # β and the five optional filters
 
 
 def test_worlds_help_shows_one_example_per_line(capsys: pytest.CaptureFixture[str]) -> None:
@@ -141,7 +147,9 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "sonarcarve"
 #: What the CLI's shell (entry point, root group, --version, --help) may import: the standard
 #: library, typer (with click) and rich, and these light modules of the package.
 SHELL_MAY_IMPORT = {"sonarcarve.errors", "sonarcarve._version", "sonarcarve.cli",
-                    "sonarcarve.cli.app", "sonarcarve.cli.main"}
+                    "sonarcarve.cli.app", "sonarcarve.cli.main",
+                    # imported by a command as it runs; it imports numba only then
+                    "sonarcarve.cli.compile_notice"}
 
 
 def _imports(path: Path) -> set[str]:
@@ -189,3 +197,52 @@ def test_the_entry_point_stays_a_function_after_a_run() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     assert "CALLABLE True" in done.stdout
+
+
+def test_ctrl_c_exits_130_with_one_line_saying_nothing_was_written(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # UX review, finding 16: rc 130 and a clean state, but not a word on stderr.
+    import sonarcarve.cli.simulate as simulate_cli
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(simulate_cli, "simulate", interrupted)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--world", "doorway", "--out", str(out)]) == 130
+    assert capsys.readouterr().err == "sonarcarve: interrupted; nothing written\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_in_a_real_process_prints_the_line(tmp_path: Path) -> None:
+    import os
+    import signal
+    import time
+
+    code = ("import sys, time\nfrom sonarcarve.cli import main\nimport sonarcarve.cli.simulate "
+            "as s\ndef slow(*a, **k):\n    print('READY', flush=True)\n    time.sleep(60)\n"
+            "s.simulate = slow\nsys.exit(main(sys.argv[1:]))")
+    out = tmp_path / "sim.csv"
+    proc = subprocess.Popen([sys.executable, "-c", code, "simulate", "--world", "doorway",
+                             "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "READY"
+    time.sleep(0.2)
+    os.kill(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err == "sonarcarve: interrupted; nothing written\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (["sweep", "--out", "sw"], "the runs finished so far are kept: the same command resumes"),
+    (["process", "a.csv", "b.csv", "--out-dir", "fl"], "the maps finished before are kept"),
+    (["grid", "r.csv", "--out", "g.yaml"], "interrupted; nothing written"),
+])
+def test_the_interrupted_line_tells_what_each_command_kept(args: list[str], said: str) -> None:
+    from sonarcarve.cli.main import interrupted_message
+
+    assert said in interrupted_message(args)

@@ -209,9 +209,10 @@ def bad_requests(runs: Path, tmp_path_factory: pytest.TempPathFactory,
     silent = _write_bag(inputs / "silent.mcap", silent_only=True)
     csv, bag = str(runs / "r.csv"), str(runs / "run.mcap")
     return {
-        "corrupt": ([str(corrupt)], f"{corrupt}: not a readable rosbag1 file or rosbag2 folder"),
-        "truncated": ([str(truncated)], f"{truncated}: not a readable rosbag1 file"),
-        "not-ros1": ([str(not_ros1)], f"{not_ros1}: not a readable"),
+        "corrupt": ([str(corrupt)], f"{corrupt}: corrupt MCAP file (Unexpected record)"),
+        "truncated": ([str(truncated)], f"{truncated}: truncated or corrupt MCAP file (no end "
+                                        "marker: was the recording cut short?)"),
+        "not-ros1": ([str(not_ros1)], f"{not_ros1}: not a ROS bag"),
         "absent": ([str(inputs / "absent.mcap")], "absent.mcap: no such file or folder"),
         "no-range-topic": ([str(no_ranges)],
                            f"{no_ranges}: no topic of type sensor_msgs/msg/Range"),

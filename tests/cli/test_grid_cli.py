@@ -52,6 +52,9 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--resolution", "0"], "--resolution must be a finite number > 0"),
     (["--resolution", "abc"], "'abc' is not a number"),
     (["--margin", "-1"], "--margin must be a finite number >= 0"),
+    # UX review, finding 9: a one-cell map was written.
+    (["--resolution", "1e9"], "--resolution 1e+09 m is larger than the area mapped ("),
+    (["--resolution", "5", "--margin", "0"], "--resolution 5 m is larger than the area mapped"),
     (["--fresh-periods", "0.5"], "--fresh-periods must be a number >= 1 firing period"),
     (["--fresh-periods", "nan"], "--fresh-periods must be a number >= 1 firing period"),
     (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),

@@ -124,3 +124,21 @@ def test_bad_map_and_bad_out_are_one_line_errors(run: tuple[Path, Path, GlobalMa
     assert "expected a .png, .svg or .pdf" in capsys.readouterr().err
     assert main(["plot", str(map_csv), "--out", str(tmp_path / "nowhere" / "m.png")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_map_of_other_readings_names_the_map_file_and_line(
+        run: tuple[Path, Path, GlobalMap], tmp_path: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # UX review, finding 13: the message named neither the map nor its line.
+    readings, map_csv, _ = run
+    lines = map_csv.read_text().splitlines(keepends=True)
+    fields = lines[2].split(",")
+    lines[2] = ",".join(["99999", *fields[1:]])
+    map_csv.write_text("".join(lines))
+    out = tmp_path / "p.png"
+    assert main(["plot", str(map_csv), "--readings", str(readings), "--arcs",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"sonarcarve: error: {map_csv}: line 3, map point has id 99999 but "
+                          f"{readings} has 40 rows"), err
+    assert not out.exists()

@@ -77,12 +77,19 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
         ([str(corrupt)], str(corrupt)),
         ([str(tmp_path / "absent.csv")], "no such file"),
         ([str(good), "--method", "nonsense"], "unknown method 'nonsense'"),
-        ([str(good), "--history", "0"], "history_size must be a whole number of arcs in [1, "),
-        ([str(good), "--history", "100001"], "history_size must be a whole number of arcs"),
-        ([str(good), "--beam-width", "200"], "beam_width must lie in [1e-06, pi) radians"),
-        ([str(good), "--range-tolerance", "-1"], "range_tolerance must be finite and >= 0"),
-        ([str(good), "--min-transversal", "91"], "min_transversal must lie in [0, pi/2]"),
-        ([str(good), "--max-incidence", "-5"], "max_incidence must lie in [0, pi/2]"),
+        ([str(good), "--history", "0"], "error: --history must be a whole number of arcs in [1, "),
+        ([str(good), "--history", "100001"], "error: --history must be a whole number of arcs"),
+        ([str(good), "--beam-width", "200"], "error: --beam-width must lie in (0, 180) degrees, "
+                                             "got 200"),
+        ([str(good), "--beam-width", "0"], "error: --beam-width must lie in (0, 180) degrees"),
+        ([str(good), "--range-tolerance", "-1"], "error: --range-tolerance must be finite and "
+                                                 ">= 0 metres, got -1"),
+        ([str(good), "--min-transversal", "91"], "error: --min-transversal must lie in (0, 90] "
+                                                 "degrees, got 91"),
+        ([str(good), "--min-transversal", "0"], "error: --min-transversal must lie in (0, 90] "
+                                                "degrees, got 0"),
+        ([str(good), "--max-incidence", "-5"], "error: --max-incidence must lie in [0, 90] "
+                                               "degrees, got -5"),
     ]
 
 

@@ -94,7 +94,7 @@ def test_physics_amplitude_is_a_different_sonar(tmp_path: Path,
 @pytest.mark.parametrize(
     ("args", "problem"),
     [
-        (["--world", "doorway", "--physics", "sonic"], "'specular', 'amplitude'"),
+        (["--world", "doorway", "--physics", "sonic"], "choose specular or amplitude"),
         (["--world", "atlantis"], "unknown world 'atlantis'"),
         (["--world", "doorway", "--robot", "nomad"], "unknown robot 'nomad'"),
         (["--world", "doorway", "--path", "nowhere.csv"], "no such file"),
@@ -150,3 +150,42 @@ def test_bag_output_refuses_to_overwrite_and_unknown_endings(
     assert run("--world", "doorway", "--out", str(tmp_path / "run.txt")) == 2
     assert "unknown ending '.txt'" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.mcap"]
+
+
+@pytest.mark.parametrize(("waypoints", "problem"), [
+    # UX review, finding 6: 1,414 m and 3,535 s in an 8 x 9.5 m world, accepted.
+    ("x,y\n0,0\n1000,1000\n", "p.csv: line 3, waypoint (1000, 1000) lies outside world "
+                              "'doorway' (x in [-4, 4], y in [-1.5, 8])"),
+    # Through the wall at y = 4, beside the door (|x| <= 0.425).
+    ("x,y\n# comment\n2,0\n2,6\n", "p.csv: line 3, the leg to the next waypoint (line 4) runs "
+                                   "into a wall of world 'doorway' at (2, 4)"),
+])
+def test_a_path_outside_the_world_or_through_a_wall_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+    waypoints: str, problem: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("p.csv").write_text(waypoints)
+    assert run("--world", "doorway", "--path", "p.csv", "--out", "never.csv") == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"sonarcarve: error: {problem}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.csv"]
+
+
+def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
+    path = tmp_path / "p.json"
+    path.write_text("[[0, 0], [0, 6]]")
+    assert run("--world", "doorway", "--path", str(path), "--out", str(tmp_path / "s.csv")) == 0
+
+
+@pytest.mark.parametrize(("args", "problem"), [
+    (["--physics", "foo"], "error: --physics foo: unknown model; choose specular or amplitude"),
+    (["--explore", "1e9"], "error: --explore must be at most 500,000 seconds (139 hours, the "
+                           "simulator's limit of 10,000,000 poses), got 1e+09"),
+])
+def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                       args: list[str], problem: str) -> None:
+    assert run("--world", "doorway", *args, "--out", str(tmp_path / "s.csv")) == 2
+    err = capsys.readouterr().err
+    assert problem in err, err
+    assert list(tmp_path.iterdir()) == []

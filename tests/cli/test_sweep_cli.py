@@ -32,3 +32,19 @@ def test_a_bad_parameter_is_a_one_line_error(tmp_path: Path,
     err = capsys.readouterr().err.strip()
     assert "warp" in err
     assert len(err.splitlines()) == 1
+
+
+def test_a_bad_length_names_the_option(tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sweep", "--length", "0", "--out", str(tmp_path / "sw")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "sonarcarve: error: --length must be > 0 metres, got 0"
+    assert not (tmp_path / "sw").exists()
+
+
+
+def test_an_angle_out_of_range_is_named_in_degrees(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sweep", "--param", "psi=0,20", "--out", str(tmp_path / "sw")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("min_transversal_deg must lie in (0, 90] degrees, got 0"), err

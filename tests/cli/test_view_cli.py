@@ -99,6 +99,9 @@ def test_no_display_means_no_viewer_and_nothing_started() -> None:
     (["--every", "0"], "--every must be at least 1 reading, got 0"),
     (["--out", "{readings}"], "is the input file"),
     (["--world", "nowhere"], "unknown world 'nowhere'"),
+    # UX review, finding 7: a Rerun file was written under this name.
+    (["--out", "{readings}.out.csv"], "--out {readings}.out.csv: a Rerun recording's name must "
+                                      "end in .rrd"),
 ])
 def test_bad_inputs_are_one_line_exit_2(readings: Path, capsys: pytest.CaptureFixture[str],
                                         args: list[str], problem: str) -> None:
@@ -106,8 +109,9 @@ def test_bad_inputs_are_one_line_exit_2(readings: Path, capsys: pytest.CaptureFi
     assert main(["view", str(readings), *given]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
-    assert problem in err
+    assert problem.format(readings=readings) in err
     assert not readings.with_suffix(".rrd").exists()
+    assert not Path(f"{readings}.out.csv").exists()
 
 
 @pytest.mark.usefixtures("headless")
@@ -120,3 +124,9 @@ def test_view_finds_the_truth_walls_of_a_simulated_log(readings: Path, tmp_path:
     out = tmp_path / "sim.rrd"
     assert main(["view", str(readings), "--out", str(out)]) == 0
     assert "/world/walls" in _entities(out)
+
+
+def test_the_method_help_lists_evidence(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["view", "--help"]) == 0
+    help_text = " ".join(capsys.readouterr().out.replace("│", " ").split())
+    assert "centerline | carve | atm | combined | evidence" in help_text

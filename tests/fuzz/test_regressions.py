@@ -52,7 +52,10 @@ CASES: dict[str, tuple[dict[str, bytes], list[str], str]] = {
                              [*SIM, "--world", "w.json", "--explore", "5"],
                              "MAX_WORLD_COORDINATE"),
     "waypoints 100 km": ({"p.csv": b"x,y\n0,0\n100000,0\n"},
-                         [*SIM, "--world", "doorway", "--path", "p.csv"], "MAX_FIRINGS"),
+                         [*SIM, "--world", "doorway", "--path", "p.csv"],
+                         # refused before simulating since the UX review (finding 6); the
+                         # firing limit itself is tested in tests/test_robot.py
+                         "p.csv: line 3, waypoint (100000, 0) lies outside world 'doorway'"),
     "readings header of 100 kB": ({"r.csv": b"t,sensor,x,y,theta," + b"r" * 100_000
                                    + b"\n1,0,0,0,0,1\n"},
                                   ["process", "r.csv", "--out", "out.csv"], "missing column"),

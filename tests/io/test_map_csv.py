@@ -138,6 +138,11 @@ GOOD = "0,0.0,2,1.0,-2.5,centerline,0.5,0.75\n"
     (HEADER + "\n" + "0,0.0,2,one,-2.5,atm,0.5,0.1\n", "line 2", "'x' is not a number"),
     (HEADER + "\n" + "1.5,0.0,2,1.0,-2.5,atm,0.5,0.1\n", "line 2", "'id' is not a whole number"),
     (HEADER + "\n" + "1,0.0,-2,1.0,-2.5,atm,0.5,0.1\n", "line 2", "'sensor' is not a whole"),
+    # UX review, finding 12: a negative bound or width passed.
+    (HEADER + "\n" + GOOD + "0,0,0,0,0,carved,0.1,-1,\n", "line 3",
+     "column 'max_error' must be >= 0 metres, got '-1'"),
+    (HEADER + "\n" + "0,0,0,0,0,carved,-0.1,1\n", "line 2",
+     "column 'width' must be >= 0 radians, got '-0.1'"),
 ])
 def test_bad_files_fail_with_one_line_naming_file_and_line(
     tmp_path: Path, text: str, where: str, problem: str
@@ -322,3 +327,12 @@ def test_sink_refuses_an_unknown_source_code(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="block_rows"), \
             map_csv_sink(tmp_path / "map.csv", block_rows=0):
         pass
+
+
+def test_a_file_that_is_not_utf8_names_its_line(tmp_path: Path) -> None:
+    # UX review, finding 11: the codec's own message, with no line.
+    path = tmp_path / "binary.csv"
+    path.write_bytes((HEADER + "\n" + GOOD).encode() + b"\xbd\xff,1\n")
+    with pytest.raises(SonarcarveError) as info:
+        read_map_csv(path)
+    assert str(info.value) == f"{path}: line 3, cannot read as CSV: not UTF-8 text (byte 0xbd)"

@@ -368,12 +368,19 @@ def test_not_a_bag(tmp_path: Path) -> None:
     fake.write_text("hello\n")
     with pytest.raises(RosbagError) as err:
         read_rosbag(fake)
-    _assert_one_line(err, str(fake), "not a readable")
+    _assert_one_line(err, str(fake), "not a ROS bag")
+    junk = tmp_path / "junk.bag"  # the codec's "can't decode byte 0xbd" leaked (UX review)
+    junk.write_bytes(b"\xbd" + bytes(range(256)) * 4)
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(junk)
+    assert str(err.value) == (f"{junk}: not a ROS bag: it does not start as an MCAP, rosbag1 "
+                              "or rosbag2 SQLite file does")
     folder = tmp_path / "folder"
     folder.mkdir()
     with pytest.raises(RosbagError) as err:
         read_rosbag(folder)
-    _assert_one_line(err, str(folder))
+    assert str(err.value) == (f"{folder}: a folder, but not a rosbag2 folder (no metadata.yaml "
+                              "in it)")
     with pytest.raises(RosbagError) as err:
         read_rosbag(tmp_path / "missing")
     _assert_one_line(err, "missing", "no such")
@@ -468,3 +475,20 @@ def test_cli_convert_rosbag_errors_are_one_line(tmp_path: Path,
     assert "does not fit" in err
     assert "--robot" in err
     assert all(line.startswith("sonarcarve: error:") for line in err.strip().splitlines())
+
+
+@pytest.mark.parametrize(("name", "kind"), [
+    ("ros1.bag", "truncated or corrupt rosbag1 file (its index cannot be read: was the "
+                 "recording cut short?)"),
+    ("run.mcap", "truncated or corrupt MCAP file (no end marker: was the recording cut short?)"),
+])
+def test_a_cut_short_bag_says_so_in_plain_words(tmp_path: Path, name: str, kind: str) -> None:
+    # UX review, finding 11: "File end magic is invalid." and a Python tuple repr.
+    source = write_bag(tmp_path / ("ros2_mcap" if name.endswith(".mcap") else name),
+                       [*TF_ODOM, *TF_MOUNTS, *TF_RANGES] * 20, TF_TYPES)
+    data = (source if source.is_file() else next(source.glob("*.mcap"))).read_bytes()
+    bag = tmp_path / f"cut-{name}"
+    bag.write_bytes(data[: len(data) // 2])
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag)
+    assert str(err.value) == f"{bag}: {kind}"

@@ -79,6 +79,15 @@ def test_a_yaml_spec_reads_with_aliases(tmp_path: Path) -> None:
     path.write_text("grid:\n  warp: [1]\n")
     with pytest.raises(SweepError, match="warp"):
         load_sweep_spec(path)
+    # UX review, finding 11: the YAML library's "while parsing a flow node ... <unicode
+    # string>" leaked; now the form of every other YAML reader.
+    path.write_text("grid: [1,\n")
+    with pytest.raises(SweepError) as err:
+        load_sweep_spec(path)
+    assert str(err.value).startswith(f"{path}: line 2, column 1: invalid YAML (")
+    assert "unicode string" not in str(err.value)
+    with pytest.raises(SweepError, match=r"absent\.yaml"):
+        load_sweep_spec(tmp_path / "absent.yaml")
 
 
 def test_the_serial_table_is_tidy(tmp_path: Path, serial_rows: list[dict[str, Any]]) -> None:

@@ -424,8 +424,17 @@ def test_both_crossings_of_one_pair_can_be_kept() -> None:
     np.testing.assert_allclose(est.width, [2.0 * expected[1]] * 2, atol=1e-6)
 
 
-def test_psi_zero_keeps_every_crossing_with_an_infinite_bound() -> None:
-    method = AtmMethod(history_size=4, beam_width=PHI, min_transversal=0.0, range_resolution=INCH)
+def test_psi_zero_is_refused() -> None:
+    # ψ = 0 would give every ATM point an infinite bound (UX review, finding 4).
+    with pytest.raises(ConfigError, match=r"min_transversal must lie in \(0, pi/2\] radians"):
+        AtmMethod(history_size=4, beam_width=PHI, min_transversal=0.0)
+    with pytest.raises(ConfigError, match="min_transversal"):
+        MethodConfig(min_transversal=0.0)
+
+
+def test_a_tiny_psi_keeps_every_crossing_with_a_huge_bound() -> None:
+    method = AtmMethod(history_size=4, beam_width=PHI, min_transversal=1e-9,
+                       range_resolution=INCH)
     reading = Reading(0.0, 0, 0.0, 0.0, 0.0, 2.0, PHI)
     method.add(reading)
     method.add(reading)  # the same circle again: concentric, never a crossing
@@ -433,7 +442,7 @@ def test_psi_zero_keeps_every_crossing_with_an_infinite_bound() -> None:
     method.add(Reading(3.0, 0, 0.0, 0.1, 0.0, 2.0, PHI))  # crosses the first two in-beam
     est = _atm(method).estimates(method.history.slots())
     assert est.processed.tolist() == [True, True, False, True]
-    assert est.max_error[0] == math.inf
+    assert est.max_error[0] > 1e6  # δ (1/sin ψ + 1/tan ψ) ≈ 2δ/ψ = 5e7 m
     assert atm_error_bound(0.0, 0.0) == 0.0
 
 

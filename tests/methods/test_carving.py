@@ -193,8 +193,8 @@ def test_cli_max_incidence(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     capsys.readouterr()
     assert main(["process", str(readings), "-o", str(tmp_path / "x.csv"),
                  "--max-incidence", "91"]) == 2
-    # The config's rule and message (degrees are converted to radians first).
-    assert "max_incidence must lie in [0, pi/2] radians" in capsys.readouterr().err
+    # Checked in degrees, as typed (the config's rule, [0, pi/2] radians).
+    assert "--max-incidence must lie in [0, 90] degrees, got 91" in capsys.readouterr().err
 
 
 # -- against a slow reference: the paper's procedure (section 5-A) with the scalar carve_arc ------

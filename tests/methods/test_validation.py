@@ -258,7 +258,7 @@ BAD_PARAMETERS = [
     ("beam_width", 0.0), ("beam_width", math.pi), ("beam_width", -0.1), ("beam_width", math.nan),
     ("beam_width", math.inf), ("beam_width", "wide"),
     ("range_tolerance", -0.01), ("range_tolerance", math.nan), ("range_tolerance", math.inf),
-    ("min_transversal", -0.1), ("min_transversal", 0.5 * math.pi + 1e-9),
+    ("min_transversal", -0.1), ("min_transversal", 0.0), ("min_transversal", 0.5 * math.pi + 1e-9),
     ("min_transversal", math.nan),
     ("range_resolution", -1.0), ("range_resolution", math.inf), ("range_resolution", math.nan),
     ("max_incidence", -0.1), ("max_incidence", 1.6), ("max_incidence", math.nan),
@@ -280,7 +280,7 @@ def test_method_config_refuses_each_bad_field(field: str, value: object) -> None
 @pytest.mark.parametrize(("field", "value"), [
     ("history_size", 1), ("history_size", 100_000), ("history_size", np.int64(7)),
     ("beam_width", 1e-6), ("beam_width", 3.14), ("range_tolerance", 0.0),
-    ("min_transversal", 0.0), ("min_transversal", 0.5 * math.pi), ("range_resolution", 0.0),
+    ("min_transversal", 1e-9), ("min_transversal", 0.5 * math.pi), ("range_resolution", 0.0),
     ("max_incidence", 0.0), ("max_incidence", 0.5 * math.pi),
 ])
 def test_method_config_accepts_the_edges(field: str, value: object) -> None:

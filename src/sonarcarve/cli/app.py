@@ -119,13 +119,28 @@ def _tidy_param(param: Any) -> None:
         param.__class__ = _Option
 
 
+#: Commands that run no compiled kernel, so need no word about compiling them (``warm``
+#: compiles on purpose and says so itself).
+_NO_KERNELS = frozenset({"warm", "worlds"})
+
+
 class _Command(TyperCommand):
-    """A command with tidied parameters (including the ``--help`` flag, made on demand)."""
+    """A command with tidied parameters (including the ``--help`` flag, made on demand), that
+    says in one stderr line when it has to compile kernels (:mod:`.compile_notice`)."""
 
     def get_help_option(self, ctx: Any) -> Any:
         option = super().get_help_option(ctx)
         _tidy_param(option)
         return option
+
+    def invoke(self, ctx: Any) -> Any:
+        # Reached once the options are parsed (never for --help), right before the command.
+        from sonarcarve.cli.compile_notice import announce_compiling, notice_enabled
+
+        if self.name in _NO_KERNELS or not notice_enabled():
+            return super().invoke(ctx)
+        with announce_compiling():
+            return super().invoke(ctx)
 
 
 def _tidy_command(command: Any) -> Any:

@@ -125,7 +125,7 @@ def convert(
     directory: Annotated[Path | None, typer.Argument(
         metavar="SOURCE",
         help="roboND: folder holding the log's files (default: the bundled copy); "
-             "rosbag: a rosbag1 file (*.bag) or a rosbag2 folder.")]
+             "rosbag: a rosbag1 file (*.bag), an MCAP file (*.mcap) or a rosbag2 folder.")]
         = None,
     beam_width: Annotated[float | None, typer.Option(
         metavar="DEGREES",

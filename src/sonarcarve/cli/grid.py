@@ -100,7 +100,8 @@ def _check_fresh_periods(model: str, fresh_periods: float | None) -> None:
         msg = f"--fresh-periods applies to --model carved only, not {model}"
         raise GridUsageError(msg)
     if not fresh_periods >= 1.0:  # also NaN
-        msg = f"--fresh-periods must be a number >= 1 firing period (inf: off), got {fresh_periods}"
+        msg = (f"--fresh-periods must be a number >= 1 firing period (inf: keep the mark up to "
+               f"2 s), got {fresh_periods}")
         raise GridUsageError(msg)
 
 
@@ -114,8 +115,8 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     ------
     GridUsageError
         An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), ``fresh_periods`` below 1 or for a model other than the carved grid, or no
-        readings.
+        >= 0), a resolution larger than the area mapped, ``fresh_periods`` below 1 or for a
+        model other than the carved grid, or no readings.
     """
     if model not in GRID_MODELS:
         msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
@@ -130,7 +131,13 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     if not len(batch):
         msg = "no readings to map"
         raise GridUsageError(msg)
-    built = GRID_MODELS[model](resolution, readings_extent(batch, margin), fresh_periods)
+    bounds = readings_extent(batch, margin)
+    width, height = bounds[2] - bounds[0], bounds[3] - bounds[1]
+    if resolution > max(width, height):
+        msg = (f"--resolution {resolution:g} m is larger than the area mapped ({width:.3g} x "
+               f"{height:.3g} m: the readings' extent plus --margin); a cell must be smaller")
+        raise GridUsageError(msg)
+    built = GRID_MODELS[model](resolution, bounds, fresh_periods)
     assert isinstance(built, CarvedGrid | RangeSensorLayer | OccupancyGrid)
     built.add_many(batch)
     return built
@@ -179,7 +186,9 @@ def grid(
         help="carved (arc carving's grid) | range-sensor-layer (ROS's layer, its defaults) | "
              "elfes (the Elfes/octomap log-odds grid).")] = "carved",
     resolution: Annotated[float, typer.Option(
-        metavar="METRES", help="Cell side, metres.")] = 0.05,
+        metavar="METRES",
+        help="Cell side, metres; at most the longer side of the area mapped (the readings' "
+             "extent plus --margin): a larger cell would put the whole map in one cell.")] = 0.05,
     margin: Annotated[float, typer.Option(
         metavar="METRES", help="Margin around the readings' extent, metres.")] = 0.5,
     fresh_periods: Annotated[float | None, typer.Option(

@@ -25,6 +25,20 @@ __all__ = ["app", "main"]
 #: Exit code for bad input or usage, as click uses for usage errors.
 EXIT_BAD_INPUT = 2
 
+#: Exit code after Ctrl-C (128 + SIGINT), as a shell reports a process killed by it; typer
+#: turns the KeyboardInterrupt into this code.
+EXIT_INTERRUPTED = 130
+
+#: What an interrupted command leaves behind, said in one line on stderr. Every output is
+#: written atomically (a temporary file renamed when complete), so no file is ever
+#: half-written; the commands with many outputs keep those finished before Ctrl-C.
+_KEPT_WHEN_INTERRUPTED = {
+    "sweep": "interrupted; the runs finished so far are kept: the same command resumes",
+    "experiments": "interrupted; no file half-written (files finished before are kept)",
+    "demo": "interrupted; no file half-written (files finished before are kept)",
+    "warm": "interrupted; the kernels compiled so far stay cached",
+}
+
 # One line per command: name, module, and the first paragraph of its help.
 lazy_command("demo", "sonarcarve.cli.demo",
              "Simulate a robot touring a building, map its sonar readings with every method, "
@@ -66,12 +80,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     A usage error (unknown command or option, missing or malformed value) and a
     :class:`SonarcarveError` from the library both become one line ``sonarcarve: error: ...``
     on stderr and exit code 2; nothing prints a traceback for bad input. ``--help`` and
-    ``--version`` exit 0; ``sonarcarve`` alone prints the help and exits 2.
+    ``--version`` exit 0; ``sonarcarve`` alone prints the help and exits 2. Ctrl-C exits 130
+    with one line saying what was kept (:func:`interrupted_message`).
     """
     command = typer.main.get_command(app)
     args = list(sys.argv[1:] if argv is None else argv)
     try:
         result = command.main(args=args, prog_name="sonarcarve", standalone_mode=False)
+    except KeyboardInterrupt:  # outside the command (typer turns one inside it into 130)
+        result = EXIT_INTERRUPTED
     except NoArgsIsHelpError:
         return EXIT_BAD_INPUT  # the help is already printed
     except ClickException as err:
@@ -85,7 +102,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     except SystemExit as done:  # a broken pipe, as click handles it
         return done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
+    if result == EXIT_INTERRUPTED:
+        print(f"sonarcarve: {interrupted_message(args)}", file=sys.stderr)
     return result if isinstance(result, int) else 0
+
+
+def interrupted_message(args: Sequence[str]) -> str:
+    """What Ctrl-C left behind, for the command line ``args`` (see _KEPT_WHEN_INTERRUPTED)."""
+    name = next((arg for arg in args if not arg.startswith("-")), "")
+    if name == "process" and any(arg == "--out-dir" or arg.startswith("--out-dir=")
+                                 for arg in args):
+        return "interrupted; no map half-written (the maps finished before are kept)"
+    return _KEPT_WHEN_INTERRUPTED.get(name, "interrupted; nothing written")
 
 
 def usage_message(err: ClickException) -> str:

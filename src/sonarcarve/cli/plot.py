@@ -87,12 +87,12 @@ def plot(
     require("matplotlib", "plot", "Figures")
     points = read_map_csv(map_csv)
     total = len(points)
+    batch = read_readings_csv(readings) if readings is not None else None
+    if batch is not None:  # refuses another log's readings, naming the map's line
+        map_origins(points, batch, source=str(readings), map_file=str(map_csv))
     if confidence_min is not None:
         points = points.select(confidence_mask(points.confidence, confidence_min))
-    batch = read_readings_csv(readings) if readings is not None else None
     image = read_grid_image(grid) if grid is not None else None
-    if batch is not None:
-        map_origins(points, batch, source=str(readings))  # refuses another log's readings
     ax = new_axes(8.0, 7.0)
     plot_user_map(points, ax, readings=batch, grid=image, error_bounds=error_bars, arcs=arcs,
                   title=title)

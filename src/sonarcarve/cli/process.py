@@ -30,6 +30,7 @@ from sonarcarve.cli.options import (
     check_new_bag,
     refuse_bag_options,
 )
+from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
@@ -100,13 +101,15 @@ class Output(NamedTuple):
 # The command's options, one alias each, so that the command's signature reads as a list.
 _InputsArg = Annotated[list[Path], typer.Argument(
     metavar="READINGS.csv|BAG",
-    help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width]`, one echo per "
-         "row: t in seconds (never decreasing), sensor a whole number >= 0, x, y the "
-         "sensor's position in metres, theta its axis in radians counter-clockwise from +x "
-         "(world frame), range in metres (> 0), beam_width in radians (optional; blank or "
-         "absent: --beam-width applies). Or a ROS bag: `*.bag` (ROS 1), `*.mcap`, `*.db3` or "
-         "a rosbag2 folder, read as `sonarcarve convert rosbag` reads it (Range + odometry + "
-         "TF; see the bag options). Several logs need --out-dir.")]
+    help="Readings CSV with a header `t,sensor,x,y,theta,range[,beam_width][,max_range]`, "
+         "one echo per row: t in seconds (never decreasing), sensor a whole number >= 0, x, y "
+         "the sensor's position in metres, theta its axis in radians counter-clockwise from "
+         "+x (world frame), range in metres (> 0, or `inf` for a reading that heard nothing: "
+         "then max_range must be given), beam_width in radians (optional; blank or absent: "
+         "--beam-width applies), max_range in metres (optional: how far the sensor listened; "
+         "a no-echo row's free space reaches it). Or a ROS bag: `*.bag` (ROS 1), `*.mcap`, "
+         "`*.db3` or a rosbag2 folder, read as `sonarcarve convert rosbag` reads it (Range + "
+         "odometry + TF; see the bag options). Several logs need --out-dir.")]
 _OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", metavar="OUT",
     help="Where to write, for one INPUT; the ending picks what: `.csv` the global map CSV; "
@@ -157,11 +160,15 @@ _BeamWidthOpt = Annotated[float, typer.Option(
     help="Beam width φ in degrees, used only for readings without a beam_width value (no "
          "such column, or a blank cell); a beam_width column, in radians, wins.")]
 _ToleranceOpt = Annotated[float, typer.Option(
+    metavar="METRES",
     help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper).")]
 _DEFAULT_TRANSVERSAL_DEG = round(math.degrees(DEFAULT_MIN_TRANSVERSAL), 6)
 _TransversalOpt = Annotated[float, typer.Option(
-    help="ψ in degrees: ATM's minimum angle between two arcs at their intersection.")]
+    metavar="DEGREES",
+    help="ψ in degrees, in (0, 90]: ATM's minimum angle between two arcs at their "
+         "intersection.")]
 _IncidenceOpt = Annotated[float | None, typer.Option(
+    metavar="DEGREES", show_default="off",
     help="β in degrees, in [0, 90]: specular-aware carving (beyond the paper; off by "
          "default). A newer reading then does not carve the part of an older arc whose "
          "implied wall (facing the older sensor) it would meet at more than β from the "
@@ -169,22 +176,28 @@ _IncidenceOpt = Annotated[float | None, typer.Option(
          "reading's free space says nothing there. 90 = off = the paper. Example: "
          "--max-incidence 30.")]
 _MaxRangeOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop readings farther than this, metres (reading filter; off by default). The "
          f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
          "sensors' height and floor.", rich_help_panel="Filters")]
 _MinRangeOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop readings nearer than this, metres (reading filter).",
     rich_help_panel="Filters")]
 _JumpOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Drop a reading whose range differs by more than this (metres) from the same "
          "sensor's previous reading: a jumping sensor is ignored for one reading.",
     rich_help_panel="Filters")]
 _OutlierRadiusOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Map filter: drop points with fewer than --outlier-neighbours other points within "
          "this radius, metres.", rich_help_panel="Filters")]
 _NeighboursOpt = Annotated[int, typer.Option(
+    metavar="POINTS",
     help="k of the outlier test (needs --outlier-radius).", rich_help_panel="Filters")]
 _MaxErrorOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
     help="Map filter: drop points whose error bound max_error exceeds this, metres "
          "(paper, Fig. 13b).", rich_help_panel="Filters")]
 
@@ -507,9 +520,16 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
             incidence_deg: float | None) -> MethodConfig:
     """The options in SI units; :class:`MethodConfig` checks every value (one-line errors).
 
-    The config speaks radians; an error about an option given in degrees is prefixed with the
-    option as typed, so that "got 3.49" is not read as the user's number.
+    The config speaks radians and its own field names; the options given in degrees are
+    checked here first, in degrees, and any other error names the option (``--history``), not
+    the field (``history_size``).
     """
+    _check_degrees("--beam-width", beam_width_deg, 0.0, 180.0, closed_high=False,
+                   low_ok=math.degrees(MIN_BEAM_WIDTH))
+    _check_degrees("--min-transversal", transversal_deg, 0.0, 90.0, closed_high=True)
+    if incidence_deg is not None:
+        _check_degrees("--max-incidence", incidence_deg, 0.0, 90.0, closed_high=True,
+                       closed_low=True)
     incidence = DEFAULT_MAX_INCIDENCE
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
@@ -519,14 +539,34 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
                             min_transversal=math.radians(transversal_deg),
                             max_incidence=incidence)
     except ConfigError as err:
-        typed = {"beam_width": f"--beam-width {beam_width_deg:g}",
-                 "min_transversal": f"--min-transversal {transversal_deg:g}",
-                 "max_incidence": f"--max-incidence {incidence_deg}"}
-        field = str(err).split(" ", 1)[0]
-        if field in typed:
-            msg = f"{typed[field]} (degrees): {err}"
-            raise ConfigError(msg) from None
-        raise
+        raise ConfigError(option_message(str(err))) from None
+
+
+#: MethodConfig's field -> the option that sets it, for its error messages.
+_OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tolerance",
+                    "beam_width": "--beam-width", "min_transversal": "--min-transversal",
+                    "max_incidence": "--max-incidence"}
+
+
+def option_message(message: str) -> str:
+    """A :class:`MethodConfig` error with its leading field name replaced by the option."""
+    field, _, rest = message.partition(" ")
+    option = _OPTION_OF_FIELD.get(field)
+    return f"{option} {rest}" if option is not None else message
+
+
+def _check_degrees(option: str, value: float, low: float, high: float, *,
+                   closed_high: bool, closed_low: bool = False,
+                   low_ok: float | None = None) -> None:
+    """Refuse an angle option outside its interval, in degrees, as the user typed it."""
+    above_low = value >= low if closed_low else value > low
+    if low_ok is not None:
+        above_low = above_low and value >= low_ok
+    below_high = value <= high if closed_high else value < high
+    if not (math.isfinite(value) and above_low and below_high):
+        interval = f"{'[' if closed_low else '('}{low:g}, {high:g}{']' if closed_high else ')'}"
+        msg = f"{option} must lie in {interval} degrees, got {value:g}"
+        raise ParameterError(msg)
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,

@@ -22,11 +22,18 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import atomic_path, check_output_file
 from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, load_robot
 from sonarcarve.sim.bag import write_simulation_bag
-from sonarcarve.sim.motion import Trajectory, explore, follow_waypoints, with_odometry_drift
+from sonarcarve.sim.motion import (
+    DEFAULT_DT,
+    MAX_POSES,
+    Trajectory,
+    explore,
+    follow_waypoints,
+    with_odometry_drift,
+)
 from sonarcarve.sim.simulate import Simulation, simulate
-from sonarcarve.sim.sonar import DEFAULT_PHYSICS, SonarPhysics
+from sonarcarve.sim.sonar import DEFAULT_PHYSICS, ECHO_MODELS, SonarPhysics
 from sonarcarve.sim.truth import TRUTH_SUFFIX, truth_path, write_simulation, write_truth_json
-from sonarcarve.sim.waypoints import read_waypoints
+from sonarcarve.sim.waypoints import check_path_in_world, read_waypoint_places
 from sonarcarve.sim.world import World, WorldError, load_world
 
 __all__ = ["LOG_FORMATS", "LogFormat", "simulate_command"]
@@ -180,11 +187,19 @@ def _check_motion_options(path: Path | None, explore_seconds: float | None) -> N
                                             and explore_seconds > 0.0):
         msg = f"--explore must be a positive number of seconds, got {explore_seconds}"
         raise SimulateParameterError(msg)
+    if explore_seconds is not None and explore_seconds / DEFAULT_DT > MAX_POSES:
+        limit = MAX_POSES * DEFAULT_DT
+        msg = (f"--explore must be at most {limit:,.0f} seconds ({limit / 3600:.0f} hours, the "
+               f"simulator's limit of {MAX_POSES:,} poses), got {explore_seconds:g}")
+        raise SimulateParameterError(msg)
 
 
 def _physics(echo_model: str, clean: bool) -> SonarPhysics:
     """The sensor model of ``--physics`` and ``--clean``; a one-line error for an unknown model
     (:class:`~sonarcarve.sim.sonar.SonarPhysicsError`, naming the choices)."""
+    if echo_model not in ECHO_MODELS:
+        msg = f"--physics {echo_model}: unknown model; choose {' or '.join(ECHO_MODELS)}"
+        raise SimulateParameterError(msg)
     base = SonarPhysics.clean() if clean else DEFAULT_PHYSICS
     return base if echo_model == base.echo_model else replace(base, echo_model=echo_model)
 
@@ -236,7 +251,9 @@ def _trajectory(world: World, path: Path | None, explore_seconds: float | None, 
     if explore_seconds is not None:
         return explore(world, explore_seconds, seed=seed, robot_radius=robot_radius)
     if path is not None:
-        return follow_waypoints(read_waypoints(path))
+        points, places = read_waypoint_places(path)
+        check_path_in_world(points, places, world, path)
+        return follow_waypoints(points)
     if world.tour is None:
         msg = f"world {world.name!r} has no built-in tour: give --path FILE or --explore SECONDS"
         raise WorldError(msg)

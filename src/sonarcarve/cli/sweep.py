@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -68,6 +69,9 @@ def sweep(
         help="How long to wait for --scheduler to answer.")] = DEFAULT_CONNECT_TIMEOUT,
 ) -> None:
     """Sweep parameters over worlds and seeds into one tidy table."""
+    if length is not None and not (math.isfinite(length) and length > 0.0):
+        msg = f"--length must be > 0 metres, got {length:g}"
+        raise SweepError(msg)
     grid: dict[str, tuple[float, ...]] = {}
     for item in param or []:
         name, sep, values = item.partition("=")

@@ -42,7 +42,8 @@ def view(
         show_default=False)] = None,
     method: Annotated[str, typer.Option(
         "--method", "-m", metavar="NAME",
-        help="centerline | carve | atm | combined.")] = "combined",
+        help="centerline | carve | atm | combined | evidence (evidence carving, beyond the "
+             "paper).")] = "combined",
     world: Annotated[str | None, typer.Option(
         "--world", "-w", metavar="WORLD",
         help="Draw this world's walls (built-in name, random:SEED, walls .json, ROS map "
@@ -73,6 +74,9 @@ def view(
         raise ViewUsageError(msg)
     target = out if out is not None else readings.with_suffix(".rrd")
     check_output_file(target, inputs=[readings], label=f"--out {target}")
+    if target.suffix.lower() != ".rrd":
+        msg = f"--out {target}: a Rerun recording's name must end in .rrd"
+        raise ViewUsageError(msg)
     sonar = make_method(method)
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)

@@ -181,8 +181,8 @@ def read_map_csv(path: str | Path) -> GlobalMap:
         One line naming the file and the line of the first problem: a missing file, a header
         that does not start with the eight contract columns, a line with too few fields, an
         ``id`` or ``sensor`` that is not a whole number >= 0, an unknown ``source`` label, a
-        NaN anywhere or an infinite value anywhere but ``max_error`` (ATM's bound may be
-        ``inf``).
+        negative ``width`` or ``max_error``, a NaN anywhere or an infinite value anywhere but
+        ``max_error`` (ATM's bound may be ``inf``), bytes that are not UTF-8.
     """
     path = Path(path)
     try:
@@ -192,7 +192,9 @@ def read_map_csv(path: str | Path) -> GlobalMap:
     except OSError as err:
         msg = f"{path}: cannot read ({err.strerror})"
         raise InputError(msg) from None
-    except (UnicodeDecodeError, csv.Error) as err:
+    except UnicodeDecodeError:
+        raise InputError(_not_utf8(path)) from None
+    except csv.Error as err:
         msg = f"{path}: cannot read as CSV ({err})"
         raise InputError(msg) from None
     while rows and not rows[-1][1]:
@@ -229,6 +231,19 @@ def read_map_csv(path: str | Path) -> GlobalMap:
     )
 
 
+def _not_utf8(path: Path) -> str:
+    """The message for a file that is not UTF-8, naming the line and byte as the readings CSV
+    reader does (the text reader's own error gives an offset within a buffer)."""
+    data = path.read_bytes()
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = data.count(b"\n", 0, err.start) + 1
+        return (f"{path}: line {line}, cannot read as CSV: not UTF-8 text "
+                f"(byte 0x{data[err.start]:02x})")
+    return f"{path}: cannot read as CSV: not UTF-8 text"
+
+
 def _probability(text: str, where: str) -> float:
     """A ``confidence`` cell: a number in [0, 1]."""
     value = parse_number(text, where, "confidence", finite=False)
@@ -249,5 +264,9 @@ def _cell(text: str, where: str, column: str) -> float:
         raise InputError(msg)
     if column in ("id", "sensor") and not (0 <= value <= _MAX_INDEX and value.is_integer()):
         msg = f"{where}, column {column!r} is not a whole number >= 0: {text!r}"
+        raise InputError(msg)
+    if column in ("width", "max_error") and value < 0.0:
+        unit = "radians" if column == "width" else "metres"
+        msg = f"{where}, column {column!r} must be >= 0 {unit}, got {text.strip()!r}"
         raise InputError(msg)
     return value

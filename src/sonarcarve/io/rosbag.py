@@ -337,7 +337,52 @@ def _read_errors() -> tuple[type[BaseException], ...]:
 
 
 def _reason(err: BaseException) -> str:
-    return " ".join(str(err).split())[:200] or type(err).__name__
+    """The library's reason in plain words: no tuple repr (rosbags wraps its causes' args),
+    no codec jargon, at most 200 characters."""
+    args = err.args
+    while len(args) == 1 and isinstance(args[0], tuple | BaseException):
+        args = args[0] if isinstance(args[0], tuple) else args[0].args
+    if isinstance(err, UnicodeDecodeError):
+        text = f"not UTF-8 text where text was expected (byte 0x{err.object[err.start]:02x})"
+    else:
+        text = ": ".join(str(a) for a in args) if args else str(err)
+    plain = " ".join(text.replace("(", "").replace(")", "").split()).rstrip(".")
+    return plain[:200] or type(err).__name__
+
+
+#: The first bytes of an MCAP file and of a rosbag1 file.
+_MCAP_MAGIC = b"\x89MCAP0\r\n"
+_ROSBAG1_MAGIC = b"#ROSBAG V2.0\n"
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+
+def _unreadable(bag: Path, err: BaseException) -> str:
+    """One plain line for a bag the reader cannot open, saying what kind of file it looks
+    like (an MCAP file, a rosbag1 file, a folder) and what is wrong with it."""
+    reason = _reason(err)
+    if bag.is_dir():
+        if not (bag / "metadata.yaml").is_file():
+            return f"{bag}: a folder, but not a rosbag2 folder (no metadata.yaml in it)"
+        return f"{bag}: not a readable rosbag2 folder ({reason})"
+    try:
+        with bag.open("rb") as handle:
+            head = handle.read(len(_SQLITE_MAGIC))
+    except OSError as os_err:
+        return f"{bag}: cannot read ({os_err.strerror})"
+    if head.startswith(_MCAP_MAGIC):
+        if "end magic" in reason.lower():
+            return (f"{bag}: truncated or corrupt MCAP file (no end marker: was the recording "
+                    "cut short?)")
+        return f"{bag}: corrupt MCAP file ({reason})"
+    if head.startswith(_ROSBAG1_MAGIC):
+        if "index" in reason.lower() or "header" in reason.lower():
+            return (f"{bag}: truncated or corrupt rosbag1 file (its index cannot be read: was "
+                    "the recording cut short?)")
+        return f"{bag}: corrupt rosbag1 file ({reason})"
+    if head.startswith(_SQLITE_MAGIC):
+        return f"{bag}: not a readable rosbag2 SQLite file ({reason})"
+    return (f"{bag}: not a ROS bag: it does not start as an MCAP, rosbag1 or rosbag2 SQLite "
+            "file does")
 
 
 def _open_reader(bag: Path) -> Any:
@@ -354,8 +399,7 @@ def _open_reader(bag: Path) -> Any:
         reader = AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
     except _read_errors() as err:
-        msg = f"{bag}: not a readable rosbag1 file or rosbag2 folder ({_reason(err)})"
-        raise RosbagError(msg) from None
+        raise RosbagError(_unreadable(bag, err)) from None
     return reader
 
 

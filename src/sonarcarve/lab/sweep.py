@@ -30,7 +30,7 @@ import io
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from itertools import product
 from pathlib import Path
@@ -39,6 +39,7 @@ from typing import Any
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path, atomic_text, make_output_dir
+from sonarcarve.io.errors import load_yaml
 from sonarcarve.lab.experiments.jobs import run_job
 from sonarcarve.lab.plan import ALL_METHODS, Job
 from sonarcarve.lab.scenarios import Scenario, run_simulation
@@ -216,13 +217,11 @@ def load_sweep_spec(path: str | Path, **overrides: Any) -> SweepSpec:
         length: 12       # metres of the tour; null: all of it
         sample_every: 32
     """
-    yaml = require("yaml", "cli", "sweep files")
+    require("yaml", "cli", "sweep files")
     label = f"sweep file {path}"
-    try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
-        msg = f"{label}: cannot read ({' '.join(str(err).split())})"
-        raise SweepError(msg) from None
+    # The shared reader: "s.yaml: line 2, column 1: invalid YAML (...)", a missing or binary
+    # file in one plain line, aliases limited (as robot and map_server YAML files).
+    data = load_yaml(path, error_type=SweepError)
     data = {} if data is None else data
     if not isinstance(data, dict):
         msg = f"{label}: expected a mapping with grid, worlds, seeds, methods"
@@ -303,12 +302,27 @@ def _job(spec: SweepSpec, world: str, seed: int, method: str,
             scenario = replace(scenario, physics=(("range_noise", float(value)),))
         else:  # range_tolerance, or any MethodConfig field by its own name
             changes[name] = value
+    for name, (low, high, interval) in _DEGREE_RULES.items():
+        given = values.get(name)
+        if given is not None and not (math.isfinite(given) and low(given) and high(given)):
+            msg = (f"sweep point {dict(values)}: {name} must lie in {interval} degrees, "
+                   f"got {given:g}")
+            raise SweepError(msg)
     try:
         config = replace(config, **changes)
     except (TypeError, ValueError) as err:
         msg = f"sweep point {dict(values)}: {' '.join(str(err).split())}"
         raise SweepError(msg) from None
     return Job(("sweep-run",), scenario, method, config, "sweep", spec.sample_every)
+
+
+#: The parameters given in degrees, checked in degrees (the config's own rule, in radians,
+#: would quote the converted value): name -> (lower test, upper test, the interval as text).
+_DEGREE_RULES: dict[str, tuple[Callable[[float], bool], Callable[[float], bool], str]] = {
+    "min_transversal_deg": (lambda v: v > 0.0, lambda v: v <= 90.0, "(0, 90]"),
+    "max_incidence_deg": (lambda v: v >= 0.0, lambda v: v <= 90.0, "[0, 90]"),
+    "beam_width_deg": (lambda v: v > 0.0, lambda v: v < 180.0, "(0, 180)"),
+}
 
 
 def _run_id(spec: SweepSpec, world: str, seed: int, method: str, job: Job) -> str:

@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from sonarcarve.constants import MIN_BEAM_WIDTH
+from sonarcarve.errors import MethodStateError, ReadingTypeError
 from sonarcarve.geometry import ArcFate
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import (
@@ -280,6 +281,10 @@ class SonarMethod(ABC):
         """
         self._check_open()
         self._check_usable()
+        if not isinstance(batch, ReadingBatch):
+            msg = (f"add_many needs a ReadingBatch, got {type(batch).__name__}: "
+                   "ReadingBatch.from_readings(readings) builds one (or call add per Reading)")
+            raise ReadingTypeError(msg)
         start = self._readings if first_id is None else first_id
         if not _plainly_valid(batch, self._last_t):
             batch.validate(first_id=start, previous_t=self._last_t)  # the error, or a pass
@@ -328,7 +333,7 @@ class SonarMethod(ABC):
     def _check_open(self) -> None:
         if self._finished:
             msg = "this method has finished its log; make a new one for more readings"
-            raise RuntimeError(msg)
+            raise MethodStateError(msg)
 
     def _check_usable(self) -> None:
         """Raise the error that stopped a model for good (:meth:`ArcModel.check_usable`), if
@@ -413,14 +418,14 @@ class SonarMethod(ABC):
 
         Raises
         ------
-        RuntimeError
+        MethodStateError
             The method has been fed readings already (their points would be split between two
             places).
         """
         if self._readings or self._finished:
             msg = (f"set_global_sink needs a fresh method; this {self.name} method has already "
                    f"been fed {self._readings} readings")
-            raise RuntimeError(msg)
+            raise MethodStateError(msg)
         self._global = _GlobalFeed(sink)
 
     @property
@@ -434,7 +439,7 @@ class SonarMethod(ABC):
 
         Raises
         ------
-        RuntimeError
+        MethodStateError
             The global map goes to a sink (:meth:`set_global_sink`): the method does not keep
             it; ask the sink.
         """
@@ -460,7 +465,7 @@ class SonarMethod(ABC):
         if memory is None:
             msg = (f"{what}: this {self.name} method sends its global map to a sink and keeps "
                    "none of it in memory")
-            raise RuntimeError(msg)
+            raise MethodStateError(msg)
         return memory
 
     def measures(self) -> Measures:

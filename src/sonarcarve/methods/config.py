@@ -71,7 +71,7 @@ DEFAULT_MIN_CONFIDENCE = 0.5
 def _number(name: str, value: object, rule: str) -> float:
     """``value`` as a float if it is a real number (not a bool), else the rule's error."""
     if isinstance(value, bool) or not isinstance(value, Real):
-        msg = f"{name} must be a number that {rule}, got {value!r}"
+        msg = f"{name} must be a number and {rule}, got {value!r}"
         raise ConfigError(msg)
     return float(value)
 
@@ -113,8 +113,14 @@ def check_range_tolerance(value: object, name: str = "range_tolerance") -> float
 
 
 def check_min_transversal(value: object, name: str = "min_transversal") -> float:
-    """ψ in radians, in [0, π/2]."""
-    return _angle_up_to_right(name, value)
+    """ψ in radians, in (0, π/2]: ψ = 0 would give every ATM point an infinite error bound
+    (``δ (1/sin ψ + 1/tan ψ)``), so ATM would never win in ``combined`` and ``--max-error``
+    would drop all its points."""
+    rule = "lie in (0, pi/2] radians"
+    angle = _number(name, value, rule)
+    if not 0.0 < angle <= NO_INCIDENCE_LIMIT:
+        _refuse(name, rule, value)
+    return angle
 
 
 def check_range_resolution(value: object, name: str = "range_resolution") -> float:
@@ -183,7 +189,8 @@ class MethodConfig:
         most 8.5 %, at a median point error within 2.5 mm of the best ε (see
         :data:`DEFAULT_RANGE_TOLERANCE`).
     min_transversal : float, default 20° (0.349 rad)
-        ψ, radians in [0, π/2]: ATM's minimum transversal angle (eq. 2.2, 5.4). Default 20°,
+        ψ, radians in (0, π/2] (0 would give every ATM point an infinite bound): ATM's
+        minimum transversal angle (eq. 2.2, 5.4). Default 20°,
         measured with ``benchmarks/min_transversal.py``: against 30° it needs a third less
         travel per crossing (eq. 2.2) and, being below φ, lets two readings of one sensor cross;
         ATM's unprocessed share fell from 29 % to 22 % at equal point error (see

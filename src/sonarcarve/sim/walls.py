@@ -26,7 +26,7 @@ from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
 __all__ = ["MAX_WALLS", "MAX_WORLD_COORDINATE", "World", "WorldError", "check_seed",
-           "geometry_problem"]
+           "first_wall_crossing", "geometry_problem"]
 
 #: Largest |x| or |y| of a wall, tour waypoint or opening, metres: 100 km, as for waypoints
 #: (:data:`sonarcarve.sim.motion.MAX_COORDINATE`); any building fits, and squared distances
@@ -335,6 +335,16 @@ def geometry_problem(segments: FloatArray, tour: FloatArray | None, *,
         return (f"tour leg {leg} (tour[{leg}] -> tour[{leg + 1}]) runs into wall "
                 f"segments[{wall}] at ({x:g}, {y:g})")
     return None
+
+
+def first_wall_crossing(path: FloatArray, segments: FloatArray
+                        ) -> tuple[int, tuple[float, float]] | None:
+    """``(leg, (x, y))``: the first leg of the polyline ``path`` (from ``path[leg]`` to
+    ``path[leg + 1]``) that meets a wall of ``segments``, and where; None if none does."""
+    if not segments.shape[0]:
+        return None
+    crossing = _first_crossing(path, segments)
+    return None if crossing is None else (crossing[0], crossing[2])
 
 
 def _first_crossing(tour: FloatArray, segments: FloatArray
