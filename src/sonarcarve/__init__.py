@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
     from sonarcarve.grids import (
         CarvedGrid,
+        CarvedGridParams,
         GridError,
         OccupancyGrid,
         RangeSensorLayer,
@@ -49,7 +50,7 @@ if TYPE_CHECKING:
         write_map_csv,
         write_readings_csv,
     )
-    from sonarcarve.io.rosbag import RosbagError
+    from sonarcarve.io.rosbag import RosbagError, SensorMounts
     from sonarcarve.maps import (
         CallbackSink,
         CountingSink,
@@ -72,7 +73,8 @@ if TYPE_CHECKING:
         make_method,
     )
     from sonarcarve.methods.atm import CrossingStoreError
-    from sonarcarve.pipeline import ProcessError, ProcessResult, process_readings
+    from sonarcarve.methods.evidence import ConfidenceModel
+    from sonarcarve.pipeline import ProcessError, ProcessResult, process_chunks, process_readings
     from sonarcarve.polling import (
         PolledLog,
         PollingError,
@@ -99,6 +101,10 @@ _EXPORTS = {
     "ArcFate": "sonarcarve.geometry",
     "AtmMethod": "sonarcarve.methods",
     "CarvedGrid": "sonarcarve.grids",
+    "CarvedGridParams": "sonarcarve.grids",
+    "ConfidenceModel": "sonarcarve.methods.evidence",
+    "SensorMounts": "sonarcarve.io.rosbag",
+    "process_chunks": "sonarcarve.pipeline",
     "CarvingMethod": "sonarcarve.methods",
     "CenterlineMethod": "sonarcarve.methods",
     "CombinedMethod": "sonarcarve.methods",
@@ -152,9 +158,11 @@ __all__ = [
     "AtmMethod",
     "CallbackSink",
     "CarvedGrid",
+    "CarvedGridParams",
     "CarvingMethod",
     "CenterlineMethod",
     "CombinedMethod",
+    "ConfidenceModel",
     "ConfigError",
     "CountingSink",
     "CrossingStoreError",
@@ -184,6 +192,7 @@ __all__ = [
     "ReadingTypeError",
     "ReadingsError",
     "RosbagError",
+    "SensorMounts",
     "SonarConeModel",
     "SonarHistory",
     "SonarMethod",
@@ -198,6 +207,7 @@ __all__ = [
     "make_method",
     "naive_stamps",
     "poll_readings",
+    "process_chunks",
     "process_readings",
     "read_map_csv",
     "read_readings_csv",

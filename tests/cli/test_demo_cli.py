@@ -112,7 +112,10 @@ def test_cli_help_teaches_the_columns() -> None:
 
 @pytest.mark.parametrize(("args", "message"), [
     (["--world", "no-such-world"], "no-such-world"),
-    (["--world", "doorway", "--history", "0"], "--history must be at least 1"),
+    (["--world", "doorway", "--history", "0"],
+     "--history must be a whole number of arcs in [1, 100,000], got 0"),
+    (["--world", "doorway", "--history", "1000000"],
+     "--history must be a whole number of arcs in [1, 100,000], got 1000000"),
 ])
 def test_cli_bad_input_is_one_line_and_writes_nothing(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str,

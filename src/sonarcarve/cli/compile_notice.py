@@ -2,7 +2,8 @@
 
 sonarcarve's kernels are compiled by numba on first use and cached on disk; a run on a cold
 cache (a fresh installation that skipped ``sonarcarve warm``, a new ``NUMBA_CACHE_DIR``, an
-upgrade) spends about a minute compiling before it gets going, which looked like a hang.
+upgrade) spends from half a minute (one method) to a few minutes (the demo, every method and
+grid) compiling before it gets going, which looked like a hang.
 
 The test for "cold" is numba's own: its ``numba:compile`` event fires only when a function is
 really compiled, never when its machine code is loaded from the cache (``sonarcarve.warm``
@@ -24,8 +25,8 @@ from contextlib import contextmanager
 __all__ = ["COMPILE_NOTICE", "announce_compiling", "notice_enabled"]
 
 #: The line printed on stderr when the first kernel starts compiling.
-COMPILE_NOTICE = ("sonarcarve: first run on this machine: compiling kernels, about a minute; "
-                  "`sonarcarve warm` does it ahead")
+COMPILE_NOTICE = ("sonarcarve: first run on this machine: compiling kernels, once (up to a few "
+                  "minutes); `sonarcarve warm` does it ahead")
 
 
 def notice_enabled() -> bool:

@@ -40,7 +40,12 @@ def warm(
     Run it again after upgrading sonarcarve, numba or Python, or after moving the cache: the
     cache is kept per version and source, and a run with nothing to compile takes a second or
     two. The cache is where numba keeps it: the folder named by `NUMBA_CACHE_DIR` if set,
-    otherwise the `__pycache__` folders beside sonarcarve's modules.
+    otherwise the `__pycache__` folders beside sonarcarve's modules. On an empty cache it
+    takes a few minutes on a 2-core machine (docs/RESULTS.md, "cold start").
+
+    Example: `sonarcarve warm` (once after `pip install sonarcarve[all]`)
+
+    Example: `NUMBA_CACHE_DIR=~/.cache/sonarcarve sonarcarve warm --quiet`
     """
     tic = time.perf_counter()
     steps = [*warm_steps(), ("demo's truth metrics", _demo_metrics)]

@@ -195,22 +195,37 @@ def animation_gif(result: DemoResult, frames: int = FRAMES) -> bytes:
                        + door.distance(float(rx[k]), float(ry[k])))
         return [*arcs.values(), *dots.values(), *robots, *paths]
 
+    moving = [*paths, *arcs.values(), *dots.values(), *robots, *titles.values(), clock]
     try:
-        return _gif([_frame(fig, draw, k) for k in range(len(cuts))])
+        return _gif(_frames(fig, draw, len(cuts), moving))
     finally:
         plt.close(fig)
 
 
-def _frame(fig: Figure, draw: Callable[[int], object], k: int) -> Image.Image:
-    """Frame ``k`` as an image: one draw of the figure (``FuncAnimation`` with ``PillowWriter``
-    drew it three times); the layout is fixed after the first frame, as nothing moves it."""
+def _frames(fig: Figure, draw: Callable[[int], object], n: int,
+            moving: list[Any]) -> list[Image.Image]:
+    """The ``n`` frames as images. The still parts (walls, door, legend, footnote) are drawn
+    and laid out once, with every moving artist's first state giving the layout its room;
+    each frame then redraws only the moving artists over that background (matplotlib's
+    blitting), a quarter of the time of drawing the whole figure each frame."""
     from PIL import Image
 
-    draw(k)
+    draw(0)
+    for artist in moving:
+        artist.set_animated(True)  # left out of the full draw below
     fig.canvas.draw()
-    if k == 0:
-        fig.set_layout_engine("none")
-    return Image.fromarray(np.asarray(fig.canvas.buffer_rgba())).convert("RGB")  # type: ignore[attr-defined]
+    fig.set_layout_engine("none")  # nothing moves the layout any more
+    background = fig.canvas.copy_from_bbox(fig.bbox)  # type: ignore[attr-defined]
+    images = []
+    for k in range(n):
+        if k:
+            draw(k)
+        fig.canvas.restore_region(background)  # type: ignore[attr-defined]
+        for artist in moving:
+            fig.draw_artist(artist)
+        rgba = np.asarray(fig.canvas.buffer_rgba())  # type: ignore[attr-defined]
+        images.append(Image.fromarray(rgba).convert("RGB"))
+    return images
 
 
 def _gif(frames: list[Image.Image]) -> bytes:

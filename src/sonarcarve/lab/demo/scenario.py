@@ -11,6 +11,7 @@ import math
 from collections.abc import Callable
 
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.history import MAX_HISTORY_SIZE
 from sonarcarve.lab.analyses import METHOD_LABELS as EXPERIMENT_LABELS
 from sonarcarve.lab.drawing import METHOD_COLORS as EXPERIMENT_COLORS
 from sonarcarve.methods import MethodConfig
@@ -93,11 +94,12 @@ def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS
     Raises
     ------
     DemoError
-        ``history_size`` below 1, an unknown method, or a ``max_length`` or
-        ``grid_resolution`` that is not a finite number > 0.
+        ``history_size`` outside [1, ``MAX_HISTORY_SIZE``], an unknown method, or a
+        ``max_length`` or ``grid_resolution`` that is not a finite number > 0.
     """
-    if history_size < 1:
-        msg = f"--history must be at least 1, got {history_size}"
+    if not 1 <= history_size <= MAX_HISTORY_SIZE:  # named as the option, as process does
+        msg = (f"--history must be a whole number of arcs in [1, {MAX_HISTORY_SIZE:,}], "
+               f"got {history_size}")
         raise DemoError(msg)
     unknown = [m for m in methods if m not in DEMO_METHODS]
     if unknown or not methods:
