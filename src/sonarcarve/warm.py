@@ -25,11 +25,11 @@ import os
 import tempfile
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from sonarcarve.compiles import watching_compiles
 from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer, trinary
 from sonarcarve.io import read_readings_csv, write_map_csv, write_readings_csv
 from sonarcarve.io.map_csv import map_csv_sink
@@ -170,30 +170,8 @@ def warm_steps() -> list[tuple[str, Callable[[], None]]]:
     return steps
 
 
-@contextmanager
-def counting_compiles() -> Iterator[list[str]]:
-    """Collect the name of every function numba compiles (not loads from cache) meanwhile.
-
-    numba's ``numba:compile`` event fires only when a function is really compiled; loading a
-    cached version does not fire it.
-    """
-    from numba.core import event  # numba is loaded by the kernels already
-
-    names: list[str] = []
-
-    class _Listener(event.Listener):
-        def on_start(self, ev: event.Event) -> None:
-            pass
-
-        def on_end(self, ev: event.Event) -> None:
-            names.append(str(ev.data["dispatcher"].py_func.__qualname__))
-
-    listener = _Listener()
-    event.register("numba:compile", listener)  # type: ignore[no-untyped-call]  # numba
-    try:
-        yield names
-    finally:
-        event.unregister("numba:compile", listener)  # type: ignore[no-untyped-call]
+#: Collect the name of every function numba compiles (not loads from cache) meanwhile.
+counting_compiles = watching_compiles
 
 
 def warm_up(on_progress: Progress | None = None,

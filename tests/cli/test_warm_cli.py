@@ -81,6 +81,7 @@ def test_an_unknown_option_is_one_line_exit_2(capsys: pytest.CaptureFixture[str]
 
 
 def test_the_command_is_listed_with_its_first_paragraph() -> None:
+    import sonarcarve.cli.main  # noqa: F401  # lists the commands (lazy_command)
     from sonarcarve.cli.app import LAZY_COMMANDS, _load
 
     module, summary = LAZY_COMMANDS["warm"]

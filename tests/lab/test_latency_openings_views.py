@@ -5,10 +5,8 @@ a view of a recorded run."""
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import math
-import sys
-from pathlib import Path
+from collections.abc import Callable
 from types import ModuleType
 
 import numpy as np
@@ -19,20 +17,13 @@ from sonarcarve.maps import PointSource
 from sonarcarve.methods import make_method
 from sonarcarve.readings import Reading, ReadingBatch
 
-_SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "latency_openings.py"
 PHI = math.radians(22.5)
 
 
 @pytest.fixture(scope="module")
-def script() -> ModuleType:
-    """The benchmark script as a module (benchmarks/ is not a package)."""
-    spec = importlib.util.spec_from_file_location("latency_openings", _SCRIPT)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["latency_openings"] = module
-    spec.loader.exec_module(module)
-    return module
+def script(benchmark_script: Callable[[str], ModuleType]) -> ModuleType:
+    """``benchmarks/latency_openings.py`` as a module."""
+    return benchmark_script("latency_openings")
 
 
 def test_only_uncut_points_over_the_bound_are_held(script: ModuleType) -> None:

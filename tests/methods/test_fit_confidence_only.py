@@ -4,9 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-import sys
-from pathlib import Path
+from collections.abc import Callable
 from types import ModuleType
 
 import numpy as np
@@ -14,19 +12,11 @@ import pytest
 
 from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel
 
-_SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "fit_confidence.py"
-
 
 @pytest.fixture(scope="module")
-def fit_confidence() -> ModuleType:
-    """The benchmark script as a module (benchmarks/ is not a package)."""
-    spec = importlib.util.spec_from_file_location("fit_confidence", _SCRIPT)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["fit_confidence"] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
+def fit_confidence(benchmark_script: Callable[[str], ModuleType]) -> ModuleType:
+    """``benchmarks/fit_confidence.py`` as a module."""
+    return benchmark_script("fit_confidence")
 
 
 def test_only_recovers_the_one_weight_and_holds_the_rest(fit_confidence: ModuleType) -> None:

@@ -42,22 +42,14 @@ def announce_compiling() -> Iterator[list[str]]:
     Yields the list of functions whose compiling started (for tests). Imports numba: use it
     only around a command that runs kernels anyway.
     """
-    from numba.core import event
+    from sonarcarve.compiles import watching_compiles
 
     started: list[str] = []
 
-    class _Listener(event.Listener):
-        def on_start(self, ev: event.Event) -> None:
-            if not started:
-                print(COMPILE_NOTICE, file=sys.stderr, flush=True)
-            started.append(str(ev.data["dispatcher"].py_func.__qualname__))
+    def note(name: str) -> None:
+        if not started:
+            print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+        started.append(name)
 
-        def on_end(self, ev: event.Event) -> None:
-            pass
-
-    listener = _Listener()
-    event.register("numba:compile", listener)  # type: ignore[no-untyped-call]  # numba
-    try:
+    with watching_compiles(on_start=note):
         yield started
-    finally:
-        event.unregister("numba:compile", listener)  # type: ignore[no-untyped-call]
