@@ -246,3 +246,19 @@ def test_process_help_lists_every_method(capsys: pytest.CaptureFixture[str]) -> 
     option = text.split("--method -m NAME", 1)[1]  # "centerline | carve | ... . combined ..."
     names = [name.strip() for name in option.split(".", 1)[0].split("|")]
     assert names == list(METHODS)
+
+
+def test_a_header_only_file_maps_to_an_empty_map_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # UX review: a header-only CSV gave exit 0 and an empty map without a word.
+    empty = tmp_path / "empty.csv"
+    empty.write_text("t,sensor,x,y,theta,range\n")
+    out = tmp_path / "map.csv"
+    assert main(["process", str(empty), "--out", str(out)]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"sonarcarve: warning: {empty} has no readings, only a header: the map is empty"]
+    assert out.read_text().splitlines() == [",".join((*MAP_COLUMNS, "confidence"))]
+    _write_ring_readings(tmp_path / "full.csv")
+    assert main(["process", str(tmp_path / "full.csv"), "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""

@@ -577,12 +577,18 @@ def _run(readings: Path, sonar: SonarMethod, label: str,
     chunks = _first_checked(iter_readings_csv(readings), warnings)
     rows = count_data_lines(readings)  # the bar's total, from the line breaks alone
     if rows < _PROGRESS_MIN_READINGS:
-        return process_chunks(chunks, sonar, reading_filter=reading_filter,
-                              map_filter=map_filter, sink=sink)
-    with progress() as bar:
-        task = bar.add_task(label, total=rows)
-        return process_chunks(chunks, sonar, on_progress=lambda n: bar.update(task, completed=n),
-                              reading_filter=reading_filter, map_filter=map_filter, sink=sink)
+        result = process_chunks(chunks, sonar, reading_filter=reading_filter,
+                                map_filter=map_filter, sink=sink)
+    else:
+        with progress() as bar:
+            task = bar.add_task(label, total=rows)
+            result = process_chunks(chunks, sonar,
+                                    on_progress=lambda n: bar.update(task, completed=n),
+                                    reading_filter=reading_filter, map_filter=map_filter,
+                                    sink=sink)
+    if result.readings == 0:  # a valid file (a header only), so not an error: say so
+        warnings.append(f"{readings} has no readings, only a header: the map is empty")
+    return result
 
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,
