@@ -30,7 +30,6 @@ from sonarcarve.cli.options import (
     check_new_bag,
     refuse_bag_options,
 )
-from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
@@ -42,7 +41,11 @@ from sonarcarve.io.map_csv import MapCsvSink, map_csv_sink
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
-from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, DEFAULT_RANGE_TOLERANCE
+from sonarcarve.methods.config import (
+    DEFAULT_MIN_TRANSVERSAL,
+    DEFAULT_RANGE_TOLERANCE,
+    check_degrees,
+)
 from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch
 
@@ -524,12 +527,10 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
     checked here first, in degrees, and any other error names the option (``--history``), not
     the field (``history_size``).
     """
-    _check_degrees("--beam-width", beam_width_deg, 0.0, 180.0, closed_high=False,
-                   low_ok=math.degrees(MIN_BEAM_WIDTH))
-    _check_degrees("--min-transversal", transversal_deg, 0.0, 90.0, closed_high=True)
+    check_degrees("beam_width", beam_width_deg, "--beam-width")
+    check_degrees("min_transversal", transversal_deg, "--min-transversal")
     if incidence_deg is not None:
-        _check_degrees("--max-incidence", incidence_deg, 0.0, 90.0, closed_high=True,
-                       closed_low=True)
+        check_degrees("max_incidence", incidence_deg, "--max-incidence")
     incidence = DEFAULT_MAX_INCIDENCE
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
@@ -553,20 +554,6 @@ def option_message(message: str) -> str:
     field, _, rest = message.partition(" ")
     option = _OPTION_OF_FIELD.get(field)
     return f"{option} {rest}" if option is not None else message
-
-
-def _check_degrees(option: str, value: float, low: float, high: float, *,
-                   closed_high: bool, closed_low: bool = False,
-                   low_ok: float | None = None) -> None:
-    """Refuse an angle option outside its interval, in degrees, as the user typed it."""
-    above_low = value >= low if closed_low else value > low
-    if low_ok is not None:
-        above_low = above_low and value >= low_ok
-    below_high = value <= high if closed_high else value < high
-    if not (math.isfinite(value) and above_low and below_high):
-        interval = f"{'[' if closed_low else '('}{low:g}, {high:g}{']' if closed_high else ')'}"
-        msg = f"{option} must lie in {interval} degrees, got {value:g}"
-        raise ParameterError(msg)
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,

@@ -30,13 +30,13 @@ import io
 import json
 import math
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from itertools import product
 from pathlib import Path
 from typing import Any
 
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path, atomic_text, make_output_dir
 from sonarcarve.io.errors import load_yaml
@@ -45,6 +45,7 @@ from sonarcarve.lab.plan import ALL_METHODS, Job
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import METHODS, MethodConfig
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
+from sonarcarve.methods.config import check_degrees
 from sonarcarve.runner import ProgressCallback, Ref, Runner, SerialRunner, Task
 from sonarcarve.sim.motion import DEFAULT_SPEED
 from sonarcarve.typing import JsonDict
@@ -302,12 +303,13 @@ def _job(spec: SweepSpec, world: str, seed: int, method: str,
             scenario = replace(scenario, physics=(("range_noise", float(value)),))
         else:  # range_tolerance, or any MethodConfig field by its own name
             changes[name] = value
-    for name, (low, high, interval) in _DEGREE_RULES.items():
-        given = values.get(name)
-        if given is not None and not (math.isfinite(given) and low(given) and high(given)):
-            msg = (f"sweep point {dict(values)}: {name} must lie in {interval} degrees, "
-                   f"got {given:g}")
-            raise SweepError(msg)
+    for name in _DEGREE_PARAMETERS:
+        if values.get(name) is not None:
+            try:  # judged in degrees, as written in the sweep
+                check_degrees(name.removesuffix("_deg"), values[name],
+                              f"sweep point {dict(values)}: {name}")
+            except ConfigError as err:
+                raise SweepError(str(err)) from None
     try:
         config = replace(config, **changes)
     except (TypeError, ValueError) as err:
@@ -316,13 +318,8 @@ def _job(spec: SweepSpec, world: str, seed: int, method: str,
     return Job(("sweep-run",), scenario, method, config, "sweep", spec.sample_every)
 
 
-#: The parameters given in degrees, checked in degrees (the config's own rule, in radians,
-#: would quote the converted value): name -> (lower test, upper test, the interval as text).
-_DEGREE_RULES: dict[str, tuple[Callable[[float], bool], Callable[[float], bool], str]] = {
-    "min_transversal_deg": (lambda v: v > 0.0, lambda v: v <= 90.0, "(0, 90]"),
-    "max_incidence_deg": (lambda v: v >= 0.0, lambda v: v <= 90.0, "[0, 90]"),
-    "beam_width_deg": (lambda v: v > 0.0, lambda v: v < 180.0, "(0, 180)"),
-}
+#: The sweep parameters given in degrees (``min_transversal_deg`` sets ``min_transversal``).
+_DEGREE_PARAMETERS = ("min_transversal_deg", "max_incidence_deg", "beam_width_deg")
 
 
 def _run_id(spec: SweepSpec, world: str, seed: int, method: str, job: Job) -> str:

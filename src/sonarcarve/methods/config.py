@@ -9,6 +9,7 @@ functions, so the API and the CLI report a bad value with the same one-line
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from numbers import Real
 
@@ -27,6 +28,7 @@ __all__ = [
     "MethodConfig",
     "check_beam_width",
     "check_carve_probability",
+    "check_degrees",
     "check_evidence_bins",
     "check_history_size",
     "check_max_incidence",
@@ -131,6 +133,25 @@ def check_range_resolution(value: object, name: str = "range_resolution") -> flo
 def check_max_incidence(value: object, name: str = "max_incidence") -> float:
     """β in radians, in [0, π/2] (π/2: specular-aware carving off, the paper)."""
     return _angle_up_to_right(name, value)
+
+
+#: The angle fields a user gives in degrees (command line, sweep files): field -> (its rule on
+#: degrees, the interval as written). The same intervals as the radians checks above; a value
+#: is judged as typed, so that an error quotes the user's number, not its conversion.
+_DEGREE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
+    "beam_width": (lambda d: math.radians(d) >= MIN_BEAM_WIDTH and d < 180.0, "(0, 180)"),
+    "min_transversal": (lambda d: 0.0 < d <= 90.0, "(0, 90]"),
+    "max_incidence": (lambda d: 0.0 <= d <= 90.0, "[0, 90]"),
+}
+
+
+def check_degrees(field: str, degrees: float, label: str) -> None:
+    """Refuse the angle field ``field`` given as ``degrees`` outside its interval (NaN and
+    infinities included), as ``"{label} must lie in (0, 90] degrees, got 0"``."""
+    rule, interval = _DEGREE_RULES[field]
+    if not rule(degrees):
+        msg = f"{label} must lie in {interval} degrees, got {degrees:g}"
+        raise ConfigError(msg)
 
 
 def check_evidence_bins(value: object, name: str = "evidence_bins") -> int:
