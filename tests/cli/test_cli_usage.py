@@ -220,18 +220,24 @@ def test_ctrl_c_in_a_real_process_prints_the_line(tmp_path: Path) -> None:
     import signal
     import time
 
-    code = ("import sys, time\nfrom sonarcarve.cli import main\nimport sonarcarve.cli.simulate "
+    # The child first restores Python's Ctrl-C handler: a suite started as a shell's background
+    # job inherits SIGINT ignored, and Python then installs none (a terminal's process has it).
+    code = ("import signal, sys, time\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "from sonarcarve.cli import main\nimport sonarcarve.cli.simulate "
             "as s\ndef slow(*a, **k):\n    print('READY', flush=True)\n    time.sleep(60)\n"
             "s.simulate = slow\nsys.exit(main(sys.argv[1:]))")
     out = tmp_path / "sim.csv"
-    proc = subprocess.Popen([sys.executable, "-c", code, "simulate", "--world", "doorway",
-                             "--out", str(out)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    assert proc.stdout.readline().strip() == "READY"
-    time.sleep(0.2)
-    os.kill(proc.pid, signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    with subprocess.Popen([sys.executable, "-c", code, "simulate", "--world", "doorway",
+                           "--out", str(out)], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True) as proc:
+        try:
+            assert proc.stdout is not None
+            assert proc.stdout.readline().strip() == "READY"
+            time.sleep(0.2)
+            os.kill(proc.pid, signal.SIGINT)
+            _, err = proc.communicate(timeout=60)
+        finally:
+            proc.kill()  # never left running past the test, whatever failed
     assert proc.returncode == 130
     assert err == "sonarcarve: interrupted; nothing written\n"
     assert list(tmp_path.iterdir()) == []
