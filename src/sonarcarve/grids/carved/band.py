@@ -50,7 +50,10 @@ def arc_value(r: float, lo: float, hi: float, weight: float, m: Model,
     return weight * s * m.l_hit
 
 
-@compiled_inline
+# Its own function, not inlined: it is called once an arc (its loop over the band's cells is
+# the work), and inlining its four copies into ``redraw`` made that one kernel take a third of
+# ``sonarcarve warm``'s compile time.
+@compiled
 def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
              m: Model, x: float, y: float, r: float, lo: float, hi: float,
              value: float) -> None:
