@@ -25,10 +25,13 @@ settings.load_profile("sonarcarve")
 def benchmark_script() -> Callable[[str], ModuleType]:
     """``load(name)``: ``benchmarks/<name>.py`` imported as the module ``name`` (benchmarks/ is
     not a package; the module is registered in ``sys.modules`` because dataclasses look their
-    module up by name)."""
+    module up by name; the folder goes on ``sys.path``, as for a script run from it, so that a
+    script's ``from commits import ...`` finds its sibling)."""
     folder = Path(__file__).resolve().parents[1] / "benchmarks"
 
     def load(name: str) -> ModuleType:
+        if str(folder) not in sys.path:
+            sys.path.append(str(folder))
         spec = importlib.util.spec_from_file_location(name, folder / f"{name}.py")
         assert spec is not None
         assert spec.loader is not None

@@ -12,7 +12,9 @@ import os
 import subprocess
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -181,3 +183,20 @@ def test_warm_up_runs_the_steps_it_is_given() -> None:
     done = warm_up(steps=[("only", lambda: calls.append(1))])
     assert calls == [1]
     assert [what for what, _, _ in done] == ["only"]
+
+
+def test_compile_time_benchmark_splits_the_compile_seconds_without_counting_twice(
+    tmp_path: Path, benchmark_script: Callable[[str], ModuleType]
+) -> None:
+    """``benchmarks/compile_time.py``: each kernel's own seconds exclude its callees' (ATM's
+    kernel compiles the spatial index's), so they add up to at most the steps' wall time
+    (counting a callee in its caller too would not)."""
+    script = benchmark_script("compile_time")
+    child = script.start("WORKTREE", tmp_path, ["method centerline", "method atm"])
+    result = script.finish("WORKTREE", child)
+    assert [name for name, _ in result["steps"]] == ["method centerline", "method atm"]
+    own = result["own"]
+    assert "methods.atm._add_arcs" in own
+    assert any(kernel.startswith("geometry.index.") for kernel in own), own
+    assert all(value >= 0.0 for value in own.values())
+    assert sum(own.values()) <= sum(seconds for _, seconds in result["steps"])
