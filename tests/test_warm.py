@@ -60,7 +60,7 @@ def test_there_is_a_step_for_every_method_the_grids_and_the_csv_kernels() -> Non
 
 
 def test_warm_up_runs_every_step_and_reports_it(monkeypatch: pytest.MonkeyPatch) -> None:
-    # The real steps compile for about a minute; here each step is a stand-in that records
+    # The real steps compile for minutes; here each step is a stand-in that records
     # its call, so the reporting is checked, not the compiling (the subprocess tests do that).
     calls: list[str] = []
     steps = [(f"step {k}", lambda k=k: calls.append(f"step {k}")) for k in range(3)]
@@ -145,7 +145,7 @@ def test_after_warm_up_a_fresh_process_compiles_nothing_cheap(
 
 @pytest.mark.slow
 def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
-    """Every step warmed (about a minute of compiling), then every method's first add()."""
+    """Every step warmed (minutes of compiling), then every method's first add()."""
     out = _run("import sonarcarve.warm as w\nw.warm_up()\nprint('WARM')\n", tmp_path)
     assert "WARM" in out
     run = _NORMAL_RUN.replace("sys.argv[1:]", repr(sorted(METHODS)))

@@ -2,10 +2,11 @@
 
 Every kernel of the product is compiled by numba on first use and cached on disk
 (``cache=True``; :mod:`sonarcarve.geometry._compiled` keys the cache on the kernel sources).
-Compiling is slow: carving's first ``add()`` compiles about 21 functions, 6.6-7.4 s of CPU
-(``benchmarks/speed.py --sections cold``), and compiling less was measured not to get near a
-second. So the honest remedy is to compile once, right after installing: :func:`warm_up` runs
-every method, grid and compiled I/O path on a small built-in stream, and every later process
+Compiling is slow: carving's first ``add()`` compiles about 21 functions, about 9 s of CPU
+(``benchmarks/speed.py --sections cold``; docs/RESULTS.md, "cold start"), and compiling less was
+measured not to get near a second; ``benchmarks/compile_time.py`` says which kernels take it.
+So the honest remedy is to compile once, right after installing: :func:`warm_up` runs every
+method, grid and compiled I/O path on a small built-in stream, and every later process
 (the same Python, numba and CPU, the same sources) loads the cached machine code instead.
 
 Where the cache lives is numba's choice: ``NUMBA_CACHE_DIR`` if set, otherwise the

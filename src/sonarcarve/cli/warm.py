@@ -32,7 +32,7 @@ def warm(
 
     sonarcarve's methods, grids and CSV reader and writer run as machine code that numba
     compiles on first use and keeps on disk. Without this, the first run of each method in a
-    fresh installation stops for several seconds (carving: about 7 s of CPU) while it
+    fresh installation stops for several seconds (carving: about 9 s) while it
     compiles. `sonarcarve warm` runs every method, grid and CSV path once on a small built-in
     stream, so every later run loads the compiled code instead. `make demo` and `make test`
     run it right after installing.
