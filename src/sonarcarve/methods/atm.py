@@ -467,8 +467,6 @@ class AtmModel(ArcModel):
     :func:`atm_error_bound` for ATM points, ``chord_error(r, φ)`` (eq. 5.3) for fallbacks.
     """
 
-    block_safe = True
-
     def __init__(self, history: SonarHistory, min_transversal: float, range_resolution: float):
         super().__init__(history)
         self.min_transversal = check_min_transversal(min_transversal)
@@ -508,16 +506,9 @@ class AtmModel(ArcModel):
         """Crossings stored per row (:class:`CrossingStore`)."""
         return self.store.counts
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Reset ``slot``'s crossings, then intersect its arc with the older live arcs.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        """Reset the crossings of each new arc ``first .. first + count - 1``, then intersect it
+        with the older live arcs, in one compiled call."""
         self.check_usable()
         h = self.history
         end = first + count

@@ -139,31 +139,21 @@ class ArcModel(ABC):
     they are committed to the global map.
     """
 
-    #: The model reads no history row newer than the arc it is adding, so that
-    #: :meth:`SonarMethod.add_many` may store a whole block of arcs first and then run
-    #: :meth:`on_add_many` over it. Models that do not say so get one reading at a time.
-    block_safe: ClassVar[bool] = False
-
     def __init__(self, history: SonarHistory) -> None:
         self.history = history
 
     @abstractmethod
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise the state of the new arc in ``slot`` and let it act on the ``older`` live
-        arcs (oldest first)."""
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for the arcs of sequence numbers ``first .. first + count - 1``, in
-        order, each against the live arcs before it (already stored by
-        :meth:`~sonarcarve.history.SonarHistory.append_many`).
+        """Take in the arcs of sequence numbers ``first .. first + count - 1``, in order, each
+        against the live arcs before it; they are already stored in the history
+        (:meth:`~sonarcarve.history.SonarHistory.append_many`, or
+        :meth:`~sonarcarve.history.SonarHistory.append` for a block of one).
 
-        This default calls :meth:`on_add` once per arc; models with a compiled kernel override
-        it with one call for the whole block (no Python between arcs).
+        The one hook a model implements: :meth:`SonarMethod.add` calls it with a block of one
+        arc, :meth:`SonarMethod.add_many` with whole blocks. A model must read no history row
+        newer than the arc it is taking in, so that the result is the same whatever the blocks
+        (the compiled models run the whole block in one call, with no Python between arcs).
         """
-        h = self.history
-        for sequence in range(first, first + count):
-            live = h.window(sequence)
-            self.on_add(int(live[-1]), live[:-1])
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Let a no-echo reading (``range`` = +inf, free up to ``reading.max_range`` metres,
@@ -291,10 +281,6 @@ class SonarMethod(ABC):
         n = len(batch)
         if n == 0:
             return
-        if not all(model.block_safe for model in self.models):
-            for offset, reading in enumerate(batch):
-                self._add_checked(reading, start + offset)
-            return
         no_echo = np.flatnonzero(batch.range == math.inf)
         if not no_echo.size:
             self._add_block(batch, start)
@@ -347,21 +333,15 @@ class SonarMethod(ABC):
             self._add_no_echo(reading)
             return
         width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
-        slot = self.history.append(reading, reading_id, width)
-        self._feed_one(slot)
+        self.history.append(reading, reading_id, width)
+        self._feed_block(self.history.appended - 1, 1)
         self._readings += 1
         self._last_t = reading.t
         self._local = None
 
-    def _feed_one(self, slot: int) -> None:
-        """Let the models take in the arc just stored in ``slot``, the newest (:meth:`add`)."""
-        older = self.history.slots()[:-1]
-        for model in self.models:
-            model.on_add(slot, older)
-
     def _feed_block(self, first: int, count: int) -> None:
-        """Let the (block-safe) models take in the arcs of sequence numbers ``first .. first +
-        count - 1``, just stored by :meth:`~sonarcarve.history.SonarHistory.append_many`."""
+        """Let the models take in the arcs of sequence numbers ``first .. first + count - 1``,
+        just stored (a block of one for :meth:`add`)."""
         for model in self.models:
             model.on_add_many(first, count)
 

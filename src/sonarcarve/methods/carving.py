@@ -309,8 +309,6 @@ class CarvingModel(ArcModel):
         (:mod:`sonarcarve.geometry.index`): a reading carves only those near its sector.
     """
 
-    block_safe = True
-
     def __init__(self, history: SonarHistory, range_tolerance: float,
                  max_incidence: float = NO_INCIDENCE_LIMIT) -> None:
         super().__init__(history)
@@ -329,17 +327,10 @@ class CarvingModel(ArcModel):
         self._fully_carved = 0
         self._split = 0
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Start the new arc as its full beam and carve the older live arcs by its freespace.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them): the spatial index finds
-        the arcs to carve among them.
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        """Start each new arc ``first .. first + count - 1`` as its full beam and carve the
+        older live arcs by its freespace, in one compiled call (the spatial index finds the arcs
+        to carve)."""
         h = self.history
         fully, split = _add_arcs(
             first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,

@@ -263,12 +263,6 @@ class CombinedMethod(SonarMethod):
             self._joint = self._atm.uses_index
         return self._joint
 
-    def _feed_one(self, slot: int) -> None:
-        if self._uses_joint_kernel():
-            self._feed_block(self.history.appended - 1, 1)
-        else:
-            super()._feed_one(slot)
-
     def _feed_block(self, first: int, count: int) -> None:
         if not self._uses_joint_kernel():
             super()._feed_block(first, count)

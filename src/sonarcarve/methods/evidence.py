@@ -390,7 +390,7 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
-    Block safe: :meth:`on_add_many` runs a block of stored arcs in one compiled call.
+    :meth:`on_add_many` runs a block of stored arcs in one compiled call.
 
     Memory: the per-arc state is fixed by the history (about 4 kB an arc with K = 24); the
     ATM crossing store grows on demand as ATM's does (:class:`~sonarcarve.methods.atm.AtmModel`):
@@ -442,8 +442,6 @@ class EvidenceModel(ArcModel):
     sensor : SensorModel
         The detection model.
     """
-
-    block_safe = True
 
     def __init__(self, history: SonarHistory, bins: int, range_tolerance: float,
                  carve_probability: float, min_transversal: float, range_resolution: float,
@@ -563,17 +561,10 @@ class EvidenceModel(ArcModel):
         self._crossings += crossings
         self._occluded_bins += occluding
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call (more
-        when the crossing store has to grow on the way)."""
+        """Initialise the profile of each new arc ``first .. first + count - 1`` and weigh its
+        reading against the older arcs, in one compiled call (more when the crossing store has
+        to grow on the way)."""
         self.check_usable()
         end = first + count
         self.mark_repeats(first, count)
