@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 from typing import ClassVar, TypeVar
 
 import numpy as np
-from numba import njit
 
 from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import MethodStateError, ReadingTypeError
 from sonarcarve.geometry import ArcFate
+from sonarcarve.geometry._compiled import compiled
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import (
     CountingSink,
@@ -572,13 +572,14 @@ def _plainly_valid(batch: ReadingBatch, previous_t: float) -> bool:
 
 
 #: The bounds :func:`_rows_plainly_valid` checks, passed as an argument: numba freezes a
-#: global into the compiled code, and its disk cache is keyed on this file only, so a bound
-#: changed in ``readings.py`` would not reach a cached kernel (review finding).
+#: global into the compiled code, and its disk cache is keyed on the kernel folders' sources only
+#: (:mod:`~sonarcarve.geometry._compiled`), so a bound changed in ``readings.py`` would not reach
+#: a cached kernel (review finding).
 _ROW_BOUNDS = (float(MAX_TIME), float(MAX_READING_RANGE), float(MAX_POSITION), float(MAX_ANGLE),
                float(MAX_SENSOR), float(MIN_BEAM_WIDTH))
 
 
-@njit(cache=True)
+@compiled
 def _rows_plainly_valid(t: FloatArray, sensor: np.ndarray, x: FloatArray, y: FloatArray,
                         theta: FloatArray, r: FloatArray, width: FloatArray, limit: FloatArray,
                         previous_t: float, bounds: tuple[float, ...]) -> bool:
