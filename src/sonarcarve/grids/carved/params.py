@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from sonarcarve.grids.cells import GridError
+from sonarcarve.grids.cells import GridError, check_probability
 from sonarcarve.grids.elfes import ROS_FADE_RANGE
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 
@@ -24,8 +24,10 @@ __all__ = [
     "DEFAULT_SPREAD_LENGTH",
     "MAX_SIDE_LOBES",
     "CarvedGridParams",
-    "check_probability",
 ]
+
+#: What the parameters' errors start with.
+_LABEL = "carved grid"
 
 #: Length over which one echo counts as a whole hit, metres
 #: (:attr:`CarvedGridParams.spread_length`).
@@ -86,15 +88,6 @@ DEFAULT_SIDE_LOBE_RANGE = 2.0
 #: lobes are 30 dB or more down one way, and a 22.5° beam widened by 3 half widths each side
 #: still looks ahead of the sensor (±45°), never behind it.
 MAX_SIDE_LOBES = 3.0
-
-
-def check_probability(name: str, value: object, lo: float, hi: float) -> float:
-    ok = (not isinstance(value, bool) and isinstance(value, int | float)
-          and math.isfinite(value) and lo < value < hi)
-    if not ok:
-        msg = f"carved grid: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
-        raise GridError(msg)
-    return float(value)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -227,12 +220,13 @@ class CarvedGridParams:
     side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
 
     def __post_init__(self) -> None:
-        check_probability("p_hit", self.p_hit, 0.5, 1.0)
-        check_probability("p_miss", self.p_miss, 0.0, 0.5)
-        check_probability("p_min", self.p_min, 0.0, 0.5)
-        check_probability("p_max", self.p_max, 0.5, 1.0)
-        check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
-        check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
+        check_probability(_LABEL, "p_hit", self.p_hit, 0.5, 1.0)
+        check_probability(_LABEL, "p_miss", self.p_miss, 0.0, 0.5)
+        check_probability(_LABEL, "p_min", self.p_min, 0.0, 0.5)
+        check_probability(_LABEL, "p_max", self.p_max, 0.5, 1.0)
+        check_probability(_LABEL, "occupied_threshold", self.occupied_threshold, 0.0, 1.0)
+        check_probability(_LABEL, "free_threshold", self.free_threshold, 0.0,
+                          self.occupied_threshold)
         tol = self.range_tolerance
         if isinstance(tol, bool) or not isinstance(tol, int | float) or not (
                 math.isfinite(tol) and tol >= 0.0):
@@ -246,7 +240,7 @@ class CarvedGridParams:
                 rule = "a finite number >= 0" if name == "spread_length" else "> 0 (inf: none)"
                 msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
                 raise GridError(msg)
-        check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
+        check_probability(_LABEL, "p_miss_heard", self.p_miss_heard, 0.0, 0.5)
         for name in ("spread", "surface_aware", "fresh_arcs"):
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
