@@ -99,6 +99,13 @@ def test_concatenate_keeps_order_and_checks_time() -> None:
         ReadingBatch.concatenate([batch[2:], batch[:2]])
 
 
+def test_concatenate_unvalidated_joins_without_checking() -> None:
+    batch = _batch()
+    backwards = ReadingBatch.concatenate([batch[2:], batch[:2]], validate=False)
+    np.testing.assert_array_equal(backwards.t, np.concatenate([batch.t[2:], batch.t[:2]]))
+    assert ReadingBatch.concatenate([], validate=False).t.shape == (0,)
+
+
 def test_whole_float_sensors_are_accepted_up_to_the_limit() -> None:
     from sonarcarve.readings import MAX_SENSOR
 

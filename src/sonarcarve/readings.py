@@ -205,12 +205,18 @@ class ReadingBatch:
         return cls.from_readings([])
 
     @classmethod
-    def concatenate(cls, batches: Sequence[ReadingBatch]) -> ReadingBatch:
-        """The readings of ``batches`` one after the other (times must stay sorted)."""
+    def concatenate(cls, batches: Sequence[ReadingBatch], *,
+                    validate: bool = True) -> ReadingBatch:
+        """The readings of ``batches`` one after the other (times must stay sorted).
+
+        With ``validate=False`` the result is not checked (:meth:`validate`): for batches each
+        checked where it came from, whose order the caller guarantees.
+        """
         if not batches:
             return cls.empty()
         merged = cls(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(cls)))
-        merged.validate("concatenated readings")
+        if validate:
+            merged.validate("concatenated readings")
         return merged
 
     def validate(self, source: str = "readings", first_line: int | None = None,
