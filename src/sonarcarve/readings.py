@@ -125,6 +125,16 @@ class Reading(NamedTuple):
         """The sensor heard nothing (``range`` is +inf): free space up to ``max_range``."""
         return self.range == math.inf
 
+    def width_or(self, default: float) -> float:
+        """This reading's beam width, or ``default`` (radians) where it carries none (NaN).
+
+        Examples
+        --------
+        >>> Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0).width_or(0.5)
+        0.5
+        """
+        return default if math.isnan(self.beam_width) else self.beam_width
+
 
 @dataclass(frozen=True, eq=False)
 class ReadingBatch:
@@ -297,11 +307,15 @@ class ReadingBatch:
         return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
                                "max_range": limit})
 
+    def beam_widths(self, default: float) -> FloatArray:
+        """Each row's beam width, or ``default`` radians where it carries none (NaN), shape
+        (n,); a new array, the batch is not copied."""
+        return np.where(np.isnan(self.beam_width), default, self.beam_width)
+
     def with_beam_width(self, default: float) -> ReadingBatch:
         """A copy where unknown (NaN) beam widths are replaced by ``default`` radians."""
-        width = np.where(np.isnan(self.beam_width), default, self.beam_width)
         return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
-                               "beam_width": width})
+                               "beam_width": self.beam_widths(default)})
 
 
 def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.inf) -> None:

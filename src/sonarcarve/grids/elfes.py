@@ -238,7 +238,7 @@ class OccupancyGrid(CellGrid):
         """
         if not len(batch):
             return
-        phi = np.where(np.isnan(batch.beam_width), self.model.beam_width, batch.beam_width)
+        phi = batch.beam_widths(self.model.beam_width)
         l_hit, l_miss, l_min, l_max = self.model.log_odds
         no_echo = batch.range == math.inf
         if not no_echo.any():

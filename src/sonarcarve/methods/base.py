@@ -298,7 +298,7 @@ class SonarMethod(ABC):
         """Ordinary (echo) readings, validated, through the models' block kernels; ids from
         ``start``."""
         n = len(batch)
-        width = np.where(np.isnan(batch.beam_width), self.beam_width, batch.beam_width)
+        width = batch.beam_widths(self.beam_width)
         h = self.history
         done = 0
         # Blocks of at most the history's room: the arcs that retire between blocks are
@@ -332,7 +332,7 @@ class SonarMethod(ABC):
         if reading.range == math.inf:
             self._add_no_echo(reading)
             return
-        width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
+        width = reading.width_or(self.beam_width)
         self.history.append(reading, reading_id, width)
         self._feed_block(self.history.appended - 1, 1)
         self._readings += 1
@@ -352,7 +352,7 @@ class SonarMethod(ABC):
 
     def _add_no_echo(self, reading: Reading) -> None:
         """A validated no-echo reading: free space for the models, no arc (module docstring)."""
-        width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
+        width = reading.width_or(self.beam_width)
         self._feed_no_echo(reading, width)
         self._readings += 1
         self._no_echo += 1

@@ -215,7 +215,7 @@ class CarvedGrid(CellGrid):
         method = self._method
         history = method.history
         first_seq = history.appended
-        half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
+        half = 0.5 * batch.beam_widths(method.beam_width)
         r = batch.range
         no_echo = r == math.inf
         if no_echo.any():  # free up to max_range, and no arc of its own in the history
