@@ -47,7 +47,7 @@ from sonarcarve.geometry.index import (
     query_sector,
     query_sector_circles,
 )
-from sonarcarve.geometry.intervals import _carve_core
+from sonarcarve.geometry.intervals import carve_core
 from sonarcarve.geometry.sector import Sector, make_sector
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
@@ -61,7 +61,13 @@ from sonarcarve.methods.config import (
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
+__all__ = [
+    "DEFAULT_RANGE_TOLERANCE",
+    "CarvingMethod",
+    "CarvingModel",
+    "carve_found",
+    "start_carved_arc",
+]
 
 _ALIVE = int(ArcFate.ALIVE)
 
@@ -103,7 +109,7 @@ def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Fl
 
 
 @compiled_inline
-def _start_arc(
+def start_carved_arc(
     slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray,
     theta2: FloatArray, lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray,
     status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
@@ -131,7 +137,7 @@ def _start_arc(
 
 
 @compiled_inline
-def _carve_found(
+def carve_found(
     found: int, candidates: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, sector: Sector, index: ArcIndex, prune: bool, cuts: FloatArray,
@@ -157,8 +163,8 @@ def _carve_found(
         if fate == UNDECIDED:
             if _clear_of_sector(i, x, y, r, lo, hi, tips, sector):
                 continue
-            fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
-                                               starts, ends, flags)
+            fate, new_lo, new_hi = carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
+                                              starts, ends, flags)
             if fate == UNCHANGED:
                 continue
         carved[i] = True
@@ -220,8 +226,8 @@ def _add_arcs(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        sector = _start_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status, carved,
-                            tolerance, max_incidence)
+        sector = start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
+                                  carved, tolerance, max_incidence)
         if sector.radius > 0.0:
             # The arcs near the sector whose circles it does not leave clear.
             found = query_sector_circles(index, sector, bounds, candidates)
@@ -230,7 +236,7 @@ def _add_arcs(
                 for older in range(max(0, sequence - capacity + 1), sequence):
                     candidates[found] = older % storage
                     found += 1
-            arcs_fully, arcs_split = _carve_found(
+            arcs_fully, arcs_split = carve_found(
                 found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
                 True, cuts, starts, ends, flags)
             fully += arcs_fully
@@ -255,7 +261,7 @@ def _carve_free(
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
     to ``fr`` metres (its sector ends at ``fr - tolerance``). The carving step of
     :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``. ``prune``: the
-    index holds only the alive arcs (:func:`_carve_found`)."""
+    index holds only the alive arcs (:func:`carve_found`)."""
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)
     cuts = bearings[0]
@@ -270,8 +276,8 @@ def _carve_free(
         for older in range(max(0, appended - capacity), appended):
             candidates[found] = older % storage
             found += 1
-    return _carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
-                        sector, index, prune, cuts, starts, ends, flags)
+    return carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
+                       sector, index, prune, cuts, starts, ends, flags)
 
 
 class CarvingModel(ArcModel):
