@@ -14,9 +14,10 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.geometry._compiled import compiled_borrowing
 from sonarcarve.geometry.circular import scratch_arrays
+from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.geometry.index import (
     ArcIndex,
     arc_box,
@@ -26,7 +27,12 @@ from sonarcarve.geometry.index import (
     query_sector,
 )
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
-from sonarcarve.maps import PointSource, chord_error
+from sonarcarve.maps import (
+    SOURCE_ATM,
+    SOURCE_CARVED,
+    SOURCE_CENTERLINE,
+    chord_error,
+)
 from sonarcarve.methods.atm import AtmModel, add_atm_arc, row_median, start_atm_arc
 from sonarcarve.methods.base import Estimates, SonarMethod, arc_point
 from sonarcarve.methods.carving import CarvingModel, carve_found, start_carved_arc
@@ -42,10 +48,6 @@ I32Array = npt.NDArray[np.int32]
 
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
-_ALIVE = int(ArcFate.ALIVE)
-_ATM = int(PointSource.ATM)
-_CARVED = int(PointSource.CARVED)
-_CENTERLINE = int(PointSource.CENTERLINE)
 
 
 @compiled_borrowing
@@ -146,9 +148,9 @@ def _choose(
     :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
     for k in range(slots.shape[0]):
         s = slots[k]
-        alive[k] = status[s] == _ALIVE
+        alive[k] = status[s] == ALIVE
         processed[k] = carved[s] or not alive[k] or counts[s] > 0
-        source[k] = _CARVED if carved[s] else _CENTERLINE
+        source[k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
         if counts[s] == 0 or not max_error[k] > error_bound:
             continue
         if stale[s]:
@@ -157,7 +159,7 @@ def _choose(
         bearing[k] = theta[s] + median[s]
         width[k] = span[s]
         max_error[k] = error_bound
-        source[k] = _ATM
+        source[k] = SOURCE_ATM
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:

@@ -70,7 +70,12 @@ from sonarcarve.geometry.evidence import (
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
-from sonarcarve.maps import GlobalMap, PointSource
+from sonarcarve.maps import (
+    SOURCE_ATM,
+    SOURCE_CARVED,
+    SOURCE_CENTERLINE,
+    GlobalMap,
+)
 from sonarcarve.methods.atm import CrossingStore, atm_error_bound
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
 from sonarcarve.methods.config import (
@@ -362,9 +367,6 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
 #: cull at history 1,000, 20 at 250; the scratch is 11 rows of this many arcs' bins.
 _GROUP_ARCS = 64
 
-_ATM = int(PointSource.ATM)
-_CARVED = int(PointSource.CARVED)
-_CENTERLINE = int(PointSource.CENTERLINE)
 
 
 @compiled
@@ -379,11 +381,11 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
         s = slots[q]
         processed[q] = touched[s] or counts[s] > 0 or status[s] != EVIDENCE_ALIVE
         if is_atm[q]:
-            source[q] = _ATM
+            source[q] = SOURCE_ATM
         elif width[q] < beam_width[s] - 1e-12:
-            source[q] = _CARVED
+            source[q] = SOURCE_CARVED
         else:
-            source[q] = _CENTERLINE
+            source[q] = SOURCE_CENTERLINE
         fate[q] = UNCHANGED if has[q] else FULLY_CARVED
 
 
