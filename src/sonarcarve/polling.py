@@ -61,7 +61,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.readings import ReadingBatch, wrap_angle
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
@@ -188,10 +188,6 @@ def _check_order(order: Sequence[int] | npt.ArrayLike) -> IntArray:
         msg = f"firing order must list distinct sensor indices >= 0, got {arr.tolist()}"
         raise PollingError(msg)
     return arr
-
-
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class SonarPoller:
@@ -383,7 +379,7 @@ class SonarPoller:
     def _add_pose(self, t: float, pose: tuple[float, float, float]) -> None:
         x, y, heading = (float(v) for v in pose)
         if self._track_pose:  # unwrap so that interpolation turns the short way
-            heading = self._track_pose[-1][2] + _wrap(heading - self._track_pose[-1][2])
+            heading = self._track_pose[-1][2] + wrap_angle(heading - self._track_pose[-1][2])
         self._track_t.append(t)
         self._track_pose.append((x, y, heading))
 

@@ -37,6 +37,7 @@ __all__ = [
     "ReadingBatch",
     "ReadingsError",
     "check_reading",
+    "wrap_angle",
 ]
 
 #: Largest sensor index accepted. Indices name the sensors of one robot, so anything near this
@@ -316,6 +317,24 @@ class ReadingBatch:
         """A copy where unknown (NaN) beam widths are replaced by ``default`` radians."""
         return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
                                "beam_width": self.beam_widths(default)})
+
+
+@overload
+def wrap_angle(angle: float) -> float: ...
+@overload
+def wrap_angle(angle: FloatArray) -> FloatArray: ...
+def wrap_angle(angle: float | FloatArray) -> float | FloatArray:
+    """``angle`` (radians; a float or an array of them) folded into [-π, π):
+    ``(angle + π) mod 2π − π``.
+
+    Examples
+    --------
+    >>> wrap_angle(3.0 * math.pi / 2.0) == -math.pi / 2.0
+    True
+    >>> wrap_angle(np.array([math.pi, -math.pi])).tolist() == [-math.pi, -math.pi]
+    True
+    """
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.inf) -> None:
