@@ -280,7 +280,7 @@ class SonarPoller:
             spans = self._chain(changed, p_prev, float(t))
         spans += self._timeouts(float(t), {pos for pos, *_ in spans})
         self._trim_track()
-        return [self._firing(pos, lo, hi, cause, new, float(t)) for pos, _, lo, hi, cause in spans]
+        return [self._firing(pos, lo, hi, cause, new) for pos, _, lo, hi, cause in spans]
 
     # -- inference ----------------------------------------------------------------------------
 
@@ -391,8 +391,8 @@ class SonarPoller:
             del self._track_t[:cut]
             del self._track_pose[:cut]
 
-    def _firing(self, pos: int, lo: float, hi: float, cause: FiringCause, values: FloatArray,
-                t: float) -> StampedFiring:
+    def _firing(self, pos: int, lo: float, hi: float, cause: FiringCause,
+                values: FloatArray) -> StampedFiring:
         sensor = int(self.order[pos])
         stamp = 0.5 * (lo + hi)
         track = np.asarray(self._track_pose)
