@@ -67,6 +67,7 @@ from sonarcarve.methods.config import (
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
+    "BEARING_MARGIN",
     "INITIAL_COLUMNS",
     "MAX_ATM_STATE_BYTES",
     "MIN_INDEXED_TRANSVERSAL",

@@ -52,9 +52,18 @@ from sonarcarve.readings import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["ArcFate", "ArcModel", "CommitListener", "Estimates", "Measures", "SonarMethod"]
+__all__ = [
+    "ArcFate",
+    "ArcModel",
+    "CommitListener",
+    "Estimates",
+    "Measures",
+    "SonarMethod",
+    "arc_point",
+    "source_codes",
+]
 
-M = TypeVar("M", LocalMap, GlobalMap)
+_M = TypeVar("_M", LocalMap, GlobalMap)
 
 
 @dataclass(frozen=True, eq=False)
@@ -487,7 +496,7 @@ class SonarMethod(ABC):
         else:
             self._global.commit(self._points(slots, GlobalMap, est))
 
-    def _points(self, slots: SlotArray, kind: type[M], est: Estimates | None = None) -> M:
+    def _points(self, slots: SlotArray, kind: type[_M], est: Estimates | None = None) -> _M:
         est = self.estimates(slots) if est is None else est
         keep = slots[est.alive]
         h = self.history

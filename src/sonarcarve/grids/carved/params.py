@@ -16,6 +16,7 @@ from sonarcarve.grids.elfes import ROS_FADE_RANGE
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 
 __all__ = [
+    "DEFAULT_FRESH_PERIODS",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",
