@@ -169,6 +169,25 @@ class SensorModel:
             "confirm": (lambda v: 0.0 < v < math.inf, "be finite and > 0"),
         })
 
+    def params(self, range_tolerance: float, threshold: float, min_transversal: float, *,
+               with_occlusion: bool = True, with_transmission: bool = True) -> EvidenceParams:
+        """The kernels' :class:`~sonarcarve.geometry.evidence.EvidenceParams` of this sensor
+        with ε = ``range_tolerance`` metres, the carving ``threshold`` (evidence) and ATM's ψ
+        = ``min_transversal`` radians; ``with_occlusion=False`` never establishes a bin
+        (``establish`` = inf), ``with_transmission=False`` weighs no transmission evidence."""
+        return EvidenceParams(
+            tolerance=range_tolerance, support_tolerance=self.support_tolerance,
+            edge_gain=self.edge_gain, incidence_full=self.incidence_full,
+            incidence_zero=self.incidence_zero, rough=self.rough,
+            max_detect=self.max_detect, range_scale=self.range_scale,
+            threshold=threshold,
+            establish=self.establish if with_occlusion else math.inf,
+            cos_psi=math.cos(min_transversal), protect=self.protect,
+            viewpoint_spacing=self.viewpoint_spacing,
+            transmit=self.transmit if with_transmission else 0.0,
+            confirm=self.confirm,
+        )
+
 
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
 #: docstring): each is known when the arc is committed, and for the local map at any time
@@ -462,18 +481,18 @@ class EvidenceModel(ArcModel):
         self.posterior_uncut = posterior_uncut
         self.min_atm_crossings = min_atm_crossings
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
-        self.params = EvidenceParams(
-            tolerance=range_tolerance, support_tolerance=sensor.support_tolerance,
-            edge_gain=sensor.edge_gain, incidence_full=sensor.incidence_full,
-            incidence_zero=sensor.incidence_zero, rough=sensor.rough,
-            max_detect=sensor.max_detect, range_scale=sensor.range_scale,
-            threshold=self.threshold,
-            establish=sensor.establish if with_occlusion else math.inf,
-            cos_psi=math.cos(min_transversal), protect=sensor.protect,
-            viewpoint_spacing=sensor.viewpoint_spacing,
-            transmit=sensor.transmit if with_transmission else 0.0,
-            confirm=sensor.confirm,
-        )
+        self.params = sensor.params(range_tolerance, self.threshold, min_transversal,
+                                    with_occlusion=with_occlusion,
+                                    with_transmission=with_transmission)
+        self.range_tolerance = range_tolerance
+        self._allocate(history, bins, with_atm)
+        self._fully = 0
+        self._crossings = 0
+        self._occluded_bins = 0
+
+    def _allocate(self, history: SonarHistory, bins: int, with_atm: bool) -> None:
+        """The per-arc state (rows of ``history.storage_size``, ``bins`` wide where it is per
+        bin), the scratch of the kernels and ATM's crossing store, all empty."""
         size = history.storage_size
         # Crossings an arc can have: 2 with each of capacity - 1 older and as many newer arcs.
         most = max(1, 4 * (history.capacity - 1))
@@ -502,7 +521,6 @@ class EvidenceModel(ArcModel):
         # 1 where the arc has a repeat (geometry/repeats.py) among its sensor's other echoes
         # in the history, else 0.
         self.repeated = np.zeros(size)
-        self.range_tolerance = range_tolerance
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -527,9 +545,6 @@ class EvidenceModel(ArcModel):
         # a history of 10,000 arcs).
         self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
-        self._fully = 0
-        self._crossings = 0
-        self._occluded_bins = 0
 
     @property
     def bearings(self) -> np.ndarray:
