@@ -10,13 +10,22 @@ of them. The log-odds grids also share their probability check (:func:`check_pro
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
-__all__ = ["CellGrid", "GridError", "bounds_around", "check_probability", "grid_cells", "logit"]
+__all__ = [
+    "CellGrid",
+    "GridError",
+    "bounds_around",
+    "check_probability",
+    "check_real",
+    "grid_cells",
+    "logit",
+]
 
 Bounds = tuple[float, float, float, float]
 
@@ -122,6 +131,27 @@ def check_probability(label: str, name: str, value: object, lo: float, hi: float
         msg = f"{label}: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
         raise GridError(msg)
     return float(value)  # type: ignore[arg-type]
+
+
+def check_real(label: str, name: str, value: object, ok: Callable[[float], bool],
+               rule: str) -> float:
+    """``value`` as a float if it is a real number (an int or a float, not a bool) for which
+    ``ok`` holds; else :class:`GridError` ``"<label>: <name> must be <rule>, got <value>"``.
+    ``ok`` sees only numbers, and must be false for NaN unless NaN is allowed.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_real("carved grid", "band_profile", True, lambda v: v >= 0.0,
+    ...                "a finite number >= 0")
+    ... except GridError as err:
+    ...     print(err)
+    carved grid: band_profile must be a finite number >= 0, got True
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float) or not ok(value):
+        msg = f"{label}: {name} must be {rule}, got {value!r}"
+        raise GridError(msg)
+    return float(value)
 
 
 class CellGrid:
