@@ -309,7 +309,7 @@ def test_a_probability_that_is_no_number_raises_a_grid_error(name: str) -> None:
     # The carved grid's check (one copy, grids/cells.py): a string was a TypeError here.
     with pytest.raises(GridError, match=f"^grid: {name} must lie in .*got '0.3'$"):
         SonarConeModel(**{name: "0.3"})  # type: ignore[arg-type]
-    with pytest.raises(GridError, match="^grid: threshold must lie in"):
+    with pytest.raises(GridError, match=r"^grid: threshold must lie in"):
         OccupancyGrid(0.1, (0, 0, 1, 1)).occupied_points("0.5")  # type: ignore[arg-type]
 
 
