@@ -24,7 +24,8 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
   (``exp(-F)``, its free evidence F) times its localised support (equal weights: the run's
   middle, eq. 3.6; :func:`~sonarcarve.geometry.evidence.evidence_estimates`), the bound
   measured from there; a beam nothing has cut keeps its middle (its crossings may be ghosts:
-  two jambs' circles meet in the doorway; ``with_uncut_posterior`` places it too);
+  two jambs' circles meet in the doorway; :attr:`EvidenceOptions.uncut_posterior` places it
+  too);
 * ATM crossings counted only inside the kept run; a crossing confirms the run, and from
   ``min_atm_crossings`` (3) crossings in it their median places the point when its bound
   (eq. 5.4) is the smaller (``source = atm``; section 4's rule);
@@ -90,7 +91,7 @@ from sonarcarve.readings import Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
-           "SensorModel"]
+           "EvidenceOptions", "SensorModel"]
 
 
 #: A field's rule: what a valid value satisfies, and how the error message says it.
@@ -187,6 +188,57 @@ class SensorModel:
             transmit=self.transmit if with_transmission else 0.0,
             confirm=self.confirm,
         )
+
+
+@dataclass(frozen=True)
+class EvidenceOptions:
+    """The switches of evidence carving: parts to switch off (ablation) and the placement
+    rules, passed unchanged from :class:`EvidenceMethod` to :class:`EvidenceModel`.
+
+    Attributes
+    ----------
+    atm : bool
+        Find and use ATM crossings.
+    occlusion : bool
+        Carve bins behind established surfaces (the multipath rule).
+    transmission : bool
+        Transmission evidence (a newer echo confirmed by other sensors behind a bin).
+    located_placement : bool
+        Place the point by the evidence instead of at the kept run's middle (eq. 3.6): with
+        ``posterior_placement``, at the median of the posterior over the run's bins
+        (:func:`~sonarcarve.geometry.evidence.evidence_estimates`); without it (the placement
+        before issue 9's point accuracy work), once evidence has cut the beam, at the median
+        of the run's localised support.
+    posterior_placement : bool
+        See ``located_placement`` (off, the placement before issue 9's point accuracy work
+        also needs ``min_atm_crossings=1``).
+    uncut_posterior : bool
+        With ``posterior_placement``, place the point of a beam nothing has cut by the
+        posterior too (``exp(-F)`` times its localised support: no bin of an uncut beam
+        reached the threshold, so the support mostly decides); off (the default): its middle,
+        eq. 3.6.
+    min_atm_crossings : int
+        ATM's median inside the kept run places the point only when the run holds at least
+        this many crossings (>= 1; and its bound, eq. 5.4, is the smaller): with fewer, the
+        median is one or two crossings themselves, which a single ghost moves (1: any
+        crossing, the rule before issue 9's point accuracy work).
+
+    Examples
+    --------
+    >>> EvidenceOptions(atm=False).min_atm_crossings
+    3
+    """
+
+    atm: bool = True
+    occlusion: bool = True
+    transmission: bool = True
+    located_placement: bool = True
+    posterior_placement: bool = True
+    uncut_posterior: bool = False
+    min_atm_crossings: int = 3
+
+    def __post_init__(self) -> None:
+        _check_min_atm_crossings(self.min_atm_crossings)
 
 
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
@@ -437,55 +489,28 @@ class EvidenceModel(ArcModel):
         P_carve: a bin is carved when the evidence equals one reading with this ``P_detect``.
     min_transversal, range_resolution : float
         ATM's ψ (radians) and δ (metres); ψ also picks the crossings.
-    with_atm : bool
-        Find and use ATM crossings.
-    with_occlusion : bool
-        Carve bins behind established surfaces (the multipath rule).
-    with_transmission : bool
-        Transmission evidence (a newer echo confirmed by other sensors behind a bin).
-    place_located : bool
-        Place the point by the evidence instead of at the kept run's middle (eq. 3.6): with
-        ``place_posterior``, at the median of the posterior over the run's bins
-        (:func:`~sonarcarve.geometry.evidence.evidence_estimates`); without it (the placement
-        before issue 9's point accuracy work), once evidence has cut the beam, at the median
-        of the run's localised support.
-    place_posterior : bool
-        See ``place_located``.
-    posterior_uncut : bool
-        With ``place_posterior``, place the point of a beam nothing has cut by the posterior
-        too (``exp(-F)`` times its localised support: no bin of an uncut beam reached the
-        threshold, so the support mostly decides; off: its middle, eq. 3.6).
-    min_atm_crossings : int
-        ATM's median inside the kept run places the point only when the run holds at least
-        this many crossings (and its bound, eq. 5.4, is the smaller): with fewer, the median
-        is one or two crossings themselves, which a single ghost moves (1: any crossing, the
-        rule before issue 9's point accuracy work).
+    options : EvidenceOptions, optional
+        The switches; default ``EvidenceOptions()``: every part, the measured placement.
     sensor : SensorModel
         The detection model.
     """
 
     def __init__(self, history: SonarHistory, bins: int, range_tolerance: float,
                  carve_probability: float, min_transversal: float, range_resolution: float,
-                 *, with_atm: bool = True, with_occlusion: bool = True,
-                 with_transmission: bool = True, place_located: bool = True,
-                 place_posterior: bool = True, posterior_uncut: bool = False,
-                 min_atm_crossings: int = 3, sensor: SensorModel | None = None) -> None:
+                 *, options: EvidenceOptions | None = None,
+                 sensor: SensorModel | None = None) -> None:
         super().__init__(history)
-        _check_min_atm_crossings(min_atm_crossings)
+        options = EvidenceOptions() if options is None else options
         sensor = SensorModel() if sensor is None else sensor
         self.bins = bins
         self.threshold = evidence_threshold(carve_probability)
-        self.with_atm = with_atm
-        self.place_located = place_located
-        self.place_posterior = place_posterior
-        self.posterior_uncut = posterior_uncut
-        self.min_atm_crossings = min_atm_crossings
+        self.options = options
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
         self.params = sensor.params(range_tolerance, self.threshold, min_transversal,
-                                    with_occlusion=with_occlusion,
-                                    with_transmission=with_transmission)
+                                    with_occlusion=options.occlusion,
+                                    with_transmission=options.transmission)
         self.range_tolerance = range_tolerance
-        self._allocate(history, bins, with_atm)
+        self._allocate(history, bins, options.atm)
         self._fully = 0
         self._crossings = 0
         self._occluded_bins = 0
@@ -570,7 +595,7 @@ class EvidenceModel(ArcModel):
                 self.in_beam, self.bin_index, self.near, self.near_flags, self.bx, self.by,
                 self.ex, self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
                 self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
-                self.bearings, self.counts, self.spill, self.params, self.with_atm)
+                self.bearings, self.counts, self.spill, self.params, self.options.atm)
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -640,12 +665,12 @@ class EvidenceModel(ArcModel):
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
         the model has stopped: :meth:`check_usable`)."""
         self.check_usable()
-        h = self.history
+        h, o = self.history, self.options
         return evidence_estimates(
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
-            self.threshold, self.atm_bound, self.with_atm, self.place_located,
-            self.place_posterior, self.posterior_uncut, self.min_atm_crossings,
+            self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
+            o.uncut_posterior, o.min_atm_crossings,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -696,19 +721,9 @@ class EvidenceMethod(SonarMethod):
     stamp_error : float
         Upper bound on the position-stamping error of a reading, metres (Appendix A), added to
         every point's bound.
-    with_atm, with_occlusion, with_transmission, with_located_placement : bool
-        Switch parts off (ablation); see :class:`EvidenceModel`.
-    with_posterior_placement : bool
-        Once evidence has cut the beam, the point at the median of the posterior over the
-        kept run (``place_posterior`` of :class:`EvidenceModel`); off: the located placement
-        of the session before (the placement before issue 9's point accuracy work also needs
-        ``min_atm_crossings=1``).
-    with_uncut_posterior : bool
-        The posterior places the points of beams nothing has cut too (``posterior_uncut``;
-        off by default: see :func:`~sonarcarve.geometry.evidence.evidence_estimates`).
-    min_atm_crossings : int
-        Crossings the kept run needs before ATM's median places the point (>= 1; see
-        :class:`EvidenceModel`).
+    options : EvidenceOptions, optional
+        The switches (ablation, placement rules), passed to :class:`EvidenceModel` as they
+        are; default ``EvidenceOptions()``.
     sensor : SensorModel, optional
         The detection model.
     confidence_model : ConfidenceModel, optional
@@ -729,13 +744,7 @@ class EvidenceMethod(SonarMethod):
         min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         stamp_error: float = 0.0,
         *,
-        with_atm: bool = True,
-        with_occlusion: bool = True,
-        with_transmission: bool = True,
-        with_located_placement: bool = True,
-        with_posterior_placement: bool = True,
-        with_uncut_posterior: bool = False,
-        min_atm_crossings: int = 3,
+        options: EvidenceOptions | None = None,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -745,14 +754,7 @@ class EvidenceMethod(SonarMethod):
             evidence_bins=evidence_bins, carve_probability=carve_probability,
             min_confidence=min_confidence, stamp_error=stamp_error,
         )
-        self.with_atm = with_atm
-        self.with_occlusion = with_occlusion
-        self.with_transmission = with_transmission
-        self.with_located_placement = with_located_placement
-        self.with_posterior_placement = with_posterior_placement
-        self.with_uncut_posterior = with_uncut_posterior
-        _check_min_atm_crossings(min_atm_crossings)
-        self.min_atm_crossings = min_atm_crossings
+        self.options = EvidenceOptions() if options is None else options
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -762,13 +764,7 @@ class EvidenceMethod(SonarMethod):
         c = self.config
         return (EvidenceModel(self.history, c.evidence_bins, c.range_tolerance,
                               c.carve_probability, c.min_transversal, c.range_resolution,
-                              with_atm=self.with_atm, with_occlusion=self.with_occlusion,
-                              with_transmission=self.with_transmission,
-                              place_located=self.with_located_placement,
-                              place_posterior=self.with_posterior_placement,
-                              posterior_uncut=self.with_uncut_posterior,
-                              min_atm_crossings=self.min_atm_crossings,
-                              sensor=self.sensor),)
+                              options=self.options, sensor=self.sensor),)
 
     def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
                  maturity: np.ndarray | None = None) -> np.ndarray:
