@@ -56,7 +56,7 @@ from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
 from sonarcarve.lab.experiments.real_log import line_spread
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
-from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod
+from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, EvidenceOptions
 from sonarcarve.pipeline import process_readings
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
@@ -72,19 +72,20 @@ def _evidence(*, atm: bool = False, occlusion: bool = False, transmission: bool 
         return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
                               c.min_transversal, c.range_resolution, c.evidence_bins,
                               c.carve_probability, c.min_confidence, c.stamp_error,
-                              with_atm=atm, with_occlusion=occlusion,
-                              with_transmission=transmission)
+                              options=EvidenceOptions(atm=atm, occlusion=occlusion,
+                                                      transmission=transmission))
     return make
 
 
-def _all_with(**options: Any) -> Factory:
-    """Evidence carving with every part (the default) and ``options`` passed to
-    :class:`EvidenceMethod` on top of the config's values."""
+def _all_with(confidence_model: ConfidenceModel | None = None, **options: Any) -> Factory:
+    """Evidence carving with every part (the default), ``options`` the fields of its
+    :class:`EvidenceOptions` and ``confidence_model`` on top of the config's values."""
     def make(c: MethodConfig) -> SonarMethod:
         return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
                               c.min_transversal, c.range_resolution, c.evidence_bins,
                               c.carve_probability, c.min_confidence, c.stamp_error,
-                              **options)
+                              options=EvidenceOptions(**options),
+                              confidence_model=confidence_model)
     return make
 
 
@@ -111,10 +112,10 @@ VARIANTS: dict[str, Factory] = {
         _all_with(confidence_model=replace(ConfidenceModel(), repeated=0.0)),
     "all, behind's weight 0 (before behind)":
         _all_with(confidence_model=replace(ConfidenceModel(), behind=0.0)),
-    "all, point at the run's middle": _all_with(with_located_placement=False),
+    "all, point at the run's middle": _all_with(located_placement=False),
     "all, placement before the posterior (located median once cut, ATM from 1 crossing)":
-        _all_with(with_posterior_placement=False, min_atm_crossings=1),
-    "all, posterior on uncut beams too": _all_with(with_uncut_posterior=True),
+        _all_with(posterior_placement=False, min_atm_crossings=1),
+    "all, posterior on uncut beams too": _all_with(uncut_posterior=True),
     "all, posterior, ATM from 1 crossing": _all_with(min_atm_crossings=1),
 }
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)

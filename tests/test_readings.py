@@ -91,12 +91,26 @@ def test_unknown_beam_width_becomes_the_default() -> None:
     assert batch.beam_width.tolist() == [0.3, 0.5, 0.2]
 
 
+def test_beam_widths_fill_only_unknown_widths() -> None:
+    batch = _batch(beam_width=[0.3, math.nan, 0.2])
+    assert batch.beam_widths(0.5).tolist() == [0.3, 0.5, 0.2]
+    assert math.isnan(batch.beam_width[1])  # the batch itself is unchanged
+    assert [r.width_or(0.5) for r in batch] == [0.3, 0.5, 0.2]
+
+
 def test_concatenate_keeps_order_and_checks_time() -> None:
     batch = _batch()
     both = ReadingBatch.concatenate([batch[:2], batch[2:]])
     np.testing.assert_array_equal(both.t, batch.t)
     with pytest.raises(ReadingsError, match="backwards"):
         ReadingBatch.concatenate([batch[2:], batch[:2]])
+
+
+def test_concatenate_unvalidated_joins_without_checking() -> None:
+    batch = _batch()
+    backwards = ReadingBatch.concatenate([batch[2:], batch[:2]], validate=False)
+    np.testing.assert_array_equal(backwards.t, np.concatenate([batch.t[2:], batch.t[:2]]))
+    assert ReadingBatch.concatenate([], validate=False).t.shape == (0,)
 
 
 def test_whole_float_sensors_are_accepted_up_to_the_limit() -> None:

@@ -65,7 +65,7 @@ __all__ = [
 #: sensors and mounting height; not a default anywhere.
 PAPER_MAX_RANGE = 150 * INCH
 
-M = TypeVar("M", LocalMap, GlobalMap)
+_M = TypeVar("_M", LocalMap, GlobalMap)
 
 
 class FilterError(SonarcarveError, ValueError):
@@ -345,10 +345,10 @@ class MapFilterReport:
 
 
 @dataclass(frozen=True, eq=False)
-class FilteredMap(Generic[M]):
+class FilteredMap(Generic[_M]):
     """The result of :func:`filter_map`: the kept points and the counts."""
 
-    points: M
+    points: _M
     report: MapFilterReport
 
 
@@ -401,7 +401,7 @@ def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
     return np.asarray(np.isnan(c) | (c >= threshold))
 
 
-def filter_map(points: M, spec: MapFilter) -> FilteredMap[M]:
+def filter_map(points: _M, spec: MapFilter) -> FilteredMap[_M]:
     """Apply the map filters of ``spec``: confidence, max-error thresholding, then the outlier
     test.
 

@@ -27,6 +27,9 @@ import numpy.typing as npt
 from sonarcarve.typing import FloatArray, Int8Array, IntArray
 
 __all__ = [
+    "SOURCE_ATM",
+    "SOURCE_CARVED",
+    "SOURCE_CENTERLINE",
     "CallbackSink",
     "CountingSink",
     "GlobalMap",
@@ -50,6 +53,12 @@ class PointSource(IntEnum):
     def label(self) -> str:
         """Lower-case name used in files: ``centerline``, ``carved`` or ``atm``."""
         return self.name.lower()
+
+
+# The codes as plain ints for the compiled kernels (numba freezes int globals as constants).
+SOURCE_CENTERLINE = int(PointSource.CENTERLINE)
+SOURCE_CARVED = int(PointSource.CARVED)
+SOURCE_ATM = int(PointSource.ATM)
 
 
 def chord_error(r: npt.ArrayLike, width: npt.ArrayLike) -> FloatArray:

@@ -6,7 +6,7 @@ import math
 import time
 from array import array
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -369,7 +369,8 @@ class _Run:
         """Run what is queued as one step (the last, shorter step of the log)."""
         if self._held:
             held, self._held, self._held_count = self._held, [], 0
-            batch = held[0][0] if len(held) == 1 else _join([b for b, _ in held])
+            batch = held[0][0] if len(held) == 1 else ReadingBatch.concatenate(
+                [b for b, _ in held], validate=False)  # each was checked where it came from
             self._step(batch, np.concatenate([i for _, i in held]))
 
     def _hold(self, batch: ReadingBatch, ids: IntArray) -> None:
@@ -399,12 +400,6 @@ class _Run:
             self.shares.append(method.measures().unprocessed_share)
         if self.on_progress is not None:  # progress counts input rows, dropped ones included
             self.on_progress(last_id + 1)
-
-
-def _join(batches: list[ReadingBatch]) -> ReadingBatch:
-    """Batches one after the other, unchecked (each was checked where it came from)."""
-    return ReadingBatch(*(np.concatenate([getattr(b, f.name) for b in batches])
-                          for f in fields(ReadingBatch)))
 
 
 class _ChunkFilter:

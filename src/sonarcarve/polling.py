@@ -61,7 +61,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.readings import ReadingBatch, wrap_angle
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
@@ -190,10 +190,6 @@ def _check_order(order: Sequence[int] | npt.ArrayLike) -> IntArray:
     return arr
 
 
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
 class SonarPoller:
     """Streaming sonar polling (Appendix A): feed polls, get stamped firings.
 
@@ -284,7 +280,7 @@ class SonarPoller:
             spans = self._chain(changed, p_prev, float(t))
         spans += self._timeouts(float(t), {pos for pos, *_ in spans})
         self._trim_track()
-        return [self._firing(pos, lo, hi, cause, new, float(t)) for pos, _, lo, hi, cause in spans]
+        return [self._firing(pos, lo, hi, cause, new) for pos, _, lo, hi, cause in spans]
 
     # -- inference ----------------------------------------------------------------------------
 
@@ -383,7 +379,7 @@ class SonarPoller:
     def _add_pose(self, t: float, pose: tuple[float, float, float]) -> None:
         x, y, heading = (float(v) for v in pose)
         if self._track_pose:  # unwrap so that interpolation turns the short way
-            heading = self._track_pose[-1][2] + _wrap(heading - self._track_pose[-1][2])
+            heading = self._track_pose[-1][2] + wrap_angle(heading - self._track_pose[-1][2])
         self._track_t.append(t)
         self._track_pose.append((x, y, heading))
 
@@ -395,8 +391,8 @@ class SonarPoller:
             del self._track_t[:cut]
             del self._track_pose[:cut]
 
-    def _firing(self, pos: int, lo: float, hi: float, cause: FiringCause, values: FloatArray,
-                t: float) -> StampedFiring:
+    def _firing(self, pos: int, lo: float, hi: float, cause: FiringCause,
+                values: FloatArray) -> StampedFiring:
         sensor = int(self.order[pos])
         stamp = 0.5 * (lo + hi)
         track = np.asarray(self._track_pose)

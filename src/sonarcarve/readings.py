@@ -37,6 +37,7 @@ __all__ = [
     "ReadingBatch",
     "ReadingsError",
     "check_reading",
+    "wrap_angle",
 ]
 
 #: Largest sensor index accepted. Indices name the sensors of one robot, so anything near this
@@ -125,6 +126,16 @@ class Reading(NamedTuple):
         """The sensor heard nothing (``range`` is +inf): free space up to ``max_range``."""
         return self.range == math.inf
 
+    def width_or(self, default: float) -> float:
+        """This reading's beam width, or ``default`` (radians) where it carries none (NaN).
+
+        Examples
+        --------
+        >>> Reading(0.0, 0, 0.0, 0.0, 0.0, 1.0).width_or(0.5)
+        0.5
+        """
+        return default if math.isnan(self.beam_width) else self.beam_width
+
 
 @dataclass(frozen=True, eq=False)
 class ReadingBatch:
@@ -205,12 +216,18 @@ class ReadingBatch:
         return cls.from_readings([])
 
     @classmethod
-    def concatenate(cls, batches: Sequence[ReadingBatch]) -> ReadingBatch:
-        """The readings of ``batches`` one after the other (times must stay sorted)."""
+    def concatenate(cls, batches: Sequence[ReadingBatch], *,
+                    validate: bool = True) -> ReadingBatch:
+        """The readings of ``batches`` one after the other (times must stay sorted).
+
+        With ``validate=False`` the result is not checked (:meth:`validate`): for batches each
+        checked where it came from, whose order the caller guarantees.
+        """
         if not batches:
             return cls.empty()
         merged = cls(*(np.concatenate([getattr(b, f.name) for b in batches]) for f in fields(cls)))
-        merged.validate("concatenated readings")
+        if validate:
+            merged.validate("concatenated readings")
         return merged
 
     def validate(self, source: str = "readings", first_line: int | None = None,
@@ -291,11 +308,33 @@ class ReadingBatch:
         return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
                                "max_range": limit})
 
+    def beam_widths(self, default: float) -> FloatArray:
+        """Each row's beam width, or ``default`` radians where it carries none (NaN), shape
+        (n,); a new array, the batch is not copied."""
+        return np.where(np.isnan(self.beam_width), default, self.beam_width)
+
     def with_beam_width(self, default: float) -> ReadingBatch:
         """A copy where unknown (NaN) beam widths are replaced by ``default`` radians."""
-        width = np.where(np.isnan(self.beam_width), default, self.beam_width)
         return ReadingBatch(**{**{f.name: getattr(self, f.name) for f in fields(self)},
-                               "beam_width": width})
+                               "beam_width": self.beam_widths(default)})
+
+
+@overload
+def wrap_angle(angle: float) -> float: ...
+@overload
+def wrap_angle(angle: FloatArray) -> FloatArray: ...
+def wrap_angle(angle: float | FloatArray) -> float | FloatArray:
+    """``angle`` (radians; a float or an array of them) folded into [-π, π):
+    ``(angle + π) mod 2π − π``.
+
+    Examples
+    --------
+    >>> wrap_angle(3.0 * math.pi / 2.0) == -math.pi / 2.0
+    True
+    >>> wrap_angle(np.array([math.pi, -math.pi])).tolist() == [-math.pi, -math.pi]
+    True
+    """
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.inf) -> None:

@@ -99,7 +99,7 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
     for i in older:
         if m.status[i] != EVIDENCE_ALIVE or _beyond(*m.circle[:, i], beam):
             continue
-        if m.with_atm:
+        if m.options.atm:
             _, spilled = transversal_crossings(
                 slot, i, h.x, h.y, h.r, m.cos_axis, m.sin_axis, m.cos_half, params.cos_psi,
                 m.bearings, m.counts, m.spill, spilled)

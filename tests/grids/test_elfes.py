@@ -304,6 +304,15 @@ def test_bad_model_parameters_raise_grid_errors(kwargs: dict[str, float]) -> Non
         SonarConeModel(**kwargs)
 
 
+@pytest.mark.parametrize("name", ["p_hit", "p_miss", "p_min", "p_max"])
+def test_a_probability_that_is_no_number_raises_a_grid_error(name: str) -> None:
+    # The carved grid's check (one copy, grids/cells.py): a string was a TypeError here.
+    with pytest.raises(GridError, match=f"^grid: {name} must lie in .*got '0.3'$"):
+        SonarConeModel(**{name: "0.3"})  # type: ignore[arg-type]
+    with pytest.raises(GridError, match=r"^grid: threshold must lie in"):
+        OccupancyGrid(0.1, (0, 0, 1, 1)).occupied_points("0.5")  # type: ignore[arg-type]
+
+
 def test_bad_threshold_margin_and_readings_raise() -> None:
     grid = OccupancyGrid(0.1, (0, 0, 1, 1))
     for threshold in (0.0, 1.0, math.nan, 1.5):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import math
 from typing import Any
 
@@ -12,13 +11,19 @@ import pytest
 
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError, SonarcarveError
+from sonarcarve.history import SonarHistory
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import EvidenceMethod
 from sonarcarve.methods import atm as atm_module
 from sonarcarve.methods import evidence as evidence_module
 from sonarcarve.methods.atm import CrossingStoreError
-from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceModel
+from sonarcarve.methods.evidence import (
+    CONFIDENCE_FEATURES,
+    ConfidenceModel,
+    EvidenceModel,
+    EvidenceOptions,
+)
 from sonarcarve.readings import Reading, ReadingBatch
 
 PHI = math.radians(22.5)
@@ -306,7 +311,7 @@ def _phantom_and_oblique_looks(transmission: bool, *, grazing: bool) -> tuple[fl
     echoes that confirm a surface beyond it, then two beams that pass it obliquely (45°, or
     along +y when ``grazing``) and hear that surface. Returns the free evidence of the
     phantom's middle bin and the threshold."""
-    method = EvidenceMethod(min_confidence=0.0, with_transmission=transmission)
+    method = EvidenceMethod(min_confidence=0.0, options=EvidenceOptions(transmission=transmission))
     model = _model(method)
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 1.0, sensor=0))
     if grazing:
@@ -376,7 +381,7 @@ def test_a_split_arc_keeps_the_piece_a_crossing_echo_locates_not_a_tangent_one()
     # circle touches the arc there: the same range again says nothing about the bearing); the
     # lower piece by another sensor's echo crossing the arc at 55°. ATM is off, so only the
     # localised support can tell them apart.
-    method = EvidenceMethod(min_confidence=0.0, with_atm=False)
+    method = EvidenceMethod(min_confidence=0.0, options=EvidenceOptions(atm=False))
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 3.0, sensor=0))
     method.add(_reading(0.05, 0.5, 0.0, 0.0, 4.0, sensor=1))
     up = math.radians(10.5)
@@ -402,8 +407,9 @@ def _wall_with_crossings(located: bool, *, carve_lower: bool, posterior: bool = 
     """A wall at x = 2 heard head-on from the origin (sensor 0); optionally its lower half seen
     through head-on by sensor 3; then two other sensors' echoes crossing the arc at a wide
     angle near bearing 0.15. Returns the point of the first echo and its bound."""
-    method = EvidenceMethod(min_confidence=0.0, with_atm=False, with_located_placement=located,
-                            with_posterior_placement=posterior, with_uncut_posterior=uncut)
+    options = EvidenceOptions(atm=False, located_placement=located,
+                              posterior_placement=posterior, uncut_posterior=uncut)
+    method = EvidenceMethod(min_confidence=0.0, options=options)
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
     if carve_lower:
         method.add(_reading(0.05, 0.3, -0.35, 0.0, 4.0, sensor=3))
@@ -692,14 +698,14 @@ def test_repeats_give_the_same_confidence_in_blocks_and_one_reading_at_a_time() 
 @pytest.mark.parametrize("value", [0, -1, 1.5, True, "3"])
 def test_min_atm_crossings_must_be_a_whole_number_of_at_least_one(value: object) -> None:
     with pytest.raises(ConfigError, match="min_atm_crossings"):
-        EvidenceMethod(min_atm_crossings=value)  # type: ignore[arg-type]
+        EvidenceOptions(min_atm_crossings=value)  # type: ignore[arg-type]
 
 
-def _crossed_wall(crossings: int, **options: object) -> tuple[str, float]:
+def _crossed_wall(crossings: int, **options: Any) -> tuple[str, float]:
     """A wall at x = 2 heard head-on from the origin (sensor 0), then ``crossings`` other
     sensors' echoes through the wall point at bearing 0.12, each crossing the first arc at a
     wide angle (one ATM crossing each). Returns the first echo's point source and bound."""
-    method = EvidenceMethod(min_confidence=0.0, **options)  # type: ignore[arg-type]
+    method = EvidenceMethod(min_confidence=0.0, options=EvidenceOptions(**options))
     method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
     target = (2.0 * math.cos(0.12), 2.0 * math.sin(0.12))
     for k, (ox, oy) in enumerate(((0.8, -1.2), (0.9, -1.1), (0.7, 1.3))[:crossings]):
@@ -726,22 +732,16 @@ def test_min_atm_crossings_reaches_the_placement() -> None:
     assert _crossed_wall(3, min_atm_crossings=4)[0] == "centerline"
 
 
-@pytest.mark.parametrize(("option", "attribute", "value"), [
-    ("with_posterior_placement", "place_posterior", False),
-    ("with_uncut_posterior", "posterior_uncut", True),
-    ("with_located_placement", "place_located", False),
-    ("min_atm_crossings", "min_atm_crossings", 5),
-])
-def test_each_placement_option_reaches_the_model(option: str, attribute: str,
-                                                 value: object) -> None:
-    method = EvidenceMethod(**{option: value})  # type: ignore[arg-type]
-    assert getattr(method.models[0], attribute) == value
+def test_the_options_reach_the_model_unchanged() -> None:
+    options = EvidenceOptions(posterior_placement=False, uncut_posterior=True,
+                              located_placement=False, min_atm_crossings=5)
+    assert _model(EvidenceMethod(options=options)).options is options
 
 
 def test_the_models_defaults_are_the_methods() -> None:
     # EvidenceModel is public: built on its own it must place points as the method does.
-    model = inspect.signature(EvidenceModel.__init__).parameters
-    method = inspect.signature(EvidenceMethod.__init__).parameters
-    assert model["min_atm_crossings"].default == method["min_atm_crossings"].default == 3
-    assert model["place_posterior"].default is method["with_posterior_placement"].default is True
-    assert model["posterior_uncut"].default is method["with_uncut_posterior"].default is False
+    alone = EvidenceModel(SonarHistory(10), 24, 0.05, 0.8, 0.35, 0.0254)
+    assert alone.options == _model(EvidenceMethod()).options == EvidenceOptions()
+    assert EvidenceOptions().min_atm_crossings == 3
+    assert EvidenceOptions().posterior_placement is True
+    assert EvidenceOptions().uncut_posterior is False

@@ -1,4 +1,4 @@
-"""Compiled-kernel plumbing: one decorator for every numba kernel of the product.
+"""Compiled-kernel plumbing: one decorator for every numba kernel under :data:`KERNEL_FOLDERS`.
 
 Why not plain ``numba.njit(cache=True)``: numba keys a function's on-disk cache on the
 modification time and size of *that function's own file*. A kernel that calls a compiled function
@@ -10,6 +10,11 @@ its own cache entry, so editing the callee's file would leave the caller running
 files of every module that may hold a kernel (:data:`KERNEL_FOLDERS`): any edit to any of them
 invalidates every cached kernel at once, and an unchanged tree reuses the cache. The rule that
 keeps this sound: a compiled kernel calls only kernels defined under :data:`KERNEL_FOLDERS`.
+
+The exception: the kernels of ``io/float_text.py`` (the CSV number parser) and
+``lab/metrics.py`` use plain ``numba.njit(cache=True)``. Each calls only kernels of its own file
+and no kernel elsewhere calls it, so numba's own per-file key is sound for them, and an edit to
+the geometry does not make the CSV reader recompile.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-__all__ = ["ArcFate"]
+__all__ = ["ALIVE", "FULLY_CARVED", "SHRUNK", "SPLIT", "UNCHANGED", "ArcFate"]
 
 
 class ArcFate(IntEnum):
@@ -35,3 +35,4 @@ UNCHANGED = int(ArcFate.UNCHANGED)
 SHRUNK = int(ArcFate.SHRUNK)
 FULLY_CARVED = int(ArcFate.FULLY_CARVED)
 SPLIT = int(ArcFate.SPLIT)
+ALIVE = int(ArcFate.ALIVE)

@@ -80,7 +80,7 @@ from sonarcarve.geometry.specular import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, IntArray
 
-__all__ = ["MIN_PIECE", "arc_remainder", "carve_arc", "carve_arcs"]
+__all__ = ["MIN_PIECE", "arc_remainder", "carve_arc", "carve_arcs", "carve_core"]
 
 #: Shortest carved or remaining piece of an arc that counts, radians (shorter ones are slivers of
 #: rounding at tangencies; 1e-12 rad is a picometre on a metre-range arc).
@@ -262,9 +262,9 @@ def _carve_point(ox: float, oy: float, r: float, m: float, sector: Sector) -> in
 
 
 @compiled_inline
-def _carve_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
-                cuts: FloatArray, starts: FloatArray, ends: FloatArray,
-                flags: BoolArray) -> tuple[int, float, float]:
+def carve_core(ox: float, oy: float, r: float, lo: float, hi: float, sector: Sector,
+               cuts: FloatArray, starts: FloatArray, ends: FloatArray,
+               flags: BoolArray) -> tuple[int, float, float]:
     """:func:`carve_arc` for a prepared sector and supplied scratch arrays (see
     :func:`_remainder_core`)."""
     if hi - lo < MIN_PIECE:
@@ -343,7 +343,7 @@ def carve_arc(
     """
     sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
     cuts, starts, ends, flags = new_scratch()
-    return _carve_core(ox, oy, r, lo, hi, sector, cuts, starts, ends, flags)
+    return carve_core(ox, oy, r, lo, hi, sector, cuts, starts, ends, flags)
 
 
 @compiled
@@ -455,8 +455,8 @@ def carve_arcs(
         new_lo = lo[slot]
         new_hi = hi[slot]
         if fate == UNDECIDED:
-            fate, new_lo, new_hi = _carve_core(x[slot], y[slot], r[slot], new_lo, new_hi,
-                                               sector, cuts, starts, ends, flags)
+            fate, new_lo, new_hi = carve_core(x[slot], y[slot], r[slot], new_lo, new_hi,
+                                              sector, cuts, starts, ends, flags)
             if fate == UNCHANGED:
                 continue
         carved[slot] = True

@@ -3,19 +3,29 @@
 One check for :class:`~sonarcarve.grids.OccupancyGrid`, :class:`~sonarcarve.grids.RangeSensorLayer`
 and :class:`~sonarcarve.grids.CarvedGrid` (and one of the margin of a grid made ``around`` an
 extent, :func:`bounds_around`), so their errors read alike and a limit cannot be forgotten by one
-of them.
+of them. The log-odds grids also share their probability check (:func:`check_probability`) and
+:func:`logit` from here.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
-__all__ = ["CellGrid", "GridError", "bounds_around", "grid_cells"]
+__all__ = [
+    "CellGrid",
+    "GridError",
+    "bounds_around",
+    "check_probability",
+    "check_real",
+    "grid_cells",
+    "logit",
+]
 
 Bounds = tuple[float, float, float, float]
 
@@ -87,6 +97,61 @@ def bounds_around(label: str, extent: Bounds, margin: float) -> Bounds:
         raise GridError(msg)
     xmin, ymin, xmax, ymax = extent
     return xmin - margin, ymin - margin, xmax + margin, ymax + margin
+
+
+def logit(p: float) -> float:
+    """The log-odds ``ln(p / (1 - p))`` of a probability ``p`` in (0, 1).
+
+    Examples
+    --------
+    >>> logit(0.5)
+    0.0
+    """
+    return math.log(p / (1.0 - p))
+
+
+def check_probability(label: str, name: str, value: object, lo: float, hi: float) -> float:
+    """``value`` as a float if it is a real number (an int or a float, not a bool) in the open
+    interval ``(lo, hi)``; else :class:`GridError` ``"<label>: <name> must lie in (lo, hi),
+    got <value>"``.
+
+    Examples
+    --------
+    >>> check_probability("grid", "p_hit", 0.7, 0.5, 1.0)
+    0.7
+    >>> try:
+    ...     check_probability("carved grid", "p_hit", "0.7", 0.5, 1.0)
+    ... except GridError as err:
+    ...     print(err)
+    carved grid: p_hit must lie in (0.5, 1), got '0.7'
+    """
+    ok = (not isinstance(value, bool) and isinstance(value, int | float)
+          and math.isfinite(value) and lo < value < hi)
+    if not ok:
+        msg = f"{label}: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
+        raise GridError(msg)
+    return float(value)  # type: ignore[arg-type]
+
+
+def check_real(label: str, name: str, value: object, ok: Callable[[float], bool],
+               rule: str) -> float:
+    """``value`` as a float if it is a real number (an int or a float, not a bool) for which
+    ``ok`` holds; else :class:`GridError` ``"<label>: <name> must be <rule>, got <value>"``.
+    ``ok`` sees only numbers, and must be false for NaN unless NaN is allowed.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_real("carved grid", "band_profile", True, lambda v: v >= 0.0,
+    ...                "a finite number >= 0")
+    ... except GridError as err:
+    ...     print(err)
+    carved grid: band_profile must be a finite number >= 0, got True
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float) or not ok(value):
+        msg = f"{label}: {name} must be {rule}, got {value!r}"
+        raise GridError(msg)
+    return float(value)
 
 
 class CellGrid:

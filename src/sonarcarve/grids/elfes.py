@@ -56,7 +56,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.cells import CellGrid, GridError, bounds_around
+from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.scan import cell_range, sector_box
 from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
@@ -85,16 +85,6 @@ MAX_CELLS = 2**28
 
 #: Slope of ROS range_sensor_layer's distance fade, 1/m (its ``delta(phi)``: ``tanh(2 (d - phi))``).
 _FADE_SLOPE = 2.0
-
-def _logit(p: float) -> float:
-    return math.log(p / (1.0 - p))
-
-
-def _check_probability(name: str, value: float, lo: float, hi: float) -> None:
-    if not (math.isfinite(value) and lo < value < hi):
-        msg = f"grid: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
-        raise GridError(msg)
-
 
 @dataclass(frozen=True)
 class SonarConeModel:
@@ -138,10 +128,10 @@ class SonarConeModel:
             msg = (f"grid: range_tolerance must be a finite number >= 0 metres, "
                    f"got {self.range_tolerance!r}")
             raise GridError(msg)
-        _check_probability("p_hit", self.p_hit, 0.5, 1.0)
-        _check_probability("p_miss", self.p_miss, 0.0, 0.5)
-        _check_probability("p_min", self.p_min, 0.0, 0.5)
-        _check_probability("p_max", self.p_max, 0.5, 1.0)
+        check_probability("grid", "p_hit", self.p_hit, 0.5, 1.0)
+        check_probability("grid", "p_miss", self.p_miss, 0.0, 0.5)
+        check_probability("grid", "p_min", self.p_min, 0.0, 0.5)
+        check_probability("grid", "p_max", self.p_max, 0.5, 1.0)
         if math.isnan(self.fade_range) or self.fade_range <= 0.0:
             msg = f"grid: fade_range must be > 0 metres (inf: no fade), got {self.fade_range!r}"
             raise GridError(msg)
@@ -149,8 +139,8 @@ class SonarConeModel:
     @property
     def log_odds(self) -> tuple[float, float, float, float]:
         """``(l_hit, l_miss, l_min, l_max)``: the four probabilities as log-odds."""
-        return (_logit(self.p_hit), _logit(self.p_miss), _logit(self.p_min),
-                _logit(self.p_max))
+        return (logit(self.p_hit), logit(self.p_miss), logit(self.p_min),
+                logit(self.p_max))
 
 
 class OccupancyGrid(CellGrid):
@@ -248,7 +238,7 @@ class OccupancyGrid(CellGrid):
         """
         if not len(batch):
             return
-        phi = np.where(np.isnan(batch.beam_width), self.model.beam_width, batch.beam_width)
+        phi = batch.beam_widths(self.model.beam_width)
         l_hit, l_miss, l_min, l_max = self.model.log_odds
         no_echo = batch.range == math.inf
         if not no_echo.any():
@@ -291,8 +281,8 @@ class OccupancyGrid(CellGrid):
 
         Evaluated as ``l > logit(threshold)`` in float64, without a float64 copy of the grid.
         """
-        _check_probability("threshold", threshold, 0.0, 1.0)
-        return np.asarray(self.log_odds > np.float64(_logit(threshold)))
+        limit = check_probability("grid", "threshold", threshold, 0.0, 1.0)
+        return np.asarray(self.log_odds > np.float64(logit(limit)))
 
     def occupied_points(self, threshold: float = DEFAULT_OCCUPIED_THRESHOLD) -> FloatArray:
         """Centres of the occupied cells (:meth:`occupied_mask`), shape (n, 2), metres.

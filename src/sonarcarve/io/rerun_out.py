@@ -34,7 +34,7 @@ from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
 from sonarcarve.readings import Reading, ReadingBatch
 
-__all__ = ["DEFAULT_EVERY", "ENTITIES", "SOURCE_RGB", "RerunMapper", "write_rerun"]
+__all__ = ["DEFAULT_EVERY", "SOURCE_RGB", "RerunMapper", "write_rerun"]
 
 #: Readings between two logs of the local map, the carved arcs and the path.
 DEFAULT_EVERY = 5
@@ -46,8 +46,6 @@ _MIN_RADIUS = 0.01
 _ARC_SAMPLES = 24
 #: A sensor's path gets a new vertex when its origin has moved this far, metres.
 _PATH_STEP = 0.02
-#: Every entity :func:`write_rerun` may log, under ``world/``.
-ENTITIES = ("walls", "robot/sensors", "robot/path", "reading", "arcs", "map", "global_map")
 
 #: Colours by point source, as in :data:`sonarcarve.plotting.SOURCE_COLORS` (RGB 0-255).
 SOURCE_RGB = {

@@ -122,13 +122,17 @@ def make_method(name: str, config: MethodConfig | None = None) -> SonarMethod:
     ----------
     name : str
         ``"centerline"`` (section 2-A), ``"carve"`` (arc carving, section 3), ``"atm"`` (Arc
-        Transversal Median, section 2-D) or ``"combined"`` (carving and ATM on one history,
-        section 4); the keys of :data:`METHODS`.
+        Transversal Median, section 2-D), ``"combined"`` (carving and ATM on one history,
+        section 4) or ``"evidence"`` (evidence carving with integrated ATM and per-point
+        confidence, beyond the paper: :mod:`sonarcarve.methods.evidence`); the keys of
+        :data:`METHODS`.
     config : MethodConfig, optional
         The parameters (history size in arcs, beam width φ in radians, range tolerance ε in
-        metres, ATM's ψ in radians and δ in metres, specular β in radians); each method reads
-        the ones it needs. Default: ``MethodConfig()``, the paper's settings and the measured
-        defaults documented there.
+        metres, ATM's ψ in radians and δ in metres, specular β in radians; for evidence
+        carving also its bins per beam K, P_carve, the minimum confidence of a mapped point
+        and the stamping error bound in metres); each method reads the ones it needs.
+        Default: ``MethodConfig()``, the paper's settings and the measured defaults
+        documented there.
 
     Raises
     ------

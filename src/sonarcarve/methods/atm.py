@@ -67,6 +67,7 @@ from sonarcarve.methods.config import (
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
+    "BEARING_MARGIN",
     "INITIAL_COLUMNS",
     "MAX_ATM_STATE_BYTES",
     "MIN_INDEXED_TRANSVERSAL",
@@ -74,8 +75,11 @@ __all__ = [
     "AtmModel",
     "CrossingStore",
     "CrossingStoreError",
+    "add_atm_arc",
     "atm_error_bound",
     "grown_columns",
+    "row_median",
+    "start_atm_arc",
 ]
 
 
@@ -224,7 +228,7 @@ def _bearing32(cross: float, along: float) -> float:
 
 
 @compiled_inline
-def _add_arc(
+def add_atm_arc(
     x: FloatArray,
     y: FloatArray,
     r: FloatArray,
@@ -315,11 +319,11 @@ def _add_arc(
 
 
 @compiled_inline
-def _start_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: FloatArray,
-               sin_axis: FloatArray, cos_half: FloatArray, counts: npt.NDArray[np.int32],
-               stale: BoolArray) -> None:
+def start_atm_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: FloatArray,
+                  sin_axis: FloatArray, cos_half: FloatArray, counts: npt.NDArray[np.int32],
+                  stale: BoolArray) -> None:
     """A new arc in ``slot``: no crossings yet, and its axis and half-beam cosines for the beam
-    tests of :func:`_add_arc`."""
+    tests of :func:`add_atm_arc`."""
     counts[slot] = 0
     stale[slot] = True
     axis = theta[slot]  # read once, so that cos and sin become one sincos call
@@ -340,7 +344,7 @@ def _add_arcs(
 ) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
-    (:func:`_add_arc`).
+    (:func:`add_atm_arc`).
 
     ``index_arrays`` is the :class:`~sonarcarve.geometry.index.ArcIndex` as a plain tuple (numba's
     dispatcher types it much faster than a NamedTuple). With ``use_index`` only the arcs the
@@ -353,7 +357,7 @@ def _add_arcs(
     Returns ``(kept, done, needed)``: the crossings kept, the sequence number after the last arc
     done (``first + count`` when all are) and, when it stops early, the columns ``bearings``
     needs for arc ``done`` (0 otherwise). It stops at an arc whose crossings do not fit, having
-    taken them back (:func:`_add_arc`) and changed nothing else of that arc that a second call
+    taken them back (:func:`add_atm_arc`) and changed nothing else of that arc that a second call
     would not redo the same way, so the caller grows the store and calls again from ``done``.
 
     Compiled without reference counting
@@ -366,7 +370,7 @@ def _add_arcs(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        _start_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
+        start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
         xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
         found = query_box(index, xmin, xmax, ymin, ymax, candidates) if use_index else -1
         if found < 0:
@@ -374,8 +378,8 @@ def _add_arcs(
             for older in range(max(0, sequence - capacity + 1), sequence):
                 candidates[found] = older % storage
                 found += 1
-        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
-                                    found, cos_psi, bearings, counts, tally, stale)
+        arc_kept, needed = add_atm_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
+                                       found, cos_psi, bearings, counts, tally, stale)
         if needed:
             return kept, sequence, needed
         kept += arc_kept
@@ -406,8 +410,8 @@ def _shell_sort(values: FloatArray, count: int) -> None:
 
 
 @compiled_inline
-def _row_median(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], s: int,
-                median: FloatArray, span: FloatArray, values: FloatArray) -> None:
+def row_median(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], s: int,
+               median: FloatArray, span: FloatArray, values: FloatArray) -> None:
     """Median and span (max − min) of row ``s``'s stored bearings, written to ``median[s]``
     and ``span[s]``; 0 where it has none. ``values`` is a work array of the store's width."""
     c = counts[s]
@@ -427,10 +431,10 @@ def _medians(
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], slots: SlotArray,
     median: FloatArray, span: FloatArray,
 ) -> None:
-    """:func:`_row_median` of each of ``slots`` (``median`` and ``span`` are by slot)."""
+    """:func:`row_median` of each of ``slots`` (``median`` and ``span`` are by slot)."""
     values = np.empty(bearings.shape[1])
     for k in range(slots.shape[0]):
-        _row_median(bearings, counts, slots[k], median, span, values)
+        row_median(bearings, counts, slots[k], median, span, values)
 
 
 class AtmModel(ArcModel):
@@ -467,8 +471,6 @@ class AtmModel(ArcModel):
     :func:`atm_error_bound` for ATM points, ``chord_error(r, φ)`` (eq. 5.3) for fallbacks.
     """
 
-    block_safe = True
-
     def __init__(self, history: SonarHistory, min_transversal: float, range_resolution: float):
         super().__init__(history)
         self.min_transversal = check_min_transversal(min_transversal)
@@ -485,7 +487,7 @@ class AtmModel(ArcModel):
         self._use_index = self.min_transversal >= MIN_INDEXED_TRANSVERSAL
         self.index = make_index(history.storage_size)
         self._candidates = np.zeros(history.storage_size, dtype=np.int64)
-        # Crossings found and stored with each candidate, to take them back (_add_arc).
+        # Crossings found and stored with each candidate, to take them back (add_atm_arc).
         self._tally = np.zeros((history.storage_size, 2), dtype=np.int32)
         # Median and span of each row's bearings, valid where the row is not stale.
         self._median = np.zeros(history.storage_size)
@@ -508,16 +510,9 @@ class AtmModel(ArcModel):
         """Crossings stored per row (:class:`CrossingStore`)."""
         return self.store.counts
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Reset ``slot``'s crossings, then intersect its arc with the older live arcs.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        """Reset the crossings of each new arc ``first .. first + count - 1``, then intersect it
+        with the older live arcs, in one compiled call."""
         self.check_usable()
         h = self.history
         end = first + count
@@ -552,7 +547,7 @@ class AtmModel(ArcModel):
                                     npt.NDArray[np.int32], BoolArray]:
         """``cos θ, sin θ, cos(φ/2)`` per slot, ``cos ψ``, the crossing store and its counts,
         the per-candidate tally and the stale marks: what a kernel adding arcs to this model
-        takes (:func:`_add_arc`; the store is replaced when it grows, so ask again after
+        takes (:func:`add_atm_arc`; the store is replaced when it grows, so ask again after
         :meth:`make_room`)."""
         return (self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi, self.bearings,
                 self.counts, self._tally, self._stale)
@@ -598,7 +593,7 @@ class AtmModel(ArcModel):
     def median_state(self) -> tuple[float, FloatArray, npt.NDArray[np.float32], BoolArray,
                                     FloatArray, FloatArray, FloatArray]:
         """What a kernel placing ATM's points takes besides the counts
-        (:func:`_row_median`): the error bound, the axes θ, the crossing store, the stale
+        (:func:`row_median`): the error bound, the axes θ, the crossing store, the stale
         marks, the cached medians and spans, and a work array as wide as the store."""
         if self._values.shape[0] != self.bearings.shape[1]:
             self._values = np.zeros(self.bearings.shape[1])

@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 from typing import ClassVar, TypeVar
 
 import numpy as np
-from numba import njit
 
 from sonarcarve.constants import MIN_BEAM_WIDTH
 from sonarcarve.errors import MethodStateError, ReadingTypeError
 from sonarcarve.geometry import ArcFate
+from sonarcarve.geometry._compiled import compiled
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import (
     CountingSink,
@@ -52,9 +52,18 @@ from sonarcarve.readings import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["ArcFate", "ArcModel", "CommitListener", "Estimates", "Measures", "SonarMethod"]
+__all__ = [
+    "ArcFate",
+    "ArcModel",
+    "CommitListener",
+    "Estimates",
+    "Measures",
+    "SonarMethod",
+    "arc_point",
+    "source_codes",
+]
 
-M = TypeVar("M", LocalMap, GlobalMap)
+_M = TypeVar("_M", LocalMap, GlobalMap)
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,31 +148,21 @@ class ArcModel(ABC):
     they are committed to the global map.
     """
 
-    #: The model reads no history row newer than the arc it is adding, so that
-    #: :meth:`SonarMethod.add_many` may store a whole block of arcs first and then run
-    #: :meth:`on_add_many` over it. Models that do not say so get one reading at a time.
-    block_safe: ClassVar[bool] = False
-
     def __init__(self, history: SonarHistory) -> None:
         self.history = history
 
     @abstractmethod
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise the state of the new arc in ``slot`` and let it act on the ``older`` live
-        arcs (oldest first)."""
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for the arcs of sequence numbers ``first .. first + count - 1``, in
-        order, each against the live arcs before it (already stored by
-        :meth:`~sonarcarve.history.SonarHistory.append_many`).
+        """Take in the arcs of sequence numbers ``first .. first + count - 1``, in order, each
+        against the live arcs before it; they are already stored in the history
+        (:meth:`~sonarcarve.history.SonarHistory.append_many`, or
+        :meth:`~sonarcarve.history.SonarHistory.append` for a block of one).
 
-        This default calls :meth:`on_add` once per arc; models with a compiled kernel override
-        it with one call for the whole block (no Python between arcs).
+        The one hook a model implements: :meth:`SonarMethod.add` calls it with a block of one
+        arc, :meth:`SonarMethod.add_many` with whole blocks. A model must read no history row
+        newer than the arc it is taking in, so that the result is the same whatever the blocks
+        (the compiled models run the whole block in one call, with no Python between arcs).
         """
-        h = self.history
-        for sequence in range(first, first + count):
-            live = h.window(sequence)
-            self.on_add(int(live[-1]), live[:-1])
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
         """Let a no-echo reading (``range`` = +inf, free up to ``reading.max_range`` metres,
@@ -291,10 +290,6 @@ class SonarMethod(ABC):
         n = len(batch)
         if n == 0:
             return
-        if not all(model.block_safe for model in self.models):
-            for offset, reading in enumerate(batch):
-                self._add_checked(reading, start + offset)
-            return
         no_echo = np.flatnonzero(batch.range == math.inf)
         if not no_echo.size:
             self._add_block(batch, start)
@@ -312,7 +307,7 @@ class SonarMethod(ABC):
         """Ordinary (echo) readings, validated, through the models' block kernels; ids from
         ``start``."""
         n = len(batch)
-        width = np.where(np.isnan(batch.beam_width), self.beam_width, batch.beam_width)
+        width = batch.beam_widths(self.beam_width)
         h = self.history
         done = 0
         # Blocks of at most the history's room: the arcs that retire between blocks are
@@ -346,22 +341,16 @@ class SonarMethod(ABC):
         if reading.range == math.inf:
             self._add_no_echo(reading)
             return
-        width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
-        slot = self.history.append(reading, reading_id, width)
-        self._feed_one(slot)
+        width = reading.width_or(self.beam_width)
+        self.history.append(reading, reading_id, width)
+        self._feed_block(self.history.appended - 1, 1)
         self._readings += 1
         self._last_t = reading.t
         self._local = None
 
-    def _feed_one(self, slot: int) -> None:
-        """Let the models take in the arc just stored in ``slot``, the newest (:meth:`add`)."""
-        older = self.history.slots()[:-1]
-        for model in self.models:
-            model.on_add(slot, older)
-
     def _feed_block(self, first: int, count: int) -> None:
-        """Let the (block-safe) models take in the arcs of sequence numbers ``first .. first +
-        count - 1``, just stored by :meth:`~sonarcarve.history.SonarHistory.append_many`."""
+        """Let the models take in the arcs of sequence numbers ``first .. first + count - 1``,
+        just stored (a block of one for :meth:`add`)."""
         for model in self.models:
             model.on_add_many(first, count)
 
@@ -372,7 +361,7 @@ class SonarMethod(ABC):
 
     def _add_no_echo(self, reading: Reading) -> None:
         """A validated no-echo reading: free space for the models, no arc (module docstring)."""
-        width = self.beam_width if math.isnan(reading.beam_width) else reading.beam_width
+        width = reading.width_or(self.beam_width)
         self._feed_no_echo(reading, width)
         self._readings += 1
         self._no_echo += 1
@@ -507,7 +496,7 @@ class SonarMethod(ABC):
         else:
             self._global.commit(self._points(slots, GlobalMap, est))
 
-    def _points(self, slots: SlotArray, kind: type[M], est: Estimates | None = None) -> M:
+    def _points(self, slots: SlotArray, kind: type[_M], est: Estimates | None = None) -> _M:
         est = self.estimates(slots) if est is None else est
         keep = slots[est.alive]
         h = self.history
@@ -592,13 +581,14 @@ def _plainly_valid(batch: ReadingBatch, previous_t: float) -> bool:
 
 
 #: The bounds :func:`_rows_plainly_valid` checks, passed as an argument: numba freezes a
-#: global into the compiled code, and its disk cache is keyed on this file only, so a bound
-#: changed in ``readings.py`` would not reach a cached kernel (review finding).
+#: global into the compiled code, and its disk cache is keyed on the kernel folders' sources only
+#: (:mod:`~sonarcarve.geometry._compiled`), so a bound changed in ``readings.py`` would not reach
+#: a cached kernel (review finding).
 _ROW_BOUNDS = (float(MAX_TIME), float(MAX_READING_RANGE), float(MAX_POSITION), float(MAX_ANGLE),
                float(MAX_SENSOR), float(MIN_BEAM_WIDTH))
 
 
-@njit(cache=True)
+@compiled
 def _rows_plainly_valid(t: FloatArray, sensor: np.ndarray, x: FloatArray, y: FloatArray,
                         theta: FloatArray, r: FloatArray, width: FloatArray, limit: FloatArray,
                         previous_t: float, bounds: tuple[float, ...]) -> bool:

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate, arc_bounding_circle
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT, arc_bounding_circle
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import (
     UNDECIDED,
@@ -35,7 +35,7 @@ from sonarcarve.geometry.bounds import (
     circle_against_sector,
 )
 from sonarcarve.geometry.circular import scratch_arrays
-from sonarcarve.geometry.fate import FULLY_CARVED, SHRUNK, UNCHANGED
+from sonarcarve.geometry.fate import ALIVE, FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
     ArcIndex,
     IndexArrays,
@@ -47,7 +47,7 @@ from sonarcarve.geometry.index import (
     query_sector,
     query_sector_circles,
 )
-from sonarcarve.geometry.intervals import _carve_core
+from sonarcarve.geometry.intervals import carve_core
 from sonarcarve.geometry.sector import Sector, make_sector
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
@@ -61,9 +61,14 @@ from sonarcarve.methods.config import (
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["DEFAULT_RANGE_TOLERANCE", "CarvingMethod", "CarvingModel"]
+__all__ = [
+    "DEFAULT_RANGE_TOLERANCE",
+    "CarvingMethod",
+    "CarvingModel",
+    "carve_found",
+    "start_carved_arc",
+]
 
-_ALIVE = int(ArcFate.ALIVE)
 
 
 @compiled_inline
@@ -103,7 +108,7 @@ def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Fl
 
 
 @compiled_inline
-def _start_arc(
+def start_carved_arc(
     slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray,
     theta2: FloatArray, lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray,
     status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
@@ -120,7 +125,7 @@ def _start_arc(
     bounds[slot, 0] = cx
     bounds[slot, 1] = cy
     bounds[slot, 2] = radius
-    status[slot] = _ALIVE
+    status[slot] = ALIVE
     carved[slot] = False
     sector = make_sector(x[slot], y[slot], r[slot], start, end, tolerance, max_incidence)
     tips[slot, 0] = sector.u1x
@@ -131,7 +136,7 @@ def _start_arc(
 
 
 @compiled_inline
-def _carve_found(
+def carve_found(
     found: int, candidates: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, sector: Sector, index: ArcIndex, prune: bool, cuts: FloatArray,
@@ -146,7 +151,7 @@ def _carve_found(
     split = 0
     for k in range(found):
         i = candidates[k]
-        if status[i] != _ALIVE:
+        if status[i] != ALIVE:
             continue
         fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
                                      sector)
@@ -157,8 +162,8 @@ def _carve_found(
         if fate == UNDECIDED:
             if _clear_of_sector(i, x, y, r, lo, hi, tips, sector):
                 continue
-            fate, new_lo, new_hi = _carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
-                                               starts, ends, flags)
+            fate, new_lo, new_hi = carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
+                                              starts, ends, flags)
             if fate == UNCHANGED:
                 continue
         carved[i] = True
@@ -220,8 +225,8 @@ def _add_arcs(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        sector = _start_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status, carved,
-                            tolerance, max_incidence)
+        sector = start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
+                                  carved, tolerance, max_incidence)
         if sector.radius > 0.0:
             # The arcs near the sector whose circles it does not leave clear.
             found = query_sector_circles(index, sector, bounds, candidates)
@@ -230,7 +235,7 @@ def _add_arcs(
                 for older in range(max(0, sequence - capacity + 1), sequence):
                     candidates[found] = older % storage
                     found += 1
-            arcs_fully, arcs_split = _carve_found(
+            arcs_fully, arcs_split = carve_found(
                 found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
                 True, cuts, starts, ends, flags)
             fully += arcs_fully
@@ -255,7 +260,7 @@ def _carve_free(
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
     to ``fr`` metres (its sector ends at ``fr - tolerance``). The carving step of
     :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``. ``prune``: the
-    index holds only the alive arcs (:func:`_carve_found`)."""
+    index holds only the alive arcs (:func:`carve_found`)."""
     storage = x.shape[0]
     index = ArcIndex(*index_arrays)
     cuts = bearings[0]
@@ -270,8 +275,8 @@ def _carve_free(
         for older in range(max(0, appended - capacity), appended):
             candidates[found] = older % storage
             found += 1
-    return _carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
-                        sector, index, prune, cuts, starts, ends, flags)
+    return carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
+                       sector, index, prune, cuts, starts, ends, flags)
 
 
 class CarvingModel(ArcModel):
@@ -309,8 +314,6 @@ class CarvingModel(ArcModel):
         (:mod:`sonarcarve.geometry.index`): a reading carves only those near its sector.
     """
 
-    block_safe = True
-
     def __init__(self, history: SonarHistory, range_tolerance: float,
                  max_incidence: float = NO_INCIDENCE_LIMIT) -> None:
         super().__init__(history)
@@ -321,7 +324,7 @@ class CarvingModel(ArcModel):
         self.hi = np.zeros(size)
         self.bounds = np.zeros((size, 3))
         self.tips = np.full((size, 4), np.nan)
-        self.status = np.full(size, _ALIVE, dtype=np.int8)
+        self.status = np.full(size, ALIVE, dtype=np.int8)
         self.carved = np.zeros(size, dtype=bool)
         self.index = make_index(size)
         self._candidates = np.zeros(size, dtype=np.int64)
@@ -329,17 +332,10 @@ class CarvingModel(ArcModel):
         self._fully_carved = 0
         self._split = 0
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Start the new arc as its full beam and carve the older live arcs by its freespace.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them): the spatial index finds
-        the arcs to carve among them.
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call."""
+        """Start each new arc ``first .. first + count - 1`` as its full beam and carve the
+        older live arcs by its freespace, in one compiled call (the spatial index finds the arcs
+        to carve)."""
         h = self.history
         fully, split = _add_arcs(
             first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
@@ -381,7 +377,7 @@ class CarvingModel(ArcModel):
         comparable across methods (an arc only leaves the unprocessed pool by interacting).
         """
         status = self.status[slots]
-        alive = status == _ALIVE  # the int: comparing with the enum member took 3 µs
+        alive = status == ALIVE  # the int: comparing with the enum member took 3 µs
         carved = self.carved[slots]
         lo = self.lo[slots]
         hi = self.hi[slots]

@@ -18,9 +18,7 @@ class CenterlineModel(ArcModel):
     0 %). The model keeps no state.
     """
 
-    block_safe = True
-
-    def on_add(self, slot: int, older: SlotArray) -> None:
+    def on_add_many(self, first: int, count: int) -> None:
         """Nothing to do: the centerline point depends on the arc alone."""
 
     def estimates(self, slots: SlotArray) -> Estimates:

@@ -14,9 +14,10 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT, ArcFate
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.geometry._compiled import compiled_borrowing
 from sonarcarve.geometry.circular import scratch_arrays
+from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.geometry.index import (
     ArcIndex,
     arc_box,
@@ -26,12 +27,15 @@ from sonarcarve.geometry.index import (
     query_sector,
 )
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
-from sonarcarve.maps import PointSource, chord_error
-from sonarcarve.methods.atm import AtmModel, _add_arc, _row_median
-from sonarcarve.methods.atm import _start_arc as _start_atm_arc
+from sonarcarve.maps import (
+    SOURCE_ATM,
+    SOURCE_CARVED,
+    SOURCE_CENTERLINE,
+    chord_error,
+)
+from sonarcarve.methods.atm import AtmModel, add_atm_arc, row_median, start_atm_arc
 from sonarcarve.methods.base import Estimates, SonarMethod, arc_point
-from sonarcarve.methods.carving import CarvingModel, _carve_found
-from sonarcarve.methods.carving import _start_arc as _start_carved_arc
+from sonarcarve.methods.carving import CarvingModel, carve_found, start_carved_arc
 from sonarcarve.methods.config import (
     DEFAULT_MIN_TRANSVERSAL,
     DEFAULT_RANGE_TOLERANCE,
@@ -44,10 +48,6 @@ I32Array = npt.NDArray[np.int32]
 
 __all__ = ["CombinedMethod", "combine_carving_atm"]
 
-_ALIVE = int(ArcFate.ALIVE)
-_ATM = int(PointSource.ATM)
-_CARVED = int(PointSource.CARVED)
-_CENTERLINE = int(PointSource.CENTERLINE)
 
 
 @compiled_borrowing
@@ -97,23 +97,23 @@ def _add_joint(
         slot = sequence % storage
         if sequence >= capacity:
             index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        _start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
+        start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
         xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
         found = query_box(index, xmin, xmax, ymin, ymax, candidates)
         if found < 0:  # a huge box: every live arc before this one
             found = _live_before(sequence, capacity, storage, candidates)
-        arc_kept, needed = _add_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
-                                    found, cos_psi, bearings, counts, tally, stale)
+        arc_kept, needed = add_atm_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
+                                       found, cos_psi, bearings, counts, tally, stale)
         if needed:
             return kept, fully, split, sequence, needed
         kept += arc_kept
-        sector = _start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
-                                   carved, tolerance, max_incidence)
+        sector = start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
+                                  carved, tolerance, max_incidence)
         if sector.radius > 0.0:
             found = query_sector(index, sector, candidates)
             if found < 0:  # a huge sector
                 found = _live_before(sequence, capacity, storage, candidates)
-            arcs_fully, arcs_split = _carve_found(
+            arcs_fully, arcs_split = carve_found(
                 found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
                 False, cuts, starts, ends, flags)
             fully += arcs_fully
@@ -148,18 +148,18 @@ def _choose(
     :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
     for k in range(slots.shape[0]):
         s = slots[k]
-        alive[k] = status[s] == _ALIVE
+        alive[k] = status[s] == ALIVE
         processed[k] = carved[s] or not alive[k] or counts[s] > 0
-        source[k] = _CARVED if carved[s] else _CENTERLINE
+        source[k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
         if counts[s] == 0 or not max_error[k] > error_bound:
             continue
         if stale[s]:
-            _row_median(bearings, counts, s, median, span, values)
+            row_median(bearings, counts, s, median, span, values)
             stale[s] = False
         bearing[k] = theta[s] + median[s]
         width[k] = span[s]
         max_error[k] = error_bound
-        source[k] = _ATM
+        source[k] = SOURCE_ATM
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -262,12 +262,6 @@ class CombinedMethod(SonarMethod):
         if self._joint is None:
             self._joint = self._atm.uses_index
         return self._joint
-
-    def _feed_one(self, slot: int) -> None:
-        if self._uses_joint_kernel():
-            self._feed_block(self.history.appended - 1, 1)
-        else:
-            super()._feed_one(slot)
 
     def _feed_block(self, first: int, count: int) -> None:
         if not self._uses_joint_kernel():

@@ -200,7 +200,8 @@ class MethodConfig:
     ----------
     history_size : int, default 250
         Arcs kept in the history (paper, section 5-C: 250); a whole number in
-        [1, :data:`~sonarcarve.history.MAX_HISTORY_SIZE`] (2000: memory grows with its square).
+        [1, :data:`~sonarcarve.history.MAX_HISTORY_SIZE`] (100,000; the history grows
+        linearly with it, see there).
     beam_width : float, default 22.5° (0.3927 rad)
         Default beam width φ, radians in (0, π), for readings that carry none (paper: 22.5°).
     range_tolerance : float, default 0.05 m

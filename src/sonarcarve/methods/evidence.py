@@ -24,7 +24,8 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
   (``exp(-F)``, its free evidence F) times its localised support (equal weights: the run's
   middle, eq. 3.6; :func:`~sonarcarve.geometry.evidence.evidence_estimates`), the bound
   measured from there; a beam nothing has cut keeps its middle (its crossings may be ghosts:
-  two jambs' circles meet in the doorway; ``with_uncut_posterior`` places it too);
+  two jambs' circles meet in the doorway; :attr:`EvidenceOptions.uncut_posterior` places it
+  too);
 * ATM crossings counted only inside the kept run; a crossing confirms the run, and from
   ``min_atm_crossings`` (3) crossings in it their median places the point when its bound
   (eq. 5.4) is the smaller (``source = atm``; section 4's rule);
@@ -70,7 +71,12 @@ from sonarcarve.geometry.evidence import (
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
-from sonarcarve.maps import GlobalMap, PointSource
+from sonarcarve.maps import (
+    SOURCE_ATM,
+    SOURCE_CARVED,
+    SOURCE_CENTERLINE,
+    GlobalMap,
+)
 from sonarcarve.methods.atm import CrossingStore, atm_error_bound
 from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
 from sonarcarve.methods.config import (
@@ -85,7 +91,7 @@ from sonarcarve.readings import Reading
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["CONFIDENCE_FEATURES", "ConfidenceModel", "EvidenceMethod", "EvidenceModel",
-           "SensorModel"]
+           "EvidenceOptions", "SensorModel"]
 
 
 #: A field's rule: what a valid value satisfies, and how the error message says it.
@@ -163,6 +169,76 @@ class SensorModel:
             "transmit": (_fraction, "lie in [0, 1]"),
             "confirm": (lambda v: 0.0 < v < math.inf, "be finite and > 0"),
         })
+
+    def params(self, range_tolerance: float, threshold: float, min_transversal: float, *,
+               with_occlusion: bool = True, with_transmission: bool = True) -> EvidenceParams:
+        """The kernels' :class:`~sonarcarve.geometry.evidence.EvidenceParams` of this sensor
+        with ε = ``range_tolerance`` metres, the carving ``threshold`` (evidence) and ATM's ψ
+        = ``min_transversal`` radians; ``with_occlusion=False`` never establishes a bin
+        (``establish`` = inf), ``with_transmission=False`` weighs no transmission evidence."""
+        return EvidenceParams(
+            tolerance=range_tolerance, support_tolerance=self.support_tolerance,
+            edge_gain=self.edge_gain, incidence_full=self.incidence_full,
+            incidence_zero=self.incidence_zero, rough=self.rough,
+            max_detect=self.max_detect, range_scale=self.range_scale,
+            threshold=threshold,
+            establish=self.establish if with_occlusion else math.inf,
+            cos_psi=math.cos(min_transversal), protect=self.protect,
+            viewpoint_spacing=self.viewpoint_spacing,
+            transmit=self.transmit if with_transmission else 0.0,
+            confirm=self.confirm,
+        )
+
+
+@dataclass(frozen=True)
+class EvidenceOptions:
+    """The switches of evidence carving: parts to switch off (ablation) and the placement
+    rules, passed unchanged from :class:`EvidenceMethod` to :class:`EvidenceModel`.
+
+    Attributes
+    ----------
+    atm : bool
+        Find and use ATM crossings.
+    occlusion : bool
+        Carve bins behind established surfaces (the multipath rule).
+    transmission : bool
+        Transmission evidence (a newer echo confirmed by other sensors behind a bin).
+    located_placement : bool
+        Place the point by the evidence instead of at the kept run's middle (eq. 3.6): with
+        ``posterior_placement``, at the median of the posterior over the run's bins
+        (:func:`~sonarcarve.geometry.evidence.evidence_estimates`); without it (the placement
+        before issue 9's point accuracy work), once evidence has cut the beam, at the median
+        of the run's localised support.
+    posterior_placement : bool
+        See ``located_placement`` (off, the placement before issue 9's point accuracy work
+        also needs ``min_atm_crossings=1``).
+    uncut_posterior : bool
+        With ``posterior_placement``, place the point of a beam nothing has cut by the
+        posterior too (``exp(-F)`` times its localised support: no bin of an uncut beam
+        reached the threshold, so the support mostly decides); off (the default): its middle,
+        eq. 3.6.
+    min_atm_crossings : int
+        ATM's median inside the kept run places the point only when the run holds at least
+        this many crossings (>= 1; and its bound, eq. 5.4, is the smaller): with fewer, the
+        median is one or two crossings themselves, which a single ghost moves (1: any
+        crossing, the rule before issue 9's point accuracy work).
+
+    Examples
+    --------
+    >>> EvidenceOptions(atm=False).min_atm_crossings
+    3
+    """
+
+    atm: bool = True
+    occlusion: bool = True
+    transmission: bool = True
+    located_placement: bool = True
+    posterior_placement: bool = True
+    uncut_posterior: bool = False
+    min_atm_crossings: int = 3
+
+    def __post_init__(self) -> None:
+        _check_min_atm_crossings(self.min_atm_crossings)
 
 
 #: The confidence's features, in the order of :meth:`ConfidenceModel.weights` (module
@@ -362,9 +438,6 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
 #: cull at history 1,000, 20 at 250; the scratch is 11 rows of this many arcs' bins.
 _GROUP_ARCS = 64
 
-_ATM = int(PointSource.ATM)
-_CARVED = int(PointSource.CARVED)
-_CENTERLINE = int(PointSource.CENTERLINE)
 
 
 @compiled
@@ -379,18 +452,18 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
         s = slots[q]
         processed[q] = touched[s] or counts[s] > 0 or status[s] != EVIDENCE_ALIVE
         if is_atm[q]:
-            source[q] = _ATM
+            source[q] = SOURCE_ATM
         elif width[q] < beam_width[s] - 1e-12:
-            source[q] = _CARVED
+            source[q] = SOURCE_CARVED
         else:
-            source[q] = _CENTERLINE
+            source[q] = SOURCE_CENTERLINE
         fate[q] = UNCHANGED if has[q] else FULLY_CARVED
 
 
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
-    Block safe: :meth:`on_add_many` runs a block of stored arcs in one compiled call.
+    :meth:`on_add_many` runs a block of stored arcs in one compiled call.
 
     Memory: the per-arc state is fixed by the history (about 4 kB an arc with K = 24); the
     ATM crossing store grows on demand as ATM's does (:class:`~sonarcarve.methods.atm.AtmModel`):
@@ -416,64 +489,35 @@ class EvidenceModel(ArcModel):
         P_carve: a bin is carved when the evidence equals one reading with this ``P_detect``.
     min_transversal, range_resolution : float
         ATM's ψ (radians) and δ (metres); ψ also picks the crossings.
-    with_atm : bool
-        Find and use ATM crossings.
-    with_occlusion : bool
-        Carve bins behind established surfaces (the multipath rule).
-    with_transmission : bool
-        Transmission evidence (a newer echo confirmed by other sensors behind a bin).
-    place_located : bool
-        Place the point by the evidence instead of at the kept run's middle (eq. 3.6): with
-        ``place_posterior``, at the median of the posterior over the run's bins
-        (:func:`~sonarcarve.geometry.evidence.evidence_estimates`); without it (the placement
-        before issue 9's point accuracy work), once evidence has cut the beam, at the median
-        of the run's localised support.
-    place_posterior : bool
-        See ``place_located``.
-    posterior_uncut : bool
-        With ``place_posterior``, place the point of a beam nothing has cut by the posterior
-        too (``exp(-F)`` times its localised support: no bin of an uncut beam reached the
-        threshold, so the support mostly decides; off: its middle, eq. 3.6).
-    min_atm_crossings : int
-        ATM's median inside the kept run places the point only when the run holds at least
-        this many crossings (and its bound, eq. 5.4, is the smaller): with fewer, the median
-        is one or two crossings themselves, which a single ghost moves (1: any crossing, the
-        rule before issue 9's point accuracy work).
+    options : EvidenceOptions, optional
+        The switches; default ``EvidenceOptions()``: every part, the measured placement.
     sensor : SensorModel
         The detection model.
     """
 
-    block_safe = True
-
     def __init__(self, history: SonarHistory, bins: int, range_tolerance: float,
                  carve_probability: float, min_transversal: float, range_resolution: float,
-                 *, with_atm: bool = True, with_occlusion: bool = True,
-                 with_transmission: bool = True, place_located: bool = True,
-                 place_posterior: bool = True, posterior_uncut: bool = False,
-                 min_atm_crossings: int = 3, sensor: SensorModel | None = None) -> None:
+                 *, options: EvidenceOptions | None = None,
+                 sensor: SensorModel | None = None) -> None:
         super().__init__(history)
-        _check_min_atm_crossings(min_atm_crossings)
+        options = EvidenceOptions() if options is None else options
         sensor = SensorModel() if sensor is None else sensor
         self.bins = bins
         self.threshold = evidence_threshold(carve_probability)
-        self.with_atm = with_atm
-        self.place_located = place_located
-        self.place_posterior = place_posterior
-        self.posterior_uncut = posterior_uncut
-        self.min_atm_crossings = min_atm_crossings
+        self.options = options
         self.atm_bound = atm_error_bound(min_transversal, range_resolution)
-        self.params = EvidenceParams(
-            tolerance=range_tolerance, support_tolerance=sensor.support_tolerance,
-            edge_gain=sensor.edge_gain, incidence_full=sensor.incidence_full,
-            incidence_zero=sensor.incidence_zero, rough=sensor.rough,
-            max_detect=sensor.max_detect, range_scale=sensor.range_scale,
-            threshold=self.threshold,
-            establish=sensor.establish if with_occlusion else math.inf,
-            cos_psi=math.cos(min_transversal), protect=sensor.protect,
-            viewpoint_spacing=sensor.viewpoint_spacing,
-            transmit=sensor.transmit if with_transmission else 0.0,
-            confirm=sensor.confirm,
-        )
+        self.params = sensor.params(range_tolerance, self.threshold, min_transversal,
+                                    with_occlusion=options.occlusion,
+                                    with_transmission=options.transmission)
+        self.range_tolerance = range_tolerance
+        self._allocate(history, bins, options.atm)
+        self._fully = 0
+        self._crossings = 0
+        self._occluded_bins = 0
+
+    def _allocate(self, history: SonarHistory, bins: int, with_atm: bool) -> None:
+        """The per-arc state (rows of ``history.storage_size``, ``bins`` wide where it is per
+        bin), the scratch of the kernels and ATM's crossing store, all empty."""
         size = history.storage_size
         # Crossings an arc can have: 2 with each of capacity - 1 older and as many newer arcs.
         most = max(1, 4 * (history.capacity - 1))
@@ -502,7 +546,6 @@ class EvidenceModel(ArcModel):
         # 1 where the arc has a repeat (geometry/repeats.py) among its sensor's other echoes
         # in the history, else 0.
         self.repeated = np.zeros(size)
-        self.range_tolerance = range_tolerance
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -527,9 +570,6 @@ class EvidenceModel(ArcModel):
         # a history of 10,000 arcs).
         self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
-        self._fully = 0
-        self._crossings = 0
-        self._occluded_bins = 0
 
     @property
     def bearings(self) -> np.ndarray:
@@ -555,7 +595,7 @@ class EvidenceModel(ArcModel):
                 self.in_beam, self.bin_index, self.near, self.near_flags, self.bx, self.by,
                 self.ex, self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
                 self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
-                self.bearings, self.counts, self.spill, self.params, self.with_atm)
+                self.bearings, self.counts, self.spill, self.params, self.options.atm)
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -563,17 +603,10 @@ class EvidenceModel(ArcModel):
         self._crossings += crossings
         self._occluded_bins += occluding
 
-    def on_add(self, slot: int, older: SlotArray) -> None:
-        """Initialise ``slot``'s profile and weigh the new reading against ``older`` arcs.
-
-        ``slot`` must be the newest arc of the history and ``older`` the live slots before it
-        (as :class:`~sonarcarve.methods.base.SonarMethod` passes them).
-        """
-        self.on_add_many(self.history.appended - 1, 1)
-
     def on_add_many(self, first: int, count: int) -> None:
-        """:meth:`on_add` for arcs ``first .. first + count - 1``, in one compiled call (more
-        when the crossing store has to grow on the way)."""
+        """Initialise the profile of each new arc ``first .. first + count - 1`` and weigh its
+        reading against the older arcs, in one compiled call (more when the crossing store has
+        to grow on the way)."""
         self.check_usable()
         end = first + count
         self.mark_repeats(first, count)
@@ -632,12 +665,12 @@ class EvidenceModel(ArcModel):
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
         the model has stopped: :meth:`check_usable`)."""
         self.check_usable()
-        h = self.history
+        h, o = self.history, self.options
         return evidence_estimates(
             np.ascontiguousarray(slots, dtype=np.int64), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
-            self.threshold, self.atm_bound, self.with_atm, self.place_located,
-            self.place_posterior, self.posterior_uncut, self.min_atm_crossings,
+            self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
+            o.uncut_posterior, o.min_atm_crossings,
         )
 
     def estimates(self, slots: SlotArray) -> Estimates:
@@ -688,19 +721,9 @@ class EvidenceMethod(SonarMethod):
     stamp_error : float
         Upper bound on the position-stamping error of a reading, metres (Appendix A), added to
         every point's bound.
-    with_atm, with_occlusion, with_transmission, with_located_placement : bool
-        Switch parts off (ablation); see :class:`EvidenceModel`.
-    with_posterior_placement : bool
-        Once evidence has cut the beam, the point at the median of the posterior over the
-        kept run (``place_posterior`` of :class:`EvidenceModel`); off: the located placement
-        of the session before (the placement before issue 9's point accuracy work also needs
-        ``min_atm_crossings=1``).
-    with_uncut_posterior : bool
-        The posterior places the points of beams nothing has cut too (``posterior_uncut``;
-        off by default: see :func:`~sonarcarve.geometry.evidence.evidence_estimates`).
-    min_atm_crossings : int
-        Crossings the kept run needs before ATM's median places the point (>= 1; see
-        :class:`EvidenceModel`).
+    options : EvidenceOptions, optional
+        The switches (ablation, placement rules), passed to :class:`EvidenceModel` as they
+        are; default ``EvidenceOptions()``.
     sensor : SensorModel, optional
         The detection model.
     confidence_model : ConfidenceModel, optional
@@ -721,13 +744,7 @@ class EvidenceMethod(SonarMethod):
         min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         stamp_error: float = 0.0,
         *,
-        with_atm: bool = True,
-        with_occlusion: bool = True,
-        with_transmission: bool = True,
-        with_located_placement: bool = True,
-        with_posterior_placement: bool = True,
-        with_uncut_posterior: bool = False,
-        min_atm_crossings: int = 3,
+        options: EvidenceOptions | None = None,
         sensor: SensorModel | None = None,
         confidence_model: ConfidenceModel | None = None,
     ) -> None:
@@ -737,14 +754,7 @@ class EvidenceMethod(SonarMethod):
             evidence_bins=evidence_bins, carve_probability=carve_probability,
             min_confidence=min_confidence, stamp_error=stamp_error,
         )
-        self.with_atm = with_atm
-        self.with_occlusion = with_occlusion
-        self.with_transmission = with_transmission
-        self.with_located_placement = with_located_placement
-        self.with_posterior_placement = with_posterior_placement
-        self.with_uncut_posterior = with_uncut_posterior
-        _check_min_atm_crossings(min_atm_crossings)
-        self.min_atm_crossings = min_atm_crossings
+        self.options = EvidenceOptions() if options is None else options
         self.sensor = SensorModel() if sensor is None else sensor
         self.confidence_model = ConfidenceModel() if confidence_model is None else confidence_model
         self._removed_committed = 0
@@ -754,13 +764,7 @@ class EvidenceMethod(SonarMethod):
         c = self.config
         return (EvidenceModel(self.history, c.evidence_bins, c.range_tolerance,
                               c.carve_probability, c.min_transversal, c.range_resolution,
-                              with_atm=self.with_atm, with_occlusion=self.with_occlusion,
-                              with_transmission=self.with_transmission,
-                              place_located=self.with_located_placement,
-                              place_posterior=self.with_posterior_placement,
-                              posterior_uncut=self.with_uncut_posterior,
-                              min_atm_crossings=self.min_atm_crossings,
-                              sensor=self.sensor),)
+                              options=self.options, sensor=self.sensor),)
 
     def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
                  maturity: np.ndarray | None = None) -> np.ndarray:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.readings import wrap_angle
 from sonarcarve.sim.world import World, WorldError, check_seed
 from sonarcarve.typing import FloatArray
 
@@ -121,11 +122,6 @@ def _check_positive(**values: float) -> None:
         if not (math.isfinite(value) and value > 0.0):
             msg = f"{name} must be a finite number > 0, got {value}"
             raise WorldError(msg)
-
-
-def _wrap(angle: npt.ArrayLike) -> FloatArray:
-    """Angles folded into [-π, π)."""
-    return np.asarray((np.asarray(angle, dtype=np.float64) + np.pi) % (2 * np.pi) - np.pi)
 
 
 # --------------------------------------------------------------------------------------------
@@ -240,7 +236,7 @@ def _drive_pieces(points: FloatArray, speed: float, turn_rate: float,
     steps = np.diff(points, axis=0)
     lengths = np.hypot(steps[:, 0], steps[:, 1])
     units = steps / lengths[:, None]
-    turns = _wrap(np.diff(np.arctan2(steps[:, 1], steps[:, 0])))
+    turns = wrap_angle(np.diff(np.arctan2(steps[:, 1], steps[:, 0])))
     headings = math.atan2(steps[0, 1], steps[0, 0]) + np.concatenate(([0.0], np.cumsum(turns)))
     # Tangent length cut from both legs at each interior corner, and the arc radius there.
     cut = np.zeros(len(points))
@@ -495,7 +491,7 @@ class _Explorer:
         far = np.flatnonzero(ahead >= lookahead)
         target = path[self.progress + (int(far[0]) if far.size else ahead.shape[0] - 1)]
         distance = float(np.hypot(*(target - (x, y))))
-        alpha = float(_wrap(math.atan2(target[1] - y, target[0] - x) - heading))
+        alpha = float(wrap_angle(math.atan2(target[1] - y, target[0] - x) - heading))
         if abs(alpha) > 0.5 or distance < 1e-6:
             speed, omega = 0.0, float(np.clip(alpha / dt, -self.turn_rate, self.turn_rate))
         else:

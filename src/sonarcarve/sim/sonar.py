@@ -951,90 +951,71 @@ def _keep_first(firing: IntArray, rng_: FloatArray, point: FloatArray, f: int) -
     return best, where
 
 
+#: Candidate echoes of one kind for a batch of firings: the firing (row in the batch) of each,
+#: its range, metres, and its reflection point, shape (k, 2).
+_Candidates = tuple[IntArray, FloatArray, FloatArray]
+
+
+@dataclass(frozen=True, eq=False)
+class _ChunkScene:
+    """What the amplitude model's candidate finders share for one batch of firings: the walls
+    near it (``world``, their indices ``index`` in the whole world), the sensors' origins
+    (f, 2), the firings' global ids, the pruning level (dB) below which no echo can be heard,
+    the sight-line limit (metres) and the noise key."""
+
+    chunk: Firings
+    robot: RobotDescription
+    physics: SonarPhysics
+    world: World
+    index: IntArray
+    box: tuple[float, float, float, float]
+    origin: FloatArray
+    firing_ids: IntArray
+    low: float
+    limit: float
+    key: int
+
+
+@dataclass(frozen=True, eq=False)
+class _Fan:
+    """The fan's rays of a batch (``rays`` per firing, firing-major), as the multipath step
+    takes them: direction (f·rays, 2), the index of the first wall hit (as :func:`_cast`
+    gives it), whether one was hit, and the hit point (the origin where none)."""
+
+    rays: int
+    direction: FloatArray
+    wall: IntArray
+    hit: BoolArray
+    point: FloatArray
+
+
 def _trace_amplitude_chunk(geometry: _WallGeometry, corners: _Corners, robot: RobotDescription,
                            chunk: Firings, physics: SonarPhysics, out: _Traced, offset: int,
                            key: int) -> None:
     """The amplitude model's direct and multipath echoes for one batch of firings.
 
-    Candidates: each wall's mirror echo, each fan ray's diffuse echo, each corner's or wall
-    end's echo (retro-reflection or diffraction), each bounce path's multipath echo; the
-    nearest heard direct and multipath echo per firing are written into ``out`` rows.
+    Candidates: each wall's mirror echo (:func:`_mirror_candidates`), each fan ray's diffuse
+    echo (:func:`_diffuse_candidates`), each corner's or wall end's echo (retro-reflection or
+    diffraction, :func:`_corner_candidates`), each bounce path's multipath echo; the nearest
+    heard direct and multipath echo per firing are written into ``out`` rows.
     """
-    amp, c = physics.amplitude, physics.sound_speed
+    amp = physics.amplitude
     f = len(chunk)
     box = (float(chunk.x.min()), float(chunk.y.min()), float(chunk.x.max()), float(chunk.y.max()))
     near_world, near_index, _ = geometry.near(*box, margin=robot.max_range)
-    origin = np.column_stack((chunk.x, chunk.y))
-    firing_ids = offset + np.arange(f)
-    low = amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db
-    limit = robot.max_range + 1.0
-    found: list[tuple[IntArray, FloatArray, FloatArray]] = []
-
-    # Mirror echoes: the foot of the perpendicular from the sensor to each wall.
-    seg = near_world.segments
-    a, edge = seg[:, :2], seg[:, 2:] - seg[:, :2]
-    t = np.einsum("fwj,wj->fw", origin[:, None, :] - a[None], edge) / np.sum(edge * edge, axis=1)
-    foot = a[None] + t[..., None] * edge[None]
-    gap = foot - origin[:, None, :]
-    d = np.hypot(gap[..., 0], gap[..., 1])
-    beta = _wrap(np.arctan2(gap[..., 1], gap[..., 0]) - chunk.theta[:, None])
-    ok = (t >= 0.0) & (t <= 1.0) & (d >= robot.min_range) & (d <= robot.max_range)
-    ok &= np.abs(beta) <= math.pi / 2
-    fi, wi = np.nonzero(ok)
-    level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
-    keep = level >= low
-    fi, wi, level = fi[keep], wi[keep], level[keep]
-    seen = _in_sight(near_world, origin[fi], foot[fi, wi], limit)
-    fi, wi, level = fi[seen], wi[seen], level[seen]
-    heard = _heard(level, key, firing_ids[fi], _MIRROR, near_index[wi], amp)
-    found.append((fi[heard], d[fi[heard], wi[heard]], foot[fi[heard], wi[heard]]))
-
-    # Diffuse echoes and first hits of the fan's rays.
-    rays = amp.fan_rays
-    spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
-        else np.zeros(1)
-    angle = (chunk.theta[:, None] + spread[None, :]).reshape(-1)
-    start = np.repeat(origin, rays, axis=0)
-    distance, wall = _cast(near_world, near_index, start, angle, robot.max_range)
-    direction = np.column_stack((np.cos(angle), np.sin(angle)))
-    hit = np.isfinite(distance)
-    point = start + np.where(hit, distance, 0.0)[:, None] * direction
-    normal = geometry.normals[np.maximum(wall, 0)]
-    if amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0:
-        which = np.flatnonzero(hit & (distance >= robot.min_range))
-        incidence = np.arccos(np.minimum(np.abs(np.sum(direction[which] * normal[which],
-                                                       axis=1)), 1.0))
-        level = diffuse_echo_db(amp, distance[which], np.tile(spread, f)[which], incidence, c)
-        heard = _heard(level, key, firing_ids[which // rays], _DIFFUSE, which % rays, amp)
-        which = which[heard]
-        found.append((which // rays, distance[which], point[which]))
-
-    # Corners and wall ends: diffraction from any angle, retro-reflection from inside a
-    # right-angled corner.
-    box_keep = np.flatnonzero(
-        (corners.points[:, 0] >= box[0] - robot.max_range)
-        & (corners.points[:, 0] <= box[2] + robot.max_range)
-        & (corners.points[:, 1] >= box[1] - robot.max_range)
-        & (corners.points[:, 1] <= box[3] + robot.max_range))
-    if box_keep.size:
-        cp = corners.points[box_keep]
-        v = origin[:, None, :] - cp[None]  # corner to sensor
-        dist = np.hypot(v[..., 0], v[..., 1])
-        alpha = _wrap(np.arctan2(-v[..., 1], -v[..., 0]) - chunk.theta[:, None])
-        ok = (dist >= robot.min_range) & (dist <= robot.max_range)
-        ok &= np.abs(alpha) <= math.pi / 2
-        fi, ci = np.nonzero(ok)
-        r, al = dist[fi, ci], alpha[fi, ci]
-        level = point_echo_db(amp, r, al, amp.edge_db, c)
-        g = box_keep[ci]
-        retro = corners.right[g] & _inside_wedge(v[fi, ci], corners.u1[g], corners.u2[g])
-        level = np.where(retro, np.maximum(level, mirror_echo_db(amp, r, al, 2, c)), level)
-        keep = level >= low
-        fi, ci, level = fi[keep], ci[keep], level[keep]
-        seen = _in_sight(near_world, origin[fi], cp[ci], limit)
-        fi, ci, level = fi[seen], ci[seen], level[seen]
-        heard = _heard(level, key, firing_ids[fi], _CORNER, box_keep[ci], amp)
-        found.append((fi[heard], dist[fi[heard], ci[heard]], cp[ci[heard]]))
+    scene = _ChunkScene(
+        chunk=chunk, robot=robot, physics=physics, world=near_world, index=near_index, box=box,
+        origin=np.column_stack((chunk.x, chunk.y)), firing_ids=offset + np.arange(f),
+        low=amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db, limit=robot.max_range + 1.0,
+        key=key,
+    )
+    found = [_mirror_candidates(scene)]
+    fan, diffuse = _diffuse_candidates(scene, geometry)
+    if diffuse is not None:
+        found.append(diffuse)
+    corner = _corner_candidates(scene, corners)
+    if corner is not None:
+        found.append(corner)
 
     firing = np.concatenate([x[0] for x in found])
     ranges = np.concatenate([x[1] for x in found])
@@ -1045,9 +1026,95 @@ def _trace_amplitude_chunk(geometry: _WallGeometry, corners: _Corners, robot: Ro
     out.direct_point[rows] = where
 
     if physics.multipath_probability > 0.0:
-        bounce = np.flatnonzero(hit)
-        _multipath_amplitude(geometry, near_world, near_index, robot, physics, chunk, origin,
-                             direction, wall, point, bounce, rays, out, offset, key)
+        bounce = np.flatnonzero(fan.hit)
+        _multipath_amplitude(geometry, near_world, near_index, robot, physics, chunk,
+                             scene.origin, fan.direction, fan.wall, fan.point, bounce, fan.rays,
+                             out, offset, key)
+
+
+def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
+    """Mirror echoes: the foot of the perpendicular from the sensor to each wall, heard."""
+    amp, c = scene.physics.amplitude, scene.physics.sound_speed
+    robot, origin = scene.robot, scene.origin
+    seg = scene.world.segments
+    a, edge = seg[:, :2], seg[:, 2:] - seg[:, :2]
+    t = np.einsum("fwj,wj->fw", origin[:, None, :] - a[None], edge) / np.sum(edge * edge, axis=1)
+    foot = a[None] + t[..., None] * edge[None]
+    gap = foot - origin[:, None, :]
+    d = np.hypot(gap[..., 0], gap[..., 1])
+    beta = _wrap(np.arctan2(gap[..., 1], gap[..., 0]) - scene.chunk.theta[:, None])
+    ok = (t >= 0.0) & (t <= 1.0) & (d >= robot.min_range) & (d <= robot.max_range)
+    ok &= np.abs(beta) <= math.pi / 2
+    fi, wi = np.nonzero(ok)
+    level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
+    keep = level >= scene.low
+    fi, wi, level = fi[keep], wi[keep], level[keep]
+    seen = _in_sight(scene.world, origin[fi], foot[fi, wi], scene.limit)
+    fi, wi, level = fi[seen], wi[seen], level[seen]
+    heard = _heard(level, scene.key, scene.firing_ids[fi], _MIRROR, scene.index[wi], amp)
+    return fi[heard], d[fi[heard], wi[heard]], foot[fi[heard], wi[heard]]
+
+
+def _diffuse_candidates(scene: _ChunkScene,
+                        geometry: _WallGeometry) -> tuple[_Fan, _Candidates | None]:
+    """The fan's rays cast to their first walls (the multipath step starts from them) and
+    their heard diffuse echoes (None when the walls scatter nothing)."""
+    amp, c, robot = scene.physics.amplitude, scene.physics.sound_speed, scene.robot
+    f = len(scene.chunk)
+    rays = amp.fan_rays
+    spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
+        else np.zeros(1)
+    angle = (scene.chunk.theta[:, None] + spread[None, :]).reshape(-1)
+    start = np.repeat(scene.origin, rays, axis=0)
+    distance, wall = _cast(scene.world, scene.index, start, angle, robot.max_range)
+    direction = np.column_stack((np.cos(angle), np.sin(angle)))
+    hit = np.isfinite(distance)
+    point = start + np.where(hit, distance, 0.0)[:, None] * direction
+    fan = _Fan(rays=rays, direction=direction, wall=wall, hit=hit, point=point)
+    if not (amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0):
+        return fan, None
+    normal = geometry.normals[np.maximum(wall, 0)]
+    which = np.flatnonzero(hit & (distance >= robot.min_range))
+    incidence = np.arccos(np.minimum(np.abs(np.sum(direction[which] * normal[which],
+                                                   axis=1)), 1.0))
+    level = diffuse_echo_db(amp, distance[which], np.tile(spread, f)[which], incidence, c)
+    heard = _heard(level, scene.key, scene.firing_ids[which // rays], _DIFFUSE, which % rays,
+                   amp)
+    which = which[heard]
+    return fan, (which // rays, distance[which], point[which])
+
+
+def _corner_candidates(scene: _ChunkScene, corners: _Corners) -> _Candidates | None:
+    """Corners and wall ends near the batch: diffraction from any angle, retro-reflection from
+    inside a right-angled corner, heard (None when no corner is near)."""
+    amp, c = scene.physics.amplitude, scene.physics.sound_speed
+    robot, origin = scene.robot, scene.origin
+    box = scene.box
+    box_keep = np.flatnonzero(
+        (corners.points[:, 0] >= box[0] - robot.max_range)
+        & (corners.points[:, 0] <= box[2] + robot.max_range)
+        & (corners.points[:, 1] >= box[1] - robot.max_range)
+        & (corners.points[:, 1] <= box[3] + robot.max_range))
+    if not box_keep.size:
+        return None
+    cp = corners.points[box_keep]
+    v = origin[:, None, :] - cp[None]  # corner to sensor
+    dist = np.hypot(v[..., 0], v[..., 1])
+    alpha = _wrap(np.arctan2(-v[..., 1], -v[..., 0]) - scene.chunk.theta[:, None])
+    ok = (dist >= robot.min_range) & (dist <= robot.max_range)
+    ok &= np.abs(alpha) <= math.pi / 2
+    fi, ci = np.nonzero(ok)
+    r, al = dist[fi, ci], alpha[fi, ci]
+    level = point_echo_db(amp, r, al, amp.edge_db, c)
+    g = box_keep[ci]
+    retro = corners.right[g] & _inside_wedge(v[fi, ci], corners.u1[g], corners.u2[g])
+    level = np.where(retro, np.maximum(level, mirror_echo_db(amp, r, al, 2, c)), level)
+    keep = level >= scene.low
+    fi, ci, level = fi[keep], ci[keep], level[keep]
+    seen = _in_sight(scene.world, origin[fi], cp[ci], scene.limit)
+    fi, ci, level = fi[seen], ci[seen], level[seen]
+    heard = _heard(level, scene.key, scene.firing_ids[fi], _CORNER, box_keep[ci], amp)
+    return fi[heard], dist[fi[heard], ci[heard]], cp[ci[heard]]
 
 
 def _inside_wedge(v: FloatArray, u1: FloatArray, u2: FloatArray) -> BoolArray:

@@ -21,16 +21,15 @@ from sonarcarve.grids.carved.kernels import (
     trinary_kernel,
     undraw_kernel,
 )
-from sonarcarve.grids.carved.model import logit, model_of
+from sonarcarve.grids.carved.model import model_of
 from sonarcarve.grids.carved.params import (
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
     CarvedGridParams,
-    check_probability,
 )
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
-from sonarcarve.grids.cells import CellGrid, GridError, bounds_around
+from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.elfes import MAX_CELLS
 from sonarcarve.grids.occupancy import Int8Grid
 from sonarcarve.history import SonarHistory
@@ -216,7 +215,7 @@ class CarvedGrid(CellGrid):
         method = self._method
         history = method.history
         first_seq = history.appended
-        half = 0.5 * np.where(np.isnan(batch.beam_width), method.beam_width, batch.beam_width)
+        half = 0.5 * batch.beam_widths(method.beam_width)
         r = batch.range
         no_echo = r == math.inf
         if no_echo.any():  # free up to max_range, and no arc of its own in the history
@@ -449,7 +448,7 @@ class CarvedGrid(CellGrid):
         :attr:`~sonarcarve.grids.carved.CarvedGridParams.occupied_threshold`), shape :attr:`shape`:
         the probability above ``threshold`` up to rounding, as :meth:`trinary`."""
         limit = self._params.occupied_threshold if threshold is None else check_probability(
-            "threshold", threshold, 0.0, 1.0)
+            "carved grid", "threshold", threshold, 0.0, 1.0)
         return np.asarray(self.log_odds > logit(limit))
 
     def occupied_points(self, threshold: float | None = None) -> FloatArray:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonarcarve.geometry import ArcFate
+from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.history import SonarHistory
 from sonarcarve.methods import SonarMethod
 from sonarcarve.methods.atm import AtmModel
@@ -19,7 +19,6 @@ from sonarcarve.typing import FloatArray, SlotArray
 
 __all__ = ["carving_intervals", "intervals", "known_models"]
 
-_ALIVE = int(ArcFate.ALIVE)
 
 
 def known_models(method: SonarMethod) -> tuple[CarvingModel | None, AtmModel | None]:
@@ -42,7 +41,7 @@ def carving_intervals(history: SonarHistory, model: CarvingModel,
     estimates), without the fields of the estimates the grid does not read (half the cost)."""
     lo, hi = model.lo[slots], model.hi[slots]
     xy = arc_point(history, slots, 0.5 * (lo + hi))  # the point, as CarvingModel.estimates
-    weight = np.where(model.status[slots] == _ALIVE, 1.0, 0.0)  # no confidence: 1 if alive
+    weight = np.where(model.status[slots] == ALIVE, 1.0, 0.0)  # no confidence: 1 if alive
     return _interval_ends(np.arctan2(xy[:, 1] - history.y[slots], xy[:, 0] - history.x[slots]),
                           0.5 * (hi - lo), weight)
 

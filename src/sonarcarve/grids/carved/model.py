@@ -6,16 +6,12 @@ by :func:`model_of` (``docs/carved-grid.md``, "The sensor model").
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 from sonarcarve.grids.carved.params import CarvedGridParams
+from sonarcarve.grids.cells import logit
 
-__all__ = ["Model", "logit", "model_of"]
-
-
-def logit(p: float) -> float:
-    return math.log(p / (1.0 - p))
+__all__ = ["Model", "model_of"]
 
 
 class Model(NamedTuple):

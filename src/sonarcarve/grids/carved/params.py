@@ -9,13 +9,15 @@ named in its parameter's description.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
-from sonarcarve.grids.cells import GridError
+from sonarcarve.grids.cells import GridError, check_probability, check_real
 from sonarcarve.grids.elfes import ROS_FADE_RANGE
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 
 __all__ = [
+    "DEFAULT_FRESH_PERIODS",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",
@@ -24,8 +26,10 @@ __all__ = [
     "DEFAULT_SPREAD_LENGTH",
     "MAX_SIDE_LOBES",
     "CarvedGridParams",
-    "check_probability",
 ]
+
+#: What the parameters' errors start with.
+_LABEL = "carved grid"
 
 #: Length over which one echo counts as a whole hit, metres
 #: (:attr:`CarvedGridParams.spread_length`).
@@ -86,15 +90,6 @@ DEFAULT_SIDE_LOBE_RANGE = 2.0
 #: lobes are 30 dB or more down one way, and a 22.5° beam widened by 3 half widths each side
 #: still looks ahead of the sensor (±45°), never behind it.
 MAX_SIDE_LOBES = 3.0
-
-
-def check_probability(name: str, value: object, lo: float, hi: float) -> float:
-    ok = (not isinstance(value, bool) and isinstance(value, int | float)
-          and math.isfinite(value) and lo < value < hi)
-    if not ok:
-        msg = f"carved grid: {name} must lie in ({lo:g}, {hi:g}), got {value!r}"
-        raise GridError(msg)
-    return float(value)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -227,62 +222,33 @@ class CarvedGridParams:
     side_lobe_range: float = DEFAULT_SIDE_LOBE_RANGE
 
     def __post_init__(self) -> None:
-        check_probability("p_hit", self.p_hit, 0.5, 1.0)
-        check_probability("p_miss", self.p_miss, 0.0, 0.5)
-        check_probability("p_min", self.p_min, 0.0, 0.5)
-        check_probability("p_max", self.p_max, 0.5, 1.0)
-        check_probability("occupied_threshold", self.occupied_threshold, 0.0, 1.0)
-        check_probability("free_threshold", self.free_threshold, 0.0, self.occupied_threshold)
-        tol = self.range_tolerance
-        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (
-                math.isfinite(tol) and tol >= 0.0):
-            msg = f"carved grid: range_tolerance must be a finite number >= 0 metres, got {tol!r}"
-            raise GridError(msg)
-        for name in ("spread_length", "fade_range"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) or not (
-                    value >= 0.0 if name == "spread_length" else value > 0.0) or (
-                    name == "spread_length" and not math.isfinite(value)):
-                rule = "a finite number >= 0" if name == "spread_length" else "> 0 (inf: none)"
-                msg = f"carved grid: {name} must be {rule} metres, got {value!r}"
-                raise GridError(msg)
-        check_probability("p_miss_heard", self.p_miss_heard, 0.0, 0.5)
+        def real(name: str, ok: Callable[[float], bool], rule: str) -> None:
+            check_real(_LABEL, name, getattr(self, name), ok, rule)
+
+        check_probability(_LABEL, "p_hit", self.p_hit, 0.5, 1.0)
+        check_probability(_LABEL, "p_miss", self.p_miss, 0.0, 0.5)
+        check_probability(_LABEL, "p_min", self.p_min, 0.0, 0.5)
+        check_probability(_LABEL, "p_max", self.p_max, 0.5, 1.0)
+        check_probability(_LABEL, "occupied_threshold", self.occupied_threshold, 0.0, 1.0)
+        check_probability(_LABEL, "free_threshold", self.free_threshold, 0.0,
+                          self.occupied_threshold)
+        real("range_tolerance", _finite_at_least_zero, "a finite number >= 0 metres")
+        real("spread_length", _finite_at_least_zero, "a finite number >= 0 metres")
+        real("fade_range", lambda v: v > 0.0, "> 0 (inf: none) metres")
+        check_probability(_LABEL, "p_miss_heard", self.p_miss_heard, 0.0, 0.5)
         for name in ("spread", "surface_aware", "fresh_arcs"):
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
-        st = self.see_through
-        if isinstance(st, bool) or not isinstance(st, int | float) or not st >= 0.0:
-            msg = (f"carved grid: see_through must be a number >= 0 metres (inf: no limit), "
-                   f"got {st!r}")
-            raise GridError(msg)
-        fs = self.fresh_seconds
-        if isinstance(fs, bool) or not isinstance(fs, int | float) or not (
-                math.isfinite(fs) and fs > 0.0):
-            msg = f"carved grid: fresh_seconds must be a finite number > 0, got {fs!r}"
-            raise GridError(msg)
-        fp = self.fresh_periods
-        if isinstance(fp, bool) or not isinstance(fp, int | float) or not fp >= 1.0:
-            msg = (f"carved grid: fresh_periods must be a number >= 1 firing period (inf: off), "
-                   f"got {fp!r}")
-            raise GridError(msg)
-        rw = self.repeat_weight
-        if isinstance(rw, bool) or not isinstance(rw, int | float) or not 0.0 <= rw <= 1.0:
-            msg = f"carved grid: repeat_weight must be a number in [0, 1], got {rw!r}"
-            raise GridError(msg)
-        sl = self.side_lobes
-        if isinstance(sl, bool) or not isinstance(sl, int | float) or not (
-                0.0 <= sl <= MAX_SIDE_LOBES):
-            msg = (f"carved grid: side_lobes must be a number in [0, {MAX_SIDE_LOBES:g}] half "
-                   f"beam widths, got {sl!r}")
-            raise GridError(msg)
-        sr = self.side_lobe_range
-        if isinstance(sr, bool) or not isinstance(sr, int | float) or not sr >= 0.0:
-            msg = (f"carved grid: side_lobe_range must be a number >= 0 metres (inf: every "
-                   f"range), got {sr!r}")
-            raise GridError(msg)
-        bp = self.band_profile
-        if isinstance(bp, bool) or not isinstance(bp, int | float) or not (
-                math.isfinite(bp) and bp >= 0.0):
-            msg = f"carved grid: band_profile must be a finite number >= 0, got {bp!r}"
-            raise GridError(msg)
+        real("see_through", lambda v: v >= 0.0, "a number >= 0 metres (inf: no limit)")
+        real("fresh_seconds", lambda v: math.isfinite(v) and v > 0.0, "a finite number > 0")
+        real("fresh_periods", lambda v: v >= 1.0, "a number >= 1 firing period (inf: off)")
+        real("repeat_weight", lambda v: 0.0 <= v <= 1.0, "a number in [0, 1]")
+        real("side_lobes", lambda v: 0.0 <= v <= MAX_SIDE_LOBES,
+             f"a number in [0, {MAX_SIDE_LOBES:g}] half beam widths")
+        real("side_lobe_range", lambda v: v >= 0.0, "a number >= 0 metres (inf: every range)")
+        real("band_profile", _finite_at_least_zero, "a finite number >= 0")
+
+
+def _finite_at_least_zero(value: float) -> bool:
+    return math.isfinite(value) and value >= 0.0
