@@ -67,7 +67,7 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     f"map shows {APPROACH_DISTANCE:g} m before a door), approach.gif, "
     "fig5-occupancy-grids.png (both grids over the true walls), carved-grid.yaml/.pgm and "
     "range-sensor-layer.yaml/.pgm (the grids as ROS map_server maps), summary.md and "
-    "summary.json. Takes about 10 s for the office tour on 2 cores (longer on a loaded "
+    "summary.json. Takes about 20 s for the office tour on 2 cores (longer on a loaded "
     "machine, and the first time, while numba compiles).\n\n"
     "Example: `sonarcarve demo --world t-junction --seed 3 --out /tmp/demo`"
 ))
