@@ -229,7 +229,8 @@ def _frames(fig: Figure, draw: Callable[[int], object], n: int,
 
 
 def _gif(frames: list[Image.Image]) -> bytes:
-    """``frames`` as an animated GIF, :data:`_FPS` frames a second, played once."""
+    """``frames`` as an animated GIF, :data:`_FPS` frames a second, looping
+    forever (``loop=0``: a README shows it over and over)."""
     buffer = io.BytesIO()
     frames[0].save(buffer, format="GIF", save_all=True, append_images=frames[1:],
                    duration=round(1000 / _FPS), loop=0)
