@@ -15,6 +15,7 @@ from sonarcarve.plotting import (
     plot_map,
     plot_map_arcs,
     plot_path,
+    plot_sources,
     plot_user_map,
     plot_walls,
     read_grid_image,
@@ -165,3 +166,14 @@ def test_user_map_draws_everything_and_titles_the_counts(tmp_path: Path) -> None
     with pytest.raises(ValueError, match=r"expected a \.png"):
         save_figure(new_axes(), tmp_path / "map.jpg")
     assert not (tmp_path / "map.jpg").exists()
+
+
+def test_sources_are_labelled_with_their_counts() -> None:
+    xy = np.zeros((1234, 2))
+    source = np.full(1234, PointSource.ATM, np.int8)
+    (series,) = plot_sources(xy, source)
+    assert series.get_label() == "atm (1,234)"
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+

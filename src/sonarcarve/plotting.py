@@ -25,6 +25,7 @@ from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from sonarcarve.maps import GlobalMap, LocalMap
     from sonarcarve.readings import ReadingBatch
@@ -36,6 +37,7 @@ __all__ = [
     "MapOrigins",
     "map_origins",
     "new_axes",
+    "new_figure",
     "plot_arc",
     "plot_error_bounds",
     "plot_freespace",
@@ -43,6 +45,7 @@ __all__ = [
     "plot_map",
     "plot_map_arcs",
     "plot_path",
+    "plot_sources",
     "plot_user_map",
     "read_grid_image",
     "save_figure",
@@ -56,14 +59,25 @@ SOURCE_COLORS = {
 }
 
 
-def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
-    """A fresh figure with one equal-aspect axes (Agg backend: works without a display)."""
+def new_figure(rows: int = 1, cols: int = 1, width: float = 7.0, height: float = 4.5,
+               **options: Any) -> tuple[Figure, Any]:
+    """A fresh constrained-layout pyplot figure of ``rows`` x ``cols`` axes, ``width`` x
+    ``height`` inches, and its axes as a 2-D array (even for one); ``options`` go to
+    ``plt.subplots`` (``sharex`` ...); Agg backend: works without a display."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    _, ax = plt.subplots(figsize=(width, height), layout="constrained")
+    fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
+                             squeeze=False, **options)
+    return fig, axes
+
+
+def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
+    """A fresh figure with one equal-aspect axes (:func:`new_figure`; Agg backend: works
+    without a display)."""
+    ax: Axes = new_figure(1, 1, width, height)[1][0, 0]
     ax.set_aspect("equal")
     return ax
 
@@ -85,17 +99,29 @@ def plot_walls(segments: npt.ArrayLike, ax: Axes | None = None, **style: Any) ->
 def plot_map(
     points: LocalMap | GlobalMap, ax: Axes | None = None, size: float = 4.0, legend: bool = True
 ) -> list[Any]:
-    """Scatter map points coloured by the model that placed them."""
+    """Scatter map points coloured by the model that placed them (:func:`plot_sources`)."""
     ax = ax or new_axes()
-    artists = []
-    for source, color in SOURCE_COLORS.items():
-        mask = points.source == source
-        if np.any(mask):
-            artists.append(ax.scatter(points.xy[mask, 0], points.xy[mask, 1], s=size, c=color,
-                                      label=f"{source.label} ({int(mask.sum())})", zorder=3,
-                                      linewidths=0))
+    artists = plot_sources(points.xy, points.source, ax, size)
     if legend and artists:
         ax.legend(loc="best", fontsize="small", markerscale=3)
+    return artists
+
+
+def plot_sources(xy: npt.ArrayLike, source: npt.ArrayLike, ax: Axes | None = None,
+                 size: float = 4.0) -> list[Any]:
+    """Scatter points ``xy`` (shape (n, 2), metres) coloured by ``source`` (shape (n,),
+    :class:`~sonarcarve.maps.PointSource` codes), one series per source present, labelled
+    with its count for a legend (``"carved (1,234)"``)."""
+    ax = ax or new_axes()
+    p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    codes = np.asarray(source)
+    artists = []
+    for code, color in SOURCE_COLORS.items():
+        mask = codes == code
+        if np.any(mask):
+            artists.append(ax.scatter(p[mask, 0], p[mask, 1], s=size, c=color,
+                                      label=f"{code.label} ({int(mask.sum()):,})", zorder=3,
+                                      linewidths=0))
     return artists
 
 

@@ -60,9 +60,9 @@ from sonarcarve.grids import (
     RangeSensorLayerParams,
     trinary,
 )
-from sonarcarve.lab.drawing import segments_collection
 from sonarcarve.methods import make_method
 from sonarcarve.methods.base import SonarMethod
+from sonarcarve.plotting import plot_walls
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
@@ -603,7 +603,7 @@ def plot_changing_scene(run: SceneRun, labels: Sequence[str], change: int,
         for i, k in enumerate((k_before, k_after)):
             ax = fig.add_subplot(grid[i, j])
             tau = float(run.times[k])
-            segments_collection(ax, run.sim.world.segments, color="0.45", linewidth=1.0)
+            plot_walls(run.sim.world.segments, ax, colors="0.45", linewidths=1.0)
             ax.add_collection(_lines(c.place, "#d62728", "--"))
             now, _ = scene.segments_at(tau)
             if now.shape[0]:
