@@ -10,6 +10,7 @@ from sonarcarve.maps import LocalMap, PointSource
 from sonarcarve.plotting import (
     map_origins,
     new_axes,
+    plot_carving_explainer,
     plot_error_bounds,
     plot_grid,
     plot_map,
@@ -166,6 +167,28 @@ def test_user_map_draws_everything_and_titles_the_counts(tmp_path: Path) -> None
     with pytest.raises(ValueError, match=r"expected a \.png"):
         save_figure(new_axes(), tmp_path / "map.jpg")
     assert not (tmp_path / "map.jpg").exists()
+
+
+def test_drawing_leaves_the_callers_backend_alone(tmp_path: Path) -> None:
+    """A notebook's inline backend, or a script's, must survive a plot (review finding 18):
+    the library draws on whatever backend the caller has, and only the commands pick Agg."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    before = matplotlib.get_backend()
+    plt.switch_backend("svg")  # not Agg, and needs no display
+    try:
+        points = _points([[0.0, 2.0]], [0], [0.0], [0.3], [0.2], [PointSource.CARVED])
+        plot_map(points)
+        plot_walls(np.array([[0.0, 0.0, 1.0, 0.0]]))
+        plot_sources(points.xy, points.source)
+        plot_user_map(points, readings=_readings(), arcs=True)
+        plot_carving_explainer()
+        write_carving_explainer(tmp_path / "explainer.png")
+        assert matplotlib.get_backend() == "svg"
+    finally:
+        plt.close("all")
+        plt.switch_backend(before)
 
 
 def test_sources_are_labelled_with_their_counts() -> None:

@@ -1,7 +1,9 @@
 """Matplotlib figures of worlds, arcs and maps.
 
 matplotlib is imported inside each function (never at import time), every function takes an
-optional ``ax`` and returns the artists it drew, so callers own their figures.
+optional ``ax`` and returns the artists it drew, so callers own their figures. Nothing here picks
+matplotlib's backend: a notebook keeps its inline one, a script its default; the command line
+draws with Agg (:func:`sonarcarve.cli.app.draw_offscreen`).
 
 A user's own map (what ``sonarcarve plot`` draws) is built from :func:`plot_map` (points by
 source), :func:`plot_error_bounds` (each point's ``max_error`` as a circle), :func:`plot_map_arcs`
@@ -63,10 +65,7 @@ def new_figure(rows: int = 1, cols: int = 1, width: float = 7.0, height: float =
                **options: Any) -> tuple[Figure, Any]:
     """A fresh constrained-layout pyplot figure of ``rows`` x ``cols`` axes, ``width`` x
     ``height`` inches, and its axes as a 2-D array (even for one); ``options`` go to
-    ``plt.subplots`` (``sharex`` ...); Agg backend: works without a display."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    ``plt.subplots`` (``sharex`` ...). The backend is left as the caller has it."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
@@ -75,8 +74,8 @@ def new_figure(rows: int = 1, cols: int = 1, width: float = 7.0, height: float =
 
 
 def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
-    """A fresh figure with one equal-aspect axes (:func:`new_figure`; Agg backend: works
-    without a display)."""
+    """A fresh figure with one equal-aspect axes (:func:`new_figure`; the backend is left as
+    the caller has it)."""
     ax: Axes = new_figure(1, 1, width, height)[1][0, 0]
     ax.set_aspect("equal")
     return ax

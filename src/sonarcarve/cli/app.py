@@ -5,6 +5,7 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
+- :func:`draw_offscreen`: the Agg backend for the commands that draw.
 
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
@@ -35,7 +36,15 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
-__all__ = ["app", "console", "err_console", "lazy_command", "progress", "summary_table"]
+__all__ = [
+    "app",
+    "console",
+    "draw_offscreen",
+    "err_console",
+    "lazy_command",
+    "progress",
+    "summary_table",
+]
 
 #: Command name -> (module that registers it, the first paragraph of its help). Filled by
 #: :func:`lazy_command` from ``sonarcarve/cli/main.py``.
@@ -249,6 +258,15 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
     clock: ProgressColumn = TimeElapsedColumn() if elapsed else TimeRemainingColumn()
     return Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), clock,
                     console=console, transient=True)
+
+
+def draw_offscreen() -> None:
+    """Draw with matplotlib's Agg backend: the commands write figures to files and never show
+    a window, and need no display. Called by each command that draws (the library's plotting
+    leaves the backend to its caller)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
 
 
 def _show_version(value: bool) -> None:

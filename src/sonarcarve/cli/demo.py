@@ -12,7 +12,7 @@ from rich.progress import TaskID
 from rich.table import Table
 from rich.text import Text
 
-from sonarcarve.cli.app import app, console, progress
+from sonarcarve.cli.app import app, console, draw_offscreen, progress
 from sonarcarve.io.atomic import check_output_dir
 from sonarcarve.lab.demo import (
     APPROACH_DISTANCE,
@@ -90,6 +90,7 @@ def demo(
     folder = check_output_dir(out, label=f"--out {out}")  # a str: "" is not "."
     demo_config(history)
     the_world = load_demo_world(world)
+    draw_offscreen()
     tic = time.perf_counter()
     with progress(label_width=20, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}

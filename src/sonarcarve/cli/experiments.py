@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.progress import TaskID
 
-from sonarcarve.cli.app import app, console, progress
+from sonarcarve.cli.app import app, console, draw_offscreen, progress
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import check_output_dir, check_output_file
 from sonarcarve.io.errors import InputError
@@ -91,6 +91,7 @@ def experiments(
         _check_results_md(results_md)
     command = _command(folder, quick, names, seeds, workers, scheduler, figures_dir,
                        results_md)
+    draw_offscreen()
     with open_runner(spec) as runner, progress(label_width=10, elapsed=True) as bar:
         settings = Settings.make(quick=quick, seeds=seeds, jobs=runner.workers)
         tasks: dict[str, TaskID] = {}

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.cli.app import app, console, draw_offscreen, summary_table
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.filters import confidence_mask
@@ -93,6 +93,7 @@ def plot(
     if confidence_min is not None:
         points = points.select(confidence_mask(points.confidence, confidence_min))
     image = read_grid_image(grid) if grid is not None else None
+    draw_offscreen()
     ax = new_axes(8.0, 7.0)
     plot_user_map(points, ax, readings=batch, grid=image, error_bounds=error_bars, arcs=arcs,
                   title=title)

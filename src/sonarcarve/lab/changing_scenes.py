@@ -587,9 +587,6 @@ def plot_changing_scene(run: SceneRun, labels: Sequence[str], change: int,
     k_before = int(np.clip(np.searchsorted(run.times, t_before, side="right") - 1, 0,
                            run.times.shape[0] - 1))
     k_after = int(np.clip(np.searchsorted(run.times, t_after), 0, run.times.shape[0] - 1))
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     x_lo, y_lo, x_hi, y_hi = run.sim.world.bounds

@@ -3,7 +3,8 @@
 :func:`~sonarcarve.plotting.plot_walls` and :func:`~sonarcarve.plotting.plot_sources` they draw
 with): the methods' colours and saving a batch of PNGs.
 
-matplotlib is imported inside each function (Agg backend), never at import time.
+matplotlib is imported inside each function, never at import time; the backend is the entry
+point's choice (the command line's is Agg).
 """
 
 from __future__ import annotations
@@ -29,9 +30,6 @@ def save_pngs(figures: dict[str, Figure | None], folder: str | Path,
               dpi: int = 110) -> list[Path]:
     """Save each figure as ``folder/<name>`` (atomically; the folder is created), close it,
     and return the paths written, in order; None entries (nothing to draw) are skipped."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     out = Path(folder)

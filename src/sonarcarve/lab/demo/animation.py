@@ -137,9 +137,6 @@ def _panel(ax: Axes, result: DemoResult, door: DoorGauge, centre: FloatArray) ->
 
 def animation_gif(result: DemoResult, frames: int = FRAMES) -> bytes:
     """The approach animation of ``result`` as GIF bytes (3 panels, 840 x 330 pixels)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
     from matplotlib.patches import Circle
