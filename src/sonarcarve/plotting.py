@@ -20,9 +20,10 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
+from sonarcarve.errors import ConfigError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path
-from sonarcarve.io.errors import InputError, finite_number, load_yaml
+from sonarcarve.io.errors import InputError, OutputError, finite_number, load_yaml
 from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
@@ -37,10 +38,12 @@ __all__ = [
     "SOURCE_COLORS",
     "GridImage",
     "MapOrigins",
+    "check_figure_path",
     "map_origins",
     "new_axes",
     "new_figure",
     "plot_arc",
+    "plot_carving_explainer",
     "plot_error_bounds",
     "plot_freespace",
     "plot_grid",
@@ -49,8 +52,10 @@ __all__ = [
     "plot_path",
     "plot_sources",
     "plot_user_map",
+    "plot_walls",
     "read_grid_image",
     "save_figure",
+    "write_carving_explainer",
 ]
 
 #: One colour per point source, the same in every figure.
@@ -205,13 +210,18 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
     return artists
 
 
-def write_carving_explainer(path: str) -> None:
-    """Write :func:`plot_carving_explainer` as a PNG (the README's figure)."""
+def write_carving_explainer(path: str | Path) -> None:
+    """Write :func:`plot_carving_explainer` to ``path`` (the README's figure; .png, .svg or
+    .pdf) with :func:`save_figure`: atomically, the figure closed after.
+
+    Raises
+    ------
+    OutputError
+        Another suffix, or a file that cannot be written.
+    """
     ax = new_axes(7.0, 5.5)
     plot_carving_explainer(ax)
-    figure = ax.get_figure(root=True)
-    if figure is not None:
-        figure.savefig(path, dpi=110)
+    save_figure(ax, path, dpi=110)
 
 
 # -- a user's own map (``sonarcarve plot``) -------------------------------------------------------
@@ -463,14 +473,14 @@ def plot_user_map(
 
     Raises
     ------
-    ValueError
+    ConfigError
         ``arcs`` without ``readings``.
     InputError
         The map was not made from ``readings`` (:func:`map_origins`).
     """
     if arcs and readings is None:
-        msg = "drawing arcs needs the readings the map was made from"
-        raise ValueError(msg)
+        msg = "arcs needs readings, the log the map was made from"
+        raise ConfigError(msg)
     origins = map_origins(points, readings) if readings is not None else None
     ax = ax or new_axes(8.0, 7.0)
     ax.set_aspect("equal")
@@ -501,26 +511,44 @@ def plot_user_map(
 FIGURE_FORMATS = ("png", "svg", "pdf")
 
 
+def check_figure_path(path: str | Path, *, label: str | None = None) -> str:
+    """The format of the figure file ``path`` from its suffix, one of :data:`FIGURE_FORMATS`.
+
+    ``label`` names the path in the message (e.g. ``"--out map.jpg"``); default: the path.
+
+    Raises
+    ------
+    OutputError
+        Another suffix.
+
+    Examples
+    --------
+    >>> check_figure_path("map.PNG")
+    'png'
+    """
+    kind = Path(path).suffix.lower().removeprefix(".")
+    if kind not in FIGURE_FORMATS:
+        msg = f"{label if label is not None else path}: expected a .png, .svg or .pdf file name"
+        raise OutputError(msg)
+    return kind
+
+
 def save_figure(ax: Axes, path: str | Path, *, dpi: int = 150) -> None:
     """Write the figure of ``ax`` atomically (format from the suffix: .png, .svg or .pdf) and
     close it.
 
     Raises
     ------
-    ValueError
-        Another suffix.
     OutputError
-        The file cannot be written (the message names it and the reason).
+        Another suffix (:func:`check_figure_path`), or a file that cannot be written (the
+        message names it and the reason).
     """
     import matplotlib.pyplot as plt
 
     target = Path(path)
-    kind = target.suffix.lower().removeprefix(".")
     figure = ax.get_figure(root=True)
     try:
-        if kind not in FIGURE_FORMATS:
-            msg = f"{target}: expected a .png, .svg or .pdf file name"
-            raise ValueError(msg)
+        kind = check_figure_path(target)
         if figure is None:  # an axes always has a figure; mypy does not know
             msg = "the axes belong to no figure"
             raise ValueError(msg)

@@ -5,7 +5,8 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
-- :func:`draw_offscreen`: the Agg backend for the commands that draw.
+- :func:`flag_message`: a library error, which names parameters, reworded to name the flags
+  that set them; :func:`draw_offscreen`: the Agg backend for the commands that draw.
 
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
@@ -18,7 +19,8 @@ the slash and the command would replace the file.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable
+import re
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +43,7 @@ __all__ = [
     "console",
     "draw_offscreen",
     "err_console",
+    "flag_message",
     "lazy_command",
     "progress",
     "summary_table",
@@ -258,6 +261,30 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
     clock: ProgressColumn = TimeElapsedColumn() if elapsed else TimeRemainingColumn()
     return Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), clock,
                     console=console, transient=True)
+
+
+def flag_message(message: str, flags: Mapping[str, str]) -> str:
+    """A library error's ``message`` in the command line's words: every parameter name of
+    ``flags`` (parameter -> flag) that it mentions replaced by its flag, and a leading
+    ``"label: "`` dropped when a flag follows it (the command has one thing of that kind).
+
+    Examples
+    --------
+    >>> flag_message("carved grid: resolution must be > 0 metres, got 0", {"resolution":
+    ...              "--resolution"})
+    '--resolution must be > 0 metres, got 0'
+    >>> flag_message("arcs needs readings", {"arcs": "--arcs", "readings": "--readings"})
+    '--arcs needs --readings'
+    """
+    def reword(text: str) -> str:
+        for name, flag in flags.items():
+            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+        return text
+
+    _, sep, rest = message.partition(": ")
+    if sep and rest.partition(" ")[0] in flags:
+        return reword(rest)
+    return reword(message)
 
 
 def draw_offscreen() -> None:
