@@ -12,7 +12,9 @@ from rich.progress import TaskID
 from rich.table import Table
 from rich.text import Text
 
-from sonarcarve.cli.app import app, console, draw_offscreen, progress
+from sonarcarve.cli.app import app, console, draw_offscreen, flag_message, progress
+from sonarcarve.errors import ConfigError
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_dir
 from sonarcarve.lab.demo import (
     APPROACH_DISTANCE,
@@ -83,12 +85,16 @@ def demo(
         help="Folder for the figures, the grid maps, summary.md and summary.json (created "
              "with its missing parents; files of the same names are replaced).")] = "demo-output",
     history: Annotated[int, typer.Option(
-        metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")] = 250,
+        metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")
+    ] = DEFAULT_HISTORY_SIZE,
 ) -> None:
     """Simulate a tour; compare the methods' maps, and the carved grid with ROS's layer."""
     # Every bad option fails here, in one line, before a progress bar or a file appears.
     folder = check_output_dir(out, label=f"--out {out}")  # a str: "" is not "."
-    demo_config(history)
+    try:
+        demo_config(history)
+    except ConfigError as err:
+        raise ConfigError(flag_message(str(err), {"history_size": "--history"})) from None
     the_world = load_demo_world(world)
     draw_offscreen()
     tic = time.perf_counter()
