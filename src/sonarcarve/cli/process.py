@@ -415,8 +415,7 @@ def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
 
 def _write_bag(job: _Job) -> list[tuple[str, str]]:
     """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
-    from sonarcarve.cli.grid import readings_extent
-    from sonarcarve.grids import CarvedGrid
+    from sonarcarve.grids import CarvedGrid, readings_extent
     from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 
     if is_bag(job.source):

@@ -3,19 +3,25 @@
 One check for :class:`~sonarcarve.grids.OccupancyGrid`, :class:`~sonarcarve.grids.RangeSensorLayer`
 and :class:`~sonarcarve.grids.CarvedGrid` (and one of the margin of a grid made ``around`` an
 extent, :func:`bounds_around`), so their errors read alike and a limit cannot be forgotten by one
-of them.
+of them; and the extent a log's readings cover (:func:`readings_extent`), which a grid over the
+whole log is made around.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
 
-__all__ = ["CellGrid", "GridError", "bounds_around", "grid_cells"]
+if TYPE_CHECKING:
+    from sonarcarve.readings import ReadingBatch
+
+__all__ = ["CellGrid", "GridError", "bounds_around", "grid_cells", "readings_extent"]
 
 Bounds = tuple[float, float, float, float]
 
@@ -87,6 +93,40 @@ def bounds_around(label: str, extent: Bounds, margin: float) -> Bounds:
         raise GridError(msg)
     xmin, ymin, xmax, ymax = extent
     return xmin - margin, ymin - margin, xmax + margin, ymax + margin
+
+
+def readings_extent(batch: ReadingBatch, margin: float = 0.0) -> Bounds:
+    """``(xmin, ymin, xmax, ymax)`` of the sensors and their arcs, grown by ``margin`` metres:
+    the bounds of a grid that holds every reading of ``batch``.
+
+    An arc counts by both beam edges and its axis at the range (a no-echo reading's, range
+    ``inf``, at its ``max_range``: the free space it clears); a reading without a beam width
+    (NaN) has :data:`~sonarcarve.constants.DEFAULT_BEAM_WIDTH`.
+
+    Raises
+    ------
+    GridError
+        No readings, or a negative or non-finite ``margin`` (:func:`bounds_around`).
+
+    Examples
+    --------
+    >>> from sonarcarve.readings import Reading, ReadingBatch
+    >>> batch = ReadingBatch.from_readings([Reading(0.0, 0, 1.0, 2.0, 0.0, 3.0)])  # 22.5°
+    >>> tuple(round(v, 2) for v in readings_extent(batch, margin=0.5))
+    (0.5, 0.91, 4.5, 3.09)
+    """
+    if not len(batch):
+        msg = "readings extent: no readings"
+        raise GridError(msg)
+    width = np.where(np.isnan(batch.beam_width), DEFAULT_BEAM_WIDTH, batch.beam_width)
+    reach = np.where(np.isfinite(batch.range), batch.range, batch.max_range)
+    xs, ys = [batch.x], [batch.y]
+    for k in (-0.5, 0.0, 0.5):
+        xs.append(batch.x + reach * np.cos(batch.theta + k * width))
+        ys.append(batch.y + reach * np.sin(batch.theta + k * width))
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    extent = float(x.min()), float(y.min()), float(x.max()), float(y.max())
+    return bounds_around("readings extent", extent, margin)
 
 
 class CellGrid:
