@@ -5,8 +5,8 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
-- :func:`flag_message`: a library error, which names parameters, reworded to name the flags
-  that set them; :func:`draw_offscreen`: the Agg backend for the commands that draw.
+- :func:`flag_message`, :func:`reworded`: a library error, which names parameters, reworded to
+  name the flags that set them; :func:`draw_offscreen`: the Agg backend for the commands that draw.
 
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import importlib
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,8 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
+from sonarcarve.errors import SonarcarveError
+
 __all__ = [
     "app",
     "console",
@@ -46,6 +49,7 @@ __all__ = [
     "flag_message",
     "lazy_command",
     "progress",
+    "reworded",
     "summary_table",
 ]
 
@@ -265,8 +269,9 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
 
 def flag_message(message: str, flags: Mapping[str, str]) -> str:
     """A library error's ``message`` in the command line's words: every parameter name of
-    ``flags`` (parameter -> flag) that it mentions replaced by its flag, and a leading
-    ``"label: "`` dropped when a flag follows it (the command has one thing of that kind).
+    ``flags`` (parameter -> flag) that it mentions as a word of its own (not inside
+    ```code```) replaced by its flag, and a leading ``"label: "`` dropped when a flag follows
+    it (the command has one thing of that kind).
 
     Examples
     --------
@@ -275,16 +280,30 @@ def flag_message(message: str, flags: Mapping[str, str]) -> str:
     '--resolution must be > 0 metres, got 0'
     >>> flag_message("arcs needs readings", {"arcs": "--arcs", "readings": "--readings"})
     '--arcs needs --readings'
+    >>> flag_message("start one with `dask scheduler`, or give no scheduler",
+    ...              {"scheduler": "--scheduler"})
+    'start one with `dask scheduler`, or give no --scheduler'
     """
     def reword(text: str) -> str:
         for name, flag in flags.items():
-            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+            text = re.sub(rf"(?<![\w`-]){re.escape(name)}(?![\w`-])", flag, text)
         return text
 
     _, sep, rest = message.partition(": ")
     if sep and rest.partition(" ")[0] in flags:
         return reword(rest)
     return reword(message)
+
+
+@contextmanager
+def reworded(errors: type[SonarcarveError] | tuple[type[SonarcarveError], ...],
+             flags: Mapping[str, str]) -> Iterator[None]:
+    """Re-raise ``errors`` raised in the block as the same class with :func:`flag_message`'s
+    wording: the library names its parameters, the command its flags."""
+    try:
+        yield
+    except errors as err:
+        raise type(err)(flag_message(str(err), flags)) from None
 
 
 def draw_offscreen() -> None:

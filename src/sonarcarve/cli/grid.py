@@ -25,6 +25,7 @@ from sonarcarve.cli.options import (
     RangeTopicOpt,
     RobotOpt,
     bag_options,
+    read_bag,
     refuse_bag_options,
 )
 from sonarcarve.errors import SonarcarveError
@@ -130,7 +131,7 @@ def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
     if not is_bag(source):
         batch, silent = read_readings_csv(source), 0
     else:
-        log = bag.read(source)
+        log = read_bag(bag, source)
         batch, silent = bag.readings(log), len(log.no_echo)
     if not len(batch):
         hint = (f" (its {silent:,} Range messages heard nothing, +Inf; --no-echo maps them as "
