@@ -539,13 +539,11 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
     incidence = DEFAULT_MAX_INCIDENCE
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
-    try:
+    with reworded(ConfigError, _OPTION_OF_FIELD):
         return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
                             range_tolerance=tolerance,
                             min_transversal=math.radians(transversal_deg),
                             max_incidence=incidence)
-    except ConfigError as err:
-        raise ConfigError(option_message(str(err))) from None
 
 
 #: MethodConfig's field -> the option that sets it, for its error messages.
@@ -553,12 +551,6 @@ _OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tol
                     "beam_width": "--beam-width", "min_transversal": "--min-transversal",
                     "max_incidence": "--max-incidence"}
 
-
-def option_message(message: str) -> str:
-    """A :class:`MethodConfig` error with its leading field name replaced by the option."""
-    field, _, rest = message.partition(" ")
-    option = _OPTION_OF_FIELD.get(field)
-    return f"{option} {rest}" if option is not None else message
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,
