@@ -3,7 +3,7 @@
 matplotlib is imported inside each function (never at import time), every function takes an
 optional ``ax`` and returns the artists it drew, so callers own their figures. Nothing here picks
 matplotlib's backend: a notebook keeps its inline one, a script its default; the command line
-draws with Agg (:func:`sonarcarve.cli.app.draw_offscreen`).
+draws with Agg (:func:`sonarcarve.cli.drawing.draw_offscreen`).
 
 A user's own map (what ``sonarcarve plot`` draws) is built from :func:`plot_map` (points by
 source), :func:`plot_error_bounds` (each point's ``max_error`` as a circle), :func:`plot_map_arcs`

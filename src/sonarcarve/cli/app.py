@@ -6,7 +6,7 @@
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
 - :func:`flag_message`, :func:`reworded`: a library error, which names parameters, reworded to
-  name the flags that set them; :func:`draw_offscreen`: the Agg backend for the commands that draw.
+  name the flags that set them.
 
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
@@ -44,7 +44,6 @@ from sonarcarve.errors import SonarcarveError
 __all__ = [
     "app",
     "console",
-    "draw_offscreen",
     "err_console",
     "flag_message",
     "lazy_command",
@@ -304,15 +303,6 @@ def reworded(errors: type[SonarcarveError] | tuple[type[SonarcarveError], ...],
         yield
     except errors as err:
         raise type(err)(flag_message(str(err), flags)) from None
-
-
-def draw_offscreen() -> None:
-    """Draw with matplotlib's Agg backend: the commands write figures to files and never show
-    a window, and need no display. Called by each command that draws (the library's plotting
-    leaves the backend to its caller)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
 
 
 def _show_version(value: bool) -> None:

@@ -12,7 +12,8 @@ from rich.progress import TaskID
 from rich.table import Table
 from rich.text import Text
 
-from sonarcarve.cli.app import app, console, draw_offscreen, flag_message, progress
+from sonarcarve.cli.app import app, console, flag_message, progress
+from sonarcarve.cli.drawing import draw_offscreen
 from sonarcarve.errors import ConfigError
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_dir

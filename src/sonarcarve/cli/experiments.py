@@ -8,7 +8,8 @@ from typing import Annotated
 import typer
 from rich.progress import TaskID
 
-from sonarcarve.cli.app import app, console, draw_offscreen, progress, reworded
+from sonarcarve.cli.app import app, console, progress, reworded
+from sonarcarve.cli.drawing import draw_offscreen
 from sonarcarve.cli.options import RUNNER_FLAGS
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import check_output_dir, check_output_file

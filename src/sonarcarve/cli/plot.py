@@ -7,7 +7,8 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, draw_offscreen, flag_message, summary_table
+from sonarcarve.cli.app import app, console, flag_message, summary_table
+from sonarcarve.cli.drawing import draw_offscreen
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.filters import confidence_mask
