@@ -103,6 +103,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 for name in SCENES}
         _print_tables(runs, h, seeds, with_methods=h_index == 0)
         if h_index == 0 and not args.no_figure:
+            import matplotlib
+
+            matplotlib.use("Agg")  # a script writing a PNG: no window, no display needed
             box = runs["box"][0]
             change = next(i for i, c in enumerate(box.changes) if c.label == "box gone")
             fig = plot_changing_scene(box, FIGURE_MAPS, change, after=TARGET_SECONDS)

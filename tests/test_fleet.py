@@ -13,6 +13,7 @@ import pytest
 
 from sonarcarve.fleet import FleetError, map_logs, map_name
 from sonarcarve.io import write_readings_csv
+from sonarcarve.io.errors import OutputError
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.runner import DaskRunner, RunnerSpec
 
@@ -104,3 +105,13 @@ def test_unknown_method_fails_once(logs: list[Path], tmp_path: Path) -> None:
 
     with pytest.raises(ConfigError):
         map_logs(logs[:1], tmp_path, "nope")
+
+
+def test_an_out_dir_that_cannot_be_made_names_the_parameter(tmp_path: Path) -> None:
+    """map_logs is library: its error names out_dir, not the command's --out-dir (review
+    finding 3); the command rewords it."""
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    with pytest.raises(OutputError) as caught:
+        map_logs([tmp_path / "a.csv"], blocker / "maps", "carve")
+    assert str(caught.value).startswith(f"out_dir {blocker / 'maps'}: ")

@@ -5,16 +5,19 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from sonarcarve.io.errors import InputError
+from sonarcarve.errors import ConfigError
+from sonarcarve.io.errors import InputError, OutputError
 from sonarcarve.maps import LocalMap, PointSource
 from sonarcarve.plotting import (
     map_origins,
     new_axes,
+    plot_carving_explainer,
     plot_error_bounds,
     plot_grid,
     plot_map,
     plot_map_arcs,
     plot_path,
+    plot_sources,
     plot_user_map,
     plot_walls,
     read_grid_image,
@@ -158,10 +161,64 @@ def test_user_map_draws_everything_and_titles_the_counts(tmp_path: Path) -> None
         _write_grid(tmp_path)), error_bounds=True, arcs=True)
     assert len(artists) == 6  # grid, path, arcs, circles, two sources
     assert ax.get_title() == "2 points (1 centerline, 1 carved, 0 atm) from 4 readings"
-    with pytest.raises(ValueError, match="needs the readings"):
+    with pytest.raises(ConfigError, match="arcs needs readings"):
         plot_user_map(points, ax, arcs=True)
     save_figure(ax, tmp_path / "map.png")
     assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    with pytest.raises(ValueError, match=r"expected a \.png"):
+    with pytest.raises(OutputError, match=r"expected a \.png"):
         save_figure(new_axes(), tmp_path / "map.jpg")
     assert not (tmp_path / "map.jpg").exists()
+
+
+def test_drawing_leaves_the_callers_backend_alone(tmp_path: Path) -> None:
+    """A notebook's inline backend, or a script's, must survive a plot (review finding 18):
+    the library draws on whatever backend the caller has, and only the commands pick Agg."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    before = matplotlib.get_backend()
+    plt.switch_backend("svg")  # not Agg, and needs no display
+    try:
+        points = _points([[0.0, 2.0]], [0], [0.0], [0.3], [0.2], [PointSource.CARVED])
+        plot_map(points)
+        plot_walls(np.array([[0.0, 0.0, 1.0, 0.0]]))
+        plot_sources(points.xy, points.source)
+        plot_user_map(points, readings=_readings(), arcs=True)
+        plot_carving_explainer()
+        write_carving_explainer(tmp_path / "explainer.png")
+        assert matplotlib.get_backend() == "svg"
+    finally:
+        plt.close("all")
+        plt.switch_backend(before)
+
+
+def test_the_explainer_is_saved_as_every_figure_is(tmp_path: Path) -> None:
+    """Through save_figure (review finding 20): the figure closed after, a wrong suffix an
+    OutputError and nothing written."""
+    import matplotlib.pyplot as plt
+
+    open_before = plt.get_fignums()
+    write_carving_explainer(tmp_path / "explainer.svg")
+    assert (tmp_path / "explainer.svg").read_bytes().lstrip().startswith(b"<?xml")
+    assert plt.get_fignums() == open_before
+    with pytest.raises(OutputError, match=r"explainer\.jpg: expected a \.png, \.svg or \.pdf"):
+        write_carving_explainer(tmp_path / "explainer.jpg")
+    assert not (tmp_path / "explainer.jpg").exists()
+    assert plt.get_fignums() == open_before
+
+
+def test_sources_are_labelled_with_their_counts() -> None:
+    xy = np.zeros((1234, 2))
+    source = np.full(1234, PointSource.ATM, np.int8)
+    (series,) = plot_sources(xy, source)
+    assert series.get_label() == "atm (1,234)"
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_the_readme_figure_and_its_parts_are_public() -> None:
+    import sonarcarve.plotting
+
+    assert {"plot_carving_explainer", "plot_walls", "write_carving_explainer",
+            "plot_sources", "new_figure", "check_figure_path"} <= set(sonarcarve.plotting.__all__)

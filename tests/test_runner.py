@@ -73,7 +73,7 @@ def test_a_ref_must_point_backwards() -> None:
 
 
 def test_specs_are_checked() -> None:
-    with pytest.raises(RunnerError, match="--workers"):
+    with pytest.raises(RunnerError, match="workers must be at least 1"):
         RunnerSpec(workers=0)
     assert RunnerSpec().serial
     assert isinstance(open_runner(RunnerSpec()), SerialRunner)
@@ -107,4 +107,19 @@ def test_the_cli_exits_2_on_an_unreachable_scheduler(
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert address in err
+    assert err.endswith("or give no --scheduler to run on this machine")  # the option
     assert not (tmp_path / "out" / "results.json").exists()
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ({"workers": 0}, "workers must be at least 1, got 0"),
+    ({"scheduler": "  "}, "scheduler needs an address such as tcp://HOST:8786"),
+    ({"connect_timeout": 0.0}, "connect_timeout must be > 0 seconds, got 0.0"),
+])
+def test_a_bad_spec_names_the_parameter_not_a_flag(spec: dict[str, object],
+                                                   message: str) -> None:
+    """RunnerSpec is library: its errors name its fields; the commands reword them as their
+    options (review finding 3; tests/cli/test_fleet_cli.py pins '--workers must be ...')."""
+    with pytest.raises(RunnerError) as caught:
+        RunnerSpec(**spec)  # type: ignore[arg-type]
+    assert str(caught.value) == message

@@ -39,6 +39,8 @@ if TYPE_CHECKING:
         OccupancyGrid,
         RangeSensorLayer,
         SonarConeModel,
+        make_grid,
+        readings_extent,
     )
     from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
     from sonarcarve.io import (
@@ -139,6 +141,7 @@ _EXPORTS = {
     "chord_error": "sonarcarve.maps",
     "filter_map": "sonarcarve.filters",
     "filter_readings": "sonarcarve.filters",
+    "make_grid": "sonarcarve.grids",
     "make_method": "sonarcarve.methods",
     "naive_stamps": "sonarcarve.polling",
     "poll_readings": "sonarcarve.polling",
@@ -146,6 +149,7 @@ _EXPORTS = {
     "read_map_csv": "sonarcarve.io",
     "read_readings_csv": "sonarcarve.io",
     "read_rosbag": "sonarcarve.io",
+    "readings_extent": "sonarcarve.grids",
     "write_map_csv": "sonarcarve.io",
     "write_readings_csv": "sonarcarve.io",
 }
@@ -204,6 +208,7 @@ __all__ = [
     "chord_error",
     "filter_map",
     "filter_readings",
+    "make_grid",
     "make_method",
     "naive_stamps",
     "poll_readings",
@@ -212,6 +217,7 @@ __all__ = [
     "read_map_csv",
     "read_readings_csv",
     "read_rosbag",
+    "readings_extent",
     "write_map_csv",
     "write_readings_csv",
 ]

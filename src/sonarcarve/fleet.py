@@ -279,7 +279,7 @@ def map_logs(
         raise FleetError(msg)
     method_config = MethodConfig() if config is None else config
     make_method(method, method_config)  # an unknown method fails now, not once per log
-    folder = make_output_dir(out_dir, label=f"--out-dir {out_dir}")
+    folder = make_output_dir(out_dir, label=f"out_dir {out_dir}")
     names: dict[str, str] = {}
     for log in logs:
         name = map_name(log)

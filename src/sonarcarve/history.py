@@ -40,7 +40,7 @@ def check_history_size(value: object) -> int:
     """
     if (not isinstance(value, int | np.integer) or isinstance(value, bool)
             or not 1 <= value <= MAX_HISTORY_SIZE):
-        msg = (f"history_size must be a whole number of arcs in [1, {MAX_HISTORY_SIZE}], "
+        msg = (f"history_size must be a whole number of arcs in [1, {MAX_HISTORY_SIZE:,}], "
                f"got {value!r}")
         raise ConfigError(msg)
     return int(value)

@@ -1,7 +1,9 @@
 """Matplotlib figures of worlds, arcs and maps.
 
 matplotlib is imported inside each function (never at import time), every function takes an
-optional ``ax`` and returns the artists it drew, so callers own their figures.
+optional ``ax`` and returns the artists it drew, so callers own their figures. Nothing here picks
+matplotlib's backend: a notebook keeps its inline one, a script its default; the command line
+draws with Agg (:func:`sonarcarve.cli.drawing.draw_offscreen`).
 
 A user's own map (what ``sonarcarve plot`` draws) is built from :func:`plot_map` (points by
 source), :func:`plot_error_bounds` (each point's ``max_error`` as a circle), :func:`plot_map_arcs`
@@ -18,13 +20,15 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
+from sonarcarve.errors import ConfigError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path
-from sonarcarve.io.errors import InputError, finite_number, load_yaml
+from sonarcarve.io.errors import InputError, OutputError, finite_number, load_yaml
 from sonarcarve.maps import PointSource
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from sonarcarve.maps import GlobalMap, LocalMap
     from sonarcarve.readings import ReadingBatch
@@ -34,18 +38,24 @@ __all__ = [
     "SOURCE_COLORS",
     "GridImage",
     "MapOrigins",
+    "check_figure_path",
     "map_origins",
     "new_axes",
+    "new_figure",
     "plot_arc",
+    "plot_carving_explainer",
     "plot_error_bounds",
     "plot_freespace",
     "plot_grid",
     "plot_map",
     "plot_map_arcs",
     "plot_path",
+    "plot_sources",
     "plot_user_map",
+    "plot_walls",
     "read_grid_image",
     "save_figure",
+    "write_carving_explainer",
 ]
 
 #: One colour per point source, the same in every figure.
@@ -56,14 +66,22 @@ SOURCE_COLORS = {
 }
 
 
-def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
-    """A fresh figure with one equal-aspect axes (Agg backend: works without a display)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+def new_figure(rows: int = 1, cols: int = 1, width: float = 7.0, height: float = 4.5,
+               **options: Any) -> tuple[Figure, Any]:
+    """A fresh constrained-layout pyplot figure of ``rows`` x ``cols`` axes, ``width`` x
+    ``height`` inches, and its axes as a 2-D array (even for one); ``options`` go to
+    ``plt.subplots`` (``sharex`` ...). The backend is left as the caller has it."""
     import matplotlib.pyplot as plt
 
-    _, ax = plt.subplots(figsize=(width, height), layout="constrained")
+    fig, axes = plt.subplots(rows, cols, figsize=(width, height), layout="constrained",
+                             squeeze=False, **options)
+    return fig, axes
+
+
+def new_axes(width: float = 7.0, height: float = 6.0) -> Axes:
+    """A fresh figure with one equal-aspect axes (:func:`new_figure`; the backend is left as
+    the caller has it)."""
+    ax: Axes = new_figure(1, 1, width, height)[1][0, 0]
     ax.set_aspect("equal")
     return ax
 
@@ -85,17 +103,29 @@ def plot_walls(segments: npt.ArrayLike, ax: Axes | None = None, **style: Any) ->
 def plot_map(
     points: LocalMap | GlobalMap, ax: Axes | None = None, size: float = 4.0, legend: bool = True
 ) -> list[Any]:
-    """Scatter map points coloured by the model that placed them."""
+    """Scatter map points coloured by the model that placed them (:func:`plot_sources`)."""
     ax = ax or new_axes()
-    artists = []
-    for source, color in SOURCE_COLORS.items():
-        mask = points.source == source
-        if np.any(mask):
-            artists.append(ax.scatter(points.xy[mask, 0], points.xy[mask, 1], s=size, c=color,
-                                      label=f"{source.label} ({int(mask.sum())})", zorder=3,
-                                      linewidths=0))
+    artists = plot_sources(points.xy, points.source, ax, size)
     if legend and artists:
         ax.legend(loc="best", fontsize="small", markerscale=3)
+    return artists
+
+
+def plot_sources(xy: npt.ArrayLike, source: npt.ArrayLike, ax: Axes | None = None,
+                 size: float = 4.0) -> list[Any]:
+    """Scatter points ``xy`` (shape (n, 2), metres) coloured by ``source`` (shape (n,),
+    :class:`~sonarcarve.maps.PointSource` codes), one series per source present, labelled
+    with its count for a legend (``"carved (1,234)"``)."""
+    ax = ax or new_axes()
+    p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    codes = np.asarray(source)
+    artists = []
+    for code, color in SOURCE_COLORS.items():
+        mask = codes == code
+        if np.any(mask):
+            artists.append(ax.scatter(p[mask, 0], p[mask, 1], s=size, c=color,
+                                      label=f"{code.label} ({int(mask.sum()):,})", zorder=3,
+                                      linewidths=0))
     return artists
 
 
@@ -180,13 +210,18 @@ def plot_carving_explainer(ax: Axes | None = None) -> list[Any]:
     return artists
 
 
-def write_carving_explainer(path: str) -> None:
-    """Write :func:`plot_carving_explainer` as a PNG (the README's figure)."""
+def write_carving_explainer(path: str | Path) -> None:
+    """Write :func:`plot_carving_explainer` to ``path`` (the README's figure; .png, .svg or
+    .pdf) with :func:`save_figure`: atomically, the figure closed after.
+
+    Raises
+    ------
+    OutputError
+        Another suffix, or a file that cannot be written.
+    """
     ax = new_axes(7.0, 5.5)
     plot_carving_explainer(ax)
-    figure = ax.get_figure(root=True)
-    if figure is not None:
-        figure.savefig(path, dpi=110)
+    save_figure(ax, path, dpi=110)
 
 
 # -- a user's own map (``sonarcarve plot``) -------------------------------------------------------
@@ -438,14 +473,14 @@ def plot_user_map(
 
     Raises
     ------
-    ValueError
+    ConfigError
         ``arcs`` without ``readings``.
     InputError
         The map was not made from ``readings`` (:func:`map_origins`).
     """
     if arcs and readings is None:
-        msg = "drawing arcs needs the readings the map was made from"
-        raise ValueError(msg)
+        msg = "arcs needs readings, the log the map was made from"
+        raise ConfigError(msg)
     origins = map_origins(points, readings) if readings is not None else None
     ax = ax or new_axes(8.0, 7.0)
     ax.set_aspect("equal")
@@ -476,26 +511,44 @@ def plot_user_map(
 FIGURE_FORMATS = ("png", "svg", "pdf")
 
 
+def check_figure_path(path: str | Path, *, label: str | None = None) -> str:
+    """The format of the figure file ``path`` from its suffix, one of :data:`FIGURE_FORMATS`.
+
+    ``label`` names the path in the message (e.g. ``"--out map.jpg"``); default: the path.
+
+    Raises
+    ------
+    OutputError
+        Another suffix.
+
+    Examples
+    --------
+    >>> check_figure_path("map.PNG")
+    'png'
+    """
+    kind = Path(path).suffix.lower().removeprefix(".")
+    if kind not in FIGURE_FORMATS:
+        msg = f"{label if label is not None else path}: expected a .png, .svg or .pdf file name"
+        raise OutputError(msg)
+    return kind
+
+
 def save_figure(ax: Axes, path: str | Path, *, dpi: int = 150) -> None:
     """Write the figure of ``ax`` atomically (format from the suffix: .png, .svg or .pdf) and
     close it.
 
     Raises
     ------
-    ValueError
-        Another suffix.
     OutputError
-        The file cannot be written (the message names it and the reason).
+        Another suffix (:func:`check_figure_path`), or a file that cannot be written (the
+        message names it and the reason).
     """
     import matplotlib.pyplot as plt
 
     target = Path(path)
-    kind = target.suffix.lower().removeprefix(".")
     figure = ax.get_figure(root=True)
     try:
-        if kind not in FIGURE_FORMATS:
-            msg = f"{target}: expected a .png, .svg or .pdf file name"
-            raise ValueError(msg)
+        kind = check_figure_path(target)
         if figure is None:  # an axes always has a figure; mypy does not know
             msg = "the axes belong to no figure"
             raise ValueError(msg)

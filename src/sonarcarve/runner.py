@@ -152,13 +152,13 @@ class RunnerSpec:
 
     def __post_init__(self) -> None:
         if self.workers < 1:
-            msg = f"--workers must be at least 1, got {self.workers}"
+            msg = f"workers must be at least 1, got {self.workers}"
             raise RunnerError(msg)
         if self.scheduler is not None and not self.scheduler.strip():
-            msg = "--scheduler needs an address such as tcp://HOST:8786"
+            msg = "scheduler needs an address such as tcp://HOST:8786"
             raise RunnerError(msg)
         if not (math.isfinite(self.connect_timeout) and self.connect_timeout > 0):
-            msg = f"connect timeout must be > 0 seconds, got {self.connect_timeout}"
+            msg = f"connect_timeout must be > 0 seconds, got {self.connect_timeout}"
             raise RunnerError(msg)
 
     @classmethod
@@ -325,18 +325,18 @@ class DaskRunner(_Closing):
             self._client = Client(spec.scheduler, timeout=spec.connect_timeout,
                                   set_as_default=False)
         except (OSError, TimeoutError) as err:
-            msg = (f"cannot reach the Dask scheduler at {spec.scheduler} within "
-                   f"{spec.connect_timeout:g} s ({_one_line(err)}); start one with "
-                   "`dask scheduler`, or leave out --scheduler to run on this machine")
+            msg = (f"cannot reach Dask at {spec.scheduler} within {spec.connect_timeout:g} s "
+                   f"({_one_line(err)}); start it with `dask scheduler`, or give no scheduler "
+                   "to run on this machine")
             raise SchedulerUnreachableError(msg) from None
         except (ValueError, TypeError) as err:
-            msg = f"--scheduler {spec.scheduler}: not a Dask address ({_one_line(err)})"
+            msg = f"scheduler {spec.scheduler}: not a Dask address ({_one_line(err)})"
             raise RunnerError(msg) from None
         try:
             self._client.wait_for_workers(1, timeout=spec.connect_timeout)
         except (OSError, TimeoutError):
             self._client.close()
-            msg = (f"the Dask scheduler at {spec.scheduler} has no workers after "
+            msg = (f"Dask at {spec.scheduler} has no worker processes after "
                    f"{spec.connect_timeout:g} s; start some with `dask worker {spec.scheduler}`")
             raise SchedulerUnreachableError(msg) from None
 

@@ -63,6 +63,22 @@ def test_plot_alone_and_as_svg(run: tuple[Path, Path, GlobalMap], tmp_path: Path
     assert b"<svg" in (tmp_path / "a.svg").read_bytes()[:500]
 
 
+def test_the_command_draws_with_agg(run: tuple[Path, Path, GlobalMap], tmp_path: Path) -> None:
+    """The command picks the Agg backend itself (review finding 18): the library's plotting
+    no longer does, and a command must not need a display whatever the default is."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    _, map_csv, _ = run
+    before = matplotlib.get_backend()
+    plt.switch_backend("svg")
+    try:
+        assert main(["plot", str(map_csv), "--out", str(tmp_path / "a.png")]) == 0
+        assert matplotlib.get_backend().lower() == "agg"
+    finally:
+        plt.switch_backend(before)
+
+
 def test_confidence_min_keeps_confident_and_unmodelled_points(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     n = 4

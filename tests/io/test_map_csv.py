@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.io import MAP_COLUMNS, read_map_csv, write_map_csv
 from sonarcarve.io.errors import InputError
 from sonarcarve.io.map_csv import APPENDED_COLUMNS, BLOCK_ROWS, map_csv_sink
@@ -271,7 +271,7 @@ def test_unknown_source_code_and_bad_block_rows_are_refused(tmp_path: Path) -> N
     with pytest.raises(ValueError, match="3 is not a valid PointSource"):
         write_map_csv(bad, tmp_path / "bad.csv")
     assert not (tmp_path / "bad.csv").exists()
-    with pytest.raises(ValueError, match="block_rows"):
+    with pytest.raises(ConfigError, match="block_rows must be at least 1, got 0"):
         write_map_csv(points, tmp_path / "map.csv", block_rows=0)
 
 

@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.io import InputError, read_readings_csv, write_readings_csv
 from sonarcarve.io.errors import parse_number
 from sonarcarve.io.readings_csv import (
@@ -558,7 +559,7 @@ def test_header_only_and_blank_files(tmp_path: Path) -> None:
     for size in BLOCK_SIZES:
         assert read_readings_csv(path, block_size=size).range.tolist() == [1.0]
     assert count_data_lines(path) == 1
-    with pytest.raises(ValueError, match="block_size"):
+    with pytest.raises(ConfigError, match="block_size must be at least 1 byte, got 0"):
         read_readings_csv(path, block_size=0)
 
 

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.io.rerun_out import write_rerun
 from sonarcarve.methods import make_method
 from sonarcarve.pipeline import process_readings
@@ -74,7 +75,7 @@ def test_times_are_the_readings_seconds(tmp_path: Path) -> None:
 
 def test_a_bad_reading_or_every_writes_nothing(tmp_path: Path) -> None:
     path = tmp_path / "run.rrd"
-    with pytest.raises(ValueError, match="every must be at least 1"):
+    with pytest.raises(ConfigError, match="every must be at least 1"):
         write_rerun(path, _readings(), make_method("carve"), every=0)
     readings = _readings()
     readings.range[3] = -1.0  # a batch is a value; this one is broken on purpose

@@ -492,3 +492,22 @@ def test_a_cut_short_bag_says_so_in_plain_words(tmp_path: Path, name: str, kind:
     with pytest.raises(RosbagError) as err:
         read_rosbag(bag)
     assert str(err.value) == f"{bag}: {kind}"
+
+
+def test_two_odometry_topics_name_the_parameter_or_the_option(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The library names its parameter (odom_topic), the command its option (review finding
+    3): a Python caller never typed --odom-topic."""
+    second = [_odom(m.t, 0.0, 0.0, 0.0, topic="/odom2") for m in STRAIGHT_ODOM]
+    bag = write_bag(tmp_path / "two_odoms", [*STRAIGHT_ODOM, *second, *STRAIGHT_RANGES],
+                    {**STRAIGHT_TYPES, "/odom2": ODOM})
+    with pytest.raises(RosbagError) as err:
+        read_rosbag(bag, robot=ROBOT)
+    _assert_one_line(err, str(bag), "several odometry topics (/odom, /odom2)",
+                     "choose one with odom_topic")
+    assert "--odom-topic" not in str(err.value)
+    robot = tmp_path / "two.yaml"
+    robot.write_text(ROBOT_YAML)
+    assert main(["convert", "rosbag", str(bag), "--robot", str(robot), "--out",
+                 str(tmp_path / "r.csv")]) == 2
+    assert "choose one with --odom-topic" in capsys.readouterr().err

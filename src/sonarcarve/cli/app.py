@@ -5,6 +5,8 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
+- :func:`flag_message`, :func:`reworded`: a library error, which names parameters, reworded to
+  name the flags that set them.
 
 The help screens are tidied here too (:class:`_Group`): usage lines show ``READINGS.csv`` rather
 than typer's ``{readings}``, option rows show a metavar (``METRES``, ``NAME``) or click's plain
@@ -17,7 +19,9 @@ the slash and the command would replace the file.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable
+import re
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +39,18 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
-__all__ = ["app", "console", "err_console", "lazy_command", "progress", "summary_table"]
+from sonarcarve.errors import SonarcarveError
+
+__all__ = [
+    "app",
+    "console",
+    "err_console",
+    "flag_message",
+    "lazy_command",
+    "progress",
+    "reworded",
+    "summary_table",
+]
 
 #: Command name -> (module that registers it, the first paragraph of its help). Filled by
 #: :func:`lazy_command` from ``sonarcarve/cli/main.py``.
@@ -249,6 +264,45 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
     clock: ProgressColumn = TimeElapsedColumn() if elapsed else TimeRemainingColumn()
     return Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), clock,
                     console=console, transient=True)
+
+
+def flag_message(message: str, flags: Mapping[str, str]) -> str:
+    """A library error's ``message`` in the command line's words: every parameter name of
+    ``flags`` (parameter -> flag) that it mentions as a word of its own (not inside
+    ```code```) replaced by its flag, and a leading ``"label: "`` dropped when a flag follows
+    it (the command has one thing of that kind).
+
+    Examples
+    --------
+    >>> flag_message("carved grid: resolution must be > 0 metres, got 0", {"resolution":
+    ...              "--resolution"})
+    '--resolution must be > 0 metres, got 0'
+    >>> flag_message("arcs needs readings", {"arcs": "--arcs", "readings": "--readings"})
+    '--arcs needs --readings'
+    >>> flag_message("start one with `dask scheduler`, or give no scheduler",
+    ...              {"scheduler": "--scheduler"})
+    'start one with `dask scheduler`, or give no --scheduler'
+    """
+    def reword(text: str) -> str:
+        for name, flag in flags.items():
+            text = re.sub(rf"(?<![\w`-]){re.escape(name)}(?![\w`-])", flag, text)
+        return text
+
+    _, sep, rest = message.partition(": ")
+    if sep and rest.partition(" ")[0] in flags:
+        return reword(rest)
+    return reword(message)
+
+
+@contextmanager
+def reworded(errors: type[SonarcarveError] | tuple[type[SonarcarveError], ...],
+             flags: Mapping[str, str]) -> Iterator[None]:
+    """Re-raise ``errors`` raised in the block as the same class with :func:`flag_message`'s
+    wording: the library names its parameters, the command its flags."""
+    try:
+        yield
+    except errors as err:
+        raise type(err)(flag_message(str(err), flags)) from None
 
 
 def _show_version(value: bool) -> None:

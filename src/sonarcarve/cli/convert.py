@@ -12,7 +12,14 @@ import typer
 from rich.table import Table
 
 from sonarcarve.cli.app import app, console, summary_table
-from sonarcarve.cli.options import FrameOpt, OdomTopicOpt, RangeTopicOpt, RobotOpt, bag_options
+from sonarcarve.cli.options import (
+    FrameOpt,
+    OdomTopicOpt,
+    RangeTopicOpt,
+    RobotOpt,
+    bag_options,
+    read_bag,
+)
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.fleet import BagOptions
 from sonarcarve.io import read_robond, write_readings_csv
@@ -76,7 +83,7 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     if opts.keep_duplicates:
         msg = "--keep-duplicates applies to the roboND format only"
         raise ConvertError(msg)
-    log = replace(opts.bag, beam_width=opts.beam_width).read(source)
+    log = read_bag(replace(opts.bag, beam_width=opts.beam_width), source)
     write_readings_csv(log.batch, out)
     r = log.report
     for line in _sensor_lines(r):

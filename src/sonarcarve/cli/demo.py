@@ -12,7 +12,10 @@ from rich.progress import TaskID
 from rich.table import Table
 from rich.text import Text
 
-from sonarcarve.cli.app import app, console, progress
+from sonarcarve.cli.app import app, console, flag_message, progress
+from sonarcarve.cli.drawing import draw_offscreen
+from sonarcarve.errors import ConfigError
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_dir
 from sonarcarve.lab.demo import (
     APPROACH_DISTANCE,
@@ -67,7 +70,7 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     f"map shows {APPROACH_DISTANCE:g} m before a door), approach.gif, "
     "fig5-occupancy-grids.png (both grids over the true walls), carved-grid.yaml/.pgm and "
     "range-sensor-layer.yaml/.pgm (the grids as ROS map_server maps), summary.md and "
-    "summary.json. Takes about 10 s for the office tour on 2 cores (longer on a loaded "
+    "summary.json. Takes about 20 s for the office tour on 2 cores (longer on a loaded "
     "machine, and the first time, while numba compiles).\n\n"
     "Example: `sonarcarve demo --world t-junction --seed 3 --out /tmp/demo`"
 ))
@@ -83,13 +86,18 @@ def demo(
         help="Folder for the figures, the grid maps, summary.md and summary.json (created "
              "with its missing parents; files of the same names are replaced).")] = "demo-output",
     history: Annotated[int, typer.Option(
-        metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")] = 250,
+        metavar="ARCS", help="Arcs kept in each method's history (paper: 250).")
+    ] = DEFAULT_HISTORY_SIZE,
 ) -> None:
     """Simulate a tour; compare the methods' maps, and the carved grid with ROS's layer."""
     # Every bad option fails here, in one line, before a progress bar or a file appears.
     folder = check_output_dir(out, label=f"--out {out}")  # a str: "" is not "."
-    demo_config(history)
+    try:
+        demo_config(history)
+    except ConfigError as err:
+        raise ConfigError(flag_message(str(err), {"history_size": "--history"})) from None
     the_world = load_demo_world(world)
+    draw_offscreen()
     tic = time.perf_counter()
     with progress(label_width=20, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}

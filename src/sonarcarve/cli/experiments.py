@@ -8,7 +8,9 @@ from typing import Annotated
 import typer
 from rich.progress import TaskID
 
-from sonarcarve.cli.app import app, console, progress
+from sonarcarve.cli.app import app, console, progress, reworded
+from sonarcarve.cli.drawing import draw_offscreen
+from sonarcarve.cli.options import RUNNER_FLAGS
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import check_output_dir, check_output_file
 from sonarcarve.io.errors import InputError
@@ -25,7 +27,7 @@ from sonarcarve.lab.report import (
     result_json,
     write_outputs,
 )
-from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
+from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerError, RunnerSpec, open_runner
 
 __all__ = ["experiments"]
 
@@ -79,8 +81,9 @@ def experiments(
         # A partial run would replace the whole generated section with a partial one.
         msg = "--results-md rewrites the whole results section: run it without --only"
         raise ExperimentError(msg)
-    spec = RunnerSpec.from_env(1 if quick and workers is None else workers, scheduler,
-                               connect_timeout)
+    with reworded(RunnerError, RUNNER_FLAGS):
+        spec = RunnerSpec.from_env(1 if quick and workers is None else workers, scheduler,
+                                   connect_timeout)
     Settings.make(quick=quick, seeds=seeds)  # refuse bad settings before starting workers
     # A run takes minutes: refuse an output it could not write before, not after.
     # Folders arrive as str, so that an empty --out is refused instead of meaning ".".
@@ -91,7 +94,10 @@ def experiments(
         _check_results_md(results_md)
     command = _command(folder, quick, names, seeds, workers, scheduler, figures_dir,
                        results_md)
-    with open_runner(spec) as runner, progress(label_width=10, elapsed=True) as bar:
+    draw_offscreen()
+    with reworded(RunnerError, RUNNER_FLAGS):
+        runner = open_runner(spec)
+    with runner, progress(label_width=10, elapsed=True) as bar:
         settings = Settings.make(quick=quick, seeds=seeds, jobs=runner.workers)
         tasks: dict[str, TaskID] = {}
 

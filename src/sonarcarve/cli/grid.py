@@ -10,16 +10,14 @@ and Elfes grids take as free space; the range-sensor-layer drops them, as ROS's 
 
 from __future__ import annotations
 
-import math
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
 
-from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.cli.app import app, console, flag_message, summary_table
 from sonarcarve.cli.options import (
     FrameOpt,
     NoEchoOpt,
@@ -27,118 +25,92 @@ from sonarcarve.cli.options import (
     RangeTopicOpt,
     RobotOpt,
     bag_options,
+    read_bag,
     refuse_bag_options,
 )
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.grids import (
-    CarvedGrid,
+    GRIDS,
     CarvedGridParams,
-    OccupancyGrid,
-    OccupancyMap,
-    RangeSensorLayer,
+    GridError,
+    make_grid,
+    readings_extent,
     trinary,
 )
+from sonarcarve.grids import Grid as BuiltGrid
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.map_server import write_map_server
 from sonarcarve.io.readings_csv import read_readings_csv
 from sonarcarve.io.sanity import likely_mistakes
-from sonarcarve.readings import DEFAULT_BEAM_WIDTH, ReadingBatch
+from sonarcarve.readings import ReadingBatch
 
-__all__ = ["GRID_MODELS", "build_grid", "grid", "read_log_for_grid", "readings_extent"]
+__all__ = ["build_grid", "grid", "grid_params", "read_log_for_grid"]
 
-Bounds = tuple[float, float, float, float]
+#: The library's parameter names (:func:`~sonarcarve.grids.make_grid`,
+#: :func:`~sonarcarve.grids.readings_extent`, :class:`~sonarcarve.grids.CarvedGridParams`) ->
+#: the options that set them, for its error messages.
+_FLAGS = {"resolution": "--resolution", "margin": "--margin", "fresh_periods": "--fresh-periods"}
 
 
 class GridUsageError(SonarcarveError):
     """A bad option of ``sonarcarve grid``: unknown model, resolution or margin out of range."""
 
 
-def _carved(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
-    params = None if fresh_periods is None else CarvedGridParams(fresh_periods=fresh_periods)
-    return CarvedGrid(resolution, bounds, params=params)
-
-
-def _layer(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
-    return RangeSensorLayer(resolution, bounds)
-
-
-def _elfes(resolution: float, bounds: Bounds, fresh_periods: float | None) -> OccupancyMap:
-    return OccupancyGrid(resolution, bounds)
-
-
-#: ``--model`` name -> grid factory ``(resolution, bounds, fresh_periods)``; ``fresh_periods``
-#: (None: the default) is the carved grid's alone, and :func:`build_grid` refuses it for the rest.
-GRID_MODELS: dict[str, Callable[[float, Bounds, float | None], OccupancyMap]] = {
-    "carved": _carved,
-    "range-sensor-layer": _layer,
-    "elfes": _elfes,
-}
-
-
-def readings_extent(batch: ReadingBatch, margin: float) -> Bounds:
-    """``(xmin, ymin, xmax, ymax)`` of the sensors and their arcs (both beam edges and the
-    axis at the range; a no-echo reading's at its ``max_range``, the free space it clears),
-    grown by ``margin`` metres."""
-    width = np.where(np.isnan(batch.beam_width), DEFAULT_BEAM_WIDTH, batch.beam_width)
-    reach = np.where(np.isfinite(batch.range), batch.range, batch.max_range)
-    xs, ys = [batch.x], [batch.y]
-    for k in (-0.5, 0.0, 0.5):
-        xs.append(batch.x + reach * np.cos(batch.theta + k * width))
-        ys.append(batch.y + reach * np.sin(batch.theta + k * width))
-    x, y = np.concatenate(xs), np.concatenate(ys)
-    return (float(x.min()) - margin, float(y.min()) - margin,
-            float(x.max()) + margin, float(y.max()) + margin)
-
-
-def _check_fresh_periods(model: str, fresh_periods: float | None) -> None:
-    """Refuse ``--fresh-periods`` for a model other than the carved grid, or out of its range
-    (:attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`)."""
-    if fresh_periods is None:
-        return
-    if model != "carved":
-        msg = f"--fresh-periods applies to --model carved only, not {model}"
-        raise GridUsageError(msg)
-    if not fresh_periods >= 1.0:  # also NaN
-        msg = (f"--fresh-periods must be a number >= 1 firing period (inf: keep the mark up to "
-               f"2 s), got {fresh_periods}")
+def _check_model(model: str) -> None:
+    """Refuse a ``--model`` that is no key of :data:`~sonarcarve.grids.GRIDS`, before anything
+    is read (:func:`~sonarcarve.grids.make_grid` would refuse it only after)."""
+    if model not in GRIDS:
+        msg = f"--model must be one of {' | '.join(GRIDS)}, got {model!r}"
         raise GridUsageError(msg)
 
 
-def build_grid(batch: ReadingBatch, model: str, resolution: float,
-               margin: float = 0.5, fresh_periods: float | None = None) -> OccupancyMap:
-    """The grid ``model`` over the readings' extent plus ``margin``, with every reading in;
-    ``fresh_periods`` (carved grid only; None: its default) as
-    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`.
+def grid_params(model: str, fresh_periods: float | None) -> CarvedGridParams | None:
+    """The grid's parameters from the options: ``--fresh-periods`` (None: the default) as
+    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`, for the carved grid only.
 
     Raises
     ------
     GridUsageError
-        An unknown model, a resolution or margin that is not a finite positive number (margin:
-        >= 0), a resolution larger than the area mapped, ``fresh_periods`` below 1 or for a
-        model other than the carved grid, or no readings.
+        ``--fresh-periods`` for a model other than the carved grid, or out of its range.
     """
-    if model not in GRID_MODELS:
-        msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
+    if fresh_periods is None:
+        return None
+    if model != "carved":
+        msg = f"--fresh-periods applies to --model carved only, not {model}"
         raise GridUsageError(msg)
-    if not (math.isfinite(resolution) and resolution > 0.0):
-        msg = f"--resolution must be a finite number > 0 (metres), got {resolution}"
-        raise GridUsageError(msg)
-    if not (math.isfinite(margin) and margin >= 0.0):
-        msg = f"--margin must be a finite number >= 0 (metres), got {margin}"
-        raise GridUsageError(msg)
-    _check_fresh_periods(model, fresh_periods)
-    if not len(batch):
-        msg = "no readings to map"
-        raise GridUsageError(msg)
-    bounds = readings_extent(batch, margin)
+    try:
+        return CarvedGridParams(fresh_periods=fresh_periods)
+    except GridError as err:
+        raise GridUsageError(flag_message(str(err), _FLAGS)) from None
+
+
+def build_grid(batch: ReadingBatch, model: str, resolution: float,
+               margin: float = 0.5, fresh_periods: float | None = None) -> BuiltGrid:
+    """The grid ``model`` (:func:`~sonarcarve.grids.make_grid`) over the readings' extent
+    plus ``margin`` (:func:`~sonarcarve.grids.readings_extent`), with every reading in;
+    ``fresh_periods`` as in :func:`grid_params`.
+
+    Raises
+    ------
+    GridUsageError
+        What the library refuses (an unknown model, a resolution or margin out of range,
+        ``fresh_periods`` below 1, no readings), its parameters named as the options; a
+        resolution larger than the area mapped; ``fresh_periods`` for a model other than the
+        carved grid.
+    """
+    _check_model(model)
+    params = grid_params(model, fresh_periods)
+    try:
+        bounds = readings_extent(batch, margin)
+        built = make_grid(model, resolution, bounds, params)
+    except GridError as err:
+        raise GridUsageError(flag_message(str(err), _FLAGS)) from None
     width, height = bounds[2] - bounds[0], bounds[3] - bounds[1]
     if resolution > max(width, height):
         msg = (f"--resolution {resolution:g} m is larger than the area mapped ({width:.3g} x "
                f"{height:.3g} m: the readings' extent plus --margin); a cell must be smaller")
         raise GridUsageError(msg)
-    built = GRID_MODELS[model](resolution, bounds, fresh_periods)
-    assert isinstance(built, CarvedGrid | RangeSensorLayer | OccupancyGrid)
     built.add_many(batch)
     return built
 
@@ -159,7 +131,7 @@ def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
     if not is_bag(source):
         batch, silent = read_readings_csv(source), 0
     else:
-        log = bag.read(source)
+        log = read_bag(bag, source)
         batch, silent = bag.readings(log), len(log.no_echo)
     if not len(batch):
         hint = (f" (its {silent:,} Range messages heard nothing, +Inf; --no-echo maps them as "
@@ -231,10 +203,8 @@ def grid(
     Example: `sonarcarve grid polled.csv --fresh-periods inf --out grid.yaml` (a log that
     left out readings equal to the one before)
     """
-    if model not in GRID_MODELS:
-        msg = f"--model must be one of {' | '.join(GRID_MODELS)}, got {model!r}"
-        raise GridUsageError(msg)
-    _check_fresh_periods(model, fresh_periods)  # before anything is read
+    _check_model(model)  # these two before anything is read
+    grid_params(model, fresh_periods)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")

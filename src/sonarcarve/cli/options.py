@@ -14,14 +14,18 @@ from typing import Annotated
 
 import typer
 
+from sonarcarve.cli.app import reworded
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
+from sonarcarve.io.rosbag import RosbagError, RosbagLog
 from sonarcarve.robot import load_robot
 
 __all__ = [
+    "BAG_FLAGS",
     "BAG_PANEL",
+    "RUNNER_FLAGS",
     "BagOptionsError",
     "FrameOpt",
     "NoEchoOpt",
@@ -30,8 +34,17 @@ __all__ = [
     "RobotOpt",
     "bag_options",
     "check_new_bag",
+    "read_bag",
     "refuse_bag_options",
 ]
+
+#: The bag reader's parameters (:func:`~sonarcarve.io.rosbag.read_rosbag`) -> the options.
+BAG_FLAGS = {"odom_topic": "--odom-topic", "range_topics": "--range-topic",
+             "base_frame": "--frame"}
+#: The runner's and the fleet's parameters (:class:`~sonarcarve.runner.RunnerSpec`,
+#: :func:`~sonarcarve.fleet.map_logs`) -> the options (:func:`~sonarcarve.cli.app.reworded`).
+RUNNER_FLAGS = {"workers": "--workers", "scheduler": "--scheduler",
+                "connect_timeout": "--connect-timeout", "out_dir": "--out-dir"}
 
 #: The help panel the bag options are listed under.
 BAG_PANEL = "ROS bag input"
@@ -65,6 +78,13 @@ NoEchoOpt = Annotated[bool, typer.Option(
          "as free space: carving and the carved and Elfes grids clear with them (ROS's "
          "range-sensor-layer drops +Inf, as on a robot); they add no point.",
     rich_help_panel=BAG_PANEL)]
+
+
+def read_bag(bag: BagOptions, source: str | Path) -> RosbagLog:
+    """``bag.read(source)``, its errors naming the options instead of the reader's
+    parameters (``choose one with --odom-topic``)."""
+    with reworded(RosbagError, BAG_FLAGS):
+        return bag.read(source)
 
 
 def bag_options(robot: str | None, range_topic: list[str] | None, odom_topic: str | None,

@@ -7,15 +7,16 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, summary_table
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.cli.app import app, console, flag_message, summary_table
+from sonarcarve.cli.drawing import draw_offscreen
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.filters import confidence_mask
 from sonarcarve.io import read_map_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.readings_csv import read_readings_csv
 from sonarcarve.plotting import (
-    FIGURE_FORMATS,
+    check_figure_path,
     map_origins,
     new_axes,
     plot_user_map,
@@ -24,6 +25,9 @@ from sonarcarve.plotting import (
 )
 
 __all__ = ["plot"]
+
+#: :func:`~sonarcarve.plotting.plot_user_map`'s parameters -> the options that set them.
+_FLAGS = {"arcs": "--arcs", "readings": "--readings"}
 
 
 class PlotUsageError(SonarcarveError):
@@ -73,15 +77,10 @@ def plot(
       and each point's arc.
     - `sonarcarve plot map.csv --grid building.yaml --error-bars --out map.png`: over a ROS map.
     """
-    if arcs and readings is None:
-        msg = "--arcs needs --readings, the readings CSV the map was made from"
-        raise PlotUsageError(msg)
     if confidence_min is not None and not 0.0 <= confidence_min <= 1.0:
         msg = f"--confidence-min must lie in [0, 1], got {confidence_min:g}"
         raise PlotUsageError(msg)
-    if out.suffix.lower().removeprefix(".") not in FIGURE_FORMATS:
-        msg = f"--out {out}: expected a .png, .svg or .pdf file name"
-        raise PlotUsageError(msg)
+    check_figure_path(out, label=f"--out {out}")
     inputs = [path for path in (map_csv, readings, grid) if path is not None]
     check_output_file(out, inputs=inputs, label=f"--out {out}")
     require("matplotlib", "plot", "Figures")
@@ -93,9 +92,13 @@ def plot(
     if confidence_min is not None:
         points = points.select(confidence_mask(points.confidence, confidence_min))
     image = read_grid_image(grid) if grid is not None else None
+    draw_offscreen()
     ax = new_axes(8.0, 7.0)
-    plot_user_map(points, ax, readings=batch, grid=image, error_bounds=error_bars, arcs=arcs,
-                  title=title)
+    try:
+        plot_user_map(points, ax, readings=batch, grid=image, error_bounds=error_bars,
+                      arcs=arcs, title=title)
+    except ConfigError as err:  # --arcs without --readings
+        raise PlotUsageError(flag_message(str(err), _FLAGS)) from None
     save_figure(ax, out)
     rows = [("points in map", f"{total:,}")]
     if confidence_min is not None:

@@ -19,8 +19,9 @@ from typing import TYPE_CHECKING, Annotated, NamedTuple
 
 import typer
 
-from sonarcarve.cli.app import app, console, err_console, progress, summary_table
+from sonarcarve.cli.app import app, console, err_console, progress, reworded, summary_table
 from sonarcarve.cli.options import (
+    RUNNER_FLAGS,
     FrameOpt,
     NoEchoOpt,
     OdomTopicOpt,
@@ -28,6 +29,7 @@ from sonarcarve.cli.options import (
     RobotOpt,
     bag_options,
     check_new_bag,
+    read_bag,
     refuse_bag_options,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
@@ -278,7 +280,7 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error)
     make_method(method, config)  # an unknown method fails before any file is touched
-    beam_warning = beam_width_mistake(beam_width)
+    beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     if out_dir is not None:
         _check_fleet_options(out, map_rate)
@@ -405,7 +407,7 @@ def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
     """Run the job's method over its input, the map to ``sink`` (None: kept in the result)."""
     sonar = job.sonar()
     if is_bag(job.source):
-        batch = job.bag.readings(job.bag.read(job.source))
+        batch = job.bag.readings(read_bag(job.bag, job.source))
         job.warnings.extend(likely_mistakes(batch))
         return process_readings(batch, sonar, reading_filter=job.reading_filter,
                                 map_filter=job.map_filter, sink=sink)
@@ -415,12 +417,11 @@ def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
 
 def _write_bag(job: _Job) -> list[tuple[str, str]]:
     """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
-    from sonarcarve.cli.grid import readings_extent
-    from sonarcarve.grids import CarvedGrid
+    from sonarcarve.grids import CarvedGrid, readings_extent
     from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 
     if is_bag(job.source):
-        log = job.bag.read(job.source)
+        log = read_bag(job.bag, job.source)
         batch, (parent, child) = job.bag.readings(log), log.report.odometry_frames
         copy_from: Path | None = job.source
     else:
@@ -452,7 +453,7 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
 
 def _read_whole(job: _Job) -> ReadingBatch:
     if is_bag(job.source):
-        return job.bag.readings(job.bag.read(job.source))
+        return job.bag.readings(read_bag(job.bag, job.source))
     return read_readings_csv(job.source)
 
 
@@ -473,11 +474,14 @@ def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodCon
     from rich.progress import TaskID
 
     from sonarcarve.fleet import map_logs
-    from sonarcarve.runner import RunnerSpec, open_runner
+    from sonarcarve.io.errors import OutputError
+    from sonarcarve.runner import RunnerError, RunnerSpec, open_runner
 
     count = workers if workers is not None else max(1, min(len(inputs), os.cpu_count() or 1))
-    spec = RunnerSpec.from_env(count, scheduler)
-    with open_runner(spec) as runner, progress(label_width=8, elapsed=True) as bar:
+    with reworded(RunnerError, RUNNER_FLAGS):
+        spec = RunnerSpec.from_env(count, scheduler)
+        runner = open_runner(spec)
+    with runner, progress(label_width=8, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}
 
         def on_progress(stage: str, done: int, total: int) -> None:
@@ -485,9 +489,10 @@ def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodCon
                 tasks[stage] = bar.add_task(stage, total=total)
             bar.update(tasks[stage], completed=done, total=total)
 
-        rows = map_logs(inputs, out_dir, method, config, runner=runner,
-                        reading_filter=reading_filter, map_filter=map_filter, bag=bag,
-                        on_progress=on_progress)
+        with reworded(OutputError, RUNNER_FLAGS):  # out_dir that cannot be made
+            rows = map_logs(inputs, out_dir, method, config, runner=runner,
+                            reading_filter=reading_filter, map_filter=map_filter, bag=bag,
+                            on_progress=on_progress)
     console.print(_fleet_table(method, rows, spec))
     failed = sum(not row.ok for row in rows)
     console.print(f"summary written to {Path(out_dir) / SUMMARY_NAME}", highlight=False)
@@ -534,13 +539,11 @@ def _config(history: int, beam_width_deg: float, tolerance: float, transversal_d
     incidence = DEFAULT_MAX_INCIDENCE
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
-    try:
+    with reworded(ConfigError, _OPTION_OF_FIELD):
         return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
                             range_tolerance=tolerance,
                             min_transversal=math.radians(transversal_deg),
                             max_incidence=incidence)
-    except ConfigError as err:
-        raise ConfigError(option_message(str(err))) from None
 
 
 #: MethodConfig's field -> the option that sets it, for its error messages.
@@ -548,12 +551,6 @@ _OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tol
                     "beam_width": "--beam-width", "min_transversal": "--min-transversal",
                     "max_incidence": "--max-incidence"}
 
-
-def option_message(message: str) -> str:
-    """A :class:`MethodConfig` error with its leading field name replaced by the option."""
-    field, _, rest = message.partition(" ")
-    option = _OPTION_OF_FIELD.get(field)
-    return f"{option} {rest}" if option is not None else message
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,

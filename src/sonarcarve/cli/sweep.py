@@ -9,7 +9,8 @@ from typing import Annotated, Any
 import typer
 from rich.progress import TaskID
 
-from sonarcarve.cli.app import app, console, progress, summary_table
+from sonarcarve.cli.app import app, console, progress, reworded, summary_table
+from sonarcarve.cli.options import RUNNER_FLAGS
 from sonarcarve.lab.sweep import (
     PARAMETERS,
     SweepError,
@@ -19,7 +20,7 @@ from sonarcarve.lab.sweep import (
     parse_values,
     run_sweep,
 )
-from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerSpec, open_runner
+from sonarcarve.runner import DEFAULT_CONNECT_TIMEOUT, RunnerError, RunnerSpec, open_runner
 
 __all__ = ["sweep"]
 
@@ -90,8 +91,10 @@ def sweep(
     else:
         spec = SweepSpec(grid=tuple(grid.items()),
                          **{k: v for k, v in overrides.items() if v is not None})
-    runner_spec = RunnerSpec.from_env(workers, scheduler, connect_timeout)
-    with open_runner(runner_spec) as runner, progress(label_width=10, elapsed=True) as bar:
+    with reworded(RunnerError, RUNNER_FLAGS):
+        runner_spec = RunnerSpec.from_env(workers, scheduler, connect_timeout)
+        runner = open_runner(runner_spec)
+    with runner, progress(label_width=10, elapsed=True) as bar:
         tasks: dict[str, TaskID] = {}
 
         def on_progress(stage: str, done: int, total: int) -> None:

@@ -11,8 +11,8 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, summary_table
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.cli.app import app, console, reworded, summary_table
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.readings_csv import read_readings_csv
@@ -69,9 +69,6 @@ def view(
 
     Example: `sonarcarve view run.csv --method carve --out run.rrd`
     """
-    if every < 1:
-        msg = f"--every must be at least 1 reading, got {every}"
-        raise ViewUsageError(msg)
     target = out if out is not None else readings.with_suffix(".rrd")
     check_output_file(target, inputs=[readings], label=f"--out {target}")
     if target.suffix.lower() != ".rrd":
@@ -81,7 +78,8 @@ def view(
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
     batch = read_readings_csv(readings)
-    global_map = write_rerun(target, batch, sonar, walls=walls, every=every)
+    with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
+        global_map = write_rerun(target, batch, sonar, walls=walls, every=every)
     viewer = find_viewer() if open_ else None
     rows = [("readings", f"{len(batch):,}"), ("points in global map", f"{len(global_map):,}"),
             ("true walls", f"{len(walls):,}" if walls is not None else "none"),

@@ -4,18 +4,24 @@ One check for :class:`~sonarcarve.grids.OccupancyGrid`, :class:`~sonarcarve.grid
 and :class:`~sonarcarve.grids.CarvedGrid` (and one of the margin of a grid made ``around`` an
 extent, :func:`bounds_around`), so their errors read alike and a limit cannot be forgotten by one
 of them. The log-odds grids also share their probability check (:func:`check_probability`) and
-:func:`logit` from here.
+:func:`logit` from here; and the extent a log's readings cover (:func:`readings_extent`), which a
+grid over the whole log is made around.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.typing import FloatArray
+
+if TYPE_CHECKING:
+    from sonarcarve.readings import ReadingBatch
 
 __all__ = [
     "CellGrid",
@@ -25,6 +31,7 @@ __all__ = [
     "check_real",
     "grid_cells",
     "logit",
+    "readings_extent",
 ]
 
 Bounds = tuple[float, float, float, float]
@@ -152,6 +159,40 @@ def check_real(label: str, name: str, value: object, ok: Callable[[float], bool]
         msg = f"{label}: {name} must be {rule}, got {value!r}"
         raise GridError(msg)
     return float(value)
+
+
+def readings_extent(batch: ReadingBatch, margin: float = 0.0) -> Bounds:
+    """``(xmin, ymin, xmax, ymax)`` of the sensors and their arcs, grown by ``margin`` metres:
+    the bounds of a grid that holds every reading of ``batch``.
+
+    An arc counts by both beam edges and its axis at the range (a no-echo reading's, range
+    ``inf``, at its ``max_range``: the free space it clears); a reading without a beam width
+    (NaN) has :data:`~sonarcarve.constants.DEFAULT_BEAM_WIDTH`.
+
+    Raises
+    ------
+    GridError
+        No readings, or a negative or non-finite ``margin`` (:func:`bounds_around`).
+
+    Examples
+    --------
+    >>> from sonarcarve.readings import Reading, ReadingBatch
+    >>> batch = ReadingBatch.from_readings([Reading(0.0, 0, 1.0, 2.0, 0.0, 3.0)])  # 22.5°
+    >>> tuple(round(v, 2) for v in readings_extent(batch, margin=0.5))
+    (0.5, 0.91, 4.5, 3.09)
+    """
+    if not len(batch):
+        msg = "readings extent: no readings"
+        raise GridError(msg)
+    width = batch.beam_widths(DEFAULT_BEAM_WIDTH)
+    reach = np.where(np.isfinite(batch.range), batch.range, batch.max_range)
+    xs, ys = [batch.x], [batch.y]
+    for k in (-0.5, 0.0, 0.5):
+        xs.append(batch.x + reach * np.cos(batch.theta + k * width))
+        ys.append(batch.y + reach * np.sin(batch.theta + k * width))
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    extent = float(x.min()), float(y.min()), float(x.max()), float(y.max())
+    return bounds_around("readings extent", extent, margin)
 
 
 class CellGrid:

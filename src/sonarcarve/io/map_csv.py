@@ -22,6 +22,7 @@ from typing import IO
 
 import numpy as np
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
 from sonarcarve.maps import GlobalMap, PointSource
@@ -58,6 +59,11 @@ def write_map_csv(points: GlobalMap, path: str | Path, *, block_rows: int = BLOC
     confidence as an empty cell. The text is built row by row by a compiled kernel
     (:func:`~sonarcarve.io.float_text.map_rows_text`), ``block_rows`` rows at a time, so memory
     stays bounded whatever the map's size.
+
+    Raises
+    ------
+    ConfigError
+        ``block_rows`` < 1.
     """
     _check_block_rows(block_rows)
     _check_sources(points.source)
@@ -144,7 +150,7 @@ class MapCsvSink:
 def _check_block_rows(block_rows: int) -> None:
     if block_rows < 1:
         msg = f"block_rows must be at least 1, got {block_rows}"
-        raise ValueError(msg)
+        raise ConfigError(msg)
 
 
 def _rows_text(points: GlobalMap, rows: slice) -> str:

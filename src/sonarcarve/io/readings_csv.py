@@ -132,12 +132,12 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
     InputError
         As :func:`read_readings_csv`.
     ConfigError
-        A ``max_range`` that is not a finite number > 0.
+        A ``max_range`` that is not a finite number > 0, or ``block_size`` < 1.
     """
     path = Path(path)
     if block_size < 1:
         msg = f"block_size must be at least 1 byte, got {block_size}"
-        raise ValueError(msg)
+        raise ConfigError(msg)
     if max_range is not None and not (isinstance(max_range, int | float)
                                       and 0.0 < max_range <= MAX_READING_RANGE):
         msg = (f"max_range must be a finite number > 0 metres, at most "

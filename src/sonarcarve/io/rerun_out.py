@@ -29,6 +29,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.errors import ConfigError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
@@ -107,7 +108,7 @@ def write_rerun(
 
     Raises
     ------
-    ValueError
+    ConfigError
         ``every`` < 1.
     ReadingsError
         A reading the method refuses (the file is not written).
@@ -118,7 +119,7 @@ def write_rerun(
     """
     if every < 1:
         msg = f"every must be at least 1 reading, got {every}"
-        raise ValueError(msg)
+        raise ConfigError(msg)
     rr = require("rerun", "viz", "Rerun recordings")
     batch.validate()
     target = Path(path)

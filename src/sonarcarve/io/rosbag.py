@@ -444,7 +444,7 @@ def _choose_topics(bag: Path, types: dict[str, str], range_topics: Sequence[str]
         return ranges, odom_topic
     odoms = sorted(t for t, m in types.items() if m == ODOMETRY_TYPE)
     if len(odoms) > 1:
-        msg = f"{bag}: several odometry topics ({', '.join(odoms)}); choose one with --odom-topic"
+        msg = f"{bag}: several odometry topics ({', '.join(odoms)}); choose one with odom_topic"
         raise RosbagError(msg)
     return ranges, odoms[0] if odoms else None
 

@@ -78,18 +78,21 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
     return found
 
 
-def beam_width_mistake(degrees: float) -> str | None:
-    """A warning if a beam width given in degrees (``--beam-width``) looks like radians.
+def beam_width_mistake(degrees: float, name: str = "beam width") -> str | None:
+    """A warning if a beam width given in degrees looks like radians; ``name`` names the value
+    in it (the command line passes its option, ``--beam-width``).
 
     Examples
     --------
     >>> beam_width_mistake(0.39)
+    'beam width 0.39 is in degrees: did you mean 22.3 (0.39 radians)?'
+    >>> beam_width_mistake(0.39, "--beam-width")
     '--beam-width 0.39 is in degrees: did you mean 22.3 (0.39 radians)?'
     >>> beam_width_mistake(22.5) is None
     True
     """
     if 0.0 < degrees < SUSPECT_BEAM_WIDTH_DEG:
-        return (f"--beam-width {degrees:g} is in degrees: did you mean "
+        return (f"{name} {degrees:g} is in degrees: did you mean "
                 f"{math.degrees(degrees):.3g} ({degrees:g} radians)?")
     return None
 

@@ -54,15 +54,14 @@ import numpy.typing as npt
 
 from sonarcarve.grids import (
     OCCUPIED,
-    CarvedGrid,
-    OccupancyGrid,
-    RangeSensorLayer,
+    Grid,
     RangeSensorLayerParams,
+    make_grid,
     trinary,
 )
-from sonarcarve.lab.drawing import segments_collection
 from sonarcarve.methods import make_method
 from sonarcarve.methods.base import SonarMethod
+from sonarcarve.plotting import plot_walls
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.motion import follow_waypoints
@@ -121,25 +120,18 @@ def grid_tolerance(resolution: float) -> float:
     return 1.5 * resolution + _ROUNDING
 
 
-Grid = CarvedGrid | RangeSensorLayer | OccupancyGrid
 Bounds = tuple[float, float, float, float]
 
 
-def _carved(h: float, bounds: Bounds) -> Grid:
-    return CarvedGrid(h, bounds)
-
-
-def _layer(h: float, bounds: Bounds) -> Grid:
-    return RangeSensorLayer(h, bounds)
-
-
-def _elfes(h: float, bounds: Bounds) -> Grid:
-    return OccupancyGrid(h, bounds)
+def _grid(name: str) -> Callable[[float, Bounds], Grid]:
+    """The factory ``(resolution, bounds) -> grid`` of :func:`~sonarcarve.grids.make_grid`'s
+    grid ``name``, with its defaults."""
+    return lambda h, bounds: make_grid(name, h, bounds)
 
 
 def _layer_clearing(h: float, bounds: Bounds) -> Grid:
     # +Inf as a max-range reading that clears (the Scout2's max range), ROS's opt-in.
-    return RangeSensorLayer(h, bounds, RangeSensorLayerParams(
+    return make_grid("range-sensor-layer", h, bounds, RangeSensorLayerParams(
         max_range=load_robot("scout2").max_range, inf_is_max_reading=True,
         clear_on_max_reading=True))
 
@@ -147,9 +139,9 @@ def _layer_clearing(h: float, bounds: Bounds) -> Grid:
 #: The grids measured: label -> factory ``(resolution, bounds) -> grid`` (defaults each). A
 #: new grid joins every table and figure by an entry here.
 GRID_KINDS: dict[str, Callable[[float, Bounds], Grid]] = {
-    "carved grid": _carved,
-    "range sensor layer": _layer,
-    "elfes grid": _elfes,
+    "carved grid": _grid("carved"),
+    "range sensor layer": _grid("range-sensor-layer"),
+    "elfes grid": _grid("elfes"),
 }
 
 #: Grids that only differ from :data:`GRID_KINDS` on no-echo readings, measured with them:
@@ -587,9 +579,6 @@ def plot_changing_scene(run: SceneRun, labels: Sequence[str], change: int,
     k_before = int(np.clip(np.searchsorted(run.times, t_before, side="right") - 1, 0,
                            run.times.shape[0] - 1))
     k_after = int(np.clip(np.searchsorted(run.times, t_after), 0, run.times.shape[0] - 1))
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     x_lo, y_lo, x_hi, y_hi = run.sim.world.bounds
@@ -603,7 +592,7 @@ def plot_changing_scene(run: SceneRun, labels: Sequence[str], change: int,
         for i, k in enumerate((k_before, k_after)):
             ax = fig.add_subplot(grid[i, j])
             tau = float(run.times[k])
-            segments_collection(ax, run.sim.world.segments, color="0.45", linewidth=1.0)
+            plot_walls(run.sim.world.segments, ax, colors="0.45", linewidths=1.0)
             ax.add_collection(_lines(c.place, "#d62728", "--"))
             now, _ = scene.segments_at(tau)
             if now.shape[0]:

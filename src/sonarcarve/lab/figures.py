@@ -15,13 +15,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.lab.drawing import (
-    METHOD_COLORS,
-    new_figure,
-    scatter_sources,
-    segments_collection,
-)
+from sonarcarve.lab.drawing import METHOD_COLORS
 from sonarcarve.maps import PointSource
+from sonarcarve.plotting import new_figure, plot_sources, plot_walls
 from sonarcarve.typing import JsonDict
 
 if TYPE_CHECKING:
@@ -133,7 +129,7 @@ def plot_fig12(f12: JsonDict, ax: Axes | None = None) -> Figure:
 
 
 def _walls(ax: Axes, segments: npt.ArrayLike) -> None:
-    segments_collection(ax, segments, color="0.75", linewidth=2.0)
+    plot_walls(segments, ax, colors="0.75", linewidths=2.0)
 
 
 def _robot(ax: Axes, xy: Sequence[float], radius: float = 0.205) -> None:
@@ -180,7 +176,7 @@ def plot_fig04(tj: JsonDict, artifacts: JsonDict | None = None) -> Figure:
             snap = {**snap, "xy": np.asarray(snap["xy"])[keep],
                     "source": np.asarray(snap["source"])[keep]}
         _walls(ax, snap["world"])
-        scatter_sources(ax, snap["xy"], snap["source"], 6.0)
+        plot_sources(snap["xy"], snap["source"], ax, 6.0)
         _robot(ax, snap["robot"])
         ax.set_aspect("equal")
         ax.set_xlim(-4.0, 4.0)
@@ -233,7 +229,7 @@ def plot_openings(op: JsonDict, artifacts: JsonDict | None = None) -> Figure:
             _walls(ax, snap["world"])
             gap = np.asarray(snap["opening"])
             ax.plot(gap[:, 0], gap[:, 1], color="orange", lw=1.0, ls="--", zorder=2)
-            scatter_sources(ax, snap["xy"], snap["source"], 5.0)
+            plot_sources(snap["xy"], snap["source"], ax, 5.0)
             _robot(ax, snap["robot"])
             centre = gap.mean(axis=0)
             ax.set_xlim(centre[0] - 2.2, centre[0] + 2.2)

@@ -19,6 +19,7 @@ def test_the_gif_has_frames_and_is_small(doorway: DemoResult) -> None:
     with Image.open(io.BytesIO(data)) as gif:
         assert gif.format == "GIF"
         assert gif.n_frames == 7  # the start and six steps
+        assert gif.info.get("loop") == 0  # loops forever, as a README's GIF should
         first = gif.convert("RGB").tobytes()
         gif.seek(gif.n_frames - 1)
         assert gif.convert("RGB").tobytes() != first  # the arcs moved

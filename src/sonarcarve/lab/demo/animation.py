@@ -137,9 +137,6 @@ def _panel(ax: Axes, result: DemoResult, door: DoorGauge, centre: FloatArray) ->
 
 def animation_gif(result: DemoResult, frames: int = FRAMES) -> bytes:
     """The approach animation of ``result`` as GIF bytes (3 panels, 840 x 330 pixels)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
     from matplotlib.patches import Circle
@@ -229,7 +226,8 @@ def _frames(fig: Figure, draw: Callable[[int], object], n: int,
 
 
 def _gif(frames: list[Image.Image]) -> bytes:
-    """``frames`` as an animated GIF, :data:`_FPS` frames a second, played once."""
+    """``frames`` as an animated GIF, :data:`_FPS` frames a second, looping
+    forever (``loop=0``: a README shows it over and over)."""
     buffer = io.BytesIO()
     frames[0].save(buffer, format="GIF", save_all=True, append_images=frames[1:],
                    duration=round(1000 / _FPS), loop=0)

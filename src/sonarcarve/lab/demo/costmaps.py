@@ -12,12 +12,11 @@ seen wall covered), and times it.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from sonarcarve.grids import CarvedGrid, RangeSensorLayer, trinary
+from sonarcarve.grids import CarvedGrid, Grid, make_grid, trinary
 from sonarcarve.lab.demo.results import GridSummary
 from sonarcarve.lab.demo.scenario import GRID_MARGIN, GRID_RESOLUTION, ProgressCallback
 from sonarcarve.lab.grid_measures import grid_measures
@@ -28,7 +27,6 @@ from sonarcarve.sim.sonar import EchoKind
 __all__ = ["GRID_KINDS", "GridKind", "grid_bounds", "run_grids"]
 
 Bounds = tuple[float, float, float, float]
-Grid = CarvedGrid | RangeSensorLayer
 
 #: Readings of the (untimed) run that loads or compiles a grid's kernels before its timed run,
 #: beyond a carved grid's history capacity.
@@ -40,17 +38,21 @@ _BATCHES = 40
 
 @dataclass(frozen=True)
 class GridKind:
-    """One grid of the demo: its ``sonarcarve grid --model`` name, label and constructor."""
+    """One grid of the demo: its :func:`~sonarcarve.grids.make_grid` name (as ``sonarcarve
+    grid --model`` names it) and its label."""
 
     kind: str
     label: str
-    make: Callable[[float, Bounds], Grid]
+
+    def make(self, resolution: float, bounds: Bounds) -> Grid:
+        """A new grid of this kind, with its defaults."""
+        return make_grid(self.kind, resolution, bounds)
 
 
 #: The demo's grids, in table order: sonarcarve's, then the baseline ROS users run.
 GRID_KINDS = (
-    GridKind("carved", "carved grid", CarvedGrid),
-    GridKind("range-sensor-layer", "ROS RangeSensorLayer (defaults)", RangeSensorLayer),
+    GridKind("carved", "carved grid"),
+    GridKind("range-sensor-layer", "ROS RangeSensorLayer (defaults)"),
 )
 
 

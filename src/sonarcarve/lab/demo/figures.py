@@ -32,9 +32,9 @@ from sonarcarve.lab.demo.scenario import (
     METHOD_LABELS,
     PAPER_METHODS,
 )
-from sonarcarve.lab.drawing import new_figure, scatter_sources
 from sonarcarve.lab.instrument import ArcTable
 from sonarcarve.maps import PointSource
+from sonarcarve.plotting import new_figure, plot_sources
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.world import World
 
@@ -134,7 +134,7 @@ def _map_panels(result: DemoResult, limits: tuple[float, float, float, float], s
         gmap = result.global_maps[row.method]
         _walls(ax, result.world)
         ax.plot(traj.x, traj.y, color="0.25", lw=0.7, ls=":", zorder=2, label="robot path")
-        scatter_sources(ax, gmap.xy, gmap.source, size)
+        plot_sources(gmap.xy, gmap.source, ax, size)
         if box is not None:
             ax.add_patch(Rectangle((box[0], box[2]), box[1] - box[0], box[3] - box[2],
                                    fill=False, ls="--", lw=1.2, color="k", zorder=4))
@@ -252,7 +252,7 @@ def _closeup_panel(ax: Axes, result: DemoResult, view: LocalView, door: DoorAppr
     ax.plot(traj.x[ahead], traj.y[ahead], color="k", ls=":", lw=1.2, zorder=4,
             label="path ahead")
     _local_arcs(ax, sim, local)
-    scatter_sources(ax, local.xy, local.source, 20.0)
+    plot_sources(local.xy, local.source, ax, 20.0)
     if door is not None:
         ax.plot(door.jambs[:, 0], door.jambs[:, 1], color="orange", lw=3.0, ls="--",
                 zorder=2, label="the door")

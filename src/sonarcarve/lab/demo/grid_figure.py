@@ -19,7 +19,7 @@ import numpy as np
 from sonarcarve.grids import FREE, OCCUPIED
 from sonarcarve.lab.demo.figures import map_limits, zoom_window
 from sonarcarve.lab.demo.results import DemoResult, GridSummary
-from sonarcarve.lab.drawing import new_figure
+from sonarcarve.plotting import new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

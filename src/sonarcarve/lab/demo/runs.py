@@ -21,6 +21,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import removal_summary
 from sonarcarve.lab.demo.costmaps import run_grids
@@ -67,7 +68,7 @@ def run_demo(
     world: str | World = "office",
     seed: int = 0,
     *,
-    history_size: int = 250,
+    history_size: int = DEFAULT_HISTORY_SIZE,
     robot: str = "scout2",
     max_length: float | None = None,
     methods: tuple[str, ...] = DEMO_METHODS,
@@ -106,8 +107,10 @@ def run_demo(
     ------
     WorldError
         Unknown or unreadable world, or a world without a tour.
+    ConfigError
+        Bad ``history_size`` (:func:`~sonarcarve.lab.demo.scenario.demo_config`).
     DemoError
-        Bad ``history_size``, ``max_length``, ``grid_resolution`` or method name.
+        Bad ``max_length``, ``grid_resolution`` or method name.
     """
     config = demo_config(history_size, methods, max_length, grid_resolution)
     the_world = load_demo_world(world)

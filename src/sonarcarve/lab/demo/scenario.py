@@ -11,7 +11,7 @@ import math
 from collections.abc import Callable
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.history import MAX_HISTORY_SIZE
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.lab.analyses import METHOD_LABELS as EXPERIMENT_LABELS
 from sonarcarve.lab.drawing import METHOD_COLORS as EXPERIMENT_COLORS
 from sonarcarve.methods import MethodConfig
@@ -86,21 +86,22 @@ def load_demo_world(world: str | World) -> World:
     return the_world
 
 
-def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS,
-                max_length: float | None = None,
+def demo_config(history_size: int = DEFAULT_HISTORY_SIZE,
+                methods: tuple[str, ...] = DEMO_METHODS, max_length: float | None = None,
                 grid_resolution: float | None = GRID_RESOLUTION) -> MethodConfig:
-    """The methods' parameters of a demo, after checking the options.
+    """The methods' parameters of a demo, after checking the request.
 
     Raises
     ------
+    ConfigError
+        ``history_size`` that :class:`~sonarcarve.methods.MethodConfig` refuses (a whole
+        number of arcs in [1, :data:`~sonarcarve.history.MAX_HISTORY_SIZE`]); its message names
+        the parameter, which the command line rewords as ``--history``.
     DemoError
-        ``history_size`` outside [1, ``MAX_HISTORY_SIZE``], an unknown method, or a
-        ``max_length`` or ``grid_resolution`` that is not a finite number > 0.
+        An unknown method, or a ``max_length`` or ``grid_resolution`` that is not a finite
+        number > 0.
     """
-    if not 1 <= history_size <= MAX_HISTORY_SIZE:  # named as the option, as process does
-        msg = (f"--history must be a whole number of arcs in [1, {MAX_HISTORY_SIZE:,}], "
-               f"got {history_size}")
-        raise DemoError(msg)
+    config = MethodConfig(history_size=history_size)
     unknown = [m for m in methods if m not in DEMO_METHODS]
     if unknown or not methods:
         msg = f"unknown demo method(s) {unknown}; choose from {', '.join(DEMO_METHODS)}"
@@ -112,4 +113,4 @@ def demo_config(history_size: int = 250, methods: tuple[str, ...] = DEMO_METHODS
                                             and grid_resolution > 0.0):
         msg = f"grid_resolution must be a positive number of metres, got {grid_resolution}"
         raise DemoError(msg)
-    return MethodConfig(history_size=history_size)
+    return config

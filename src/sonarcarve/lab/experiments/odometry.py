@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from sonarcarve.lab import metrics
-from sonarcarve.lab.drawing import new_figure, save_pngs, segments_collection
+from sonarcarve.lab.drawing import save_pngs
 from sonarcarve.lab.experiments.appendix_base import (
     COLORS,
     LABELS,
@@ -33,6 +33,7 @@ from sonarcarve.lab.formatting import (
     md_image,
 )
 from sonarcarve.lab.plan import Settings
+from sonarcarve.plotting import new_figure, plot_walls
 from sonarcarve.typing import FloatArray, JsonDict
 
 if TYPE_CHECKING:
@@ -215,7 +216,7 @@ def _map_panels(fig: Figure, grid: Any, res: OdometryResult, art: JsonDict) -> N
     for row, label in enumerate(("carving", "combined")):
         for col, name in enumerate(("true_poses", "odometry")):
             ax = fig.add_subplot(grid[row, col])
-            segments_collection(ax, world)
+            plot_walls(world, ax, linewidths=0.8)
             xy = np.asarray(art["maps"][label][name])
             ax.scatter(xy[:, 0], xy[:, 1], s=0.6, c=COLORS[label], linewidths=0, zorder=3)
             path = np.asarray(art["true_path" if name == "true_poses" else "odometry_path"])

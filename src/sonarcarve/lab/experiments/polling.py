@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.lab import metrics
-from sonarcarve.lab.drawing import new_figure, save_pngs, segments_collection
+from sonarcarve.lab.drawing import save_pngs
 from sonarcarve.lab.experiments.appendix_base import (
     AppendixSettings,
     mean_or_none,
@@ -38,6 +38,7 @@ from sonarcarve.lab.formatting import (
 )
 from sonarcarve.lab.plan import Settings
 from sonarcarve.maps import GlobalMap
+from sonarcarve.plotting import new_figure, plot_walls
 from sonarcarve.polling import (
     PolledLog,
     PolledReadings,
@@ -370,7 +371,7 @@ def plot_polling(artifacts: JsonDict | None) -> Figure | None:
         far = err > 0.3
         for row in range(2):
             ax = axes[row, col]
-            segments_collection(ax, world)
+            plot_walls(world, ax, linewidths=0.8)
             size = 0.8 if row == 0 else 3.0
             ax.scatter(xy[~far, 0], xy[~far, 1], s=size, c="#d62728", linewidths=0, zorder=3,
                        label="within 0.3 m of a wall")

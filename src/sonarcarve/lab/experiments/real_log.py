@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 
 from sonarcarve.filters import MapFilter, filter_map
 from sonarcarve.lab import metrics
-from sonarcarve.lab.drawing import new_figure, save_pngs, scatter_sources
+from sonarcarve.lab.drawing import save_pngs
 from sonarcarve.lab.experiments.appendix_base import (
     COLORS,
     LABELS,
@@ -35,6 +35,7 @@ from sonarcarve.lab.plan import Settings
 from sonarcarve.maps import GlobalMap, PointSource
 from sonarcarve.methods import MethodConfig
 from sonarcarve.methods.atm import atm_error_bound
+from sonarcarve.plotting import new_figure, plot_sources
 from sonarcarve.typing import FloatArray, IntArray, JsonDict
 
 if TYPE_CHECKING:
@@ -340,7 +341,7 @@ def plot_real_log(res: RealLogResult, artifacts: JsonDict | None) -> Figure | No
             ax.plot(path[:, 0], path[:, 1], c="0.5", lw=0.6, zorder=2)
             data = art["maps"][label]
             if which == "xy":
-                scatter_sources(ax, data["xy"], data["source"], 3.0)
+                plot_sources(data["xy"], data["source"], ax, 3.0)
                 m = res.methods[label]
                 title = f"{label}: {m['points']} points ({m['removed_percent']:.0f}% removed)"
             else:
