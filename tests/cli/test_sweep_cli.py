@@ -42,6 +42,14 @@ def test_a_bad_length_names_the_option(tmp_path: Path,
     assert not (tmp_path / "sw").exists()
 
 
+def test_a_bad_sweep_point_leaves_no_folder(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sweep", "--param", "history=0,250", "--out", str(tmp_path / "sw")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "sweep point {'history': 0}" in err
+    assert "history_size" in err
+    assert not (tmp_path / "sw").exists()  # refused before the folder was made
+
 
 def test_an_angle_out_of_range_is_named_in_degrees(tmp_path: Path,
                                                    capsys: pytest.CaptureFixture[str]) -> None:

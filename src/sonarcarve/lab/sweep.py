@@ -441,8 +441,8 @@ def run_sweep(
     figure : bool
         Draw ``sweep.png`` (needs matplotlib).
     """
+    runs = plan_runs(spec)  # first: a bad point is refused before any folder is made
     folder = make_output_dir(out_dir, label=f"--out {out_dir}")
-    runs = plan_runs(spec)
     finished = read_finished(folder)
     todo = [run for run in runs if run.run_id not in finished]
     scenarios = list(dict.fromkeys(run.job.scenario for run in todo))
