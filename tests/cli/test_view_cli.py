@@ -130,3 +130,16 @@ def test_the_method_help_lists_evidence(capsys: pytest.CaptureFixture[str]) -> N
     assert main(["view", "--help"]) == 0
     help_text = " ".join(capsys.readouterr().out.replace("│", " ").split())
     assert "centerline | carve | atm | combined | evidence" in help_text
+
+
+@pytest.mark.usefixtures("headless")
+def test_a_header_only_log_gives_an_empty_recording_and_one_warning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    empty = tmp_path / "empty.csv"
+    empty.write_text("t,sensor,x,y,theta,range\n")
+    assert main(["view", str(empty), "--method", "carve"]) == 0
+    err = capsys.readouterr().err
+    assert err == (f"sonarcarve: warning: {empty} has no readings, only a header: the "
+                   "recording is empty\n")
+    assert empty.with_suffix(".rrd").is_file()

@@ -91,6 +91,9 @@ def view(
     if viewer is None:
         reason = "" if open_ else " (--no-open)"
         console.print(f"no viewer opened{reason}; open the recording with `rerun {target}`")
+    if not len(batch):  # a valid file (a header only), so not an error: say so, as process does
+        print(f"sonarcarve: warning: {readings} has no readings, only a header: the recording "
+              "is empty", file=sys.stderr)
 
 
 def _walls(readings: Path, world: str | None) -> FloatArray | None:
