@@ -18,13 +18,21 @@ grids), what a planner reading the whole map pays on top. Timed in CPU time of t
 wall-clock ratios of the once-per-log runs swung 0.7-1.9 at a load of 2), best of
 ``--repeats`` runs after a warm-up, the two grids taking turns, one process: the ratio is of
 numbers measured side by side. The load average of the machine is printed before and after.
+
+``--split`` then says where the carved grid's CPU goes at the first ``--every`` that is not 0:
+the compiled kernels' share (their own time under ``cProfile``, which times a kernel call as one
+call, against the CPU time of the same run unprofiled) and the rest, Python and numpy between
+the kernels (a batch's arcs, intervals, estimates and bookkeeping).
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
 import math
 import os
+import pstats
+import sys
 import time
 from collections.abc import Callable, Sequence
 
@@ -102,6 +110,44 @@ def _table(batch: ReadingBatch, bounds: Bounds, resolutions: Sequence[float],
                   f"{carved / layer:.2f} |", flush=True)
 
 
+def _kernel_codes() -> set[tuple[str, int, str]]:
+    """``(file, first line, name)`` of every numba kernel of the loaded ``sonarcarve`` modules,
+    as :mod:`pstats` keys its entries."""
+    from numba.core.registry import CPUDispatcher
+
+    codes = set()
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("sonarcarve"):
+            continue
+        for value in vars(module).values():
+            if isinstance(value, CPUDispatcher):
+                code = value.py_func.__code__
+                codes.add((code.co_filename, code.co_firstlineno, code.co_name))
+    return codes
+
+
+def _split(batch: ReadingBatch, bounds: Bounds, resolutions: Sequence[float],
+           schedules: Sequence[int]) -> None:
+    every = next((k for k in schedules if k > 0), 5)
+    print(f"\ncarved grid, read every {every} readings: where its CPU goes\n")
+    print("| resolution (m) | CPU per reading (µs) | compiled kernels (%) | the rest (%) |")
+    print("|---:|---:|---:|---:|")
+    for h in resolutions:
+        def make(h: float = h) -> Grid:
+            return CarvedGrid(h, bounds)
+
+        _run(make, batch[:300], every, False)  # compiled and warm
+        plain = _run(make, batch, every, False) * len(batch) / 1e6
+        profiler = cProfile.Profile()
+        profiler.runcall(_run, make, batch, every, False)
+        entries = pstats.Stats(profiler).stats  # type: ignore[attr-defined]  # untyped
+        kernels = _kernel_codes()
+        inside = sum(entry[2] for key, entry in entries.items() if key in kernels)
+        share = min(1.0, inside / plain)
+        print(f"| {h:.2f} | {plain / len(batch) * 1e6:.1f} | {100 * share:.0f} | "
+              f"{100 * (1 - share):.0f} |", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Simulate the log, time both grids at every schedule and print the table."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -118,6 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--limit", type=int, default=None, help="only the first N readings")
     parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
                         help="the simulator's echo model (specular: its default)")
+    parser.add_argument("--split", action="store_true",
+                        help="then the carved grid's CPU split: compiled kernels and the rest")
     args = parser.parse_args(argv)
     batch, bounds = _readings(args.world, args.seed, args.no_echo, args.limit, args.physics)
     read = ("refresh (carved grid) / nothing (layer), then trinary of every cell"
@@ -128,6 +176,8 @@ def main(argv: list[str] | None = None) -> int:
           f"CPU time, best of {args.repeats}, the grids taking turns, one process; "
           f"load average {os.getloadavg()[0]:.1f} (2 cores)\n")
     _table(batch, bounds, args.resolutions, args.every, args.repeats, args.trinary)
+    if args.split:
+        _split(batch, bounds, args.resolutions, args.every)
     print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
     return 0
 
