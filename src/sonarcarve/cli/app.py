@@ -269,8 +269,9 @@ def progress(*, label_width: int = 0, elapsed: bool = False) -> Progress:
 def flag_message(message: str, flags: Mapping[str, str]) -> str:
     """A library error's ``message`` in the command line's words: every parameter name of
     ``flags`` (parameter -> flag) that it mentions as a word of its own (not inside
-    ```code```) replaced by its flag, and a leading ``"label: "`` dropped when a flag follows
-    it (the command has one thing of that kind).
+    ```code```, and not a folder or file name in a path: ``/data/out_dir/x.csv`` stays)
+    replaced by its flag, and a leading ``"label: "`` dropped when a flag follows it (the
+    command has one thing of that kind).
 
     Examples
     --------
@@ -282,10 +283,14 @@ def flag_message(message: str, flags: Mapping[str, str]) -> str:
     >>> flag_message("start one with `dask scheduler`, or give no scheduler",
     ...              {"scheduler": "--scheduler"})
     'start one with `dask scheduler`, or give no --scheduler'
+    >>> flag_message("out_dir /data/out_dir: cannot write /data/out_dir/a.csv",
+    ...              {"out_dir": "--out-dir"})
+    '--out-dir /data/out_dir: cannot write /data/out_dir/a.csv'
     """
     def reword(text: str) -> str:
         for name, flag in flags.items():
-            text = re.sub(rf"(?<![\w`-]){re.escape(name)}(?![\w`-])", flag, text)
+            # Not next to a word character, a backquote, a hyphen or a path separator.
+            text = re.sub(rf"(?<![\w`/\\-]){re.escape(name)}(?![\w`/\\-])", flag, text)
         return text
 
     _, sep, rest = message.partition(": ")
