@@ -5,6 +5,7 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
+- :func:`warn`: the one-line warnings of a command that still succeeds.
 - :func:`flag_message`, :func:`reworded`: a library error, which names parameters, reworded to
   name the flags that set them.
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import importlib
 import re
+import sys
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -50,6 +52,7 @@ __all__ = [
     "progress",
     "reworded",
     "summary_table",
+    "warn",
 ]
 
 #: Command name -> (module that registers it, the first paragraph of its help). Filled by
@@ -308,6 +311,15 @@ def reworded(errors: type[SonarcarveError] | tuple[type[SonarcarveError], ...],
         yield
     except errors as err:
         raise type(err)(flag_message(str(err), flags)) from None
+
+
+def warn(lines: Iterable[str | None]) -> None:
+    """Each line (None: skipped) as ``sonarcarve: warning: ...`` on stderr: a likely mistake
+    that does not stop the command (not through rich, which would wrap a long line or read
+    brackets as markup)."""
+    for line in lines:
+        if line is not None:
+            print(f"sonarcarve: warning: {line}", file=sys.stderr)
 
 
 def _show_version(value: bool) -> None:

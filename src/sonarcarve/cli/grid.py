@@ -10,14 +10,13 @@ and Elfes grids take as free space; the range-sensor-layer drops them, as ROS's 
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
 
-from sonarcarve.cli.app import app, console, flag_message, summary_table
+from sonarcarve.cli.app import app, console, flag_message, summary_table, warn
 from sonarcarve.cli.options import (
     FrameOpt,
     NoEchoOpt,
@@ -216,8 +215,7 @@ def grid(
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
     rows, cols = built.shape
-    for line in likely_mistakes(batch):  # after the writing: a failed run prints one line only
-        print(f"sonarcarve: warning: {line}", file=sys.stderr)
+    warn(likely_mistakes(batch))  # after the writing: a failed run prints one line only
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, NamedTuple
 
 import typer
 
-from sonarcarve.cli.app import app, console, err_console, progress, reworded, summary_table
+from sonarcarve.cli.app import app, console, err_console, progress, reworded, summary_table, warn
 from sonarcarve.cli.options import (
     RUNNER_FLAGS,
     FrameOpt,
@@ -287,7 +286,7 @@ def process(
         code = _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
                       workers, scheduler)
         if code == 0:
-            _warn([beam_warning])
+            warn([beam_warning])
         return code
     if out is None:
         msg = "missing option '--out' (or --out-dir FOLDER for one map per log)"
@@ -310,17 +309,9 @@ def process(
     job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate, cell)
     output.check(job)  # before the (possibly long) run: a bad --out wastes no time
     rows = output.write(job)
-    _warn([beam_warning, *job.warnings])  # only now: a failed run prints its error line alone
+    warn([beam_warning, *job.warnings])  # only now: a failed run prints its error line alone
     console.print(summary_table(f"sonarcarve process --method {method}", rows))
     return 0
-
-
-def _warn(lines: Iterable[str | None]) -> None:
-    """Each likely mistake as one line ``sonarcarve: warning: ...`` on stderr (not through
-    rich, which would wrap a long line or read brackets as markup)."""
-    for line in lines:
-        if line is not None:
-            print(f"sonarcarve: warning: {line}", file=sys.stderr)
 
 
 def _first_checked(chunks: Iterable[ReadingBatch], found: list[str]) -> Iterator[ReadingBatch]:

@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, reworded, summary_table
+from sonarcarve.cli.app import app, console, reworded, summary_table, warn
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import check_output_file
@@ -92,8 +92,7 @@ def view(
         reason = "" if open_ else " (--no-open)"
         console.print(f"no viewer opened{reason}; open the recording with `rerun {target}`")
     if not len(batch):  # a valid file (a header only), so not an error: say so, as process does
-        print(f"sonarcarve: warning: {readings} has no readings, only a header: the recording "
-              "is empty", file=sys.stderr)
+        warn([f"{readings} has no readings, only a header: the recording is empty"])
 
 
 def _walls(readings: Path, world: str | None) -> FloatArray | None:
