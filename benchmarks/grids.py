@@ -124,12 +124,14 @@ def _fill(make: Factory, h: float, sim: Simulation, seed: int,
 def _measure(grid: OccupancyMap, sim: Simulation) -> GridMeasures:
     direct = sim.truth.kind == EchoKind.DIRECT
     return grid_measures(grid, sim.world.segments, sim.truth.reflection[direct],
-                         sim.world.bounds)
+                         sim.world.bounds, path=np.column_stack((sim.readings.x, sim.readings.y)))
 
 
 def _mean(rows: Sequence[GridMeasures]) -> GridMeasures:
-    means = [float(np.nanmean([r[k] for r in rows])) for k in range(5)]
-    return GridMeasures(means[0], means[1], means[2], means[3], round(means[4]))
+    means = [float(np.nanmean([r[k] for r in rows])) for k in range(len(GridMeasures._fields))]
+    means[GridMeasures._fields.index("occupied_cells")] = round(
+        means[GridMeasures._fields.index("occupied_cells")])
+    return GridMeasures(*means)
 
 
 def _f1(m: GridMeasures) -> float:
@@ -163,11 +165,21 @@ def _carved_with_side_lobes(lobes: float) -> Factory:
     return make
 
 
-def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None) -> list[GridKind]:
+def _carved_with_free_threshold(threshold: float) -> Factory:
+    def make(h: float, b: Bounds) -> OccupancyMap:
+        return CarvedGrid(h, b, params=CarvedGridParams(free_threshold=threshold))
+    return make
+
+
+def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
+           free_threshold: float | None = None) -> list[GridKind]:
     kinds = [GridKind("carved grid", _carved)]
     if side_lobes is not None:  # the opt-in rule as a row of its own
         kinds.append(GridKind(f"carved grid, side_lobes {side_lobes:g}",
                               _carved_with_side_lobes(side_lobes)))
+    if free_threshold is not None:  # another free threshold as a row of its own
+        kinds.append(GridKind(f"carved grid, free below {free_threshold:g}",
+                              _carved_with_free_threshold(free_threshold)))
     return [
         *kinds,
         GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
@@ -182,15 +194,16 @@ def _measures_table(sims: dict[str, list[Simulation]], h: float,
     print(f"\ngrid measures at {h:.2f} m, seeds 0-{len(next(iter(sims.values()))) - 1}, "
           "mean over seeds\n")
     print("| world | grid | precision | recall | phantoms (%) | wall covered (%) | "
-          "occupied cells |")
-    print("|---|---|---:|---:|---:|---:|---:|")
+          "occupied cells | free near the path (%) | seen walls freed (%) |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for world, runs in sims.items():
         for kind in kinds:
             m = _mean([_measure(_fill(kind.make, h, sim, s), sim) for s, sim in enumerate(runs)])
             out[(world, kind.label)] = m
             print(f"| {world} | {kind.label} | {m.precision:.3f} | {m.recall:.3f} | "
                   f"{100 * m.phantoms:.3f} | {100 * m.wall_covered:.1f} | "
-                  f"{m.occupied_cells:,.0f} |")
+                  f"{m.occupied_cells:,.0f} | {100 * m.free_near_path:.1f} | "
+                  f"{100 * m.walls_freed:.2f} |")
     return out
 
 
@@ -317,6 +330,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--side-lobes", type=float, default=None, metavar="HALF_WIDTHS",
                         help="add a row for the carved grid with the opt-in side-lobe rule "
                              "(CarvedGridParams.side_lobes, e.g. 1)")
+    parser.add_argument("--free-threshold", type=float, default=None, metavar="P",
+                        help="add a row for the carved grid calling a cell free below P "
+                             "(CarvedGridParams.free_threshold; 0.196, map_saver's, was the "
+                             "default before 0.35)")
     parser.add_argument("--doors-only", action="store_true",
                         help="only the door table (the layer's phi sweep on the office still "
                              "runs: it picks the layer's best settings)")
@@ -334,7 +351,8 @@ def main(argv: list[str] | None = None) -> int:
                 for s in range(args.seeds)] for w in worlds}
     office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
-    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes) for h in args.resolutions}
+    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes, args.free_threshold)
+                  for h in args.resolutions}
     if not args.doors_only:
         for h in args.resolutions:
             _measures_table(sims, h, kinds_by_h[h])

@@ -187,7 +187,7 @@ def test_trinary_follows_each_grids_rule() -> None:
     elfes.add(reading)
     p = elfes.probabilities()
     assert np.array_equal(trinary(elfes) == 100, p > 0.65)
-    assert np.array_equal(trinary(elfes) == 0, p < 0.196)
+    assert np.array_equal(trinary(elfes) == 0, p < 0.35)  # DEFAULT_FREE_THRESHOLD
 
 
 def _silent(t: float, theta: float, x: float, y: float, max_range: float = 4.0) -> Reading:

@@ -13,6 +13,12 @@ Every grid of :mod:`sonarcarve.grids` is judged the same way, on its trinary map
   from every wall cell) marked occupied;
 - **wall covered**: the share of the seen wall length (wall samples every h/4 with a direct
   echo's reflection point within :data:`SEEN_RADIUS`) that has an occupied cell within one cell;
+- **free near the path**: the share of the truly free cells a planner needs, those within
+  :data:`NEAR_PATH` of the robot's path and in sight of it (no wall between the cell and the
+  nearest path point), that the grid marks free: a corridor left unknown is one a planner with
+  ``track_unknown_space`` must not enter, and a local controller scores as unsafe;
+- **walls freed**: the share of seen wall cells marked free (what users of ROS's layer report as
+  obstacles it erased);
 - for openings, the **free width** read from the grid (:func:`grid_free_width`): the widest
   stretch of the gap whose cells, within :data:`~sonarcarve.lab.analyses.GAP_DEPTH` of the gap
   line, are all left open (not occupied, or strictly: free).
@@ -33,6 +39,7 @@ from sonarcarve.lab.metrics import GapRegion
 from sonarcarve.typing import BoolArray, FloatArray
 
 __all__ = [
+    "NEAR_PATH",
     "SEEN_RADIUS",
     "GridMeasures",
     "dilate",
@@ -45,6 +52,10 @@ __all__ = [
 #: (half the 0.5 m wall patch of :mod:`benchmarks.grid_baseline`).
 SEEN_RADIUS = 0.25
 
+#: Free space is judged within this distance of the robot's path, metres: the corridor a
+#: planner routes the robot through (Scout2's 0.2 m radius plus about half a metre).
+NEAR_PATH = 0.75
+
 
 class GridMeasures(NamedTuple):
     """One grid against the truth (shares in [0, 1]; NaN where the denominator is empty)."""
@@ -54,6 +65,8 @@ class GridMeasures(NamedTuple):
     phantoms: float
     wall_covered: float
     occupied_cells: int
+    free_near_path: float = math.nan
+    walls_freed: float = math.nan
 
 
 def _cell_of(points: FloatArray, origin: tuple[float, float], h: float,
@@ -121,7 +134,8 @@ def _share(part: int, whole: int) -> float:
 
 def grid_measures(grid: OccupancyMap, segments: npt.ArrayLike, reflections: npt.ArrayLike,
                   world_bounds: tuple[float, float, float, float],
-                  cells: npt.ArrayLike | None = None) -> GridMeasures:
+                  cells: npt.ArrayLike | None = None,
+                  path: npt.ArrayLike | None = None) -> GridMeasures:
     """The measures of the module docstring for ``grid`` against ``segments``.
 
     Parameters
@@ -136,6 +150,9 @@ def grid_measures(grid: OccupancyMap, segments: npt.ArrayLike, reflections: npt.
         ``(xmin, ymin, xmax, ymax)`` of the world: truly free cells are counted inside it.
     cells : array-like of int8, shape grid.shape, optional
         The grid's trinary map if already computed (default: :func:`~sonarcarve.grids.trinary`).
+    path : array-like, shape (k, 2), optional
+        Where the robot's sensors were (the readings' x and y), metres; without it
+        ``free_near_path`` is NaN.
     """
     tri = trinary(grid) if cells is None else np.asarray(cells)
     occupied = tri == OCCUPIED
@@ -160,6 +177,12 @@ def grid_measures(grid: OccupancyMap, segments: npt.ArrayLike, reflections: npt.
     covered = np.zeros(len(samples), dtype=bool)
     covered[sin] = near_occupied[srow[sin], scol[sin]]
     n_occ = int(np.count_nonzero(occupied))
+    freed = int(np.count_nonzero(seen_walls & (tri == FREE)))
+    near_path = math.nan
+    if path is not None:
+        wanted = truly_free & _in_sight_of_path(grid, segments, path)
+        near_path = _share(int(np.count_nonzero(wanted & (tri == FREE))),
+                           int(np.count_nonzero(wanted)))
     return GridMeasures(
         precision=_share(int(np.count_nonzero(occupied & near_wall)), n_occ),
         recall=_share(int(np.count_nonzero(seen_walls & near_occupied)),
@@ -168,7 +191,50 @@ def grid_measures(grid: OccupancyMap, segments: npt.ArrayLike, reflections: npt.
                         int(np.count_nonzero(truly_free))),
         wall_covered=_share(int(np.count_nonzero(covered & seen)), int(np.count_nonzero(seen))),
         occupied_cells=n_occ,
+        free_near_path=near_path,
+        walls_freed=_share(freed, int(np.count_nonzero(seen_walls))),
     )
+
+
+def _in_sight_of_path(grid: OccupancyMap, segments: npt.ArrayLike,
+                      path: npt.ArrayLike) -> BoolArray:
+    """Cells within :data:`NEAR_PATH` of a path point whose centre sees the nearest one (the
+    straight line between them crosses no wall), shape ``grid.shape``."""
+    xs, ys = grid.cell_centers()
+    gx, gy = np.meshgrid(xs, ys)
+    centres = np.column_stack((gx.ravel(), gy.ravel()))
+    points = np.asarray(path, dtype=np.float64).reshape(-1, 2)
+    out = np.zeros(len(centres), dtype=bool)
+    if not len(points):
+        return out.reshape(grid.shape)
+    distance, nearest = cKDTree(points).query(centres, k=1,
+                                              distance_upper_bound=NEAR_PATH * (1 + 1e-12))
+    near = np.flatnonzero(distance <= NEAR_PATH)
+    walls = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    blocked = _crosses_any(centres[near], points[nearest[near]], walls)
+    out[near[~blocked]] = True
+    return out.reshape(grid.shape)
+
+
+def _crosses_any(a: FloatArray, b: FloatArray, walls: FloatArray,
+                 chunk: int = 2048) -> BoolArray:
+    """Whether each segment ``a[i]``-``b[i]`` properly crosses any wall (touching does not
+    count), in chunks of ``chunk`` segments against every wall."""
+    out = np.zeros(len(a), dtype=bool)
+    p1, p2 = walls[None, :, :2], walls[None, :, 2:]
+    for start in range(0, len(a), chunk):
+        q1, q2 = a[start:start + chunk, None, :], b[start:start + chunk, None, :]
+        d1, d2 = _cross(p1, p2, q1), _cross(p1, p2, q2)
+        d3, d4 = _cross(q1, q2, p1), _cross(q1, q2, p2)
+        crossing = (d1 * d2 < 0.0) & (d3 * d4 < 0.0)
+        out[start:start + chunk] = crossing.any(axis=1)
+    return out
+
+
+def _cross(o: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+    """z of (a - o) x (b - o), broadcast: which side of the line o-a the point b lies on."""
+    return ((a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1])
+            - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0]))
 
 
 def _near_any(points: FloatArray, targets: FloatArray, radius: float) -> BoolArray:

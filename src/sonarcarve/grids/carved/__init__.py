@@ -24,6 +24,7 @@ from sonarcarve.grids.carved.classify import trinary
 from sonarcarve.grids.carved.grid import CarvedGrid
 from sonarcarve.grids.carved.heard import HEARD_BINS, HEARD_NEAR
 from sonarcarve.grids.carved.params import (
+    DEFAULT_FREE_THRESHOLD,
     DEFAULT_FRESH_PERIODS,
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
@@ -37,6 +38,7 @@ from sonarcarve.grids.carved.params import (
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
+    "DEFAULT_FREE_THRESHOLD",
     "DEFAULT_FRESH_PERIODS",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",

@@ -29,7 +29,8 @@ def trinary(grid: OccupancyMap) -> Int8Grid:
     :class:`~sonarcarve.grids.RangeSensorLayer` as it writes its master costmap
     (:meth:`~sonarcarve.grids.RangeSensorLayer.costs`: lethal above ``mark_threshold``, free below
     ``clear_threshold``); :class:`~sonarcarve.grids.OccupancyGrid` (Elfes) occupied above its
-    default threshold (0.65) and free below 0.196 (map_saver's ``free_thresh``); any other
+    default threshold (0.65) and free below :data:`~sonarcarve.grids.carved.DEFAULT_FREE_THRESHOLD`
+    (0.35), as the carved grid by default; any other
     :class:`~sonarcarve.grids.OccupancyMap` by probability with those two thresholds.
 
     Examples

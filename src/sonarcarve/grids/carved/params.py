@@ -17,6 +17,7 @@ from sonarcarve.grids.elfes import ROS_FADE_RANGE
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 
 __all__ = [
+    "DEFAULT_FREE_THRESHOLD",
     "DEFAULT_FRESH_PERIODS",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
@@ -58,6 +59,18 @@ DEFAULT_MAX_INCIDENCE = math.radians(20.0)
 #: (:attr:`CarvedGridParams.fresh_periods`): past one period the sensor has fired again; the
 #: rest is room for the jitter of real firing times.
 DEFAULT_FRESH_PERIODS = 1.1
+#: Probability below which :meth:`~sonarcarve.grids.carved.CarvedGrid.trinary` calls a cell free
+#: (:attr:`CarvedGridParams.free_threshold`): as much evidence to call a cell free as to call it
+#: occupied (logit -0.62 against +0.62 for the occupied threshold 0.65, about one strong look),
+#: symmetric about the prior as ROS's layer (0.2 / 0.8) and octomap (0.5) are. It was 0.196, ROS
+#: map_saver's ``free_thresh``: the grey level of an *unknown* pixel in a map image, not an amount
+#: of evidence; with it a cell needed about 3.5 on-axis misses, and within 0.75 m of the robot's
+#: path the grid called 13-57 % of the truly free floor free (ROS's layer 92-98 %); at 0.35,
+#: 70-94 %, with fewer seen wall cells marked free than the layer (``benchmarks/grids.py
+#: --free-threshold 0.196``; docs/RESULTS.md, *Free space a planner can use*). The map_server
+#: YAML keeps 0.196, which reads the trinary image back exactly
+#: (:data:`sonarcarve.io.map_server.FREE_THRESH`).
+DEFAULT_FREE_THRESHOLD = 0.35
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
 DEFAULT_SEE_THROUGH = 0.5
@@ -107,11 +120,11 @@ class CarvedGridParams:
         Clamp of the final log-odds, ``p_min < 0.5 < p_max``; octomap's 0.12 and 0.97.
     occupied_threshold, free_threshold : float
         :meth:`~sonarcarve.grids.carved.CarvedGrid.trinary` calls a cell occupied above the first
-        and free below the second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and 0.196
-        (ROS map_saver's ``free_thresh``). Compared in log-odds (``l > logit(occupied)``), which
-        equals comparing :meth:`~sonarcarve.grids.carved.CarvedGrid.probabilities` with the
-        threshold up to rounding: a cell within a few ulp of a threshold's logit may fall on the
-        other side.
+        and free below the second (``0 < free < occupied < 1``); 0.65 (as the Elfes grid) and
+        :data:`DEFAULT_FREE_THRESHOLD` (0.35; map_saver's 0.196 before). Compared in log-odds
+        (``l > logit(occupied)``), which equals comparing
+        :meth:`~sonarcarve.grids.carved.CarvedGrid.probabilities` with the threshold up to
+        rounding: a cell within a few ulp of a threshold's logit may fall on the other side.
     range_tolerance : float
         ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm.
     spread : bool
@@ -205,7 +218,7 @@ class CarvedGridParams:
     p_min: float = 0.12
     p_max: float = 0.97
     occupied_threshold: float = 0.65
-    free_threshold: float = 0.196
+    free_threshold: float = DEFAULT_FREE_THRESHOLD
     range_tolerance: float = DEFAULT_RANGE_TOLERANCE
     spread: bool = True
     spread_length: float = DEFAULT_SPREAD_LENGTH
