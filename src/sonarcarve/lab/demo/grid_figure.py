@@ -39,7 +39,8 @@ _CLOSEUP_SHARE = 0.3
 #: What the numbers in the panel titles mean (the legend's title).
 _MEASURES_TEXT = ("precision: share of the occupied cells within one cell of a true wall; "
                   "recall: share of the walls the sonars saw that have an occupied cell; "
-                  "phantoms: share of the truly free cells marked occupied")
+                  "phantoms: share of the truly free cells marked occupied; free: share of the "
+                  "truly free floor within 0.75 m of the path marked free")
 
 
 def _compare(ours: float, theirs: float, better: str, worse: str, same: str) -> tuple[str, int]:
@@ -112,7 +113,8 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
         _grid_panel(axes[0, k], result, grid, limits, linewidth=0.5,
                     box=box if rows == 2 else None)
         axes[0, k].set_title(f"{grid.label}: precision {m.precision:.2f}, recall "
-                             f"{m.recall:.2f}, phantoms {100.0 * m.phantoms:.2f} %", fontsize=11)
+                             f"{m.recall:.2f}, phantoms {100.0 * m.phantoms:.2f} %, free "
+                             f"{100.0 * m.free_near_path:.0f} %", fontsize=11)
         if rows == 2:
             _grid_panel(axes[1, k], result, grid, box, linewidth=1.0)
             axes[1, k].set_title(f"{grid.label}, close-up (dashed box above; fig. 2's window)",

@@ -69,8 +69,9 @@ GRID_COLUMNS = (
     ("recall", "recall",
      "share of the seen wall cells with an occupied cell within one cell (higher is better)"),
     ("phantoms", "phantom\n%", "share of the truly free cells marked occupied (lower is better)"),
-    ("wall_covered", "wall\ncovered\n%",
-     "share of the seen wall length with an occupied cell within one cell"),
+    ("free_near_path", "free\nnear\npath %",
+     "share of the truly free floor within 0.75 m of the robot's path marked free, what a "
+     "planner may drive through (higher is better)"),
     ("cpu_us_per_reading", "CPU µs\nper\nreading",
      "processor time per reading: folding it in, and reading the map once at the end"),
 )
@@ -84,7 +85,7 @@ def grid_table_rows(result: DemoResult) -> tuple[list[str], list[list[str]]]:
     """Header (with line breaks) and cells of the grid table (empty rows without grids)."""
     header = [title for _, title, _ in GRID_COLUMNS]
     rows = [[g.label, _share(g.measures.precision), _share(g.measures.recall),
-             _pct(100.0 * g.measures.phantoms), _pct(100.0 * g.measures.wall_covered),
+             _pct(100.0 * g.measures.phantoms), _pct(100.0 * g.measures.free_near_path),
              "–" if math.isnan(g.cpu_us_per_reading) else f"{g.cpu_us_per_reading:.0f}"]
             for g in result.grids]
     return header, rows
@@ -99,7 +100,8 @@ def grid_caption(result: DemoResult) -> str:
             f"{result.grids[0].resolution:.2f} m cells, read as a planner reads them (occupied, "
             "free, unknown). Precision: share of the occupied cells that lie on a true wall "
             "(within one cell); recall: share of the walls the sonars saw that are marked; "
-            "phantoms: free space marked occupied.")
+            "phantoms: free space marked occupied; free near path: the floor a planner may "
+            "drive through, marked free.")
     verdict = grid_verdict(result)
     return f"{text} Here {verdict}." if verdict else text
 
