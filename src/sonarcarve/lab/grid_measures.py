@@ -217,18 +217,36 @@ def _in_sight_of_path(grid: OccupancyMap, segments: npt.ArrayLike,
 
 
 def _crosses_any(a: FloatArray, b: FloatArray, walls: FloatArray,
-                 chunk: int = 2048) -> BoolArray:
+                 tile: float = 2.0) -> BoolArray:
     """Whether each segment ``a[i]``-``b[i]`` properly crosses any wall (touching does not
-    count), in chunks of ``chunk`` segments against every wall."""
+    count). The segments are grouped by the ``tile``-metre square their ``a`` end lies in, and
+    each group is tested only against the walls whose bounding box meets the group's (the
+    office at 0.05 m: 180,000 segments against 290 walls, 9 s untiled)."""
     out = np.zeros(len(a), dtype=bool)
-    p1, p2 = walls[None, :, :2], walls[None, :, 2:]
-    for start in range(0, len(a), chunk):
-        q1, q2 = a[start:start + chunk, None, :], b[start:start + chunk, None, :]
-        d1, d2 = _cross(p1, p2, q1), _cross(p1, p2, q2)
-        d3, d4 = _cross(q1, q2, p1), _cross(q1, q2, p2)
-        crossing = (d1 * d2 < 0.0) & (d3 * d4 < 0.0)
-        out[start:start + chunk] = crossing.any(axis=1)
+    if not len(a) or not len(walls):
+        return out
+    wall_lo = np.minimum(walls[:, :2], walls[:, 2:])
+    wall_hi = np.maximum(walls[:, :2], walls[:, 2:])
+    keys = np.floor(a / tile).astype(np.int64)
+    _, group = np.unique(keys, axis=0, return_inverse=True)
+    order = np.argsort(group.ravel(), kind="stable")
+    starts = np.flatnonzero(np.diff(group.ravel()[order], prepend=-1))
+    for members in np.split(order, starts[1:]):
+        ends = np.vstack((a[members], b[members]))
+        lo, hi = ends.min(axis=0), ends.max(axis=0)
+        near = np.all((wall_lo <= hi) & (wall_hi >= lo), axis=1)
+        if near.any():
+            out[members] = _crosses(a[members], b[members], walls[near])
     return out
+
+
+def _crosses(a: FloatArray, b: FloatArray, walls: FloatArray) -> BoolArray:
+    """Whether each segment ``a[i]``-``b[i]`` properly crosses any of ``walls``."""
+    p1, p2 = walls[None, :, :2], walls[None, :, 2:]
+    q1, q2 = a[:, None, :], b[:, None, :]
+    d1, d2 = _cross(p1, p2, q1), _cross(p1, p2, q2)
+    d3, d4 = _cross(q1, q2, p1), _cross(q1, q2, p2)
+    return np.asarray(((d1 * d2 < 0.0) & (d3 * d4 < 0.0)).any(axis=1))
 
 
 def _cross(o: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
