@@ -21,12 +21,14 @@ from sonarcarve.lab.demo import (
     GRID_KINDS,
     DemoResult,
     GridSummary,
+    free_verdict,
     grid_files,
     grid_table_rows,
     grid_verdict,
     run_demo,
     write_demo_outputs,
 )
+from sonarcarve.lab.demo.table import grid_caption
 from sonarcarve.lab.grid_measures import GridMeasures
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.sim.world import World
@@ -169,6 +171,23 @@ def _with_measures(result: DemoResult, carved: tuple[float, float],
 def test_the_verdict_says_which_grid_is_better(room: DemoResult, carved: tuple[float, float],
                                                layer: tuple[float, float], words: str) -> None:
     assert grid_verdict(_with_measures(room, carved, layer)).startswith(words)
+
+
+@pytest.mark.parametrize(("carved", "layer", "words"), [
+    (0.935, 0.970, "ROS's layer marks more of the floor near the path free (97 against 94 %)"),
+    (0.80, 0.55, "the carved grid marks more of the floor near the path free (80 against 55 %)"),
+    (0.801, 0.799, "both grids mark as much of the floor near the path free (80 against 80 %)"),
+])
+def test_the_free_verdict_says_which_grid_frees_more(room: DemoResult, carved: float,
+                                                     layer: float, words: str) -> None:
+    grids = tuple(dataclasses.replace(g, measures=GridMeasures(0.9, 0.9, 0.0, 0.5, 10, free))
+                  for g, free in zip(room.grids, (carved, layer), strict=True))
+    result = dataclasses.replace(room, grids=grids)
+    assert free_verdict(result) == words
+    assert grid_caption(result).endswith(words[0].upper() + words[1:] + ".")
+    nan = tuple(dataclasses.replace(g, measures=GridMeasures(0.9, 0.9, 0.0, 0.5, 10))
+                for g in room.grids)
+    assert free_verdict(dataclasses.replace(room, grids=nan)) == ""
 
 
 def test_grid_summary_as_dict_is_json_ready(room: DemoResult) -> None:

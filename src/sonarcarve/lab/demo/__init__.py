@@ -23,7 +23,7 @@ The modules, each importing only those above it:
 from sonarcarve.lab.demo.costmaps import GRID_KINDS, grid_bounds, run_grids
 from sonarcarve.lab.demo.doors import DoorApproach, LocalView
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
-from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, grid_verdict
+from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, free_verdict, grid_verdict
 from sonarcarve.lab.demo.outputs import (
     check_output_dir,
     grid_files,
@@ -78,6 +78,7 @@ __all__ = [
     "caption",
     "check_output_dir",
     "demo_config",
+    "free_verdict",
     "grid_bounds",
     "grid_caption",
     "grid_files",

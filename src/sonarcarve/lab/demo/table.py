@@ -13,7 +13,12 @@ import math
 from typing import Any
 
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
-from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, GRID_FIGURE_TEXT, grid_verdict
+from sonarcarve.lab.demo.grid_figure import (
+    GRID_FIGURE_FILE,
+    GRID_FIGURE_TEXT,
+    free_verdict,
+    grid_verdict,
+)
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE
 from sonarcarve.lab.output import json_ready
@@ -103,7 +108,9 @@ def grid_caption(result: DemoResult) -> str:
             "phantoms: free space marked occupied; free near path: the floor a planner may "
             "drive through, marked free.")
     verdict = grid_verdict(result)
-    return f"{text} Here {verdict}." if verdict else text
+    text = f"{text} Here {verdict}." if verdict else text
+    free = free_verdict(result)
+    return f"{text} {free[0].upper()}{free[1:]}." if free else text
 
 
 def table_rows(result: DemoResult) -> tuple[list[str], list[list[str]]]:
