@@ -14,7 +14,8 @@ tuned:
   spurious ones (crosstalk, floor, multipath) it removes, and its median and p90 true error as a
   ratio of centerline's on the same readings (paper carving, combined, evidence carving);
 - **costmaps** (issue 10): the carved grid against ROS's ``RangeSensorLayer`` with its defaults,
-  occupied precision and recall and phantom share, at 0.05 and 0.10 m.
+  occupied precision and recall, phantom share, the free floor near the path marked free and
+  the seen wall cells marked free (:mod:`sonarcarve.lab.grid_measures`), at 0.05 and 0.10 m.
 
 The worlds are generated floors of corridors and rooms (``random:SEED[:WxH]``) with seeds never
 used in development. The physics are the two shipped models and two perturbations of them, with
@@ -29,7 +30,8 @@ parameters picked before any run (not tuned on these results) as plausible other
 
 Means over seeds; each row also counts in how many (world, seed) runs the target held.
 ``--variant P[:JSON]`` adds point rows of evidence carving with P_carve ``P`` (and the confidence
-model ``fit_confidence.py --save`` wrote); ``--skip-grids`` leaves the costmaps out.
+model ``fit_confidence.py --save`` wrote); ``--skip-grids`` leaves the costmaps out,
+``--skip-points`` the point maps.
 """
 
 from __future__ import annotations
@@ -123,9 +125,11 @@ def _grid_rows(sim: Simulation) -> dict[tuple[str, float], dict[str, float]]:
         for name, make in GRIDS.items():
             grid = make(h, bounds)
             grid.add_many(sim.readings)
-            m = grid_measures(grid, sim.world.segments, reflections, sim.world.bounds)
+            m = grid_measures(grid, sim.world.segments, reflections, sim.world.bounds,
+                              path=np.column_stack((sim.readings.x, sim.readings.y)))
             rows[name, h] = {"precision": m.precision, "recall": m.recall,
-                             "phantoms": m.phantoms}
+                             "phantoms": m.phantoms, "free": m.free_near_path,
+                             "freed": m.walls_freed}
     return rows
 
 
@@ -149,9 +153,10 @@ def _points_table(title: str, runs: Sequence[dict[str, dict[str, float]]]) -> No
 
 def _grids_table(title: str, runs: Sequence[dict[tuple[str, float], dict[str, float]]]) -> None:
     print(f"\n{title}\n")
-    print("| resolution (m) | grid | precision | recall | phantoms (%) | "
-          "runs where the carved grid beats the layer on precision and recall |")
-    print("|---:|---|---:|---:|---:|---:|")
+    print("| resolution (m) | grid | precision | recall | phantoms (%) | free near the path (%) "
+          "| seen walls freed (%) | runs where the carved grid beats the layer on precision and "
+          "recall |")
+    print("|---:|---|---:|---:|---:|---:|---:|---:|")
     for h in RESOLUTIONS:
         wins = sum(run["carved grid", h]["precision"] > run["RangeSensorLayer", h]["precision"]
                    and run["carved grid", h]["recall"] > run["RangeSensorLayer", h]["recall"]
@@ -160,7 +165,8 @@ def _grids_table(title: str, runs: Sequence[dict[tuple[str, float], dict[str, fl
             rows = [run[name, h] for run in runs]
             won = f"{wins} of {len(runs)}" if name == "carved grid" else ""
             print(f"| {h:.2f} | {name} | {_mean(rows, 'precision'):.3f} | "
-                  f"{_mean(rows, 'recall'):.3f} | {100 * _mean(rows, 'phantoms'):.3f} | {won} |")
+                  f"{_mean(rows, 'recall'):.3f} | {100 * _mean(rows, 'phantoms'):.3f} | "
+                  f"{100 * _mean(rows, 'free'):.1f} | {100 * _mean(rows, 'freed'):.2f} | {won} |")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -173,6 +179,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="add point rows: evidence with P_carve P (and the confidence model "
                              "of JSON, as fit_confidence.py --save writes it)")
     parser.add_argument("--skip-grids", action="store_true")
+    parser.add_argument("--skip-points", action="store_true",
+                        help="only the costmaps (the methods' point maps take most of the time)")
     args = parser.parse_args(argv)
     for physics_name in args.physics:
         physics = PHYSICS[physics_name]
@@ -180,13 +188,15 @@ def main(argv: list[str] | None = None) -> int:
         for world in args.worlds:
             for seed in range(args.seeds):
                 sim = _simulate(world, seed, physics)
-                points.append(_point_rows(sim, args.variant))
+                if not args.skip_points:
+                    points.append(_point_rows(sim, args.variant))
                 if not args.skip_grids:
                     grids.append(_grid_rows(sim))
                 print(f"  {physics_name}, {world}, seed {seed}: {len(sim.readings):,} readings",
                       flush=True)
         where = f"{', '.join(args.worlds)}; seeds 0-{args.seeds - 1}; physics: {physics_name}"
-        _points_table(f"points, {where}; mean over runs", points)
+        if points:
+            _points_table(f"points, {where}; mean over runs", points)
         if grids:
             _grids_table(f"grids, {where}; mean over runs", grids)
     return 0
