@@ -128,10 +128,8 @@ def _measure(grid: OccupancyMap, sim: Simulation) -> GridMeasures:
 
 
 def _mean(rows: Sequence[GridMeasures]) -> GridMeasures:
-    means = [float(np.nanmean([r[k] for r in rows])) for k in range(len(GridMeasures._fields))]
-    means[GridMeasures._fields.index("occupied_cells")] = round(
-        means[GridMeasures._fields.index("occupied_cells")])
-    return GridMeasures(*means)
+    mean = GridMeasures(*(float(np.nanmean(column)) for column in zip(*rows, strict=True)))
+    return mean._replace(occupied_cells=round(mean.occupied_cells))
 
 
 def _f1(m: GridMeasures) -> float:

@@ -33,6 +33,7 @@ from sonarcarve.lab.demo import (
     table_rows,
     write_demo_outputs,
 )
+from sonarcarve.lab.grid_measures import NEAR_PATH
 
 __all__ = ["demo"]
 
@@ -62,9 +63,9 @@ _STEPS = {"simulate": "simulating the tour", "centerline": "centerline", "atm": 
     "the same readings: the carved grid and ROS's RangeSensorLayer (its defaults). "
     "**occupied precision**: share of occupied cells on a true wall (within one cell); "
     "**recall**: share of the walls the sonars saw that are marked; **phantom %**: free "
-    "space marked occupied; **free near path %**: the truly free floor within 0.75 m of the "
-    "robot's path marked free, where a planner may drive; **CPU µs per reading**: processor "
-    "time.\n\n"
+    "space marked occupied; **free near path %**: the truly free floor within "
+    f"{NEAR_PATH:g} m of the robot's path marked free, where a planner may drive; **CPU µs per "
+    "reading**: processor time.\n\n"
     "Writes into --out: fig1-global-maps.png (each method's map over the true walls), "
     "fig2-global-maps-zoom.png (a close-up of the same maps), fig3-error-vs-range.png "
     "(error against the reading's range), fig4-door-local-maps.png (what the robot's local "

@@ -19,6 +19,7 @@ import numpy as np
 from sonarcarve.grids import FREE, OCCUPIED
 from sonarcarve.lab.demo.figures import map_limits, zoom_window
 from sonarcarve.lab.demo.results import DemoResult, GridSummary
+from sonarcarve.lab.grid_measures import NEAR_PATH
 from sonarcarve.plotting import new_figure
 
 if TYPE_CHECKING:
@@ -41,7 +42,7 @@ _CLOSEUP_SHARE = 0.3
 _MEASURES_TEXT = ("precision: share of the occupied cells within one cell of a true wall; "
                   "recall: share of the walls the sonars saw that have an occupied cell;\n"
                   "phantoms: share of the truly free cells marked occupied; free: share of the "
-                  "truly free floor within 0.75 m of the path marked free")
+                  f"truly free floor within {NEAR_PATH:g} m of the path marked free")
 
 
 def _compare(ours: float, theirs: float, better: str, worse: str, same: str) -> tuple[str, int]:

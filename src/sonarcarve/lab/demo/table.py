@@ -21,6 +21,7 @@ from sonarcarve.lab.demo.grid_figure import (
 )
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE
+from sonarcarve.lab.grid_measures import NEAR_PATH
 from sonarcarve.lab.output import json_ready
 
 __all__ = [
@@ -75,8 +76,8 @@ GRID_COLUMNS = (
      "share of the seen wall cells with an occupied cell within one cell (higher is better)"),
     ("phantoms", "phantom\n%", "share of the truly free cells marked occupied (lower is better)"),
     ("free_near_path", "free\nnear\npath %",
-     "share of the truly free floor within 0.75 m of the robot's path marked free, what a "
-     "planner may drive through (higher is better)"),
+     f"share of the truly free floor within {NEAR_PATH:g} m of the robot's path marked free, "
+     "what a planner may drive through (higher is better)"),
     ("cpu_us_per_reading", "CPU µs\nper\nreading",
      "processor time per reading: folding it in, and reading the map once at the end"),
 )
