@@ -64,12 +64,11 @@ DEFAULT_FRESH_PERIODS = 1.1
 #: occupied (logit -0.62 against +0.62 for the occupied threshold 0.65, about one strong look),
 #: symmetric about the prior as ROS's layer (0.2 / 0.8) and octomap (0.5) are. It was 0.196, ROS
 #: map_saver's ``free_thresh``: the grey level of an *unknown* pixel in a map image, not an amount
-#: of evidence; with it a cell needed about 3.5 on-axis misses, and the grid left most of the
-#: floor near the robot's path unknown where ROS's layer marks it free; the numbers, before and
+#: of evidence; with it a cell needed about 3.5 on-axis misses, and the grid left much of the
+#: floor near the robot's path unknown where ROS's layer marks it free (the numbers, before and
 #: after, against the layer: ``benchmarks/grids.py --free-threshold 0.196`` and docs/RESULTS.md,
-#: *Free space a planner can use*. The map_server
-#: YAML keeps 0.196, which reads the trinary image back exactly
-#: (:data:`sonarcarve.io.map_server.FREE_THRESH`).
+#: *Free space a planner can use*). The map_server YAML keeps 0.196, which reads the trinary
+#: image back exactly (:data:`sonarcarve.io.map_server.FREE_THRESH`).
 DEFAULT_FREE_THRESHOLD = 0.35
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
