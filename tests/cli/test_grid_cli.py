@@ -60,6 +60,9 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--fresh-periods", "2", "--model", "elfes"], "applies to --model carved only, not elfes"),
     (["--fresh-periods", "inf", "--model", "range-sensor-layer"],
      "applies to --model carved only, not range-sensor-layer"),
+    (["--free-below", "0.7"], "--free-below must lie in (0, 0.65), got 0.7"),
+    (["--free-below", "0"], "--free-below must lie in (0, 0.65), got 0"),
+    (["--free-below", "0.2", "--model", "elfes"], "--free-below applies to --model carved only"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -171,3 +174,25 @@ def test_fresh_periods_decides_how_long_the_newest_echo_stays_marked(
     i = int((0.0 - m.origin[1]) / 0.05)
     ahead = m.cells[max(0, i - 2):i + 3, max(0, j - 2):j + 3]
     assert bool(np.any(ahead == 100)) is marked
+
+
+def test_free_below_decides_how_much_evidence_frees_a_cell(tmp_path: Path) -> None:
+    """Three echoes at 2 m from one pose: the cells before the echo have three misses each,
+    between map_saver's 0.196 and the default 0.35 on the beam's axis at 0.65 m (see
+    tests/grids/test_carved_free_threshold.py): free by default, unknown with --free-below 0.196,
+    and the default's free cells a superset of the stricter map's."""
+    log = tmp_path / "log.csv"
+    beam = [Reading(t=0.2 * k, sensor=0, x=0.0, y=0.0, theta=0.0, range=2.0) for k in range(3)]
+    write_readings_csv(ReadingBatch.from_readings(beam), log)
+    maps = {}
+    for extra in ([], ["--free-below", "0.196"]):
+        out = tmp_path / f"grid{len(extra)}.yaml"
+        assert main(["grid", str(log), "--resolution", "0.1", "--out", str(out), *extra]) == 0
+        maps[bool(extra)] = read_map_server(out)
+    default, strict = maps[False], maps[True]
+    j = int((0.65 - default.origin[0]) / 0.1)
+    i = int((0.0 - default.origin[1]) / 0.1)
+    assert default.cells[i, j] == 0
+    assert strict.cells[i, j] == -1
+    assert np.all(default.cells[strict.cells == 0] == 0)
+    assert np.count_nonzero(default.cells == 0) > np.count_nonzero(strict.cells == 0)

@@ -49,7 +49,8 @@ __all__ = ["build_grid", "grid", "grid_params", "read_log_for_grid"]
 #: The library's parameter names (:func:`~sonarcarve.grids.make_grid`,
 #: :func:`~sonarcarve.grids.readings_extent`, :class:`~sonarcarve.grids.CarvedGridParams`) ->
 #: the options that set them, for its error messages.
-_FLAGS = {"resolution": "--resolution", "margin": "--margin", "fresh_periods": "--fresh-periods"}
+_FLAGS = {"resolution": "--resolution", "margin": "--margin", "fresh_periods": "--fresh-periods",
+          "free_threshold": "--free-below"}
 
 
 class GridUsageError(SonarcarveError):
@@ -64,31 +65,38 @@ def _check_model(model: str) -> None:
         raise GridUsageError(msg)
 
 
-def grid_params(model: str, fresh_periods: float | None) -> CarvedGridParams | None:
-    """The grid's parameters from the options: ``--fresh-periods`` (None: the default) as
-    :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`, for the carved grid only.
+def grid_params(model: str, fresh_periods: float | None,
+                free_below: float | None = None) -> CarvedGridParams | None:
+    """The grid's parameters from the options, for the carved grid only (None: the default):
+    ``--fresh-periods`` as :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`,
+    ``--free-below`` as :attr:`~sonarcarve.grids.CarvedGridParams.free_threshold`.
 
     Raises
     ------
     GridUsageError
-        ``--fresh-periods`` for a model other than the carved grid, or out of its range.
+        Either option for a model other than the carved grid, or out of its range.
     """
-    if fresh_periods is None:
+    if fresh_periods is None and free_below is None:
         return None
     if model != "carved":
-        msg = f"--fresh-periods applies to --model carved only, not {model}"
+        flag = "--fresh-periods" if fresh_periods is not None else "--free-below"
+        msg = f"{flag} applies to --model carved only, not {model}"
         raise GridUsageError(msg)
+    defaults = CarvedGridParams()
     try:
-        return CarvedGridParams(fresh_periods=fresh_periods)
+        return CarvedGridParams(
+            fresh_periods=defaults.fresh_periods if fresh_periods is None else fresh_periods,
+            free_threshold=defaults.free_threshold if free_below is None else free_below)
     except GridError as err:
         raise GridUsageError(flag_message(str(err), _FLAGS)) from None
 
 
 def build_grid(batch: ReadingBatch, model: str, resolution: float,
-               margin: float = 0.5, fresh_periods: float | None = None) -> BuiltGrid:
+               margin: float = 0.5, fresh_periods: float | None = None,
+               free_below: float | None = None) -> BuiltGrid:
     """The grid ``model`` (:func:`~sonarcarve.grids.make_grid`) over the readings' extent
     plus ``margin`` (:func:`~sonarcarve.grids.readings_extent`), with every reading in;
-    ``fresh_periods`` as in :func:`grid_params`.
+    ``fresh_periods`` and ``free_below`` as in :func:`grid_params`.
 
     Raises
     ------
@@ -99,7 +107,7 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
         carved grid.
     """
     _check_model(model)
-    params = grid_params(model, fresh_periods)
+    params = grid_params(model, fresh_periods, free_below)
     try:
         bounds = readings_extent(batch, margin)
         built = make_grid(model, resolution, bounds, params)
@@ -170,6 +178,12 @@ def grid(
              "the mark up to 2 s, for logs that drop readings whose value did not change "
              "(naive polling, stale-repeat filters), where a missing reading does not mean "
              "the sensor heard nothing.")] = None,
+    free_below: Annotated[float | None, typer.Option(
+        metavar="P",
+        help="--model carved only: call a cell free when its occupancy probability is below P "
+             "(default 0.35: as much evidence as 'occupied' above 0.65 needs). 0.196, ROS "
+             "map_saver's free_thresh, keeps more of the floor unknown, for planners or "
+             "frontier explorers that must not trust a weakly seen cell.")] = None,
     robot: RobotOpt = None,
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
@@ -201,16 +215,19 @@ def grid(
 
     Example: `sonarcarve grid polled.csv --fresh-periods inf --out grid.yaml` (a log that
     left out readings equal to the one before)
+
+    Example: `sonarcarve grid readings.csv --free-below 0.196 --out grid.yaml` (free only where
+    the evidence is strong, as map_saver's threshold)
     """
     _check_model(model)  # these two before anything is read
-    grid_params(model, fresh_periods)
+    grid_params(model, fresh_periods, free_below)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
     batch = read_log_for_grid(readings, bag)
-    built = build_grid(batch, model, resolution, margin, fresh_periods)
+    built = build_grid(batch, model, resolution, margin, fresh_periods, free_below)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
