@@ -53,6 +53,7 @@ from sonarcarve.lab.analyses import GAP_DEPTH, first_reading_within, passage_cle
 from sonarcarve.lab.grid_measures import GridMeasures, grid_free_width, grid_measures
 from sonarcarve.lab.metrics import gap_region
 from sonarcarve.lab.scenarios import Scenario, build_world, run_simulation
+from sonarcarve.plotting import plot_trinary
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import DEFAULT_PHYSICS, EchoKind
@@ -282,19 +283,13 @@ def _figure(sim: Simulation, h: float, path: Path) -> None:
 
     mpl.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
 
     grids = [("carved grid", _fill(_carved, h, sim, 0)),
              ("RangeSensorLayer (ROS defaults)",
               _fill(_layer(RangeSensorLayerParams()), h, sim, 0))]
     fig, axes = plt.subplots(1, 2, figsize=(16, 6.2), constrained_layout=True)
-    cmap = ListedColormap(["#ffffff", "#c8c8c8", "#000000"])  # free, unknown, occupied
     for ax, (title, grid) in zip(axes, grids, strict=True):
-        cells = trinary(grid)
-        image = np.select([cells == 0, cells == -1], [0, 1], 2)
-        x0, y0, x1, y1 = grid.extent
-        ax.imshow(image, origin="lower", extent=(x0, x1, y0, y1), cmap=cmap, vmin=0, vmax=2,
-                  interpolation="nearest")
+        plot_trinary(trinary(grid), grid.extent, ax)
         for seg in sim.world.segments:
             ax.plot(seg[[0, 2]], seg[[1, 3]], color="#d62728", lw=0.7)
         m = _measure(grid, sim)

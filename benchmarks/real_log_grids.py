@@ -38,6 +38,7 @@ from sonarcarve import make_grid, readings_extent
 from sonarcarve.grids import FREE, OCCUPIED, Grid, trinary
 from sonarcarve.io import read_robond
 from sonarcarve.lab.experiments.real_log import line_spread
+from sonarcarve.plotting import plot_trinary
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import FloatArray
 
@@ -125,17 +126,11 @@ def figure(batch: ReadingBatch, h: float, path: Path) -> None:
 
     mpl.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
 
     fig, axes = plt.subplots(1, len(GRIDS), figsize=(18, 6.5), constrained_layout=True)
-    cmap = ListedColormap(["#ffffff", "#c8c8c8", "#000000"])  # free, unknown, occupied
     for ax, (label, name) in zip(axes, GRIDS.items(), strict=True):
         grid, _ = _fill(name, h, batch)
-        cells = trinary(grid)
-        image = np.select([cells == FREE, cells != OCCUPIED], [0, 1], 2)
-        x0, y0, x1, y1 = grid.extent
-        ax.imshow(image, origin="lower", extent=(x0, x1, y0, y1), cmap=cmap, vmin=0, vmax=2,
-                  interpolation="nearest")
+        plot_trinary(trinary(grid), grid.extent, ax)
         ax.plot(batch.x, batch.y, color="#1f77b4", lw=0.8)
         ax.set_title(label)
         ax.set_aspect("equal")

@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 __all__ = [
     "FIGURE_FORMATS",
     "SOURCE_COLORS",
+    "TRINARY_COLORS",
     "GridImage",
     "MapOrigins",
     "check_figure_path",
@@ -51,6 +52,7 @@ __all__ = [
     "plot_map_arcs",
     "plot_path",
     "plot_sources",
+    "plot_trinary",
     "plot_user_map",
     "plot_walls",
     "read_grid_image",
@@ -316,6 +318,35 @@ def plot_grid(grid: GridImage, ax: Axes | None = None, **style: Any) -> list[Any
     options: dict[str, Any] = {"cmap": "gray", "vmin": 0, "vmax": 255, "origin": "upper",
                                "interpolation": "nearest", "zorder": 0, "alpha": 0.6} | style
     return [ax.imshow(grid.image, extent=grid.extent, **options)]
+
+
+#: Colours of a trinary map's cells, in the order free, unknown, occupied.
+TRINARY_COLORS = ("#ffffff", "#c0c0c0", "#000000")
+
+
+def plot_trinary(cells: npt.ArrayLike, extent: tuple[float, float, float, float],
+                 ax: Axes | None = None, **style: Any) -> list[Any]:
+    """Draw a trinary occupancy map: free white, unknown grey, occupied black
+    (:data:`TRINARY_COLORS`).
+
+    Parameters
+    ----------
+    cells : array-like of int, shape (rows, columns)
+        ``nav_msgs/OccupancyGrid`` values (100 occupied, 0 free, -1 unknown; anything else is
+        drawn as unknown), row 0 at the bottom (smallest y), as
+        :func:`sonarcarve.grids.trinary` gives them.
+    extent : tuple of float
+        ``(xmin, ymin, xmax, ymax)`` covered by the cells, metres (a grid's ``extent``).
+    """
+    from matplotlib.colors import ListedColormap
+
+    ax = ax or new_axes()
+    values = np.asarray(cells)
+    shade = np.select([values == 0, values == 100], [0, 2], 1)
+    x0, y0, x1, y1 = extent
+    options: dict[str, Any] = {"cmap": ListedColormap(TRINARY_COLORS), "vmin": 0, "vmax": 2,
+                               "origin": "lower", "interpolation": "nearest"} | style
+    return [ax.imshow(shade, extent=(x0, x1, y0, y1), **options)]
 
 
 class MapOrigins(NamedTuple):

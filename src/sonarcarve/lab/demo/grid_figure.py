@@ -16,11 +16,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sonarcarve.grids import FREE, OCCUPIED
 from sonarcarve.lab.demo.figures import map_limits, zoom_window
 from sonarcarve.lab.demo.results import DemoResult, GridSummary
 from sonarcarve.lab.grid_measures import NEAR_PATH
-from sonarcarve.plotting import new_figure
+from sonarcarve.plotting import TRINARY_COLORS, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -34,7 +33,6 @@ GRID_FIGURE_FILE = "fig5-occupancy-grids.png"
 #: What it shows, in a few words (printed by the CLI, listed in ``summary.md``).
 GRID_FIGURE_TEXT = "carved grid beside ROS's layer, over true walls"
 #: Cell colours: free, unknown, occupied (the map_server image's own shades, and black).
-_CELL_COLORS = ("#ffffff", "#c0c0c0", "#000000")
 _WALL_COLOR = "#e8000b"
 #: The close-up row is drawn only when fig. 2's window is smaller than this share of the map.
 _CLOSEUP_SHARE = 0.3
@@ -165,16 +163,11 @@ def _grid_panel(ax: Axes, result: DemoResult, grid: GridSummary,
                 limits: tuple[float, float, float, float], linewidth: float,
                 box: tuple[float, float, float, float] | None = None) -> None:
     """One grid's trinary cells with the true walls on top, inside ``limits``."""
-    from matplotlib.colors import ListedColormap
     from matplotlib.patches import Rectangle
 
-    from sonarcarve.plotting import plot_walls
+    from sonarcarve.plotting import plot_trinary, plot_walls
 
-    cells = grid.cells
-    shade = np.select([cells == FREE, cells == OCCUPIED], [0, 2], 1)
-    x0, y0, x1, y1 = grid.extent
-    ax.imshow(shade, origin="lower", extent=(x0, x1, y0, y1), cmap=ListedColormap(_CELL_COLORS),
-              vmin=0, vmax=2, interpolation="nearest", zorder=1)
+    plot_trinary(grid.cells, grid.extent, ax, zorder=1)
     plot_walls(result.world.segments, ax, colors=_WALL_COLOR, linewidths=linewidth,
                alpha=0.8, zorder=3)
     if box is not None:
@@ -189,7 +182,7 @@ def _legend_handles() -> list[object]:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    free, unknown, occupied = _CELL_COLORS
+    free, unknown, occupied = TRINARY_COLORS
     return [Patch(facecolor=occupied, edgecolor="k", label="occupied"),
             Patch(facecolor=free, edgecolor="k", label="free"),
             Patch(facecolor=unknown, edgecolor="k", label="unknown"),
