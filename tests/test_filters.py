@@ -109,6 +109,7 @@ def test_stream_and_batch_make_the_same_decisions(
     ({"min_range": math.nan}, "min_range must be"),
     ({"jump_threshold": 0.0}, "jump_threshold must be"),
     ({"max_range": 1.0, "min_range": 2.0}, "exceeds max_range"),
+    ({"max_range": True}, "max_range must be a finite number > 0 .metres., got bool"),
 ])
 def test_bad_reading_filter_parameters(kwargs: dict[str, float], text: str) -> None:
     with pytest.raises(FilterError, match=text):
@@ -119,6 +120,8 @@ def test_bad_reading_filter_parameters(kwargs: dict[str, float], text: str) -> N
     ({"max_error": -0.1}, "max_error must be"),
     ({"outlier_radius": math.inf}, "outlier_radius must be"),
     ({"outlier_radius": 1.0, "outlier_neighbours": 0}, "outlier_neighbours must be"),
+    ({"min_confidence": -0.01}, "min_confidence must lie in"),
+    ({"min_confidence": 1.01}, "min_confidence must lie in"),
 ])
 def test_bad_map_filter_parameters(kwargs: dict[str, float], text: str) -> None:
     with pytest.raises(FilterError, match=text):
@@ -302,3 +305,24 @@ def test_min_confidence_filter_keeps_unknown_and_threshold() -> None:
     assert MapFilter(min_confidence=0.5).active
     with pytest.raises(FilterError):
         MapFilter(min_confidence=1.5)
+
+
+def test_min_confidence_accepts_both_ends_of_zero_to_one() -> None:
+    # A probability threshold: 0 keeps everything, 1 keeps only certain (and unknown) points.
+    pts = dataclasses.replace(_points(LocalMap, [[0, 0], [1, 0], [2, 0]], [0.1] * 3),
+                              confidence=np.array([1.0, 0.999, np.nan]))
+    assert filter_map(pts, MapFilter(min_confidence=1.0)).points.reading_id.tolist() == [10, 12]
+    assert len(filter_map(pts, MapFilter(min_confidence=0.0)).points) == 3
+
+
+def test_each_map_filter_counts_only_what_it_dropped() -> None:
+    # Five points: 10 has a low confidence, 11 a large error, 13 is alone, 12 and 14 vouch for
+    # each other. Confidence runs first, then max_error, then the outlier test: 1 + 1 + 1.
+    pts = dataclasses.replace(
+        _points(GlobalMap, [[0, 0], [0.1, 0], [5, 5], [9, 9], [5.1, 5]], [0.01, 0.9, 0.01, 0.01,
+                                                                            0.01]),
+        confidence=np.array([0.1, 0.9, 0.9, 0.9, 0.9]))
+    out = filter_map(pts, MapFilter(min_confidence=0.5, max_error=0.5, outlier_radius=0.2))
+    assert out.points.reading_id.tolist() == [12, 14]
+    r = out.report
+    assert (r.total, r.confidence, r.max_error, r.outliers, r.kept) == (5, 1, 1, 1, 2)

@@ -115,3 +115,54 @@ def test_an_out_dir_that_cannot_be_made_names_the_parameter(tmp_path: Path) -> N
     with pytest.raises(OutputError) as caught:
         map_logs([tmp_path / "a.csv"], blocker / "maps", "carve")
     assert str(caught.value).startswith(f"out_dir {blocker / 'maps'}: ")
+
+
+def test_a_folder_is_a_rosbag2_bag_and_a_csv_is_not(tmp_path: Path) -> None:
+    from sonarcarve.fleet import is_bag
+
+    folder = tmp_path / "rosbag2_2024_05_01"
+    folder.mkdir()
+    assert is_bag(folder)
+    assert is_bag(tmp_path / "run.db3")
+    assert not is_bag(tmp_path / "run.csv")
+    assert map_name(folder) == "rosbag2_2024_05_01.map.csv"
+
+
+def test_summary_measures_are_those_of_processing_the_log(logs: list[Path],
+                                                           serial: Path) -> None:
+    # The fleet maps each log "as sonarcarve process does": its row carries that run's
+    # measures, the unprocessed share in percent.
+    from sonarcarve.io import read_readings_csv
+    from sonarcarve.methods import MethodConfig, make_method
+    from sonarcarve.pipeline import process_readings
+
+    batch = read_readings_csv(logs[0])
+    result = process_readings(batch, make_method("carve", MethodConfig()))
+    assert result.fully_carved != result.split  # a swap of the two would show
+    row = _summary(serial)[0]
+    data_lines = len(logs[0].read_text().splitlines()) - 1
+    assert int(row["readings"]) == data_lines == result.readings
+    assert int(row["points"]) == len(result.global_map)
+    assert (int(row["fully_carved"]), int(row["split"])) == (result.fully_carved, result.split)
+    assert float(row["unprocessed"]) == 100.0 * result.mean_unprocessed_share
+    assert 1.0 < float(row["unprocessed"]) <= 100.0
+
+
+@pytest.mark.parametrize(("error", "reason"), [
+    (ZeroDivisionError("float division by zero"), "ZeroDivisionError: float division by zero"),
+    (RuntimeError(), "RuntimeError"),
+    (OutputError("map.csv: disk full,\n  try again"), "map.csv: disk full, try again"),
+])
+def test_a_crash_on_one_log_is_one_line_naming_unexpected_errors(
+        logs: list[Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        error: Exception, reason: str) -> None:
+    from sonarcarve import fleet
+    from sonarcarve.methods import MethodConfig
+
+    def crash(*args: object, **kwargs: object) -> None:
+        raise error
+
+    monkeypatch.setattr(fleet, "process_readings", crash)
+    row = fleet.map_log(str(logs[0]), str(tmp_path / "m.csv"), "carve", MethodConfig())
+    assert (row.ok, row.error, row.map) == (False, reason, "")
+    assert not (tmp_path / "m.csv").exists()

@@ -1,6 +1,7 @@
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -64,3 +65,54 @@ def test_memory_does_not_grow_with_the_log() -> None:
         history.append(_reading(k), k, 0.4)
         sizes.add(history.x.nbytes)
     assert sizes == {np.zeros(10).nbytes}
+
+
+def _arrays(ids: range) -> dict[str, np.ndarray]:
+    """append_many's columns for readings ``ids`` as :func:`_reading` makes them."""
+    k = np.array(ids, dtype=np.float64)
+    return {"x": 0.1 * k, "y": np.zeros(len(k)), "r": 1.0 + k, "theta": np.zeros(len(k)),
+            "t": k, "sensor": np.array(ids, dtype=np.int64) % 16,
+            "beam_width": np.full(len(k), 0.4)}
+
+
+def test_append_many_across_the_end_of_the_storage_numbers_every_arc() -> None:
+    # Capacity 3: storage of 6 rows. 4 arcs one by one (slots 0-3); arc 0 has retired. A block
+    # of 3 then fills slots 4, 5 and, wrapping, 0: ids 4, 5, 6 whichever part they land in.
+    evicted: list[int] = []
+    history = SonarHistory(3)
+    history._on_evict = lambda slots: evicted.extend(history.reading_id[slots].tolist())
+    for k in range(4):
+        history.append(_reading(k), k, 0.4)
+    history.commit_for_room()  # room 2: nothing to commit yet
+    assert (evicted, history.room()) == ([], 2)
+    history.flush_retired()
+    assert (evicted, history.room()) == ([0], 3)
+    history.append_many(**_arrays(range(4, 7)), first_id=4)
+    assert history.reading_id.tolist() == [6, 1, 2, 3, 4, 5]
+    assert history.r.tolist() == [7.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    assert history.theta2.tolist() == [0.2] * 6
+    assert history.reading_id[history.slots()].tolist() == [4, 5, 6]
+    assert history.room() == 0
+    history.commit_for_room()  # arcs 1, 2, 3 have retired too (3 live of 7 appended)
+    assert evicted == [0, 1, 2, 3]
+    assert history.room() == 3
+
+
+def test_append_many_refuses_more_arcs_than_room() -> None:
+    history = SonarHistory(2)  # storage of 4 rows
+    history.append_many(**_arrays(range(3)), first_id=0)
+    assert history.room() == 1
+    with pytest.raises(ValueError, match="append_many of 2 arcs with room for 1"):
+        history.append_many(**_arrays(range(3, 5)), first_id=3)
+    assert history.appended == 3
+
+
+def test_window_is_the_live_arcs_right_after_an_arc_was_appended() -> None:
+    history = SonarHistory(3)
+    for k in range(5):
+        history.append(_reading(k), k, 0.4)
+    ids = history.reading_id
+    assert ids[history.window(0)].tolist() == [0]
+    assert ids[history.window(1)].tolist() == [0, 1]
+    assert ids[history.window(3)].tolist() == [1, 2, 3]
+    assert ids[history.window(4)].tolist() == [2, 3, 4]

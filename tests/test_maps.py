@@ -308,3 +308,22 @@ def test_sink_only_before_the_first_reading() -> None:
     assert method.global_map().reading_id.tolist() == []  # still the in-memory map
     assert method.finish().reading_id.tolist() == [0]
     assert method.committed_points == 1
+
+
+def test_counting_sink_counts_each_source_apart() -> None:
+    counting = CountingSink()
+    counting.commit(_points(GlobalMap, [0, 1, 2, 3], [PointSource.CARVED, PointSource.ATM,
+                                                      PointSource.ATM, PointSource.CENTERLINE]))
+    counting.count(np.array([2, 1, 1, 1], dtype=np.int8))
+    # by_source is indexed by code: centerline 0, carved 1, atm 2.
+    assert counting.by_source.tolist() == [1, 4, 3]
+    assert counting.points == 8
+
+
+def test_a_confidence_of_the_wrong_length_is_refused() -> None:
+    base = _points(LocalMap, [0, 1, 2])
+    fields = {name: getattr(base, name) for name in (
+        "reading_id", "t", "sensor", "xy", "source", "width", "max_error", "range")}
+    with pytest.raises(ValueError, match="confidence has 2 values for 3 points"):
+        LocalMap(**fields, confidence=np.array([0.5, 0.5]))
+    assert np.isnan(LocalMap(**fields).confidence).tolist() == [True] * 3  # left out: unknown

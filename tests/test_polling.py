@@ -291,3 +291,45 @@ def test_poll_time_must_increase_and_values_keep_their_length() -> None:
         poller.feed(1.0, [1, 2])
     with pytest.raises(PollingError, match="3 values, expected 2"):
         poller.feed(2.0, [1, 2, 3])
+
+
+def test_l_s_own_sensor_changing_again_is_a_whole_cycle() -> None:
+    # Order 0, 1; timeout 0.1. Sensor 0 fired in (0, 0.04]: it is l. At 0.2 only sensor 0 has
+    # changed again, so sensor 1 fired in between (with its old value) and then sensor 0:
+    # T1 in [T_l, T_l + 0.1] = [0, 0.14]; T2 in (0.04, 0.2] and T2 <= T1 + 0.1 = 0.24.
+    got = _feed(SonarPoller([0, 1], timeout=0.1),
+                [(0.0, [1.0, 2.0]), (0.04, [1.5, 2.0]), (0.2, [1.7, 2.0])])
+    assert got == [[], [(0, "CHANGED", 0.0, 0.04, 1.5)],
+                   [(1, "BETWEEN", 0.0, 0.14, 2.0), (0, "CHANGED", 0.04, 0.2, 1.7)]]
+
+
+def test_stamped_firing_error_bound_is_half_its_interval() -> None:
+    poller = SonarPoller([0, 1], timeout=0.1)
+    poller.feed(0.0, [1.0, 2.0])
+    (f,) = poller.feed(0.04, [1.5, 2.0])
+    assert (f.t_low, f.t_high) == (0.0, 0.04)
+    assert f.error_bound == pytest.approx(0.02)
+
+
+def test_readings_come_out_in_time_order_with_their_firing_index() -> None:
+    # Firings listed out of time order (as a caller may build them): the readings are sorted by
+    # stamp, and `firing` still names each one's row in the firings.
+    firings = StampedFirings(
+        sensor=np.array([0, 1, 0]), value=np.array([1.0, 2.0, 3.0]), t=np.array([0.3, 0.1, 0.2]),
+        t_low=np.array([0.25, 0.05, 0.15]), t_high=np.array([0.35, 0.15, 0.25]),
+        cause=np.zeros(3, dtype=np.int8), poll=np.array([3, 1, 2]), x=np.zeros(3),
+        y=np.zeros(3), heading=np.zeros(3))
+    out = readings_from_firings(firings, [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    assert out.batch.t.tolist() == [0.1, 0.2, 0.3]
+    assert out.firing.tolist() == [1, 2, 0]
+    assert out.batch.range.tolist() == [2.0, 3.0, 1.0]
+    np.testing.assert_allclose(out.stamp_error, [0.05, 0.05, 0.05])
+
+
+def test_sequential_firings_refuse_a_zero_gap() -> None:
+    # Two firings at the same instant break "one at a time" (A1).
+    with pytest.raises(PollingError, match="must stay > 0"):
+        sequential_firings([0, 1], [0.1, 0.0], 4)
+    t, sensor = sequential_firings([0, 1], [0.1, 0.2], 4, t0=1.0)
+    np.testing.assert_allclose(t, [1.0, 1.1, 1.3, 1.4])
+    assert sensor.tolist() == [0, 1, 0, 1]

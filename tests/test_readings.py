@@ -173,3 +173,28 @@ def test_a_batch_built_directly_has_unknown_max_ranges() -> None:
                           theta=batch.theta, range=batch.range, beam_width=batch.beam_width)
     assert direct.max_range.shape == (len(batch),)
     assert np.isnan(direct.max_range).all()
+
+
+def test_integer_sensors_are_accepted_up_to_the_limit() -> None:
+    from sonarcarve.readings import MAX_SENSOR
+
+    limit = 2**31 - 1  # the documented bound, written out
+    assert limit == MAX_SENSOR
+    batch = _batch(sensor=np.array([0, 15, limit], dtype=np.int64))
+    assert batch.sensor.tolist() == [0, 15, limit]
+    with pytest.raises(ReadingsError, match=r"row 2, column 'sensor' must be at most 2147483647"):
+        _batch(sensor=np.array([0, 15, limit + 1], dtype=np.int64))
+
+
+@pytest.mark.parametrize("sensor", [np.int64(3), np.int32(3), 3.0])
+def test_a_numpy_or_float_sensor_is_held_to_the_same_edges(sensor: object) -> None:
+    # A sensor that is no Python int misses check_reading's fast test and is examined field by
+    # field: that path must accept exactly what the fast one does (same time as the previous
+    # reading: several sensors fire together; a range at the 10 km bound or at max_range).
+    check_reading(Reading(5.0, sensor, 0.0, 0.0, 0.0, 1.0), 0, previous_t=5.0)  # type: ignore[arg-type]
+    check_reading(Reading(5.0, sensor, 0.0, 0.0, 0.0, 1e4), 0)  # type: ignore[arg-type]
+    check_reading(Reading(5.0, sensor, 0.0, 0.0, 0.0, 2.5, math.nan, 2.5), 0)  # type: ignore[arg-type]
+    with pytest.raises(ReadingsError, match="reading 4, column 't' goes backwards in time"):
+        check_reading(Reading(4.9, sensor, 0.0, 0.0, 0.0, 1.0), 4, previous_t=5.0)  # type: ignore[arg-type]
+    with pytest.raises(ReadingsError, match="reading 4, column 'range' must be at most 10,000 m"):
+        check_reading(Reading(5.0, sensor, 0.0, 0.0, 0.0, 10_000.001), 4)  # type: ignore[arg-type]

@@ -123,3 +123,71 @@ def test_a_bad_spec_names_the_parameter_not_a_flag(spec: dict[str, object],
     with pytest.raises(RunnerError) as caught:
         RunnerSpec(**spec)  # type: ignore[arg-type]
     assert str(caught.value) == message
+
+
+def _divide(a: float, b: float) -> float:
+    return a / b
+
+
+def _seen(value: object) -> object:
+    _SEEN.append(value)
+    return value
+
+
+_SEEN: list[object] = []
+
+
+def test_a_task_after_a_failed_one_fails_with_its_error_without_running() -> None:
+    _SEEN.clear()
+    tasks = [Task(_divide, (1.0, 0.0), gather=False), Task(_seen, (Ref(0),)),
+             Task(_divide, (1.0, 4.0))]
+    results = dict(SerialRunner().run(tasks, capture_errors=True))
+    assert results == {1: TaskFailure("ZeroDivisionError: float division by zero"), 2: 0.25}
+    assert _SEEN == []  # the dependent task never ran on the failure
+
+
+class _Result:
+    """A result that can be watched with a weak reference."""
+
+
+def _make() -> _Result:
+    return _Result()
+
+
+def _ignore(value: object) -> int:
+    return 1
+
+
+def test_the_serial_runner_drops_a_result_once_its_last_dependent_ran() -> None:
+    import gc
+    import weakref
+
+    refs: list[weakref.ref[_Result]] = []
+
+    def keep(value: _Result) -> int:
+        refs.append(weakref.ref(value))
+        return 1
+
+    tasks = [Task(_make, gather=False), Task(keep, (Ref(0),)), Task(_ignore, (0,)),
+             Task(_ignore, (0,))]
+    run = SerialRunner().run(tasks)
+    assert next(run) == (1, 1)
+    assert next(run) == (2, 1)  # the task after the last dependent has run
+    gc.collect()
+    assert refs[0]() is None
+    assert list(run) == [(3, 1)]
+
+
+def test_the_scheduler_comes_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://10.0.0.7:8786")
+    assert RunnerSpec.from_env(workers=2).scheduler == "tcp://10.0.0.7:8786"
+    assert RunnerSpec.from_env(2, "tcp://host:1").scheduler == "tcp://host:1"  # the flag wins
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS")
+    assert RunnerSpec.from_env(workers=2).scheduler is None
+
+
+def test_only_one_local_worker_is_serial() -> None:
+    assert RunnerSpec(1).serial
+    assert not RunnerSpec(2).serial
+    assert RunnerSpec(2).describe() == "local Dask cluster of 2 workers"
+    assert not RunnerSpec(1, "tcp://host:8786").serial

@@ -14,6 +14,7 @@ from sonarcarve.io.atomic import (
     check_output_dir,
     check_output_file,
     make_output_dir,
+    remove_stale,
 )
 from sonarcarve.io.errors import OutputError
 
@@ -204,3 +205,37 @@ def test_a_long_target_name_gets_a_temporary_name_that_fits(tmp_path: Path) -> N
     with atomic_text(target) as handle:
         handle.write("x\n")
     assert target.read_text() == "x\n"
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_a_written_file_has_the_usual_permissions(tmp_path: Path, umask: int,
+                                                  mode: int) -> None:
+    # As open() would make it (0o666 less the umask), not mkstemp's private 0o600: a map must
+    # be readable by the ROS node of another user when the umask says so.
+    import os
+
+    old = os.umask(umask)
+    try:
+        with atomic_text(tmp_path / "map.csv") as handle:
+            handle.write("x\n")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "map.csv").stat().st_mode & 0o777 == mode
+
+
+def test_a_live_writer_of_this_process_keeps_its_temporary(tmp_path: Path) -> None:
+    target = tmp_path / "map.csv"
+    with atomic_path(target) as tmp:
+        tmp.write_text("partial")
+        assert remove_stale(target) == []  # another writer of the same file, same process
+        assert tmp.exists()
+    assert target.read_text() == "partial"
+
+
+def test_atomic_paths_keep_each_target_s_suffix_on_its_temporary(tmp_path: Path) -> None:
+    # Writers that choose a format by the file's ending (an image by .png) see the target's.
+    with atomic_paths(tmp_path / "a.png", tmp_path / "b.yaml") as (png, yml):
+        assert (png.suffix, yml.suffix) == (".png", ".yaml")
+        png.write_bytes(b"1")
+        yml.write_bytes(b"2")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.yaml"]

@@ -336,3 +336,26 @@ def test_a_file_that_is_not_utf8_names_its_line(tmp_path: Path) -> None:
     with pytest.raises(SonarcarveError) as info:
         read_map_csv(path)
     assert str(info.value) == f"{path}: line 3, cannot read as CSV: not UTF-8 text (byte 0xbd)"
+
+
+def test_spaces_around_header_names_and_labels_are_read(tmp_path: Path) -> None:
+    # A map typed by hand or by a spreadsheet, with a space after every comma.
+    path = tmp_path / "map.csv"
+    path.write_text("id, t, sensor, x, y, source, width, max_error, confidence\n"
+                    "4, 1.5, 2, 0.25, -1.0, carved, 0.125, 0.5, 0.75\n", encoding="utf-8")
+    back = read_map_csv(path)
+    assert back.reading_id.tolist() == [4]
+    assert back.source.tolist() == [PointSource.CARVED]
+    assert back.xy.tolist() == [[0.25, -1.0]]
+    assert (back.width.tolist(), back.max_error.tolist()) == ([0.125], [0.5])
+    assert back.confidence.tolist() == [0.75]
+
+
+def test_a_row_without_the_appended_confidence_cell_reads_it_as_unknown(tmp_path: Path) -> None:
+    # Only the first eight columns are required on a row; a missing confidence is "not modelled".
+    path = tmp_path / "map.csv"
+    path.write_text(WRITTEN_HEADER + "\n0,0.0,2,1.0,-2.5,atm,0.5,0.75\n"
+                    "1,0.1,3,1.0,-2.5,atm,0.5,0.75,0.25\n", encoding="utf-8")
+    back = read_map_csv(path)
+    np.testing.assert_array_equal(back.confidence, [np.nan, 0.25])
+    assert back.sensor.tolist() == [2, 3]

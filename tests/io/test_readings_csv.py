@@ -601,3 +601,42 @@ def test_run_wide_max_range_fills_unknown_ones(tmp_path: Path) -> None:
     np.testing.assert_array_equal(read_readings_csv(path, max_range=5.0).max_range, [3.0, 5.0])
     with pytest.raises(ValueError, match="max_range must be a finite number > 0"):
         read_readings_csv(path, max_range=0.0)
+
+
+def test_spaces_around_header_names_are_read(tmp_path: Path) -> None:
+    path = tmp_path / "r.csv"
+    path.write_text("t, sensor, x, y, theta, range\n0.5, 3, 1.0, -2.0, 0.25, 1.5\n")
+    batch = read_readings_csv(path)
+    assert (batch.t.tolist(), batch.sensor.tolist(), batch.range.tolist()) == ([0.5], [3], [1.5])
+    assert (batch.x.tolist(), batch.y.tolist(), batch.theta.tolist()) == ([1.0], [-2.0], [0.25])
+
+
+def test_several_unnamed_columns_are_ignored_not_duplicates(tmp_path: Path) -> None:
+    # A spreadsheet export with two empty trailing columns: unnamed columns are extra columns.
+    path = tmp_path / "r.csv"
+    path.write_text("t,sensor,x,y,theta,range,,\n0.0,1,0.0,0.0,0.0,2.0,,\n")
+    batch = read_readings_csv(path)
+    assert (batch.sensor.tolist(), batch.range.tolist()) == ([1], [2.0])
+
+
+def test_counting_lines_does_not_consume_a_pipe(tmp_path: Path) -> None:
+    # A log given as a pipe (`sonarcarve process <(zcat log.csv.gz)`) can be read only once:
+    # counting its lines for a progress bar must not read it (0: unknown).
+    import os
+    import threading
+
+    fifo = tmp_path / "log.csv"
+    os.mkfifo(fifo)
+
+    def write() -> None:
+        try:
+            with fifo.open("w") as handle:
+                handle.write(HEADER + "0.0,1,0.0,0.0,0.0,2.0\n" * 3)
+        except BrokenPipeError:
+            pass  # the counter closed its end without reading: what it should do
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    assert count_data_lines(fifo) == 0
+    writer.join(timeout=10)
+    assert not writer.is_alive()

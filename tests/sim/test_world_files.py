@@ -250,3 +250,54 @@ def test_world_json_yaml_bomb_and_size_cap(tmp_path: Path) -> None:
         handle.write('{"segments": [' + "[0, 0, 1, 1], " * 1_200_000 + "[0, 0, 1, 1]]}")
     with pytest.raises(WorldError, match="larger than the limit of 16,777,216 bytes"):
         load_world(big)
+
+
+# One occupied pixel, top-left, in a 3 x 3 image at 1 m per pixel and origin (0, 0): its walls
+# are the square x in [0, 1], y in [2, 3] (image row 0 is the top of the map).
+TOP_LEFT_CELL = (0.0, 2.0, 1.0, 3.0)
+
+
+def _one_cell_map(tmp_path: Path, corner: int, rest: list[int], **meta: object) -> World:
+    """A 3 x 3 map whose top-left pixel is ``corner`` and whose other pixels cycle ``rest``."""
+    pixels = np.resize(np.array(rest), 9).reshape(3, 3)
+    pixels[0, 0] = corner
+    fields = {"resolution": 1.0, "origin": [0.0, 0.0, 0.0], **meta}
+    return read_ros_map(_write_map(tmp_path, pixels, **fields))
+
+
+def test_ros_map_occupancy_equal_to_occupied_thresh_is_not_occupied(tmp_path: Path) -> None:
+    # map_server: occupied when occupancy > occupied_thresh. Pixel 51 is (255 - 51) / 255 = 0.8
+    # exactly, pixel 50 is 0.804: with occupied_thresh 0.8 only the 50 is a wall.
+    world = _one_cell_map(tmp_path, 50, [51], occupied_thresh=0.8)
+    assert (len(world), world.bounds) == (4, TOP_LEFT_CELL)
+
+
+def test_ros_map_without_occupied_thresh_takes_map_server_s_065(tmp_path: Path) -> None:
+    # Pixel 76 is 0.702 occupied (> 0.65), pixel 102 is 0.6 (not, though it is > 0.5).
+    fields = {"resolution": 1.0, "origin": [0.0, 0.0, 0.0]}
+    path = _write_map(tmp_path, np.array([[76, 102, 102], [102, 254, 254], [102, 254, 254]]),
+                      **fields)
+    meta = yaml.safe_load(path.read_text())
+    del meta["occupied_thresh"]
+    path.write_text(yaml.safe_dump(meta))
+    world = read_ros_map(path)
+    assert (len(world), world.bounds) == (4, TOP_LEFT_CELL)
+
+
+def test_ros_map_raw_mode_reads_pixels_as_percent_and_255_as_unknown(tmp_path: Path) -> None:
+    # mode raw: the pixel is the occupancy in percent; 80 > 65 is occupied, 255 (-1 as int8:
+    # unknown) and 10 are not.
+    world = _one_cell_map(tmp_path, 80, [255, 10], mode="raw")
+    assert (len(world), world.bounds) == (4, TOP_LEFT_CELL)
+
+
+def test_ros_map_origin_yaw_turns_the_map_about_the_origin(tmp_path: Path) -> None:
+    # Yaw +90 degrees: (x, y) -> (-y, x); the cell [0, 1] x [2, 3] goes to [-3, -2] x [0, 1].
+    world = _one_cell_map(tmp_path, 0, [254], origin=[0.0, 0.0, float(np.pi / 2)])
+    assert len(world) == 4
+    assert world.bounds == pytest.approx((-3.0, 0.0, -2.0, 1.0), abs=1e-12)
+
+
+def test_ros_map_negate_must_be_0_or_1(tmp_path: Path) -> None:
+    with pytest.raises(WorldError, match="negate must be 0 or 1, got 2"):
+        _one_cell_map(tmp_path, 0, [254], negate=2)
