@@ -198,3 +198,25 @@ def test_a_numpy_or_float_sensor_is_held_to_the_same_edges(sensor: object) -> No
         check_reading(Reading(4.9, sensor, 0.0, 0.0, 0.0, 1.0), 4, previous_t=5.0)  # type: ignore[arg-type]
     with pytest.raises(ReadingsError, match="reading 4, column 'range' must be at most 10,000 m"):
         check_reading(Reading(5.0, sensor, 0.0, 0.0, 0.0, 10_000.001), 4)  # type: ignore[arg-type]
+
+
+def test_a_bool_is_refused_as_a_sensor_only() -> None:
+    """The one rule everywhere: a sensor given as a bool is refused (a mask or flag in the wrong
+    place), by check_reading and by a batch alike; a bool coordinate is the number 0 or 1."""
+    import pytest
+
+    from sonarcarve.errors import ReadingsError, ReadingTypeError
+    from sonarcarve.readings import Reading, ReadingBatch, check_reading
+
+    with pytest.raises(ReadingTypeError, match="column 'sensor' must be a real number, got bool"):
+        check_reading(Reading(0.0, True, 0.0, 0.0, 0.0, 1.0), 0)
+    with pytest.raises(ReadingsError, match="column 'sensor' holds booleans"):
+        ReadingBatch.from_arrays(t=[0.0], sensor=[True], x=[0.0], y=[0.0], theta=[0.0],
+                                 range=[1.0])
+    check_reading(Reading(0.0, 0, True, 0.0, 0.0, 1.0), 0)  # x = 1
+    # A bool coordinate on a reading with another problem: the message names the problem.
+    with pytest.raises(ReadingsError, match="column 'range' must be > 0"):
+        check_reading(Reading(0.0, 0, True, 0.0, 0.0, -1.0), 0)
+    batch = ReadingBatch.from_arrays(t=[0.0], sensor=[0], x=[True], y=[0.0], theta=[0.0],
+                                     range=[1.0])
+    assert batch.x.tolist() == [1.0]

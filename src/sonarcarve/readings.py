@@ -385,14 +385,18 @@ def check_reading(reading: Reading, reading_id: int, previous_t: float = -math.i
 
 def _check_types(reading: object, where: _Where) -> None:
     """:class:`ReadingTypeError` for something that is no :class:`Reading` or has a field that is no
-    real number (``"abc"``, ``None``, ``1+2j``), naming the field."""
+    real number (``"abc"``, ``None``, ``1+2j``), naming the field.
+
+    A bool is refused as the sensor only: an index given as ``True`` is almost always a mask or a
+    flag passed in the wrong place, while a bool coordinate is the number Python says it is (the
+    fast test of :func:`check_reading` and a batch's float columns take it as 0 or 1 too)."""
     if not isinstance(reading, Reading):
         size = f" of {len(reading)} values" if isinstance(reading, tuple) else ""
         msg = (f"{where.row(0)}: expected a Reading(t, sensor, x, y, theta, range[, "
                f"beam_width, max_range]), got {type(reading).__name__}{size}")
         raise ReadingTypeError(msg)
     for name, value in zip(Reading._fields, reading, strict=True):
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        if (isinstance(value, bool) and name == "sensor") or not isinstance(value, numbers.Real):
             shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
             msg = (f"{where.row(0)}, column {name!r} must be a real number, got "
                    f"{type(value).__name__} {shown}")
@@ -468,7 +472,11 @@ def _sensor_indices(sensor: npt.ArrayLike, where: _Where) -> IntArray:
     silently truncates or wraps (with a RuntimeWarning), which would report the wrong problem.
     """
     values = np.asarray(sensor).reshape(-1)
-    if values.dtype.kind in "iub":
+    if values.dtype.kind == "b":  # as check_reading refuses a bool sensor (see _check_types)
+        msg = (f"{where.source}: column 'sensor' holds booleans (sensors are whole numbers; a "
+               "mask passed in its place?)")
+        raise ReadingsError(msg)
+    if values.dtype.kind in "iu":
         _first_bad(where, "sensor", values < 0, _NEGATIVE)
         _first_bad(where, "sensor", values > MAX_SENSOR, _TOO_LARGE)
         return values.astype(np.int64)

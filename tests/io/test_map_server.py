@@ -127,6 +127,26 @@ def test_read_a_map_written_by_hand(tmp_path: Path) -> None:
     assert (m.resolution, m.origin, m.image) == (0.25, (-1.0, 2.0, 0.0), "m.pgm")
 
 
+@pytest.mark.parametrize("pgm", [
+    # map_saver writes a comment line into the header; PGM allows one between any two fields.
+    b"P5\n# CREATOR: map_saver.cpp 0.100 m/pix\n2 2\n255\n" + bytes([0, 254, 205, 254]),
+    b"P5 2 # width\n2 255\n" + bytes([0, 254, 205, 254]),
+    # Bytes after the raster (a trailing newline, a second image) are not pixels of this one:
+    # a trailing 205 byte once shifted the whole image by one pixel, silently.
+    PGM_2X2 + b"\n",
+    PGM_2X2 + bytes([205]),
+])
+def test_read_takes_the_raster_right_after_the_header(tmp_path: Path, pgm: bytes) -> None:
+    m = read_map_server(_write_by_hand(tmp_path, pgm))
+    assert m.cells.tolist() == [[-1, 0], [100, 0]]
+
+
+def test_read_calls_a_short_raster_truncated(tmp_path: Path) -> None:
+    # One pixel short: it used to be read as if the header's last byte were a pixel.
+    with pytest.raises(InputError, match=r"2 x 2 pixels but 3 bytes of them \(truncated\?\)"):
+        read_map_server(_write_by_hand(tmp_path, PGM_2X2[:-1]))
+
+
 @pytest.mark.parametrize(("fields", "pgm", "match"), [
     ({"resolution": 0.0}, PGM_2X2, "resolution must be > 0"),
     ({"resolution": -0.1}, PGM_2X2, "resolution must be > 0"),

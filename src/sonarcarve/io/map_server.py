@@ -165,8 +165,37 @@ def _fail(path: Path, problem: str) -> NoReturn:
     raise InputError(msg)
 
 
+def _pgm_header(data: bytes) -> tuple[list[bytes], int] | None:
+    """The four header fields of a PGM (magic, width, height, maxval) and where its raster
+    starts: after the one whitespace byte that ends the header. Comments (``#`` to the end of
+    the line, as map_saver's ``# CREATOR: ...``) may come between the fields. None when the
+    header is incomplete."""
+    fields: list[bytes] = []
+    i = 0
+    while len(fields) < 4:
+        while i < len(data) and (data[i:i + 1].isspace() or data[i:i + 1] == b"#"):
+            if data[i:i + 1] == b"#":
+                end = data.find(b"\n", i)
+                if end < 0:
+                    return None
+                i = end
+            i += 1
+        start = i
+        while i < len(data) and not data[i:i + 1].isspace() and data[i:i + 1] != b"#":
+            i += 1
+        if start == i:
+            return None
+        fields.append(data[start:i])
+    if not data[i:i + 1].isspace():
+        return None
+    return fields, i + 1
+
+
 def _read_pgm(yaml_path: Path, image: str) -> npt.NDArray[np.uint8]:
-    """The pixels of a binary 8-bit PGM (P5, maxval 255), shape (rows, cols), top row first."""
+    """The pixels of a binary 8-bit PGM (P5, maxval 255), shape (rows, cols), top row first.
+
+    The raster is the ``rows * cols`` bytes right after the header; bytes after it (a trailing
+    newline, a second image) are ignored, as netpbm readers do."""
     where = f"image {shorten(image, 120)}"
     image_path = yaml_path.parent / image
     try:
@@ -180,14 +209,17 @@ def _read_pgm(yaml_path: Path, image: str) -> npt.NDArray[np.uint8]:
         _fail(yaml_path, f"{where}: cannot read ({err.strerror or err})")
     if len(data) > MAX_PGM_BYTES:
         _fail(yaml_path, f"{where}: larger than the limit of {MAX_PGM_BYTES:,} bytes")
-    parts = data.split(maxsplit=4)
-    if (len(parts) < 5 or parts[0] != b"P5" or parts[3] != b"255"
-            or not (parts[1].isdigit() and parts[2].isdigit())):
+    header = _pgm_header(data)
+    if header is None:
         _fail(yaml_path, f"{where}: not a binary 8-bit PGM")
-    cols, rows = int(parts[1]), int(parts[2])
-    body = data[len(data) - rows * cols:] if rows * cols else b""
-    if rows * cols > len(data) or len(body) != rows * cols:
-        _fail(yaml_path, f"{where}: {cols} x {rows} pixels but {len(data):,} bytes (truncated?)")
+    (magic, width, height, maxval), start = header
+    if magic != b"P5" or maxval != b"255" or not (width.isdigit() and height.isdigit()):
+        _fail(yaml_path, f"{where}: not a binary 8-bit PGM")
+    cols, rows = int(width), int(height)
+    body = data[start:start + rows * cols]
+    if len(body) != rows * cols:
+        _fail(yaml_path, f"{where}: {cols} x {rows} pixels but {len(body):,} bytes of them "
+                         "(truncated?)")
     return np.frombuffer(body, dtype=np.uint8).reshape(rows, cols)
 
 
