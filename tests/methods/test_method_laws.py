@@ -115,6 +115,23 @@ def test_global_map_has_one_row_per_surviving_reading_in_order(
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_blocks_give_the_map_of_one_reading_at_a_time(name: str, stream: ReadingBatch) -> None:
+    """Blocks of 53 readings (prime to the history's 120, so the history's storage wraps inside
+    blocks and blocks straddle every commit) map the stream exactly as one reading at a time:
+    the same readings in the same global map, at the same points."""
+    single = _method(name)
+    for k in range(len(stream)):
+        single.add(stream[k])
+    blocks = _method(name)
+    for start in range(0, len(stream), 53):
+        blocks.add_many(stream[start : start + 53], first_id=start)
+    one, many = single.finish(), blocks.finish()
+    np.testing.assert_array_equal(many.reading_id, one.reading_id)
+    np.testing.assert_array_equal(many.xy, one.xy)
+    np.testing.assert_array_equal(many.width, one.width)
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_shares_are_within_zero_and_one(name: str, stream: ReadingBatch) -> None:
     method = _method(name)
     for start in range(0, len(stream), 29):
