@@ -27,7 +27,7 @@ from sonarcarve.grids.carved.params import (
     DEFAULT_METHOD,
     CarvedGridParams,
 )
-from sonarcarve.grids.carved.periods import FiringPeriods
+from sonarcarve.grids.carved.periods import LOOP_BATCH, FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
 from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.elfes import MAX_CELLS
@@ -254,10 +254,20 @@ class CarvedGrid(CellGrid):
         """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
         heard nothing (its arc is then no sensor's newest)."""
         newest = self._newest
-        # In order, the last reading of each sensor wins; a loop, because a robot's batches are
-        # a few readings and np.unique costs more than the loop for them.
-        for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(), strict=True):
-            newest[s] = -1 if silent else seq
+        # In order, the last reading of each sensor wins; a loop for a robot's few readings, where
+        # np.unique costs more than the loop; for a whole log each sensor once, new sensors
+        # entered in the order of their first reading as the loop enters them.
+        if len(sensor) <= LOOP_BATCH:
+            for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(),
+                                      strict=True):
+                newest[s] = -1 if silent else seq
+            return
+        value = np.where(no_echo, -1, seqs)
+        ids, first = np.unique(sensor, return_index=True)
+        last = len(sensor) - 1 - np.unique(sensor[::-1], return_index=True)[1]
+        order = np.argsort(first, kind="stable")
+        for s, k in zip(ids[order].tolist(), last[order].tolist(), strict=True):
+            newest[s] = int(value[k])
 
     def _mark_repeats(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
                       no_echo: BoolArray, half: FloatArray, first_seq: int) -> SlotArray:
