@@ -18,7 +18,7 @@ import numpy as np
 
 from sonarcarve.lab.demo.figures import map_limits, zoom_window
 from sonarcarve.lab.demo.results import DemoResult, GridSummary
-from sonarcarve.lab.grid_measures import NEAR_PATH
+from sonarcarve.lab.grid_measures import NEAR_PATH, GridMeasures
 from sonarcarve.plotting import TRINARY_COLORS, new_figure
 
 if TYPE_CHECKING:
@@ -32,7 +32,6 @@ __all__ = ["GRID_FIGURE_FILE", "GRID_FIGURE_TEXT", "free_verdict", "grid_verdict
 GRID_FIGURE_FILE = "fig5-occupancy-grids.png"
 #: What it shows, in a few words (printed by the CLI, listed in ``summary.md``).
 GRID_FIGURE_TEXT = "carved grid beside ROS's layer, over true walls"
-#: Cell colours: free, unknown, occupied (the map_server image's own shades, and black).
 _WALL_COLOR = "#e8000b"
 #: The close-up row is drawn only when fig. 2's window is smaller than this share of the map.
 _CLOSEUP_SHARE = 0.3
@@ -56,6 +55,14 @@ def _compare(ours: float, theirs: float, better: str, worse: str, same: str) -> 
     return same, 0
 
 
+def _carved_and_layer(result: DemoResult) -> tuple[GridMeasures, GridMeasures] | None:
+    """The measures of the carved grid and of ROS's layer; None unless the run built both."""
+    kinds = {g.kind for g in result.grids}
+    if not {"carved", "range-sensor-layer"} <= kinds:
+        return None
+    return result.grid("carved").measures, result.grid("range-sensor-layer").measures
+
+
 def grid_verdict(result: DemoResult) -> str:
     """Which grid is better, in one sentence with the numbers; empty without both grids.
 
@@ -65,10 +72,10 @@ def grid_verdict(result: DemoResult) -> str:
     Examples: "the carved grid is better: it is more precise (precision 0.83 against 0.67)
     and finds as much of the walls (recall 0.95 against 0.95)".
     """
-    kinds = {g.kind for g in result.grids}
-    if not {"carved", "range-sensor-layer"} <= kinds:
+    both = _carved_and_layer(result)
+    if both is None:
         return ""
-    ours, theirs = result.grid("carved").measures, result.grid("range-sensor-layer").measures
+    ours, theirs = both
     if np.isnan([ours.precision, ours.recall, theirs.precision, theirs.recall]).any():
         return "the grids cannot be compared: one marks no cell occupied or saw no wall"
     precise, p = _compare(ours.precision, theirs.precision, "more precise", "less precise",
@@ -94,11 +101,10 @@ def free_verdict(result: DemoResult) -> str:
 
     Examples: "ROS's layer marks more of the floor near the path free (97 against 94 %)".
     """
-    kinds = {g.kind for g in result.grids}
-    if not {"carved", "range-sensor-layer"} <= kinds:
+    both = _carved_and_layer(result)
+    if both is None:
         return ""
-    ours = 100.0 * result.grid("carved").measures.free_near_path
-    theirs = 100.0 * result.grid("range-sensor-layer").measures.free_near_path
+    ours, theirs = (100.0 * m.free_near_path for m in both)
     if np.isnan([ours, theirs]).any():
         return ""
     a, b = round(ours), round(theirs)
