@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.methods import METHODS
-from sonarcarve.warm import counting_compiles, warm_steps, warm_stream, warm_up
+from sonarcarve.warm import counting_compiles, warm_lanes, warm_steps, warm_stream, warm_up
 
 
 def _run(code: str, cache: Path) -> str:
@@ -57,6 +57,70 @@ def test_there_is_a_step_for_every_method_the_grids_and_the_csv_kernels() -> Non
     assert any("max_incidence" in name for name in names)
     assert any("grids" in name for name in names)
     assert any("CSV" in name for name in names)
+
+
+def test_every_step_is_in_one_lane_and_kernel_sharing_steps_share_a_lane() -> None:
+    lanes = [[name for name, _ in lane] for lane in warm_lanes()]
+    names = [name for lane in lanes for name in lane]
+    assert names == [name for name, _ in warm_steps()]
+    assert len(set(names)) == len(names)
+
+    def lane_of(name: str) -> int:
+        return next(k for k, lane in enumerate(lanes) if name in lane)
+
+    # Combined and specular-aware carving call carving's kernels; the carved grid calls
+    # evidence carving's (measured: apart, each would compile them again).
+    assert lane_of("method carve") == lane_of("method combined") == lane_of(
+        "method carve, max_incidence 60 deg")
+    assert lane_of("method evidence") == lane_of("grid carved")
+    assert lane_of("method carve") != lane_of("method evidence")
+
+
+def test_a_parallel_warm_up_compiles_in_other_processes_and_leaves_nothing_to_compile(
+        tmp_path: Path) -> None:
+    """Two lanes in two processes, then a fresh process finds everything in the cache."""
+    (tmp_path / "cheap_lanes.py").write_text(textwrap.dedent("""
+        import os
+        from sonarcarve.warm import warm_lanes
+
+        KEEP = ("method centerline", "CSV reader and map writer")
+
+        def lanes():
+            def noted(step):
+                def run():
+                    with open(os.environ["PIDS"], "a") as out:
+                        out.write(f"{os.getpid()}\\n")
+                    step()
+                return run
+            return [[(name, noted(step)) for name, step in lane if name in KEEP]
+                    for lane in warm_lanes() if any(name in KEEP for name, _ in lane)]
+        """))
+    code = f"""
+    import os, sys
+    sys.path.insert(0, {str(tmp_path)!r})
+    os.environ["PIDS"] = {str(tmp_path / "pids.txt")!r}
+    import cheap_lanes
+    from sonarcarve.warm import warm_up
+    if __name__ == "__main__":
+        done = warm_up(lanes=cheap_lanes.lanes, jobs=2)
+        print("PARENT", os.getpid())
+        for what, _, count in done:
+            print("ROW", count, what)
+    """
+    out = _run(code, tmp_path / "cache")
+    rows = [line.split(maxsplit=2)[1:] for line in out.splitlines() if line.startswith("ROW")]
+    assert [what for _, what in rows] == ["CSV reader and map writer", "method centerline",
+                                          "every step again in one process"]
+    assert int(rows[0][0]) > 0
+    assert int(rows[1][0]) > 0
+    assert rows[2][0] == "0"  # so the last pass here found it all in the cache
+    parent = next(line for line in out.splitlines() if line.startswith("PARENT")).split()[1]
+    pids = (tmp_path / "pids.txt").read_text().split()
+    assert len(pids) == 4  # two steps in the workers, then both again here
+    assert parent not in pids[:2]
+    assert pids[2:] == [parent, parent]
+    run = _NORMAL_RUN.replace("sys.argv[1:]", "['centerline']")
+    assert _compiled_names(_run(run, tmp_path / "cache")) == []
 
 
 def test_warm_up_runs_every_step_and_reports_it(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -120,27 +184,6 @@ def test_a_cold_cache_compiles_so_the_check_below_can_fail(tmp_path: Path) -> No
     names = _compiled_names(_run(_NORMAL_RUN.replace("sys.argv[1:]", "['centerline']"),
                                  tmp_path))
     assert len(names) >= 5, names
-
-
-def test_after_warm_up_a_fresh_process_compiles_nothing_cheap(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """Centerline and the CSV kernels only: warmed in one process, used in another."""
-    warm = """
-    import sonarcarve.warm as w
-    steps = [s for s in w.warm_steps() if s[0] in ('method centerline',
-                                                   'CSV reader and map writer')]
-    w.warm_steps = lambda: steps
-    done = w.warm_up()
-    print('STEPS', len(done), sum(count for _, _, count in done))
-    """
-    out = _run(warm, tmp_path)
-    report = next(line for line in out.splitlines() if line.startswith("STEPS"))
-    steps, compiled = report.split()[1:]
-    assert steps == "2"
-    assert int(compiled) > 0
-    run = _NORMAL_RUN.replace("sys.argv[1:]", "['centerline']")
-    assert _compiled_names(_run(run, tmp_path)) == []
 
 
 @pytest.mark.slow

@@ -21,9 +21,10 @@ def stub_steps(monkeypatch: pytest.MonkeyPatch) -> list[str]:
              ("CSV beta", lambda: calls.append("beta"))]
     import sonarcarve.cli.warm as command
 
-    monkeypatch.setattr("sonarcarve.warm.warm_steps", lambda: steps)
-    monkeypatch.setattr(command, "warm_steps", lambda: steps)
+    monkeypatch.setattr(command, "warm_lanes", lambda: [steps[:1], steps[1:]])
     monkeypatch.setattr(command, "_demo_metrics", lambda: calls.append("demo"))
+    # Stubs cannot cross into other processes: one job, as on a 1-core machine.
+    monkeypatch.setattr(command, "default_jobs", lambda: 1)
     return calls
 
 
@@ -31,7 +32,7 @@ def test_help_says_what_it_is_for(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["warm", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.replace("│", " ").split())
     for phrase in ("Usage: sonarcarve warm [OPTIONS]", "first run", "several seconds",
-                   "NUMBA_CACHE_DIR", "__pycache__", "--quiet"):
+                   "NUMBA_CACHE_DIR", "__pycache__", "--quiet", "--jobs", "one per core"):
         assert phrase in text, phrase
 
 
@@ -71,6 +72,40 @@ def test_without_numba_cache_dir_it_names_the_package_folders(
     out = capsys.readouterr().out.replace("\n", "")
     assert "__pycache__" in out
     assert "sonarcarve" in out
+
+
+def test_more_jobs_hand_the_lanes_to_that_many_processes(
+    stub_steps: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import sonarcarve.cli.warm as command
+
+    asked: list[dict[str, object]] = []
+
+    def recording_warm_up(*args: object, **kwargs: object) -> list[tuple[str, float, int]]:
+        asked.append(kwargs)
+        return [("lane one", 1.0, 3), ("every step again in one process", 0.5, 0)]
+
+    monkeypatch.setattr(command, "warm_up", recording_warm_up)
+    assert main(["warm", "--jobs", "3"]) == 0
+    assert asked == [{"lanes": command.command_lanes, "jobs": 3}]
+    out = " ".join(capsys.readouterr().out.replace("│", " ").split())
+    assert "total, 3 processes at once (wall time) 3" in out
+    assert stub_steps == []  # nothing ran here: the processes run the lanes
+    # 0 (the default) is one per core; -1 is refused before anything runs.
+    monkeypatch.setattr(command, "default_jobs", lambda: 5)
+    assert main(["warm", "-q"]) == 0
+    assert asked[-1] == {"lanes": command.command_lanes, "jobs": 5}
+    assert main(["warm", "--jobs", "-1"]) == 2
+    assert len(asked) == 2
+
+
+def test_the_command_warms_every_product_lane_and_the_demo_kernel() -> None:
+    from sonarcarve.cli.warm import command_lanes
+    from sonarcarve.warm import warm_lanes
+
+    names = [[name for name, _ in lane] for lane in command_lanes()]
+    assert names == [[name for name, _ in lane] for lane in warm_lanes()] + [
+        ["demo's truth metrics"]]
 
 
 def test_an_unknown_option_is_one_line_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
