@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from pathlib import Path
 
@@ -16,10 +18,20 @@ from sonarcarve.lab.demo import DEMO_METHODS, FIGURE_FILES, GRID_FIGURE_FILE, ME
 PERCENT_FIELDS = ("unprocessed_pct", "fully_carved_pct", "spurious_removed_pct", "true_lost_pct")
 
 
-def test_cli_writes_every_figure_and_summary(tmp_path: Path,
-                                             capsys: pytest.CaptureFixture[str]) -> None:
-    out = tmp_path / "nested" / "demo"
-    assert main(["demo", "--world", "doorway", "--seed", "1", "--out", str(out)]) == 0
+@pytest.fixture(scope="module")
+def doorway_demo(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
+    """One ``sonarcarve demo`` run on the doorway world, into a folder it must create with its
+    parents: (that folder, what it printed). Shared by the tests that read its files (a run
+    costs several seconds)."""
+    out = tmp_path_factory.mktemp("demo") / "nested" / "demo"
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert main(["demo", "--world", "doorway", "--seed", "1", "--out", str(out)]) == 0
+    return out, printed.getvalue()
+
+
+def test_cli_writes_every_figure_and_summary(doorway_demo: tuple[Path, str]) -> None:
+    out, printed = doorway_demo
     names = sorted(p.name for p in out.iterdir())
     grid_files = ["carved-grid.yaml", "carved-grid.pgm", "range-sensor-layer.yaml",
                   "range-sensor-layer.pgm"]
@@ -47,7 +59,6 @@ def test_cli_writes_every_figure_and_summary(tmp_path: Path,
         assert 0.0 <= row["median_error_m"] <= row["p90_error_m"]
         assert row["readings_per_second"] > 0.0
 
-    printed = capsys.readouterr().out
     first_words = [METHOD_LABELS[m].split()[0] for m in DEMO_METHODS]
     table_rows = [line for line in printed.splitlines()
                   if line.split() and line.split()[0] in first_words]
@@ -76,9 +87,10 @@ def _pgm_pixels(path: Path) -> np.ndarray:
     return np.frombuffer(body, dtype=np.uint8).reshape(int(rows), int(cols))
 
 
-def test_cli_writes_each_grid_as_a_trinary_map_server_map(tmp_path: Path) -> None:
-    out = tmp_path / "demo"
-    assert main(["demo", "--world", "doorway", "--out", str(out)]) == 0
+def test_cli_writes_each_grid_as_a_trinary_map_server_map(
+    doorway_demo: tuple[Path, str],
+) -> None:
+    out, _ = doorway_demo
     summary = json.loads((out / "summary.json").read_text())
     grids = {g["kind"]: g for g in summary["grids"]}
     assert list(grids) == ["carved", "range-sensor-layer"]

@@ -19,6 +19,12 @@ def _assert_repr(values: np.ndarray) -> None:
     assert not wrong, wrong[:10]
 
 
+def _seeds(count: int) -> list[object]:
+    """Seeds ``0 .. count-1``: 0 in ``make test``, the others (the same checks on other random
+    values, a second each) marked slow, for ``make experiments``."""
+    return [0, *(pytest.param(seed, marks=pytest.mark.slow) for seed in range(1, count))]
+
+
 def test_the_forms_python_writes() -> None:
     values = np.array([0.0, 1.0, 0.1, 0.3, 100.0, 123.456, 1e15, 1e16, 1234567890123456.0,
                        9999999999999998.0, 1e-4, 1e-5, 0.00012345, 2.5e-7, 1.5e300, 1e22,
@@ -31,7 +37,7 @@ def test_the_forms_python_writes() -> None:
     _assert_repr(values)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", _seeds(3))
 def test_random_bit_patterns(seed: int) -> None:
     bits = np.random.default_rng(seed).integers(0, 2**64, 200_000, dtype=np.uint64)
     _assert_repr(bits.view(np.float64))
@@ -50,7 +56,7 @@ def test_powers_of_two_and_ten_and_their_neighbours() -> None:
                                  np.nextafter(powers, 0.0)]))
 
 
-@pytest.mark.parametrize("seed", range(2))
+@pytest.mark.parametrize("seed", _seeds(2))
 def test_values_written_in_decimal(seed: int) -> None:
     """Doubles nearest to short and long decimal texts (where ties between candidates and
     trailing zeros are likeliest), and everyday magnitudes."""
@@ -89,7 +95,7 @@ def _decimal_texts(rng: np.random.Generator, n: int) -> list[str]:
     return texts
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", _seeds(3))
 def test_parse_floats_is_float_or_undecided(seed: int) -> None:
     """Each group of fields is read bit for bit as ``float`` reads it, or left undecided
     (None) as a whole; repr's texts and short decimals are always decided."""

@@ -142,22 +142,25 @@ def test_only_refuses_to_rewrite_the_results_markdown(
 
 
 
-def test_a_local_cluster_gives_the_numbers_of_this_process(tmp_path: Path) -> None:
+def test_a_local_cluster_gives_the_numbers_of_this_process(
+    quick_run: tuple[Path, dict[str, Any], Path], tmp_path: Path,
+) -> None:
     import faulthandler
     import sys
 
+    # The serial numbers: the module's run of every experiment in this process (--quick: one
+    # worker); its t-junction results are those of `--only t-junction --workers 1`.
+    _, serial, _ = quick_run
+    assert serial["meta"]["settings"]["jobs"] == 1
     faulthandler.dump_traceback_later(120, exit=True, file=sys.__stderr__)
     try:
-        runs = {}
-        for workers in ("1", "2"):
-            out = tmp_path / workers
-            assert main(["experiments", "--quick", "--only", "t-junction", "--workers", workers,
-                         "--out", str(out)]) == 0
-            runs[workers] = json.loads((out / "results.json").read_text())
+        out = tmp_path / "2"
+        assert main(["experiments", "--quick", "--only", "t-junction", "--workers", "2",
+                     "--out", str(out)]) == 0
+        cluster = json.loads((out / "results.json").read_text())
     finally:
         faulthandler.cancel_dump_traceback_later()
-    assert runs["2"]["meta"]["settings"]["jobs"] == 2
-    for res in runs.values():
-        for key in ("command", "meta"):
-            res.pop(key)
-    assert runs["1"] == runs["2"]
+    assert cluster["meta"]["settings"]["jobs"] == 2
+    keys = set(cluster) - {"command", "meta"}
+    assert keys == {"t_junction"}
+    assert {key: cluster[key] for key in keys} == {key: serial[key] for key in keys}

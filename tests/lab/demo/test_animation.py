@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import io
+from functools import partial
 from pathlib import Path
 
+import pytest
 from PIL import Image
 
-from sonarcarve.lab.demo import DemoResult, write_demo_outputs
+from sonarcarve.lab.demo import DemoResult, outputs, write_demo_outputs
 from sonarcarve.lab.demo.animation import ANIMATION_FILE, DoorGauge, animation_gif, live_map
 from sonarcarve.lab.demo.scenario import CLOSEUP_METHODS
 from sonarcarve.methods import make_method
@@ -25,7 +27,16 @@ def test_the_gif_has_frames_and_is_small(doorway: DemoResult) -> None:
         assert gif.convert("RGB").tobytes() != first  # the arcs moved
 
 
-def test_demo_outputs_write_it_on_request(doorway: DemoResult, tmp_path: Path) -> None:
+def test_demo_outputs_write_it_on_request(doorway: DemoResult, tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    # Whether the GIF is written is the point here: two frames of it, and no figures drawn
+    # (40 frames and the figures twice cost 11 s; the test above, tests/lab/demo/test_figures.py
+    # and the demo CLI's test check them).
+    monkeypatch.setattr(outputs, "animation_gif", partial(animation_gif, frames=2))
+    for figure in ("plot_global_maps", "plot_map_zoom", "plot_error_by_range",
+                   "plot_door_closeup", "plot_occupancy_grids"):
+        monkeypatch.setattr(outputs, figure, lambda result: None)
+    monkeypatch.setattr(outputs, "_png", lambda figure: b"")
     written = write_demo_outputs(doorway, tmp_path / "with", animation=True)
     assert tmp_path / "with" / ANIMATION_FILE in written
     assert ANIMATION_FILE not in [p.name for p in write_demo_outputs(doorway, tmp_path / "w")]
