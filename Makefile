@@ -12,7 +12,8 @@ $(BIN)/python:
 	$(BIN)/python -m pip install -q --upgrade pip
 
 # After installing, `sonarcarve warm` compiles every kernel once into numba's on-disk cache
-# (a few minutes on 2 cores), so the first run of each method loads machine code instead of compiling.
+# (about a minute and a half on 2 cores, one process per core), so the first run of each method
+# loads machine code instead of compiling.
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e '.[all]'
 	$(BIN)/sonarcarve warm --quiet
