@@ -20,7 +20,14 @@ import numpy as np
 import pytest
 
 from sonarcarve.methods import METHODS
-from sonarcarve.warm import counting_compiles, warm_lanes, warm_steps, warm_stream, warm_up
+from sonarcarve.warm import (
+    CHECK_STEP,
+    counting_compiles,
+    warm_lanes,
+    warm_steps,
+    warm_stream,
+    warm_up,
+)
 
 
 def _run(code: str, cache: Path) -> str:
@@ -121,6 +128,23 @@ def test_a_parallel_warm_up_compiles_in_other_processes_and_leaves_nothing_to_co
     assert pids[2:] == [parent, parent]
     run = _NORMAL_RUN.replace("sys.argv[1:]", "['centerline']")
     assert _compiled_names(_run(run, tmp_path / "cache")) == []
+
+
+def test_without_processes_the_lanes_run_here_and_are_reported_alike(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    class NoProcesses:
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            raise OSError(38, "Function not implemented")  # sem_open in some sandboxes
+
+    monkeypatch.setattr("sonarcarve.warm.ProcessPoolExecutor", NoProcesses)
+    calls: list[str] = []
+    lanes = [[("a", lambda: calls.append("a")), ("b", lambda: calls.append("b"))],
+             [("c", lambda: calls.append("c"))]]
+    seen: list[str] = []
+    done = warm_up(lambda what, _: seen.append(what), lanes=lambda: lanes, jobs=2)
+    # Each lane here, then every step again in the last pass.
+    assert calls == ["a", "b", "c", "a", "b", "c"]
+    assert [what for what, _, _ in done] == seen == ["a", "b", "c", CHECK_STEP]
 
 
 def test_warm_up_runs_every_step_and_reports_it(monkeypatch: pytest.MonkeyPatch) -> None:

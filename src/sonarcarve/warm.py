@@ -38,6 +38,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import numpy as np
@@ -270,13 +271,20 @@ def _warm_up_in_processes(lanes: Callable[[], list[Lane]], jobs: int,
     # Spawned, not forked: a fork would copy this process's numba and LLVM state mid-flight.
     context = multiprocessing.get_context("spawn")
     by_lane: dict[int, list[tuple[str, float, int]]] = {}
-    with ProcessPoolExecutor(max_workers=min(jobs, count), mp_context=context) as pool:
-        futures = {pool.submit(_warm_lane, lanes, k): k for k in range(count)}
-        for future in as_completed(futures):
-            by_lane[futures[future]] = future.result()
-            for what, seconds, _ in by_lane[futures[future]]:
-                if on_progress is not None:
-                    on_progress(what, seconds)
+    try:
+        with ProcessPoolExecutor(max_workers=min(jobs, count), mp_context=context) as pool:
+            futures = {pool.submit(_warm_lane, lanes, k): k for k in range(count)}
+            for future in as_completed(futures):
+                by_lane[futures[future]] = future.result()
+                for what, seconds, _ in by_lane[futures[future]]:
+                    if on_progress is not None:
+                        on_progress(what, seconds)
+    except (OSError, BrokenProcessPool):
+        # No processes to be had (a sandbox without semaphores) or one died (out of memory):
+        # what they did is cached; the lanes left run here, one after another.
+        pass
+    for k in sorted(set(range(count)) - set(by_lane)):
+        by_lane[k] = warm_up(on_progress, steps=lanes()[k])
     done = [row for k in range(count) for row in by_lane[k]]
     tic = time.perf_counter()
     with counting_compiles() as names:
