@@ -13,8 +13,11 @@ import subprocess
 import sys
 import textwrap
 from collections.abc import Callable
+from concurrent.futures import Future
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from types import ModuleType
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -147,6 +150,47 @@ def test_without_processes_the_lanes_run_here_and_are_reported_alike(
     assert [what for what, _, _ in done] == seen == ["a", "b", "c", CHECK_STEP]
 
 
+class _FakePool:
+    """A process pool stand-in: lane 0's future holds ``error``, the others a result row."""
+
+    made: ClassVar[list[_FakePool]] = []
+    error: ClassVar[BaseException] = RuntimeError("a step failed")
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        self.shutdowns: list[tuple[bool, bool]] = []
+        _FakePool.made.append(self)
+
+    def submit(self, run: object, lanes: object, k: int) -> Future[list[tuple[str, float, int]]]:
+        future: Future[list[tuple[str, float, int]]] = Future()
+        if k == 0:
+            future.set_exception(_FakePool.error)
+        else:
+            future.set_result([(f"lane {k}", 0.0, 1)])
+        return future
+
+    def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
+        self.shutdowns.append((wait, cancel_futures))
+
+
+def test_a_failing_lane_stops_the_warm_up_without_waiting_for_the_others(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("sonarcarve.warm.ProcessPoolExecutor", _FakePool)
+    monkeypatch.setattr(_FakePool, "made", [])
+    calls: list[str] = []
+    lanes = [[("a", lambda: calls.append("a"))], [("b", lambda: calls.append("b"))]]
+    with pytest.raises(RuntimeError, match="a step failed"):
+        warm_up(lanes=lambda: lanes, jobs=2)
+    assert _FakePool.made[0].shutdowns == [(False, True)]  # queued lanes cancelled
+    assert calls == []
+    # A worker that died (BrokenProcessPool) is not an error: its lane runs here.
+    monkeypatch.setattr(_FakePool, "error", BrokenProcessPool("killed"))
+    done = warm_up(lanes=lambda: lanes, jobs=2)
+    assert [what for what, _, _ in done] == ["a", "lane 1", CHECK_STEP]
+    assert calls == ["a", "a", "b"]
+    with pytest.raises(ValueError, match="lanes"):
+        warm_up(steps=lanes[0], jobs=2)
+
+
 def test_warm_up_runs_every_step_and_reports_it(monkeypatch: pytest.MonkeyPatch) -> None:
     # The real steps compile for minutes; here each step is a stand-in that records
     # its call, so the reporting is checked, not the compiling (the subprocess tests do that).
@@ -213,7 +257,9 @@ def test_a_cold_cache_compiles_so_the_check_below_can_fail(tmp_path: Path) -> No
 @pytest.mark.slow
 def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
     """Every step warmed (minutes of compiling), then every method's first add()."""
-    out = _run("import sonarcarve.warm as w\nw.warm_up()\nprint('WARM')\n", tmp_path)
+    # In two processes, as `sonarcarve warm` runs on a 2-core machine.
+    out = _run("import sonarcarve.warm as w\nif __name__ == '__main__':\n"
+               "    w.warm_up(jobs=2)\n    print('WARM')\n", tmp_path)
     assert "WARM" in out
     run = _NORMAL_RUN.replace("sys.argv[1:]", repr(sorted(METHODS)))
     assert _compiled_names(_run(run, tmp_path)) == []

@@ -20,13 +20,14 @@ process with the warmed cache, that a normal run of every method compiles nothin
 
 Steps come in *lanes*: steps that share kernels (carving, its specular-aware variant and
 combined, which calls carving; evidence carving and the carved grid) stay in one lane, and lanes
-share none worth compiling twice (measured: the counts of compiled functions add up), so
+share little (15 small helpers are compiled in two lanes: 128 functions against 113), so
 :func:`warm_up` with ``jobs > 1`` runs lanes in separate processes at once. Numba compiles on
-one core, so two processes halve the wall time on a 2-core machine (170 s to about 90 s,
-measured with ``time sonarcarve warm`` on an empty cache). Two processes that save the same
-function's cache index at once can lose one entry (the index is rewritten whole, last writer
-wins), so the parallel warm-up ends with every step once more in this process: loads only, a
-second or two, and it compiles whatever such a race lost.
+one core, so two processes about halve the wall time on a 2-core machine (docs/RESULTS.md,
+"The warm-up on two cores"). Saves to numba's cache take turns under a file lock
+(:func:`sonarcarve.geometry._compiled._cache_lock`), and the parallel warm-up ends with every
+step once more in this process: loads only, a second or two, and it compiles anything a worker
+did not leave in the cache (the plain-``njit`` CSV and demo kernels save without that lock, each
+in one lane only).
 """
 
 from __future__ import annotations
@@ -246,6 +247,8 @@ def warm_up(on_progress: Progress | None = None,
         :data:`CHECK_STEP`, for its in-process pass.
     """
     if jobs > 1:
+        if steps is not None:
+            raise ValueError("warm_up: steps run in this process; give lanes for jobs > 1")
         return _warm_up_in_processes(lanes or warm_lanes, jobs, on_progress)
     done: list[tuple[str, float, int]] = []
     for what, step in warm_steps() if steps is None else steps:
@@ -272,17 +275,25 @@ def _warm_up_in_processes(lanes: Callable[[], list[Lane]], jobs: int,
     context = multiprocessing.get_context("spawn")
     by_lane: dict[int, list[tuple[str, float, int]]] = {}
     try:
-        with ProcessPoolExecutor(max_workers=min(jobs, count), mp_context=context) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(jobs, count), mp_context=context)
+    except OSError:  # no processes to be had here (a sandbox without semaphores)
+        pool = None
+    if pool is not None:
+        try:
             futures = {pool.submit(_warm_lane, lanes, k): k for k in range(count)}
             for future in as_completed(futures):
                 by_lane[futures[future]] = future.result()
                 for what, seconds, _ in by_lane[futures[future]]:
                     if on_progress is not None:
                         on_progress(what, seconds)
-    except (OSError, BrokenProcessPool):
-        # No processes to be had (a sandbox without semaphores) or one died (out of memory):
-        # what they did is cached; the lanes left run here, one after another.
-        pass
+        except BrokenProcessPool:
+            pass  # a worker died (out of memory): what the others did is cached
+        except BaseException:
+            # A step failed, or Ctrl-C: drop the lanes not started rather than compile them.
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown()
+    # The lanes left (none, unless processes failed) run here, one after another.
     for k in sorted(set(range(count)) - set(by_lane)):
         by_lane[k] = warm_up(on_progress, steps=lanes()[k])
     done = [row for k in range(count) for row in by_lane[k]]

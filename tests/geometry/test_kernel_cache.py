@@ -96,3 +96,58 @@ def test_a_borrowing_kernel_gives_the_same_result_with_and_without_reference_cou
         out = np.zeros(5)
         results.append((kernel(values, out), out.tolist()))
     assert results == [(20.0, [0.0, 2.0, 4.0, 6.0, 8.0])] * 2
+
+
+def test_saving_a_kernel_holds_the_cache_folders_lock(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two processes saving overloads of one kernel at once take turns (the index race)."""
+    import fcntl
+
+    from numba.core.caching import FunctionCache
+
+    from sonarcarve.geometry import _compiled
+    from sonarcarve.geometry.bounds import arc_clear_of_disk
+
+    lock_file = tmp_path / _compiled.CACHE_LOCK_NAME
+    held: list[bool] = []
+
+    def numbas_save(self: FunctionCache, sig: object, data: object) -> None:
+        with lock_file.open("a") as other:  # another process's attempt, in effect
+            try:
+                fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                held.append(True)
+            else:
+                held.append(False)
+                fcntl.flock(other, fcntl.LOCK_UN)
+
+    monkeypatch.setattr(FunctionCache, "save_overload", numbas_save)
+    cache = _compiled._SourcesKeyedCache(arc_clear_of_disk.py_func)
+    cache._cache_path = str(tmp_path)
+    cache.save_overload("signature", "machine code")
+    assert held == [True]
+    with lock_file.open("a") as other:  # released after the save
+        fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+
+def test_every_kernel_in_the_kernel_folders_is_keyed_on_all_kernel_sources() -> None:
+    """A kernel decorated with plain ``numba.njit(cache=True)`` there would keep running its
+    old machine code after an edit to a kernel it inlines (the module docstring's rule)."""
+    import importlib
+    import pkgutil
+
+    from numba.core.registry import CPUDispatcher
+
+    from sonarcarve.geometry._compiled import KERNEL_FOLDERS, _SourcesKeyedCache
+
+    kernels = 0
+    for folder in KERNEL_FOLDERS:
+        package = importlib.import_module(f"sonarcarve.{folder}")
+        for info in pkgutil.walk_packages(package.__path__, f"sonarcarve.{folder}."):
+            module = importlib.import_module(info.name)
+            for name, value in vars(module).items():
+                if isinstance(value, CPUDispatcher) and value.__module__ == module.__name__:
+                    kernels += 1
+                    assert isinstance(value._cache, _SourcesKeyedCache), f"{info.name}.{name}"
+    assert kernels > 50

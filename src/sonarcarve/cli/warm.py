@@ -84,7 +84,8 @@ def warm(
     table.add_column("seconds", justify="right")
     for what, seconds, count in done:
         table.add_row(what, f"{count:,}", f"{seconds:.1f}")
-    label = "total" if jobs == 1 else f"total, {jobs} processes at once (wall time)"
+    processes = min(jobs, len(command_lanes()))  # never more processes than lanes
+    label = "total" if jobs == 1 else f"total, {processes} processes at once (wall time)"
     table.add_row(label, f"{compiled:,}", f"{total:.1f}", style="bold")
     console.print(table)
     console.print(f"Compiled code cached in {cache_location()}.")

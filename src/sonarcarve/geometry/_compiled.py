@@ -19,8 +19,9 @@ the geometry does not make the CSV reader recompile.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar, cast
 
@@ -66,6 +67,40 @@ class _SourcesKeyedCache(FunctionCache):
             cache_path=self._cache_path, filename_base=self._impl.filename_base,
             source_stamp=SOURCES_STAMP,
         )
+
+    def save_overload(self, sig: Any, data: Any) -> None:
+        """numba's save, one process at a time (:func:`_cache_lock`)."""
+        with _cache_lock(self._cache_path):
+            super().save_overload(sig, data)  # type: ignore[no-untyped-call]
+
+
+#: The lock file :func:`_cache_lock` takes, in each cache folder.
+CACHE_LOCK_NAME = "sonarcarve-cache.lock"
+
+
+@contextlib.contextmanager
+def _cache_lock(folder: str) -> Iterator[None]:
+    """Hold an exclusive lock on ``folder``'s :data:`CACHE_LOCK_NAME` while saving to it.
+
+    numba saves an overload by reading the function's index, naming a free data file and
+    rewriting the index whole. Two processes saving overloads of one function at once (the
+    lanes of a parallel ``sonarcarve warm`` share small kernels) could both pick ``.1.nbc`` and
+    leave the index pointing one signature at the other's machine code, which numba loads
+    without checking; a lock makes the saves take turns (numba/numba#10128 suggests the same).
+    Where ``fcntl`` is missing (Windows) the saves are not guarded.
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not on POSIX
+        yield
+        return
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    with (Path(folder) / CACHE_LOCK_NAME).open("a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def compiled(func: _F) -> _F:
