@@ -185,8 +185,14 @@ def test_a_failing_lane_stops_the_warm_up_without_waiting_for_the_others(
     # A worker that died (BrokenProcessPool) is not an error: its lane runs here.
     monkeypatch.setattr(_FakePool, "error", BrokenProcessPool("killed"))
     done = warm_up(lanes=lambda: lanes, jobs=2)
-    assert [what for what, _, _ in done] == ["a", "lane 1", CHECK_STEP]
-    assert calls == ["a", "a", "b"]
+    names = [what for what, _, _ in done]
+    # Lane 1 is reported by the pool or, when the broken lane came out of as_completed first,
+    # run here too; either way once, in lane order, then the last pass.
+    assert names[0] == "a"
+    assert names[1] in ("lane 1", "b")
+    assert names[2:] == [CHECK_STEP]
+    assert calls[:-2] in (["a"], ["a", "b"])
+    assert calls[-2:] == ["a", "b"]
     with pytest.raises(ValueError, match="lanes"):
         warm_up(steps=lanes[0], jobs=2)
 

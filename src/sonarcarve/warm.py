@@ -279,20 +279,7 @@ def _warm_up_in_processes(lanes: Callable[[], list[Lane]], jobs: int,
     except OSError:  # no processes to be had here (a sandbox without semaphores)
         pool = None
     if pool is not None:
-        try:
-            futures = {pool.submit(_warm_lane, lanes, k): k for k in range(count)}
-            for future in as_completed(futures):
-                by_lane[futures[future]] = future.result()
-                for what, seconds, _ in by_lane[futures[future]]:
-                    if on_progress is not None:
-                        on_progress(what, seconds)
-        except BrokenProcessPool:
-            pass  # a worker died (out of memory): what the others did is cached
-        except BaseException:
-            # A step failed, or Ctrl-C: drop the lanes not started rather than compile them.
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-        pool.shutdown()
+        _run_lanes(pool, lanes, count, by_lane, on_progress)
     # The lanes left (none, unless processes failed) run here, one after another.
     for k in sorted(set(range(count)) - set(by_lane)):
         by_lane[k] = warm_up(on_progress, steps=lanes()[k])
@@ -305,6 +292,26 @@ def _warm_up_in_processes(lanes: Callable[[], list[Lane]], jobs: int,
     if on_progress is not None:
         on_progress(CHECK_STEP, done[-1][1])
     return done
+
+
+def _run_lanes(pool: ProcessPoolExecutor, lanes: Callable[[], list[Lane]], count: int,
+               by_lane: dict[int, list[tuple[str, float, int]]],
+               on_progress: Progress | None) -> None:
+    """Every lane in ``pool``; each one's rows into ``by_lane`` as it ends."""
+    try:
+        futures = {pool.submit(_warm_lane, lanes, k): k for k in range(count)}
+        for future in as_completed(futures):
+            by_lane[futures[future]] = future.result()
+            for what, seconds, _ in by_lane[futures[future]]:
+                if on_progress is not None:
+                    on_progress(what, seconds)
+    except BrokenProcessPool:
+        pass  # a worker died (out of memory): what the others did is cached
+    except BaseException:
+        # A step failed, or Ctrl-C: drop the lanes not started rather than compile them.
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
 
 
 def cache_location() -> str:
