@@ -237,7 +237,8 @@ def warm_up(on_progress: Progress | None = None,
         the default; the command adds the demo's own kernel, which the product may not import).
         A function rather than the lanes themselves because each process builds its own.
     jobs : int
-        Processes compiling at once; 1 runs ``steps`` here, one after another.
+        Processes compiling at once; 1 runs ``steps`` here, one after another (``steps``
+        with ``jobs > 1`` is a ``ValueError``: processes build their steps from ``lanes``).
 
     Returns
     -------
