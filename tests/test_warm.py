@@ -25,7 +25,9 @@ import pytest
 from sonarcarve.methods import METHODS
 from sonarcarve.warm import (
     CHECK_STEP,
+    cgroup_cpus,
     counting_compiles,
+    default_jobs,
     warm_lanes,
     warm_steps,
     warm_stream,
@@ -319,3 +321,47 @@ def test_compile_time_benchmark_splits_the_compile_seconds_without_counting_twic
     assert any(kernel.startswith("geometry.index.") for kernel in own), own
     assert all(value >= 0.0 for value in own.values())
     assert sum(own.values()) <= sum(seconds for _, seconds in result["steps"])
+
+
+def _cgroups(tmp_path: Path, proc: str, files: dict[str, str]) -> tuple[Path, Path]:
+    """A control-group tree under ``tmp_path`` with ``files`` (relative path: text) and a
+    ``/proc/self/cgroup`` of text ``proc``."""
+    root = tmp_path / "cgroup"
+    for name, text in files.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text)
+    proc_file = tmp_path / "proc-self-cgroup"
+    proc_file.write_text(proc)
+    return root, proc_file
+
+
+@pytest.mark.parametrize(("proc", "files", "cores"), [
+    # cgroup v2, a container's own namespace: "docker run --cpus 2" writes 200000 100000
+    ("0::/\n", {"cpu.max": "200000 100000\n"}, 2),
+    ("0::/\n", {"cpu.max": "150000 100000\n"}, 2),  # 1.5 CPUs: two processes, rounded up
+    ("0::/\n", {"cpu.max": "max 100000\n"}, math.inf),  # no quota
+    # v2 on the host: the process's own group, which is tighter than the root's
+    ("0::/user.slice/ci.scope\n", {"cpu.max": "400000 100000",
+                                   "user.slice/ci.scope/cpu.max": "100000 100000"}, 1),
+    # cgroup v1 (this machine's kind): cfs quota over period; -1 is no quota
+    ("4:memory:/x\n1:cpu,cpuacct:/docker/abc\n0::/\n",
+     {"cpu/docker/abc/cpu.cfs_quota_us": "300000", "cpu/docker/abc/cpu.cfs_period_us": "100000"},
+     3),
+    ("1:cpu:/\n0::/\n", {"cpu/cpu.cfs_quota_us": "-1", "cpu/cpu.cfs_period_us": "100000"},
+     math.inf),
+    ("", {}, math.inf),  # no control groups at all (not Linux, or not mounted)
+    ("0::/\n", {"cpu.max": "garbage"}, math.inf),
+])
+def test_cgroup_cpus_reads_the_quota(tmp_path: Path, proc: str, files: dict[str, str],
+                                     cores: float) -> None:
+    root, proc_file = _cgroups(tmp_path, proc, files)
+    assert cgroup_cpus(root, proc_file) == cores
+
+
+def test_default_jobs_is_the_cores_capped_by_the_quota(tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(64)), raising=False)
+    root, proc_file = _cgroups(tmp_path, "0::/\n", {"cpu.max": "200000 100000"})
+    assert default_jobs(root, proc_file) == 2  # 64 cores visible, 2 CPUs' time allowed
+    root, proc_file = _cgroups(tmp_path / "none", "0::/\n", {"cpu.max": "max 100000"})
+    assert default_jobs(root, proc_file) == 64

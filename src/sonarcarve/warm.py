@@ -40,6 +40,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
@@ -209,11 +210,64 @@ def warm_steps() -> list[Step]:
     return [step for lane in warm_lanes() for step in lane]
 
 
-def default_jobs() -> int:
-    """Processes for a parallel warm-up: one per core this process may use."""
+#: Where Linux's control groups (v2) keep them, and this process's entry among them.
+CGROUP_ROOT = Path("/sys/fs/cgroup")
+PROC_CGROUP = Path("/proc/self/cgroup")
+
+
+def default_jobs(cgroup_root: Path = CGROUP_ROOT, proc_cgroup: Path = PROC_CGROUP) -> int:
+    """Processes for a parallel warm-up: one per core this process may use, and no more than
+    the CPU time its control group may take (:func:`cgroup_cpus`).
+
+    Why both: a container started with ``--cpus 2`` on a 64-core host sees all 64 cores in its
+    affinity mask; 64 compiling processes would then share two cores' time (and hold 64 times
+    the memory) for no gain.
+    """
     if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
+        cores = len(os.sched_getaffinity(0))
+    else:
+        cores = os.cpu_count() or 1
+    quota = cgroup_cpus(cgroup_root, proc_cgroup)
+    return max(1, cores if math.isinf(quota) else min(cores, int(quota)))
+
+
+def cgroup_cpus(cgroup_root: Path = CGROUP_ROOT, proc_cgroup: Path = PROC_CGROUP) -> float:
+    """Cores' worth of CPU time this process's control group may use, rounded up: the quota
+    over its period, in cgroup v2 (``cpu.max``, ``"200000 100000"``: 2) or v1
+    (``cpu/cpu.cfs_quota_us`` over ``cpu.cfs_period_us``), of the group ``/proc/self/cgroup``
+    names or, inside a container's own namespace, of the root; the smallest found. Infinite
+    where none sets a quota (``max``, ``-1``) or nothing can be read."""
+    v2_group = v1_group = ""
+    for line in _text(proc_cgroup).splitlines():  # "number:controllers:/path"
+        number, controllers, group = [*line.split(":", 2), "", ""][:3]
+        if number == "0":
+            v2_group = group.strip().lstrip("/")
+        elif "cpu" in controllers.split(","):
+            v1_group = group.strip().lstrip("/")
+    limits = [math.inf]
+    for folder in (cgroup_root / v2_group, cgroup_root):
+        limits.append(_cores(_text(folder / "cpu.max")))
+    for folder in (cgroup_root / "cpu" / v1_group, cgroup_root / "cpu"):
+        limits.append(_cores(f"{_text(folder / 'cpu.cfs_quota_us')} "
+                             f"{_text(folder / 'cpu.cfs_period_us')}"))
+    return min(limits)
+
+
+def _text(path: Path) -> str:
+    """The file's text, or nothing where it cannot be read."""
+    try:
+        return path.read_text()
+    except OSError:
+        return ""
+
+
+def _cores(quota_and_period: str) -> float:
+    """``"QUOTA PERIOD"`` as cores, rounded up; infinite for no quota or anything else."""
+    with suppress(ValueError):  # "max", "-1 100000" is fine, a word that is no number is not
+        quota, period = (int(word) for word in quota_and_period.split()[:2])
+        if quota > 0 and period > 0:
+            return float(math.ceil(quota / period))
+    return math.inf
 
 
 #: Collect the name of every function numba compiles (not loads from cache) meanwhile.

@@ -36,8 +36,9 @@ def warm(
         "--quiet", "-q", help="No progress bar and no table: one line when done.")] = False,
     jobs: Annotated[int, typer.Option(
         "--jobs", "-j", min=0, max=64,
-        help="Processes compiling at once; 0: one per core. Numba compiles on one core, so "
-             "2 jobs take about half the time of 1.")] = 0,
+        help="Processes compiling at once; 0: one per core this process may use (no more "
+             "than a container's CPU quota allows). Numba compiles on one core, so 2 jobs take "
+             "about half the time of 1.")] = 0,
 ) -> None:
     """Compile every method's kernels now, so that their first run needs no compiling.
 
