@@ -206,6 +206,23 @@ def test_rep117_infinities_and_nan(tmp_path: Path) -> None:
     np.testing.assert_allclose(log.no_echo.max_range, [3.0, 3.0])
 
 
+def test_a_range_at_max_range_is_a_silent_firing(tmp_path: Path) -> None:
+    """Gazebo's range and sonar plugins publish ``range = max_range`` for a ray that hit
+    nothing (and drivers clamp late echoes to it): nothing heard, free space, no arc at
+    max_range. Just below max_range is an echo."""
+    odom = [_odom(0.0, 0.0, 0.0, 0.0), _odom(1.0, 1.0, 0.0, 0.0)]
+    mounts = _tf(0.0, ("base_link", "s", 0.0, 0.0, 0.0))
+    ranges = [_range("/r", 0.1, 3.0, frame="s", hi=3.0), _range("/r", 0.2, 2.99, frame="s", hi=3.0),
+              _range("/r", 0.3, 5.0, frame="s", hi=5.0)]
+    bag = write_bag(tmp_path / "bag_mcap", [*odom, mounts, *ranges],
+                    {"/r": RANGE, "/odom": ODOM, "/tf_static": TF})
+    log = read_rosbag(bag)
+    assert (log.report.no_echo, log.report.readings) == (2, 1)
+    np.testing.assert_allclose(log.batch.range, [2.99], rtol=1e-6)  # float32 in the message
+    np.testing.assert_allclose(log.no_echo.t, [0.1, 0.3])
+    np.testing.assert_allclose(log.no_echo.max_range, [3.0, 5.0])
+
+
 # TF mounts: base_link -> sonar_ring at (0.1, 0) turned 90°; the ring carries sonar_front at
 # (0.2, 0) turned -90° and sonar_left at (0, -0.15) turned 0; sonar_rear hangs off base_link
 # on /tf at (-0.25, 0.05) turned 180°. In base_link, worked by hand:

@@ -94,7 +94,7 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
         *rows,
         ("odometry", f"{r.odometry_topic} ({parent or '?'} → {child or '?'})"),
         ("sensors", f"{len(r.sensors):,}"),
-        ("no echo, +Inf (free space; not written yet)", f"{r.no_echo:,}"),
+        ("no echo, +Inf or max_range (free space; not written yet)", f"{r.no_echo:,}"),
         ("too close, -Inf (dropped)", f"{r.too_close:,}"),
         ("invalid, NaN (dropped)", f"{r.invalid:,}"),
         ("outside odometry span (dropped)", f"{r.outside_odometry:,}"),
@@ -154,11 +154,13 @@ def convert(
     the previous record although the robot moved (the sensor had not fired again).
 
     rosbag (ROS 1 .bag, ROS 2 folder with sqlite3 or MCAP storage, or a bare .mcap): each
-    sensor_msgs/Range echo (header stamp, s) inside [min_range, max_range] becomes a reading
+    sensor_msgs/Range echo (header stamp, s) at or above min_range and below max_range becomes a
+    reading
     posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
     composed with the sensor's mount, found in /tf_static (and /tf) by its frame_id; --robot
-    gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: +Inf (no
-    echo within range), -Inf (too close) and NaN (invalid) are counted, not written.
+    gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: +Inf or a
+    range at max_range (no echo within range), -Inf (too close) and NaN (invalid) are counted,
+    not written.
 
     Example: `sonarcarve convert roboND --out roboND.csv` then
     `sonarcarve process roboND.csv --out map.csv`; or

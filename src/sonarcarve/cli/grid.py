@@ -141,7 +141,8 @@ def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
         log = read_bag(bag, source)
         batch, silent = bag.readings(log), len(log.no_echo)
     if not len(batch):
-        hint = (f" (its {silent:,} Range messages heard nothing, +Inf; --no-echo maps them as "
+        hint = (f" (its {silent:,} Range messages heard nothing, +Inf or max_range; --no-echo "
+                "maps them as "
                 "free space)" if silent else "")
         msg = f"{source}: no readings to map{hint}"
         raise GridUsageError(msg)
@@ -194,10 +195,11 @@ def grid(
 
     The input is a readings CSV or a ROS bag (ROS 1 `.bag`, `.mcap`, `.db3` or a rosbag2
     folder: sensor_msgs/Range per transducer, odometry and TF), a bag read as `sonarcarve
-    process` reads it, with the same bag options. A bag's silent firings (REP 117 +Inf) are
-    left out unless --no-echo keeps them as no-echo readings, as a CSV's rows with range inf
-    always are: the carved and Elfes grids take their beams, up to max_range, as free space;
-    ROS's range-sensor-layer drops +Inf, as ROS does. The bag options apply to bags only.
+    process` reads it, with the same bag options. A bag's silent firings (REP 117 +Inf, or a
+    range equal to max_range, as Gazebo's sonar plugins publish them) are left out unless
+    --no-echo keeps them as no-echo readings, as a CSV's rows with range inf always are: the
+    carved and Elfes grids take their beams, up to max_range, as free space; ROS's
+    range-sensor-layer drops +Inf, as ROS does. The bag options apply to bags only.
 
     Writes GRID.yaml (image, resolution, origin, negate 0, occupied_thresh, free_thresh) and
     GRID.pgm beside it (trinary: occupied 0, free 254, unknown 205), both or neither. The grid

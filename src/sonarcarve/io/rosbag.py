@@ -41,8 +41,14 @@ Times are the messages' ``header.stamp`` (seconds), not the time the recorder lo
 Range values (REP 117)
 ----------------------
 - finite, inside ``[min_range, max_range]``: an echo, one reading;
-- ``+Inf`` (or finite beyond ``max_range``): nothing within range, free space up to
-  ``max_range``. The readings core takes no such reading yet, so they are kept apart in
+- ``+Inf``, or a finite range at or beyond ``max_range``: nothing within range, free space
+  up to ``max_range``. At ``max_range`` too, because that is how many publishers say "nothing
+  heard": Gazebo's range and sonar plugins publish ``range = max_range`` for a ray that hit
+  nothing, drivers clamp a late echo to it, and ROS's range-sensor layer calls such a reading a
+  *max reading* (its ``clear_on_max_reading``); an echo timed at the very end of the listening
+  window is worth nothing as a wall. (A simulated log written to a bag could differ from its
+  CSV only by an echo quantised to exactly ``max_range``: none in 18 simulator logs, 0 of about
+  80,000 readings.) The readings core takes no such reading yet, so they are kept apart in
   :attr:`RosbagLog.no_echo` with their poses, and counted;
 - ``-Inf`` (or finite below ``min_range``): an object too close to measure; counted, dropped;
 - NaN (or finite ≤ 0): invalid; counted, dropped.
@@ -172,7 +178,7 @@ class RosbagReport:
     odometry_frames : tuple of (str, str)
         ``(parent, child)`` frames of the odometry (``odom``, ``base_link``).
     no_echo : int
-        +Inf ranges, or finite ones beyond ``max_range``: nothing heard within range.
+        +Inf ranges, or finite ones at or beyond ``max_range``: nothing heard within range.
     too_close : int
         −Inf ranges, or finite ones below ``min_range``.
     invalid : int
@@ -727,7 +733,7 @@ def _assemble(bag: Path, found: _Messages, sensors: tuple[tuple[str, str], ...],
     _check_fov(bag, ranges, fov)
     with np.errstate(invalid="ignore"):  # NaN compares False everywhere: it is invalid
         invalid = np.isnan(r) | (np.isfinite(r) & (r <= 0.0))
-        no_echo = ~invalid & (r > hi)
+        no_echo = ~invalid & (r >= hi)  # max_range itself: "nothing heard" (module notes)
         too_close = ~invalid & (r < lo)
     echo = ~(invalid | no_echo | too_close)
     inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
