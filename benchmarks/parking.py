@@ -4,6 +4,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
 
     nice .venv/bin/python benchmarks/parking.py                     # seeds 0-2, 3 physics
     nice .venv/bin/python benchmarks/parking.py --seeds 1 --physics specular
+    nice .venv/bin/python benchmarks/parking.py --beam-deg 120 --skip-grids   # diagnostics
 
 Every default of sonarcarve was chosen with robot sonar rings (22.5°, 15° and 20° beams) in
 office-like buildings. This script drives the ``car-parking-12`` robot (a 4.5 x 1.8 m car,
@@ -52,7 +53,9 @@ whatever beam width the robot file declares, so its readings are narrower than t
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
+import shlex
 import sys
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -67,6 +70,7 @@ from sonarcarve.lab.grid_measures import grid_free_width, grid_measures
 from sonarcarve.lab.metrics import GapRegion, free_width, gap_region, segment_distance
 from sonarcarve.methods import MethodConfig
 from sonarcarve.pipeline import process_readings
+from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.amplitude import AmplitudeModel
 from sonarcarve.sim.motion import follow_waypoints
@@ -108,6 +112,7 @@ class Run(NamedTuple):
     """One simulation's measures."""
 
     readings: int
+    outside: float  # share of direct echoes whose true reflector lies outside the declared beam
     points: dict[str, dict[str, float]]
     grids: dict[MapKey, dict[str, float]]
     gaps: dict[MapKey, list[float]]  # read length of every gap, in :func:`all_gaps` order
@@ -149,11 +154,30 @@ def _simulate(seed: int, physics: SonarPhysics) -> Simulation:
     return simulate(world, load_robot(ROBOT), trajectory, seed, physics=physics)
 
 
-def _point_maps(sim: Simulation) -> dict[str, dict[str, float] | np.ndarray]:
+def relabelled(sim: Simulation, beam_deg: float) -> Simulation:
+    """``sim`` with every reading declaring a ``beam_deg`` beam (the echoes unchanged): what a
+    robot file with another beam width would have told the methods and grids."""
+    r = sim.readings
+    batch = ReadingBatch.from_arrays(t=r.t, sensor=r.sensor, x=r.x, y=r.y, theta=r.theta,
+                                     range=r.range, beam_width=np.full(len(r), math.radians(
+                                         beam_deg)), max_range=r.max_range)
+    return dataclasses.replace(sim, readings=batch)
+
+
+def outside_share(sim: Simulation) -> float:
+    """Share of the direct echoes whose true reflection point lies outside the beam the reading
+    declares (the arc model's assumption broken: no method can place them right)."""
+    r, refl = sim.readings, sim.truth.reflection
+    direct = sim.truth.kind == EchoKind.DIRECT
+    bearing = np.arctan2(refl[:, 1] - r.y, refl[:, 0] - r.x)
+    off = np.abs((bearing - r.theta + math.pi) % (2.0 * math.pi) - math.pi)
+    return float(np.mean(off[direct] > 0.5 * r.beam_width[direct] + 1e-9))
+
+
+def _point_maps(sim: Simulation, config: MethodConfig) -> dict[str, dict[str, float] | np.ndarray]:
     """Per method: the measures of the module docstring and (key ``xy``) the map's points."""
     kind = sim.truth.kind
     direct = kind == EchoKind.DIRECT
-    config = MethodConfig()
     out: dict[str, dict[str, float] | np.ndarray] = {}
     center_err = np.full(len(kind), np.nan)
     for name in POINT_METHODS:
@@ -189,10 +213,12 @@ def _grids(sim: Simulation) -> dict[MapKey, OccupancyMap]:
     return out
 
 
-def measure(sim: Simulation, with_grids: bool = True) -> Run:
-    """Points, costmaps and gaps of one simulation."""
+def measure(sim: Simulation, with_grids: bool = True,
+            config: MethodConfig | None = None) -> Run:
+    """Points, costmaps and gaps of one simulation (the methods with ``config``, default
+    :class:`~sonarcarve.methods.MethodConfig`'s defaults)."""
     gaps = all_gaps()
-    maps = _point_maps(sim)
+    maps = _point_maps(sim, MethodConfig() if config is None else config)
     points = {name: maps[name] for name in POINT_METHODS}
     read = {(name, 0.0): [read_gap(g, points=maps[f"{name} xy"]) for g in gaps]
             for name in POINT_METHODS}
@@ -205,7 +231,7 @@ def measure(sim: Simulation, with_grids: bool = True) -> Run:
             grid_rows[key] = {"precision": m.precision, "recall": m.recall,
                               "phantoms": m.phantoms, "free": m.free_near_path}
             read[key] = [read_gap(g, grid=grid) for g in gaps]
-    return Run(len(sim.readings), points, grid_rows, read)  # type: ignore[arg-type]
+    return Run(len(sim.readings), outside_share(sim), points, grid_rows, read)  # type: ignore[arg-type]
 
 
 # -- tables ------------------------------------------------------------------------------------
@@ -282,18 +308,32 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--physics", nargs="+", default=list(CAR_PHYSICS),
                         choices=list(CAR_PHYSICS))
     parser.add_argument("--skip-grids", action="store_true")
+    parser.add_argument("--beam-deg", type=float, metavar="DEG",
+                        help="diagnostic: the readings declare DEG-degree beams instead of the "
+                             "robot file's (the echoes are the same)")
+    parser.add_argument("--evidence-bins", type=int, metavar="K",
+                        help="diagnostic: evidence carving with K bins per beam instead of its "
+                             "default")
     args = parser.parse_args(argv)
-    command = "nice .venv/bin/python benchmarks/parking.py " + " ".join(
+    command = "nice .venv/bin/python benchmarks/parking.py " + shlex.join(
         argv if argv is not None else sys.argv[1:])
     print(f"`{command.strip()}`")
+    config = (MethodConfig() if args.evidence_bins is None
+              else MethodConfig(evidence_bins=args.evidence_bins))
     for physics_name in args.physics:
         runs = []
         for seed in range(args.seeds):
             sim = _simulate(seed, CAR_PHYSICS[physics_name])
-            runs.append(measure(sim, with_grids=not args.skip_grids))
+            if args.beam_deg is not None:
+                sim = relabelled(sim, args.beam_deg)
+            runs.append(measure(sim, with_grids=not args.skip_grids, config=config))
             print(f"  {physics_name}, seed {seed}: {len(sim.readings):,} readings", flush=True)
-        where = (f"car-park.json, {ROBOT}, {car_park.SPEED:g} m/s; seeds 0-{args.seeds - 1}; "
-                 f"physics: {physics_name}; mean over seeds")
+        beam = "" if args.beam_deg is None else f" (readings declare {args.beam_deg:g}° beams)"
+        where = (f"car-park.json, {ROBOT}{beam}, {car_park.SPEED:g} m/s; seeds "
+                 f"0-{args.seeds - 1}; physics: {physics_name}; mean over seeds")
+        outside = 100 * _mean([run.outside for run in runs])
+        print(f"\n{physics_name}: {outside:.1f} % of the direct echoes came from outside the "
+              "beam their reading declares")
         print(f"\npoints, {where}")
         _points_table(runs)
         if not args.skip_grids:
