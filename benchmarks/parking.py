@@ -5,6 +5,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/parking.py                     # seeds 0-2, 3 physics
     nice .venv/bin/python benchmarks/parking.py --seeds 1 --physics specular
     nice .venv/bin/python benchmarks/parking.py --beam-deg 120 --skip-grids   # diagnostics
+    nice .venv/bin/python benchmarks/parking.py --physics specular --speed 0.4
 
 Every default of sonarcarve was chosen with robot sonar rings (22.5°, 15° and 20° beams) in
 office-like buildings. This script drives the ``car-parking-12`` robot (a 4.5 x 1.8 m car,
@@ -146,10 +147,10 @@ def slot_needed(gap: car_park.Gap) -> float:
     return PARALLEL_SLOT if gap.row.kind == "parallel" else PERPENDICULAR_BAY
 
 
-def _simulate(seed: int, physics: SonarPhysics) -> Simulation:
+def _simulate(seed: int, physics: SonarPhysics, speed: float = car_park.SPEED) -> Simulation:
     world = load_world(car_park.WORLD_FILE)
     assert world.tour is not None
-    trajectory = follow_waypoints(world.tour, speed=car_park.SPEED,
+    trajectory = follow_waypoints(world.tour, speed=speed,
                                   corner_radius=car_park.CORNER_RADIUS)
     return simulate(world, load_robot(ROBOT), trajectory, seed, physics=physics)
 
@@ -311,6 +312,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--beam-deg", type=float, metavar="DEG",
                         help="diagnostic: the readings declare DEG-degree beams instead of the "
                              "robot file's (the echoes are the same)")
+    parser.add_argument("--speed", type=float, default=car_park.SPEED, metavar="M_PER_S",
+                        help="diagnostic: drive at this speed instead of %(default)s m/s")
     parser.add_argument("--evidence-bins", type=int, metavar="K",
                         help="diagnostic: evidence carving with K bins per beam instead of its "
                              "default")
@@ -323,13 +326,13 @@ def main(argv: list[str] | None = None) -> int:
     for physics_name in args.physics:
         runs = []
         for seed in range(args.seeds):
-            sim = _simulate(seed, CAR_PHYSICS[physics_name])
+            sim = _simulate(seed, CAR_PHYSICS[physics_name], args.speed)
             if args.beam_deg is not None:
                 sim = relabelled(sim, args.beam_deg)
             runs.append(measure(sim, with_grids=not args.skip_grids, config=config))
             print(f"  {physics_name}, seed {seed}: {len(sim.readings):,} readings", flush=True)
         beam = "" if args.beam_deg is None else f" (readings declare {args.beam_deg:g}° beams)"
-        where = (f"car-park.json, {ROBOT}{beam}, {car_park.SPEED:g} m/s; seeds "
+        where = (f"car-park.json, {ROBOT}{beam}, {args.speed:g} m/s; seeds "
                  f"0-{args.seeds - 1}; physics: {physics_name}; mean over seeds")
         outside = 100 * _mean([run.outside for run in runs])
         print(f"\n{physics_name}: {outside:.1f} % of the direct echoes came from outside the "
