@@ -60,6 +60,36 @@ def test_p3dx_and_robond_bearings() -> None:
     assert (nd.min_range, nd.max_range) == (0.17, 5.0)
 
 
+def test_car_parking_12_is_a_car_with_bumper_and_side_sensors() -> None:
+    # Expected values from the YAML's sources and stated choices, not from the loader: a
+    # 4.5 x 1.8 m car, 4 front + 4 rear + 2 per side, 70 degree beams, 0.15..5.5 m in 1 cm
+    # steps, 0.035 s per firing, body disc of half the width.
+    car = load_robot("car-parking-12")
+    assert car.n_sensors == 12
+    np.testing.assert_allclose(car.beam_width, math.radians(70.0))
+    assert (car.min_range, car.max_range, car.range_resolution) == (0.15, 5.5, 0.01)
+    assert car.firing_period == pytest.approx(0.035)
+    assert car.cycle_time == pytest.approx(0.42)
+    assert car.robot_radius == pytest.approx(1.8 / 2)
+    # Every sensor on the body outline: |x| <= 2.25 (half the length), |y| <= 0.9 (half width).
+    assert np.all(np.abs(car.mount_x) <= 4.5 / 2 + 1e-9)
+    assert np.all(np.abs(car.mount_y) <= 1.8 / 2 + 1e-9)
+    ahead = np.cos(car.bearing) > 0.5   # within 60 degrees of straight ahead
+    behind = np.cos(car.bearing) < -0.5
+    side = np.abs(np.cos(car.bearing)) < 1e-9
+    assert (ahead.sum(), behind.sum()) == (4, 4)
+    np.testing.assert_array_equal(car.mount_x[ahead] > 2.0, True)   # in the front bumper
+    np.testing.assert_array_equal(car.mount_x[behind] < -2.0, True)  # in the rear bumper
+    # Two per side, aimed sideways, near the corners, on the car's flank.
+    assert (np.sin(car.bearing[side]) > 0).sum() == 2
+    assert (np.sin(car.bearing[side]) < 0).sum() == 2
+    np.testing.assert_allclose(np.abs(car.mount_y[side]), 0.9)
+    assert np.all(np.abs(car.mount_x[side]) > 1.5)
+    # The side sensors are spread through the firing order: every 3rd firing is a side one.
+    side_slots = np.flatnonzero(side[car.firing_order])
+    np.testing.assert_array_equal(side_slots, [0, 3, 6, 9])
+
+
 def test_yaml_file_loads_with_defaults_and_overrides(tmp_path: Path) -> None:
     path = tmp_path / "two.yaml"
     path.write_text(GOOD_YAML)
