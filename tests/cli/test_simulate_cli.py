@@ -67,6 +67,21 @@ def test_path_file_is_followed(tmp_path: Path) -> None:
     assert on_second.any()
 
 
+def test_speed_sets_how_fast_the_path_is_driven(tmp_path: Path) -> None:
+    """A straight 2.5 m leg (no turn: the robot starts facing it) takes 5 s at 0.5 m/s and 2 s
+    at 1.25 m/s. roboND-8's sensors sit at the robot centre, so a reading's y is where the robot
+    was: y = speed * t on this leg."""
+    path = tmp_path / "path.csv"
+    path.write_text("x,y\n0,0\n0,2.5\n")
+    for speed in ("0.5", "1.25"):
+        out = tmp_path / f"r{speed}.csv"
+        assert run("--world", "doorway", "--robot", "roboND-8", "--path", str(path),
+                   "--speed", speed, "--out", str(out)) == 0
+        readings = read_readings_csv(out)
+        np.testing.assert_allclose(readings.y, float(speed) * readings.t, atol=1e-9)
+        assert readings.t.max() <= 2.5 / float(speed) + 1e-9
+
+
 def test_explore(tmp_path: Path) -> None:
     out = tmp_path / "e.csv"
     assert run("--world", "t-junction", "--explore", "20", "--seed", "2", "--out", str(out)) == 0
@@ -182,6 +197,9 @@ def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
     (["--physics", "foo"], "error: --physics foo: unknown model; choose specular or amplitude"),
     (["--explore", "1e9"], "error: --explore must be at most 500,000 seconds (139 hours, the "
                            "simulator's limit of 10,000,000 poses), got 1e+09"),
+    (["--speed", "0"], "error: --speed must be a speed in (0, 10] m/s, got 0"),
+    (["--speed", "11"], "error: --speed must be a speed in (0, 10] m/s, got 11"),
+    (["--speed", "nan"], "error: --speed must be a speed in (0, 10] m/s, got nan"),
 ])
 def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                        args: list[str], problem: str) -> None:

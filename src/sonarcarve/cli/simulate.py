@@ -24,6 +24,7 @@ from sonarcarve.robot import BUILTIN_ROBOTS, RobotDescription, load_robot
 from sonarcarve.sim.bag import write_simulation_bag
 from sonarcarve.sim.motion import (
     DEFAULT_DT,
+    DEFAULT_SPEED,
     MAX_POSES,
     Trajectory,
     explore,
@@ -92,6 +93,11 @@ LOG_FORMATS: dict[str, LogFormat] = {
 }
 
 
+#: Fastest --speed, m/s: at 10 m/s a ring firing every 0.04 s moves 0.4 m between two
+#: firings, past where any sonar map keeps up (a parking car drives at 1-2 m/s).
+MAX_SPEED = 10.0
+
+
 @app.command("simulate")
 def simulate_command(
     world: Annotated[str, typer.Option(
@@ -107,7 +113,8 @@ def simulate_command(
              "or not at all; a bag is never overwritten.")],
     robot: Annotated[str, typer.Option(
         "--robot", "-r", metavar="ROBOT",
-        help=f"Sonar ring: {', '.join(BUILTIN_ROBOTS)}, or a robot YAML file.")] = "scout2",
+        help=f"The sonars and their robot: {', '.join(BUILTIN_ROBOTS)}, or a robot YAML "
+             "file.")] = "scout2",
     path: Annotated[Path | None, typer.Option(
         "--path", metavar="WAYPOINTS",
         help="Waypoints to drive through, metres: a CSV with a header x,y, or JSON "
@@ -115,6 +122,11 @@ def simulate_command(
     explore_seconds: Annotated[float | None, typer.Option(
         "--explore", metavar="SECONDS",
         help="Instead of a path, wander the world for this many seconds (seeded).")] = None,
+    speed: Annotated[float, typer.Option(
+        "--speed", metavar="M/S",
+        help=f"Driving speed, metres per second, on --path, the tour or --explore (a robot "
+             f"cruises at {DEFAULT_SPEED:g}; a car parks at 1-2), in (0, {MAX_SPEED:g}].")
+    ] = DEFAULT_SPEED,
     seed: Annotated[int, typer.Option(
         help="Seeds noise, spurious echoes, exploration and drift: same seed, same bytes.")] = 0,
     odometry: Annotated[bool, typer.Option(
@@ -158,7 +170,7 @@ def simulate_command(
 
     Example: `sonarcarve simulate --world office --out office.mcap` (open it in Foxglove)
     """
-    _check_motion_options(path, explore_seconds)
+    _check_motion_options(path, explore_seconds, speed)
     chosen = _physics(physics, clean)
     log_format = _log_format(out)
     if no_echo and log_format.label != "readings":
@@ -169,7 +181,8 @@ def simulate_command(
     truth = _check_outputs(out, log_format, [path, Path(world), Path(robot)])
     the_world = load_world(world)
     the_robot = load_robot(robot)
-    trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius)
+    trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius,
+                             speed)
     drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
     result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift,
                                      no_echo)
@@ -177,9 +190,14 @@ def simulate_command(
     console.print(_summary(result, out, truth, log_format.label))
 
 
-def _check_motion_options(path: Path | None, explore_seconds: float | None) -> None:
+def _check_motion_options(path: Path | None, explore_seconds: float | None,
+                          speed: float = DEFAULT_SPEED) -> None:
     """Raise :class:`SimulateParameterError` unless at most one of --path and --explore is
-    given and --explore, if given, is a finite number of seconds > 0."""
+    given, --explore, if given, is a finite number of seconds > 0, and --speed lies in
+    (0, :data:`MAX_SPEED`]."""
+    if not 0.0 < speed <= MAX_SPEED:  # False for NaN too
+        msg = f"--speed must be a speed in (0, {MAX_SPEED:g}] m/s, got {speed:g}"
+        raise SimulateParameterError(msg)
     if path is not None and explore_seconds is not None:
         msg = "give either --path or --explore, not both"
         raise SimulateParameterError(msg)
@@ -247,17 +265,17 @@ def _simulate_with_progress(world: World, robot: RobotDescription, trajectory: T
 
 
 def _trajectory(world: World, path: Path | None, explore_seconds: float | None, seed: int,
-                robot_radius: float) -> Trajectory:
+                robot_radius: float, speed: float = DEFAULT_SPEED) -> Trajectory:
     if explore_seconds is not None:
-        return explore(world, explore_seconds, seed=seed, robot_radius=robot_radius)
+        return explore(world, explore_seconds, seed=seed, speed=speed, robot_radius=robot_radius)
     if path is not None:
         points, places = read_waypoint_places(path)
         check_path_in_world(points, places, world, path)
-        return follow_waypoints(points)
+        return follow_waypoints(points, speed=speed)
     if world.tour is None:
         msg = f"world {world.name!r} has no built-in tour: give --path FILE or --explore SECONDS"
         raise WorldError(msg)
-    return follow_waypoints(world.tour)
+    return follow_waypoints(world.tour, speed=speed)
 
 
 def _summary(result: Simulation, out: Path, truth: Path, label: str) -> Table:
