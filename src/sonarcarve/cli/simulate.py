@@ -142,8 +142,10 @@ def simulate_command(
              "smooth wall echoes only within a critical angle (17.5°) of its normal, corners "
              "always; spurious echoes by fixed rates. amplitude: a sonar equation; the "
              "transducer's beam pattern (main lobe and side lobes, so strong reflectors are "
-             "heard outside the nominal beam), spreading and absorption with range, mirror, "
-             "diffuse and corner echoes against a noisy detection threshold (weak glancing "
+             "heard outside the nominal beam; the transducer is a Polaroid 600, about 25° "
+             "between first nulls, whatever beam the robot file declares: another is "
+             "sonarcarve.sim.AmplitudeModel in Python), spreading and absorption with range, "
+             "mirror, diffuse and corner echoes against a noisy detection threshold (weak glancing "
              "walls are missed, near ones heard at wide angles).")] = "specular",
     no_echo: Annotated[bool, typer.Option(
         "--no-echo",
