@@ -30,3 +30,34 @@ def test_caption_states_what_each_carving_left_out(doorway: DemoResult) -> None:
         assert (f"{name} left out {row.spurious_removed_pct:.0f}% of the spurious readings"
                 in text)
         assert f"{row.true_lost_pct:.0f}% of the true ones." in text
+
+
+def test_verdict_names_the_method_with_the_lowest_p90_error(doorway: DemoResult) -> None:
+    from sonarcarve.lab.demo.table import caption, method_verdict
+
+    shown = {row.label: f"{100.0 * row.p90_error_m:.1f}" for row in doorway.methods}
+    best = sorted(shown, key=lambda label: float(shown[label]))[0]
+    verdict = method_verdict(doorway)
+    assert verdict.startswith(f"Sharpest map: {best}, 90% of its points within {shown[best]} cm")
+    assert verdict in caption(doorway)
+
+
+def test_verdict_names_the_best_paper_method_beside_one_beyond_the_paper(
+        doorway: DemoResult) -> None:
+    import dataclasses
+
+    from sonarcarve.lab.demo.table import method_verdict
+
+    rows = {row.method: row for row in doorway.methods}
+    # Hand-made errors: evidence carving the sharpest, ATM the best of the paper's methods.
+    p90 = {"centerline": 0.90, "atm": 0.20, "carve": 0.80, "combined": 0.35, "evidence": 0.10}
+    made_up = dataclasses.replace(doorway, methods=tuple(
+        dataclasses.replace(rows[m], p90_error_m=p90[m]) for m in p90))
+    assert method_verdict(made_up) == (
+        "Sharpest map: evidence carving (beyond the paper), 90% of its points within 10.0 cm "
+        "of a true wall (centerline: 90.0 cm; the best of the paper's methods, ATM: 20.0 cm); "
+        "figures 1-3 draw the paper's methods only.")
+    only_paper = dataclasses.replace(made_up, methods=made_up.methods[:4])
+    assert method_verdict(only_paper) == (
+        "Sharpest map: ATM, 90% of its points within 20.0 cm of a true wall "
+        "(centerline: 90.0 cm).")
