@@ -61,3 +61,20 @@ def test_verdict_names_the_best_paper_method_beside_one_beyond_the_paper(
     assert method_verdict(only_paper) == (
         "Sharpest map: ATM, 90% of its points within 20.0 cm of a true wall "
         "(centerline: 90.0 cm).")
+
+
+def test_summaries_list_the_animation_when_it_is_written(doorway: DemoResult) -> None:
+    import json
+
+    from sonarcarve.lab.demo import summary_json
+
+    def figures(text: str) -> list[str]:
+        section = text.split("## Figures")[1].split("## Run")[0]
+        return [line.split("]")[0][3:] for line in section.splitlines() if line.startswith("- [")]
+
+    assert figures(summary_markdown(doorway, animation=True)) == [
+        "fig1-global-maps.png", "fig2-global-maps-zoom.png", "fig3-error-vs-range.png",
+        "fig4-door-local-maps.png", "approach.gif", "fig5-occupancy-grids.png"]
+    assert "approach.gif" not in figures(summary_markdown(doorway))
+    assert json.loads(summary_json(doorway, animation=True))["figures"] == figures(
+        summary_markdown(doorway, animation=True))

@@ -12,6 +12,7 @@ import json
 import math
 from typing import Any
 
+from sonarcarve.lab.demo.animation import ANIMATION_FILE, ANIMATION_TEXT
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
 from sonarcarve.lab.demo.grid_figure import (
     GRID_FIGURE_FILE,
@@ -56,13 +57,17 @@ TABLE_COLUMNS = (
     ("method", "method", "sonar processing method"),
     ("readings", "readings", "sonar readings processed"),
     ("unprocessed_pct", "unpro-\ncessed\n%",
-     "mean share of the history not yet processed (arcs carving removed count as processed)"),
-    ("median_error_m", "median\nerror\ncm", "median distance of map points to the true walls"),
-    ("p90_error_m", "p90\nerror\ncm", "90th percentile of that distance"),
+     "mean share of the history not yet processed (arcs carving removed count as processed; "
+     "lower is better: less latency)"),
+    ("median_error_m", "median\nerror\ncm",
+     "median distance of map points to the true walls (lower is better)"),
+    ("p90_error_m", "p90\nerror\ncm",
+     "90th percentile of that distance (lower is better: fewer points far off)"),
     ("fully_carved_pct", "fully\ncarved\n%", "readings whose whole arc was carved away"),
     ("spurious_removed_pct", "spurious\nremoved\n%",
-     "of the spurious readings, share left out of the map"),
-    ("true_lost_pct", "true\nlost\n%", "of the true wall echoes, share left out of the map"),
+     "of the spurious readings, share left out of the map (higher is better)"),
+    ("true_lost_pct", "true\nlost\n%",
+     "of the true wall echoes, share left out of the map (lower is better)"),
     ("map_points", "map\npoints", "points in the final map"),
     ("readings_per_second", "readings\nper s", "processing speed"),
 )
@@ -209,8 +214,9 @@ def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
             "unprocessed.")
 
 
-def summary_markdown(result: DemoResult) -> str:
-    """``summary.md``: the table, its caption, the figures and how the run was made."""
+def summary_markdown(result: DemoResult, *, animation: bool = False) -> str:
+    """``summary.md``: the table, its caption, the figures (with ``animation``, the door
+    approach's GIF after fig. 4, as it is written beside them) and how the run was made."""
     sim = result.simulation
     header, rows = table_rows(result)
     header = [_flat(title) for title in header]
@@ -222,10 +228,7 @@ def summary_markdown(result: DemoResult) -> str:
     lines += [f"- {_flat(title)}: {text}" for _, title, text in TABLE_COLUMNS[1:]]
     lines += _grid_markdown(result)
     lines += ["", "## Figures", ""]
-    for key, name in FIGURE_FILES.items():
-        lines.append(f"- [{name}]({name}): {FIGURE_TEXT[key]}")
-    if result.grids:
-        lines.append(f"- [{GRID_FIGURE_FILE}]({GRID_FIGURE_FILE}): {GRID_FIGURE_TEXT}")
+    lines += [f"- [{name}]({name}): {text}" for name, text in _figures(result, animation)]
     lines += ["", "## Run", "",
               f"- world: {result.world.name}; seed {result.seed}; history "
               f"{result.config.history_size} arcs; tour {sim.trajectory.path_length:.0f} m in "
@@ -234,6 +237,16 @@ def summary_markdown(result: DemoResult) -> str:
               + ", ".join(f"{k} {v:,}" for k, v in sim.kind_counts().items()),
               "- seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()), ""]
     return "\n".join(lines)
+
+
+def _figures(result: DemoResult, animation: bool) -> list[tuple[str, str]]:
+    """``(file name, what it shows)`` of every figure of the demo's output, in viewing order."""
+    figures = [(name, FIGURE_TEXT[key]) for key, name in FIGURE_FILES.items()]
+    if animation:
+        figures.append((ANIMATION_FILE, ANIMATION_TEXT))
+    if result.grids:
+        figures.append((GRID_FIGURE_FILE, GRID_FIGURE_TEXT))
+    return figures
 
 
 def _flat(title: str) -> str:
@@ -254,8 +267,9 @@ def _grid_markdown(result: DemoResult) -> list[str]:
     return lines
 
 
-def summary_json(result: DemoResult) -> str:
-    """``summary.json``: settings, one record per method, the doors, timings."""
+def summary_json(result: DemoResult, *, animation: bool = False) -> str:
+    """``summary.json``: settings, one record per method, the doors, timings; its
+    ``figures`` as :func:`summary_markdown` lists them."""
     sim = result.simulation
     data: dict[str, Any] = {
         "world": result.world.name,
@@ -274,7 +288,7 @@ def summary_json(result: DemoResult) -> str:
                    "free_width_m": d.free_width, "passable": d.passable} for d in result.doors],
         "closeup_opening": None if result.closeup is None else result.closeup.opening,
         "caption": caption(result),
-        "figures": list(FIGURE_FILES.values()) + ([GRID_FIGURE_FILE] if result.grids else []),
+        "figures": [name for name, _ in _figures(result, animation)],
         "grids": [g.as_dict() for g in result.grids],
         "grid_caption": grid_caption(result),
         "seconds": result.seconds,
