@@ -28,6 +28,7 @@ from sonarcarve.lab.demo import (
     grid_caption,
     grid_table_rows,
     load_demo_world,
+    method_verdict,
     output_captions,
     run_demo,
     table_rows,
@@ -115,6 +116,10 @@ def demo(
         bar.update(figures, total=1, completed=1)
     console.print(_table(result))
     console.print()
+    verdict = method_verdict(result)
+    if verdict:  # the answer first, then how to read the table
+        console.print(Text(verdict, style="bold"), width=min(console.width, 110))
+        console.print()
     console.print(Text(caption(result)), width=min(console.width, 110))
     if result.grids:
         console.print()

@@ -39,7 +39,11 @@ def test_verdict_names_the_method_with_the_lowest_p90_error(doorway: DemoResult)
     best = sorted(shown, key=lambda label: float(shown[label]))[0]
     verdict = method_verdict(doorway)
     assert verdict.startswith(f"Sharpest map: {best}, 90% of its points within {shown[best]} cm")
-    assert verdict in caption(doorway)
+    # Its own paragraph, between the table and the caption, not buried in the caption.
+    table, rest = summary_markdown(doorway).split(f"\n\n**{verdict}**\n\n")
+    assert table.splitlines()[-1].startswith("| ")
+    assert rest.startswith(caption(doorway))
+    assert verdict not in caption(doorway)
 
 
 def test_verdict_names_the_best_paper_method_beside_one_beyond_the_paper(

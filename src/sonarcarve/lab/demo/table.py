@@ -158,15 +158,13 @@ def caption(result: DemoResult) -> str:
                                               + evidence.true_lost_pct):
         parts.append(f"Evidence carving left out {evidence.spurious_removed_pct:.0f}% of the "
                      f"spurious readings and {evidence.true_lost_pct:.0f}% of the true ones.")
-    verdict = method_verdict(result)
-    if verdict:
-        parts.append(verdict)
     return " ".join(parts)
 
 
 def method_verdict(result: DemoResult) -> str:
     """Which method made the sharpest map, in one sentence with the numbers; empty with fewer
-    than two methods that placed points.
+    than two methods that placed points. Printed on its own line between the table and its
+    caption, and so written in ``summary.md`` (``verdict`` in ``summary.json``).
 
     Sharpest is the lowest 90th-percentile error, compared as the table shows it (to a tenth
     of a centimetre; a tie goes to the method listed first): the median alone hides the points
@@ -224,6 +222,8 @@ def summary_markdown(result: DemoResult, *, animation: bool = False) -> str:
     lines.append("| " + " | ".join(header) + " |")
     lines.append("|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|")
     lines += ["| " + " | ".join(cells) + " |" for cells in rows]
+    verdict = method_verdict(result)
+    lines += ["", f"**{verdict}**"] if verdict else []
     lines += ["", caption(result), "", "Columns:", ""]
     lines += [f"- {_flat(title)}: {text}" for _, title, text in TABLE_COLUMNS[1:]]
     lines += _grid_markdown(result)
@@ -287,6 +287,7 @@ def summary_json(result: DemoResult, *, animation: bool = False) -> str:
                    "distance_m": d.distance,
                    "free_width_m": d.free_width, "passable": d.passable} for d in result.doors],
         "closeup_opening": None if result.closeup is None else result.closeup.opening,
+        "verdict": method_verdict(result),
         "caption": caption(result),
         "figures": [name for name, _ in _figures(result, animation)],
         "grids": [g.as_dict() for g in result.grids],
