@@ -25,6 +25,7 @@ from sonarcarve.lab.demo import (
     DemoResult,
     caption,
     demo_config,
+    door_note,
     grid_caption,
     grid_table_rows,
     load_demo_world,
@@ -126,6 +127,10 @@ def demo(
         console.print(_grid_table(result))
         console.print()
         console.print(Text(grid_caption(result)), width=min(console.width, 110))
+    note = door_note(result)
+    if note:
+        console.print()
+        console.print(Text(note), width=min(console.width, 110))
     console.print()
     console.print(f"[bold]Wrote {len(written)} files to {out}/[/bold], look at them in order:")
     for name, text in output_captions(result, animation=True):

@@ -82,3 +82,23 @@ def test_summaries_list_the_animation_when_it_is_written(doorway: DemoResult) ->
     assert "approach.gif" not in figures(summary_markdown(doorway))
     assert json.loads(summary_json(doorway, animation=True))["figures"] == figures(
         summary_markdown(doorway, animation=True))
+
+
+def test_door_note_only_when_no_door_tells_the_methods_apart(doorway: DemoResult) -> None:
+    import dataclasses
+
+    from sonarcarve.lab.demo import door_note
+
+    # The doorway world's door: closed in centerline's local map, so fig. 4 shows the point.
+    assert [door.passable["centerline"] for door in doorway.doors] == [False]
+    assert door_note(doorway) == ""
+    assert "Doors:" not in summary_markdown(doorway)
+    # The same door open for every method, as on the office tour: say where to look instead.
+    door = doorway.doors[0]
+    all_open = dataclasses.replace(door, passable=dict.fromkeys(door.passable, True))
+    office_like = dataclasses.replace(doorway, doors=(all_open, all_open))
+    note = door_note(office_like)
+    assert note.startswith("Doors: every door this tour approaches (2) looks passable 1.5 m")
+    assert "`sonarcarve demo --world doorway`" in note
+    assert note in summary_markdown(office_like)
+    assert door_note(dataclasses.replace(doorway, doors=())) == ""

@@ -21,7 +21,12 @@ from sonarcarve.lab.demo.grid_figure import (
     grid_verdict,
 )
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
-from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE, METHOD_LABELS, PAPER_METHODS
+from sonarcarve.lab.demo.scenario import (
+    APPROACH_DISTANCE,
+    CLOSEUP_METHODS,
+    METHOD_LABELS,
+    PAPER_METHODS,
+)
 from sonarcarve.lab.grid_measures import NEAR_PATH
 from sonarcarve.lab.output import json_ready
 
@@ -29,6 +34,7 @@ __all__ = [
     "GRID_COLUMNS",
     "TABLE_COLUMNS",
     "caption",
+    "door_note",
     "grid_caption",
     "grid_table_rows",
     "method_verdict",
@@ -196,6 +202,24 @@ def method_verdict(result: DemoResult) -> str:
     return text + "."
 
 
+def door_note(result: DemoResult) -> str:
+    """A sentence when no door of the tour tells the methods apart, else empty.
+
+    When every method fig. 4 draws leaves every approached door passable, fig. 4 and the
+    animation show three open doors; a newcomer who came for the README's animation (the
+    doorway world, where the centerline map closes a 0.85 m door) should learn where to look.
+    """
+    doors = result.doors
+    if not doors or not all(door.passable.get(method, True) for door in doors
+                            for method in CLOSEUP_METHODS):
+        return ""
+    return (f"Doors: every door this tour approaches ({len(doors):,}) looks passable "
+            f"{APPROACH_DISTANCE:g} m before it in each local map of fig. 4, so that figure and "
+            "the animation show no method closing one; `sonarcarve demo --world doorway` drives "
+            "at a 0.85 m door that the centerline map closes and carving opens (the README's "
+            "animation).")
+
+
 def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
     """"Carving: points 2.0x closer to the walls than centerline (...), 22% unprocessed."."""
     ratio = base.median_error_m / row.median_error_m if row.median_error_m > 0.0 else math.nan
@@ -229,6 +253,8 @@ def summary_markdown(result: DemoResult, *, animation: bool = False) -> str:
     lines += _grid_markdown(result)
     lines += ["", "## Figures", ""]
     lines += [f"- [{name}]({name}): {text}" for name, text in _figures(result, animation)]
+    note = door_note(result)
+    lines += ["", note] if note else []
     lines += ["", "## Run", "",
               f"- world: {result.world.name}; seed {result.seed}; history "
               f"{result.config.history_size} arcs; tour {sim.trajectory.path_length:.0f} m in "
