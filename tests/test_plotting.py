@@ -222,3 +222,23 @@ def test_the_readme_figure_and_its_parts_are_public() -> None:
 
     assert {"plot_carving_explainer", "plot_walls", "write_carving_explainer",
             "plot_sources", "new_figure", "check_figure_path"} <= set(sonarcarve.plotting.__all__)
+
+
+@pytest.mark.parametrize("drawn", [(), ("grid",), ("arcs", "error_bounds"),
+                                   ("grid", "arcs", "error_bounds")])
+def test_user_map_legend_keys_every_layer_it_draws(tmp_path: Path, drawn: tuple[str, ...]) -> None:
+    """The grid's shades, the arcs and the error circles carry no label of their own (they take
+    each point's colour), so the legend gets a key for each one drawn, and only for those."""
+    points = _points([[0.0, 2.0], [0.2, 2.0]], [0, 2], [0.0, 0.2], [0.3, 0.1], [0.2, 0.1],
+                     [PointSource.CENTERLINE, PointSource.CARVED])
+    ax = new_axes()
+    grid = read_grid_image(_write_grid(tmp_path)) if "grid" in drawn else None
+    plot_user_map(points, ax, readings=_readings(), grid=grid, arcs="arcs" in drawn,
+                  error_bounds="error_bounds" in drawn)
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    keys = {"grid": ["grid: occupied", "grid: unknown", "grid: free"],
+            "arcs": ["final arc of each point"],
+            "error_bounds": ["error bound (circle of radius max_error)"]}
+    expected = [label for layer in ("grid", "arcs", "error_bounds") if layer in drawn
+                for label in keys[layer]]
+    assert labels == ["sensor paths", "centerline (1)", "carved (1)", *expected]

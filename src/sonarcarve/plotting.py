@@ -312,11 +312,16 @@ def read_grid_image(path: str | Path) -> GridImage:
     return GridImage(image, resolution, (x0, y0))
 
 
+#: Opacity of a map_server map drawn under a map (:func:`plot_grid`).
+_GRID_ALPHA = 0.6
+
+
 def plot_grid(grid: GridImage, ax: Axes | None = None, **style: Any) -> list[Any]:
     """Draw a map_server map in grey underneath everything else (occupied dark, free light)."""
     ax = ax or new_axes()
     options: dict[str, Any] = {"cmap": "gray", "vmin": 0, "vmax": 255, "origin": "upper",
-                               "interpolation": "nearest", "zorder": 0, "alpha": 0.6} | style
+                               "interpolation": "nearest", "zorder": 0,
+                               "alpha": _GRID_ALPHA} | style
     return [ax.imshow(grid.image, extent=grid.extent, **options)]
 
 
@@ -525,8 +530,10 @@ def plot_user_map(
     if error_bounds:
         artists += plot_error_bounds(points, ax)
     artists += plot_map(points, ax, size=6.0, legend=False)
-    if artists:
-        ax.legend(loc="best", fontsize="small", markerscale=2)
+    handles = ax.get_legend_handles_labels()[0] + _overlay_keys(
+        grid=grid is not None, arcs=arcs and origins is not None, error_bounds=error_bounds)
+    if handles:
+        ax.legend(handles=handles, loc="best", fontsize="small", markerscale=2)
     if title is None:
         counts = ", ".join(f"{points.count(source):,} {source.label}" for source in PointSource)
         title = f"{len(points):,} points ({counts})"
@@ -536,6 +543,31 @@ def plot_user_map(
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     return artists
+
+
+#: The pixels of a trinary map_server map (map_saver's, and ``sonarcarve grid``'s): legend
+#: label -> pixel value.
+_GRID_PIXELS = {"grid: occupied": 0, "grid: unknown": 205, "grid: free": 254}
+
+
+def _overlay_keys(*, grid: bool, arcs: bool, error_bounds: bool) -> list[Any]:
+    """Legend keys of what :func:`plot_user_map` draws without a label of its own: the grid's
+    shades, the arcs and the error circles (each drawn in its point's source colour, so the
+    key is grey)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    keys: list[Any] = []
+    if grid:
+        # As plot_grid shows the pixel: grey level value/255 at _GRID_ALPHA over white.
+        keys += [Patch(facecolor=str(1.0 - _GRID_ALPHA * (1.0 - value / 255.0)),
+                       edgecolor="0.5", label=label) for label, value in _GRID_PIXELS.items()]
+    if arcs:
+        keys.append(Line2D([], [], color="0.45", lw=0.8, label="final arc of each point"))
+    if error_bounds:
+        keys.append(Line2D([], [], ls="none", marker="o", markersize=7, mfc="none", mec="0.45",
+                           label="error bound (circle of radius max_error)"))
+    return keys
 
 
 #: Figure formats :func:`save_figure` writes, by file suffix.

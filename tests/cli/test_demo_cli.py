@@ -30,6 +30,15 @@ def doorway_demo(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     return out, printed.getvalue()
 
 
+def test_cli_prints_the_verdict_between_the_table_and_the_caption(
+        doorway_demo: tuple[Path, str]) -> None:
+    out, printed = doorway_demo
+    verdict = json.loads((out / "summary.json").read_text())["verdict"]
+    assert verdict.startswith("Sharpest map: ")
+    flat = " ".join(printed.split())  # the console wraps long lines
+    assert flat.index("sonarcarve demo: ") < flat.index(verdict) < flat.index("How to read")
+
+
 def test_cli_writes_every_figure_and_summary(doorway_demo: tuple[Path, str]) -> None:
     out, printed = doorway_demo
     names = sorted(p.name for p in out.iterdir())

@@ -182,6 +182,19 @@ def test_the_hand_made_bag_grids_as_the_same_readings_written_by_hand(tmp_path: 
         _assert_same_grid(from_bag, from_csv, atol=1e-9)
 
 
+@pytest.mark.parametrize("model", MODELS)
+def test_convert_no_echo_keeps_the_free_space_grid_no_echo_takes_from_the_bag(
+        runs: Path, tmp_path: Path, model: str) -> None:
+    """bag → convert rosbag --no-echo → CSV → grid equals grid BAG --no-echo (before, convert
+    always dropped the +Inf firings, so the CSV's carved grid missed their free space)."""
+    csv = tmp_path / "converted.csv"
+    assert main(["convert", "rosbag", str(runs / "run.mcap"), "--no-echo", "--out", str(csv)]) == 0
+    assert "inf" in csv.read_text()
+    from_bag = _grid(runs / "run.mcap", tmp_path / "bag.yaml", "--model", model, "--no-echo")
+    from_csv = _grid(csv, tmp_path / "csv.yaml", "--model", model)
+    _assert_same_grid(from_csv, from_bag, atol=1e-12)
+
+
 # -- bad input: one line on stderr naming the problem and where, exit 2, nothing written.
 
 _CSV_WITH_BAG_OPTION = {"csv-robot": ["--robot", "scout2"],

@@ -262,3 +262,21 @@ def test_a_header_only_file_maps_to_an_empty_map_and_says_so(
     _write_ring_readings(tmp_path / "full.csv")
     assert main(["process", str(tmp_path / "full.csv"), "--out", str(out)]) == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("command", ["process", "grid"])
+def test_a_last_line_without_a_line_end_is_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    """A logger killed mid-line leaves a number cut short, which still parses: say so."""
+    readings = tmp_path / "cut.csv"
+    # Line 4, the last, was "0.2,0,0.1,0,0,1.5625\n" before the writer died.
+    readings.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,1.5\n0.1,0,0.05,0,0,1.5\n"
+                        "0.2,0,0.1,0,0,1.5")
+    out = tmp_path / ("map.csv" if command == "process" else "grid.yaml")
+    assert main([command, str(readings), "--out", str(out)]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"sonarcarve: warning: {readings}: line 4, the last, has no line end: if the file was "
+        "cut short, its last reading may be wrong (a number cut short still reads as a number)"]
+    readings.write_text(readings.read_text() + "\n")
+    assert main([command, str(readings), "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""

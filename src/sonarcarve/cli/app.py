@@ -5,7 +5,8 @@
   ``sonarcarve --help`` and each command load only what they use.
 - :func:`summary_table`, :func:`progress`: the two-column result table and the progress bar
   every command prints.
-- :func:`warn`: the one-line warnings of a command that still succeeds.
+- :func:`warn`: the one-line warnings of a command that still succeeds; :func:`cut_short`, the
+  one for a log whose last line has no line end.
 - :func:`flag_message`, :func:`reworded`: a library error, which names parameters, reworded to
   name the flags that set them.
 
@@ -24,6 +25,7 @@ import re
 import sys
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -320,6 +322,29 @@ def warn(lines: Iterable[str | None]) -> None:
     for line in lines:
         if line is not None:
             print(f"sonarcarve: warning: {line}", file=sys.stderr)
+
+
+def cut_short(path: Path) -> str | None:
+    """A warning when a text log's last line has no line end, else None.
+
+    A logger killed mid-line leaves such a file, and a number cut short still parses
+    (``3.7845`` as ``3.7``), so the reader cannot tell; every tool that writes CSV ends its
+    last line. Costs one byte read unless the warning is due (then one pass to number the
+    line); None for anything but a non-empty regular file that can be read.
+    """
+    try:
+        if not path.is_file() or path.stat().st_size == 0:  # a pipe would block, or be eaten
+            return None
+        with path.open("rb") as handle:
+            handle.seek(-1, 2)
+            if handle.read(1) in (b"\n", b"\r"):
+                return None
+            handle.seek(0)
+            line = 1 + sum(block.count(b"\n") for block in iter(partial(handle.read, 1 << 20), b""))
+    except OSError:
+        return None
+    return (f"{path}: line {line:,}, the last, has no line end: if the file was cut short, "
+            "its last reading may be wrong (a number cut short still reads as a number)")
 
 
 def _show_version(value: bool) -> None:

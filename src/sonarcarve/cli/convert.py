@@ -13,6 +13,7 @@ from rich.table import Table
 
 from sonarcarve.cli.app import app, console, summary_table
 from sonarcarve.cli.options import (
+    BAG_PANEL,
     FrameOpt,
     OdomTopicOpt,
     RangeTopicOpt,
@@ -55,7 +56,8 @@ class ConvertOptions:
 
 def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
     if opts.bag.given:
-        msg = "--robot, --range-topic, --odom-topic and --frame apply to the rosbag format only"
+        msg = ("--robot, --range-topic, --odom-topic, --frame and --no-echo apply to the rosbag "
+               "format only")
         raise ConvertError(msg)
     beam_width = opts.beam_width
     log = read_robond(directory, keep_duplicates=opts.keep_duplicates,
@@ -83,8 +85,10 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     if opts.keep_duplicates:
         msg = "--keep-duplicates applies to the roboND format only"
         raise ConvertError(msg)
-    log = read_bag(replace(opts.bag, beam_width=opts.beam_width), source)
-    write_readings_csv(log.batch, out)
+    bag = replace(opts.bag, beam_width=opts.beam_width)
+    log = read_bag(bag, source)
+    batch = bag.readings(log)
+    write_readings_csv(batch, out)
     r = log.report
     for line in _sensor_lines(r):
         console.print(line, soft_wrap=True, highlight=False, markup=False)
@@ -94,11 +98,12 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
         *rows,
         ("odometry", f"{r.odometry_topic} ({parent or '?'} → {child or '?'})"),
         ("sensors", f"{len(r.sensors):,}"),
-        ("no echo, +Inf or max_range (free space; not written yet)", f"{r.no_echo:,}"),
+        ("no echo, +Inf or max_range (free space)",
+         f"{r.no_echo:,} ({'written, range inf' if bag.no_echo else 'dropped; --no-echo keeps'})"),
         ("too close, -Inf (dropped)", f"{r.too_close:,}"),
         ("invalid, NaN (dropped)", f"{r.invalid:,}"),
         ("outside odometry span (dropped)", f"{r.outside_odometry:,}"),
-        ("readings written", f"{r.readings:,}"),
+        ("readings written", f"{len(batch):,}"),
         ("readings CSV", str(out)),
     ])
 
@@ -145,6 +150,13 @@ def convert(
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
     frame: FrameOpt = None,
+    no_echo: Annotated[bool, typer.Option(
+        "--no-echo",
+        help="rosbag: also write the no-echo readings (REP 117 +Inf: nothing heard up to "
+             "max_range) as rows with range inf and a max_range column, which the methods and "
+             "the carved and Elfes grids take as free space (as process and grid --no-echo "
+             "take them from the bag).",
+        rich_help_panel=BAG_PANEL)] = False,
 ) -> None:
     """Convert a data set's files into the readings CSV (t,sensor,x,y,theta,range,beam_width).
 
@@ -155,12 +167,11 @@ def convert(
 
     rosbag (ROS 1 .bag, ROS 2 folder with sqlite3 or MCAP storage, or a bare .mcap): each
     sensor_msgs/Range echo (header stamp, s) at or above min_range and below max_range becomes a
-    reading
-    posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
+    reading posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
     composed with the sensor's mount, found in /tf_static (and /tf) by its frame_id; --robot
-    gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: +Inf or a
-    range at max_range (no echo within range), -Inf (too close) and NaN (invalid) are counted,
-    not written.
+    gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: -Inf (too
+    close) and NaN (invalid) are counted, not written; +Inf, or a range at max_range (no echo
+    within range), too, unless --no-echo writes them as free-space rows (range inf, max_range).
 
     Example: `sonarcarve convert roboND --out roboND.csv` then
     `sonarcarve process roboND.csv --out map.csv`; or
@@ -175,7 +186,8 @@ def convert(
     # The data set's own files must survive a --out that names one of them.
     check_output_file(out, inputs=_source_files(directory), label=f"--out {out}")
     options = ConvertOptions(beam_width=width, keep_duplicates=keep_duplicates,
-                             bag=bag_options(robot, range_topic, odom_topic, frame))
+                             bag=bag_options(robot, range_topic, odom_topic, frame,
+                                             no_echo=no_echo))
     console.print(converter(directory, out, options))
 
 

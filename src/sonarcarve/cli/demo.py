@@ -25,9 +25,11 @@ from sonarcarve.lab.demo import (
     DemoResult,
     caption,
     demo_config,
+    door_note,
     grid_caption,
     grid_table_rows,
     load_demo_world,
+    method_verdict,
     output_captions,
     run_demo,
     table_rows,
@@ -115,12 +117,20 @@ def demo(
         bar.update(figures, total=1, completed=1)
     console.print(_table(result))
     console.print()
+    verdict = method_verdict(result)
+    if verdict:  # the answer first, then how to read the table
+        console.print(Text(verdict, style="bold"), width=min(console.width, 110))
+        console.print()
     console.print(Text(caption(result)), width=min(console.width, 110))
     if result.grids:
         console.print()
         console.print(_grid_table(result))
         console.print()
         console.print(Text(grid_caption(result)), width=min(console.width, 110))
+    note = door_note(result)
+    if note:
+        console.print()
+        console.print(Text(note), width=min(console.width, 110))
     console.print()
     console.print(f"[bold]Wrote {len(written)} files to {out}/[/bold], look at them in order:")
     for name, text in output_captions(result, animation=True):

@@ -16,7 +16,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from sonarcarve.cli.app import app, console, flag_message, summary_table, warn
+from sonarcarve.cli.app import app, console, cut_short, flag_message, summary_table, warn
 from sonarcarve.cli.options import (
     FrameOpt,
     NoEchoOpt,
@@ -234,7 +234,8 @@ def grid(
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
     rows, cols = built.shape
-    warn(likely_mistakes(batch))  # after the writing: a failed run prints one line only
+    # After the writing: a failed run prints one line only.
+    warn([*likely_mistakes(batch), None if is_bag(readings) else cut_short(readings)])
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),

@@ -18,7 +18,16 @@ from typing import TYPE_CHECKING, Annotated, NamedTuple
 
 import typer
 
-from sonarcarve.cli.app import app, console, err_console, progress, reworded, summary_table, warn
+from sonarcarve.cli.app import (
+    app,
+    console,
+    cut_short,
+    err_console,
+    progress,
+    reworded,
+    summary_table,
+    warn,
+)
 from sonarcarve.cli.options import (
     RUNNER_FLAGS,
     FrameOpt,
@@ -309,7 +318,8 @@ def process(
     job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate, cell)
     output.check(job)  # before the (possibly long) run: a bad --out wastes no time
     rows = output.write(job)
-    warn([beam_warning, *job.warnings])  # only now: a failed run prints its error line alone
+    # Only now: a failed run prints its error line alone.
+    warn([beam_warning, *job.warnings, None if is_bag(source) else cut_short(source)])
     console.print(summary_table(f"sonarcarve process --method {method}", rows))
     return 0
 

@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, reworded, summary_table, warn
+from sonarcarve.cli.app import app, console, cut_short, reworded, summary_table, warn
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import check_output_file
@@ -93,6 +93,7 @@ def view(
         console.print(f"no viewer opened{reason}; open the recording with `rerun {target}`")
     if not len(batch):  # a valid file (a header only), so not an error: say so, as process does
         warn([f"{readings} has no readings, only a header: the recording is empty"])
+    warn([cut_short(readings)])
 
 
 def _walls(readings: Path, world: str | None) -> FloatArray | None:

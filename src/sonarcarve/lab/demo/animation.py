@@ -34,10 +34,12 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from PIL import Image
 
-__all__ = ["ANIMATION_FILE", "FRAMES", "DoorGauge", "animation_gif", "live_map"]
+__all__ = ["ANIMATION_FILE", "ANIMATION_TEXT", "FRAMES", "DoorGauge", "animation_gif", "live_map"]
 
 #: The animation's file name in the demo's output folder.
 ANIMATION_FILE = "approach.gif"
+#: What it shows, in a few words (printed by the CLI, listed in ``summary.md``).
+ANIMATION_TEXT = "that approach, animated, measured in every frame"
 #: Frames drawn (the readings before the door's moment are spread over them).
 FRAMES = 40
 _WINDOW = 2.4  # half-size of the drawn square, metres

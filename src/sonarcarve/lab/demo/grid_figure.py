@@ -35,6 +35,10 @@ GRID_FIGURE_TEXT = "carved grid beside ROS's layer, over true walls"
 _WALL_COLOR = "#e8000b"
 #: The close-up row is drawn only when fig. 2's window is smaller than this share of the map.
 _CLOSEUP_SHARE = 0.3
+#: Space between rows of panels and below the figure's title, inches (constrained layout's
+#: ``h_pad``; its default, 3 points, let the upper panels' "x (m)" touch the close-ups' titles
+#: and the two-line figure title touch the panel titles).
+_ROW_PAD = 0.12
 #: What the numbers in the panel titles mean (the legend's title).
 _MEASURES_TEXT = ("precision: share of the occupied cells within one cell of a true wall; "
                   "recall: share of the walls the sonars saw that have an occupied cell;\n"
@@ -128,7 +132,9 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
     aspects = [(lim[3] - lim[2]) / max(lim[1] - lim[0], 1e-9) for lim in (limits, box)[:rows]]
     width = 13.0 if cols == 2 else 7.0
     fig, axes = new_figure(rows, cols, width=width,
-                           height=min(16.0, 1.6 + width / cols * sum(aspects)))
+                           height=min(16.0, 1.6 + rows * 3 * _ROW_PAD
+                                      + width / cols * sum(aspects)))
+    _pad_rows(fig)
     if not grids:
         axes[0, 0].text(0.5, 0.5, "no grids in this run", ha="center", va="center")
         for ax in axes.flat:
@@ -158,6 +164,15 @@ def plot_occupancy_grids(result: DemoResult) -> Figure:
         f"('{result.world.name}' tour, {grids[0].resolution:.2f} m cells), as a robot's planner "
         "reads them" + (f":\n{verdict}" if verdict else ""), fontsize=12)
     return fig
+
+
+def _pad_rows(fig: Figure) -> None:
+    """Leave :data:`_ROW_PAD` between the rows of panels and below the figure's title."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    engine = fig.get_layout_engine()
+    if isinstance(engine, ConstrainedLayoutEngine):
+        engine.set(h_pad=_ROW_PAD)
 
 
 def _area(limits: tuple[float, float, float, float]) -> float:

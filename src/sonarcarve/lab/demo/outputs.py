@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from sonarcarve.io.atomic import atomic_path, make_output_dir
 from sonarcarve.io.map_server import write_map_server
-from sonarcarve.lab.demo.animation import ANIMATION_FILE, animation_gif
+from sonarcarve.lab.demo.animation import ANIMATION_FILE, ANIMATION_TEXT, animation_gif
 from sonarcarve.lab.demo.figures import (
     FIGURE_FILES,
     FIGURE_TEXT,
@@ -64,7 +64,7 @@ def output_captions(result: DemoResult, *, animation: bool = False) -> list[tupl
     column, so each caption is kept within 49 characters (an 80-column terminal)."""
     out = [(name, FIGURE_TEXT[key]) for key, name in FIGURE_FILES.items()]
     if animation:
-        out.append((ANIMATION_FILE, "that approach, animated, measured in every frame"))
+        out.append((ANIMATION_FILE, ANIMATION_TEXT))
     if result.grids:
         out.append((GRID_FIGURE_FILE, GRID_FIGURE_TEXT))
     for grid in result.grids:
@@ -108,8 +108,8 @@ def write_demo_outputs(result: DemoResult, out: str | Path, *,
     if result.grids:
         files[GRID_FIGURE_FILE] = _png(plot_occupancy_grids(result))
     files |= {
-        SUMMARY_MD: summary_markdown(result).encode(),
-        SUMMARY_JSON: summary_json(result).encode(),
+        SUMMARY_MD: summary_markdown(result, animation=animation).encode(),
+        SUMMARY_JSON: summary_json(result, animation=animation).encode(),
     }
     if animation:
         files[ANIMATION_FILE] = animation_gif(result)
