@@ -252,3 +252,17 @@ def test_the_interrupted_line_tells_what_each_command_kept(args: list[str], said
     from sonarcarve.cli.main import interrupted_message
 
     assert said in interrupted_message(args)
+
+
+def test_python_dash_m_runs_the_command_line() -> None:
+    """``python -m sonarcarve`` is the ``sonarcarve`` script: same output, same exit codes."""
+    done = subprocess.run([sys.executable, "-m", "sonarcarve", "--version"], capture_output=True,
+                          text=True, check=False, timeout=120)
+    assert done.returncode == 0, done.stderr
+    from sonarcarve import __version__
+
+    assert done.stdout.strip() == f"sonarcarve {__version__}"
+    bad = subprocess.run([sys.executable, "-m", "sonarcarve", "worlds", "--nope"],
+                         capture_output=True, text=True, check=False, timeout=120)
+    assert bad.returncode == 2
+    assert "Traceback" not in bad.stderr
