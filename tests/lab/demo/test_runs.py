@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -63,3 +64,50 @@ def test_same_seed_same_numbers(doorway: DemoResult) -> None:
     for name in ("median_error_m", "p90_error_m", *PERCENT_FIELDS, "map_points"):
         a, b = getattr(first, name), getattr(second, name)
         assert a == b or (math.isnan(a) and math.isnan(b))
+
+
+def test_doors_tell_apart_when_a_drawn_method_closes_one(doorway: DemoResult) -> None:
+    import dataclasses
+
+    from sonarcarve.lab.demo.doors import doors_tell_apart
+
+    door = doorway.doors[0]
+    assert door.passable["centerline"] is False  # the doorway world: centerline closes it
+    assert doors_tell_apart((door,))
+    assert doors_tell_apart(())  # nothing to show: the tour's own figure stays
+    all_open = dataclasses.replace(door, passable=dict.fromkeys(door.passable, True))
+    assert not doors_tell_apart((all_open, all_open))
+    # Closed only by a method fig. 4 does not draw (evidence carving): nothing to see there.
+    only_evidence = dataclasses.replace(all_open, passable={**all_open.passable,
+                                                            "evidence": False})
+    assert not doors_tell_apart((only_evidence,))
+
+
+def test_open_doors_bring_the_doorway_scene_for_fig_4(monkeypatch: pytest.MonkeyPatch,
+                                                      tmp_path: Path) -> None:
+    """When no door of the tour tells the methods apart, fig. 4 and the animation are drawn
+    from a drive at the doorway world's door (the paper's Fig. 2), with fig. 4's methods."""
+    from sonarcarve.lab.demo import outputs, runs
+
+    monkeypatch.setattr(runs, "doors_tell_apart", lambda doors: False)
+    steps: list[str] = []
+    result = run_demo("t-junction", seed=0, methods=("centerline",), grid_resolution=None,
+                      on_progress=lambda step, done, total: steps.append(step))
+    scene = result.door_scene
+    assert scene is not None
+    assert result.door_source is scene
+    assert scene.world.name == "doorway"
+    assert [row.method for row in scene.methods] == ["centerline", "carve", "combined"]
+    assert scene.door_scene is None  # no scene of a scene
+    assert "door scene" in steps
+    drawn: list[DemoResult] = []
+    monkeypatch.setattr(outputs, "animation_gif", lambda r: drawn.append(r) or b"GIF")
+    real = outputs.plot_door_closeup
+    monkeypatch.setattr(outputs, "plot_door_closeup", lambda r: drawn.append(r) or real(r))
+    outputs.write_demo_outputs(result, tmp_path, animation=True)
+    assert drawn == [scene, scene]
+    # Without the option, or on the doorway world itself, no scene.
+    assert run_demo("t-junction", seed=0, methods=("centerline",), grid_resolution=None,
+                    door_scene=False).door_scene is None
+    assert run_demo("doorway", seed=0, methods=("centerline",),
+                    grid_resolution=None).door_scene is None

@@ -102,3 +102,12 @@ def test_door_note_only_when_no_door_tells_the_methods_apart(doorway: DemoResult
     assert "`sonarcarve demo --world doorway`" in note
     assert note in summary_markdown(office_like)
     assert door_note(dataclasses.replace(doorway, doors=())) == ""
+    # With the doorway scene run for fig. 4 (run_demo's door_scene): what each method left free
+    # there, as measured at the scene's close-up door (centerline blocked, carving open).
+    with_scene = dataclasses.replace(office_like, door_scene=doorway)
+    note = door_note(with_scene)
+    widths = doorway.doors[0].free_width
+    assert "fig. 4 and approach.gif show the 'doorway' world's 0.85 m door instead" in note
+    assert f"centerline {widths['centerline']:.2f} m free, blocked" in note
+    assert f"carving {widths['carve']:.2f} m free;" in note
+    assert note in summary_markdown(with_scene)

@@ -190,7 +190,8 @@ def animation_gif(result: DemoResult, frames: int = FRAMES) -> bytes:
         for robot, path in zip(robots, paths, strict=True):
             robot.set_center((float(rx[k]), float(ry[k])))
             path.set_data(rx[start:hi], ry[start:hi])
-        clock.set_text(f"t = {float(readings.t[k]):.1f} s: the robot's local maps"
+        clock.set_text(f"'{result.world.name}', t = {float(readings.t[k]):.1f} s: the robot's "
+                       "local maps"
                        + door.distance(float(rx[k]), float(ry[k])))
         return [*arcs.values(), *dots.values(), *robots, *paths]
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import GAP_DEPTH, passage_clearance
-from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE
+from sonarcarve.lab.demo.scenario import APPROACH_DISTANCE, CLOSEUP_METHODS
 from sonarcarve.lab.instrument import ArcTable, RunRecord
 from sonarcarve.sim.motion import Trajectory
 from sonarcarve.sim.simulate import Simulation
@@ -27,6 +27,7 @@ __all__ = [
     "DoorCandidate",
     "LocalView",
     "door_candidates",
+    "doors_tell_apart",
     "local_view",
     "measure_door",
     "pick_closeup",
@@ -212,3 +213,14 @@ def pick_closeup(doors: tuple[DoorApproach, ...]) -> DoorApproach | None:
         return best - d.free_width.get("centerline", 0.0)
 
     return min(doors, key=lambda d: (tier.get(d.how, 3), -round(gain(d), 3), d.view.readings))
+
+
+def doors_tell_apart(doors: tuple[DoorApproach, ...]) -> bool:
+    """False when the tour approaches doors and every method fig. 4 draws leaves every one of
+    them passable: then fig. 4 and the animation would show three open doors (every 1 m door of
+    the office tour), and the demo shows Fig. 2's doorway instead (:func:`run_demo`). True
+    when some method closes some door, or when there is no door to show."""
+    if not doors:
+        return True
+    return not all(door.passable.get(method, True) for door in doors
+                   for method in CLOSEUP_METHODS)

@@ -287,8 +287,8 @@ def _closeup_title(result: DemoResult, view: LocalView, door: DoorApproach | Non
     where = (f"{APPROACH_DISTANCE:g} m before driving through a door" if door.how == "through"
              else f"{door.distance:.1f} m from a door")
     need = passage_clearance(float(result.simulation.robot.robot_radius))
-    return (f"What the robot's local map shows {where} (t = {view.t:.0f} s); the "
-            f"robot needs {need:.2f} m free to pass")
+    return (f"'{result.world.name}': what the robot's local map shows {where} "
+            f"(t = {view.t:.0f} s); the robot needs {need:.2f} m free to pass")
 
 
 def _robot(ax: Axes, pose: tuple[float, float, float], radius: float) -> None:

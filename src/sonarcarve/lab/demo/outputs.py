@@ -103,7 +103,7 @@ def write_demo_outputs(result: DemoResult, out: str | Path, *,
         FIGURE_FILES["global_maps"]: _png(plot_global_maps(result)),
         FIGURE_FILES["map_zoom"]: _png(plot_map_zoom(result)),
         FIGURE_FILES["error_by_range"]: _png(plot_error_by_range(result)),
-        FIGURE_FILES["door_closeup"]: _png(plot_door_closeup(result)),
+        FIGURE_FILES["door_closeup"]: _png(plot_door_closeup(result.door_source)),
     }
     if result.grids:
         files[GRID_FIGURE_FILE] = _png(plot_occupancy_grids(result))
@@ -112,7 +112,7 @@ def write_demo_outputs(result: DemoResult, out: str | Path, *,
         SUMMARY_JSON: summary_json(result, animation=animation).encode(),
     }
     if animation:
-        files[ANIMATION_FILE] = animation_gif(result)
+        files[ANIMATION_FILE] = animation_gif(result.door_source)
     make_output_dir(target)  # atomic_path creates no folders
     written = []
     for name, content in files.items():

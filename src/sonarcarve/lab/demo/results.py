@@ -182,6 +182,10 @@ class DemoResult:
     seconds : dict of str to float
         Wall time per step (``simulate``, each method incl. its snapshots, ``measure``, each
         grid as ``grid:KIND`` incl. its measures).
+    door_scene : DemoResult or None
+        The approach to the doorway world's 0.85 m door (the paper's Fig. 2), run beside the
+        tour when no door of the tour tells the methods apart (:func:`run_demo`); fig. 4 and
+        the animation then draw it (:attr:`door_source`). None: they draw this tour's door.
     """
 
     world: World
@@ -196,6 +200,13 @@ class DemoResult:
     fallback_view: LocalView | None
     grids: tuple[GridSummary, ...]
     seconds: dict[str, float]
+    door_scene: DemoResult | None = None
+
+    @property
+    def door_source(self) -> DemoResult:
+        """The run whose door fig. 4 and the animation draw: :attr:`door_scene` if any, else
+        this one."""
+        return self.door_scene if self.door_scene is not None else self
 
     def summary(self, method: str) -> MethodSummary:
         """The table row of ``method``."""

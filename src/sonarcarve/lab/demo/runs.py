@@ -28,12 +28,14 @@ from sonarcarve.lab.demo.costmaps import run_grids
 from sonarcarve.lab.demo.doors import (
     DoorCandidate,
     door_candidates,
+    doors_tell_apart,
     local_view,
     measure_door,
     pick_closeup,
 )
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import (
+    CLOSEUP_METHODS,
     DEMO_METHODS,
     GRID_RESOLUTION,
     SAMPLE_EVERY,
@@ -64,6 +66,11 @@ __all__ = ["run_demo"]
 _WARM_UP = 64
 
 
+#: The world whose door fig. 4 and the animation show when the tour's doors tell the methods
+#: nothing apart: the paper's Fig. 2, a 0.85 m door driven at head-on.
+DOOR_SCENE_WORLD = "doorway"
+
+
 def run_demo(
     world: str | World = "office",
     seed: int = 0,
@@ -74,6 +81,7 @@ def run_demo(
     methods: tuple[str, ...] = DEMO_METHODS,
     grid_resolution: float | None = GRID_RESOLUTION,
     on_progress: ProgressCallback | None = None,
+    door_scene: bool = True,
 ) -> DemoResult:
     """Simulate a world's tour and map it with every method; measure each against the truth.
 
@@ -96,8 +104,15 @@ def run_demo(
         Cell side of the carved grid and the range sensor layer built from the same readings,
         metres; None builds no grids.
     on_progress : callable, optional
-        ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings), a method name or
-        ``grid:KIND`` (readings).
+        ``on_progress(step, done, total)``: ``step`` is ``simulate`` (firings), a method name,
+        ``grid:KIND`` (readings) or ``door scene`` (0 or 1 of 1).
+    door_scene : bool
+        When the tour approaches doors and every method of fig. 4 leaves each one passable
+        (:func:`~sonarcarve.lab.demo.doors.doors_tell_apart`; every 1 m door of the office
+        tour), also drive at the doorway world's 0.85 m door (:data:`DOOR_SCENE_WORLD`, the
+        paper's Fig. 2, about 170 readings) with fig. 4's methods, for fig. 4 and the animation
+        (:attr:`DemoResult.door_scene`): a figure of three open doors shows nothing of what
+        carving does. False: never.
 
     Returns
     -------
@@ -140,12 +155,29 @@ def run_demo(
     seconds["measure"] = time.perf_counter() - tic
     grids = () if grid_resolution is None else run_grids(sim, grid_resolution, on_progress,
                                                          seconds)
+    scene = None
+    if door_scene and not doors_tell_apart(doors) and the_world.name != DOOR_SCENE_WORLD:
+        scene = _door_scene(seed, history_size, robot, seconds, on_progress)
     return DemoResult(
         world=the_world, seed=seed, config=config, simulation=sim, methods=rows,
         global_maps={name: rec.global_map for name, rec in records.items()},
         map_errors=errors, doors=doors, closeup=closeup, fallback_view=fallback,
-        grids=grids, seconds=seconds,
+        grids=grids, seconds=seconds, door_scene=scene,
     )
+
+
+def _door_scene(seed: int, history_size: int, robot: str, seconds: dict[str, float],
+                on_progress: ProgressCallback | None) -> DemoResult:
+    """The doorway world's approach with fig. 4's methods (``run_demo``'s ``door_scene``)."""
+    tic = time.perf_counter()
+    if on_progress is not None:
+        on_progress("door scene", 0, 1)
+    scene = run_demo(DOOR_SCENE_WORLD, seed, history_size=history_size, robot=robot,
+                     methods=CLOSEUP_METHODS, grid_resolution=None, door_scene=False)
+    if on_progress is not None:
+        on_progress("door scene", 1, 1)
+    seconds["door scene"] = time.perf_counter() - tic
+    return scene
 
 
 def _simulate_tour(world: World, robot: RobotDescription, seed: int, max_length: float | None,

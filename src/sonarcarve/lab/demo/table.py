@@ -13,6 +13,7 @@ import math
 from typing import Any
 
 from sonarcarve.lab.demo.animation import ANIMATION_FILE, ANIMATION_TEXT
+from sonarcarve.lab.demo.doors import doors_tell_apart
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
 from sonarcarve.lab.demo.grid_figure import (
     GRID_FIGURE_FILE,
@@ -206,18 +207,28 @@ def door_note(result: DemoResult) -> str:
     """A sentence when no door of the tour tells the methods apart, else empty.
 
     When every method fig. 4 draws leaves every approached door passable, fig. 4 and the
-    animation show three open doors; a newcomer who came for the README's animation (the
-    doorway world, where the centerline map closes a 0.85 m door) should learn where to look.
+    animation would show three open doors; they show the doorway world's door instead
+    (:attr:`DemoResult.door_scene`), and this says so, with what each method left free there.
     """
     doors = result.doors
-    if not doors or not all(door.passable.get(method, True) for door in doors
-                            for method in CLOSEUP_METHODS):
+    if doors_tell_apart(doors):
         return ""
-    return (f"Doors: every door this tour approaches ({len(doors):,}) looks passable "
-            f"{APPROACH_DISTANCE:g} m before it in each local map of fig. 4, so that figure and "
-            "the animation show no method closing one; `sonarcarve demo --world doorway` drives "
-            "at a 0.85 m door that the centerline map closes and carving opens (the README's "
-            "animation).")
+    seen = (f"Doors: every door this tour approaches ({len(doors):,}) looks passable "
+            f"{APPROACH_DISTANCE:g} m before it in each local map")
+    scene = result.door_scene
+    door = scene.closeup if scene is not None else None
+    if scene is None or door is None:
+        return (f"{seen}, so fig. 4 and the animation show no method closing one; `sonarcarve "
+                "demo --world doorway` drives at a 0.85 m door that the centerline map closes "
+                "and carving opens (the README's animation).")
+    gap = math.dist(door.jambs[0], door.jambs[1])
+    widths = "; ".join(
+        f"{METHOD_LABELS.get(m, m)} {door.free_width[m]:.2f} m free"
+        f"{'' if door.passable[m] else ', blocked'}"
+        for m in CLOSEUP_METHODS if m in door.free_width)
+    return (f"{seen}, so fig. 4 and approach.gif show the '{scene.world.name}' world's "
+            f"{gap:.2f} m door instead (the paper's Fig. 2, a short drive simulated for them; "
+            f"`sonarcarve demo --world {scene.world.name}` maps it alone): {widths}.")
 
 
 def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
