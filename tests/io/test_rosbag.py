@@ -223,6 +223,22 @@ def test_a_range_at_max_range_is_a_silent_firing(tmp_path: Path) -> None:
     np.testing.assert_allclose(log.no_echo.max_range, [3.0, 5.0])
 
 
+def test_a_sensor_that_reports_inf_keeps_its_max_range_echoes(tmp_path: Path) -> None:
+    """A publisher that says "nothing heard" with +Inf (REP 117, as sonarcarve's simulated bags
+    do) means an echo when it reports max_range itself: a Scout2's 6.477 m is a whole number of
+    its range steps, and a bag must give back the CSV's readings. The rule is per sensor."""
+    odom = [_odom(0.0, 0.0, 0.0, 0.0), _odom(1.0, 1.0, 0.0, 0.0)]
+    mounts = _tf(0.0, ("base_link", "a", 0.0, 0.0, 0.0), ("base_link", "b", 0.0, 0.0, 1.0))
+    ranges = [_range("/a", 0.1, 3.0, frame="a", hi=3.0), _range("/a", 0.2, INF, frame="a", hi=3.0),
+              _range("/b", 0.3, 3.0, frame="b", hi=3.0)]
+    bag = write_bag(tmp_path / "bag_mcap", [*odom, mounts, *ranges],
+                    {"/a": RANGE, "/b": RANGE, "/odom": ODOM, "/tf_static": TF})
+    log = read_rosbag(bag)
+    assert (log.report.no_echo, log.report.readings) == (2, 1)
+    np.testing.assert_allclose(log.batch.t, [0.1])  # /a's 3.0: an echo, /a says silence with +Inf
+    np.testing.assert_allclose(log.no_echo.t, [0.2, 0.3])  # /a's +Inf, /b's 3.0
+
+
 # TF mounts: base_link -> sonar_ring at (0.1, 0) turned 90°; the ring carries sonar_front at
 # (0.2, 0) turned -90° and sonar_left at (0, -0.15) turned 0; sonar_rear hangs off base_link
 # on /tf at (-0.25, 0.05) turned 180°. In base_link, worked by hand:

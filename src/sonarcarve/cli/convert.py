@@ -166,12 +166,13 @@ def convert(
     the previous record although the robot moved (the sensor had not fired again).
 
     rosbag (ROS 1 .bag, ROS 2 folder with sqlite3 or MCAP storage, or a bare .mcap): each
-    sensor_msgs/Range echo (header stamp, s) at or above min_range and below max_range becomes a
-    reading posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
+    sensor_msgs/Range echo (header stamp, s) from min_range up to max_range becomes a reading
+    posed by the robot pose interpolated in nav_msgs/Odometry (or odom → base_link on /tf)
     composed with the sensor's mount, found in /tf_static (and /tf) by its frame_id; --robot
     gives mounts for bags without TF. Beam width = field_of_view when > 0. REP 117: -Inf (too
-    close) and NaN (invalid) are counted, not written; +Inf, or a range at max_range (no echo
-    within range), too, unless --no-echo writes them as free-space rows (range inf, max_range).
+    close) and NaN (invalid) are counted, not written; +Inf, and a range equal to max_range
+    from a sensor that never reports +Inf (Gazebo's way to say it), are no echo within range:
+    counted, and written as free-space rows (range inf, max_range) with --no-echo.
 
     Example: `sonarcarve convert roboND --out roboND.csv` then
     `sonarcarve process roboND.csv --out map.csv`; or

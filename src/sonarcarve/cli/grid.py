@@ -196,7 +196,8 @@ def grid(
     The input is a readings CSV or a ROS bag (ROS 1 `.bag`, `.mcap`, `.db3` or a rosbag2
     folder: sensor_msgs/Range per transducer, odometry and TF), a bag read as `sonarcarve
     process` reads it, with the same bag options. A bag's silent firings (REP 117 +Inf, or a
-    range equal to max_range, as Gazebo's sonar plugins publish them) are left out unless
+    range equal to max_range from a sensor that never reports +Inf, as Gazebo's sonar plugins
+    publish them) are left out unless
     --no-echo keeps them as no-echo readings, as a CSV's rows with range inf always are: the
     carved and Elfes grids take their beams, up to max_range, as free space; ROS's
     range-sensor-layer drops +Inf, as ROS does. The bag options apply to bags only.

@@ -74,8 +74,9 @@ FrameOpt = Annotated[str | None, typer.Option(
 
 NoEchoOpt = Annotated[bool, typer.Option(
     "--no-echo",
-    help="Bag input: keep the no-echo readings (REP 117 +Inf, or a range equal to max_range: "
-         "nothing heard up to max_range) "
+    help="Bag input: keep the no-echo readings (REP 117 +Inf; or a range equal to max_range "
+         "from a sensor that never reports +Inf, as Gazebo's plugins say it: nothing heard up "
+         "to max_range) "
          "as free space: carving and the carved and Elfes grids clear with them (ROS's "
          "range-sensor-layer drops +Inf, as on a robot); they add no point.",
     rich_help_panel=BAG_PANEL)]

@@ -40,16 +40,18 @@ Times are the messages' ``header.stamp`` (seconds), not the time the recorder lo
 
 Range values (REP 117)
 ----------------------
-- finite, inside ``[min_range, max_range]``: an echo, one reading;
-- ``+Inf``, or a finite range at or beyond ``max_range``: nothing within range, free space
-  up to ``max_range``. At ``max_range`` too, because that is how many publishers say "nothing
-  heard": Gazebo's range and sonar plugins publish ``range = max_range`` for a ray that hit
-  nothing, drivers clamp a late echo to it, and ROS's range-sensor layer calls such a reading a
-  *max reading* (its ``clear_on_max_reading``); an echo timed at the very end of the listening
-  window is worth nothing as a wall. (A simulated log written to a bag could differ from its
-  CSV only by an echo quantised to exactly ``max_range``: none in 18 simulator logs, 0 of about
-  80,000 readings.) The readings core takes no such reading yet, so they are kept apart in
-  :attr:`RosbagLog.no_echo` with their poses, and counted;
+- finite, from ``min_range`` up to ``max_range`` (``max_range`` itself: below): an echo, one
+  reading;
+- ``+Inf``, or a finite range beyond ``max_range``: nothing within range, free space up to
+  ``max_range``; kept apart in :attr:`RosbagLog.no_echo` with their poses, and counted
+  (:meth:`RosbagLog.with_no_echo` merges them in as no-echo readings);
+- a range equal to ``max_range``: nothing heard too, from a sensor that never reports +Inf or
+  beyond ``max_range`` in the bag, because that is how such publishers say it: Gazebo's range
+  and sonar plugins publish ``range = max_range`` for a ray that hit nothing, drivers clamp a
+  late echo to it (ROS's range-sensor layer calls it a *max reading*, its
+  ``clear_on_max_reading``). From a sensor that does report +Inf (REP 117, as sonarcarve's
+  simulated bags do) it is an echo at ``max_range``: a Scout2's 6.477 m is 255 range steps, and
+  the office tour has 15 such echoes, which a bag must give back as its CSV does;
 - ``-Inf`` (or finite below ``min_range``): an object too close to measure; counted, dropped;
 - NaN (or finite ≤ 0): invalid; counted, dropped.
 
@@ -70,11 +72,12 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.extras import require
 from sonarcarve.io.errors import InputError
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.typing import FloatArray, IntArray
+from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "MOUNT_TOLERANCE",
@@ -178,7 +181,8 @@ class RosbagReport:
     odometry_frames : tuple of (str, str)
         ``(parent, child)`` frames of the odometry (``odom``, ``base_link``).
     no_echo : int
-        +Inf ranges, or finite ones at or beyond ``max_range``: nothing heard within range.
+        +Inf ranges, finite ones beyond ``max_range``, and ones equal to it from a sensor that
+        never reports beyond it (module notes): nothing heard within range.
     too_close : int
         −Inf ranges, or finite ones below ``min_range``.
     invalid : int
@@ -733,7 +737,8 @@ def _assemble(bag: Path, found: _Messages, sensors: tuple[tuple[str, str], ...],
     _check_fov(bag, ranges, fov)
     with np.errstate(invalid="ignore"):  # NaN compares False everywhere: it is invalid
         invalid = np.isnan(r) | (np.isfinite(r) & (r <= 0.0))
-        no_echo = ~invalid & (r >= hi)  # max_range itself: "nothing heard" (module notes)
+        beyond = ~invalid & (r > hi)
+        no_echo = beyond | (~invalid & (r == hi) & ~_follows_rep117(sensor, beyond))
         too_close = ~invalid & (r < lo)
     echo = ~(invalid | no_echo | too_close)
     inside = (t >= odom[:, 0].min()) & (t <= odom[:, 0].max())
@@ -755,6 +760,14 @@ def _assemble(bag: Path, found: _Messages, sensors: tuple[tuple[str, str], ...],
     no_echo_rows = _no_echo_rows(t[free], sensor[free], x[free], y[free], theta[free], hi[free],
                                  width[free])
     return RosbagLog(batch=batch, report=report, no_echo=no_echo_rows)
+
+
+def _follows_rep117(sensor: npt.NDArray[np.int64], beyond: BoolArray) -> BoolArray:
+    """Per message: whether its sensor ever reports silence as REP 117 asks (+Inf, or a range
+    beyond ``max_range``); then a range equal to ``max_range`` is an echo there (module notes)."""
+    says_inf = np.zeros(int(sensor.max(initial=-1)) + 1, dtype=bool)
+    says_inf[sensor[beyond]] = True
+    return says_inf[sensor]
 
 
 def _no_echo_rows(t: FloatArray, sensor: Any, x: FloatArray, y: FloatArray, theta: FloatArray,
