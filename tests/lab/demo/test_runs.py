@@ -89,7 +89,14 @@ def test_open_doors_bring_the_doorway_scene_for_fig_4(monkeypatch: pytest.Monkey
     from a drive at the doorway world's door (the paper's Fig. 2), with fig. 4's methods."""
     from sonarcarve.lab.demo import outputs, runs
 
-    monkeypatch.setattr(runs, "doors_tell_apart", lambda doors: False)
+    real = runs.doors_tell_apart
+    asked: list[int] = []
+
+    def tour_open_scene_real(doors: tuple) -> bool:  # the tour's doors all open; the scene's
+        asked.append(len(doors))
+        return real(doors) if len(asked) > 1 else False
+
+    monkeypatch.setattr(runs, "doors_tell_apart", tour_open_scene_real)
     steps: list[str] = []
     result = run_demo("t-junction", seed=0, methods=("centerline",), grid_resolution=None,
                       on_progress=lambda step, done, total: steps.append(step))
@@ -102,8 +109,8 @@ def test_open_doors_bring_the_doorway_scene_for_fig_4(monkeypatch: pytest.Monkey
     assert "door scene" in steps
     drawn: list[DemoResult] = []
     monkeypatch.setattr(outputs, "animation_gif", lambda r: drawn.append(r) or b"GIF")
-    real = outputs.plot_door_closeup
-    monkeypatch.setattr(outputs, "plot_door_closeup", lambda r: drawn.append(r) or real(r))
+    plot = outputs.plot_door_closeup
+    monkeypatch.setattr(outputs, "plot_door_closeup", lambda r: drawn.append(r) or plot(r))
     outputs.write_demo_outputs(result, tmp_path, animation=True)
     assert drawn == [scene, scene]
     # Without the option, or on the doorway world itself, no scene.
@@ -111,3 +118,20 @@ def test_open_doors_bring_the_doorway_scene_for_fig_4(monkeypatch: pytest.Monkey
                     door_scene=False).door_scene is None
     assert run_demo("doorway", seed=0, methods=("centerline",),
                     grid_resolution=None).door_scene is None
+
+
+def test_no_scene_when_the_doorway_door_stays_open_too(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With a history too short for any map to close the doorway's door (review rev6: --history
+    50), the scene would show three open doors again: fig. 4 stays the tour's own."""
+    from sonarcarve.lab.demo import runs
+
+    calls: list[int] = []
+
+    def tour_never_scene_never(doors: tuple) -> bool:  # the tour's doors, then the scene's
+        calls.append(len(doors))
+        return False
+
+    monkeypatch.setattr(runs, "doors_tell_apart", tour_never_scene_never)
+    result = run_demo("t-junction", seed=0, methods=("centerline",), grid_resolution=None)
+    assert result.door_scene is None
+    assert len(calls) == 2  # asked of the tour, then of the scene, which was dropped

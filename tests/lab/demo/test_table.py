@@ -99,7 +99,7 @@ def test_door_note_only_when_no_door_tells_the_methods_apart(doorway: DemoResult
     office_like = dataclasses.replace(doorway, doors=(all_open, all_open))
     note = door_note(office_like)
     assert note.startswith("Doors: every door this tour approaches (2) looks passable 1.5 m")
-    assert "`sonarcarve demo --world doorway`" in note
+    assert note.endswith("so fig. 4 and the animation show no method closing one.")
     assert note in summary_markdown(office_like)
     assert door_note(dataclasses.replace(doorway, doors=())) == ""
     # With the doorway scene run for fig. 4 (run_demo's door_scene): what each method left free
@@ -111,3 +111,13 @@ def test_door_note_only_when_no_door_tells_the_methods_apart(doorway: DemoResult
     assert f"centerline {widths['centerline']:.2f} m free, blocked" in note
     assert f"carving {widths['carve']:.2f} m free;" in note
     assert note in summary_markdown(with_scene)
+    import json
+
+    from sonarcarve.lab.demo import summary_json
+
+    record = json.loads(summary_json(with_scene))
+    assert record["door_note"] == note
+    assert record["door_figure"]["world"] == "doorway"
+    assert record["door_figure"]["door_scene"] is True
+    assert record["door_figure"]["passable"]["centerline"] is False
+    assert json.loads(summary_json(doorway))["door_figure"]["door_scene"] is False

@@ -218,9 +218,7 @@ def door_note(result: DemoResult) -> str:
     scene = result.door_scene
     door = scene.closeup if scene is not None else None
     if scene is None or door is None:
-        return (f"{seen}, so fig. 4 and the animation show no method closing one; `sonarcarve "
-                "demo --world doorway` drives at a 0.85 m door that the centerline map closes "
-                "and carving opens (the README's animation).")
+        return f"{seen}, so fig. 4 and the animation show no method closing one."
     gap = math.dist(door.jambs[0], door.jambs[1])
     widths = "; ".join(
         f"{METHOD_LABELS.get(m, m)} {door.free_width[m]:.2f} m free"
@@ -229,6 +227,18 @@ def door_note(result: DemoResult) -> str:
     return (f"{seen}, so fig. 4 and approach.gif show the '{scene.world.name}' world's "
             f"{gap:.2f} m door instead (the paper's Fig. 2, a short drive simulated for them; "
             f"`sonarcarve demo --world {scene.world.name}` maps it alone): {widths}.")
+
+
+def _door_figure(result: DemoResult) -> dict[str, Any]:
+    """What fig. 4 and the animation show: the world, and that world's door with what each
+    method left free (the tour's own, or the door scene's)."""
+    source = result.door_source
+    door = source.closeup
+    return {"world": source.world.name, "door_scene": result.door_scene is not None,
+            "opening": None if door is None else door.opening,
+            "jambs": None if door is None else door.jambs.tolist(),
+            "free_width_m": None if door is None else door.free_width,
+            "passable": None if door is None else door.passable}
 
 
 def _compare(name: str, row: MethodSummary, base: MethodSummary) -> str:
@@ -324,6 +334,8 @@ def summary_json(result: DemoResult, *, animation: bool = False) -> str:
                    "distance_m": d.distance,
                    "free_width_m": d.free_width, "passable": d.passable} for d in result.doors],
         "closeup_opening": None if result.closeup is None else result.closeup.opening,
+        "door_figure": _door_figure(result),
+        "door_note": door_note(result),
         "verdict": method_verdict(result),
         "caption": caption(result),
         "figures": [name for name, _ in _figures(result, animation)],
