@@ -207,3 +207,17 @@ def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_p
     err = capsys.readouterr().err
     assert problem in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sensors_behind_walls_are_warned_of(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """The car's bumper sensors reach 2.28 m from its centre, its disc 0.9 m: on the doorway
+    world's tour, which stops 1 m short of the wall, the front ones pass through it."""
+    assert run("--world", "doorway", "--robot", "car-parking-12",
+               "--out", str(tmp_path / "car.csv")) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "came from a sensor on the far side of a wall" in err[0]
+    assert "car-parking-12's sensors reach 2.28 m from its centre" in err[0]
+    assert run("--world", "doorway", "--out", str(tmp_path / "scout.csv")) == 0
+    assert "far side of a wall" not in capsys.readouterr().err

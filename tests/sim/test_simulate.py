@@ -182,3 +182,26 @@ def test_no_echo_files_round_trip(tmp_path: Path) -> None:
     np.testing.assert_array_equal(back.max_range, sim.readings.max_range)
     truth = read_truth_json(truth_path(path))
     np.testing.assert_array_equal(truth.kind, sim.truth.kind)
+
+
+def test_firings_behind_walls_counts_sensors_past_a_wall(tmp_path: Path) -> None:
+    """A sensor mounted 2 m ahead of a robot whose disc is 0.3 m: driving from y = 0 to y = 3
+    at 0.4 m/s towards a wall at y = 4, the sensor is past the wall once the robot is past y = 2,
+    after t = 5 s (worked by hand). A sensor inside the disc never is."""
+    from sonarcarve.sim.motion import follow_waypoints
+
+    def robot(ahead: float) -> Path:
+        path = tmp_path / f"r{ahead}.yaml"
+        path.write_text(f"name: probe\nrobot_radius: 0.3\nrange_resolution: 0.001\n"
+                        f"min_range: 0.1\nmax_range: 5.0\nfiring_period: 0.05\n"
+                        f"beam_width_deg: 22.5\nsensors:\n"
+                        f"  - {{x: {ahead}, y: 0.0, bearing_deg: 0.0}}\n")
+        return path
+
+    world = World(np.array([[-1.0, 4.0, 1.0, 4.0]]))
+    drive = follow_waypoints([[0.0, 0.0], [0.0, 3.0]], speed=0.4)
+    far = simulate(world, load_robot(robot(2.0)), drive, seed=0)
+    assert far.firings_behind_walls() == int(np.count_nonzero(far.firings.t > 5.0 + 1e-9))
+    assert far.firings_behind_walls() > 0
+    near = simulate(world, load_robot(robot(0.2)), drive, seed=0)
+    assert near.firings_behind_walls() == 0

@@ -8,11 +8,13 @@ ending); the truth file goes beside either.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, NamedTuple
 
+import numpy as np
 import typer
 from rich.table import Table
 
@@ -190,6 +192,20 @@ def simulate_command(
                                      no_echo)
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
+    _warn_behind_walls(result)
+
+
+def _warn_behind_walls(result: Simulation) -> None:
+    """One stderr line when sensors fired from behind a wall (``firings_behind_walls``)."""
+    behind = result.firings_behind_walls()
+    if behind:
+        robot = result.robot
+        reach = float(np.max(np.hypot(robot.mount_x, robot.mount_y)))
+        print(f"sonarcarve: warning: {behind:,} of {len(result.firings):,} firings "
+              f"({100.0 * behind / len(result.firings):.1f} %) came from a sensor on the far "
+              f"side of a wall: {robot.name}'s sensors reach {reach:.2f} m from its centre, "
+              f"its body disc only {robot.robot_radius:g} m; give a --path that keeps "
+              f"{reach:.2f} m from walls", file=sys.stderr)
 
 
 def _check_motion_options(path: Path | None, explore_seconds: float | None,

@@ -132,6 +132,24 @@ class Simulation:
         """Readings per echo kind (``direct``, ``crosstalk``, ``floor``, ``multipath``)."""
         return self.truth.counts()
 
+    def firings_behind_walls(self) -> int:
+        """Firings whose sensor sat on the far side of a wall from the robot's centre.
+
+        The simulator keeps the robot's *disc* (``robot_radius``) clear of walls; a sensor
+        mounted outside it (a car's bumper sensors, 2.3 m from its centre, around a 0.9 m
+        disc that lets it drive a lane) can pass through a wall, and then fires from inside or
+        behind it: readings no real sonar gives. 0 when every mount lies within the disc.
+        """
+        robot = self.robot
+        if float(np.max(np.hypot(robot.mount_x, robot.mount_y))) <= robot.robot_radius:
+            return 0
+        f = self.firings
+        cx, cy, _ = self.trajectory.pose_at(f.t)
+        reach = np.hypot(f.x - cx, f.y - cy)
+        distance, _ = self.world.cast_rays(np.column_stack((cx, cy)),
+                                           np.arctan2(f.y - cy, f.x - cx))
+        return int(np.count_nonzero(distance < reach))
+
     @property
     def firing_reading(self) -> IntArray:
         """Row in :attr:`readings` of each firing's echo, or -1 where it heard nothing."""
