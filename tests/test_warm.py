@@ -343,6 +343,10 @@ def _cgroups(tmp_path: Path, proc: str, files: dict[str, str]) -> tuple[Path, Pa
     # v2 on the host: the process's own group, which is tighter than the root's
     ("0::/user.slice/ci.scope\n", {"cpu.max": "400000 100000",
                                    "user.slice/ci.scope/cpu.max": "100000 100000"}, 1),
+    # a quota on a parent group (a systemd slice's CPUQuota=) bounds the groups below it
+    ("0::/a/b\n", {"a/cpu.max": "100000 100000", "a/b/cpu.max": "max 100000"}, 1),
+    ("1:cpu:/a/b\n", {"cpu/a/cpu.cfs_quota_us": "200000", "cpu/a/cpu.cfs_period_us": "100000"},
+     2),
     # cgroup v1 (this machine's kind): cfs quota over period; -1 is no quota
     ("4:memory:/x\n1:cpu,cpuacct:/docker/abc\n0::/\n",
      {"cpu/docker/abc/cpu.cfs_quota_us": "300000", "cpu/docker/abc/cpu.cfs_period_us": "100000"},

@@ -235,7 +235,8 @@ def cgroup_cpus(cgroup_root: Path = CGROUP_ROOT, proc_cgroup: Path = PROC_CGROUP
     """Cores' worth of CPU time this process's control group may use, rounded up: the quota
     over its period, in cgroup v2 (``cpu.max``, ``"200000 100000"``: 2) or v1
     (``cpu/cpu.cfs_quota_us`` over ``cpu.cfs_period_us``), of the group ``/proc/self/cgroup``
-    names or, inside a container's own namespace, of the root; the smallest found. Infinite
+    names and of every group above it (inside a container's own namespace, the root); the
+    smallest found. Infinite
     where none sets a quota (``max``, ``-1``) or nothing can be read."""
     v2_group = v1_group = ""
     for line in _text(proc_cgroup).splitlines():  # "number:controllers:/path"
@@ -245,12 +246,19 @@ def cgroup_cpus(cgroup_root: Path = CGROUP_ROOT, proc_cgroup: Path = PROC_CGROUP
         elif "cpu" in controllers.split(","):
             v1_group = group.strip().lstrip("/")
     limits = [math.inf]
-    for folder in (cgroup_root / v2_group, cgroup_root):
+    for folder in _with_ancestors(cgroup_root, v2_group):
         limits.append(_cores(_text(folder / "cpu.max")))
-    for folder in (cgroup_root / "cpu" / v1_group, cgroup_root / "cpu"):
+    for folder in _with_ancestors(cgroup_root / "cpu", v1_group):
         limits.append(_cores(f"{_text(folder / 'cpu.cfs_quota_us')} "
                              f"{_text(folder / 'cpu.cfs_period_us')}"))
     return min(limits)
+
+
+def _with_ancestors(root: Path, group: str) -> list[Path]:
+    """``root / group`` and every folder above it up to ``root``: a quota set on a parent
+    group (a systemd slice's ``CPUQuota=``, docker's ``--cgroup-parent``) bounds its children."""
+    parts = [part for part in group.split("/") if part]
+    return [root.joinpath(*parts[:k]) for k in range(len(parts), -1, -1)]
 
 
 def _text(path: Path) -> str:
