@@ -271,7 +271,7 @@ def _text(path: Path) -> str:
 
 def _cores(quota_and_period: str) -> float:
     """``"QUOTA PERIOD"`` as cores, rounded up; infinite for no quota or anything else."""
-    with suppress(ValueError):  # "max", "-1 100000" is fine, a word that is no number is not
+    with suppress(ValueError):  # "max" (no quota) and any other word that is no number
         quota, period = (int(word) for word in quota_and_period.split()[:2])
         if quota > 0 and period > 0:
             return float(math.ceil(quota / period))

@@ -141,9 +141,8 @@ def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
         log = read_bag(bag, source)
         batch, silent = bag.readings(log), len(log.no_echo)
     if not len(batch):
-        hint = (f" (its {silent:,} Range messages heard nothing, +Inf or max_range; --no-echo "
-                "maps them as "
-                "free space)" if silent else "")
+        hint = (f" (its {silent:,} Range messages heard nothing, +Inf or max_range; "
+                "--no-echo maps them as free space)" if silent else "")
         msg = f"{source}: no readings to map{hint}"
         raise GridUsageError(msg)
     return batch

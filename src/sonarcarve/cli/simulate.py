@@ -145,8 +145,8 @@ def simulate_command(
              "always; spurious echoes by fixed rates. amplitude: a sonar equation; the "
              "transducer's beam pattern (main lobe and side lobes, so strong reflectors are "
              "heard outside the nominal beam; the transducer is a Polaroid 600, about 25° "
-             "between first nulls, whatever beam the robot file declares: another is "
-             "sonarcarve.sim.AmplitudeModel in Python), spreading and absorption with range, "
+             "between first nulls, whatever beam the robot file declares; set another with "
+             "sonarcarve.sim.AmplitudeModel from Python), spreading and absorption with range, "
              "mirror, diffuse and corner echoes against a noisy detection threshold (weak glancing "
              "walls are missed, near ones heard at wide angles).")] = "specular",
     no_echo: Annotated[bool, typer.Option(
