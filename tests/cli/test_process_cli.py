@@ -280,3 +280,19 @@ def test_a_last_line_without_a_line_end_is_a_warning(
     readings.write_text(readings.read_text() + "\n")
     assert main([command, str(readings), "--out", str(out)]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_cut_log_is_warned_of_in_fleet_mode_too_and_bare_cr_lines_count(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A batch of logs is where a killed logger is likeliest (review rev6: --out-dir said
+    nothing); a file whose lines end in a bare CR numbers its last line by the CRs."""
+    cut = tmp_path / "cut.csv"
+    cut.write_text("t,sensor,x,y,theta,range\r0,0,0,0,0,1.5\r0.1,0,0.05,0,0,1.5\r"
+                   "0.2,0,0.1,0,0,1.5", newline="")
+    whole = tmp_path / "whole.csv"
+    whole.write_text("t,sensor,x,y,theta,range\n0,0,0,0,0,1.5\n0.1,0,0.05,0,0,1.5\n")
+    assert main(["process", str(cut), str(whole), "--out-dir", str(tmp_path / "maps")]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert warnings == [
+        f"sonarcarve: warning: {cut}: line 4, the last, has no line end: if the file was "
+        "cut short, its last reading may be wrong (a number cut short still reads as a number)"]

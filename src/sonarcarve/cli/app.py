@@ -340,7 +340,11 @@ def cut_short(path: Path) -> str | None:
             if handle.read(1) in (b"\n", b"\r"):
                 return None
             handle.seek(0)
-            line = 1 + sum(block.count(b"\n") for block in iter(partial(handle.read, 1 << 20), b""))
+            feeds = returns = 0
+            for block in iter(partial(handle.read, 1 << 20), b""):
+                feeds += block.count(b"\n")
+                returns += block.count(b"\r")
+            line = 1 + (feeds or returns)  # a file with bare CR line ends counts its CRs
     except OSError:
         return None
     return (f"{path}: line {line:,}, the last, has no line end: if the file was cut short, "
