@@ -200,6 +200,8 @@ def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
     (["--speed", "0"], "error: --speed must be a speed in (0, 10] m/s, got 0"),
     (["--speed", "11"], "error: --speed must be a speed in (0, 10] m/s, got 11"),
     (["--speed", "nan"], "error: --speed must be a speed in (0, 10] m/s, got nan"),
+    (["--speed", "1e-6"], "(MAX_POSES): at --speed 1e-06 m/s the drive is too long; raise "
+                          "--speed or give a shorter --path"),
 ])
 def test_option_errors_name_the_option(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                        args: list[str], problem: str) -> None:

@@ -185,14 +185,27 @@ def simulate_command(
     truth = _check_outputs(out, log_format, [path, Path(world), Path(robot)])
     the_world = load_world(world)
     the_robot = load_robot(robot)
-    trajectory = _trajectory(the_world, path, explore_seconds, seed, the_robot.robot_radius,
-                             speed)
-    drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
-    result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift,
-                                     no_echo)
+    try:
+        trajectory = _trajectory(the_world, path, explore_seconds, seed,
+                                 the_robot.robot_radius, speed)
+        drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
+        result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift,
+                                         no_echo)
+    except SonarcarveError as err:
+        raise _with_speed_hint(err, speed) from None
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
     _warn_behind_walls(result)
+
+
+def _with_speed_hint(err: SonarcarveError, speed: float) -> SonarcarveError:
+    """A drive too long for the simulator's limits (poses, firings) named by what the user
+    can change (--speed, --path), not the library's ``dt``; any other error as it is."""
+    text = str(err)
+    if "(MAX_POSES)" not in text and "(MAX_FIRINGS)" not in text:
+        return err
+    return SimulateParameterError(f"{text.split('; use')[0]}: at --speed {speed:g} m/s the "
+                                  "drive is too long; raise --speed or give a shorter --path")
 
 
 def _warn_behind_walls(result: Simulation) -> None:
