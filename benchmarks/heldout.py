@@ -79,12 +79,14 @@ GRIDS: dict[str, GridFactory] = {
 }
 
 
-def _simulate(world_spec: str, seed: int, physics: SonarPhysics) -> Simulation:
-    """The world's tour driven once by the Scout2 ring under ``physics``."""
+def _simulate(world_spec: str, seed: int, physics: SonarPhysics,
+              robot: str = "scout2") -> Simulation:
+    """The world's tour driven once by ``robot`` (the Scout2 ring unless ``--robot``) under
+    ``physics``."""
     world = build_world(world_spec)
     assert world.tour is not None, f"{world_spec} has no tour"
     trajectory = follow_waypoints(world.tour)
-    return simulate(world, load_robot("scout2"), trajectory, seed, physics=physics)
+    return simulate(world, load_robot(robot), trajectory, seed, physics=physics)
 
 
 def _point_rows(sim: Simulation, variants: Sequence[Variant] = ()) -> dict[str, dict[str, float]]:
@@ -178,6 +180,9 @@ def main(argv: list[str] | None = None) -> int:
                         metavar="P[:JSON]",
                         help="add point rows: evidence with P_carve P (and the confidence model "
                              "of JSON, as fit_confidence.py --save writes it)")
+    parser.add_argument("--robot", default="scout2",
+                        help="the sonars (a built-in robot or a robot YAML): another ring held "
+                             "out, e.g. p3dx-front (8 front sonars, 15° beams)")
     parser.add_argument("--skip-grids", action="store_true")
     parser.add_argument("--skip-points", action="store_true",
                         help="only the costmaps (the methods' point maps take most of the time)")
@@ -187,14 +192,15 @@ def main(argv: list[str] | None = None) -> int:
         points, grids = [], []
         for world in args.worlds:
             for seed in range(args.seeds):
-                sim = _simulate(world, seed, physics)
+                sim = _simulate(world, seed, physics, args.robot)
                 if not args.skip_points:
                     points.append(_point_rows(sim, args.variant))
                 if not args.skip_grids:
                     grids.append(_grid_rows(sim))
                 print(f"  {physics_name}, {world}, seed {seed}: {len(sim.readings):,} readings",
                       flush=True)
-        where = f"{', '.join(args.worlds)}; seeds 0-{args.seeds - 1}; physics: {physics_name}"
+        where = (f"{', '.join(args.worlds)}; {args.robot}; seeds 0-{args.seeds - 1}; physics: "
+                 f"{physics_name}")
         if points:
             _points_table(f"points, {where}; mean over runs", points)
         if grids:

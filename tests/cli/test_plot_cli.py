@@ -158,3 +158,18 @@ def test_a_map_of_other_readings_names_the_map_file_and_line(
     assert err.startswith(f"sonarcarve: error: {map_csv}: line 3, map point has id 99999 but "
                           f"{readings} has 40 rows"), err
     assert not out.exists()
+
+
+def test_plot_warns_of_a_cut_last_line(run: tuple[Path, Path, GlobalMap], tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """As process and grid do: a log or map cut mid-number still parses (review rev6)."""
+    readings, map_csv, _ = run
+    readings.write_bytes(readings.read_bytes().rstrip(b"\n"))
+    lines = readings.read_text().count("\n") + 1
+    capsys.readouterr()
+    assert main(["plot", str(map_csv), "--readings", str(readings),
+                 "--out", str(tmp_path / "cut.png")]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"sonarcarve: warning: {readings}: line {lines:,}, the last, has no line end: if the "
+        "file was cut short, its last reading may be wrong (a number cut short still reads as "
+        "a number)"]

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, flag_message, summary_table
+from sonarcarve.cli.app import app, console, cut_short, flag_message, summary_table, warn
 from sonarcarve.cli.drawing import draw_offscreen
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
@@ -100,6 +100,7 @@ def plot(
     except ConfigError as err:  # --arcs without --readings
         raise PlotUsageError(flag_message(str(err), _FLAGS)) from None
     save_figure(ax, out)
+    warn([cut_short(map_csv), None if readings is None else cut_short(readings)])
     rows = [("points in map", f"{total:,}")]
     if confidence_min is not None:
         rows.append((f"dropped: confidence < {confidence_min:g}", f"{total - len(points):,}"))
