@@ -210,7 +210,8 @@ def warm_steps() -> list[Step]:
     return [step for lane in warm_lanes() for step in lane]
 
 
-#: Where Linux's control groups (v2) keep them, and this process's entry among them.
+#: Where Linux keeps its control groups (v2 at the top, v1 under ``cpu/``), and this process's
+#: entry among them.
 CGROUP_ROOT = Path("/sys/fs/cgroup")
 PROC_CGROUP = Path("/proc/self/cgroup")
 
@@ -236,8 +237,7 @@ def cgroup_cpus(cgroup_root: Path = CGROUP_ROOT, proc_cgroup: Path = PROC_CGROUP
     over its period, in cgroup v2 (``cpu.max``, ``"200000 100000"``: 2) or v1
     (``cpu/cpu.cfs_quota_us`` over ``cpu.cfs_period_us``), of the group ``/proc/self/cgroup``
     names and of every group above it (inside a container's own namespace, the root); the
-    smallest found. Infinite
-    where none sets a quota (``max``, ``-1``) or nothing can be read."""
+    smallest found. Infinite where none sets a quota (``max``, ``-1``) or nothing can be read."""
     v2_group = v1_group = ""
     for line in _text(proc_cgroup).splitlines():  # "number:controllers:/path"
         number, controllers, group = [*line.split(":", 2), "", ""][:3]

@@ -152,10 +152,11 @@ def convert(
     frame: FrameOpt = None,
     no_echo: Annotated[bool, typer.Option(
         "--no-echo",
-        help="rosbag: also write the no-echo readings (REP 117 +Inf: nothing heard up to "
-             "max_range) as rows with range inf and a max_range column, which the methods and "
-             "the carved and Elfes grids take as free space (as process and grid --no-echo "
-             "take them from the bag).",
+        help="rosbag: also write the no-echo readings (REP 117 +Inf, or max_range from a "
+             "sensor that never reports +Inf: nothing heard up to max_range) as rows with "
+             "range inf and a max_range column, which the methods and the carved and Elfes "
+             "grids take as free space (as process and grid --no-echo take them from the "
+             "bag).",
         rich_help_panel=BAG_PANEL)] = False,
 ) -> None:
     """Convert a data set's files into the readings CSV (t,sensor,x,y,theta,range,beam_width).

@@ -295,7 +295,7 @@ def process(
         code = _fleet(inputs, out_dir, method, config, reading_filter, map_filter, bag,
                       workers, scheduler)
         if code == 0:  # every log checked, as a single log is: a killed logger is likeliest here
-            warn([beam_warning, *(cut_short(Path(p)) for p in inputs if not is_bag(Path(p)))])
+            warn([beam_warning, *(cut_short(log) for log in inputs if not is_bag(log))])
         return code
     if out is None:
         msg = "missing option '--out' (or --out-dir FOLDER for one map per log)"
