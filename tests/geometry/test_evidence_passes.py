@@ -194,7 +194,7 @@ def _one_loop_add_many(m: EvidenceModel, first: int, count: int) -> None:
 
 
 STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoints", "looked",
-         "others", "through", "repeated", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
+         "others", "through", "repeated", "watch", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
 
 
 def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:
@@ -216,9 +216,10 @@ def _run_both(readings: Any, history: int, bins: int, start: int,
     model = oracle.models[0]
     assert isinstance(model, EvidenceModel)
 
-    def one_loop(first: int, count: int) -> None:  # the repeats are not the passes' business
+    def one_loop(first: int, count: int) -> None:  # repeats and watch: not the passes
         model.mark_repeats(first, count)
         _one_loop_add_many(model, first, count)
+        model.mark_watch(first, count)
 
     model.on_add_many = one_loop  # type: ignore[method-assign]
     occluded = False

@@ -28,6 +28,8 @@ Modules, from the model up:
   the two rules about sound passing (or not) through a surface;
 * :mod:`~sonarcarve.geometry.evidence.behind`: how far an arc leaving the history lies behind
   surfaces the arcs after it confirm (a feature of the confidence, not a carving rule);
+* :mod:`~sonarcarve.geometry.evidence.watch`: how squarely distinct readings looked at an arc
+  (whether its confidence can mature at all; not a carving rule);
 * :mod:`~sonarcarve.geometry.evidence.add`: an echo weighed against the older arcs
   (:func:`evidence_add`, :func:`evidence_add_many`);
 * :mod:`~sonarcarve.geometry.evidence.free`: a no-echo reading (:func:`evidence_free`);
@@ -47,6 +49,7 @@ from sonarcarve.geometry.evidence.model import (
     detect_probability,
     evidence_threshold,
 )
+from sonarcarve.geometry.evidence.watch import mark_watch
 
 __all__ = [
     "EVIDENCE_ALIVE",
@@ -58,4 +61,5 @@ __all__ = [
     "evidence_estimates",
     "evidence_free",
     "evidence_threshold",
+    "mark_watch",
 ]
