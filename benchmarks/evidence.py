@@ -26,11 +26,11 @@ together, the library defaults), the same with the confidence fitted before its 
 feature (issue 9's repeats: the previous default), with the same fit but ``repeated``'s weight
 set to 0 (what the feature adds beyond the refit), with ``behind``'s weight 0 (the default
 before that feature: only its weight was fitted), with every arc maturing with age alone
-(``watch_angle`` None: the default before unwatched arcs kept the prior), with each point at its run's middle
-(eq. 3.6) instead of at the median of its posterior (once its beam is cut), with the placement
-before that posterior (the median of the localised support once cut, ATM's median from one
-crossing), with the posterior placing the points of uncut beams too, and with ATM's median
-from one crossing in the run (the default needs three).
+(``watch_angle`` None: the default before unwatched arcs kept the prior), with each point at its
+run's middle (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with
+the placement before that posterior (the median of the localised support once cut, ATM's
+median from one crossing), with the posterior placing the points of uncut beams too, and with
+ATM's median from one crossing in the run (the default needs three).
 ``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed;
 ``--variant P[:JSON]`` adds a row of evidence carving with P_carve ``P`` (and the confidence
 model ``fit_confidence.py --save`` wrote).

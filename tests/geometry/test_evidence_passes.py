@@ -194,7 +194,8 @@ def _one_loop_add_many(m: EvidenceModel, first: int, count: int) -> None:
 
 
 STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoints", "looked",
-         "others", "through", "repeated", "watch", "counts", "bearings", "bx", "by", "ex", "ey", "circle")
+         "others", "through", "repeated", "watch", "counts", "bearings", "bx", "by", "ex", "ey",
+         "circle")
 
 
 def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:

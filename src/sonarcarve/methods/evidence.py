@@ -61,13 +61,13 @@ from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.errors import ConfigError
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.evidence import (
-    mark_watch,
     EVIDENCE_ALIVE,
     EvidenceParams,
     evidence_add_many,
     evidence_estimates,
     evidence_free,
     evidence_threshold,
+    mark_watch,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
