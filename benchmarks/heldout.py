@@ -30,8 +30,9 @@ parameters picked before any run (not tuned on these results) as plausible other
 
 Means over seeds; each row also counts in how many (world, seed) runs the target held.
 ``--variant P[:JSON]`` adds point rows of evidence carving with P_carve ``P`` (and the confidence
-model ``fit_confidence.py --save`` wrote); ``--skip-grids`` leaves the costmaps out,
-``--skip-points`` the point maps.
+model ``fit_confidence.py --save`` wrote), ``--before-watch`` one with every arc maturing with
+age alone (the confidence before unwatched arcs kept the prior); ``--skip-grids`` leaves the
+costmaps out, ``--skip-points`` the point maps.
 """
 
 from __future__ import annotations
@@ -49,6 +50,8 @@ from sonarcarve.lab.grid_measures import grid_measures
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import build_world
 from sonarcarve.methods import MethodConfig
+from sonarcarve.methods.config import DEFAULT_CARVE_PROBABILITY
+from sonarcarve.methods.evidence import ConfidenceModel
 from sonarcarve.pipeline import process_readings
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.amplitude import AmplitudeModel
@@ -89,9 +92,11 @@ def _simulate(world_spec: str, seed: int, physics: SonarPhysics,
     return simulate(world, load_robot(robot), trajectory, seed, physics=physics)
 
 
-def _point_rows(sim: Simulation, variants: Sequence[Variant] = ()) -> dict[str, dict[str, float]]:
-    """Per method (and evidence ``variants``): direct kept, spurious removed, median and p90
-    error ratios to centerline."""
+def _point_rows(sim: Simulation, variants: Sequence[Variant] = (),
+                before_watch: bool = False) -> dict[str, dict[str, float]]:
+    """Per method (and evidence ``variants``, and evidence with every arc maturing with age
+    alone when ``before_watch``): direct kept, spurious removed, median and p90 error ratios
+    to centerline."""
     kind = sim.truth.kind
     direct = kind == EchoKind.DIRECT
     config = MethodConfig()
@@ -102,6 +107,10 @@ def _point_rows(sim: Simulation, variants: Sequence[Variant] = ()) -> dict[str, 
     makers = {name: (lambda c, n=name: make_method(n, c)) for name in METHODS}
     for variant in variants:
         makers[variant[0]] = lambda c, v=variant: variant_method(c, v)
+    if before_watch:
+        before = ("evidence, every arc matures (before watch)", DEFAULT_CARVE_PROBABILITY,
+                  ConfidenceModel(watch_angle=None))
+        makers[before[0]] = lambda c: variant_method(c, before)
     for name, make in makers.items():
         gmap = process_readings(sim.readings, make(config)).global_map
         kept = np.zeros(len(kind), dtype=bool)
@@ -183,6 +192,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--robot", default="scout2",
                         help="the sonars (a built-in robot or a robot YAML): another ring held "
                              "out, e.g. p3dx-front (8 front sonars, 15° beams)")
+    parser.add_argument("--before-watch", action="store_true",
+                        help="add a point row: evidence carving with every arc maturing with "
+                             "age alone (ConfidenceModel watch_angle None, the default before "
+                             "unwatched arcs kept the prior)")
     parser.add_argument("--skip-grids", action="store_true")
     parser.add_argument("--skip-points", action="store_true",
                         help="only the costmaps (the methods' point maps take most of the time)")
@@ -194,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
             for seed in range(args.seeds):
                 sim = _simulate(world, seed, physics, args.robot)
                 if not args.skip_points:
-                    points.append(_point_rows(sim, args.variant))
+                    points.append(_point_rows(sim, args.variant, args.before_watch))
                 if not args.skip_grids:
                     grids.append(_grid_rows(sim))
                 print(f"  {physics_name}, {world}, seed {seed}: {len(sim.readings):,} readings",
