@@ -26,8 +26,8 @@ together, the library defaults), the same with the confidence fitted before its 
 feature (issue 9's repeats: the previous default), with the same fit but ``repeated``'s weight
 set to 0 (what the feature adds beyond the refit), with ``behind``'s weight 0 (the default
 before that feature: only its weight was fitted), with every arc maturing with age alone
-(``watch_angle`` None: the default before unwatched arcs kept the prior), with each point at its
-run's middle (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with
+(``unwatched_prior`` False: the default before unwatched arcs kept the prior), with each point at
+its run's middle (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with
 the placement before that posterior (the median of the localised support once cut, ATM's
 median from one crossing), with the posterior placing the points of uncut beams too, and with
 ATM's median from one crossing in the run (the default needs three).
@@ -114,7 +114,7 @@ VARIANTS: dict[str, Factory] = {
     "all, behind's weight 0 (before behind)":
         _all_with(confidence_model=replace(ConfidenceModel(), behind=0.0)),
     "all, every arc matures (before watch)":
-        _all_with(confidence_model=replace(ConfidenceModel(), watch_angle=None)),
+        _all_with(confidence_model=replace(ConfidenceModel(), unwatched_prior=False)),
     "all, point at the run's middle": _all_with(located_placement=False),
     "all, placement before the posterior (located median once cut, ATM from 1 crossing)":
         _all_with(posterior_placement=False, min_atm_crossings=1),

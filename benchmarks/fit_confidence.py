@@ -89,7 +89,8 @@ class Samples:
 @dataclass(frozen=True)
 class LocalSamples:
     """Arcs of the local map at regular snapshots: features (n, F), whether the arc was never
-    supported, age (s) and labels (n,).
+    supported, age (s), labels (n,) and whether a distinct reading had looked squarely at it
+    (an unwatched arc keeps the prior: ``ConfidenceModel.unwatched_prior``).
 
     The ``unheard`` column of ``features`` is ``unsupported * maturity(age)`` with the maturity
     time of the run that collected them; :meth:`features_at` rebuilds it for another time.
@@ -99,12 +100,17 @@ class LocalSamples:
     unsupported: np.ndarray
     age: np.ndarray
     direct: np.ndarray
+    watched: np.ndarray
+
+    def maturity_at(self, model: ConfidenceModel) -> np.ndarray:
+        """The maturity ``model`` (its maturity time) gives these arcs."""
+        return model.maturity(self.age, self.watched)
 
     def features_at(self, model: ConfidenceModel) -> np.ndarray:
         """The features as ``model`` (its maturity time) would have computed them."""
         features = self.features.copy()
         features[:, CONFIDENCE_FEATURES.index("unheard")] = (
-            self.unsupported * model.maturity(self.age))
+            self.unsupported * self.maturity_at(model))
         return features
 
 
@@ -114,7 +120,7 @@ def collect(world: str, physics: str, seeds: range,
     """Simulate ``world`` under ``physics`` for ``seeds`` and record the committed arcs (and,
     with ``snapshot_every``, the local map's arcs every that many readings); evidence carving
     with the library's configuration, or ``carve_probability`` for P_carve."""
-    local: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    local: list[tuple[np.ndarray, ...]] = []
     rows: list[np.ndarray] = []
     maturities: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
@@ -154,9 +160,9 @@ def collect(world: str, physics: str, seeds: range,
     direct = (all_kinds == EchoKind.DIRECT).astype(float)
     snapshots = None
     if local:
-        features, unsupported, age, labels = (np.concatenate(part)
-                                              for part in zip(*local, strict=True))
-        snapshots = LocalSamples(features, unsupported, age, labels)
+        features, unsupported, age, labels, watched = (np.concatenate(part)
+                                                       for part in zip(*local, strict=True))
+        snapshots = LocalSamples(features, unsupported, age, labels, watched)
     return Samples(np.vstack(rows), np.concatenate(maturities), direct, all_kinds, total_direct,
                    total_by_kind, snapshots)
 
@@ -184,14 +190,15 @@ def _pooled_local(parts: list[Samples]) -> LocalSamples | None:
     return LocalSamples(np.vstack([loc.features for loc in local]),
                         np.concatenate([loc.unsupported for loc in local]),
                         np.concatenate([loc.age for loc in local]),
-                        np.concatenate([loc.direct for loc in local]))
+                        np.concatenate([loc.direct for loc in local]),
+                        np.concatenate([loc.watched for loc in local]))
 
 
 def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
-               every: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+               every: int) -> list[tuple[np.ndarray, ...]]:
     """Add ``readings`` in blocks of ``every``; after each, the features, whether it was never
-    supported, age (seconds) and label (direct echo) of every arc in the history with a
-    surviving piece."""
+    supported, age (seconds), label (direct echo) and whether it was watched, of every arc in
+    the history with a surviving piece."""
     out = []
     model = method.models[0]
     assert isinstance(model, EvidenceModel)
@@ -204,7 +211,8 @@ def _snapshots(method: EvidenceMethod, readings: ReadingBatch, kind: np.ndarray,
         support = raw[4]  # as EvidenceMethod.features reads it for ``unheard``
         now = float(block.t[-1])
         out.append((method.features(slots, raw), support <= 0.0, now - method.history.t[slots],
-                    (kind[method.history.reading_id[slots]] == EchoKind.DIRECT).astype(float)))
+                    (kind[method.history.reading_id[slots]] == EchoKind.DIRECT).astype(float),
+                    model.watched[slots].copy()))
     return out
 
 
@@ -221,7 +229,7 @@ def fit_maturity(model: ConfidenceModel, local: LocalSamples,
     for t in grid:
         timed = replace(model, maturity_time=t)
         losses.append(_log_loss(timed.confidence(local.features_at(timed),
-                                                 timed.maturity(local.age)), local.direct))
+                                                 local.maturity_at(timed)), local.direct))
     return grid[int(np.argmin(losses))], losses
 
 

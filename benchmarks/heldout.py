@@ -109,7 +109,7 @@ def _point_rows(sim: Simulation, variants: Sequence[Variant] = (),
         makers[variant[0]] = lambda c, v=variant: variant_method(c, v)
     if before_watch:
         before = ("evidence, every arc matures (before watch)", DEFAULT_CARVE_PROBABILITY,
-                  ConfidenceModel(watch_angle=None))
+                  ConfidenceModel(unwatched_prior=False))
         makers[before[0]] = lambda c: variant_method(c, before)
     for name, make in makers.items():
         gmap = process_readings(sim.readings, make(config)).global_map
@@ -194,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
                              "out, e.g. p3dx-front (8 front sonars, 15° beams)")
     parser.add_argument("--before-watch", action="store_true",
                         help="add a point row: evidence carving with every arc maturing with "
-                             "age alone (ConfidenceModel watch_angle None, the default before "
+                             "age alone (ConfidenceModel unwatched_prior False, the default before "
                              "unwatched arcs kept the prior)")
     parser.add_argument("--skip-grids", action="store_true")
     parser.add_argument("--skip-points", action="store_true",

@@ -194,7 +194,7 @@ def _one_loop_add_many(m: EvidenceModel, first: int, count: int) -> None:
 
 
 STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoints", "looked",
-         "others", "through", "repeated", "watch", "counts", "bearings", "bx", "by", "ex", "ey",
+         "others", "through", "repeated", "watched", "counts", "bearings", "bx", "by", "ex", "ey",
          "circle")
 
 

@@ -305,16 +305,15 @@ class ConfidenceModel:
     2 s, none under 0.75 s old do. The price: young spurious echoes stay in the local map
     longer (of those under 2 s old, 44 % are hidden instead of 67 %).
 
-    Watched: an arc no distinct reading (another sensor, or its own from at least
-    ``viewpoint_spacing`` away) looked at from within ``watch_angle`` of its own direction
-    (:mod:`~sonarcarve.geometry.evidence.watch`) never matures: its confidence stays the prior,
-    ``σ(fresh)`` (0.92), because nothing could have confirmed it, and the fitted weights read
-    the missing confirmation as a sign of a spurious echo (``others`` most of all, 3.3).
-    Almost no arc of a 16-sonar ring is unwatched (0.2 % in the office); a Pioneer's 8 front
-    sonars leave 25 % of their arcs so, most of them side walls that only one sensor faces.
-    ``watch_angle`` is chosen, not fitted: the angle past which a smooth wall stops answering
-    (17.5° in the specular simulator, 25° for rough walls) plus slack for where on its beam
-    the arc's surface lies; None matures every arc with age alone (the model before it).
+    Watched (``unwatched_prior``): an arc that no distinct reading (another sensor, or its own
+    from at least ``viewpoint_spacing`` away) looked at squarely, from within the sensor
+    model's ``incidence_zero`` (30°) of its own direction
+    (:mod:`~sonarcarve.geometry.evidence.watch`), never matures: its confidence stays the
+    prior, ``σ(fresh)`` (0.92), because nothing could have confirmed it, while the fitted
+    weights would read the missing confirmation as a spurious echo's (``others`` most of all,
+    3.3). Almost no arc of a 16-sonar ring is unwatched (0.2 % in the office); a Pioneer's 8
+    front sonars leave 25 % of their arcs so, most of them side walls only one sensor faces.
+    Nothing about it is fitted. False matures every arc with age alone (the model before it).
     Measured in ``docs/RESULTS.md`` ("Another ring").
 
     The default weights were fitted by logistic regression on the simulator's truth (direct
@@ -348,9 +347,7 @@ class ConfidenceModel:
     behind: float = -0.406
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
-    # Chosen, not fitted (see above): a smooth wall's critical angle (17.5° in the specular
-    # simulator, 25° rough) plus slack for where on its beam the arc's surface is.
-    watch_angle: float | None = math.radians(30.0)
+    unwatched_prior: bool = True  # see "Watched" above; False: every arc matures with age
 
     def __post_init__(self) -> None:
         """Refuse a weight that is not finite and a maturity time that is not finite and > 0
@@ -358,9 +355,6 @@ class ConfidenceModel:
         finite: _Rule = (math.isfinite, "be finite")
         rules = dict.fromkeys(("intercept", *CONFIDENCE_FEATURES, "fresh"), finite)
         rules["maturity_time"] = (lambda v: 0.0 < v < math.inf, "be finite and > 0 seconds")
-        if self.watch_angle is not None:
-            rules["watch_angle"] = (lambda v: 0.0 <= v <= math.pi, "lie in [0, pi] radians "
-                                    "(or be None: every arc matures with age alone)")
         _check_fields(self, rules)
 
     def weights(self) -> np.ndarray:
@@ -372,19 +366,19 @@ class ConfidenceModel:
                      maturity_time: float | None = None) -> ConfidenceModel:
         """The model with ``weights`` (shape (F,), :data:`CONFIDENCE_FEATURES` order);
         ``maturity_time`` defaults to the class's (None: the field's default)."""
-        named = {name: float(w) for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True)}
+        named: dict[str, Any] = {name: float(w)
+                                 for name, w in zip(CONFIDENCE_FEATURES, weights, strict=True)}
         if maturity_time is not None:
             named["maturity_time"] = maturity_time
         return cls(intercept=float(intercept), fresh=float(fresh), **named)
 
-    def maturity(self, age: np.ndarray, watch: np.ndarray | None = None) -> np.ndarray:
-        """``clip(age / maturity_time, 0, 1)``, ``age`` in seconds; 0 where ``watch`` (the
-        smallest angle at which a distinct reading looked at the arc, radians,
-        :mod:`~sonarcarve.geometry.evidence.watch`) exceeds ``watch_angle``, when both are
-        given."""
+    def maturity(self, age: np.ndarray, watched: np.ndarray | None = None) -> np.ndarray:
+        """``clip(age / maturity_time, 0, 1)``, ``age`` in seconds; with ``unwatched_prior``,
+        0 where ``watched`` (given: whether a distinct reading looked squarely at the arc,
+        :mod:`~sonarcarve.geometry.evidence.watch`) is False."""
         maturity = np.clip(age / self.maturity_time, 0.0, 1.0)
-        if watch is not None and self.watch_angle is not None:
-            maturity = np.where(np.asarray(watch) <= self.watch_angle, maturity, 0.0)
+        if watched is not None and self.unwatched_prior:
+            maturity = np.where(watched, maturity, 0.0)
         return np.asarray(maturity)
 
     def confidence(self, features: np.ndarray, maturity: np.ndarray | float = 1.0,
@@ -572,8 +566,8 @@ class EvidenceModel(ArcModel):
         # in the history, else 0.
         self.repeated = np.zeros(size)
         # The smallest angle at which a distinct reading looked at the arc's axis point
-        # (geometry/evidence/watch.py); infinity: none did.
-        self.watch = np.full(size, np.inf)
+        # Whether a distinct reading looked squarely at the arc (geometry/evidence/watch.py).
+        self.watched = np.zeros(size, dtype=bool)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -650,12 +644,14 @@ class EvidenceModel(ArcModel):
 
     def mark_watch(self, first: int, count: int) -> None:
         """How squarely distinct readings looked at arcs ``first .. first + count - 1`` and the
-        arcs before them (:func:`~sonarcarve.geometry.evidence.mark_watch`, into :attr:`watch`;
+        arcs before them (:func:`~sonarcarve.geometry.evidence.mark_watch`, into :attr:`watched`,
+        squarely: within the sensor model's ``incidence_zero``;
         the new arcs' axes must be set, as weighing them does). Each pair is judged when its
         newer arc arrives, from the two readings alone: the same values whatever the blocks."""
         h = self.history
         mark_watch(first, count, h.capacity, h.x, h.y, h.r, self.cos_axis, self.sin_axis,
-                   self.cos_half, h.sensor, self.watch, self.params.viewpoint_spacing)
+                   self.cos_half, h.sensor, self.watched, self.params.viewpoint_spacing,
+                   self.params.incidence_zero)
 
     def mark_repeats(self, first: int, count: int) -> int:
         """Mark the repeats (:func:`~sonarcarve.geometry.repeats.mark_repeats`, ε the range
@@ -839,7 +835,7 @@ class EvidenceMethod(SonarMethod):
         now = max(self._last_t, newest)
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
-        return self.confidence_model.maturity(now - h.t[slots], model.watch[slots])
+        return self.confidence_model.maturity(now - h.t[slots], model.watched[slots])
 
     def _estimates(self, slots: SlotArray) -> Estimates:
         """The model's points with their confidence; low-confidence points are not alive."""

@@ -8,16 +8,18 @@ to one sensor, whose own firings (every 0.32 s) land too far apart along the wal
 point; 25 % of that ring's direct echoes were then judged by a silence that could not have been
 anything else, and dropped (``docs/RESULTS.md``, "Another ring").
 
-So each arc records how squarely any *distinct* reading looked at its axis point ``p_i = o_i +
-r_i u(θ_i)``: over the readings ``j`` of the history that are another sensor's, or the same
+So each arc records whether any *distinct* reading looked squarely at its axis point ``p_i =
+o_i + r_i u(θ_i)``: a reading ``j`` of the history that is another sensor's, or the same
 sensor's from at least ``viewpoint_spacing`` away, whose beam holds ``p_i`` (``(p_i - o_j) ·
-u(θ_j) >= |p_i - o_j| cos(φ_j / 2)``), the smallest angle between the two looks at it, ``p_i -
-o_j`` and ``u(θ_i)``, radians; infinity when no such reading. A surface heard by ``i`` faces
-``o_i`` roughly (a specular echo comes from the point nearest the sensor), so a reading looking
-from further off its normal than a smooth wall's critical angle could not have heard it even
-where it is real. The confidence model treats an arc whose smallest angle exceeds its
-``watch_angle`` as one no evidence could reach: it keeps the prior (``fresh``) instead of
-maturing to the fitted logit.
+u(θ_j) >= |p_i - o_j| cos(φ_j / 2)``) and whose look at it, ``p_i - o_j``, lies within the
+sensor model's ``incidence_zero`` (30°) of the direction ``u(θ_i)`` it was heard along. A
+surface heard by ``i`` faces ``o_i`` roughly (a specular echo comes from the point nearest the
+sensor), so a look from further off its normal than the angle past which the detection model
+gives a smooth wall nothing (``incidence_zero``: the simulator's specular critical angle is
+17.5°, 25° for rough walls; the rest is slack for where on its beam the surface lies) could
+not have heard it even where it is real. The confidence model treats an arc no such reading
+looked at as one no evidence could reach: it keeps the prior (``fresh``) instead of maturing
+to the fitted logit (:class:`~sonarcarve.methods.evidence.ConfidenceModel`).
 
 The range of ``j`` is not looked at: a reading whose beam holds ``p_i`` but heard something
 nearer (its sound stopped in front of ``p_i``) still counts as a look. Echoes behind a surface
@@ -42,59 +44,79 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.typing import FloatArray
 
-__all__ = ["look_angle", "mark_watch"]
+__all__ = ["mark_watch", "watch_pairs"]
 
 
 @compiled_inline
-def look_angle(px: float, py: float, cos_own: float, sin_own: float, xj: float, yj: float,
-               cos_j: float, sin_j: float, cos_half_j: float) -> float:
-    """The angle (radians) between the look from ``(xj, yj)`` at the point ``(px, py)`` and
-    the direction ``(cos_own, sin_own)`` it was heard along, when the point lies in the beam
-    of axis ``(cos_j, sin_j)`` and half-width of cosine ``cos_half_j``; infinity when it lies
-    outside that beam or at the origin."""
-    vx = px - xj
-    vy = py - yj
-    d = math.sqrt(vx * vx + vy * vy)
-    if not d > 0.0 or vx * cos_j + vy * sin_j < d * cos_half_j:
-        return math.inf
-    c = (vx * cos_own + vy * sin_own) / d
-    return math.acos(min(1.0, max(-1.0, c)))
+def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArray,
+                sin_axis: FloatArray, cos_half: FloatArray, sensor: npt.NDArray[np.int64],
+                xj: float, yj: float, rj: float, cj: float, sj: float, cos_half_j: float,
+                sensor_j: int, spacing2: float, cos_look2: float,
+                watched: npt.NDArray[np.bool_]) -> int:
+    """For the rows of the arrays (slices of the history's rows) against the reading ``j``
+    (origin ``(xj, yj)``, range ``rj``, axis ``(cj, sj)``, half-width of cosine
+    ``cos_half_j``): set ``watched[i]`` where ``j`` looked squarely at row ``i``'s axis point
+    (in ``j``'s beam, the look within the angle of squared cosine ``cos_look2`` of ``i``'s
+    axis, the two distinct; module docstring); return how many rows looked squarely at ``j``'s
+    axis point. Squared comparisons of dot products (the angles are below 90°): no square root,
+    no division, no branch and indices from 0, so the compiler runs it on several rows at
+    once. A point at the other's origin fails ``along > 0``."""
+    pxj = xj + rj * cj
+    pyj = yj + rj * sj
+    cos_half_j2 = cos_half_j * cos_half_j
+    looked_at_j = 0
+    for i in range(watched.shape[0]):
+        ox = x[i] - xj
+        oy = y[i] - yj
+        distinct = (sensor[i] != sensor_j) | (ox * ox + oy * oy >= spacing2)
+        ci = cos_axis[i]
+        si = sin_axis[i]
+        # j looks at i's point: v = p_i - o_j, against j's axis and i's.
+        vx = ox + r[i] * ci
+        vy = oy + r[i] * si
+        v2 = vx * vx + vy * vy
+        along = vx * cj + vy * sj
+        square = vx * ci + vy * si
+        watched[i] |= (distinct & (along > 0.0) & (along * along >= v2 * cos_half_j2)
+                       & (square > 0.0) & (square * square >= v2 * cos_look2))
+        # i looks at j's point: w = p_j - o_i, against i's axis and j's.
+        wx = pxj - x[i]
+        wy = pyj - y[i]
+        w2 = wx * wx + wy * wy
+        along = wx * ci + wy * si
+        square = wx * cj + wy * sj
+        looked_at_j += (distinct & (along > 0.0) & (along * along >= w2 * cos_half[i] * cos_half[i])
+                        & (square > 0.0) & (square * square >= w2 * cos_look2))
+    return looked_at_j
 
 
 @compiled
 def mark_watch(first: int, count: int, capacity: int, x: FloatArray, y: FloatArray,
                r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-               sensor: npt.NDArray[np.int64], watch: FloatArray, spacing: float) -> None:
-    """Update ``watch`` for the arcs of sequence numbers ``first .. first + count - 1`` of a
+               sensor: npt.NDArray[np.int64], watched: npt.NDArray[np.bool_], spacing: float,
+               look_angle: float) -> None:
+    """Mark ``watched`` for the arcs of sequence numbers ``first .. first + count - 1`` of a
     history ring (``n`` rows, arc ``s`` in row ``s % n``; ``cos_axis``, ``sin_axis`` and
     ``cos_half`` the cosine and sine of each row's axis and the cosine of its half-width,
-    already set), in order: each new arc's value is reset to infinity, then each pair of it
-    and one of the ``capacity - 1`` arcs before it (those still in the history) that are
-    distinct (another sensor, or origins at least ``spacing`` metres apart) lowers each one's
-    value to the angle at which the other looked at its axis point (:func:`look_angle`; module
-    docstring). The block's rows and the up to ``capacity - 1`` before it must all be in the
-    ring (as for :func:`~sonarcarve.geometry.repeats.mark_repeats`)."""
+    already set), in order: each new arc's flag is reset, then each pair of it and one of the
+    ``capacity - 1`` arcs before it (those still in the history) that are distinct (another
+    sensor, or origins at least ``spacing`` metres apart) marks each one the other looked at
+    squarely, within ``look_angle`` radians (< π/2) of its axis (:func:`watch_pairs`). The
+    block's rows and the up to ``capacity - 1`` before it must all be in the ring (as for
+    :func:`~sonarcarve.geometry.repeats.mark_repeats`)."""
     storage = x.shape[0]
     spacing2 = spacing * spacing
+    cos_look = math.cos(look_angle)
+    cos_look2 = cos_look * cos_look
     for sequence in range(first, first + count):
         j = sequence % storage
-        watch[j] = math.inf
-        xj = x[j]
-        yj = y[j]
-        cj = cos_axis[j]
-        sj = sin_axis[j]
-        pxj = xj + r[j] * cj
-        pyj = yj + r[j] * sj
-        for older in range(max(0, sequence - capacity + 1), sequence):
-            i = older % storage
-            ox = x[i] - xj
-            oy = y[i] - yj
-            if sensor[i] == sensor[j] and ox * ox + oy * oy < spacing2:
-                continue  # the same look again: no chance to corroborate
-            ci = cos_axis[i]
-            si = sin_axis[i]
-            seen = look_angle(x[i] + r[i] * ci, y[i] + r[i] * si, ci, si, xj, yj, cj, sj,
-                              cos_half[j])
-            watch[i] = min(watch[i], seen)
-            seen = look_angle(pxj, pyj, cj, sj, x[i], y[i], ci, si, cos_half[i])
-            watch[j] = min(watch[j], seen)
+        looked = 0
+        oldest = max(0, sequence - capacity + 1)
+        start = oldest % storage
+        end = start + sequence - oldest
+        for lo, hi in ((start, min(end, storage)), (0, max(end - storage, 0))):
+            looked += watch_pairs(x[lo:hi], y[lo:hi], r[lo:hi], cos_axis[lo:hi],
+                                  sin_axis[lo:hi], cos_half[lo:hi], sensor[lo:hi], x[j], y[j],
+                                  r[j], cos_axis[j], sin_axis[j], cos_half[j], sensor[j],
+                                  spacing2, cos_look2, watched[lo:hi])
+        watched[j] = looked > 0
