@@ -282,6 +282,16 @@ def test_a_last_line_without_a_line_end_is_a_warning(
     assert capsys.readouterr().err == ""
 
 
+def test_a_header_alone_without_a_line_end_is_warned_of_once(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """No reading to cut short: only the empty map is worth a word."""
+    readings = tmp_path / "header.csv"
+    readings.write_text("t,sensor,x,y,theta,range")
+    assert main(["process", str(readings), "--out", str(tmp_path / "map.csv")]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"sonarcarve: warning: {readings} has no readings, only a header: the map is empty"]
+
+
 def test_a_cut_log_is_warned_of_in_fleet_mode_too_and_bare_cr_lines_count(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A batch of logs is where a killed logger is likeliest (review rev6: --out-dir said

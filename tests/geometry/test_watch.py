@@ -24,21 +24,27 @@ def _watched(rows: list[Row], capacity: int, angle_deg: float,
              blocks: tuple[int, ...] | None = None, storage: int | None = None) -> np.ndarray:
     """``watched`` of each arc (looks within ``angle_deg``) once every row is stored and
     marked, block by block (one block by default), in a ring of ``storage`` rows (twice the
-    rows by default: nothing overwritten)."""
+    rows by default: nothing overwritten), each read just before its row is reused or at the
+    end."""
     n = len(rows)
     storage = 2 * n if storage is None else storage
     x, y, r, theta, width = (np.zeros(storage) for _ in range(5))
     sensor = np.full(storage, -1, dtype=np.int64)
     watched = np.ones(storage, dtype=bool)  # stale: every new arc must reset its own flag
+    flags: dict[int, bool] = {}
     first = 0
     for count in (n,) if blocks is None else blocks:
         for s in range(first, first + count):
             j = s % storage
+            if s >= storage:  # the arc this row held is gone: read its flag first
+                flags[s - storage] = bool(watched[j])
             x[j], y[j], r[j], theta[j], width[j], sensor[j] = rows[s]
         mark_watch(first, count, capacity, x, y, r, np.cos(theta), np.sin(theta),
                    np.cos(0.5 * width), sensor, watched, SPACING, math.radians(angle_deg))
         first += count
-    return np.array([watched[s % storage] for s in range(n)])
+    for s in range(max(0, n - storage), n):
+        flags[s] = bool(watched[s % storage])
+    return np.array([flags[s] for s in range(n)])
 
 
 def test_a_neighbour_looking_from_the_same_place_watches_squarely() -> None:
@@ -75,6 +81,9 @@ def test_the_same_sensor_watches_only_from_a_distinct_viewpoint() -> None:
     assert _watched(far, 2, 16.0).tolist() == [False, False]
     near: list[Row] = [(0.0, 0.0, 1.0, math.pi / 2, beam, 0), (0.2, 0.0, 1.0, math.pi / 2, beam, 0)]
     assert _watched(near, 2, 89.0).tolist() == [False, False]
+    # Exactly the spacing apart (0.25 m, exact in binary) is distinct: "at least".
+    at: list[Row] = [(0.0, 0.0, 1.0, math.pi / 2, beam, 0), (0.25, 0.0, 1.0, math.pi / 2, beam, 0)]
+    assert _watched(at, 2, 89.0).tolist() == [True, True]
     near[1] = (0.2, 0.0, 1.0, math.pi / 2, beam, 1)  # another sensor there: distinct
     assert _watched(near, 2, 12.0).tolist() == [True, True]
 
@@ -130,11 +139,13 @@ def test_random_rings_match_the_reference_whatever_the_blocks(seed: int) -> None
         expected = angles <= math.radians(angle)
         assert 5 < expected.sum() < n - 3  # watched and unwatched arcs
         assert np.array_equal(_watched(rows, 8, angle), expected)
-    # In blocks, in a ring of 16 rows (twice the capacity) that wraps: the same flags.
+    # In blocks, in a ring of 16 rows (twice the capacity) that wraps: the same flags for
+    # every arc (review rev7: comparing the last 8 let a kernel skipping the wrapped run pass).
     blocks = (5, 1, 8, 3, 8, 8, 7, 8, 4, 8)
     assert sum(blocks) == n
-    ring = _watched(rows, 8, 30.0, blocks=blocks, storage=16)
-    np.testing.assert_array_equal(ring[-8:], _watched(rows, 8, 30.0)[-8:])
+    for angle in (30.0, 60.0):
+        ring = _watched(rows, 8, angle, blocks=blocks, storage=16)
+        np.testing.assert_array_equal(ring, angles <= math.radians(angle))
 
 
 def _wall_readings(second_sensor: bool) -> ReadingBatch:
@@ -182,3 +193,27 @@ def test_an_arc_nobody_could_confirm_keeps_the_prior() -> None:
     narrow = SensorModel(incidence_full=math.radians(5.0), incidence_zero=math.radians(15.0))
     np.testing.assert_allclose(
         _committed_confidence(_wall_readings(True), ConfidenceModel(), narrow), prior)
+
+
+def test_a_silent_look_watches_within_its_range() -> None:
+    """Sensor 1, 0.5 m ahead, fires silently at each wall point (116.6°, 26.6° off the echo's
+    direction, 1.118 m away): a look, when its maximum range reaches the point."""
+    prior = 1.0 / (1.0 + math.exp(-ConfidenceModel().fresh))
+    echoes = _wall_readings(False)
+
+    def with_silence(max_range: float) -> np.ndarray:
+        n = len(echoes)
+        rows = {name: np.column_stack((getattr(echoes, name), silent)).ravel()
+                for name, silent in (("x", echoes.x + 0.5), ("y", np.zeros(n)),
+                                     ("theta", np.full(n, math.atan2(1.0, -0.5))),
+                                     ("range", np.full(n, math.inf)),
+                                     ("sensor", np.ones(n, dtype=int)),
+                                     ("max_range", np.full(n, max_range)))}
+        rows["max_range"][::2] = 5.0
+        batch = ReadingBatch.from_arrays(
+            t=np.arange(2 * n, dtype=float), beam_width=np.full(2 * n, math.radians(10.0)),
+            **rows)
+        return _committed_confidence(batch, ConfidenceModel())
+
+    assert not np.allclose(with_silence(5.0)[:10], prior)
+    np.testing.assert_allclose(with_silence(1.0), prior)  # 1.118 m is beyond its reach

@@ -325,7 +325,7 @@ def warn(lines: Iterable[str | None]) -> None:
 
 
 def cut_short(path: Path) -> str | None:
-    """A warning when a text log's last line has no line end, else None.
+    """A warning when a text log's last line, after its first, has no line end, else None.
 
     A logger killed mid-line leaves such a file, and a number cut short still parses
     (``3.7845`` as ``3.7``), so the reader cannot tell; every tool that writes CSV ends its
@@ -347,6 +347,8 @@ def cut_short(path: Path) -> str | None:
             line = 1 + (feeds or returns)  # a file with bare CR line ends counts its CRs
     except OSError:
         return None
+    if line == 1:
+        return None  # the header alone: no reading to cut (the empty map is warned of)
     return (f"{path}: line {line:,}, the last, has no line end: if the file was cut short, "
             "its last reading may be wrong (a number cut short still reads as a number)")
 

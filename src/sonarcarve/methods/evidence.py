@@ -68,6 +68,7 @@ from sonarcarve.geometry.evidence import (
     evidence_free,
     evidence_threshold,
     mark_watch,
+    mark_watched_by_silence,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
@@ -314,7 +315,9 @@ class ConfidenceModel:
     3.3). Almost no arc of a 16-sonar ring is unwatched (0.2 % in the office); a Pioneer's 8
     front sonars leave 25 % of their arcs so, most of them side walls only one sensor faces.
     Nothing about it is fitted. False matures every arc with age alone (the model before it).
-    Measured in ``docs/RESULTS.md`` ("Another ring").
+    Measured in ``docs/RESULTS.md`` ("Another ring"). Looks are counted within the history, so
+    with a short one (a few ring cycles) most arcs stay unwatched and the fitted model is all
+    but off; an arc watched late goes from the prior to its age's maturity at once.
 
     The default weights were fitted by logistic regression on the simulator's truth (direct
     echo or spurious) of the arcs with a surviving piece when they left the history, on ONE
@@ -356,6 +359,9 @@ class ConfidenceModel:
         rules = dict.fromkeys(("intercept", *CONFIDENCE_FEATURES, "fresh"), finite)
         rules["maturity_time"] = (lambda v: 0.0 < v < math.inf, "be finite and > 0 seconds")
         _check_fields(self, rules)
+        if not isinstance(self.unwatched_prior, bool):  # a JSON "false" would read as on
+            msg = f"unwatched_prior must be True or False, got {self.unwatched_prior!r}"
+            raise ConfigError(msg)
 
     def weights(self) -> np.ndarray:
         """The weights in :data:`CONFIDENCE_FEATURES` order, shape (F,)."""
@@ -565,7 +571,6 @@ class EvidenceModel(ArcModel):
         # 1 where the arc has a repeat (geometry/repeats.py) among its sensor's other echoes
         # in the history, else 0.
         self.repeated = np.zeros(size)
-        # The smallest angle at which a distinct reading looked at the arc's axis point
         # Whether a distinct reading looked squarely at the arc (geometry/evidence/watch.py).
         self.watched = np.zeros(size, dtype=bool)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
@@ -685,16 +690,22 @@ class EvidenceModel(ArcModel):
         self.store.check_usable()
 
     def on_no_echo(self, reading: Reading, beam_width: float) -> None:
-        """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own).
-        """
+        """Add the no-echo reading's free-space evidence to the live arcs (no arc of its own),
+        and mark those it looked at squarely as watched
+        (:func:`~sonarcarve.geometry.evidence.mark_watched_by_silence`)."""
         self.check_usable()
         h = self.history
+        slots = np.ascontiguousarray(h.slots())
         self._fully += evidence_free(
             reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
-            np.ascontiguousarray(h.slots()), h.x, h.y, h.beam_width, h.sensor, self.looked,
+            slots, h.x, h.y, h.beam_width, h.sensor, self.looked,
             self.bx, self.by, self.ex, self.ey, self.free, self.support, self.circle,
             self.status, self.touched, self.params,
         )
+        mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
+                                reading.x, reading.y, reading.theta, beam_width,
+                                reading.max_range, reading.sensor, self.watched,
+                                self.params.viewpoint_spacing, self.params.incidence_zero)
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once

@@ -49,7 +49,7 @@ from sonarcarve.geometry.evidence.model import (
     detect_probability,
     evidence_threshold,
 )
-from sonarcarve.geometry.evidence.watch import mark_watch
+from sonarcarve.geometry.evidence.watch import mark_watch, mark_watched_by_silence
 
 __all__ = [
     "EVIDENCE_ALIVE",
@@ -62,4 +62,5 @@ __all__ = [
     "evidence_free",
     "evidence_threshold",
     "mark_watch",
+    "mark_watched_by_silence",
 ]

@@ -25,8 +25,9 @@ The range of ``j`` is not looked at: a reading whose beam holds ``p_i`` but hear
 nearer (its sound stopped in front of ``p_i``) still counts as a look. Echoes behind a surface
 another sensor hears, multipath mostly, are so still judged by the fitted model, as before
 (measured on a Pioneer ring: a lone arc only such readings cover is direct in 27 % of cases, one
-that no beam covers in 93 %). No-echo readings are not looked at either (they are not arcs of
-the history; their free space reaches the arcs through the ``looked`` and ``free`` evidence).
+that no beam covers in 93 %). A no-echo reading looks too (:func:`mark_watched_by_silence`):
+its beam held the point within its maximum range and heard nothing, evidence the fitted model
+reads through ``free`` and ``looked``; it is no arc, so nothing watches it.
 
 Each pair is judged once, when its newer reading arrives, from the two readings alone (both
 directions: each may watch the other), so the values do not depend on how readings are batched.
@@ -44,7 +45,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.typing import FloatArray
 
-__all__ = ["mark_watch", "watch_pairs"]
+__all__ = ["mark_watch", "mark_watched_by_silence", "watch_pairs"]
 
 
 @compiled_inline
@@ -120,3 +121,38 @@ def mark_watch(first: int, count: int, capacity: int, x: FloatArray, y: FloatArr
                                   r[j], cos_axis[j], sin_axis[j], cos_half[j], sensor[j],
                                   spacing2, cos_look2, watched[lo:hi])
         watched[j] = looked > 0
+
+
+@compiled
+def mark_watched_by_silence(slots: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
+                            r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray,
+                            sensor: npt.NDArray[np.int64], xj: float, yj: float, theta_j: float,
+                            beam_width_j: float, max_range_j: float, sensor_j: int,
+                            watched: npt.NDArray[np.bool_], spacing: float,
+                            look_angle: float) -> None:
+    """Mark ``watched`` for the history rows ``slots`` whose axis point a no-echo reading
+    (origin ``(xj, yj)``, axis ``theta_j``, beam ``beam_width_j``, of sensor ``sensor_j``)
+    looked at squarely (:func:`watch_pairs`' test) within its ``max_range_j`` (not finite: no
+    bound), when the two are distinct."""
+    cj = math.cos(theta_j)
+    sj = math.sin(theta_j)
+    cos_half_j = math.cos(0.5 * beam_width_j)
+    cos_half_j2 = cos_half_j * cos_half_j
+    cos_look = math.cos(look_angle)
+    cos_look2 = cos_look * cos_look
+    reach2 = max_range_j * max_range_j if math.isfinite(max_range_j) else math.inf
+    spacing2 = spacing * spacing
+    for q in range(slots.shape[0]):
+        i = slots[q]
+        ox = x[i] - xj
+        oy = y[i] - yj
+        if sensor[i] == sensor_j and ox * ox + oy * oy < spacing2:
+            continue  # its own look again
+        vx = ox + r[i] * cos_axis[i]
+        vy = oy + r[i] * sin_axis[i]
+        v2 = vx * vx + vy * vy
+        along = vx * cj + vy * sj
+        square = vx * cos_axis[i] + vy * sin_axis[i]
+        if (along > 0.0 and along * along >= v2 * cos_half_j2 and v2 <= reach2
+                and square > 0.0 and square * square >= v2 * cos_look2):
+            watched[i] = True
