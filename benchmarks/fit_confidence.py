@@ -107,7 +107,7 @@ class LocalSamples:
 
     def maturity_at(self, model: ConfidenceModel) -> np.ndarray:
         """The maturity ``model`` (its maturity time) gives these arcs."""
-        return model.maturity(self.age, self.watched)
+        return model.maturity(self.age, self.watched | self.unsupported)
 
     def features_at(self, model: ConfidenceModel) -> np.ndarray:
         """The features as ``model`` (its maturity time) would have computed them."""

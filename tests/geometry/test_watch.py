@@ -148,14 +148,16 @@ def test_random_rings_match_the_reference_whatever_the_blocks(seed: int) -> None
         np.testing.assert_array_equal(ring, angles <= math.radians(angle))
 
 
-def _wall_readings(second_sensor: bool) -> ReadingBatch:
-    """Sensor 0 facing +y drives along a wall 1 m away, 0.3 m and 1 s a reading, 10° beams:
-    each point is 16.7° or more off the axis of its other readings, so none watches another.
-    With ``second_sensor``, sensor 1, mounted 0.5 m ahead of it, faces the same wall point, at
-    116.6°: each of the two looks at the other's point 26.6° off its direction, and no other
-    pair has a point in its beam (the nearest: 12° off a 5° half-width)."""
-    n = 12
-    xs = 0.3 * np.arange(n)
+def _wall_readings(second_sensor: bool, step: float = 0.1) -> ReadingBatch:
+    """Sensor 0 facing +y drives along a wall 1 m away, ``step`` metres and 1 s a reading, 10°
+    beams. Its readings 0.3 m or more apart (distinct: at least 0.25 m) have each other's point
+    16.7° or more off their axis, outside the beam, so none watches another; 0.1 m apart they
+    support each other (the same sensor heard the wall again), 0.3 m apart they do not. With
+    ``second_sensor``, sensor 1, mounted 0.5 m ahead, faces the same wall point at 116.6°: the
+    two look at each other's points 26.6° off their direction, and sensor 1 at the other
+    places looks at sensor 0's points 21.8-31.0° off (0.4-0.6 m away along the wall)."""
+    n = 30 if step < 0.3 else 12
+    xs = step * np.arange(n)
     sensor = np.zeros(n, dtype=int)
     theta = np.full(n, math.pi / 2)
     if second_sensor:
@@ -179,8 +181,12 @@ def _committed_confidence(readings: ReadingBatch, model: ConfidenceModel,
 def test_an_arc_nobody_could_confirm_keeps_the_prior() -> None:
     prior = 1.0 / (1.0 + math.exp(-ConfidenceModel().fresh))
     alone = _committed_confidence(_wall_readings(False), ConfidenceModel())
-    assert len(alone) == 12
+    assert len(alone) == 30
     np.testing.assert_allclose(alone, prior)
+    # Never heard again either (0.3 m steps): judged by the fitted model, which drops them.
+    unheard = _committed_confidence(_wall_readings(False, step=0.3), ConfidenceModel())
+    assert len(unheard) == 12
+    assert np.all(unheard[:6] < 0.5)
     # Without the rule the same arcs mature to the fitted logit, which reads the missing
     # confirmation as a spurious echo's (the last ones stay young: the log ends).
     matured = _committed_confidence(_wall_readings(False),

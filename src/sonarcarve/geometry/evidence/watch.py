@@ -18,8 +18,9 @@ sensor), so a look from further off its normal than the angle past which the det
 gives a smooth wall nothing (``incidence_zero``: the simulator's specular critical angle is
 17.5°, 25° for rough walls; the rest is slack for where on its beam the surface lies) could
 not have heard it even where it is real. The confidence model treats an arc no such reading
-looked at as one no evidence could reach: it keeps the prior (``fresh``) instead of maturing
-to the fitted logit (:class:`~sonarcarve.methods.evidence.ConfidenceModel`).
+looked at, but that something supported (its own sensor heard it again), as one no other
+evidence could reach: it keeps the prior (``fresh``) instead of maturing to the fitted logit
+(:class:`~sonarcarve.methods.evidence.ConfidenceModel`).
 
 The range of ``j`` is not looked at: a reading whose beam holds ``p_i`` but heard something
 nearer (its sound stopped in front of ``p_i``) still counts as a look. Echoes behind a surface
