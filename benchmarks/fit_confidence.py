@@ -20,9 +20,9 @@ piece is a sample of the local map (its features and age then); the time on ``--
 with the smallest mean log-loss over those samples is printed (each time scored with the
 ``unheard`` feature rebuilt for it). The weights themselves are fitted at the library's default
 maturity time (it picks the mature arcs at commit and sets their ``unheard``; an arc no distinct
-reading looked at squarely never matures, ``ConfidenceModel.unwatched_prior``, so it is left out
-too: its confidence is the prior whatever the weights; 0.2 % of the office's arcs, about 25 % of
-a Pioneer front ring's): a time chosen
+reading looked at squarely but that something supported never matures,
+``ConfidenceModel.unwatched_prior``, so it is left out too: its confidence is the prior whatever
+the weights; 0.2 % of the office's arcs, about a fifth of a Pioneer front ring's): a time chosen
 here that differs from the default is a fixed point only once the default is changed and the
 script run again. A ``min_confidence`` is then
 chosen by one rule on the same training data: the largest threshold, on a 0.05 grid, that keeps
