@@ -638,8 +638,8 @@ class EvidenceModel(ArcModel):
     def on_add_many(self, first: int, count: int) -> None:
         """Initialise the profile of each new arc ``first .. first + count - 1`` and weigh its
         reading against the older arcs, in one compiled call (more when the crossing store has
-        to grow on the way), then mark how squarely distinct readings looked at each
-        (:func:`~sonarcarve.geometry.evidence.mark_watch`)."""
+        to grow on the way), then mark the arcs distinct readings looked at squarely
+        (:meth:`mark_watch`)."""
         self.check_usable()
         end = first + count
         self.mark_repeats(first, count)
@@ -653,11 +653,11 @@ class EvidenceModel(ArcModel):
         self.mark_watch(end - count, count)  # after the weighing, which sets the axes it reads
 
     def mark_watch(self, first: int, count: int) -> None:
-        """How squarely distinct readings looked at arcs ``first .. first + count - 1`` and the
-        arcs before them (:func:`~sonarcarve.geometry.evidence.mark_watch`, into :attr:`watched`,
-        squarely: within the sensor model's ``incidence_zero``;
-        the new arcs' axes must be set, as weighing them does). Each pair is judged when its
-        newer arc arrives, from the two readings alone: the same values whatever the blocks."""
+        """Mark in :attr:`watched` the arcs ``first .. first + count - 1`` and the arcs before
+        them that a distinct reading looked at squarely, within the sensor model's
+        ``incidence_zero`` (:func:`~sonarcarve.geometry.evidence.mark_watch`; the new arcs' axes
+        must be set, as weighing them does). Each pair is judged when its newer arc arrives,
+        from the two readings alone: the same flags whatever the blocks."""
         h = self.history
         mark_watch(first, count, h.capacity, h.x, h.y, h.r, self.cos_axis, self.sin_axis,
                    self.cos_half, h.sensor, self.watched, self.params.viewpoint_spacing,
