@@ -28,8 +28,8 @@ Modules, from the model up:
   the two rules about sound passing (or not) through a surface;
 * :mod:`~sonarcarve.geometry.evidence.behind`: how far an arc leaving the history lies behind
   surfaces the arcs after it confirm (a feature of the confidence, not a carving rule);
-* :mod:`~sonarcarve.geometry.evidence.watch`: how squarely distinct readings looked at an arc
-  (whether its confidence can mature at all; not a carving rule);
+* :mod:`~sonarcarve.geometry.evidence.watch`: whether a distinct reading, echo or silent, looked
+  squarely at an arc (whether its confidence can mature at all; not a carving rule);
 * :mod:`~sonarcarve.geometry.evidence.add`: an echo weighed against the older arcs
   (:func:`evidence_add`, :func:`evidence_add_many`);
 * :mod:`~sonarcarve.geometry.evidence.free`: a no-echo reading (:func:`evidence_free`);
