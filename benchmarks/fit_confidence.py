@@ -145,8 +145,11 @@ def collect(world: str, physics: str, seeds: range,
                      method: EvidenceMethod = method, kind: np.ndarray = kind) -> None:
             has = est.fate == UNCHANGED
             if has.any():
-                rows.append(method.features(slots[has]))
-                maturities.append(method.maturity(slots[has]))
+                arcs = method.models[0]
+                assert isinstance(arcs, EvidenceModel)
+                raw = arcs.raw(slots[has])  # once, for both (it is not cheap)
+                rows.append(method.features(slots[has], raw))
+                maturities.append(method.maturity(slots[has], raw))
                 kinds.append(kind[history.reading_id[slots[has]]])
 
         method.add_commit_listener(listener)

@@ -46,7 +46,21 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.typing import FloatArray
 
-__all__ = ["mark_watch", "mark_watched_by_silence", "watch_pairs"]
+__all__ = ["looks_squarely", "mark_watch", "mark_watched_by_silence", "watch_pairs"]
+
+
+@compiled_inline
+def looks_squarely(vx: float, vy: float, v2: float, cj: float, sj: float, cos_half_j2: float,
+                   ci: float, si: float, cos_look2: float) -> bool:
+    """Whether a look ``v = p_i - o_j`` (``v2 = |v|²``) from a beam of axis ``(cj, sj)`` and
+    half-width of squared cosine ``cos_half_j2`` holds the point and meets it within the angle
+    of squared cosine ``cos_look2`` of the direction ``(ci, si)`` it was heard along (module
+    docstring). Squared comparisons of dot products (the angles are below 90°): no square
+    root, no division, no branch. A point at the looking origin fails ``along > 0``."""
+    along = vx * cj + vy * sj
+    square = vx * ci + vy * si
+    return ((along > 0.0) & (along * along >= v2 * cos_half_j2)
+            & (square > 0.0) & (square * square >= v2 * cos_look2))
 
 
 @compiled_inline
@@ -58,11 +72,9 @@ def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArra
     """For the rows of the arrays (slices of the history's rows) against the reading ``j``
     (origin ``(xj, yj)``, range ``rj``, axis ``(cj, sj)``, half-width of cosine
     ``cos_half_j``): set ``watched[i]`` where ``j`` looked squarely at row ``i``'s axis point
-    (in ``j``'s beam, the look within the angle of squared cosine ``cos_look2`` of ``i``'s
-    axis, the two distinct; module docstring); return how many rows looked squarely at ``j``'s
-    axis point. Squared comparisons of dot products (the angles are below 90°): no square root,
-    no division, no branch and indices from 0, so the compiler runs it on several rows at
-    once. A point at the other's origin fails ``along > 0``."""
+    (:func:`looks_squarely`, the two distinct); return how many rows looked squarely at
+    ``j``'s axis point. No branch and indices from 0: the compiler runs it on several rows at
+    once."""
     pxj = xj + rj * cj
     pyj = yj + rj * sj
     cos_half_j2 = cos_half_j * cos_half_j
@@ -76,19 +88,13 @@ def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArra
         # j looks at i's point: v = p_i - o_j, against j's axis and i's.
         vx = ox + r[i] * ci
         vy = oy + r[i] * si
-        v2 = vx * vx + vy * vy
-        along = vx * cj + vy * sj
-        square = vx * ci + vy * si
-        watched[i] |= (distinct & (along > 0.0) & (along * along >= v2 * cos_half_j2)
-                       & (square > 0.0) & (square * square >= v2 * cos_look2))
+        watched[i] |= distinct & looks_squarely(vx, vy, vx * vx + vy * vy, cj, sj, cos_half_j2,
+                                                ci, si, cos_look2)
         # i looks at j's point: w = p_j - o_i, against i's axis and j's.
         wx = pxj - x[i]
         wy = pyj - y[i]
-        w2 = wx * wx + wy * wy
-        along = wx * ci + wy * si
-        square = wx * cj + wy * sj
-        looked_at_j += (distinct & (along > 0.0) & (along * along >= w2 * cos_half[i] * cos_half[i])
-                        & (square > 0.0) & (square * square >= w2 * cos_look2))
+        looked_at_j += distinct & looks_squarely(wx, wy, wx * wx + wy * wy, ci, si,
+                                                 cos_half[i] * cos_half[i], cj, sj, cos_look2)
     return looked_at_j
 
 
@@ -133,7 +139,7 @@ def mark_watched_by_silence(slots: npt.NDArray[np.int64], x: FloatArray, y: Floa
                             look_angle: float) -> None:
     """Mark ``watched`` for the history rows ``slots`` whose axis point a no-echo reading
     (origin ``(xj, yj)``, axis ``theta_j``, beam ``beam_width_j``, of sensor ``sensor_j``)
-    looked at squarely (:func:`watch_pairs`' test) within its ``max_range_j`` (not finite: no
+    looked at squarely (:func:`looks_squarely`) within its ``max_range_j`` (not finite: no
     bound), when the two are distinct."""
     cj = math.cos(theta_j)
     sj = math.sin(theta_j)
@@ -152,8 +158,6 @@ def mark_watched_by_silence(slots: npt.NDArray[np.int64], x: FloatArray, y: Floa
         vx = ox + r[i] * cos_axis[i]
         vy = oy + r[i] * sin_axis[i]
         v2 = vx * vx + vy * vy
-        along = vx * cj + vy * sj
-        square = vx * cos_axis[i] + vy * sin_axis[i]
-        if (along > 0.0 and along * along >= v2 * cos_half_j2 and v2 <= reach2
-                and square > 0.0 and square * square >= v2 * cos_look2):
+        if v2 <= reach2 and looks_squarely(vx, vy, v2, cj, sj, cos_half_j2, cos_axis[i],
+                                           sin_axis[i], cos_look2):
             watched[i] = True
