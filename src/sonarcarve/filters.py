@@ -23,7 +23,11 @@ Map filters drop points from a :class:`~sonarcarve.maps.LocalMap` or
 :class:`~sonarcarve.maps.GlobalMap`: maximum-error thresholding (Fig. 13b: points whose
 ``max_error`` bound, eq. 5.3, exceeds a threshold) and then the outlier test (a point needs at
 least ``k`` other points within radius ``R``). Thresholding runs first so that inaccurate points
-do not vouch for their neighbours.
+do not vouch for their neighbours. Between the two, beyond the paper, the **occlusion** filter
+drops points that lie ``occlusion_depth`` or more behind a surface of the map on the line from
+their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); it needs the
+sensor origin of every point, which a map does not hold, so :func:`filter_map` takes them
+(:func:`map_origins` looks them up in the readings).
 """
 
 from __future__ import annotations
@@ -39,12 +43,18 @@ import numpy.typing as npt
 
 from sonarcarve.constants import INCH
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.geometry.occluded import occluded_points
 from sonarcarve.maps import GlobalMap, LocalMap
 from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
+    "OCCLUSION_CROSSING",
+    "OCCLUSION_DEPTH",
+    "OCCLUSION_REACH",
     "PAPER_MAX_RANGE",
+    "SURFACE_NEIGHBOURS",
+    "SURFACE_RADIUS",
     "DropReason",
     "FilterError",
     "FilteredMap",
@@ -57,7 +67,10 @@ __all__ = [
     "confidence_mask",
     "filter_map",
     "filter_readings",
+    "map_origins",
     "max_error_mask",
+    "occlusion_mask",
+    "origins_by_id",
     "outlier_mask",
 ]
 
@@ -300,6 +313,10 @@ class MapFilter:
     min_confidence : float or None
         Drop points whose ``confidence`` (probability of a real surface, section 6) is below
         this, in [0, 1]; points without one (NaN: the paper's methods) are kept.
+    occlusion_depth : float or None
+        Drop points lying at least this far behind a surface of the map, metres, on the line
+        from the sensor that heard them (:func:`occlusion_mask`; 0.5 m is
+        :data:`OCCLUSION_DEPTH`). Needs the points' sensor origins (:func:`filter_map`).
 
     Raises
     ------
@@ -311,9 +328,11 @@ class MapFilter:
     outlier_radius: float | None = None
     outlier_neighbours: int = 1
     min_confidence: float | None = None
+    occlusion_depth: float | None = None
 
     def __post_init__(self) -> None:
         _check_positive("max_error", self.max_error)
+        _check_positive("occlusion_depth", self.occlusion_depth)
         if self.min_confidence is not None and not 0.0 <= self.min_confidence <= 1.0:
             msg = f"min_confidence must lie in [0, 1], got {self.min_confidence!r}"
             raise FilterError(msg)
@@ -326,7 +345,7 @@ class MapFilter:
     def active(self) -> bool:
         """True if at least one filter is on."""
         return (self.max_error is not None or self.outlier_radius is not None
-                or self.min_confidence is not None)
+                or self.min_confidence is not None or self.occlusion_depth is not None)
 
 
 @dataclass(frozen=True)
@@ -337,11 +356,12 @@ class MapFilterReport:
     max_error: int = 0
     outliers: int = 0
     confidence: int = 0
+    occluded: int = 0
 
     @property
     def kept(self) -> int:
         """Points out."""
-        return self.total - self.max_error - self.outliers - self.confidence
+        return self.total - self.max_error - self.outliers - self.confidence - self.occluded
 
 
 @dataclass(frozen=True, eq=False)
@@ -389,6 +409,103 @@ def outlier_mask(xy: npt.ArrayLike, radius: float, neighbours: int) -> BoolArray
     return np.asarray(counts - 1 >= neighbours)  # the point itself is in its own ball
 
 
+#: The occlusion filter's depth when a user asks for it without one (``process
+#: --occlusion-depth``'s suggestion), metres: the depth the carved grid's ``see_through`` clears
+#: behind a surface, an obstacle's (box, person, chair), not a room's.
+OCCLUSION_DEPTH = 0.5
+#: How near the line from the sensor a surface point must lie to block it, metres.
+OCCLUSION_REACH = 0.05
+#: A point is part of a surface with at least :data:`SURFACE_NEIGHBOURS` other points within
+#: :data:`SURFACE_RADIUS` metres lying along a line
+#: (:func:`~sonarcarve.geometry.occluded.surface_directions`).
+SURFACE_RADIUS = 0.3
+SURFACE_NEIGHBOURS = 3
+#: The least angle between that surface and the line it blocks: a line running along a
+#: surface passes beside it (a 22.5° beam's half-width, 11°, plus slack), radians.
+OCCLUSION_CROSSING = math.radians(20.0)
+
+
+def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike,
+                   depth: float = OCCLUSION_DEPTH) -> BoolArray:
+    """True where a point is *not* hidden: no surface of the map (a line of at least
+    :data:`SURFACE_NEIGHBOURS` other points within :data:`SURFACE_RADIUS`) crosses the line
+    from its sensor origin, at :data:`OCCLUSION_CROSSING` or more and within
+    :data:`OCCLUSION_REACH` of it, ``depth`` metres or more in front of it
+    (:func:`~sonarcarve.geometry.occluded.occluded_points`).
+
+    Parameters
+    ----------
+    xy : array-like, shape (n, 2)
+        The map's points, metres.
+    origin : array-like, shape (n, 2)
+        The sensor origin each point was heard from, metres.
+    depth : float
+        Metres behind the surface.
+
+    Examples
+    --------
+    A wall 1 m ahead of the sensor at the origin hides a point 2 m away, not one 0.5 m away:
+
+    >>> wall = [[1.0, 0.1 * k - 0.5] for k in range(11)]
+    >>> occlusion_mask(wall + [[2.0, 0.0], [0.5, 0.0]], np.zeros((13, 2)))[-2:].tolist()
+    [False, True]
+    """
+    return np.asarray(~occluded_points(xy, origin, depth=depth, reach=OCCLUSION_REACH,
+                                       radius=SURFACE_RADIUS, neighbours=SURFACE_NEIGHBOURS,
+                                       crossing=OCCLUSION_CROSSING))
+
+
+def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
+                reading_ids: npt.ArrayLike | None = None) -> FloatArray:
+    """The sensor origin ``(x, y)`` of each point's reading, shape (n, 2): for the occlusion
+    filter, which needs them and a map does not hold them.
+
+    Parameters
+    ----------
+    points : LocalMap or GlobalMap
+        The map.
+    readings : ReadingBatch
+        The readings the map was made from.
+    reading_ids : array-like of int, optional
+        The id of each of ``readings`` (default: its row, as :func:`~sonarcarve.pipeline.
+        process_readings` numbers them).
+
+    Raises
+    ------
+    FilterError
+        A point whose reading id is not among the readings.
+    """
+    ids = (np.arange(len(readings), dtype=np.int64) if reading_ids is None
+           else np.asarray(reading_ids, dtype=np.int64))
+    return origins_by_id(points.reading_id, ids, readings.x, readings.y)
+
+
+def origins_by_id(point_ids: npt.ArrayLike, ids: npt.ArrayLike, x: npt.ArrayLike,
+                  y: npt.ArrayLike) -> FloatArray:
+    """:func:`map_origins` from arrays: the ``(x[k], y[k])`` of the reading ``k`` whose id
+    ``ids[k]`` is each of ``point_ids``, shape (n, 2).
+
+    Raises
+    ------
+    FilterError
+        An id of ``point_ids`` not in ``ids``.
+    """
+    wanted = np.asarray(point_ids, dtype=np.int64)
+    known = np.asarray(ids, dtype=np.int64)
+    order = np.argsort(known, kind="stable")
+    sorted_ids = known[order]
+    at = np.searchsorted(sorted_ids, wanted)
+    found = at < len(known)
+    found[found] = sorted_ids[at[found]] == wanted[found]
+    if not found.all():
+        msg = (f"map point of reading id {int(wanted[~found][0])} has no reading among the "
+               f"{len(known):,} given: pass the readings the map was made from")
+        raise FilterError(msg)
+    rows = order[at]
+    return np.column_stack([np.asarray(x, dtype=np.float64)[rows],
+                            np.asarray(y, dtype=np.float64)[rows]])
+
+
 def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
     """True where a point's confidence is at least ``threshold`` or unknown (NaN).
 
@@ -401,9 +518,10 @@ def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
     return np.asarray(np.isnan(c) | (c >= threshold))
 
 
-def filter_map(points: _M, spec: MapFilter) -> FilteredMap[_M]:
-    """Apply the map filters of ``spec``: confidence, max-error thresholding, then the outlier
-    test.
+def filter_map(points: _M, spec: MapFilter,
+               origins: npt.ArrayLike | None = None) -> FilteredMap[_M]:
+    """Apply the map filters of ``spec``: confidence, max-error thresholding, occlusion, then
+    the outlier test.
 
     Parameters
     ----------
@@ -411,28 +529,48 @@ def filter_map(points: _M, spec: MapFilter) -> FilteredMap[_M]:
         The map to filter.
     spec : MapFilter
         Which filters, with which thresholds.
+    origins : array-like, shape (n, 2), optional
+        The sensor origin of each point (:func:`map_origins`); needed by the occlusion filter.
 
     Returns
     -------
     FilteredMap
         The kept points (same type as ``points``) and how many each filter dropped.
+
+    Raises
+    ------
+    FilterError
+        The occlusion filter without ``origins``, or ``origins`` of the wrong shape.
     """
     total = len(points)
-    dropped_confidence = 0
+    if spec.occlusion_depth is not None:
+        if origins is None:
+            msg = ("the occlusion filter needs each point's sensor origin: pass "
+                   "origins=map_origins(points, readings)")
+            raise FilterError(msg)
+        origins = np.asarray(origins, dtype=np.float64)
+        if origins.shape != (total, 2) or not np.all(np.isfinite(origins)):
+            msg = (f"origins must be finite, of shape ({total}, 2) for {total} points, "
+                   f"got shape {origins.shape}")
+            raise FilterError(msg)
+    origin = None if origins is None else np.asarray(origins, dtype=np.float64)
+    dropped = {"confidence": 0, "max_error": 0, "occluded": 0, "outliers": 0}
+
+    def drop(name: str, keep: BoolArray) -> None:
+        nonlocal points, origin
+        dropped[name] = len(points) - int(keep.sum())
+        points = points.select(keep)
+        origin = None if origin is None else origin[keep]
+
     if spec.min_confidence is not None:
-        keep = confidence_mask(points.confidence, spec.min_confidence)
-        dropped_confidence = total - int(keep.sum())
-        points = points.select(keep)
-    dropped_error = 0
+        drop("confidence", confidence_mask(points.confidence, spec.min_confidence))
     if spec.max_error is not None:
-        keep = max_error_mask(points.max_error, spec.max_error)
-        dropped_error = len(points) - int(keep.sum())
-        points = points.select(keep)
-    dropped_outliers = 0
+        drop("max_error", max_error_mask(points.max_error, spec.max_error))
+    if spec.occlusion_depth is not None:
+        # After the confidence and error filters, so that only points the map keeps hide
+        # others; before the outlier test, so that a hidden point vouches for no neighbour.
+        assert origin is not None  # checked above
+        drop("occluded", occlusion_mask(points.xy, origin, spec.occlusion_depth))
     if spec.outlier_radius is not None:
-        keep = outlier_mask(points.xy, spec.outlier_radius, spec.outlier_neighbours)
-        dropped_outliers = len(points) - int(keep.sum())
-        points = points.select(keep)
-    return FilteredMap(points=points, report=MapFilterReport(
-        total=total, max_error=dropped_error, outliers=dropped_outliers,
-        confidence=dropped_confidence))
+        drop("outliers", outlier_mask(points.xy, spec.outlier_radius, spec.outlier_neighbours))
+    return FilteredMap(points=points, report=MapFilterReport(total=total, **dropped))

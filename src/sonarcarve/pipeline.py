@@ -19,11 +19,12 @@ from sonarcarve.filters import (
     ReadingFilterReport,
     filter_map,
     filter_readings,
+    origins_by_id,
 )
 from sonarcarve.maps import GlobalMap, GlobalMapSink
 from sonarcarve.methods.base import SonarMethod
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.typing import IntArray
+from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
     "FINE_SAMPLES",
@@ -187,6 +188,8 @@ def process_chunks(
         method.set_global_sink(timed)
     run = _Run(method, _schedule(method, sample_every), on_progress)
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
+    origins = (_Origins() if map_filter is not None and map_filter.occlusion_depth is not None
+               else None)
     rows = 0
     for chunk in chunks:
         ids = np.arange(rows, rows + len(chunk), dtype=np.int64)
@@ -194,6 +197,8 @@ def process_chunks(
         if chunk_filter is not None:
             keep = chunk_filter.keep(chunk)
             chunk, ids = chunk[keep], ids[keep]
+        if origins is not None:
+            origins.note(chunk, ids)
         run.feed(chunk, ids)
     run.flush()
     filter_report = None
@@ -201,7 +206,7 @@ def process_chunks(
         filter_report = chunk_filter.report
         if on_progress is not None:
             on_progress(filter_report.total)
-    return _finish(run, timed, filter_report, map_filter)
+    return _finish(run, timed, filter_report, map_filter, origins)
 
 
 def _check_run(method: SonarMethod, sample_every: int | None, map_filter: MapFilter | None,
@@ -237,7 +242,7 @@ def _schedule(method: SonarMethod, sample_every: int | None) -> _Schedule:
 
 
 def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterReport | None,
-            map_filter: MapFilter | None) -> ProcessResult:
+            map_filter: MapFilter | None, origins: _Origins | None = None) -> ProcessResult:
     """Finish the run's method and gather what it measured (the map filtered last)."""
     method = run.method
     measures = method.measures()
@@ -250,7 +255,8 @@ def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterRep
     points = method.committed_points
     map_report = None
     if map_filter is not None:
-        kept = filter_map(global_map, map_filter)
+        kept = filter_map(global_map, map_filter,
+                          None if origins is None else origins.of(global_map.reading_id))
         global_map, map_report = kept.points, kept.report
         points = len(global_map)
     return ProcessResult(
@@ -318,6 +324,28 @@ class _Schedule:
 
     def step(self, samples: int) -> int:
         return self.fine if samples < FINE_SAMPLES else self.coarse
+
+
+class _Origins:
+    """The sensor origin of every reading fed, by id, for the occlusion filter (16 bytes a
+    reading, kept only when that filter is on: a map does not hold its points' origins)."""
+
+    def __init__(self) -> None:
+        self._ids: list[IntArray] = []
+        self._xy: list[tuple[FloatArray, FloatArray]] = []
+
+    def note(self, batch: ReadingBatch, ids: IntArray) -> None:
+        """Remember the origins of ``batch``, whose reading ids are ``ids``."""
+        self._ids.append(ids)
+        self._xy.append((batch.x, batch.y))
+
+    def of(self, reading_id: IntArray) -> FloatArray:
+        """The origins of the readings ``reading_id``, shape (n, 2)."""
+        if not self._ids:
+            return np.zeros((0, 2))
+        return origins_by_id(reading_id, np.concatenate(self._ids),
+                             np.concatenate([x for x, _ in self._xy]),
+                             np.concatenate([y for _, y in self._xy]))
 
 
 class _Run:
