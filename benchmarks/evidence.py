@@ -30,7 +30,9 @@ before that feature: only its weight was fitted), with every arc maturing with a
 its run's middle (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with
 the placement before that posterior (the median of the localised support once cut, ATM's
 median from one crossing), with the posterior placing the points of uncut beams too, and with
-ATM's median from one crossing in the run (the default needs three).
+ATM's median from one crossing in the run (the default needs three); and combined and evidence
+with the occlusion map filter on their global maps (points 0.5 m or more behind a surface of
+the finished map, on the line from their sensor, dropped: ``MapFilter(occlusion_depth=0.5)``).
 ``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed;
 ``--variant P[:JSON]`` adds a row of evidence carving with P_carve ``P`` (and the confidence
 model ``fit_confidence.py --save`` wrote).
@@ -54,6 +56,7 @@ import numpy as np
 
 from latency_openings import parse_variant, variant_method
 from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter
 from sonarcarve.lab.experiments.real_log import line_spread
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
@@ -121,14 +124,25 @@ VARIANTS: dict[str, Factory] = {
     "all, posterior on uncut beams too": _all_with(uncut_posterior=True),
     "all, posterior, ATM from 1 crossing": _all_with(min_atm_crossings=1),
 }
+#: Rows of a variant above whose global map then goes through the occlusion map filter
+#: (``MapFilter(occlusion_depth=0.5)``: points behind a surface of the finished map dropped).
+OCCLUDED = {"combined (paper), occluded points dropped": "combined (paper)",
+            "evidence (all), occluded points dropped": "evidence (all)"}
+VARIANTS.update({name: VARIANTS[base] for name, base in OCCLUDED.items()})
+
+
+def _map_filter(name: str) -> MapFilter | None:
+    """The occlusion filter for the rows of :data:`OCCLUDED`, None for the others."""
+    return MapFilter(occlusion_depth=OCCLUSION_DEPTH) if name in OCCLUDED else None
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 COLUMNS = ("direct_kept", "crosstalk", "floor", "multipath", "spurious", "median_ratio",
            "p90_ratio", "unprocessed", "readings_per_s")
 
 
 def _measure(sim: Simulation, make: Factory, config: MethodConfig,
-             centerline_err: np.ndarray, centerline_p90: float) -> dict[str, float]:
-    result = process_readings(sim.readings, make(config))
+             centerline_err: np.ndarray, centerline_p90: float,
+             map_filter: MapFilter | None = None) -> dict[str, float]:
+    result = process_readings(sim.readings, make(config), map_filter=map_filter)
     gmap = result.global_map
     kind = sim.truth.kind
     kept = np.zeros(len(kind), dtype=bool)
@@ -186,7 +200,7 @@ def _robond(config: MethodConfig, variants: dict[str, Factory]) -> None:
     print("| variant | points | line spread median (cm) | p90 (cm) | isolated (%) |")
     print("|---|---:|---:|---:|---:|")
     for name, make in variants.items():
-        gmap = process_readings(batch, make(cfg)).global_map
+        gmap = process_readings(batch, make(cfg), map_filter=_map_filter(name)).global_map
         spread = line_spread(gmap.xy, 0.25, 5).spread
         ok = np.isfinite(spread)
         print(f"| {name} | {len(gmap)} | {100 * np.median(spread[ok]):.1f} | "
@@ -253,7 +267,8 @@ def main(argv: list[str] | None = None) -> int:
                     center.global_map.xy, sim.world.segments)[0]
                 c_p90 = float(np.nanpercentile(c_err, 90.0))
                 for name, make in variants.items():
-                    rows[name].append(_measure(sim, make, config, c_err, c_p90))
+                    rows[name].append(_measure(sim, make, config, c_err, c_p90,
+                                               _map_filter(name)))
             _table(f"{world}, physics {physics}: {args.seeds} seeds, mean over seeds", rows)
             if args.per_seed:
                 _per_seed(rows)

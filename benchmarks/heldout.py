@@ -45,6 +45,7 @@ import numpy as np
 
 from latency_openings import Variant, parse_variant, variant_method
 from sonarcarve import make_method
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, map_origins
 from sonarcarve.grids import CarvedGrid, RangeSensorLayer
 from sonarcarve.lab.grid_measures import grid_measures
 from sonarcarve.lab.metrics import segment_distance
@@ -93,10 +94,12 @@ def _simulate(world_spec: str, seed: int, physics: SonarPhysics,
 
 
 def _point_rows(sim: Simulation, variants: Sequence[Variant] = (),
-                before_watch: bool = False) -> dict[str, dict[str, float]]:
+                before_watch: bool = False, occlusion: bool = False,
+                ) -> dict[str, dict[str, float]]:
     """Per method (and evidence ``variants``, and evidence with every arc maturing with age
-    alone when ``before_watch``): direct kept, spurious removed, median and p90 error ratios
-    to centerline."""
+    alone when ``before_watch``, and combined and evidence with the occlusion map filter when
+    ``occlusion``): direct kept, spurious removed, median and p90 error ratios to
+    centerline."""
     kind = sim.truth.kind
     direct = kind == EchoKind.DIRECT
     config = MethodConfig()
@@ -111,8 +114,15 @@ def _point_rows(sim: Simulation, variants: Sequence[Variant] = (),
         before = ("evidence, every arc matures (before watch)", DEFAULT_CARVE_PROBABILITY,
                   ConfidenceModel(unwatched_prior=False))
         makers[before[0]] = lambda c: variant_method(c, before)
-    for name, make in makers.items():
-        gmap = process_readings(sim.readings, make(config)).global_map
+    maps = {name: process_readings(sim.readings, make(config)).global_map
+            for name, make in makers.items()}
+    if occlusion:
+        for name in ("combined", "evidence"):
+            hidden = MapFilter(occlusion_depth=OCCLUSION_DEPTH)
+            origins = map_origins(maps[name], sim.readings)
+            maps[f"{name}, occluded points dropped"] = filter_map(maps[name], hidden,
+                                                                  origins).points
+    for name, gmap in maps.items():
         kept = np.zeros(len(kind), dtype=bool)
         kept[gmap.reading_id] = True
         err = segment_distance(gmap.xy, sim.world.segments)[0]
@@ -196,6 +206,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="add a point row: evidence carving with every arc maturing with "
                              "age alone (ConfidenceModel unwatched_prior False, the default before "
                              "unwatched arcs kept the prior)")
+    parser.add_argument("--occlusion", action="store_true",
+                        help="add point rows: combined and evidence with the occlusion map "
+                             "filter (MapFilter occlusion_depth 0.5 m)")
     parser.add_argument("--skip-grids", action="store_true")
     parser.add_argument("--skip-points", action="store_true",
                         help="only the costmaps (the methods' point maps take most of the time)")
@@ -207,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
             for seed in range(args.seeds):
                 sim = _simulate(world, seed, physics, args.robot)
                 if not args.skip_points:
-                    points.append(_point_rows(sim, args.variant, args.before_watch))
+                    points.append(_point_rows(sim, args.variant, args.before_watch, args.occlusion))
                 if not args.skip_grids:
                     grids.append(_grid_rows(sim))
                 print(f"  {physics_name}, {world}, seed {seed}: {len(sim.readings):,} readings",

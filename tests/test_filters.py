@@ -15,12 +15,15 @@ from sonarcarve.filters import (
     ReadingFilterStream,
     filter_map,
     filter_readings,
+    map_origins,
     max_error_mask,
+    occlusion_mask,
+    origins_by_id,
     outlier_mask,
 )
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
 from sonarcarve.methods import CenterlineMethod
-from sonarcarve.pipeline import process_readings
+from sonarcarve.pipeline import process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch
 
 
@@ -122,6 +125,9 @@ def test_bad_reading_filter_parameters(kwargs: dict[str, float], text: str) -> N
     ({"outlier_radius": 1.0, "outlier_neighbours": 0}, "outlier_neighbours must be"),
     ({"min_confidence": -0.01}, "min_confidence must lie in"),
     ({"min_confidence": 1.01}, "min_confidence must lie in"),
+    ({"occlusion_depth": 0.0}, "occlusion_depth must be"),
+    ({"occlusion_depth": math.nan}, "occlusion_depth must be"),
+    ({"occlusion_depth": True}, "occlusion_depth must be a finite number > 0 .metres., got bool"),
 ])
 def test_bad_map_filter_parameters(kwargs: dict[str, float], text: str) -> None:
     with pytest.raises(FilterError, match=text):
@@ -326,3 +332,108 @@ def test_each_map_filter_counts_only_what_it_dropped() -> None:
     assert out.points.reading_id.tolist() == [12, 14]
     r = out.report
     assert (r.total, r.confidence, r.max_error, r.outliers, r.kept) == (5, 1, 1, 1, 2)
+
+
+# -- the occlusion filter ------------------------------------------------------------------------
+
+def _behind_a_wall() -> tuple[GlobalMap, np.ndarray]:
+    """A wall of 21 points at x = 1 heard head-on from x = 0 (ids 10-30), and a point at x = 2
+    heard from the origin through it (id 31): the multipath echo to drop."""
+    wall_y = np.linspace(-0.5, 0.5, 21)
+    xy = [[1.0, y] for y in wall_y] + [[2.0, 0.0]]
+    pts = _points(GlobalMap, xy, [0.01] * 22)
+    origins = np.array([[0.0, y] for y in wall_y] + [[0.0, 0.0]])
+    return pts, origins
+
+
+def test_occlusion_filter_drops_the_point_behind_a_wall() -> None:
+    pts, origins = _behind_a_wall()
+    out = filter_map(pts, MapFilter(occlusion_depth=0.5), origins)
+    assert 31 not in out.points.reading_id.tolist()
+    assert (out.report.occluded, out.report.kept) == (1, 21)
+    assert MapFilter(occlusion_depth=0.5).active
+    # Deeper than the point lies behind the wall (1 m): nothing dropped.
+    assert filter_map(pts, MapFilter(occlusion_depth=1.0), origins).report.occluded == 0
+    assert occlusion_mask(pts.xy, origins).tolist() == [True] * 21 + [False]
+
+
+def test_occlusion_runs_after_confidence_and_error_and_before_outliers() -> None:
+    pts, origins = _behind_a_wall()
+    # A wall the confidence filter drops hides nothing.
+    doubtful = dataclasses.replace(pts, confidence=np.r_[np.full(21, 0.1), 0.9])
+    out = filter_map(doubtful, MapFilter(min_confidence=0.5, occlusion_depth=0.5), origins)
+    assert (out.report.confidence, out.report.occluded) == (21, 0)
+    # The same with the error filter.
+    inaccurate = dataclasses.replace(pts, max_error=np.r_[np.full(21, 0.9), 0.01])
+    out = filter_map(inaccurate, MapFilter(max_error=0.5, occlusion_depth=0.5), origins)
+    assert (out.report.max_error, out.report.occluded) == (21, 0)
+    # A hidden point vouches for no neighbour: its only one, 0.6 m away and heard from the
+    # other side (not hidden), becomes an outlier; without the occlusion filter both stay.
+    pair = GlobalMap.concatenate([pts, _points(GlobalMap, [[2.0, 0.6]], [0.01])])
+    pair = dataclasses.replace(pair, reading_id=np.arange(10, 33))
+    both = np.vstack([origins, [[3.0, 0.6]]])
+    out = filter_map(pair, MapFilter(occlusion_depth=0.5, outlier_radius=0.65), both)
+    assert (out.report.occluded, out.report.outliers, out.report.kept) == (1, 1, 21)
+    out = filter_map(pair, MapFilter(outlier_radius=0.65), both)
+    assert (out.report.outliers, out.report.kept) == (0, 23)
+
+
+def test_occlusion_filter_needs_origins_of_the_right_shape() -> None:
+    pts, origins = _behind_a_wall()
+    with pytest.raises(FilterError, match="needs each point's sensor origin"):
+        filter_map(pts, MapFilter(occlusion_depth=0.5))
+    with pytest.raises(FilterError, match=r"of shape \(22, 2\)"):
+        filter_map(pts, MapFilter(occlusion_depth=0.5), origins[:-1])
+    bad = origins.copy()
+    bad[3, 0] = math.nan
+    with pytest.raises(FilterError, match="must be finite"):
+        filter_map(pts, MapFilter(occlusion_depth=0.5), bad)
+
+
+def test_map_origins_looks_points_up_by_reading_id() -> None:
+    n = 6
+    b = ReadingBatch.from_arrays(t=np.arange(n) * 0.1, sensor=np.zeros(n, int),
+                                 x=np.arange(n) * 1.0, y=-np.arange(n) * 1.0,
+                                 theta=np.zeros(n), range=np.ones(n))
+    pts = dataclasses.replace(_points(GlobalMap, [[0, 0], [1, 1]], [0.1, 0.1]),
+                              reading_id=np.array([4, 1]))
+    np.testing.assert_array_equal(map_origins(pts, b), [[4.0, -4.0], [1.0, -1.0]])
+    # With ids of their own (a filtered log keeps input rows), not positions.
+    np.testing.assert_array_equal(map_origins(pts, b, reading_ids=[7, 4, 9, 1, 3, 0]),
+                                  [[1.0, -1.0], [3.0, -3.0]])
+    with pytest.raises(FilterError, match="reading id 4 has no reading"):
+        origins_by_id([4], [0, 1, 2], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
+    with pytest.raises(FilterError, match="reading id 9 has no reading"):
+        origins_by_id([9], [0, 1, 2], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
+
+
+def _wall_and_echo_through_it() -> ReadingBatch:
+    """A sensor driving along y = 0 hears a wall at x = 1 head-on 40 times, then a reading
+    from the origin reads 2 m along the x axis: through the wall (multipath)."""
+    n = 40
+    k = np.arange(n)
+    return ReadingBatch.from_arrays(
+        t=np.r_[k * 0.1, 4.0], sensor=np.r_[np.zeros(n, int), 1],
+        x=np.zeros(n + 1), y=np.r_[0.025 * k - 0.5, 0.0], theta=np.zeros(n + 1),
+        range=np.r_[np.ones(n), 2.0])
+
+
+def test_pipeline_keeps_origins_for_the_occlusion_filter() -> None:
+    b = _wall_and_echo_through_it()
+    spec = MapFilter(occlusion_depth=0.5)
+    result = process_readings(b, CenterlineMethod(history_size=10), map_filter=spec)
+    assert result.map_filter is not None
+    assert result.map_filter.occluded == 1
+    assert 40 not in result.global_map.reading_id.tolist()
+    # The same as filtering the unfiltered map with the readings' origins, however the log is
+    # cut into chunks, and with a reading filter that drops rows (ids stay input rows).
+    whole = process_readings(b, CenterlineMethod(history_size=10)).global_map
+    expected = filter_map(whole, spec, map_origins(whole, b)).points
+    chunked = process_chunks([b[:7], b[7:30], b[30:]], CenterlineMethod(history_size=10),
+                             map_filter=spec)
+    np.testing.assert_array_equal(chunked.global_map.reading_id, expected.reading_id)
+    near = process_readings(b, CenterlineMethod(history_size=10), map_filter=spec,
+                            reading_filter=ReadingFilter(max_range=1.5))
+    assert near.map_filter is not None
+    assert near.map_filter.occluded == 0
+    assert len(near.global_map) == 40

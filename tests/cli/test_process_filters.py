@@ -63,6 +63,19 @@ def test_map_filters_drop_outliers_and_inaccurate_points(tmp_path: Path) -> None
     assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in (7, 30)]
 
 
+def test_occlusion_filter_drops_echoes_read_through_the_wall(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Rows 7 and 30 read 6 m straight through the wall the other rows hear at 1.5 m.
+    code, out = _run(tmp_path, "--occlusion-depth", "0.5")
+    assert code == 0
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in (7, 30)]
+    assert "dropped: behind a surface" in capsys.readouterr().out
+    # 4.5 m behind the wall: a depth beyond that keeps them.
+    code, out = _run(tmp_path, "--occlusion-depth", "4.6")
+    assert code == 0
+    assert len(read_map_csv(out)) == 60
+
+
 @pytest.mark.parametrize(("options", "text"), [
     (["--max-range", "-1"], "--max-range must be a finite number > 0"),
     (["--min-range", "nan"], "--min-range must be"),
@@ -72,6 +85,8 @@ def test_map_filters_drop_outliers_and_inaccurate_points(tmp_path: Path) -> None
     (["--outlier-radius", "1", "--outlier-neighbours", "0"], "--outlier-neighbours must be"),
     (["--outlier-neighbours", "3"], "--outlier-neighbours needs --outlier-radius"),
     (["--max-error", "-0.5"], "--max-error must be"),
+    (["--occlusion-depth", "0"], "--occlusion-depth must be a finite number > 0"),
+    (["--occlusion-depth", "inf"], "--occlusion-depth must be"),
 ])
 def test_bad_filter_values_are_one_line_errors(tmp_path: Path, options: list[str], text: str,
                                                capsys: pytest.CaptureFixture[str]) -> None:

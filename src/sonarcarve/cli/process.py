@@ -214,6 +214,13 @@ _MaxErrorOpt = Annotated[float | None, typer.Option(
     help="Map filter: drop points whose error bound max_error exceeds this, metres "
          "(paper, Fig. 13b).", rich_help_panel="Filters")]
 
+_OcclusionOpt = Annotated[float | None, typer.Option(
+    metavar="METRES", show_default="off",
+    help="Map filter: drop points lying at least this far behind a surface of the finished "
+         "map, on the line from the sensor that heard them (multipath echoes: the sound "
+         "glanced off a wall and read too long). 0.5 is a good start; docs/RESULTS.md, "
+         "\"Points behind a surface of the map\".", rich_help_panel="Filters")]
+
 
 @app.command()
 def process(
@@ -232,6 +239,7 @@ def process(
     outlier_radius: _OutlierRadiusOpt = None,
     outlier_neighbours: _NeighboursOpt = 1,
     max_error: _MaxErrorOpt = None,
+    occlusion_depth: _OcclusionOpt = None,
     map_rate: _MapRateOpt = None,
     grid_resolution: _GridResolutionOpt = None,
     robot: RobotOpt = None,
@@ -263,7 +271,8 @@ def process(
 
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
-    rows; map filters (--max-error, then --outlier-radius) drop points from the global map.
+    rows; map filters (--max-error, --occlusion-depth, then --outlier-radius) drop points from
+    the global map.
     Without map filters a map CSV is written as it is made (memory stays flat however long the
     log); map filters need the whole map, so with them it is held in memory until the end.
 
@@ -279,6 +288,9 @@ def process(
 
     Example: `sonarcarve process readings.csv --max-range 3.81 --max-error 0.1 --out map.csv`
 
+    Example: `sonarcarve process readings.csv --method evidence --occlusion-depth 0.5 --out
+    map.csv` (evidence carving, then multipath points behind walls dropped)
+
     Example: `sonarcarve process run.mcap --out run-map.mcap` (then open run-map.mcap in
     Foxglove)
 
@@ -286,7 +298,7 @@ def process(
     """
     config = _config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
-                                          outlier_neighbours, max_error)
+                                          outlier_neighbours, max_error, occlusion_depth)
     make_method(method, config)  # an unknown method fails before any file is touched
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
@@ -305,7 +317,8 @@ def process(
     refuse_bag_options(source, bag)
     if output.label != "csv" and (reading_filter is not None or map_filter is not None):
         msg = (f"--out {out}: the filters (--max-range, --min-range, --jump-threshold, "
-               "--max-error, --outlier-radius) apply to a map CSV output only")
+               "--max-error, --occlusion-depth, --outlier-radius) apply to a map CSV output "
+               "only")
         raise ParameterError(msg)
     if map_rate is not None and output.label != "bag":
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
@@ -578,10 +591,11 @@ def _run(readings: Path, sonar: SonarMethod, label: str,
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,
              radius: float | None, neighbours: int, max_error: float | None,
+             occlusion_depth: float | None = None,
              ) -> tuple[ReadingFilter | None, MapFilter | None]:
     for name, value in (("--max-range", max_range), ("--min-range", min_range),
                         ("--jump-threshold", jump), ("--outlier-radius", radius),
-                        ("--max-error", max_error)):
+                        ("--max-error", max_error), ("--occlusion-depth", occlusion_depth)):
         if value is not None and not (math.isfinite(value) and value > 0.0):
             msg = f"{name} must be a finite number > 0 (metres), got {value}"
             raise ParameterError(msg)
@@ -595,7 +609,8 @@ def _filters(max_range: float | None, min_range: float | None, jump: float | Non
         msg = "--outlier-neighbours needs --outlier-radius"
         raise ParameterError(msg)
     readings = ReadingFilter(max_range=max_range, min_range=min_range, jump_threshold=jump)
-    points = MapFilter(max_error=max_error, outlier_radius=radius, outlier_neighbours=neighbours)
+    points = MapFilter(max_error=max_error, outlier_radius=radius, outlier_neighbours=neighbours,
+                       occlusion_depth=occlusion_depth)
     return (readings if readings.active else None), (points if points.active else None)
 
 
@@ -614,6 +629,7 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
     if points is not None:
         rows += [("points before map filters", f"{points.total:,}"),
                  ("dropped: above --max-error", f"{points.max_error:,}"),
+                 ("dropped: behind a surface", f"{points.occluded:,}"),
                  ("dropped: outliers", f"{points.outliers:,}")]
     rows += [("points out", f"{result.points:,}"),
              ("fully carved", f"{result.fully_carved:,}"),

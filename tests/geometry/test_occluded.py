@@ -1,0 +1,174 @@
+"""Points behind a surface of the map (``geometry/occluded.py``): hand geometry, and the compiled
+kernels against a brute-force reference over every pair of points."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.geometry.occluded import LINE_RATIO, occluded_points, surface_directions
+
+DEPTH, REACH, RADIUS, NEIGHBOURS, CROSSING = 0.5, 0.05, 0.3, 3, math.radians(20.0)
+
+
+def _hidden(xy: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    return occluded_points(xy, origin, depth=DEPTH, reach=REACH, radius=RADIUS,
+                           neighbours=NEIGHBOURS, crossing=CROSSING)
+
+
+def _wall(start: tuple[float, float], angle: float, length: float,
+          spacing: float = 0.05) -> np.ndarray:
+    """Points every ``spacing`` along a straight wall from ``start`` at ``angle``."""
+    s = np.arange(0.0, length + 1e-9, spacing)
+    return np.column_stack([start[0] + s * math.cos(angle), start[1] + s * math.sin(angle)])
+
+
+def _hidden_target(wall: np.ndarray, target: tuple[float, float]) -> bool:
+    """Whether ``target``, heard from the origin, is hidden by ``wall`` (heard from afar, so
+    the wall's own points are never hidden: their origins sit on the wall's far side)."""
+    xy = np.vstack([wall, [target]])
+    origin = np.vstack([wall + np.array([10.0, 0.0]), [[0.0, 0.0]]])
+    return bool(_hidden(xy, origin)[-1])
+
+
+# -- hand geometry ------------------------------------------------------------------------------
+
+def test_a_wall_across_the_line_hides_a_point_behind_it() -> None:
+    wall = _wall((1.0, -0.5), math.pi / 2, 1.0)  # x = 1, y from -0.5 to 0.5
+    assert _hidden_target(wall, (2.0, 0.0))
+    assert not _hidden_target(wall, (0.8, 0.0))  # in front of it
+    assert not _hidden_target(wall, (2.0, 3.0))  # the line misses the wall
+
+
+def test_depth_is_measured_along_the_line_from_the_wall() -> None:
+    wall = _wall((1.0, -0.5), math.pi / 2, 1.0)
+    # The nearest wall point on the line is (1, 0): 0.5 m in front of (1.5, 0) is not enough
+    # (the test is strict), a millimetre more is.
+    assert not _hidden_target(wall, (1.5, 0.0))
+    assert _hidden_target(wall, (1.501, 0.0))
+
+
+def test_a_wall_along_the_line_does_not_hide() -> None:
+    for angle, hides in ((0.0, False), (math.radians(15.0), False), (math.radians(25.0), True),
+                         (math.radians(90.0), True)):
+        # A wall through (1, 0) at ``angle`` to the line from the origin to (2.5, 0).
+        centre = np.array([1.0, 0.0])
+        wall = _wall(tuple(centre - 0.5 * np.array([math.cos(angle), math.sin(angle)])),
+                     angle, 1.0)
+        assert _hidden_target(wall, (2.5, 0.0)) is hides, math.degrees(angle)
+
+
+def test_a_lone_point_or_a_blob_is_no_surface() -> None:
+    assert not _hidden_target(np.array([[1.0, 0.0]]), (2.0, 0.0))
+    rng = np.random.default_rng(3)
+    blob = np.array([1.0, 0.0]) + rng.normal(scale=0.05, size=(30, 2))
+    assert not _hidden_target(blob, (2.0, 0.0))
+
+
+def test_reach_the_line_must_pass_within() -> None:
+    # A wall ending just short of the line: within reach it hides, beyond it does not.
+    near = _wall((1.0, 0.04), math.pi / 2, 1.0)
+    far = _wall((1.0, 0.06), math.pi / 2, 1.0)
+    assert _hidden_target(near, (2.0, 0.0))
+    assert not _hidden_target(far, (2.0, 0.0))
+
+
+def test_points_hide_one_another_only_from_their_own_sensor() -> None:
+    # Two walls of a corridor, each heard from the middle: none is behind the other.
+    left = _wall((0.0, 1.0), 0.0, 4.0)
+    right = _wall((0.0, -1.0), 0.0, 4.0)
+    xy = np.vstack([left, right])
+    origin = np.column_stack([xy[:, 0], np.zeros(len(xy))])
+    assert not _hidden(xy, origin).any()
+    # Heard through the left wall from across it (a multipath reading of the right wall as seen
+    # from outside the corridor): every right-wall point behind the left wall is hidden.
+    origin[len(left):, 1] = 3.0
+    hidden = _hidden(xy, origin)
+    assert not hidden[: len(left)].any()
+    assert hidden[len(left):].sum() >= len(right) - 2  # the ends may fall short of a surface
+
+
+def test_empty_and_single_maps() -> None:
+    assert _hidden(np.zeros((0, 2)), np.zeros((0, 2))).shape == (0,)
+    assert not _hidden(np.array([[1.0, 1.0]]), np.zeros((1, 2))).any()
+    assert surface_directions(np.zeros((0, 2)), RADIUS, NEIGHBOURS).shape == (0, 2)
+
+
+def test_surface_directions_by_hand() -> None:
+    angle = math.radians(30.0)
+    wall = _wall((0.0, 0.0), angle, 1.0)
+    direction = surface_directions(wall, RADIUS, NEIGHBOURS)
+    assert np.all(np.isfinite(direction))
+    np.testing.assert_allclose(np.abs(direction @ [math.cos(angle), math.sin(angle)]), 1.0,
+                               atol=1e-9)
+    # Exactly ``neighbours`` others within the radius (inclusive) make a surface; one fewer
+    # does not.
+    four = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.0], [0.3, 0.0]])
+    assert np.isfinite(surface_directions(four, 0.3, 3)[0, 0])
+    assert np.isnan(surface_directions(four[:3], 0.3, 3)[0, 0])
+    assert np.isnan(surface_directions(four, 0.29, 3)[0, 0])
+    # A square's corners spread equally both ways: not a line.
+    square = np.array([[0.0, 0.0], [0.1, 0.0], [0.0, 0.1], [0.1, 0.1]])
+    assert np.isnan(surface_directions(square, 0.3, 3)).all()
+
+
+# -- the kernels against brute force ------------------------------------------------------------
+
+def _reference_directions(xy: np.ndarray, radius: float, neighbours: int) -> np.ndarray:
+    out = np.full(xy.shape, np.nan)
+    for i, p in enumerate(xy):
+        near = xy[np.sum((xy - p) ** 2, axis=1) <= radius * radius]
+        if len(near) - 1 < neighbours:
+            continue
+        values, vectors = np.linalg.eigh(np.cov(near.T, bias=True))
+        if values[1] > 0.0 and values[1] >= LINE_RATIO * values[0]:
+            out[i] = vectors[:, 1]
+    return out
+
+
+def _reference_hidden(xy: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    direction = _reference_directions(xy, RADIUS, NEIGHBOURS)
+    out = np.zeros(len(xy), dtype=bool)
+    for i in range(len(xy)):
+        v = xy[i] - origin[i]
+        d = math.hypot(*v)
+        if d <= DEPTH:
+            continue
+        u = v / d
+        w = xy - origin[i]
+        in_front = w @ u
+        across = np.abs(w[:, 0] * u[1] - w[:, 1] * u[0])
+        crossing = np.abs(direction[:, 0] * u[1] - direction[:, 1] * u[0])
+        blocks = ((in_front > 0.0) & (in_front < d - DEPTH) & (across <= REACH)
+                  & (crossing >= math.sin(CROSSING)))
+        blocks[i] = False
+        out[i] = bool(blocks.any())
+    return out
+
+
+def _random_map(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Noisy walls and stray points in a 6 m room, each heard from a random origin (some far
+    outside the points' extent, so that walks leave the bucketed cells)."""
+    rng = np.random.default_rng(seed)
+    walls = [_wall(tuple(rng.uniform(-3, 3, 2)), rng.uniform(0, math.pi), rng.uniform(0.3, 3),
+                   rng.uniform(0.03, 0.15)) for _ in range(rng.integers(3, 9))]
+    xy = np.vstack([*walls, rng.uniform(-3, 3, (rng.integers(0, 30), 2))])
+    xy += rng.normal(scale=rng.uniform(0.0, 0.03), size=xy.shape)
+    origin = rng.uniform(-5, 5, xy.shape)
+    return xy, origin
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_kernels_match_brute_force(seed: int) -> None:
+    xy, origin = _random_map(seed)
+    got = surface_directions(xy, RADIUS, NEIGHBOURS)
+    want = _reference_directions(xy, RADIUS, NEIGHBOURS)
+    np.testing.assert_array_equal(np.isnan(got[:, 0]), np.isnan(want[:, 0]))
+    line = ~np.isnan(want[:, 0])
+    np.testing.assert_allclose(np.abs(np.sum(got[line] * want[line], axis=1)), 1.0, atol=1e-9)
+    hidden = _hidden(xy, origin)
+    np.testing.assert_array_equal(hidden, _reference_hidden(xy, origin))
+    assert hidden.any()  # the comparison says something
+    assert not hidden.all()
