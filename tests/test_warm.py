@@ -95,7 +95,7 @@ def test_a_parallel_warm_up_compiles_in_other_processes_and_leaves_nothing_to_co
         import os
         from sonarcarve.warm import warm_lanes
 
-        KEEP = ("method centerline", "CSV reader and map writer")
+        KEEP = ("method centerline", "CSV reader, map writer and occlusion filter")
 
         def lanes():
             def noted(step):
@@ -121,8 +121,8 @@ def test_a_parallel_warm_up_compiles_in_other_processes_and_leaves_nothing_to_co
     """
     out = _run(code, tmp_path / "cache")
     rows = [line.split(maxsplit=2)[1:] for line in out.splitlines() if line.startswith("ROW")]
-    assert [what for _, what in rows] == ["CSV reader and map writer", "method centerline",
-                                          "every step again in one process"]
+    assert [what for _, what in rows] == ["CSV reader, map writer and occlusion filter",
+                                          "method centerline", "every step again in one process"]
     assert int(rows[0][0]) > 0
     assert int(rows[1][0]) > 0
     assert rows[2][0] == "0"  # so the last pass here found it all in the cache
@@ -276,17 +276,19 @@ def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
     import math
     from sonarcarve.warm import counting_compiles, warm_stream
     from sonarcarve import MethodConfig, make_method
+    from sonarcarve.filters import MapFilter, filter_map, map_origins
     from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer
     batch = warm_stream(400)
     box = (-3.0, -3.0, 3.0, 3.0)
     with counting_compiles() as names:
         m = make_method('carve', MethodConfig(max_incidence=math.radians(30)))
         m.add_many(batch)
-        m.finish()
+        points = m.finish()
         for grid in (CarvedGrid.around(box, 0.05), RangeSensorLayer(0.05, box),
                      OccupancyGrid.around(box, 0.05)):
             grid.add_many(batch)
             grid.probabilities()
+        filter_map(points, MapFilter(occlusion_depth=0.5), map_origins(points, batch))
     print('COMPILED', *names)
     """
     assert _compiled_names(_run(grids, tmp_path)) == []

@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from sonarcarve.compiles import watching_compiles
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, map_origins
 from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer, trinary
 from sonarcarve.io import read_readings_csv, write_map_csv, write_readings_csv
 from sonarcarve.io.map_csv import map_csv_sink
@@ -162,7 +163,8 @@ def _run_csv() -> None:
     """The readings CSV's compiled parser and the map CSV's compiled writer, in a temp folder.
 
     Both ways a map is written (whole, and streamed a block at a time as ``process`` does) and
-    both ways a log is read (whole, and in chunks).
+    both ways a log is read (whole, and in chunks); and the occlusion map filter's kernels
+    (``process --occlusion-depth``).
     """
     batch = warm_stream()
     with tempfile.TemporaryDirectory(prefix="sonarcarve-warm-") as folder:
@@ -175,7 +177,9 @@ def _run_csv() -> None:
         write_map_csv(make_method("centerline").finish(), Path(folder) / "empty.csv")
         method = make_method("centerline")
         method.add_many(batch)
-        write_map_csv(method.finish(), Path(folder) / "map.csv")
+        points = method.finish()
+        write_map_csv(points, Path(folder) / "map.csv")
+        filter_map(points, MapFilter(occlusion_depth=OCCLUSION_DEPTH), map_origins(points, batch))
 
 
 def warm_lanes() -> list[Lane]:
@@ -197,7 +201,7 @@ def warm_lanes() -> list[Lane]:
         [("grids range sensor layer and occupancy",
           lambda: _run_grids(lambda: RangeSensorLayer(0.1, _EXTENT),
                              lambda: OccupancyGrid.around(_EXTENT, 0.1)))],
-        [("CSV reader and map writer", _run_csv)],
+        [("CSV reader, map writer and occlusion filter", _run_csv)],
     ]
     # Methods added later get a lane of their own (carve and combined are in carving's).
     lanes += [[(f"method {name}", method(name))] for name in METHODS
