@@ -175,7 +175,10 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: Floa
     uy = vy / d
     # Walk the segment a cell at a time: a point within ``reach`` of it lies within half a
     # cell along and ``reach`` <= half a cell across of the nearest step, so each of its
-    # coordinates within a cell of that step's: in the 3 x 3 cells around it.
+    # coordinates within a cell of that step's: in the 3 x 3 cells around it. Cells the
+    # previous step's 3 x 3 already looked at are skipped (most of them, steps a cell apart).
+    last_column = -10
+    last_row = -10
     for step in range(int((d - depth) / cell) + 2):
         along = min(step * cell, d - depth)
         column = math.floor((ox + along * ux - x0) / cell)
@@ -184,6 +187,8 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: Floa
             for dr in (-1, 0, 1):
                 if row + dr < 0 or row + dr >= rows or column + dc < 0:
                     continue  # outside the map's cells: no point there
+                if abs(column + dc - last_column) <= 1 and abs(row + dr - last_row) <= 1:
+                    continue
                 lo, hi = _cell_span(sorted_keys, (column + dc) * rows + row + dr)
                 for k in range(lo, hi):
                     j = order[k]
@@ -195,6 +200,8 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: Floa
                     if (0.0 < in_front < d - depth and abs(wx * uy - wy * ux) <= reach
                             and abs(tx[j] * uy - ty[j] * ux) >= sin_crossing):
                         return True
+        last_column = column
+        last_row = row
     return False
 
 

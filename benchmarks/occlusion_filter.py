@@ -1,0 +1,73 @@
+"""What the occlusion map filter costs (``MapFilter(occlusion_depth=0.5)``, ``process
+--occlusion-depth``), beside the method that made the map, in the same run.
+
+Run from the repository root (on a shared machine, with ``nice``)::
+
+    nice .venv/bin/python benchmarks/occlusion_filter.py
+
+Two maps: evidence carving's global map of the office tour (seed 0, specular physics, the Scout2
+ring), and centerline's map of ``synthetic.py``'s corridor stream (every reading a point, so the
+largest map a log of that length gives). For each, the CPU seconds of making the map
+(``process_readings``, no filter) and of the filter alone (origins looked up and the mask), best
+of ``--repeats``, after one warm-up call (compiled, cache warm); the filter's microseconds a
+point and its share of the method's time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Callable
+
+from sonarcarve import MethodConfig, ReadingBatch, make_method
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, map_origins
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.maps import GlobalMap
+from sonarcarve.pipeline import process_readings
+from synthetic import corridor_stream
+
+
+def _best(run: Callable[[], object], repeats: int) -> float:
+    """The least CPU seconds of ``repeats`` calls (after one not counted)."""
+    run()
+    best = math.inf
+    for _ in range(repeats):
+        start = time.process_time()
+        run()
+        best = min(best, time.process_time() - start)
+    return best
+
+
+def _row(name: str, method: str, batch: ReadingBatch, repeats: int) -> None:
+    def make() -> GlobalMap:
+        return process_readings(batch, make_method(method, MethodConfig())).global_map
+
+    points = make()
+    spec = MapFilter(occlusion_depth=OCCLUSION_DEPTH)
+    method_s = _best(make, repeats)
+    filter_s = _best(lambda: filter_map(points, spec, map_origins(points, batch)), repeats)
+    dropped = filter_map(points, spec, map_origins(points, batch)).report.occluded
+    print(f"| {name} | {method} | {len(batch):,} | {len(points):,} | {dropped:,} | "
+          f"{method_s:.3f} | {filter_s:.3f} | {1e6 * filter_s / max(len(points), 1):.2f} | "
+          f"{100 * filter_s / method_s:.1f} |")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--corridor", type=int, default=200_000,
+                        help="readings of the synthetic corridor stream")
+    args = parser.parse_args(argv)
+    office = run_simulation(Scenario("office", 0)).readings
+    corridor = corridor_stream(args.corridor, noise=0.01, spurious_share=0.05, seed=0).batch
+    print("| map | method | readings | points | dropped | method CPU s | filter CPU s | "
+          "filter µs a point | filter / method (%) |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    _row("office tour, seed 0", "evidence", office, args.repeats)
+    _row("synthetic corridor", "centerline", corridor, args.repeats)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
