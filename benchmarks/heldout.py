@@ -45,7 +45,7 @@ import numpy as np
 
 from latency_openings import Variant, parse_variant, variant_method
 from sonarcarve import make_method
-from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, map_origins
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, point_origins
 from sonarcarve.grids import CarvedGrid, RangeSensorLayer
 from sonarcarve.lab.grid_measures import grid_measures
 from sonarcarve.lab.metrics import segment_distance
@@ -119,7 +119,7 @@ def _point_rows(sim: Simulation, variants: Sequence[Variant] = (),
     if occlusion:
         for name in ("combined", "evidence"):
             hidden = MapFilter(occlusion_depth=OCCLUSION_DEPTH)
-            origins = map_origins(maps[name], sim.readings)
+            origins = point_origins(maps[name], sim.readings)
             maps[f"{name}, occluded points dropped"] = filter_map(maps[name], hidden,
                                                                   origins).points
     for name, gmap in maps.items():

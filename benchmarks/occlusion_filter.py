@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 
 from sonarcarve import MethodConfig, ReadingBatch, make_method
-from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, map_origins
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, point_origins
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import GlobalMap
 from sonarcarve.pipeline import process_readings
@@ -46,8 +46,8 @@ def _row(name: str, method: str, batch: ReadingBatch, repeats: int) -> None:
     points = make()
     spec = MapFilter(occlusion_depth=OCCLUSION_DEPTH)
     method_s = _best(make, repeats)
-    filter_s = _best(lambda: filter_map(points, spec, map_origins(points, batch)), repeats)
-    dropped = filter_map(points, spec, map_origins(points, batch)).report.occluded
+    filter_s = _best(lambda: filter_map(points, spec, point_origins(points, batch)), repeats)
+    dropped = filter_map(points, spec, point_origins(points, batch)).report.occluded
     print(f"| {name} | {method} | {len(batch):,} | {len(points):,} | {dropped:,} | "
           f"{method_s:.3f} | {filter_s:.3f} | {1e6 * filter_s / max(len(points), 1):.2f} | "
           f"{100 * filter_s / method_s:.1f} |")

@@ -15,11 +15,11 @@ from sonarcarve.filters import (
     ReadingFilterStream,
     filter_map,
     filter_readings,
-    map_origins,
     max_error_mask,
     occlusion_mask,
     origins_by_id,
     outlier_mask,
+    point_origins,
 )
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
 from sonarcarve.methods import CenterlineMethod
@@ -354,7 +354,12 @@ def test_occlusion_filter_drops_the_point_behind_a_wall() -> None:
     assert MapFilter(occlusion_depth=0.5).active
     # Deeper than the point lies behind the wall (1 m): nothing dropped.
     assert filter_map(pts, MapFilter(occlusion_depth=1.0), origins).report.occluded == 0
-    assert occlusion_mask(pts.xy, origins).tolist() == [True] * 21 + [False]
+    assert occlusion_mask(pts.xy, origins, pts.max_error).tolist() == [True] * 21 + [False]
+    # A wall whose points' error bounds exceed half the depth hides nothing: such points may
+    # stand anywhere within their bound.
+    vague = dataclasses.replace(pts, max_error=np.r_[np.full(21, 0.26), 0.01])
+    assert filter_map(vague, MapFilter(occlusion_depth=0.5), origins).report.occluded == 0
+    assert filter_map(vague, MapFilter(occlusion_depth=0.6), origins).report.occluded == 1
 
 
 def test_occlusion_runs_after_confidence_and_error_and_before_outliers() -> None:
@@ -382,29 +387,54 @@ def test_occlusion_filter_needs_origins_of_the_right_shape() -> None:
     pts, origins = _behind_a_wall()
     with pytest.raises(FilterError, match="needs each point's sensor origin"):
         filter_map(pts, MapFilter(occlusion_depth=0.5))
-    with pytest.raises(FilterError, match=r"of shape \(22, 2\)"):
+    with pytest.raises(FilterError, match=r"must have shape \(22, 2\)"):
         filter_map(pts, MapFilter(occlusion_depth=0.5), origins[:-1])
+    with pytest.raises(FilterError, match=r"must have shape \(22, 2\)"):  # filter off too
+        filter_map(pts, MapFilter(max_error=0.5), origins[:-1])
     bad = origins.copy()
     bad[3, 0] = math.nan
-    with pytest.raises(FilterError, match="must be finite"):
+    with pytest.raises(FilterError, match="needs finite points and origins"):
         filter_map(pts, MapFilter(occlusion_depth=0.5), bad)
+    with pytest.raises(FilterError, match="an error bound"):
+        occlusion_mask(pts.xy, origins, pts.max_error[:-1])
 
 
-def test_map_origins_looks_points_up_by_reading_id() -> None:
+def test_origins_follow_their_points_through_the_earlier_filters() -> None:
+    # A first point the error filter drops. The wall's last point is heard from across the
+    # wall (x = 3): if the origins were not dropped with the first point, the point behind the
+    # wall would take that origin, from which nothing hides it.
+    pts, origins = _behind_a_wall()
+    origins[20] = [3.0, 0.5]
+    both = GlobalMap.concatenate([_points(GlobalMap, [[5.0, 5.0]], [0.9]), pts])
+    both = dataclasses.replace(both, reading_id=np.arange(9, 32))
+    out = filter_map(both, MapFilter(max_error=0.5, occlusion_depth=0.5),
+                     np.vstack([[[5.0, 6.0]], origins]))
+    assert out.points.reading_id.tolist() == list(range(10, 31))
+    assert (out.report.max_error, out.report.occluded) == (1, 1)
+
+
+def test_point_origins_looks_points_up_by_reading_id() -> None:
     n = 6
     b = ReadingBatch.from_arrays(t=np.arange(n) * 0.1, sensor=np.zeros(n, int),
                                  x=np.arange(n) * 1.0, y=-np.arange(n) * 1.0,
                                  theta=np.zeros(n), range=np.ones(n))
     pts = dataclasses.replace(_points(GlobalMap, [[0, 0], [1, 1]], [0.1, 0.1]),
-                              reading_id=np.array([4, 1]))
-    np.testing.assert_array_equal(map_origins(pts, b), [[4.0, -4.0], [1.0, -1.0]])
+                              reading_id=np.array([4, 1]), t=np.array([0.4, 0.1]))
+    np.testing.assert_array_equal(point_origins(pts, b), [[4.0, -4.0], [1.0, -1.0]])
     # With ids of their own (a filtered log keeps input rows), not positions.
-    np.testing.assert_array_equal(map_origins(pts, b, reading_ids=[7, 4, 9, 1, 3, 0]),
+    renumbered = dataclasses.replace(pts, t=np.array([0.1, 0.3]))
+    np.testing.assert_array_equal(point_origins(renumbered, b, reading_ids=[7, 4, 9, 1, 3, 0]),
                                   [[1.0, -1.0], [3.0, -3.0]])
     with pytest.raises(FilterError, match="reading id 4 has no reading"):
         origins_by_id([4], [0, 1, 2], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
     with pytest.raises(FilterError, match="reading id 9 has no reading"):
         origins_by_id([9], [0, 1, 2], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
+    with pytest.raises(FilterError, match="must be unique"):
+        origins_by_id([1], [0, 1, 1], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
+    # Readings the map was not made from: a point's time is not its reading's.
+    moved = dataclasses.replace(pts, t=np.array([0.4, 0.5]))
+    with pytest.raises(FilterError, match=r"map point 1 \(reading id 1\) has another time"):
+        point_origins(moved, b)
 
 
 def _wall_and_echo_through_it() -> ReadingBatch:
@@ -428,7 +458,7 @@ def test_pipeline_keeps_origins_for_the_occlusion_filter() -> None:
     # The same as filtering the unfiltered map with the readings' origins, however the log is
     # cut into chunks, and with a reading filter that drops rows (ids stay input rows).
     whole = process_readings(b, CenterlineMethod(history_size=10)).global_map
-    expected = filter_map(whole, spec, map_origins(whole, b)).points
+    expected = filter_map(whole, spec, point_origins(whole, b)).points
     chunked = process_chunks([b[:7], b[7:30], b[30:]], CenterlineMethod(history_size=10),
                              map_filter=spec)
     np.testing.assert_array_equal(chunked.global_map.reading_id, expected.reading_id)

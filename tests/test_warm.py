@@ -276,7 +276,7 @@ def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
     import math
     from sonarcarve.warm import counting_compiles, warm_stream
     from sonarcarve import MethodConfig, make_method
-    from sonarcarve.filters import MapFilter, filter_map, map_origins
+    from sonarcarve.filters import MapFilter, filter_map, point_origins
     from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer
     batch = warm_stream(400)
     box = (-3.0, -3.0, 3.0, 3.0)
@@ -288,7 +288,7 @@ def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
                      OccupancyGrid.around(box, 0.05)):
             grid.add_many(batch)
             grid.probabilities()
-        filter_map(points, MapFilter(occlusion_depth=0.5), map_origins(points, batch))
+        filter_map(points, MapFilter(occlusion_depth=0.5), point_origins(points, batch))
     print('COMPILED', *names)
     """
     assert _compiled_names(_run(grids, tmp_path)) == []

@@ -24,10 +24,11 @@ Map filters drop points from a :class:`~sonarcarve.maps.LocalMap` or
 ``max_error`` bound, eq. 5.3, exceeds a threshold) and then the outlier test (a point needs at
 least ``k`` other points within radius ``R``). Thresholding runs first so that inaccurate points
 do not vouch for their neighbours. Between the two, beyond the paper, the **occlusion** filter
-drops points that lie ``occlusion_depth`` or more behind a surface of the map on the line from
-their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); it needs the
-sensor origin of every point, which a map does not hold, so :func:`filter_map` takes them
-(:func:`map_origins` looks them up in the readings).
+drops points that lie more than ``occlusion_depth`` behind a surface of the map on the line
+from their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); only points
+whose error bound is at most half that depth make up the surfaces. It needs the sensor origin of
+every point, which a map does not hold, so :func:`filter_map` takes them (:func:`point_origins`
+looks them up in the readings).
 """
 
 from __future__ import annotations
@@ -67,11 +68,11 @@ __all__ = [
     "confidence_mask",
     "filter_map",
     "filter_readings",
-    "map_origins",
     "max_error_mask",
     "occlusion_mask",
     "origins_by_id",
     "outlier_mask",
+    "point_origins",
 ]
 
 #: The paper's maximum range (Appendix B): 150 inches, in metres. Specific to the Scout2's
@@ -314,7 +315,7 @@ class MapFilter:
         Drop points whose ``confidence`` (probability of a real surface, section 6) is below
         this, in [0, 1]; points without one (NaN: the paper's methods) are kept.
     occlusion_depth : float or None
-        Drop points lying at least this far behind a surface of the map, metres, on the line
+        Drop points lying more than this far behind a surface of the map, metres, on the line
         from the sensor that heard them (:func:`occlusion_mask`; 0.5 m is
         :data:`OCCLUSION_DEPTH`). Needs the points' sensor origins (:func:`filter_map`).
 
@@ -425,13 +426,18 @@ SURFACE_NEIGHBOURS = 3
 OCCLUSION_CROSSING = math.radians(20.0)
 
 
-def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike,
+def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike, max_error: npt.ArrayLike,
                    depth: float = OCCLUSION_DEPTH) -> BoolArray:
     """True where a point is *not* hidden: no surface of the map (a line of at least
     :data:`SURFACE_NEIGHBOURS` other points within :data:`SURFACE_RADIUS`) crosses the line
     from its sensor origin, at :data:`OCCLUSION_CROSSING` or more and within
-    :data:`OCCLUSION_REACH` of it, ``depth`` metres or more in front of it
-    (:func:`~sonarcarve.geometry.occluded.occluded_points`).
+    :data:`OCCLUSION_REACH` of it, more than ``depth`` metres in front of it
+    (:func:`~sonarcarve.geometry.occluded.occluded_points`). Only points whose error bound is
+    at most ``depth / 2`` hide others or make up surfaces: displaced by its whole bound, such a
+    point still stands more than half the depth in front. (Without that, a dense map's
+    misplaced points, the middles of uncut beams in a corridor, made up surfaces in free space:
+    on 50,000 readings of ``benchmarks/synthetic.py``'s corridor loop combined carving lost 18 %
+    of its true echoes to them; docs/RESULTS.md, *Points behind a surface of the map*.)
 
     Parameters
     ----------
@@ -439,24 +445,45 @@ def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike,
         The map's points, metres.
     origin : array-like, shape (n, 2)
         The sensor origin each point was heard from, metres.
+    max_error : array-like, shape (n,)
+        Each point's error bound, metres (the map's ``max_error``; NaN: it hides nothing).
     depth : float
         Metres behind the surface.
+
+    Raises
+    ------
+    FilterError
+        Arrays of different lengths, or a point or origin that is not finite.
 
     Examples
     --------
     A wall 1 m ahead of the sensor at the origin hides a point 2 m away, not one 0.5 m away:
 
     >>> wall = [[1.0, 0.1 * k - 0.5] for k in range(11)]
-    >>> occlusion_mask(wall + [[2.0, 0.0], [0.5, 0.0]], np.zeros((13, 2)))[-2:].tolist()
+    >>> keep = occlusion_mask(wall + [[2.0, 0.0], [0.5, 0.0]], np.zeros((13, 2)),
+    ...                       np.full(13, 0.01))
+    >>> keep[-2:].tolist()
     [False, True]
     """
-    return np.asarray(~occluded_points(xy, origin, depth=depth, reach=OCCLUSION_REACH,
+    pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    src = np.asarray(origin, dtype=np.float64)
+    bound = np.asarray(max_error, dtype=np.float64)
+    if src.shape != pts.shape or bound.shape != (len(pts),):
+        msg = (f"the occlusion filter needs an origin (n, 2) and an error bound (n,) for each of "
+               f"the {len(pts)} points, got {src.shape} and {bound.shape}")
+        raise FilterError(msg)
+    if not (np.all(np.isfinite(pts)) and np.all(np.isfinite(src))):
+        msg = "the occlusion filter needs finite points and origins"
+        raise FilterError(msg)
+    with np.errstate(invalid="ignore"):
+        blocks = bound <= 0.5 * depth
+    return np.asarray(~occluded_points(pts, src, depth=depth, reach=OCCLUSION_REACH,
                                        radius=SURFACE_RADIUS, neighbours=SURFACE_NEIGHBOURS,
-                                       crossing=OCCLUSION_CROSSING))
+                                       crossing=OCCLUSION_CROSSING, blocks=blocks))
 
 
-def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
-                reading_ids: npt.ArrayLike | None = None) -> FloatArray:
+def point_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
+                  reading_ids: npt.ArrayLike | None = None) -> FloatArray:
     """The sensor origin ``(x, y)`` of each point's reading, shape (n, 2): for the occlusion
     filter, which needs them and a map does not hold them.
 
@@ -467,33 +494,54 @@ def map_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
     readings : ReadingBatch
         The readings the map was made from.
     reading_ids : array-like of int, optional
-        The id of each of ``readings`` (default: its row, as :func:`~sonarcarve.pipeline.
-        process_readings` numbers them).
+        The id of each of ``readings``, unique (default: its row, as
+        :func:`~sonarcarve.pipeline.process_readings` numbers them).
 
     Raises
     ------
     FilterError
-        A point whose reading id is not among the readings.
+        A point whose reading id is not among the readings, or whose time or sensor is not its
+        reading's: the map was not made from these readings.
     """
     ids = (np.arange(len(readings), dtype=np.int64) if reading_ids is None
            else np.asarray(reading_ids, dtype=np.int64))
-    return origins_by_id(points.reading_id, ids, readings.x, readings.y)
+    rows = _rows_of(points.reading_id, ids)
+    # Times loosely: a tool that rewrote a file may have rounded them.
+    same = ((np.abs(readings.t[rows] - points.t) <= 1e-6)
+            & (readings.sensor[rows] == points.sensor))
+    if not same.all():
+        bad = int(np.argmin(same))
+        msg = (f"map point {bad} (reading id {int(points.reading_id[bad])}) has another time or "
+               "sensor than its reading: pass the readings the map was made from")
+        raise FilterError(msg)
+    return np.column_stack([readings.x[rows], readings.y[rows]])
 
 
 def origins_by_id(point_ids: npt.ArrayLike, ids: npt.ArrayLike, x: npt.ArrayLike,
                   y: npt.ArrayLike) -> FloatArray:
-    """:func:`map_origins` from arrays: the ``(x[k], y[k])`` of the reading ``k`` whose id
-    ``ids[k]`` is each of ``point_ids``, shape (n, 2).
+    """:func:`point_origins` from arrays, without the time and sensor check: the ``(x[k],
+    y[k])`` of the reading ``k`` whose id ``ids[k]`` (unique) is each of ``point_ids``, shape
+    (n, 2).
 
     Raises
     ------
     FilterError
-        An id of ``point_ids`` not in ``ids``.
+        An id of ``point_ids`` not in ``ids``, or ``ids`` not unique.
     """
+    rows = _rows_of(point_ids, ids)
+    return np.column_stack([np.asarray(x, dtype=np.float64)[rows],
+                            np.asarray(y, dtype=np.float64)[rows]])
+
+
+def _rows_of(point_ids: npt.ArrayLike, ids: npt.ArrayLike) -> IntArray:
+    """The position in ``ids`` of each of ``point_ids`` (:func:`origins_by_id`'s errors)."""
     wanted = np.asarray(point_ids, dtype=np.int64)
     known = np.asarray(ids, dtype=np.int64)
     order = np.argsort(known, kind="stable")
     sorted_ids = known[order]
+    if np.any(sorted_ids[1:] == sorted_ids[:-1]):
+        msg = "reading ids must be unique to look up a point's reading"
+        raise FilterError(msg)
     at = np.searchsorted(sorted_ids, wanted)
     found = at < len(known)
     found[found] = sorted_ids[at[found]] == wanted[found]
@@ -501,9 +549,7 @@ def origins_by_id(point_ids: npt.ArrayLike, ids: npt.ArrayLike, x: npt.ArrayLike
         msg = (f"map point of reading id {int(wanted[~found][0])} has no reading among the "
                f"{len(known):,} given: pass the readings the map was made from")
         raise FilterError(msg)
-    rows = order[at]
-    return np.column_stack([np.asarray(x, dtype=np.float64)[rows],
-                            np.asarray(y, dtype=np.float64)[rows]])
+    return np.asarray(order[at])
 
 
 def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
@@ -530,7 +576,7 @@ def filter_map(points: _M, spec: MapFilter,
     spec : MapFilter
         Which filters, with which thresholds.
     origins : array-like, shape (n, 2), optional
-        The sensor origin of each point (:func:`map_origins`); needed by the occlusion filter.
+        The sensor origin of each point (:func:`point_origins`); needed by the occlusion filter.
 
     Returns
     -------
@@ -543,15 +589,14 @@ def filter_map(points: _M, spec: MapFilter,
         The occlusion filter without ``origins``, or ``origins`` of the wrong shape.
     """
     total = len(points)
-    if spec.occlusion_depth is not None:
-        if origins is None:
-            msg = ("the occlusion filter needs each point's sensor origin: pass "
-                   "origins=map_origins(points, readings)")
-            raise FilterError(msg)
-        origins = np.asarray(origins, dtype=np.float64)
-        if origins.shape != (total, 2) or not np.all(np.isfinite(origins)):
-            msg = (f"origins must be finite, of shape ({total}, 2) for {total} points, "
-                   f"got shape {origins.shape}")
+    if spec.occlusion_depth is not None and origins is None:
+        msg = ("the occlusion filter needs each point's sensor origin: pass "
+               "origins=point_origins(points, readings)")
+        raise FilterError(msg)
+    if origins is not None:
+        shape = np.shape(origins)
+        if shape != (total, 2):
+            msg = f"origins must have shape ({total}, 2) for {total} points, got {shape}"
             raise FilterError(msg)
     origin = None if origins is None else np.asarray(origins, dtype=np.float64)
     dropped = {"confidence": 0, "max_error": 0, "occluded": 0, "outliers": 0}
@@ -570,7 +615,8 @@ def filter_map(points: _M, spec: MapFilter,
         # After the confidence and error filters, so that only points the map keeps hide
         # others; before the outlier test, so that a hidden point vouches for no neighbour.
         assert origin is not None  # checked above
-        drop("occluded", occlusion_mask(points.xy, origin, spec.occlusion_depth))
+        drop("occluded", occlusion_mask(points.xy, origin, points.max_error,
+                                        spec.occlusion_depth))
     if spec.outlier_radius is not None:
         drop("outliers", outlier_mask(points.xy, spec.outlier_radius, spec.outlier_neighbours))
     return FilteredMap(points=points, report=MapFilterReport(total=total, **dropped))

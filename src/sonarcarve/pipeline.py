@@ -327,8 +327,9 @@ class _Schedule:
 
 
 class _Origins:
-    """The sensor origin of every reading fed, by id, for the occlusion filter (16 bytes a
-    reading, kept only when that filter is on: a map does not hold its points' origins)."""
+    """The sensor origin of every reading fed, by id, for the occlusion filter (24 bytes a
+    reading, id and origin, kept only when that filter is on: a map does not hold its points'
+    origins)."""
 
     def __init__(self) -> None:
         self._ids: list[IntArray] = []

@@ -65,8 +65,13 @@ def test_map_filters_drop_outliers_and_inaccurate_points(tmp_path: Path) -> None
 
 def test_occlusion_filter_drops_echoes_read_through_the_wall(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    # Rows 7 and 30 read 6 m straight through the wall the other rows hear at 1.5 m.
+    # Rows 7 and 30 read 6 m straight through the wall the other rows hear at 1.5 m. The wall's
+    # centerline points have an error bound of 0.29 m (eq. 5.3), and only points whose bound
+    # is at most half the depth make up a wall: 0.5 m would let no point block, 0.6 m does.
     code, out = _run(tmp_path, "--occlusion-depth", "0.5")
+    assert code == 0
+    assert len(read_map_csv(out)) == 60
+    code, out = _run(tmp_path, "--occlusion-depth", "0.6")
     assert code == 0
     assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in (7, 30)]
     assert "dropped: behind a surface" in capsys.readouterr().out

@@ -13,9 +13,9 @@ from sonarcarve.geometry.occluded import LINE_RATIO, occluded_points, surface_di
 DEPTH, REACH, RADIUS, NEIGHBOURS, CROSSING = 0.5, 0.05, 0.3, 3, math.radians(20.0)
 
 
-def _hidden(xy: np.ndarray, origin: np.ndarray) -> np.ndarray:
+def _hidden(xy: np.ndarray, origin: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
     return occluded_points(xy, origin, depth=DEPTH, reach=REACH, radius=RADIUS,
-                           neighbours=NEIGHBOURS, crossing=CROSSING)
+                           neighbours=NEIGHBOURS, crossing=CROSSING, blocks=blocks)
 
 
 def _wall(start: tuple[float, float], angle: float, length: float,
@@ -90,6 +90,34 @@ def test_points_hide_one_another_only_from_their_own_sensor() -> None:
     assert hidden[len(left):].sum() >= len(right) - 2  # the ends may fall short of a surface
 
 
+def test_only_points_that_may_block_hide_others() -> None:
+    wall = _wall((1.0, -0.5), math.pi / 2, 1.0)
+    xy = np.vstack([wall, [[2.0, 0.0]]])
+    origin = np.vstack([wall + np.array([10.0, 0.0]), [[0.0, 0.0]]])
+    assert _hidden(xy, origin, np.ones(len(xy), dtype=bool))[-1]
+    assert not _hidden(xy, origin, np.r_[np.zeros(len(wall), dtype=bool), True])[-1]
+    # Half the wall may block: still a surface across the line.
+    half = np.r_[np.arange(len(wall)) % 2 == 0, True]
+    assert _hidden(xy, origin, half)[-1]
+
+
+def test_mismatched_arrays_are_refused() -> None:
+    xy = np.zeros((3, 2))
+    with pytest.raises(ValueError, match="must match the 3 points"):
+        _hidden(xy, np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="must match the 3 points"):
+        _hidden(xy, np.zeros((3, 2)), np.ones(4, dtype=bool))
+
+
+def test_neighbours_exactly_a_radius_apart_count() -> None:
+    # Points 0.1 apart along x = 0 (the 0.3 m radius spans exactly three gaps): found by a
+    # review, floor rounding put the first and fourth two cells apart when cells were exactly
+    # one radius wide, and neither saw the other.
+    xy = np.array([[0, -0.44], [0, -0.33999999999999997], [0, -0.24], [0, -0.14], [5, -4.34]])
+    direction = surface_directions(xy, RADIUS, NEIGHBOURS)
+    np.testing.assert_array_equal(np.isnan(direction[:, 0]), [False] * 4 + [True])
+
+
 def test_empty_and_single_maps() -> None:
     assert _hidden(np.zeros((0, 2)), np.zeros((0, 2))).shape == (0,)
     assert not _hidden(np.array([[1.0, 1.0]]), np.zeros((1, 2))).any()
@@ -128,23 +156,25 @@ def _reference_directions(xy: np.ndarray, radius: float, neighbours: int) -> np.
     return out
 
 
-def _reference_hidden(xy: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    direction = _reference_directions(xy, RADIUS, NEIGHBOURS)
+def _reference_hidden(xy: np.ndarray, origin: np.ndarray, blocks: np.ndarray,
+                      depth: float, reach: float, radius: float) -> np.ndarray:
+    direction = np.full(xy.shape, np.nan)
+    direction[blocks] = _reference_directions(xy[blocks], radius, NEIGHBOURS)
     out = np.zeros(len(xy), dtype=bool)
     for i in range(len(xy)):
         v = xy[i] - origin[i]
         d = math.hypot(*v)
-        if d <= DEPTH:
+        if d <= depth:
             continue
         u = v / d
         w = xy - origin[i]
         in_front = w @ u
         across = np.abs(w[:, 0] * u[1] - w[:, 1] * u[0])
         crossing = np.abs(direction[:, 0] * u[1] - direction[:, 1] * u[0])
-        blocks = ((in_front > 0.0) & (in_front < d - DEPTH) & (across <= REACH)
-                  & (crossing >= math.sin(CROSSING)))
-        blocks[i] = False
-        out[i] = bool(blocks.any())
+        hides = ((in_front > 0.0) & (in_front < d - depth) & (across <= reach)
+                 & (crossing >= math.sin(CROSSING)))
+        hides[i] = False
+        out[i] = bool(hides.any())
     return out
 
 
@@ -168,7 +198,14 @@ def test_kernels_match_brute_force(seed: int) -> None:
     np.testing.assert_array_equal(np.isnan(got[:, 0]), np.isnan(want[:, 0]))
     line = ~np.isnan(want[:, 0])
     np.testing.assert_allclose(np.abs(np.sum(got[line] * want[line], axis=1)), 1.0, atol=1e-9)
-    hidden = _hidden(xy, origin)
-    np.testing.assert_array_equal(hidden, _reference_hidden(xy, origin))
+    # Other depths, reaches wider than half the radius (the walk's cells then follow the
+    # reach), and only some points blocking.
+    rng = np.random.default_rng(100 + seed)
+    blocks = rng.random(len(xy)) < (1.0 if seed % 3 == 0 else 0.7)
+    depth, reach, radius = ((DEPTH, REACH, RADIUS), (0.3, 0.3, 0.15), (0.8, 0.12, 0.4))[seed % 3]
+    hidden = occluded_points(xy, origin, depth=depth, reach=reach, radius=radius,
+                             neighbours=NEIGHBOURS, crossing=CROSSING, blocks=blocks)
+    np.testing.assert_array_equal(
+        hidden, _reference_hidden(xy, origin, blocks, depth, reach, radius))
     assert hidden.any()  # the comparison says something
     assert not hidden.all()

@@ -13,13 +13,15 @@ surface in the map when they were committed, 91 % in the finished map (``docs/RE
 other map filters do (:func:`sonarcarve.filters.filter_map`).
 
 Point ``i`` (at ``p_i``, heard from the sensor origin ``o_i``, ``d_i = |p_i - o_i|``,
-``u_i = (p_i - o_i) / d_i``) is *occluded* when another point ``j`` of the map
+``u_i = (p_i - o_i) / d_i``) is *occluded* when another point ``j`` of the map that may block
+(``blocks``: :mod:`sonarcarve.filters` lets only points whose error bound is at most half the
+depth block, so that one displaced by its whole bound still stands in front)
 
 * lies on the segment from ``o_i``: ``0 < (p_j - o_i) · u_i < d_i - depth`` and
-  ``|(p_j - o_i) × u_i| <= reach``, so at least ``depth`` in front of ``p_i``, and
-* lies on a *surface* (:func:`surface_directions`): at least ``neighbours`` other points
-  within ``radius`` of it, spread along a line (the larger eigenvalue of their scatter at
-  least :data:`LINE_RATIO` times the smaller), a line that
+  ``|(p_j - o_i) × u_i| <= reach``, so more than ``depth`` in front of ``p_i``, and
+* lies on a *surface* (:func:`surface_directions` over the points that may block): at least
+  ``neighbours`` other such points within ``radius`` of it, spread along a line (the larger
+  eigenvalue of their scatter at least :data:`LINE_RATIO` times the smaller), a line that
 * crosses the segment at ``crossing`` or more (``|t_j × u_i| >= sin(crossing)``).
 
 Why each part: one stray point (a crosstalk echo, a floor echo) is no surface; a surface the
@@ -30,9 +32,10 @@ a surface, an obstacle's, not a room's) keeps a point on the same surface, or ju
 thin one, from occluding itself. The defaults live in :mod:`sonarcarve.filters`.
 
 Exact on its numbers: the kernels visit every pair the tests can accept (points are bucketed in
-square cells of side ``radius``, at least 2 ``reach``, and the segment is walked a cell at a
-time, each step looking at the 3 x 3 cells around it), and ``tests/geometry/test_occluded.py``
-compares them with a brute-force reference over all pairs.
+square cells of side ``radius`` (a hair more for the surfaces), at least 2 ``reach``, and the
+segment is walked a cell at a time, each step looking at the 3 x 3 cells around it), and
+``tests/geometry/test_occluded.py`` compares them with a brute-force reference over all pairs.
+The work grows with how many surface points lie near each line: with the density of the map.
 """
 
 from __future__ import annotations
@@ -153,19 +156,24 @@ def surface_directions(xy: npt.ArrayLike, radius: float, neighbours: int,
     out = np.full((pts.shape[0], 2), np.nan)
     if pts.shape[0] == 0:
         return out
-    order, sorted_keys, keys, _, _, rows = _buckets(pts, radius)
+    # A hair wider than the radius: two points exactly ``radius`` apart must never land two
+    # cells apart by rounding, or the 3 x 3 look would miss the pair.
+    order, sorted_keys, keys, _, _, rows = _buckets(pts, radius * (1.0 + 1e-9))
     _directions(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]), order,
                 sorted_keys, keys, rows, radius, neighbours, line_ratio, out)
     return out
 
 
 @compiled
-def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: FloatArray,
-            ty: FloatArray, order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64],
-            x0: float, y0: float, rows: int, cell: float, depth: float, reach: float,
+def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: FloatArray,
+            by: FloatArray, tx: FloatArray, ty: FloatArray, index: npt.NDArray[np.int64],
+            order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64], x0: float,
+            y0: float, rows: int, cell: float, depth: float, reach: float,
             sin_crossing: float) -> bool:
-    """Whether a surface point blocks the segment from ``(ox, oy)`` to point ``i``, at least
-    ``depth`` in front of it (:func:`occluded_points`)."""
+    """Whether a surface point ``(bx, by)[j]`` (direction ``(tx, ty)[j]``, point ``index[j]``
+    of the map) lies on the segment from ``(ox, oy)`` to point ``i`` more than ``depth`` in
+    front of it, within ``reach`` of it, crossing it at the angle of sine ``sin_crossing`` or
+    more (:func:`occluded_points`)."""
     vx = x[i] - ox
     vy = y[i] - oy
     d = math.sqrt(vx * vx + vy * vy)
@@ -186,16 +194,16 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: Floa
         for dc in (-1, 0, 1):
             for dr in (-1, 0, 1):
                 if row + dr < 0 or row + dr >= rows or column + dc < 0:
-                    continue  # outside the map's cells: no point there
+                    continue  # outside the surface points' cells: none there
                 if abs(column + dc - last_column) <= 1 and abs(row + dr - last_row) <= 1:
                     continue
                 lo, hi = _cell_span(sorted_keys, (column + dc) * rows + row + dr)
                 for k in range(lo, hi):
                     j = order[k]
-                    if j == i or math.isnan(tx[j]):
+                    if index[j] == i:
                         continue
-                    wx = x[j] - ox
-                    wy = y[j] - oy
+                    wx = bx[j] - ox
+                    wy = by[j] - oy
                     in_front = wx * ux + wy * uy
                     if (0.0 < in_front < d - depth and abs(wx * uy - wy * ux) <= reach
                             and abs(tx[j] * uy - ty[j] * ux) >= sin_crossing):
@@ -206,26 +214,29 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, tx: Floa
 
 
 @compiled
-def _occluded(x: FloatArray, y: FloatArray, ox: FloatArray, oy: FloatArray, tx: FloatArray,
-              ty: FloatArray, order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64],
-              x0: float, y0: float, rows: int, cell: float, depth: float, reach: float,
+def _occluded(x: FloatArray, y: FloatArray, ox: FloatArray, oy: FloatArray, bx: FloatArray,
+              by: FloatArray, tx: FloatArray, ty: FloatArray, index: npt.NDArray[np.int64],
+              order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64], x0: float,
+              y0: float, rows: int, cell: float, depth: float, reach: float,
               sin_crossing: float, out: npt.NDArray[np.bool_]) -> None:
-    """:func:`occluded_points` on bucketed points (cells of side ``cell`` >= 2 ``reach``)."""
+    """:func:`occluded_points` with the surface points bucketed (cells of side ``cell`` >= 2
+    ``reach``)."""
     for i in range(x.shape[0]):
-        out[i] = _hidden(i, x, y, ox[i], oy[i], tx, ty, order, sorted_keys, x0, y0, rows, cell,
-                         depth, reach, sin_crossing)
+        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, index, order, sorted_keys, x0,
+                         y0, rows, cell, depth, reach, sin_crossing)
 
 
 def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, reach: float,
                     radius: float, neighbours: int, crossing: float,
+                    blocks: npt.ArrayLike | None = None,
                     line_ratio: float = LINE_RATIO) -> npt.NDArray[np.bool_]:
-    """True where a point lies at least ``depth`` behind a surface of the map, on the line
+    """True where a point lies more than ``depth`` behind a surface of the map, on the line
     from its sensor (module docstring).
 
     Parameters
     ----------
     xy : array-like, shape (n, 2)
-        The map's points, metres: each is tested, and each may occlude the others.
+        The map's points, metres, finite: each is tested.
     origin : array-like, shape (n, 2)
         The sensor origin each point was heard from, metres.
     depth : float
@@ -236,10 +247,17 @@ def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, r
         What makes a point part of a surface (:func:`surface_directions`).
     crossing : float
         The least angle between the surface and the line, radians, in (0, π/2].
+    blocks : array-like of bool, shape (n,), optional
+        The points that may hide others and make up surfaces (default: all of them).
 
     Returns
     -------
     ndarray of bool, shape (n,)
+
+    Raises
+    ------
+    ValueError
+        ``origin`` or ``blocks`` not of ``xy``'s length.
 
     Examples
     --------
@@ -254,14 +272,25 @@ def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, r
     """
     pts = np.ascontiguousarray(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
     src = np.ascontiguousarray(np.asarray(origin, dtype=np.float64).reshape(-1, 2))
+    blocking = (np.ones(len(pts), dtype=bool) if blocks is None
+                else np.asarray(blocks, dtype=bool).reshape(-1))
+    if src.shape != pts.shape or blocking.shape != (len(pts),):
+        msg = (f"origin {src.shape} and blocks {blocking.shape} must match the {len(pts)} "
+               "points")
+        raise ValueError(msg)
     out = np.zeros(pts.shape[0], dtype=bool)
-    if pts.shape[0] == 0:
+    index = np.flatnonzero(blocking)
+    direction = surface_directions(pts[index], radius, neighbours, line_ratio)
+    on_surface = ~np.isnan(direction[:, 0])
+    index, direction = index[on_surface], direction[on_surface]
+    if not len(index):
         return out
-    direction = surface_directions(pts, radius, neighbours, line_ratio)
     cell = max(radius, 2.0 * reach)
-    order, sorted_keys, _, x0, y0, rows = _buckets(pts, cell)
+    order, sorted_keys, _, x0, y0, rows = _buckets(pts[index], cell)
     _occluded(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]),
               np.ascontiguousarray(src[:, 0]), np.ascontiguousarray(src[:, 1]),
+              np.ascontiguousarray(pts[index, 0]), np.ascontiguousarray(pts[index, 1]),
               np.ascontiguousarray(direction[:, 0]), np.ascontiguousarray(direction[:, 1]),
-              order, sorted_keys, x0, y0, rows, cell, depth, reach, math.sin(crossing), out)
+              index, order, sorted_keys, x0, y0, rows, cell, depth, reach, math.sin(crossing),
+              out)
     return out
