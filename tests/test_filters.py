@@ -397,6 +397,12 @@ def test_occlusion_filter_needs_origins_of_the_right_shape() -> None:
         filter_map(pts, MapFilter(occlusion_depth=0.5), bad)
     with pytest.raises(FilterError, match="an error bound"):
         occlusion_mask(pts.xy, origins, pts.max_error[:-1])
+    with pytest.raises(FilterError, match=r"must have shape \(22, 2\) for 22 points: "):
+        filter_map(pts, MapFilter(occlusion_depth=0.5), [[0.0, 0.0], [1.0]])  # ragged
+    with pytest.raises(FilterError, match="depth must be a finite number > 0"):
+        occlusion_mask(pts.xy, origins, pts.max_error, depth=-0.5)
+    empty = filter_map(pts.select(np.zeros(22, dtype=bool)), MapFilter(occlusion_depth=0.5), [])
+    assert (empty.report.total, empty.report.kept) == (0, 0)
 
 
 def test_origins_follow_their_points_through_the_earlier_filters() -> None:
@@ -431,10 +437,13 @@ def test_point_origins_looks_points_up_by_reading_id() -> None:
         origins_by_id([9], [0, 1, 2], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
     with pytest.raises(FilterError, match="must be unique"):
         origins_by_id([1], [0, 1, 1], [0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
-    # Readings the map was not made from: a point's time is not its reading's.
+    # Readings the map was not made from: a point's time, or its sensor, is not its reading's.
     moved = dataclasses.replace(pts, t=np.array([0.4, 0.5]))
     with pytest.raises(FilterError, match=r"map point 1 \(reading id 1\) has another time"):
         point_origins(moved, b)
+    other_sensor = dataclasses.replace(pts, sensor=np.array([0, 3]))
+    with pytest.raises(FilterError, match=r"map point 1 \(reading id 1\) has another time"):
+        point_origins(other_sensor, b)
 
 
 def _wall_and_echo_through_it() -> ReadingBatch:

@@ -317,7 +317,10 @@ class MapFilter:
     occlusion_depth : float or None
         Drop points lying more than this far behind a surface of the map, metres, on the line
         from the sensor that heard them (:func:`occlusion_mask`; 0.5 m is
-        :data:`OCCLUSION_DEPTH`). Needs the points' sensor origins (:func:`filter_map`).
+        :data:`OCCLUSION_DEPTH`). Only points whose error bound is at most half of it make up
+        surfaces, so a small depth blocks little. Needs the points' sensor origins
+        (:func:`filter_map`). Not for centerline maps (docs/RESULTS.md, *Points behind a
+        surface of the map*).
 
     Raises
     ------
@@ -465,8 +468,11 @@ def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike, max_error: npt.Arra
     >>> keep[-2:].tolist()
     [False, True]
     """
+    _check_positive("depth", depth)
     pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     src = np.asarray(origin, dtype=np.float64)
+    if src.size == 0:
+        src = src.reshape(0, 2)  # an empty list for an empty map
     bound = np.asarray(max_error, dtype=np.float64)
     if src.shape != pts.shape or bound.shape != (len(pts),):
         msg = (f"the occlusion filter needs an origin (n, 2) and an error bound (n,) for each of "
@@ -475,8 +481,7 @@ def occlusion_mask(xy: npt.ArrayLike, origin: npt.ArrayLike, max_error: npt.Arra
     if not (np.all(np.isfinite(pts)) and np.all(np.isfinite(src))):
         msg = "the occlusion filter needs finite points and origins"
         raise FilterError(msg)
-    with np.errstate(invalid="ignore"):
-        blocks = bound <= 0.5 * depth
+    blocks = bound <= 0.5 * depth  # NaN: False
     return np.asarray(~occluded_points(pts, src, depth=depth, reach=OCCLUSION_REACH,
                                        radius=SURFACE_RADIUS, neighbours=SURFACE_NEIGHBOURS,
                                        crossing=OCCLUSION_CROSSING, blocks=blocks))
@@ -552,6 +557,21 @@ def _rows_of(point_ids: npt.ArrayLike, ids: npt.ArrayLike) -> IntArray:
     return np.asarray(order[at])
 
 
+def _origins_array(origins: npt.ArrayLike, total: int) -> FloatArray:
+    """``origins`` as a (total, 2) float array, or a :class:`FilterError` naming the shape."""
+    try:
+        array = np.asarray(origins, dtype=np.float64)
+    except ValueError as exc:  # ragged
+        msg = f"origins must have shape ({total}, 2) for {total} points: {exc}"
+        raise FilterError(msg) from None
+    if total == 0 and array.size == 0:
+        return array.reshape(0, 2)
+    if array.shape != (total, 2):
+        msg = f"origins must have shape ({total}, 2) for {total} points, got {array.shape}"
+        raise FilterError(msg)
+    return array
+
+
 def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
     """True where a point's confidence is at least ``threshold`` or unknown (NaN).
 
@@ -593,12 +613,7 @@ def filter_map(points: _M, spec: MapFilter,
         msg = ("the occlusion filter needs each point's sensor origin: pass "
                "origins=point_origins(points, readings)")
         raise FilterError(msg)
-    if origins is not None:
-        shape = np.shape(origins)
-        if shape != (total, 2):
-            msg = f"origins must have shape ({total}, 2) for {total} points, got {shape}"
-            raise FilterError(msg)
-    origin = None if origins is None else np.asarray(origins, dtype=np.float64)
+    origin = None if origins is None else _origins_array(origins, total)
     dropped = {"confidence": 0, "max_error": 0, "occluded": 0, "outliers": 0}
 
     def drop(name: str, keep: BoolArray) -> None:

@@ -218,8 +218,10 @@ _OcclusionOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help="Map filter: drop points lying more than this far behind a surface of the finished "
          "map, on the line from the sensor that heard them (multipath echoes: the sound "
-         "glanced off a wall and read too long). 0.5 is a good start; docs/RESULTS.md, "
-         "\"Points behind a surface of the map\".", rich_help_panel="Filters")]
+         "glanced off a wall and read too long). Only points whose error bound is at most half "
+         "of it make up surfaces. 0.5 is a good start with carve, combined or evidence; not "
+         "for centerline maps. docs/RESULTS.md, \"Points behind a surface of the map\".",
+    rich_help_panel="Filters")]
 
 
 @app.command()
