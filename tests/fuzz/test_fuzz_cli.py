@@ -89,8 +89,11 @@ def _families() -> dict[str, Callable[[random.Random, Callable[..., bytes]], Cas
 
     def readings(rng: random.Random, mutate: Callable[..., bytes]) -> Case:
         method = rng.choice(["centerline", "carve", "atm", "combined"])
+        # Half the cases through the occlusion map filter: the whole map held, origins kept.
+        occlusion = rng.choice([[], ["--occlusion-depth", "0.5"]])
         return ({"r.csv": mutate(csv, rng)},
-                ["process", "r.csv", "--method", method, "--out", "out.csv"], "out.csv")
+                ["process", "r.csv", "--method", method, *occlusion, "--out", "out.csv"],
+                "out.csv")
 
     def world_json(rng: random.Random, mutate: Callable[..., bytes]) -> Case:
         return ({"w.json": mutate(world, rng), "p.csv": WAYPOINTS},
