@@ -213,7 +213,6 @@ _MaxErrorOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help="Map filter: drop points whose error bound max_error exceeds this, metres "
          "(paper, Fig. 13b).", rich_help_panel="Filters")]
-
 _OcclusionOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help="Map filter: drop points lying more than this far behind a surface of the finished "
