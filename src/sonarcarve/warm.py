@@ -46,13 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from sonarcarve.compiles import watching_compiles
-from sonarcarve.filters import (
-    OCCLUSION_DEPTH,
-    MapFilter,
-    filter_map,
-    occlusion_mask,
-    point_origins,
-)
+from sonarcarve.filters import occlusion_mask, point_origins
 from sonarcarve.grids import CarvedGrid, OccupancyGrid, RangeSensorLayer, trinary
 from sonarcarve.io import read_readings_csv, write_map_csv, write_readings_csv
 from sonarcarve.io.map_csv import map_csv_sink
@@ -185,11 +179,9 @@ def _run_csv() -> None:
         method.add_many(batch)
         points = method.finish()
         write_map_csv(points, Path(folder) / "map.csv")
-        origins = point_origins(points, batch)
-        filter_map(points, MapFilter(occlusion_depth=OCCLUSION_DEPTH), origins)
-        # Centerline's bounds here exceed half the depth, so no point blocks above: with zero
-        # bounds every point may, and every kernel of the filter runs.
-        occlusion_mask(points.xy, origins, np.zeros(len(points)))
+        # Zero error bounds: every point may block (centerline's own here exceed half the
+        # depth), so every kernel of the filter runs.
+        occlusion_mask(points.xy, point_origins(points, batch), np.zeros(len(points)))
 
 
 def warm_lanes() -> list[Lane]:

@@ -166,14 +166,14 @@ def surface_directions(xy: npt.ArrayLike, radius: float, neighbours: int,
 
 @compiled
 def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: FloatArray,
-            by: FloatArray, tx: FloatArray, ty: FloatArray, index: npt.NDArray[np.int64],
-            order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64], x0: float,
-            y0: float, rows: int, cell: float, depth: float, reach: float,
-            sin_crossing: float) -> bool:
-    """Whether a surface point ``(bx, by)[j]`` (direction ``(tx, ty)[j]``, point ``index[j]``
-    of the map) lies on the segment from ``(ox, oy)`` to point ``i`` more than ``depth`` in
-    front of it, within ``reach`` of it, crossing it at the angle of sine ``sin_crossing`` or
-    more (:func:`occluded_points`)."""
+            by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
+            sorted_keys: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
+            depth: float, reach: float, sin_crossing: float) -> bool:
+    """Whether a surface point ``(bx, by)[j]`` (direction ``(tx, ty)[j]``) lies on the segment
+    from ``(ox, oy)`` to point ``i`` more than ``depth`` in front of it, within ``reach`` of
+    it, crossing it at the angle of sine ``sin_crossing`` or more (:func:`occluded_points`).
+    Point ``i`` itself, or any point where it is, lies ``d`` in front, never less than ``d -
+    depth``: no self test is needed."""
     vx = x[i] - ox
     vy = y[i] - oy
     d = math.sqrt(vx * vx + vy * vy)
@@ -200,8 +200,6 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
                 lo, hi = _cell_span(sorted_keys, (column + dc) * rows + row + dr)
                 for k in range(lo, hi):
                     j = order[k]
-                    if index[j] == i:
-                        continue
                     wx = bx[j] - ox
                     wy = by[j] - oy
                     in_front = wx * ux + wy * uy
@@ -215,15 +213,15 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
 
 @compiled
 def _occluded(x: FloatArray, y: FloatArray, ox: FloatArray, oy: FloatArray, bx: FloatArray,
-              by: FloatArray, tx: FloatArray, ty: FloatArray, index: npt.NDArray[np.int64],
-              order: npt.NDArray[np.int64], sorted_keys: npt.NDArray[np.int64], x0: float,
-              y0: float, rows: int, cell: float, depth: float, reach: float,
-              sin_crossing: float, out: npt.NDArray[np.bool_]) -> None:
+              by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
+              sorted_keys: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
+              depth: float, reach: float, sin_crossing: float,
+              out: npt.NDArray[np.bool_]) -> None:
     """:func:`occluded_points` with the surface points bucketed (cells of side ``cell`` >= 2
     ``reach``)."""
     for i in range(x.shape[0]):
-        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, index, order, sorted_keys, x0,
-                         y0, rows, cell, depth, reach, sin_crossing)
+        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, order, sorted_keys, x0, y0,
+                         rows, cell, depth, reach, sin_crossing)
 
 
 def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, reach: float,
@@ -291,6 +289,5 @@ def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, r
               np.ascontiguousarray(src[:, 0]), np.ascontiguousarray(src[:, 1]),
               np.ascontiguousarray(pts[index, 0]), np.ascontiguousarray(pts[index, 1]),
               np.ascontiguousarray(direction[:, 0]), np.ascontiguousarray(direction[:, 1]),
-              index, order, sorted_keys, x0, y0, rows, cell, depth, reach, math.sin(crossing),
-              out)
+              order, sorted_keys, x0, y0, rows, cell, depth, reach, math.sin(crossing), out)
     return out
