@@ -75,6 +75,24 @@ def test_reach_the_line_must_pass_within() -> None:
     assert not _hidden_target(far, (2.0, 0.0))
 
 
+def test_a_wall_ending_just_within_reach_is_found_wherever_the_walk_steps() -> None:
+    # The walk looks only at the cells around each step: a surface point at the edge of the
+    # reach, between two steps, on lines at every angle and offset, must still be seen (cells
+    # one reach wide, half what the walk needs, miss some of these).
+    missed = []
+    for degrees in range(0, 360, 7):
+        u = np.array([math.cos(math.radians(degrees)), math.sin(math.radians(degrees))])
+        n = np.array([-u[1], u[0]])
+        for along in np.linspace(0.8, 1.2, 23):
+            end = along * u + 0.999 * REACH * n  # the wall's end, just within reach
+            wall = end + np.outer(np.arange(8) * 0.05, n)  # running away from the line
+            xy = np.vstack([wall, [2.0 * u]])
+            origin = np.vstack([wall + 10.0 * n, [[0.0, 0.0]]])
+            if not _hidden(xy, origin)[-1]:
+                missed.append((degrees, round(float(along), 3)))
+    assert not missed
+
+
 def test_points_hide_one_another_only_from_their_own_sensor() -> None:
     # Two walls of a corridor, each heard from the middle: none is behind the other.
     left = _wall((0.0, 1.0), 0.0, 4.0)
@@ -116,6 +134,20 @@ def test_neighbours_exactly_a_radius_apart_count() -> None:
     xy = np.array([[0, -0.44], [0, -0.33999999999999997], [0, -0.24], [0, -0.14], [5, -4.34]])
     direction = surface_directions(xy, RADIUS, NEIGHBOURS)
     np.testing.assert_array_equal(np.isnan(direction[:, 0]), [False] * 4 + [True])
+
+
+def test_a_map_spread_over_kilometres_gets_coarser_cells_and_the_same_answer() -> None:
+    # Two rooms 40 km apart: cells of 0.1 m over that extent would be 10^11 of them; the
+    # table stays within MAX_CELLS and the masks are still the brute-force ones.
+    xy, origin = _random_map(4)
+    far = np.vstack([xy, xy + 40_000.0])
+    far_origin = np.vstack([origin, origin + 40_000.0])
+    blocks = np.ones(len(far), dtype=bool)
+    got = _hidden(far, far_origin)
+    np.testing.assert_array_equal(
+        got, _reference_hidden(far, far_origin, blocks, DEPTH, REACH, RADIUS))
+    np.testing.assert_array_equal(got[: len(xy)], got[len(xy):])
+    assert got.any()
 
 
 def test_empty_and_single_maps() -> None:

@@ -31,9 +31,10 @@ crossed, hence 20°; ``depth`` (0.5 m, the depth the carved grid's ``see_through
 a surface, an obstacle's, not a room's) keeps a point on the same surface, or just behind a
 thin one, from occluding itself. The defaults live in :mod:`sonarcarve.filters`.
 
-Exact on its numbers: the kernels visit every pair the tests can accept (points are bucketed in
-square cells of side ``radius`` (a hair more for the surfaces), at least 2 ``reach``, and the
-segment is walked a cell at a time, each step looking at the 3 x 3 cells around it), and
+Exact on its numbers: the kernels visit every pair the tests can accept (for the surfaces,
+points are bucketed in square cells a hair wider than a third of ``radius`` and each looks at the
+7 x 7 cells around its own; for the walk, in cells of 2 ``reach``, and the segment is walked a
+cell at a time, each step looking at the 3 x 3 cells around it), and
 ``tests/geometry/test_occluded.py`` compares them with a brute-force reference over all pairs.
 The work grows with how many surface points lie near each line: with the density of the map.
 """
@@ -41,6 +42,7 @@ The work grows with how many surface points lie near each line: with the density
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -55,71 +57,130 @@ __all__ = ["LINE_RATIO", "occluded_points", "surface_directions"]
 LINE_RATIO = 4.0
 
 
-def _buckets(xy: FloatArray, cell: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64],
-                                                   npt.NDArray[np.int64], float, float, int]:
-    """Points sorted by square cell of side ``cell``: the order, the sorted cell keys, each
-    point's cell column and row (from the map's lower left corner) packed as keys, and that
-    corner and the number of rows (keys are ``column * rows + row``)."""
-    x0 = float(xy[:, 0].min()) - cell
-    y0 = float(xy[:, 1].min()) - cell
+#: At most this many cells in a bucket table (32 MiB of starts): a map wider than that at the
+#: asked cell size gets coarser cells, which changes the work, not the answer (every look
+#: covers at least the floor it must).
+MAX_CELLS = 1 << 22
+
+
+class _Buckets(NamedTuple):
+    """Points sorted by square cell: cell ``key = column * rows + row`` (from the corner
+    ``x0, y0``) holds the points ``order[starts[key]:starts[key + 1]]``."""
+
+    order: npt.NDArray[np.int64]
+    starts: npt.NDArray[np.int64]
+    x0: float
+    y0: float
+    rows: int
+    cell: float
+
+
+def _buckets(xy: FloatArray, cell: float, spare: int = 1) -> _Buckets:
+    """Bucket ``xy`` in cells of side ``cell`` (or coarser, :data:`MAX_CELLS`). ``spare`` empty
+    rows top each column, so a look up to ``spare`` rows above or below a point's cell never
+    reaches another column's points (below, it wraps to the previous column's spare rows)."""
+    low = xy.min(axis=0)
+    width, height = xy.max(axis=0) - low
+    cell = max(cell, math.sqrt((width + 3.0 * cell) * (height + (3.0 + spare) * cell)
+                               / MAX_CELLS))
+    x0 = float(low[0]) - cell
+    y0 = float(low[1]) - cell
     column = np.floor((xy[:, 0] - x0) / cell).astype(np.int64)
     row = np.floor((xy[:, 1] - y0) / cell).astype(np.int64)
-    rows = int(row.max()) + 2  # one spare row above: the 3 x 3 look never wraps to a column
+    rows = int(row.max()) + 1 + spare
     keys = column * rows + row
-    order = np.argsort(keys, kind="stable")
-    return order, keys[order], keys, x0, y0, rows
+    counts = np.bincount(keys, minlength=(int(column.max()) + 1) * rows)
+    starts = np.concatenate(([0], np.cumsum(counts)))
+    return _Buckets(np.argsort(keys, kind="stable"), starts, x0, y0, rows, cell)
 
 
 @compiled
-def _cell_span(sorted_keys: npt.NDArray[np.int64], key: int) -> tuple[int, int]:
-    """The positions ``lo .. hi - 1`` of the points of cell ``key`` in the sorted order."""
-    return (int(np.searchsorted(sorted_keys, key, side="left")),
-            int(np.searchsorted(sorted_keys, key, side="right")))
+def _span(starts: npt.NDArray[np.int64], first: int, last: int) -> tuple[int, int]:
+    """The positions in the sorted order of the points of cells ``first`` to ``last``
+    (inclusive; keys outside the table hold none)."""
+    cells = starts.shape[0] - 1
+    return (starts[min(max(first, 0), cells)], starts[min(max(last + 1, 0), cells)])
+
+
+#: Surface neighbourhoods are bucketed in cells of a third of the radius and looked up 7 x 7
+#: cells at a time: 5.4 radius² of floor searched for a disc of 3.1, where cells of one radius
+#: searched 9 (the work of a dense map's surfaces is nearly all in that search).
+_SURFACE_SPLIT = 3
+
+
+@compiled
+def _gather(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
+            starts: npt.NDArray[np.int64], key: int, rows: int, span: int, gx: FloatArray,
+            gy: FloatArray) -> int:
+    """Copy the points of the (2 ``span`` + 1)² cells around cell ``key`` into ``gx``, ``gy``
+    (contiguous, so every point of the cell then sums over one short array); their count."""
+    m = 0
+    for dc in range(-span, span + 1):
+        # One column's cells are consecutive keys.
+        lo, hi = _span(starts, key + dc * rows - span, key + dc * rows + span)
+        for k in range(lo, hi):
+            j = order[k]
+            gx[m] = x[j]
+            gy[m] = y[j]
+            m += 1
+    return m
 
 
 @compiled
 def _directions(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
-                sorted_keys: npt.NDArray[np.int64], keys: npt.NDArray[np.int64], rows: int,
-                radius: float, neighbours: int, line_ratio: float, out: FloatArray) -> None:
-    """:func:`surface_directions` on bucketed points (cells of side ``radius``)."""
+                starts: npt.NDArray[np.int64], rows: int, radius: float, neighbours: int,
+                line_ratio: float, out: FloatArray) -> None:
+    """:func:`surface_directions` on bucketed points (cells at least a hair wider than
+    ``radius`` / :data:`_SURFACE_SPLIT`), a cell's neighbourhood gathered once for its points."""
     radius2 = radius * radius
-    for i in range(x.shape[0]):
-        n = 0
-        sx = 0.0
-        sy = 0.0
-        sxx = 0.0
-        syy = 0.0
-        sxy = 0.0
-        for dc in (-rows, 0, rows):
-            for dr in (-1, 0, 1):
-                lo, hi = _cell_span(sorted_keys, keys[i] + dc + dr)
-                for k in range(lo, hi):
-                    j = order[k]
-                    dx = x[j] - x[i]  # about point i: small numbers, no cancellation
-                    dy = y[j] - y[i]
-                    if dx * dx + dy * dy <= radius2:
-                        n += 1
-                        sx += dx
-                        sy += dy
-                        sxx += dx * dx
-                        syy += dy * dy
-                        sxy += dx * dy
-        out[i, 0] = math.nan
-        out[i, 1] = math.nan
-        if n - 1 < neighbours:  # n counts point i itself
+    gx = np.empty(x.shape[0])
+    gy = np.empty(x.shape[0])
+    for key in range(starts.shape[0] - 1):
+        if starts[key] == starts[key + 1]:
             continue
-        a = sxx - sx * sx / n
-        c = syy - sy * sy / n
-        b = sxy - sx * sy / n
-        half = 0.5 * (a - c)
-        root = math.sqrt(half * half + b * b)
-        larger = 0.5 * (a + c) + root
-        smaller = 0.5 * (a + c) - root
-        if larger <= 0.0 or larger < line_ratio * smaller:
-            continue
-        angle = 0.5 * math.atan2(2.0 * b, a - c)  # the larger eigenvector's direction
-        out[i, 0] = math.cos(angle)
-        out[i, 1] = math.sin(angle)
+        m = _gather(x, y, order, starts, key, rows, _SURFACE_SPLIT, gx, gy)
+        for k in range(starts[key], starts[key + 1]):
+            i = order[k]
+            n = 0
+            sx = 0.0
+            sy = 0.0
+            sxx = 0.0
+            syy = 0.0
+            sxy = 0.0
+            for g in range(m):
+                dx = gx[g] - x[i]  # about point i: small numbers, no cancellation
+                dy = gy[g] - y[i]
+                if dx * dx + dy * dy <= radius2:
+                    n += 1
+                    sx += dx
+                    sy += dy
+                    sxx += dx * dx
+                    syy += dy * dy
+                    sxy += dx * dy
+            _direction(n, sx, sy, sxx, syy, sxy, neighbours, line_ratio, out[i])
+
+
+@compiled
+def _direction(n: int, sx: float, sy: float, sxx: float, syy: float, sxy: float,
+               neighbours: int, line_ratio: float, out: FloatArray) -> None:
+    """The principal axis of ``n`` points (``n`` counting the point itself) from their sums
+    about it, into ``out``; NaN when too few or not along a line."""
+    out[0] = math.nan
+    out[1] = math.nan
+    if n - 1 < neighbours:
+        return
+    a = sxx - sx * sx / n
+    c = syy - sy * sy / n
+    b = sxy - sx * sy / n
+    half = 0.5 * (a - c)
+    root = math.sqrt(half * half + b * b)
+    larger = 0.5 * (a + c) + root
+    smaller = 0.5 * (a + c) - root
+    if larger <= 0.0 or larger < line_ratio * smaller:
+        return
+    angle = 0.5 * math.atan2(2.0 * b, a - c)  # the larger eigenvector's direction
+    out[0] = math.cos(angle)
+    out[1] = math.sin(angle)
 
 
 def surface_directions(xy: npt.ArrayLike, radius: float, neighbours: int,
@@ -156,18 +217,18 @@ def surface_directions(xy: npt.ArrayLike, radius: float, neighbours: int,
     out = np.full((pts.shape[0], 2), np.nan)
     if pts.shape[0] == 0:
         return out
-    # A hair wider than the radius: two points exactly ``radius`` apart must never land two
-    # cells apart by rounding, or the 3 x 3 look would miss the pair.
-    order, sorted_keys, keys, _, _, rows = _buckets(pts, radius * (1.0 + 1e-9))
-    _directions(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]), order,
-                sorted_keys, keys, rows, radius, neighbours, line_ratio, out)
+    # A hair wider than a third of the radius: two points exactly ``radius`` apart must never
+    # land four cells apart by rounding, or the 7 x 7 look would miss the pair.
+    cells = _buckets(pts, radius / _SURFACE_SPLIT * (1.0 + 1e-9), spare=_SURFACE_SPLIT)
+    _directions(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]), cells.order,
+                cells.starts, cells.rows, radius, neighbours, line_ratio, out)
     return out
 
 
 @compiled
 def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: FloatArray,
             by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
-            sorted_keys: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
+            starts: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
             depth: float, reach: float, sin_crossing: float) -> bool:
     """Whether a surface point ``(bx, by)[j]`` (direction ``(tx, ty)[j]``) lies on the segment
     from ``(ox, oy)`` to point ``i`` more than ``depth`` in front of it, within ``reach`` of
@@ -197,7 +258,8 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
                     continue  # outside the surface points' cells: none there
                 if abs(column + dc - last_column) <= 1 and abs(row + dr - last_row) <= 1:
                     continue
-                lo, hi = _cell_span(sorted_keys, (column + dc) * rows + row + dr)
+                key = (column + dc) * rows + row + dr
+                lo, hi = _span(starts, key, key)
                 for k in range(lo, hi):
                     j = order[k]
                     wx = bx[j] - ox
@@ -214,13 +276,13 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
 @compiled
 def _occluded(x: FloatArray, y: FloatArray, ox: FloatArray, oy: FloatArray, bx: FloatArray,
               by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
-              sorted_keys: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
+              starts: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
               depth: float, reach: float, sin_crossing: float,
               out: npt.NDArray[np.bool_]) -> None:
     """:func:`occluded_points` with the surface points bucketed (cells of side ``cell`` >= 2
     ``reach``)."""
     for i in range(x.shape[0]):
-        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, order, sorted_keys, x0, y0,
+        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, order, starts, x0, y0,
                          rows, cell, depth, reach, sin_crossing)
 
 
@@ -283,11 +345,13 @@ def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, r
     index, direction = index[on_surface], direction[on_surface]
     if not len(index):
         return out
-    cell = max(radius, 2.0 * reach)
-    order, sorted_keys, _, x0, y0, rows = _buckets(pts[index], cell)
+    # The walk's cells follow the reach, not the radius: the band it searches is 3 cells
+    # wide, so the narrower the cells the fewer surface points a line passes by.
+    cells = _buckets(pts[index], 2.0 * reach)
     _occluded(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]),
               np.ascontiguousarray(src[:, 0]), np.ascontiguousarray(src[:, 1]),
               np.ascontiguousarray(pts[index, 0]), np.ascontiguousarray(pts[index, 1]),
               np.ascontiguousarray(direction[:, 0]), np.ascontiguousarray(direction[:, 1]),
-              order, sorted_keys, x0, y0, rows, cell, depth, reach, math.sin(crossing), out)
+              cells.order, cells.starts, cells.x0, cells.y0, cells.rows, cells.cell, depth, reach,
+              math.sin(crossing), out)
     return out
