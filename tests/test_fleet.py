@@ -71,7 +71,7 @@ def test_each_log_gets_a_map_and_a_summary_line(logs: list[Path], serial: Path) 
         cells = list(csv.DictReader(handle))[1]
     assert {name: value for name, value in cells.items() if name not in ("log", "error")} == {
         "map": "", "readings": "", "points": "", "fully_carved": "", "split": "",
-        "unprocessed": "", "seconds": ""}
+        "unprocessed": "", "seconds": "", "readings_filtered": "", "points_filtered": ""}
     assert int(summary[0]["points"]) > 0
     assert all(row["error"] == "" for i, row in enumerate(summary) if i != 1)
 
@@ -146,6 +146,32 @@ def test_summary_measures_are_those_of_processing_the_log(logs: list[Path],
     assert (int(row["fully_carved"]), int(row["split"])) == (result.fully_carved, result.split)
     assert float(row["unprocessed"]) == 100.0 * result.mean_unprocessed_share
     assert 1.0 < float(row["unprocessed"]) <= 100.0
+    assert (row["readings_filtered"], row["points_filtered"]) == ("0", "0")  # no filter ran
+
+
+def test_summary_counts_what_the_filters_dropped(logs: list[Path], tmp_path: Path) -> None:
+    # Counted here from the log and the unfiltered map, not from the filters' reports.
+    import numpy as np
+
+    from sonarcarve.filters import MapFilter, ReadingFilter
+    from sonarcarve.io import read_readings_csv
+    from sonarcarve.methods import MethodConfig, make_method
+    from sonarcarve.pipeline import process_readings
+
+    batch = read_readings_csv(logs[0])
+    far = 2.0
+    map_bound = 0.1
+    rows = map_logs([logs[0]], tmp_path, "carve", reading_filter=ReadingFilter(max_range=far),
+                    map_filter=MapFilter(max_error=map_bound))
+    near = batch[batch.range <= far]
+    unfiltered = process_readings(near, make_method("carve", MethodConfig())).global_map
+    too_far = int(np.sum(batch.range > far))
+    too_wide = int(np.sum(~(unfiltered.max_error <= map_bound)))
+    assert too_far > 0
+    assert too_wide > 0
+    (row,) = _summary(tmp_path)
+    assert (int(row["readings_filtered"]), int(row["points_filtered"])) == (too_far, too_wide)
+    assert int(row["points"]) == len(unfiltered) - too_wide == rows[0].points
 
 
 @pytest.mark.parametrize(("error", "reason"), [

@@ -160,6 +160,10 @@ class FleetRow:
         The method's wall time on the log (not part of the result's identity).
     error : str
         Empty, or the one-line reason the log has no map.
+    readings_filtered, points_filtered : int
+        Readings the reading filters dropped before the method, and points the map filters
+        dropped from its map (0 when none ran; after ``error``, so the older columns keep
+        their places).
     """
 
     log: str
@@ -171,6 +175,8 @@ class FleetRow:
     unprocessed: float = 0.0
     seconds: float = 0.0
     error: str = ""
+    readings_filtered: int = 0
+    points_filtered: int = 0
 
     @property
     def ok(self) -> bool:
@@ -230,8 +236,13 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
         reason = text if isinstance(err, SonarcarveError) and text else (
             f"{type(err).__name__}: {text}" if text else type(err).__name__)
         return FleetRow(log, error=reason)
+    reading_report, map_report = result.reading_filter, result.map_filter
     return FleetRow(log, out, result.readings, len(result.global_map), result.fully_carved,
-                    result.split, 100.0 * result.mean_unprocessed_share, seconds)
+                    result.split, 100.0 * result.mean_unprocessed_share, seconds,
+                    readings_filtered=0 if reading_report is None
+                    else reading_report.total - reading_report.kept,
+                    points_filtered=0 if map_report is None
+                    else map_report.total - map_report.kept)
 
 
 def map_logs(
