@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
-from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -32,17 +30,7 @@ from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import GlobalMap
 from sonarcarve.pipeline import process_readings
 from synthetic import corridor_stream
-
-
-def _best(run: Callable[[], object], repeats: int) -> float:
-    """The least CPU seconds of ``repeats`` calls (after one not counted)."""
-    run()
-    best = math.inf
-    for _ in range(repeats):
-        start = time.process_time()
-        run()
-        best = min(best, time.process_time() - start)
-    return best
+from timing import best_seconds
 
 
 def _row(name: str, method: str, batch: ReadingBatch, repeats: int,
@@ -52,8 +40,8 @@ def _row(name: str, method: str, batch: ReadingBatch, repeats: int,
 
     points = make()
     spec = MapFilter(occlusion_depth=OCCLUSION_DEPTH)
-    method_s = _best(make, repeats)
-    filter_s = _best(lambda: filter_map(points, spec, point_origins(points, batch)), repeats)
+    method_s = best_seconds(make, repeats)
+    filter_s = best_seconds(lambda: filter_map(points, spec, point_origins(points, batch)), repeats)
     kept = filter_map(points, spec, point_origins(points, batch)).points
     shares = "– | –"
     if spurious is not None:

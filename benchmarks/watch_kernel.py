@@ -15,21 +15,12 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from collections.abc import Callable
 
 import numpy as np
 
 from sonarcarve.geometry.evidence import mark_watch
 from sonarcarve.geometry.repeats import mark_repeats
-
-
-def _best(run: Callable[[], None], repeats: int) -> float:
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        best = min(best, time.perf_counter() - start)
-    return best
+from timing import best_seconds
 
 
 def _measure(capacity: int, repeats: int) -> tuple[float, float]:
@@ -55,8 +46,12 @@ def _measure(capacity: int, repeats: int) -> tuple[float, float]:
     watch(0)
     repeat(0)
     half = storage // 2
-    return (_best(lambda: watch(half), repeats) / (storage - half),
-            _best(lambda: repeat(half), repeats) / (storage - half))
+    rows = storage - half
+    # Wall time, already warm (the calls above): the kernels run in one thread.
+    return (best_seconds(lambda: watch(half), repeats, clock=time.perf_counter,
+                         warm_up=False) / rows,
+            best_seconds(lambda: repeat(half), repeats, clock=time.perf_counter,
+                         warm_up=False) / rows)
 
 
 def main(argv: list[str] | None = None) -> int:
