@@ -169,6 +169,12 @@ def test_surface_directions_by_hand() -> None:
     assert np.isfinite(surface_directions(four, 0.3, 3)[0, 0])
     assert np.isnan(surface_directions(four[:3], 0.3, 3)[0, 0])
     assert np.isnan(surface_directions(four, 0.29, 3)[0, 0])
+    # Four corners of a rectangle 0.2 m long: 6 cm wide its scatter's eigenvalues are
+    # 0.1² : 0.03² = 11 to 1, a line; 8 cm wide, 0.1² : 0.04² = 6.25 to 1, not (a line needs
+    # its spread along three times that across, 9 to 1).
+    for half_width, line in ((0.03, True), (0.04, False)):
+        corners = np.array([[sx * 0.1, sy * half_width] for sx in (-1, 1) for sy in (-1, 1)])
+        assert bool(np.isfinite(surface_directions(corners, 0.3, 3)[:, 0]).all()) is line
     # A square's corners spread equally both ways: not a line.
     square = np.array([[0.0, 0.0], [0.1, 0.0], [0.0, 0.1], [0.1, 0.1]])
     assert np.isnan(surface_directions(square, 0.3, 3)).all()
