@@ -135,3 +135,29 @@ def test_no_scene_when_the_doorway_door_stays_open_too(monkeypatch: pytest.Monke
     result = run_demo("t-junction", seed=0, methods=("centerline",), grid_resolution=None)
     assert result.door_scene is None
     assert len(calls) == 2  # asked of the tour, then of the scene, which was dropped
+
+
+def test_the_occlusion_filter_summary_is_the_filtered_evidence_map() -> None:
+    # Reference: the mask computed from the readings' own origins, and the shares counted
+    # from it, not through filter_map and point_origins; a part of the office tour where the
+    # filter drops points, so that a summary of the unfiltered map would fail.
+    from sonarcarve.filters import OCCLUSION_DEPTH, occlusion_mask
+
+    result = run_demo("office", seed=0, max_length=40.0, grid_resolution=None,
+                      door_scene=False)
+    assert result.occlusion is not None
+    points = result.global_maps["evidence"]
+    readings = result.simulation.readings
+    origin = np.column_stack([readings.x, readings.y])[points.reading_id]
+    keep = occlusion_mask(points.xy, origin, points.max_error, OCCLUSION_DEPTH)
+    assert 0 < keep.sum() < len(keep)
+    kind = result.simulation.truth.kind
+    kept = np.zeros(len(kind), dtype=bool)
+    kept[points.reading_id[keep]] = True
+    summary = result.occlusion
+    assert (summary.method, summary.depth_m, summary.map_points) == (
+        "evidence", OCCLUSION_DEPTH, int(keep.sum()))
+    assert summary.spurious_removed_pct == pytest.approx(
+        100.0 * np.mean(~kept[kind > EchoKind.DIRECT]))
+    assert summary.true_lost_pct == pytest.approx(100.0 * np.mean(~kept[kind == EchoKind.DIRECT]))
+    assert summary.spurious_removed_pct > result.summary("evidence").spurious_removed_pct

@@ -121,3 +121,24 @@ def test_door_note_only_when_no_door_tells_the_methods_apart(doorway: DemoResult
     assert record["door_figure"]["door_scene"] is True
     assert record["door_figure"]["passable"]["centerline"] is False
     assert json.loads(summary_json(doorway))["door_figure"]["door_scene"] is False
+
+
+def test_caption_and_summary_give_the_occlusion_filters_shares(doorway: DemoResult) -> None:
+    import dataclasses
+    import json
+
+    from sonarcarve.lab.demo import FilterSummary, summary_json
+    from sonarcarve.lab.demo.table import caption
+
+    made_up = dataclasses.replace(doorway, occlusion=FilterSummary("evidence", 0.5, 91.6, 4.4,
+                                                                   123))
+    assert caption(made_up).endswith(
+        "With the occlusion filter on its final map (`sonarcarve process --method evidence "
+        "--occlusion-depth 0.5`: points behind a wall of the map, as multipath echoes are), "
+        "92% and 4%.")
+    assert json.loads(summary_json(made_up))["occlusion_filter"] == {
+        "method": "evidence", "depth_m": 0.5, "spurious_removed_pct": 91.6,
+        "true_lost_pct": 4.4, "map_points": 123}
+    without = dataclasses.replace(doorway, occlusion=None)
+    assert "occlusion" not in caption(without)
+    assert json.loads(summary_json(without))["occlusion_filter"] is None

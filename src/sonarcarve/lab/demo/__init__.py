@@ -30,7 +30,7 @@ from sonarcarve.lab.demo.outputs import (
     output_captions,
     write_demo_outputs,
 )
-from sonarcarve.lab.demo.results import DemoResult, GridSummary, MethodSummary
+from sonarcarve.lab.demo.results import DemoResult, FilterSummary, GridSummary, MethodSummary
 from sonarcarve.lab.demo.runs import run_demo
 from sonarcarve.lab.demo.scenario import (
     APPROACH_DISTANCE,
@@ -74,6 +74,7 @@ __all__ = [
     "DemoError",
     "DemoResult",
     "DoorApproach",
+    "FilterSummary",
     "GridSummary",
     "LocalView",
     "MethodSummary",

@@ -22,7 +22,7 @@ from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.world import World
 from sonarcarve.typing import FloatArray, Int8Array
 
-__all__ = ["DemoResult", "GridSummary", "MethodSummary"]
+__all__ = ["DemoResult", "FilterSummary", "GridSummary", "MethodSummary"]
 
 
 @dataclass(frozen=True)
@@ -89,6 +89,35 @@ class MethodSummary:
                      "seconds", "readings_per_second"):
             row[name] = json_ready(getattr(self, name))
         return row
+
+
+@dataclass(frozen=True)
+class FilterSummary:
+    """A method's final map after the occlusion map filter (``sonarcarve process
+    --occlusion-depth``): what the demo's caption adds to that method's table row.
+
+    Attributes
+    ----------
+    method : str
+        The method whose global map was filtered (``evidence``).
+    depth_m : float
+        The filter's depth, metres (:data:`~sonarcarve.filters.OCCLUSION_DEPTH`).
+    spurious_removed_pct, true_lost_pct : float
+        As :class:`MethodSummary`'s, for the filtered map, percent.
+    map_points : int
+        Points left.
+    """
+
+    method: str
+    depth_m: float
+    spurious_removed_pct: float
+    true_lost_pct: float
+    map_points: int
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready (NaN becomes None)."""
+        return {name: json_ready(getattr(self, name)) for name in
+                ("method", "depth_m", "spurious_removed_pct", "true_lost_pct", "map_points")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,6 +215,9 @@ class DemoResult:
         The approach to the doorway world's 0.85 m door (the paper's Fig. 2), run beside the
         tour when no door of the tour tells the methods apart (:func:`run_demo`); fig. 4 and
         the animation then draw it (:attr:`door_source`). None: they draw this tour's door.
+    occlusion : FilterSummary or None
+        Evidence carving's final map after the occlusion map filter (None when evidence
+        carving did not run).
     """
 
     world: World
@@ -201,6 +233,7 @@ class DemoResult:
     grids: tuple[GridSummary, ...]
     seconds: dict[str, float]
     door_scene: DemoResult | None = None
+    occlusion: FilterSummary | None = None
 
     @property
     def door_source(self) -> DemoResult:

@@ -21,6 +21,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, point_origins
 from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.lab import metrics
 from sonarcarve.lab.analyses import removal_summary
@@ -33,7 +34,7 @@ from sonarcarve.lab.demo.doors import (
     measure_door,
     pick_closeup,
 )
-from sonarcarve.lab.demo.results import DemoResult, MethodSummary
+from sonarcarve.lab.demo.results import DemoResult, FilterSummary, MethodSummary
 from sonarcarve.lab.demo.scenario import (
     CLOSEUP_METHODS,
     DEMO_METHODS,
@@ -51,6 +52,7 @@ from sonarcarve.lab.instrument import (
     unprocessed_percent,
 )
 from sonarcarve.lab.scenarios import cut_polyline
+from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.motion import follow_waypoints
@@ -163,7 +165,28 @@ def run_demo(
         global_maps={name: rec.global_map for name, rec in records.items()},
         map_errors=errors, doors=doors, closeup=closeup, fallback_view=fallback,
         grids=grids, seconds=seconds, door_scene=scene,
+        occlusion=_occlusion(sim, records["evidence"]) if "evidence" in records else None,
     )
+
+
+def _occlusion(sim: Simulation, record: RunRecord) -> FilterSummary:
+    """``record``'s global map after the occlusion map filter: what it leaves out."""
+    points = record.global_map
+    kept = filter_map(points, MapFilter(occlusion_depth=OCCLUSION_DEPTH),
+                      point_origins(points, sim.readings)).points
+    spurious_removed, true_lost = _left_out(sim, kept)
+    return FilterSummary(record.method, OCCLUSION_DEPTH, spurious_removed, true_lost, len(kept))
+
+
+def _left_out(sim: Simulation, points: GlobalMap) -> tuple[float, float]:
+    """Of the spurious and of the direct readings, the shares with no point in ``points``,
+    percent: left out whatever the reason (fully carved or split, below the confidence a
+    method keeps, a map filter), so read off the map itself."""
+    kept = np.zeros(len(sim.readings), dtype=bool)
+    kept[points.reading_id] = True
+    direct = sim.truth.kind == EchoKind.DIRECT
+    spurious = sim.truth.kind > EchoKind.DIRECT  # no-echo readings (NO_ECHO, -1) are neither
+    return metrics.percent(~kept[spurious]), metrics.percent(~kept[direct])
 
 
 def _door_scene(seed: int, history_size: int, robot: str, seconds: dict[str, float],
@@ -232,12 +255,7 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
     # Table I's measure over the regular snapshots only (the door moments would bias it).
     unprocessed = unprocessed_percent(full_history_samples(record, capacity, every=SAMPLE_EVERY))
     removal = removal_summary(record.final, sim.truth.kind)
-    # Left out of the map, whatever the reason: fully carved or split (the paper's methods), or
-    # below the confidence a method keeps (evidence carving), so read it off the map itself.
-    kept = np.zeros(len(sim.readings), dtype=bool)
-    kept[record.global_map.reading_id] = True
-    direct = sim.truth.kind == EchoKind.DIRECT
-    spurious = sim.truth.kind > EchoKind.DIRECT  # no-echo readings (NO_ECHO, -1) are neither
+    spurious_removed, true_lost = _left_out(sim, record.global_map)
     summary = metrics.error_summary(err)
     return MethodSummary(
         method=record.method,
@@ -246,8 +264,8 @@ def _summarise(sim: Simulation, record: RunRecord, err: FloatArray,
         median_error_m=summary.median,
         p90_error_m=summary.p90,
         fully_carved_pct=removal["share"],
-        spurious_removed_pct=metrics.percent(~kept[spurious]),
-        true_lost_pct=metrics.percent(~kept[direct]),
+        spurious_removed_pct=spurious_removed,
+        true_lost_pct=true_lost,
         map_points=len(record.global_map),
         seconds=record.seconds,
     )

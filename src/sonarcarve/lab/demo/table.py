@@ -165,6 +165,12 @@ def caption(result: DemoResult) -> str:
                                               + evidence.true_lost_pct):
         parts.append(f"Evidence carving left out {evidence.spurious_removed_pct:.0f}% of the "
                      f"spurious readings and {evidence.true_lost_pct:.0f}% of the true ones.")
+    hidden = result.occlusion
+    if hidden is not None and math.isfinite(hidden.spurious_removed_pct + hidden.true_lost_pct):
+        parts.append(f"With the occlusion filter on its final map (`sonarcarve process --method "
+                     f"{hidden.method} --occlusion-depth {hidden.depth_m:g}`: points behind a "
+                     "wall of the map, as multipath echoes are), "
+                     f"{hidden.spurious_removed_pct:.0f}% and {hidden.true_lost_pct:.0f}%.")
     return " ".join(parts)
 
 
@@ -328,6 +334,7 @@ def summary_json(result: DemoResult, *, animation: bool = False) -> str:
         "readings": len(sim.readings),
         "readings_by_kind": sim.kind_counts(),
         "methods": [row.as_dict() for row in result.methods],
+        "occlusion_filter": None if result.occlusion is None else result.occlusion.as_dict(),
         "approach_distance_m": APPROACH_DISTANCE,
         "doors": [{"opening": d.opening, "how": d.how, "jambs": d.jambs.tolist(),
                    "readings": d.view.readings, "t": d.view.t,
