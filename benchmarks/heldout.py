@@ -201,7 +201,8 @@ def main(argv: list[str] | None = None) -> int:
                              "of JSON, as fit_confidence.py --save writes it)")
     parser.add_argument("--robot", default="scout2",
                         help="the sonars (a built-in robot or a robot YAML): another ring held "
-                             "out, e.g. p3dx-front (8 front sonars, 15° beams)")
+                             "out, e.g. p3dx-front (8 front sonars, 15° beams) or p3dx (its "
+                             "16, front and rear)")
     parser.add_argument("--before-watch", action="store_true",
                         help="add a point row: evidence carving with every arc maturing with "
                              "age alone (ConfidenceModel unwatched_prior False, the default before "

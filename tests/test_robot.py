@@ -60,6 +60,33 @@ def test_p3dx_and_robond_bearings() -> None:
     assert (nd.min_range, nd.max_range) == (0.17, 5.0)
 
 
+def test_p3dx_full_ring_is_arias_sonar_units() -> None:
+    # Expected values typed from ARIA's params/p3dx.p, "SonarUnit <n> <x mm> <y mm> <heading>":
+    # SonarUnit 8 -157 -136 -90, 11 -255 -27 -170, 12 -255 27 170, 15 -157 136 90.
+    robot = load_robot("p3dx")
+    assert robot.n_sensors == 16
+    for sensor, (x_mm, y_mm, heading) in {8: (-157, -136, -90), 11: (-255, -27, -170),
+                                          12: (-255, 27, 170), 15: (-157, 136, 90)}.items():
+        assert robot.mount_x[sensor] == pytest.approx(x_mm / 1000)
+        assert robot.mount_y[sensor] == pytest.approx(y_mm / 1000)
+        assert math.degrees(robot.bearing[sensor]) == pytest.approx(heading)
+    # Rear bank 8-15: -90, -130, -150, -170, 170, 150, 130, 90 degrees, every mount behind the
+    # centre; the front bank is p3dx-front's ring, sensor for sensor.
+    np.testing.assert_allclose(np.degrees(robot.bearing[8:]),
+                               [-90, -130, -150, -170, 170, 150, 130, 90])
+    assert np.all(robot.mount_x[8:] < 0.0)
+    front = load_robot("p3dx-front")
+    for field in ("mount_x", "mount_y", "bearing", "beam_width"):
+        np.testing.assert_array_equal(getattr(robot, field)[:8], getattr(front, field))
+    # The banks alternate, 20 ms apart: each sensor fires every 0.32 s, as the firmware's two
+    # banks firing together every 40 ms do.
+    times, sensors = robot.firing_schedule(0.0, 0.02 * 31)
+    np.testing.assert_allclose(np.diff(times), 0.02)
+    np.testing.assert_array_equal(sensors[:4], [0, 8, 1, 9])
+    for sensor in range(16):
+        np.testing.assert_allclose(np.diff(times[sensors == sensor]), 0.32)
+
+
 def test_car_parking_12_is_a_car_with_bumper_and_side_sensors() -> None:
     # Expected values from the YAML's sources and stated choices, not from the loader: a
     # 4.5 x 1.8 m car, 4 front + 4 rear + 2 per side, 70 degree beams, 0.15..5.5 m in 1 cm

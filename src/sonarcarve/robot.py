@@ -49,7 +49,7 @@ __all__ = [
 
 
 #: Names of the robots shipped with the package (``sonarcarve/robots/<name>.yaml``).
-BUILTIN_ROBOTS = ("car-parking-12", "p3dx-front", "roboND-8", "scout2")
+BUILTIN_ROBOTS = ("car-parking-12", "p3dx", "p3dx-front", "roboND-8", "scout2")
 #: Most firings :meth:`RobotDescription.firing_schedule` makes: 11 hours of a ring firing every
 #: 0.04 s. The simulator holds every ray of every firing at once (31 rays, about 1 kB a
 #: firing), so this bounds a simulation's memory to about a gigabyte.

@@ -52,8 +52,8 @@ BAG_PANEL = "ROS bag input"
 RobotOpt = Annotated[str | None, typer.Option(
     metavar="NAME|ROBOT.yaml",
     help="Bag input: fallback sensor mounts when the bag's TF lacks them: a built-in robot "
-         "(car-parking-12, p3dx-front, roboND-8, scout2) or a YAML file; sensor i takes mount "
-         "i. Refused when it does not fit the bag (sensor count, or TF mounts).",
+         "(car-parking-12, p3dx, p3dx-front, roboND-8, scout2) or a YAML file; sensor i takes "
+         "mount i. Refused when it does not fit the bag (sensor count, or TF mounts).",
     rich_help_panel=BAG_PANEL)]
 RangeTopicOpt = Annotated[list[str] | None, typer.Option(
     metavar="TOPIC",
