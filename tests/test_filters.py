@@ -75,6 +75,38 @@ def test_range_dropped_reading_is_not_the_previous_for_the_jump_filter() -> None
     assert (out.report.too_far, out.report.jumps) == (1, 0)
 
 
+def _with_silence(sensor: list[int], r: list[float], listened: float = 6.5) -> ReadingBatch:
+    """A batch whose ``inf`` ranges are no-echo readings that listened up to ``listened``."""
+    n = len(r)
+    k = np.arange(n)
+    max_range = [listened if math.isinf(v) else math.nan for v in r]
+    return ReadingBatch.from_arrays(t=0.1 * k, sensor=sensor, x=0.01 * k, y=np.zeros(n),
+                                    theta=0.3 * k, range=r, max_range=max_range)
+
+
+def _both_ways(b: ReadingBatch, spec: ReadingFilter) -> list[int]:
+    """The kept rows, after checking that the stream and the batch filter agree."""
+    stream = ReadingFilterStream(spec)
+    reasons = [int(stream.check(reading)) for reading in b]
+    out = filter_readings(b, spec)
+    assert out.reasons.tolist() == reasons
+    return out.ids.tolist()
+
+
+def test_no_echo_readings_are_no_echo_farther_than_max_range() -> None:
+    # A silent firing (free space up to 6.5 m, no point) is not an echo beyond --max-range:
+    # dropping it threw away the free space of every no-echo row of a log.
+    b = _with_silence([0, 0, 0], [2.0, math.inf, 9.0], listened=10.0)
+    assert _both_ways(b, ReadingFilter(max_range=5.0, min_range=0.2)) == [0, 1]
+
+
+def test_no_echo_reading_is_no_jump_and_not_the_previous_range() -> None:
+    # sensor 0: 1.0, silence, 1.05, 3.0: only 3.0 jumps (from 1.05); the silence is kept and
+    # the echo after it is compared with the echo before it.
+    b = _with_silence([0, 0, 0, 0], [1.0, math.inf, 1.05, 3.0])
+    assert _both_ways(b, ReadingFilter(jump_threshold=0.5)) == [0, 1, 2]
+
+
 def test_kept_batch_is_the_input_rows_named_by_ids() -> None:
     rng = np.random.default_rng(3)
     n = 200

@@ -86,6 +86,20 @@ def test_validation_names_row_and_column(overrides: dict[str, object], problem: 
     assert "\n" not in str(caught.value)
 
 
+@pytest.mark.parametrize(("overrides", "hint"), [
+    # Times since 1970 in milliseconds, a UTM northing, a beam width in degrees: values a
+    # logger writes, refused with the way out named.
+    ({"t": [1.7e12, 1.7e12 + 40, 1.7e12 + 80]}, "milliseconds or nanoseconds"),
+    ({"t": [1.7e18, 1.7e18 + 4e7, 1.7e18 + 8e7]}, "milliseconds or nanoseconds"),
+    ({"y": [5.3e6, 5.3e6, 5.3e6]}, "subtract a local origin"),
+    ({"x": [0.0, -2e6, 0.0]}, "subtract a local origin"),
+    ({"beam_width": [22.5, 22.5, 22.5]}, "22.5 degrees is 0.39"),
+])
+def test_values_in_a_likely_other_unit_name_it(overrides: dict[str, object], hint: str) -> None:
+    with pytest.raises(ReadingsError, match=hint):
+        _batch(**overrides)
+
+
 def test_unknown_beam_width_becomes_the_default() -> None:
     batch = _batch(beam_width=[0.3, math.nan, 0.2]).with_beam_width(0.5)
     assert batch.beam_width.tolist() == [0.3, 0.5, 0.2]

@@ -13,6 +13,10 @@ Reading filters drop sonar readings before they reach a method:
   spike (cross-talk, a floor bounce) costs two: the spike and the reading after it, which jumps
   back. A sensor's first reading is always kept.
 
+A no-echo reading (``range`` inf: the sensor heard nothing up to its ``max_range``) is no echo
+that any of them judges: every reading filter keeps it, and the jump filter compares a sensor's
+echoes across it.
+
 Each reading is dropped by the first filter, in that order, that rejects it, and counted under
 it. The batch form (:func:`filter_readings`) and the streaming form
 (:class:`ReadingFilterStream`, one reading at a time) make the same decisions. Dropping readings
@@ -202,8 +206,8 @@ def _range_reasons(r: FloatArray, spec: ReadingFilter) -> npt.NDArray[np.int8]:
     reasons = np.zeros(r.shape[0], dtype=np.int8)
     if spec.min_range is not None:
         reasons[r < spec.min_range] = DropReason.TOO_NEAR
-    if spec.max_range is not None:
-        reasons[r > spec.max_range] = DropReason.TOO_FAR
+    if spec.max_range is not None:  # a no-echo reading (inf) is free space, not a far echo
+        reasons[(r > spec.max_range) & np.isfinite(r)] = DropReason.TOO_FAR
     return reasons
 
 
@@ -232,8 +236,8 @@ def filter_readings(batch: ReadingBatch, spec: ReadingFilter) -> FilteredReading
     ([0, 1, 3], 1)
     """
     reasons = _range_reasons(batch.range, spec)
-    if spec.jump_threshold is not None:
-        passed = np.flatnonzero(reasons == DropReason.KEPT)
+    if spec.jump_threshold is not None:  # among echoes only: a silence is no range to jump
+        passed = np.flatnonzero((reasons == DropReason.KEPT) & np.isfinite(batch.range))
         sensors = batch.sensor[passed]
         # Stable sort by sensor keeps each sensor's readings in stream order, so a difference
         # between neighbours of one sensor's run is the change since its previous reading.
@@ -270,6 +274,9 @@ class ReadingFilterStream:
         """Decide on the next reading of the stream (and remember it for the jump filter)."""
         spec = self.spec
         reason = DropReason.KEPT
+        if reading.no_echo:  # free space up to its own max_range: no echo to judge
+            self._counts[reason] += 1
+            return reason
         if spec.max_range is not None and reading.range > spec.max_range:
             reason = DropReason.TOO_FAR
         elif spec.min_range is not None and reading.range < spec.min_range:

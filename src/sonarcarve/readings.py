@@ -70,16 +70,19 @@ _NOT_POSITIVE = "must be > 0"
 _NEGATIVE = "must be >= 0"
 _NOT_WHOLE = "is not a whole number"
 _TOO_LARGE = f"must be at most {MAX_SENSOR}"
-_BAD_BEAM = f"must lie in [{MIN_BEAM_WIDTH:g}, pi) radians"
+_BAD_BEAM = f"must lie in [{MIN_BEAM_WIDTH:g}, pi) radians (22.5 degrees is 0.39)"
 _BACKWARDS = "goes backwards in time"
 _NO_MAX_RANGE = "is infinite but 'max_range' is not given"
 _BAD_MAX_RANGE = f"must be a number in (0, {MAX_READING_RANGE:,.0f}] metres, or NaN (unknown)"
 _TOO_FAR = f"must be at most {MAX_READING_RANGE:,.0f} m"
 #: The bound of each column that has one, and the message of a value beyond it.
+#: The hints name what loggers write there: times since 1970 in ms or ns, UTM northings.
+_OFF_MAP = f"must lie within ±{MAX_POSITION:,.0f} m (UTM coordinates? subtract a local origin)"
 _BOUNDS = {
-    "t": (MAX_TIME, "must lie within ±1e12 s"),
-    "x": (MAX_POSITION, f"must lie within ±{MAX_POSITION:,.0f} m"),
-    "y": (MAX_POSITION, f"must lie within ±{MAX_POSITION:,.0f} m"),
+    "t": (MAX_TIME, "must lie within ±1e12 s (seconds: milliseconds or nanoseconds since 1970 "
+                    "are beyond it)"),
+    "x": (MAX_POSITION, _OFF_MAP),
+    "y": (MAX_POSITION, _OFF_MAP),
     "theta": (MAX_ANGLE, f"must lie within ±{MAX_ANGLE:,.0f} rad"),
 }
 _BEYOND_MAX_RANGE = "exceeds 'max_range'"

@@ -196,3 +196,24 @@ def test_free_below_decides_how_much_evidence_frees_a_cell(tmp_path: Path) -> No
     assert strict.cells[i, j] == -1
     assert np.all(default.cells[strict.cells == 0] == 0)
     assert np.count_nonzero(default.cells == 0) > np.count_nonzero(strict.cells == 0)
+
+
+def test_a_stray_position_too_large_a_grid_is_named(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # One pose of a drive along y = 0 glitched to x = 900 km (a GPS jump, a bad odometry
+    # sample): the grid would be 18 million cells wide; the error shows where that came from.
+    batch = ReadingBatch.from_readings(
+        Reading(t=0.1 * k, sensor=0, x=900_000.0 if k == 7 else 0.05 * k, y=0.0,
+                theta=math.pi / 2, range=1.0)
+        for k in range(20))
+    path = tmp_path / "glitch.csv"
+    write_readings_csv(batch, path)
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(path), "--resolution", "0.05", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "exceed the limit" in err
+    # The readings' extent plus the 0.5 m margin (the first arc's edge reaches sin 11.25° =
+    # 0.19509 m left of x = 0): the stray pose stands out.
+    assert "over x from -0.69509 to 900001 m and y from -0.5 to 1.5 m" in err
+    assert not out.exists()

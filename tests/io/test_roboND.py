@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.io import InputError, bundled_robond_dir, read_robond
+from sonarcarve.io.sanity import likely_mistakes
 
 # Lines 46-51 of the real log (poses.txt and measurement.txt), unchanged.
 POSES = """1697168 0 0 0
@@ -88,6 +89,23 @@ def test_bundled_copy_matches_the_readme() -> None:
     assert np.all(log.batch.range <= 5.110)
     # About 93 s and 25 m of path (README).
     assert log.batch.t[-1] - log.batch.t[0] == pytest.approx(93, abs=2)
+
+
+def test_headings_past_a_full_turn_are_wrapped(tmp_path: Path) -> None:
+    # Heading 359.9° (3599 tenths) plus sensor 7's 90° bearing is 449.9°, the same axis as
+    # 89.9°; the readings CSV is radians, and an axis past ±2π reads as a unit mistake there.
+    poses = "1000 0 0 3599\n1200 100 0 1\n"
+    measurements = "1000 5110 5110 5110 5110 5110 5110 5110 1180\n" \
+                   "1200 900 5110 5110 5110 5110 5110 5110 1190\n"
+    log = read_robond(_write(tmp_path / "log", poses, measurements))
+    assert log.batch.theta.tolist() == pytest.approx([math.radians(89.9), math.radians(-89.9),
+                                                      math.radians(90.1)])
+
+
+def test_bundled_log_reads_as_radians() -> None:
+    batch = read_robond().batch
+    assert np.all(np.abs(batch.theta) <= math.pi)
+    assert likely_mistakes(batch) == []  # no "is it in degrees?" on our own conversion
 
 
 def _broken(tmp_path: Path) -> list[tuple[Path, str]]:

@@ -38,6 +38,21 @@ def test_each_likely_mistake_is_one_line(batch: ReadingBatch, words: str) -> Non
     assert "\n" not in warning
 
 
+@pytest.mark.parametrize(("metres", "unit"), [(0.8382, "millimetres"), (0.8382, "centimetres"),
+                                              (2.29, "millimetres"), (2.29, "centimetres"),
+                                              (0.45, "millimetres"), (3.5, "centimetres")])
+def test_short_indoor_ranges_name_their_unit(metres: float, unit: str) -> None:
+    # Median ranges of real and simulated logs (the T junction 0.84 m, roboND 2.29 m) written
+    # in another unit: 838 mm was called centimetres and 84 cm passed as metres.
+    scale = {"millimetres": 1000.0, "centimetres": 100.0}[unit]
+    (warning,) = likely_mistakes(_batch(rng=metres * scale))
+    assert f"is it in {unit}?" in warning
+
+
+def test_a_long_sonar_range_in_metres_is_no_mistake() -> None:
+    assert likely_mistakes(_batch(rng=10.0)) == []  # sonars reach 3-10 m
+
+
 def test_beam_width_in_radians_given_as_degrees() -> None:
     assert beam_width_mistake(0.39) is not None
     assert beam_width_mistake(15.0) is None

@@ -30,6 +30,8 @@ from sonarcarve.readings import Reading, ReadingBatch
 
 GOOD = Reading(1.0, 0, 0.0, 0.0, 0.0, 2.0)
 
+BAD_BEAM = "must lie in [1e-06, pi) radians (22.5 degrees is 0.39)"
+
 # (field overrides of a reading at t = 2, the column named in the error, the problem).
 BAD_READINGS = [
     ({"t": math.nan}, "t", "is NaN or infinite"),
@@ -46,13 +48,13 @@ BAD_READINGS = [
     ({"sensor": -1}, "sensor", "must be >= 0"),
     ({"sensor": 1.5}, "sensor", "is not a whole number"),
     ({"sensor": 2**31}, "sensor", "must be at most 2147483647"),
-    ({"beam_width": 0.0}, "beam_width", "must lie in [1e-06, pi) radians"),
-    ({"beam_width": math.radians(225.0)}, "beam_width", "must lie in [1e-06, pi) radians"),
-    ({"beam_width": math.pi}, "beam_width", "must lie in [1e-06, pi) radians"),
-    ({"beam_width": math.inf}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": 0.0}, "beam_width", BAD_BEAM),
+    ({"beam_width": math.radians(225.0)}, "beam_width", BAD_BEAM),
+    ({"beam_width": math.pi}, "beam_width", BAD_BEAM),
+    ({"beam_width": math.inf}, "beam_width", BAD_BEAM),
     # Underflowing widths: evidence carving divided by zero or indexed out of its bins.
-    ({"beam_width": 5e-324}, "beam_width", "must lie in [1e-06, pi) radians"),
-    ({"beam_width": 9.9e-7}, "beam_width", "must lie in [1e-06, pi) radians"),
+    ({"beam_width": 5e-324}, "beam_width", BAD_BEAM),
+    ({"beam_width": 9.9e-7}, "beam_width", BAD_BEAM),
     ({"t": 0.5}, "t", "goes backwards in time"),  # the previous reading is at t = 1
 ]
 

@@ -77,8 +77,10 @@ def grid_cells(label: str, resolution: object, bounds: object, max_cells: int,
     nx = max(1, math.ceil((xmax - xmin) / h - 1e-9))
     ny = max(1, math.ceil((ymax - ymin) / h - 1e-9))
     if nx * ny > max_cells:
+        # The bounds say where the size comes from: a stray pose 900 km away, UTM coordinates.
         msg = (f"{label}: {nx} x {ny} cells of {h:g} m exceed the limit of {max_cells:,} "
-               f"({limit_name}); use a coarser resolution or smaller bounds")
+               f"({limit_name}) over x from {xmin:.6g} to {xmax:.6g} m and y from {ymin:.6g} "
+               f"to {ymax:.6g} m; use a coarser resolution or smaller bounds")
         raise GridError(msg)
     return float(h), (xmin, ymin, xmax, ymax), nx, ny
 

@@ -238,10 +238,13 @@ def _readings(poses: npt.NDArray[np.float64], values: npt.NDArray[np.float64],
     duplicate = same & ~moved[:, None] & echo
     keep = echo & ~stale & (keep_duplicates | ~duplicate)
     record, sensor = np.nonzero(keep)  # row-major: record order, then sensor order
-    heading = np.radians(poses[record, 3] / 10.0)
+    axis = np.radians(poses[record, 3] / 10.0) + np.asarray(ROBOND_BEARINGS)[sensor]
+    # Wrapped into [-π, π): a heading of 359.9° plus a 90° bearing would otherwise write
+    # 7.85 rad, and the jump to the next record's -1.57 rad reads as degrees to likely_mistakes.
+    theta = (axis + math.pi) % (2.0 * math.pi) - math.pi
     batch = ReadingBatch.from_arrays(
         t=poses[record, 0] / 1000.0, sensor=sensor, x=poses[record, 1] / 1000.0,
-        y=poses[record, 2] / 1000.0, theta=heading + np.asarray(ROBOND_BEARINGS)[sensor],
+        y=poses[record, 2] / 1000.0, theta=theta,
         range=values[record, sensor] / 1000.0, beam_width=np.full(record.shape, beam_width),
         source="roboND log",
     )

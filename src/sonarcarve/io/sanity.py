@@ -19,8 +19,14 @@ from sonarcarve.readings import ReadingBatch
 __all__ = ["beam_width_mistake", "csv_shape_hint", "likely_mistakes"]
 
 #: A log whose finite ranges have this median or more, metres, is probably not in metres:
-#: ultrasonic sensors reach 3-10 m; 100 is centimetres, 1000 millimetres.
-SUSPECT_MEDIAN_RANGE = 100.0
+#: ultrasonic sensors reach 3-10 m, and the median range of a log lies near 0.5-3 m (the T
+#: junction 0.84 m, the office 2.3 m, the real roboND log 2.29 m), so a median of 20 "metres" is
+#: centimetres (84 cm passed as metres with a threshold of 100).
+SUSPECT_MEDIAN_RANGE = 20.0
+#: A suspect median of this many "metres" or more is probably millimetres, below it
+#: centimetres: 0.5-3 m is 500-3000 mm or 50-300 cm, and 400 parts them (838 mm read as
+#: centimetres with a boundary of 1000).
+MILLIMETRE_MEDIAN_RANGE = 400.0
 #: A ``--beam-width`` (degrees) below this is probably radians: sonar beams are 7-60 degrees,
 #: and 22.5 degrees is 0.39 radians.
 SUSPECT_BEAM_WIDTH_DEG = 2.0
@@ -67,7 +73,7 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
     if ranges.size:
         median = float(np.median(ranges))
         if median >= SUSPECT_MEDIAN_RANGE:
-            unit = "millimetres" if median >= 10 * SUSPECT_MEDIAN_RANGE else "centimetres"
+            unit = "millimetres" if median >= MILLIMETRE_MEDIAN_RANGE else "centimetres"
             found.append(f"the median range is {median:g} m: is it in {unit}? "
                          "(readings CSV range is metres)")
     widths = batch.beam_width[np.isfinite(batch.beam_width)]
