@@ -53,7 +53,7 @@ def test_view_saves_the_recording_beside_the_readings_and_says_where(readings: P
     target = readings.with_suffix(".rrd")
     assert "no viewer opened" in result.output
     assert f"rerun {target}" in " ".join(result.output.split())
-    assert {"/world/reading", "/world/map", "/world/robot/path"} <= _entities(target)
+    assert {"/world/reading", "/world/map", "/world/robot/path/tail"} <= _entities(target)
 
 
 @pytest.mark.usefixtures("headless")

@@ -45,7 +45,7 @@ def test_recording_reads_back_with_every_entity_on_the_time_timeline(tmp_path: P
     walls = np.array([[-1.0, 2.0, 3.0, 2.0]])
     global_map = write_rerun(path, _readings(), make_method("combined"), walls=walls, every=5)
     chunks = _chunks(path)
-    for entity in ("reading", "robot/sensors", "robot/path", "arcs", "map", "global_map",
+    for entity in ("reading", "robot/sensors", "robot/path/tail", "arcs", "map", "global_map",
                    "walls"):
         assert f"/world/{entity}" in chunks, entity
     assert _rows(chunks["/world/reading"]) == N
@@ -110,3 +110,52 @@ def test_a_run_failing_halfway_leaves_an_existing_file_as_it_was(tmp_path: Path)
         write_rerun(path, _readings(), _Failing(), every=1)
     assert path.read_bytes() == b"old"
     assert list(tmp_path.iterdir()) == [path]
+
+
+def _strips(chunks: list[Any]) -> list[list[np.ndarray]]:
+    """Each logged row of a LineStrips2D entity: its strips as arrays."""
+    rows = []
+    for chunk in chunks:
+        for row in chunk.to_record_batch().column("LineStrips2D:strips").to_pylist():
+            rows.append([np.array(strip) for strip in row])
+    return rows
+
+
+def test_the_path_is_logged_in_pieces_that_join_into_each_sensors_path(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A straight drive of 400 readings, two sensors, a vertex every 5 cm (> the 2 cm step):
+    # 200 vertices a sensor. With pieces of 60 vertices, every vertex is logged in one piece
+    # (its first vertex repeated from the piece before) and in the tails until its piece is
+    # cut, so what is logged grows with the log, not with its square.
+    from sonarcarve.io import rerun_out
+
+    monkeypatch.setattr(rerun_out, "PATH_PIECE", 60)
+    n = 400
+    sensor = np.arange(n) % 2
+    readings = ReadingBatch.from_arrays(
+        t=0.1 * np.arange(n), sensor=sensor, x=0.05 * (np.arange(n) // 2), y=0.3 * sensor,
+        theta=np.full(n, math.pi / 2), range=np.full(n, 2.0))
+    path = tmp_path / "run.rrd"
+    write_rerun(path, readings, make_method("carve"), every=5)
+    chunks = _chunks(path)
+    names = sorted((name for name in chunks if name.startswith("/world/robot/path/")
+                    and name != "/world/robot/path/tail"),
+                   key=lambda name: int(name.split("/")[-1]))
+    assert len(names) == 6  # 400 vertices in pieces of 60 (a piece is cut at a log, every 5)
+    joined: dict[float, list[np.ndarray]] = {}
+    for name in [*names, "/world/robot/path/tail"]:
+        (strips,) = _strips(chunks[name])[-1:]  # a piece is logged once; the last tail
+        for strip in strips:
+            line = joined.setdefault(round(float(strip[0, 1]), 3), [])  # float32 on disk
+            if line:
+                np.testing.assert_array_equal(strip[0], line[-1][-1])  # pieces join
+                strip = strip[1:]
+            line.append(strip)
+    for y in (0.0, 0.3):
+        whole = np.vstack(joined[y])
+        np.testing.assert_allclose(whole[:, 0], 0.05 * np.arange(200), atol=1e-6)
+        np.testing.assert_allclose(whole[:, 1], y, atol=1e-6)
+    logged = sum(len(strip) for name in chunks if name.startswith("/world/robot/path")
+                 for row in _strips(chunks[name]) for strip in row)
+    whole_path_every_log = sum(5 * j for j in range(1, n // 5 + 1))  # 16,200 vertices
+    assert logged < whole_path_every_log / 4

@@ -6,8 +6,11 @@ readings' seconds (and a ``reading`` sequence timeline, the reading's id), under
 - ``walls``: the true walls of a simulated run (static), light grey.
 - ``robot/sensors``: the latest origin of every sensor heard so far (the robot's pose, as
   the readings know it), every reading.
-- ``robot/path``: each sensor's origins over time, one line strip per sensor, every ``every``
-  readings and at the end.
+- ``robot/path/tail``: each sensor's origins since the last finished piece, one line strip per
+  sensor, every ``every`` readings and at the end; ``robot/path/<k>``: the ``k``-th finished
+  piece (about :data:`PATH_PIECE` vertices in all), logged once. Logging the whole path every
+  ``every`` readings made a recording grow with the square of the log (97,960 readings: over
+  776 MB); in pieces it grows with the log.
 - ``reading``: the new reading's beam (its two edges and its full arc of radius r), every
   reading.
 - ``arcs``: every surviving arc in the history as carved so far (the point's final width about
@@ -35,7 +38,7 @@ from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
 from sonarcarve.readings import Reading, ReadingBatch
 
-__all__ = ["DEFAULT_EVERY", "SOURCE_RGB", "RerunMapper", "write_rerun"]
+__all__ = ["DEFAULT_EVERY", "PATH_PIECE", "SOURCE_RGB", "RerunMapper", "write_rerun"]
 
 #: Readings between two logs of the local map, the carved arcs and the path.
 DEFAULT_EVERY = 5
@@ -47,6 +50,8 @@ _MIN_RADIUS = 0.01
 _ARC_SAMPLES = 24
 #: A sensor's path gets a new vertex when its origin has moved this far, metres.
 _PATH_STEP = 0.02
+#: Vertices (all sensors together) after which the path's tail is logged as a finished piece.
+PATH_PIECE = 2000
 
 #: Colours by point source, as in :data:`sonarcarve.plotting.SOURCE_COLORS` (RGB 0-255).
 SOURCE_RGB = {
@@ -141,6 +146,7 @@ def _log_run(rr: Any, rec: Any, batch: ReadingBatch, method: RerunMapper,
         rec.log("world/walls", rr.LineStrips2D(segments, colors=_WALL_RGB, radii=0.02),
                 static=True)
     paths = _Paths()
+    pieces = 0
     latest: dict[int, tuple[float, float]] = {}
     n = len(batch)
     for k, reading in enumerate(batch):
@@ -155,12 +161,18 @@ def _log_run(rr: Any, rec: Any, batch: ReadingBatch, method: RerunMapper,
         if beam:
             rec.log("world/reading", rr.LineStrips2D(beam, colors=_READING_RGB, radii=0.01))
         if (k + 1) % every == 0 or k == n - 1:
-            rec.log("world/robot/path", rr.LineStrips2D(paths.strips(), colors=_PATH_RGB,
-                                                        radii=0.005))
+            if paths.tail_size() >= PATH_PIECE:
+                rec.log(f"world/robot/path/{pieces}", _path(rr, paths.take_piece()))
+                pieces += 1
+            rec.log("world/robot/path/tail", _path(rr, paths.strips()))
             _log_points(rr, rec, "world/map", method.local_map(), batch, arcs="world/arcs")
     global_map = method.finish()
     _log_points(rr, rec, "world/global_map", global_map, batch, arcs=None)
     return global_map
+
+
+def _path(rr: Any, strips: Sequence[npt.NDArray[np.float64]]) -> Any:
+    return rr.LineStrips2D(strips, colors=_PATH_RGB, radii=0.005)
 
 
 def _beam(reading: Reading, method: RerunMapper) -> list[npt.NDArray[np.float64]]:
@@ -202,15 +214,31 @@ def _arc_strips(points: LocalMap | GlobalMap, batch: ReadingBatch) -> npt.NDArra
 
 
 class _Paths:
-    """Each sensor's origins over time, a vertex whenever it moved :data:`_PATH_STEP`."""
+    """Each sensor's origins since the last finished piece, a vertex whenever it moved
+    :data:`_PATH_STEP`; a sensor's tail starts at the last vertex of its previous piece, so
+    the pieces join."""
 
     def __init__(self) -> None:
         self._vertices: dict[int, list[tuple[float, float]]] = {}
+        self._size = 0
 
     def add(self, sensor: int, x: float, y: float) -> None:
         line = self._vertices.setdefault(sensor, [])
         if not line or np.hypot(x - line[-1][0], y - line[-1][1]) >= _PATH_STEP:
             line.append((x, y))
+            self._size += 1
+
+    def tail_size(self) -> int:
+        """Vertices added since the last piece was taken."""
+        return self._size
 
     def strips(self) -> Sequence[npt.NDArray[np.float64]]:
+        """The tail, one strip per sensor that moved."""
         return [np.array(line) for line in self._vertices.values() if len(line) > 1]
+
+    def take_piece(self) -> Sequence[npt.NDArray[np.float64]]:
+        """The tail as a finished piece; each sensor's tail then restarts at its last vertex."""
+        piece = self.strips()
+        self._vertices = {sensor: line[-1:] for sensor, line in self._vertices.items()}
+        self._size = 0
+        return piece
