@@ -58,21 +58,25 @@ __all__ = ["LINE_RATIO", "occluded_points", "surface_directions"]
 #: chance, and on ``benchmarks/synthetic.py``'s corridor loop at 200,000 readings evidence
 #: carving lost 1.6 % of its true echoes behind them, 0.8 % now; on the held-out floors,
 #: rings and physics of ``docs/RESULTS.md`` the two ratios keep and remove the same within
-#: 0.6 points, while 16 (four times) lost runs there.
+#: 0.6 points, while 16 (four times) lost a run of the nine settings measured there.
 LINE_RATIO = 9.0
 
 
-#: At most this many cells in a bucket table (32 MiB of starts): a map wider than that at the
-#: asked cell size gets coarser cells, which changes the work, not the answer (every look
-#: covers at least the floor it must).
+#: At most this many cells in a table of cell starts (32 MiB): a map wider than that at its
+#: cell size finds its cells by binary search over the sorted keys instead, a little slower
+#: on sparse maps and the same answer (coarser cells would keep the table small but make the
+#: searches of a dense map quadratic in its cells' contents).
 MAX_CELLS = 1 << 22
 
 
 class _Buckets(NamedTuple):
-    """Points sorted by square cell: cell ``key = column * rows + row`` (from the corner
-    ``x0, y0``) holds the points ``order[starts[key]:starts[key + 1]]``."""
+    """Points sorted by square cell of side ``cell``: cell ``key = column * rows + row`` (from
+    the corner ``x0, y0``) holds the points ``order[k]`` for the ``k`` where ``sorted_keys[k]
+    == key``: ``starts[key]`` to ``starts[key + 1]`` when ``starts`` is not empty (a table
+    over every cell, :data:`MAX_CELLS`)."""
 
     order: npt.NDArray[np.int64]
+    sorted_keys: npt.NDArray[np.int64]
     starts: npt.NDArray[np.int64]
     x0: float
     y0: float
@@ -81,28 +85,30 @@ class _Buckets(NamedTuple):
 
 
 def _buckets(xy: FloatArray, cell: float, spare: int = 1) -> _Buckets:
-    """Bucket ``xy`` in cells of side ``cell`` (or coarser, :data:`MAX_CELLS`). ``spare`` empty
-    rows top each column, so a look up to ``spare`` rows above or below a point's cell never
-    reaches another column's points (below, it wraps to the previous column's spare rows)."""
-    low = xy.min(axis=0)
-    width, height = xy.max(axis=0) - low
-    cell = max(cell, math.sqrt((width + 3.0 * cell) * (height + (3.0 + spare) * cell)
-                               / MAX_CELLS))
-    x0 = float(low[0]) - cell
-    y0 = float(low[1]) - cell
+    """Bucket ``xy`` in cells of side ``cell``. ``spare`` empty rows top each column, so a look
+    up to ``spare`` rows above or below a point's cell never reaches another column's points
+    (below, it wraps to the previous column's spare rows)."""
+    x0 = float(xy[:, 0].min()) - cell
+    y0 = float(xy[:, 1].min()) - cell
     column = np.floor((xy[:, 0] - x0) / cell).astype(np.int64)
     row = np.floor((xy[:, 1] - y0) / cell).astype(np.int64)
     rows = int(row.max()) + 1 + spare
     keys = column * rows + row
-    counts = np.bincount(keys, minlength=(int(column.max()) + 1) * rows)
-    starts = np.concatenate(([0], np.cumsum(counts)))
-    return _Buckets(np.argsort(keys, kind="stable"), starts, x0, y0, rows, cell)
+    order = np.argsort(keys, kind="stable")
+    cells = (int(column.max()) + 1) * rows
+    starts = (np.concatenate(([0], np.cumsum(np.bincount(keys, minlength=cells))))
+              if cells <= MAX_CELLS else np.zeros(0, dtype=np.int64))
+    return _Buckets(order, keys[order], starts, x0, y0, rows, cell)
 
 
 @compiled
-def _span(starts: npt.NDArray[np.int64], first: int, last: int) -> tuple[int, int]:
+def _span(sorted_keys: npt.NDArray[np.int64], starts: npt.NDArray[np.int64], first: int,
+          last: int) -> tuple[int, int]:
     """The positions in the sorted order of the points of cells ``first`` to ``last``
-    (inclusive; keys outside the table hold none)."""
+    (inclusive; keys outside the map hold none): from the table, or by binary search."""
+    if starts.shape[0] == 0:
+        return (int(np.searchsorted(sorted_keys, first, side="left")),
+                int(np.searchsorted(sorted_keys, last, side="right")))
     cells = starts.shape[0] - 1
     return (starts[min(max(first, 0), cells)], starts[min(max(last + 1, 0), cells)])
 
@@ -115,14 +121,14 @@ _SURFACE_SPLIT = 3
 
 @compiled
 def _gather(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
-            starts: npt.NDArray[np.int64], key: int, rows: int, span: int, gx: FloatArray,
-            gy: FloatArray) -> int:
+            sorted_keys: npt.NDArray[np.int64], starts: npt.NDArray[np.int64], key: int,
+            rows: int, span: int, gx: FloatArray, gy: FloatArray) -> int:
     """Copy the points of the (2 ``span`` + 1)² cells around cell ``key`` into ``gx``, ``gy``
     (contiguous, so every point of the cell then sums over one short array); their count."""
     m = 0
     for dc in range(-span, span + 1):
         # One column's cells are consecutive keys.
-        lo, hi = _span(starts, key + dc * rows - span, key + dc * rows + span)
+        lo, hi = _span(sorted_keys, starts, key + dc * rows - span, key + dc * rows + span)
         for k in range(lo, hi):
             j = order[k]
             gx[m] = x[j]
@@ -133,18 +139,21 @@ def _gather(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
 
 @compiled
 def _directions(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
-                starts: npt.NDArray[np.int64], rows: int, radius: float, neighbours: int,
-                line_ratio: float, out: FloatArray) -> None:
+                sorted_keys: npt.NDArray[np.int64], starts: npt.NDArray[np.int64], rows: int,
+                radius: float, neighbours: int, line_ratio: float, out: FloatArray) -> None:
     """:func:`surface_directions` on bucketed points (cells at least a hair wider than
     ``radius`` / :data:`_SURFACE_SPLIT`), a cell's neighbourhood gathered once for its points."""
     radius2 = radius * radius
     gx = np.empty(x.shape[0])
     gy = np.empty(x.shape[0])
-    for key in range(starts.shape[0] - 1):
-        if starts[key] == starts[key + 1]:
-            continue
-        m = _gather(x, y, order, starts, key, rows, _SURFACE_SPLIT, gx, gy)
-        for k in range(starts[key], starts[key + 1]):
+    first = 0
+    while first < order.shape[0]:  # one cell's points at a time
+        last = first
+        while last < order.shape[0] and sorted_keys[last] == sorted_keys[first]:
+            last += 1
+        m = _gather(x, y, order, sorted_keys, starts, sorted_keys[first], rows, _SURFACE_SPLIT,
+                    gx, gy)
+        for k in range(first, last):
             i = order[k]
             n = 0
             sx = 0.0
@@ -163,6 +172,7 @@ def _directions(x: FloatArray, y: FloatArray, order: npt.NDArray[np.int64],
                     syy += dy * dy
                     sxy += dx * dy
             _direction(n, sx, sy, sxx, syy, sxy, neighbours, line_ratio, out[i])
+        first = last
 
 
 @compiled
@@ -226,15 +236,16 @@ def surface_directions(xy: npt.ArrayLike, radius: float, neighbours: int,
     # land four cells apart by rounding, or the 7 x 7 look would miss the pair.
     cells = _buckets(pts, radius / _SURFACE_SPLIT * (1.0 + 1e-9), spare=_SURFACE_SPLIT)
     _directions(np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]), cells.order,
-                cells.starts, cells.rows, radius, neighbours, line_ratio, out)
+                cells.sorted_keys, cells.starts, cells.rows, radius, neighbours, line_ratio, out)
     return out
 
 
 @compiled
 def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: FloatArray,
             by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
-            starts: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
-            depth: float, reach: float, sin_crossing: float) -> bool:
+            sorted_keys: npt.NDArray[np.int64], starts: npt.NDArray[np.int64], x0: float,
+            y0: float, rows: int, cell: float, depth: float, reach: float,
+            sin_crossing: float) -> bool:
     """Whether a surface point ``(bx, by)[j]`` (direction ``(tx, ty)[j]``) lies on the segment
     from ``(ox, oy)`` to point ``i`` more than ``depth`` in front of it, within ``reach`` of
     it, crossing it at the angle of sine ``sin_crossing`` or more (:func:`occluded_points`).
@@ -264,7 +275,7 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
                 if abs(column + dc - last_column) <= 1 and abs(row + dr - last_row) <= 1:
                     continue
                 key = (column + dc) * rows + row + dr
-                lo, hi = _span(starts, key, key)
+                lo, hi = _span(sorted_keys, starts, key, key)
                 for k in range(lo, hi):
                     j = order[k]
                     wx = bx[j] - ox
@@ -281,14 +292,14 @@ def _hidden(i: int, x: FloatArray, y: FloatArray, ox: float, oy: float, bx: Floa
 @compiled
 def _occluded(x: FloatArray, y: FloatArray, ox: FloatArray, oy: FloatArray, bx: FloatArray,
               by: FloatArray, tx: FloatArray, ty: FloatArray, order: npt.NDArray[np.int64],
-              starts: npt.NDArray[np.int64], x0: float, y0: float, rows: int, cell: float,
-              depth: float, reach: float, sin_crossing: float,
-              out: npt.NDArray[np.bool_]) -> None:
-    """:func:`occluded_points` with the surface points bucketed (cells of side ``cell`` >= 2
+              sorted_keys: npt.NDArray[np.int64], starts: npt.NDArray[np.int64], x0: float,
+              y0: float, rows: int, cell: float, depth: float, reach: float,
+              sin_crossing: float, out: npt.NDArray[np.bool_]) -> None:
+    """:func:`occluded_points` with the surface points bucketed (cells of side ``cell`` = 2
     ``reach``)."""
     for i in range(x.shape[0]):
-        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, order, starts, x0, y0,
-                         rows, cell, depth, reach, sin_crossing)
+        out[i] = _hidden(i, x, y, ox[i], oy[i], bx, by, tx, ty, order, sorted_keys, starts,
+                         x0, y0, rows, cell, depth, reach, sin_crossing)
 
 
 def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, reach: float,
@@ -357,6 +368,6 @@ def occluded_points(xy: npt.ArrayLike, origin: npt.ArrayLike, *, depth: float, r
               np.ascontiguousarray(src[:, 0]), np.ascontiguousarray(src[:, 1]),
               np.ascontiguousarray(pts[index, 0]), np.ascontiguousarray(pts[index, 1]),
               np.ascontiguousarray(direction[:, 0]), np.ascontiguousarray(direction[:, 1]),
-              cells.order, cells.starts, cells.x0, cells.y0, cells.rows, cells.cell, depth, reach,
-              math.sin(crossing), out)
+              cells.order, cells.sorted_keys, cells.starts, cells.x0, cells.y0, cells.rows,
+              cells.cell, depth, reach, math.sin(crossing), out)
     return out
