@@ -135,7 +135,7 @@ def test_caption_and_summary_give_the_occlusion_filters_shares(doorway: DemoResu
     assert caption(made_up).endswith(
         "With the occlusion filter on its final map (`sonarcarve process --method evidence "
         "--occlusion-depth 0.5`: points behind a wall of the map, as multipath echoes are), "
-        "92% and 4%.")
+        "it left out 92% and 4%.")
     assert json.loads(summary_json(made_up))["occlusion_filter"] == {
         "method": "evidence", "depth_m": 0.5, "spurious_removed_pct": 91.6,
         "true_lost_pct": 4.4, "map_points": 123}

@@ -169,7 +169,7 @@ def caption(result: DemoResult) -> str:
     if hidden is not None and math.isfinite(hidden.spurious_removed_pct + hidden.true_lost_pct):
         parts.append(f"With the occlusion filter on its final map (`sonarcarve process --method "
                      f"{hidden.method} --occlusion-depth {hidden.depth_m:g}`: points behind a "
-                     "wall of the map, as multipath echoes are), "
+                     "wall of the map, as multipath echoes are), it left out "
                      f"{hidden.spurious_removed_pct:.0f}% and {hidden.true_lost_pct:.0f}%.")
     return " ".join(parts)
 
