@@ -53,6 +53,28 @@ def test_a_long_sonar_range_in_metres_is_no_mistake() -> None:
     assert likely_mistakes(_batch(rng=10.0)) == []  # sonars reach 3-10 m
 
 
+def _limited(at_limit: int, echoes: int = 100, limit: float = 6.477) -> ReadingBatch:
+    """``echoes`` echoes with a max_range column, ``at_limit`` of them at exactly the limit,
+    and three silent firings (inf), which are no echoes."""
+    r = np.concatenate([np.full(at_limit, limit), np.full(echoes - at_limit, 2.0),
+                        np.full(3, np.inf)])
+    n = len(r)
+    return ReadingBatch.from_arrays(t=np.arange(n), sensor=np.zeros(n, int), x=np.zeros(n),
+                                    y=np.zeros(n), theta=np.zeros(n), range=r,
+                                    max_range=np.full(n, limit))
+
+
+def test_echoes_at_exactly_their_max_range_are_named_from_five_percent() -> None:
+    # A Gazebo-style log (max_range for "nothing heard") written to CSV: 5 of 100 is the
+    # threshold; 4 of 100 is a real echo's rare landing on the limit.
+    (warning,) = likely_mistakes(_limited(5))
+    assert warning.startswith("5 of 100 echoes read exactly their max_range")
+    assert "write those rows as range inf" in warning
+    assert likely_mistakes(_limited(4)) == []
+    assert likely_mistakes(_limited(0, echoes=0)) == []  # only silences: no echo to judge
+    assert likely_mistakes(_batch()) == []  # no max_range column
+
+
 def test_beam_width_in_radians_given_as_degrees() -> None:
     assert beam_width_mistake(0.39) is not None
     assert beam_width_mistake(15.0) is None

@@ -27,6 +27,10 @@ SUSPECT_MEDIAN_RANGE = 20.0
 #: centimetres: 0.5-3 m is 500-3000 mm or 50-300 cm, and 400 parts them (838 mm read as
 #: centimetres with a boundary of 1000).
 MILLIMETRE_MEDIAN_RANGE = 400.0
+#: Echoes at exactly their ``max_range`` from this share of a log's echoes on are probably a
+#: driver's "nothing heard" (a real echo lands exactly on the limit rarely: 1 in 255 range
+#: steps of a Scout2 sonar, evenly spread).
+MAX_RANGE_ECHO_SHARE = 0.05
 #: A ``--beam-width`` (degrees) below this is probably radians: sonar beams are 7-60 degrees,
 #: and 22.5 degrees is 0.39 radians.
 SUSPECT_BEAM_WIDTH_DEG = 2.0
@@ -44,7 +48,9 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
       turns round: that is no mistake;
     - ranges with a median of :data:`SUSPECT_MEDIAN_RANGE` m or more: probably centimetres or
       millimetres;
-    - a ``beam_width`` below 1 degree: probably another unit (beams are 7-60 degrees).
+    - a ``beam_width`` below 1 degree: probably another unit (beams are 7-60 degrees);
+    - :data:`MAX_RANGE_ECHO_SHARE` or more of the echoes at exactly their ``max_range``:
+      probably a driver's "nothing heard".
 
     Examples
     --------
@@ -76,12 +82,32 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
             unit = "millimetres" if median >= MILLIMETRE_MEDIAN_RANGE else "centimetres"
             found.append(f"the median range is {median:g} m: is it in {unit}? "
                          "(readings CSV range is metres)")
+    at_limit = _echoes_at_max_range(batch)
+    if at_limit:
+        found.append(at_limit)
     widths = batch.beam_width[np.isfinite(batch.beam_width)]
     if widths.size and float(np.min(widths)) < math.radians(1.0):
         found.append(f"beam_width is as small as {float(np.min(widths)):g} rad "
                      f"({math.degrees(float(np.min(widths))):.2g} degrees): sonar beams are "
                      "7-60 degrees; is it in another unit?")
     return found
+
+
+def _echoes_at_max_range(batch: ReadingBatch) -> str | None:
+    """A warning when :data:`MAX_RANGE_ECHO_SHARE` or more of the echoes that have a
+    ``max_range`` read exactly it: drivers and simulators that report ``max_range`` for "nothing
+    heard" (Gazebo's sonar plugin, clamping drivers) make those rows phantom walls at the limit
+    in a readings CSV, where only ``inf`` is silence (bags are read with ``--no-echo``)."""
+    echo = np.isfinite(batch.range) & np.isfinite(batch.max_range)
+    if not echo.any():
+        return None
+    at_limit = int(np.sum(np.abs(batch.range[echo] - batch.max_range[echo])
+                          <= 1e-9 * batch.max_range[echo]))
+    if at_limit < MAX_RANGE_ECHO_SHARE * int(echo.sum()):
+        return None
+    return (f"{at_limit:,} of {int(echo.sum()):,} echoes read exactly their max_range: if the "
+            "sensor reports max_range when it hears nothing, write those rows as range inf "
+            "(free space up to max_range), or they map as walls at the limit")
 
 
 def beam_width_mistake(degrees: float, name: str = "beam width") -> str | None:
