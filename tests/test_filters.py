@@ -105,6 +105,10 @@ def test_no_echo_reading_is_no_jump_and_not_the_previous_range() -> None:
     # the echo after it is compared with the echo before it.
     b = _with_silence([0, 0, 0, 0], [1.0, math.inf, 1.05, 3.0])
     assert _both_ways(b, ReadingFilter(jump_threshold=0.5)) == [0, 1, 2]
+    # A jump across the silence is a jump: 3.0 after 1.0 goes (a silence that forgot the
+    # echo before it would keep it), and 3.05 after it is compared with 3.0 (a review's case).
+    b = _with_silence([0, 0, 0, 0], [1.0, math.inf, 3.0, 3.05])
+    assert _both_ways(b, ReadingFilter(jump_threshold=0.5)) == [0, 1, 3]
 
 
 def test_kept_batch_is_the_input_rows_named_by_ids() -> None:

@@ -94,7 +94,7 @@ class DropReason(IntEnum):
     """Why a reading filter dropped a reading (``KEPT`` if it did not)."""
 
     KEPT = 0
-    TOO_FAR = 1  #: range > max_range
+    TOO_FAR = 1  #: an echo's range > max_range (a no-echo reading never is)
     TOO_NEAR = 2  #: range < min_range
     JUMP = 3  #: range jumped by more than jump_threshold since the sensor's previous reading
 
@@ -117,7 +117,11 @@ class ReadingFilter:
     Attributes
     ----------
     max_range : float or None
-        Drop readings with range > ``max_range``, metres (paper: :data:`PAPER_MAX_RANGE`).
+        Drop echoes with range > ``max_range``, metres (paper: :data:`PAPER_MAX_RANGE`). A
+        no-echo reading is kept with its own ``max_range``, even a longer one: the filter is
+        for long echoes, which are the likelier crosstalk and multipath, and a silence is
+        none of those (a decision; clipping its free space to this value would be the
+        other).
     min_range : float or None
         Drop readings with range < ``min_range``, metres.
     jump_threshold : float or None

@@ -144,7 +144,9 @@ def test_the_path_is_logged_in_pieces_that_join_into_each_sensors_path(
     assert len(names) == 6  # 400 vertices in pieces of 60 (a piece is cut at a log, every 5)
     joined: dict[float, list[np.ndarray]] = {}
     for name in [*names, "/world/robot/path/tail"]:
-        (strips,) = _strips(chunks[name])[-1:]  # a piece is logged once; the last tail
+        if name != "/world/robot/path/tail":
+            assert _rows(chunks[name]) == 1  # a piece is logged once
+        (strips,) = _strips(chunks[name])[-1:]  # the piece; the last tail
         for strip in strips:
             line = joined.setdefault(round(float(strip[0, 1]), 3), [])  # float32 on disk
             if line:

@@ -68,11 +68,28 @@ def test_echoes_at_exactly_their_max_range_are_named_from_five_percent() -> None
     # A Gazebo-style log (max_range for "nothing heard") written to CSV: 5 of 100 is the
     # threshold; 4 of 100 is a real echo's rare landing on the limit.
     (warning,) = likely_mistakes(_limited(5))
-    assert warning.startswith("5 of 100 echoes read exactly their max_range")
+    assert warning.startswith("5 of 100 echoes checked read exactly their max_range")
     assert "write those rows as range inf" in warning
     assert likely_mistakes(_limited(4)) == []
     assert likely_mistakes(_limited(0, echoes=0)) == []  # only silences: no echo to judge
     assert likely_mistakes(_batch()) == []  # no max_range column
+
+
+def test_an_echo_written_in_text_beside_a_float32_max_range_is_at_it() -> None:
+    # 6.477 as text, max_range kept as float32 (6.47700023651123...): the same limit.
+    b = _limited(5, limit=6.477)
+    b = ReadingBatch.from_arrays(t=b.t, sensor=b.sensor, x=b.x, y=b.y, theta=b.theta,
+                                 range=b.range,
+                                 max_range=np.full(len(b), float(np.float32(6.477))))
+    (warning,) = likely_mistakes(b)
+    assert warning.startswith("5 of 100 echoes checked")
+
+
+def test_the_unit_warning_starts_at_a_median_of_20_metres() -> None:
+    # A 0.3 m median written in centimetres (30) is named; 19 m in metres is a long sonar.
+    (warning,) = likely_mistakes(_batch(rng=30.0))
+    assert "is it in centimetres?" in warning
+    assert likely_mistakes(_batch(rng=19.0)) == []
 
 
 def test_beam_width_in_radians_given_as_degrees() -> None:

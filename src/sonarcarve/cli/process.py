@@ -190,9 +190,10 @@ _IncidenceOpt = Annotated[float | None, typer.Option(
          "--max-incidence 30.")]
 _MaxRangeOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
-    help="Drop readings farther than this, metres (reading filter; off by default). The "
+    help="Drop echoes farther than this, metres (reading filter; off by default). The "
          f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
-         "sensors' height and floor.", rich_help_panel="Filters")]
+         "sensors' height and floor. No-echo rows (range inf) are kept, with their own "
+         "max_range.", rich_help_panel="Filters")]
 _MinRangeOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help="Drop readings nearer than this, metres (reading filter).",
