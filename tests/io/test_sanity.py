@@ -75,6 +75,25 @@ def test_echoes_at_exactly_their_max_range_are_named_from_five_percent() -> None
     assert likely_mistakes(_batch()) == []  # no max_range column
 
 
+def test_without_a_max_range_column_a_clamped_longest_range_is_named() -> None:
+    # Gazebo's "nothing heard" as 5.0 m in a CSV of t,sensor,x,y,theta,range only: 10 of 100
+    # echoes at the longest range, well above the 2 m median. Not: 4 of 100, a longest range
+    # near the median (a long hall), or a log of fewer than 100 echoes.
+    def log(clamped: int, others: float = 2.0, echoes: int = 100) -> ReadingBatch:
+        r = np.concatenate([np.full(clamped, 5.0), np.full(echoes - clamped, others)])
+        n = len(r)
+        return ReadingBatch.from_arrays(t=np.arange(n), sensor=np.zeros(n, int),
+                                        x=np.zeros(n), y=np.zeros(n), theta=np.zeros(n),
+                                        range=r)
+
+    (warning,) = likely_mistakes(log(10))
+    assert warning.startswith("10 of 100 echoes checked read exactly the log's longest range, "
+                              "5 m")
+    assert likely_mistakes(log(4)) == []
+    assert likely_mistakes(log(10, others=4.0)) == []
+    assert likely_mistakes(log(10, echoes=99)) == []
+
+
 def test_an_echo_written_in_text_beside_a_float32_max_range_is_at_it() -> None:
     # 6.477 as text, max_range kept as float32 (6.47700023651123...): the same limit.
     b = _limited(5, limit=6.477)

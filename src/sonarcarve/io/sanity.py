@@ -31,6 +31,11 @@ MILLIMETRE_MEDIAN_RANGE = 400.0
 #: driver's "nothing heard" (a real echo lands exactly on the limit rarely: 1 in 255 range
 #: steps of a Scout2 sonar, evenly spread).
 MAX_RANGE_ECHO_SHARE = 0.05
+#: Without a ``max_range`` column, the longest range counts as a clamp only in a log of this
+#: many echoes or more, and only when it is this many times the median range: a handful of
+#: readings, or a robot in a long hall, reads the same longest range a few times honestly.
+_CLAMPED_MIN_ECHOES = 100
+_CLAMPED_OVER_MEDIAN = 1.5
 #: A ``--beam-width`` (degrees) below this is probably radians: sonar beams are 7-60 degrees,
 #: and 22.5 degrees is 0.39 radians.
 SUSPECT_BEAM_WIDTH_DEG = 2.0
@@ -95,21 +100,28 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
 
 def _echoes_at_max_range(batch: ReadingBatch) -> str | None:
     """A warning when :data:`MAX_RANGE_ECHO_SHARE` or more of the echoes that have a
-    ``max_range`` read exactly it: drivers and simulators that report ``max_range`` for "nothing
+    ``max_range`` read exactly it (without that column: the log's longest range, well above its
+    median): drivers and simulators that report ``max_range`` for "nothing
     heard" (Gazebo's sonar plugin, clamping drivers) make those rows phantom walls at the limit
     in a readings CSV, where only ``inf`` is silence (bags are read with ``--no-echo``)."""
     echo = np.isfinite(batch.range) & np.isfinite(batch.max_range)
-    if not echo.any():
-        return None
+    if echo.any():
+        limit, r = batch.max_range[echo], batch.range[echo]
+        named = "their max_range"
+    else:  # no max_range column: a clamped reading is the log's longest, many times over
+        r = batch.range[np.isfinite(batch.range)]
+        if r.size < _CLAMPED_MIN_ECHOES or r.max() < _CLAMPED_OVER_MEDIAN * np.median(r):
+            return None
+        limit = np.full(r.shape, r.max())
+        named = f"the log's longest range, {r.max():g} m"
     # Relative 1e-6: a range written as 6.477 beside a max_range stored as float32.
-    at_limit = int(np.sum(np.abs(batch.range[echo] - batch.max_range[echo])
-                          <= 1e-6 * batch.max_range[echo]))
-    if at_limit < MAX_RANGE_ECHO_SHARE * int(echo.sum()):
+    at_limit = int(np.sum(np.abs(r - limit) <= 1e-6 * limit))
+    if at_limit < MAX_RANGE_ECHO_SHARE * r.size:
         return None
     # "checked": process looks at a log's first block only, as for the unit warnings.
-    return (f"{at_limit:,} of {int(echo.sum()):,} echoes checked read exactly their max_range: "
-            "if the sensor reports max_range when it hears nothing, write those rows as range "
-            "inf (free space up to max_range), or they map as walls at the limit")
+    return (f"{at_limit:,} of {r.size:,} echoes checked read exactly {named}: if the sensor "
+            "reports its maximum range when it hears nothing, write those rows as range inf "
+            "(free space up to max_range), or they map as walls at the limit")
 
 
 def beam_width_mistake(degrees: float, name: str = "beam width") -> str | None:
