@@ -119,9 +119,11 @@ class BagOptions:
         return log.with_no_echo() if self.no_echo else log.batch
 
 
-def read_log(path: str | Path, bag: BagOptions | None = None) -> ReadingBatch:
+def read_log(path: str | Path, bag: BagOptions | None = None, *,
+             max_range: float | None = None) -> ReadingBatch:
     """The readings of one log, whole: a ROS bag (:func:`is_bag`, read with ``bag``) or a
-    readings CSV (``bag`` unused).
+    readings CSV (``bag`` unused; ``max_range``, metres, the run-wide max range of its no-echo
+    rows that give none, as for :func:`~sonarcarve.io.readings_csv.iter_readings_csv`).
 
     Raises
     ------
@@ -131,7 +133,7 @@ def read_log(path: str | Path, bag: BagOptions | None = None) -> ReadingBatch:
     if is_bag(path):
         options = bag if bag is not None else BagOptions()
         return options.readings(options.read(path))
-    return read_readings_csv(path)
+    return read_readings_csv(path, max_range=max_range)
 
 
 class FleetError(SonarcarveError):
@@ -225,7 +227,9 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
         The log's summary line; ``error`` holds the reason when it failed.
     """
     try:
-        batch = read_log(log, bag)
+        # The max-range filter's value is also the run-wide max range of no-echo rows.
+        max_range = None if reading_filter is None else reading_filter.max_range
+        batch = read_log(log, bag, max_range=max_range)
         tic = time.perf_counter()
         result = process_readings(batch, make_method(method, config),
                                   reading_filter=reading_filter, map_filter=map_filter)

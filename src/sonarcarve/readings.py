@@ -33,6 +33,7 @@ __all__ = [
     "MAX_READING_RANGE",
     "MAX_SENSOR",
     "MAX_TIME",
+    "NO_MAX_RANGE",
     "Reading",
     "ReadingBatch",
     "ReadingsError",
@@ -72,7 +73,9 @@ _NOT_WHOLE = "is not a whole number"
 _TOO_LARGE = f"must be at most {MAX_SENSOR}"
 _BAD_BEAM = f"must lie in [{MIN_BEAM_WIDTH:g}, pi) radians (22.5 degrees is 0.39)"
 _BACKWARDS = "goes backwards in time"
-_NO_MAX_RANGE = "is infinite but 'max_range' is not given"
+#: The end of the error of a no-echo reading (range inf) that says how far it listened nowhere
+#: (the commands add how to say it).
+NO_MAX_RANGE = "is infinite but 'max_range' is not given"
 _BAD_MAX_RANGE = f"must be a number in (0, {MAX_READING_RANGE:,.0f}] metres, or NaN (unknown)"
 _TOO_FAR = f"must be at most {MAX_READING_RANGE:,.0f} m"
 #: The bound of each column that has one, and the message of a value beyond it.
@@ -258,7 +261,7 @@ class ReadingBatch:
         if not_finite.any():  # +inf is a no-echo reading, allowed where max_range is known
             no_echo = r == math.inf
             _first_bad(where, "range", not_finite & ~no_echo, _NOT_FINITE)
-            _first_bad(where, "range", no_echo & ~(self.max_range > 0.0), _NO_MAX_RANGE)
+            _first_bad(where, "range", no_echo & ~(self.max_range > 0.0), NO_MAX_RANGE)
         _first_bad(where, "range", r <= 0.0, _NOT_POSITIVE)
         _first_bad(where, "range", (r > MAX_READING_RANGE) & (r < math.inf), _TOO_FAR)
         _first_bad(where, "sensor", self.sensor < 0, _NEGATIVE)
@@ -423,7 +426,7 @@ def _explain_bad_reading(reading: Reading, where: _Where, previous_t: float) -> 
         if reading.range != math.inf:
             _raise(where, 0, "range", _NOT_FINITE)
         if not limit > 0.0:
-            _raise(where, 0, "range", _NO_MAX_RANGE)
+            _raise(where, 0, "range", NO_MAX_RANGE)
     if reading.range <= 0.0:
         _raise(where, 0, "range", _NOT_POSITIVE)
     if MAX_READING_RANGE < reading.range < math.inf:

@@ -596,7 +596,9 @@ def test_run_wide_max_range_fills_unknown_ones(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="line 2, column 'range' is infinite but 'max_range'"):
         read_readings_csv(path)
     batch = read_readings_csv(path, max_range=5.0)
-    np.testing.assert_array_equal(batch.max_range, [5.0, 5.0])
+    np.testing.assert_array_equal(batch.max_range, [5.0, math.nan])  # no-echo rows only
+    path.write_text(HEADER + "0,0,0,0,0,inf\n1,0,0,0,0,7\n")  # an echo beyond it: no error
+    np.testing.assert_array_equal(read_readings_csv(path, max_range=5.0).range, [math.inf, 7.0])
     path.write_text(HEADER.rstrip() + ",max_range\n0,0,0,0,0,inf,3\n1,0,0,0,0,inf,\n")
     np.testing.assert_array_equal(read_readings_csv(path, max_range=5.0).max_range, [3.0, 5.0])
     with pytest.raises(ValueError, match="max_range must be a finite number > 0"):

@@ -19,11 +19,15 @@ import typer
 from sonarcarve.cli.app import app, console, cut_short, flag_message, summary_table, warn
 from sonarcarve.cli.options import (
     FrameOpt,
+    MaxRangeOpt,
     NoEchoOpt,
     OdomTopicOpt,
     RangeTopicOpt,
     RobotOpt,
     bag_options,
+    check_max_range,
+    drop_far_echoes,
+    max_range_hint,
     read_bag,
     refuse_bag_options,
 )
@@ -122,10 +126,11 @@ def build_grid(batch: ReadingBatch, model: str, resolution: float,
     return built
 
 
-def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
+def read_log_for_grid(source: Path, bag: BagOptions,
+                      max_range: float | None = None) -> ReadingBatch:
     """The readings of ``source``: a ROS bag (:func:`~sonarcarve.fleet.is_bag`) read with
     ``bag`` as ``sonarcarve process`` reads it, else a readings CSV (whose no-echo rows, range
-    inf, are in it already).
+    inf, are in it already; ``max_range``, metres, is how far those that give none listened).
 
     Raises
     ------
@@ -136,7 +141,8 @@ def read_log_for_grid(source: Path, bag: BagOptions) -> ReadingBatch:
         nothing, ``--no-echo``).
     """
     if not is_bag(source):
-        batch, silent = read_readings_csv(source), 0
+        with max_range_hint():
+            batch, silent = read_readings_csv(source, max_range=max_range), 0
     else:
         log = read_bag(bag, source)
         batch, silent = bag.readings(log), len(log.no_echo)
@@ -189,6 +195,7 @@ def grid(
     odom_topic: OdomTopicOpt = None,
     frame: FrameOpt = None,
     no_echo: NoEchoOpt = False,
+    max_range: MaxRangeOpt = None,
 ) -> None:
     """Map a readings CSV or a ROS bag into an occupancy grid, written as a ROS map_server map.
 
@@ -220,15 +227,19 @@ def grid(
 
     Example: `sonarcarve grid readings.csv --free-below 0.196 --out grid.yaml` (free only where
     the evidence is strong, as map_saver's threshold)
+
+    Example: `sonarcarve grid gazebo.csv --max-range 5 --out grid.yaml` (a CSV whose silent
+    firings are rows with range inf and no max_range column)
     """
     _check_model(model)  # these two before anything is read
     grid_params(model, fresh_periods, free_below)
+    check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
-    batch = read_log_for_grid(readings, bag)
+    batch, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
     built = build_grid(batch, model, resolution, margin, fresh_periods, free_below)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
@@ -239,6 +250,7 @@ def grid(
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),
+        *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
         ("cells", f"{cols} x {rows} of {built.resolution:g} m"),
         ("occupied / free / unknown",
          f"{np.count_nonzero(cells == 100):,} / {np.count_nonzero(cells == 0):,} / "

@@ -1,14 +1,18 @@
-"""Options more than one command takes, declared once: how to read a ROS bag, bag outputs.
+"""Options more than one command takes, declared once: how to read a ROS bag, bag outputs,
+the sensors' max range.
 
 ``sonarcarve convert rosbag``, ``sonarcarve process`` and ``sonarcarve grid`` read bags the
 same way; each takes the options below in its signature and turns them into a
 :class:`~sonarcarve.fleet.BagOptions` with :func:`bag_options`; :func:`refuse_bag_options`
-refuses them for a readings CSV input.
+refuses them for a readings CSV input. ``sonarcarve process``, ``grid`` and ``view`` take
+``--max-range`` (:data:`MAX_RANGE_HELP`): the readings CSV contract lets a no-echo row (range
+``inf``) leave its ``max_range`` empty when the run gives one for all.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -16,24 +20,32 @@ import typer
 
 from sonarcarve.cli.app import reworded
 from sonarcarve.errors import SonarcarveError
+from sonarcarve.filters import ReadingFilter, filter_readings
 from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
 from sonarcarve.io.rosbag import RosbagError, RosbagLog
+from sonarcarve.readings import MAX_READING_RANGE, NO_MAX_RANGE, ReadingBatch
 from sonarcarve.robot import load_robot
 
 __all__ = [
     "BAG_FLAGS",
     "BAG_PANEL",
+    "MAX_RANGE_HELP",
     "RUNNER_FLAGS",
     "BagOptionsError",
     "FrameOpt",
+    "MaxRangeError",
+    "MaxRangeOpt",
     "NoEchoOpt",
     "OdomTopicOpt",
     "RangeTopicOpt",
     "RobotOpt",
     "bag_options",
+    "check_max_range",
     "check_new_bag",
+    "drop_far_echoes",
+    "max_range_hint",
     "read_bag",
     "refuse_bag_options",
 ]
@@ -45,6 +57,14 @@ BAG_FLAGS = {"odom_topic": "--odom-topic", "range_topics": "--range-topic",
 #: :func:`~sonarcarve.fleet.map_logs`) -> the options (:func:`~sonarcarve.cli.app.reworded`).
 RUNNER_FLAGS = {"workers": "--workers", "scheduler": "--scheduler",
                 "connect_timeout": "--connect-timeout", "out_dir": "--out-dir"}
+
+#: What ``--max-range`` means to every command that takes it (process adds its filter panel).
+MAX_RANGE_HELP = (
+    "The sensors' max range, metres: echoes farther are dropped (reading filter), and a "
+    "readings CSV's no-echo rows (range inf) without a max_range of their own heard nothing up "
+    "to it (free space). Off: every echo is kept, and such rows need a max_range column.")
+MaxRangeOpt = Annotated[float | None, typer.Option(
+    "--max-range", metavar="METRES", show_default="off", help=MAX_RANGE_HELP)]
 
 #: The help panel the bag options are listed under.
 BAG_PANEL = "ROS bag input"
@@ -137,3 +157,49 @@ def check_new_bag(path: Path, *, inputs: Iterable[Path] = (), label: str) -> Pat
         msg = f"{label}: already exists; a bag is never overwritten, remove it or pick another name"
         raise OutputError(msg)
     return target
+
+
+@contextmanager
+def max_range_hint() -> Iterator[None]:
+    """Re-raise the error of a no-echo row (range inf) that gives no max_range (a readings
+    CSV's :class:`~sonarcarve.io.errors.InputError`, a batch's
+    :class:`~sonarcarve.readings.ReadingsError`) with the two ways to give one: the error
+    names the row, the hint the remedy."""
+    try:
+        yield
+    except SonarcarveError as err:
+        if not str(err).endswith(NO_MAX_RANGE):
+            raise
+        msg = f"{err} (add a max_range column, or give the sensors' max range with --max-range)"
+        raise type(err)(msg) from None
+
+
+class MaxRangeError(SonarcarveError):
+    """A ``--max-range`` that is not a finite number of metres in (0, 10,000]."""
+
+
+def check_max_range(max_range: float | None) -> float | None:
+    """``--max-range`` checked before anything is read: a finite number > 0, at most
+    :data:`~sonarcarve.readings.MAX_READING_RANGE` (what a readings CSV accepts as a row's
+    max_range), or None (off).
+
+    Raises
+    ------
+    MaxRangeError
+        One line naming the option and the value.
+    """
+    if max_range is not None and not 0.0 < max_range <= MAX_READING_RANGE:  # NaN fails too
+        msg = (f"--max-range must be a finite number > 0 metres, at most "
+               f"{MAX_READING_RANGE:,.0f}, got {max_range}")
+        raise MaxRangeError(msg)
+    return max_range
+
+
+def drop_far_echoes(batch: ReadingBatch, max_range: float | None) -> tuple[ReadingBatch, int]:
+    """``batch`` without its echoes farther than ``max_range`` (None: all kept), and how many
+    were dropped: ``--max-range`` as ``sonarcarve process`` applies it (a no-echo row keeps its
+    own max_range)."""
+    if max_range is None:
+        return batch, 0
+    kept = filter_readings(batch, ReadingFilter(max_range=max_range))
+    return kept.batch, kept.report.too_far

@@ -29,6 +29,7 @@ from sonarcarve.cli.app import (
     warn,
 )
 from sonarcarve.cli.options import (
+    MAX_RANGE_HELP,
     RUNNER_FLAGS,
     FrameOpt,
     NoEchoOpt,
@@ -36,7 +37,9 @@ from sonarcarve.cli.options import (
     RangeTopicOpt,
     RobotOpt,
     bag_options,
+    check_max_range,
     check_new_bag,
+    max_range_hint,
     read_bag,
     refuse_bag_options,
 )
@@ -100,6 +103,12 @@ class _Job:
     def sonar(self) -> SonarMethod:
         """A fresh method."""
         return make_method(self.method, self.config)
+
+    @property
+    def max_range(self) -> float | None:
+        """``--max-range``: also how far a readings CSV's no-echo rows without a max_range
+        listened (the readings CSV contract's run-wide max range)."""
+        return None if self.reading_filter is None else self.reading_filter.max_range
 
 
 class Output(NamedTuple):
@@ -190,10 +199,9 @@ _IncidenceOpt = Annotated[float | None, typer.Option(
          "--max-incidence 30.")]
 _MaxRangeOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
-    help="Drop echoes farther than this, metres (reading filter; off by default). The "
-         f"paper used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your "
-         "sensors' height and floor. No-echo rows (range inf) are kept, with their own "
-         "max_range.", rich_help_panel="Filters")]
+    help=f"{MAX_RANGE_HELP} No-echo rows that give a max_range keep theirs. The paper "
+         f"used 150 in = {PAPER_MAX_RANGE:.2f} m on its robot; pick yours from your sensors' "
+         "height and floor.", rich_help_panel="Filters")]
 _MinRangeOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help="Drop readings nearer than this, metres (reading filter).",
@@ -332,7 +340,8 @@ def process(
         raise ParameterError(msg)
     job = _Job(source, out, method, config, reading_filter, map_filter, bag, rate, cell)
     output.check(job)  # before the (possibly long) run: a bad --out wastes no time
-    rows = output.write(job)
+    with max_range_hint():  # a no-echo row without max_range: say how to give one
+        rows = output.write(job)
     # Only now: a failed run prints its error line alone.
     warn([beam_warning, *job.warnings, None if is_bag(source) else cut_short(source)])
     console.print(summary_table(f"sonarcarve process --method {method}", rows))
@@ -441,7 +450,8 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
         batch, (parent, child) = job.bag.readings(log), log.report.odometry_frames
         copy_from: Path | None = job.source
     else:
-        batch, parent, child, copy_from = read_readings_csv(job.source), "", "", None
+        batch = read_readings_csv(job.source, max_range=job.max_range)
+        parent, child, copy_from = "", "", None
     job.warnings.extend(likely_mistakes(batch))
     grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
             CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
@@ -470,7 +480,7 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
 def _read_whole(job: _Job) -> ReadingBatch:
     if is_bag(job.source):
         return job.bag.readings(read_bag(job.bag, job.source))
-    return read_readings_csv(job.source)
+    return read_readings_csv(job.source, max_range=job.max_range)
 
 
 #: Ending of ``--out`` (lower case; "" a rosbag2 folder) -> what is written there.
@@ -574,7 +584,8 @@ def _run(readings: Path, sonar: SonarMethod, label: str,
          warnings: list[str], sink: MapCsvSink | None = None) -> ProcessResult:
     """Map the file ``readings`` with ``sonar`` (the map to ``sink``, if given), with a
     progress bar for long logs; the likely mistakes of its first block added to ``warnings``."""
-    chunks = _first_checked(iter_readings_csv(readings), warnings)
+    max_range = None if reading_filter is None else reading_filter.max_range
+    chunks = _first_checked(iter_readings_csv(readings, max_range=max_range), warnings)
     rows = count_data_lines(readings)  # the bar's total, from the line breaks alone
     if rows < _PROGRESS_MIN_READINGS:
         result = process_chunks(chunks, sonar, reading_filter=reading_filter,
@@ -595,6 +606,7 @@ def _filters(max_range: float | None, min_range: float | None, jump: float | Non
              radius: float | None, neighbours: int, max_error: float | None,
              occlusion_depth: float | None = None,
              ) -> tuple[ReadingFilter | None, MapFilter | None]:
+    check_max_range(max_range)  # also what a readings CSV accepts as a row's max_range
     for name, value in (("--max-range", max_range), ("--min-range", min_range),
                         ("--jump-threshold", jump), ("--outlier-radius", radius),
                         ("--max-error", max_error), ("--occlusion-depth", occlusion_depth)):

@@ -12,6 +12,7 @@ from typing import Annotated
 import typer
 
 from sonarcarve.cli.app import app, console, cut_short, reworded, summary_table, warn
+from sonarcarve.cli.options import MaxRangeOpt, check_max_range, drop_far_echoes, max_range_hint
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import check_output_file
@@ -57,6 +58,7 @@ def view(
         "--open/--no-open",
         help="Open the recording in the Rerun viewer when one can be started (a display "
              "and the `rerun` program).")] = True,
+    max_range: MaxRangeOpt = None,
 ) -> None:
     """Record a run for the Rerun viewer: robot path, each reading's arc, the map growing.
 
@@ -75,13 +77,17 @@ def view(
         msg = f"--out {target}: a Rerun recording's name must end in .rrd"
         raise ViewUsageError(msg)
     sonar = make_method(method)
+    check_max_range(max_range)
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
-    batch = read_readings_csv(readings)
+    with max_range_hint():
+        batch, too_far = drop_far_echoes(read_readings_csv(readings, max_range=max_range),
+                                         max_range)
     with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
         global_map = write_rerun(target, batch, sonar, walls=walls, every=every)
     viewer = find_viewer() if open_ else None
     rows = [("readings", f"{len(batch):,}"), ("points in global map", f"{len(global_map):,}"),
+            *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
             ("true walls", f"{len(walls):,}" if walls is not None else "none"),
             ("recording saved to", str(target))]
     if viewer is not None:

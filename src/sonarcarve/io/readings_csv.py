@@ -119,8 +119,11 @@ def iter_readings_csv(path: str | Path, *, block_size: int = BLOCK_SIZE,
     block_size : int
         Bytes read at a time (at least 1; a longer line is read whole).
     max_range : float, optional
-        Run-wide max range, metres (finite, > 0): the ``max_range`` of every row that does not
-        give its own (no column, or an empty cell), so that ``inf`` rows are no-echo readings.
+        Run-wide max range, metres (finite, > 0): the ``max_range`` of every no-echo row
+        (``inf``) that does not give its own (no column, or an empty cell), so that it is a
+        no-echo reading. Echo rows are left as they are: an echo beyond a run-wide value is
+        one for a reading filter to drop (``sonarcarve process --max-range``), not a broken
+        file, whereas a row's own ``max_range`` below its range is.
 
     Yields
     ------
@@ -490,11 +493,11 @@ class _Reader:
 
     def _validated(self, arrays: dict[str, FloatArray], first_line: int) -> ReadingBatch:
         """The batch of ``arrays``; :class:`ReadingsError` if any row breaks a rule."""
-        if self.max_range is not None:  # the run-wide max range where a row gives none
+        if self.max_range is not None:  # the run-wide max range where a no-echo row gives none
             given = arrays.get("max_range")
-            arrays = {**arrays, "max_range": (
-                np.full(arrays["t"].shape, self.max_range) if given is None
-                else np.where(np.isnan(given), self.max_range, given))}
+            known = np.full(arrays["t"].shape, np.nan) if given is None else given
+            unknown = np.isnan(known) & (arrays["range"] == np.inf)
+            arrays = {**arrays, "max_range": np.where(unknown, self.max_range, known)}
         batch = ReadingBatch.from_arrays(**arrays, source=str(self.path), first_line=first_line)
         if len(batch) and batch.t[0] < self.previous_t:  # the only rule across batches
             batch[:1].validate(str(self.path), first_line, previous_t=self.previous_t)
