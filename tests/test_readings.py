@@ -89,8 +89,9 @@ def test_validation_names_row_and_column(overrides: dict[str, object], problem: 
 @pytest.mark.parametrize(("overrides", "hint"), [
     # Times since 1970 in milliseconds, a UTM northing, a beam width in degrees: values a
     # logger writes, refused with the way out named.
-    ({"t": [1.7e12, 1.7e12 + 40, 1.7e12 + 80]}, "milliseconds or nanoseconds"),
-    ({"t": [1.7e18, 1.7e18 + 4e7, 1.7e18 + 8e7]}, "milliseconds or nanoseconds"),
+    ({"t": [1.7e12, 1.7e12 + 40, 1.7e12 + 80]}, "milli-, micro- or nanoseconds since 1970"),
+    ({"t": [1.7e15, 1.7e15 + 4e4, 1.7e15 + 8e4]}, "milli-, micro- or nanoseconds since 1970"),
+    ({"t": [1.7e18, 1.7e18 + 4e7, 1.7e18 + 8e7]}, "milli-, micro- or nanoseconds since 1970"),
     ({"y": [5.3e6, 5.3e6, 5.3e6]}, "subtract a local origin"),
     ({"x": [0.0, -2e6, 0.0]}, "subtract a local origin"),
     ({"beam_width": [22.5, 22.5, 22.5]}, "22.5 degrees is 0.39"),

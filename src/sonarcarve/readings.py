@@ -79,11 +79,11 @@ NO_MAX_RANGE = "is infinite but 'max_range' is not given"
 _BAD_MAX_RANGE = f"must be a number in (0, {MAX_READING_RANGE:,.0f}] metres, or NaN (unknown)"
 _TOO_FAR = f"must be at most {MAX_READING_RANGE:,.0f} m"
 #: The bound of each column that has one, and the message of a value beyond it.
-#: The hints name what loggers write there: times since 1970 in ms or ns, UTM northings.
+#: The hints name what loggers write there: times since 1970 in ms, µs or ns, UTM northings.
 _OFF_MAP = f"must lie within ±{MAX_POSITION:,.0f} m (UTM coordinates? subtract a local origin)"
 _BOUNDS = {
-    "t": (MAX_TIME, "must lie within ±1e12 s (seconds: milliseconds or nanoseconds since 1970 "
-                    "are beyond it)"),
+    "t": (MAX_TIME, "must lie within ±1e12 s (seconds: milli-, micro- or nanoseconds since "
+                    "1970 are beyond it)"),
     "x": (MAX_POSITION, _OFF_MAP),
     "y": (MAX_POSITION, _OFF_MAP),
     "theta": (MAX_ANGLE, f"must lie within ±{MAX_ANGLE:,.0f} rad"),
