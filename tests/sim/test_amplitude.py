@@ -17,7 +17,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-import sonarcarve.sim.sonar as sonar_module
 from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.amplitude import (
     AmplitudeModel,
@@ -36,6 +35,7 @@ from sonarcarve.sim.sonar import (
     SonarPhysics,
     SonarPhysicsError,
     fire_sonars,
+    tracing,
 )
 from sonarcarve.sim.world import World
 
@@ -283,7 +283,7 @@ def test_same_seed_same_echoes_whatever_the_batching(monkeypatch: pytest.MonkeyP
     np.testing.assert_array_equal(runs[0].kind, runs[1].kind)
     np.testing.assert_array_equal(runs[0].range, runs[1].range)
     assert not np.array_equal(runs[0].range, runs[2].range, equal_nan=True)
-    monkeypatch.setattr(sonar_module, "_CHUNK_FIRINGS", 37)
+    monkeypatch.setattr(tracing, "_CHUNK_FIRINGS", 37)
     rebatched = fire_sonars(room_world(), robot, firings, AMPLITUDE, np.random.default_rng(1))
     np.testing.assert_array_equal(runs[0].kind, rebatched.kind)
     np.testing.assert_array_equal(runs[0].range, rebatched.range)

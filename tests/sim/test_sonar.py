@@ -11,7 +11,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import sonarcarve.sim.sonar as sonar_module
 from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.sonar import (
     NO_ECHO,
@@ -21,6 +20,8 @@ from sonarcarve.sim.sonar import (
     SonarPhysics,
     SonarPhysicsError,
     fire_sonars,
+    tracing,
+    wall_geometry,
 )
 from sonarcarve.sim.world import World
 
@@ -263,8 +264,8 @@ def test_wall_prefilter_and_batching_do_not_change_the_result(
         world = geometry.world  # type: ignore[attr-defined]
         return world, np.arange(len(world)), geometry.scatter  # type: ignore[attr-defined]
 
-    monkeypatch.setattr(sonar_module._WallGeometry, "near", everything)
-    monkeypatch.setattr(sonar_module, "_CHUNK_FIRINGS", 37)
+    monkeypatch.setattr(wall_geometry._WallGeometry, "near", everything)
+    monkeypatch.setattr(tracing, "_CHUNK_FIRINGS", 37)
     slow = fire_sonars(room_world(), robot, firings, physics, np.random.default_rng(9))
     np.testing.assert_array_equal(fast.kind, slow.kind)
     np.testing.assert_array_equal(fast.range, slow.range)
