@@ -272,6 +272,46 @@ def test_wall_prefilter_and_batching_do_not_change_the_result(
     np.testing.assert_array_equal(fast.reflection, slow.reflection)
 
 
+def hall_world() -> World:
+    """A 60 x 14 m hall with free-standing walls every 4 m on both sides of its middle line:
+    a robot on that line hears walls from all over its 6.5 m range."""
+    walls = [[0, 0, 60, 0], [60, 0, 60, 14], [60, 14, 0, 14], [0, 14, 0, 0]]
+    walls += [[x, 2.0 + (x % 8) / 4, x + 1.5, 3.5] for x in range(2, 58, 4)]
+    walls += [[x, 10.5, x + 1.5, 12.0 - (x % 8) / 4] for x in range(4, 58, 4)]
+    return World(np.array(walls, dtype=float), name="hall")
+
+
+@pytest.mark.parametrize("echo_model", ["specular", "amplitude"])
+def test_wall_prefilter_keeps_every_wall_within_range_of_a_tour(
+    monkeypatch: pytest.MonkeyPatch, echo_model: str,
+) -> None:
+    # Firings in tour order, so each batch's box is a short stretch of the hall (the room test
+    # above fires all over its room in every batch): a pre-filter margin short of max_range
+    # loses the walls between it and max_range of the stretch.
+    robot = load_robot("scout2")
+    n = 3000
+    x = np.linspace(1.0, 59.0, n)
+    heading = np.full(n, 0.3)
+    sensor = np.arange(n) % robot.n_sensors
+    sx, sy, theta = robot.sensor_poses(x, np.full(n, 7.0), heading, sensor)
+    firings = Firings(t=0.04 * np.arange(n), sensor=sensor, x=sx, y=sy, theta=theta)
+    physics = replace(SonarPhysics(echo_model=echo_model), multipath_probability=1.0,
+                      crosstalk_probability=1.0)
+    fast = fire_sonars(hall_world(), robot, firings, physics, np.random.default_rng(3))
+
+    def everything(self: object, *box: float, margin: float) -> object:
+        geometry = self
+        world = geometry.world  # type: ignore[attr-defined]
+        return world, np.arange(len(world)), geometry.scatter  # type: ignore[attr-defined]
+
+    monkeypatch.setattr(wall_geometry._WallGeometry, "near", everything)
+    slow = fire_sonars(hall_world(), robot, firings, physics, np.random.default_rng(3))
+    assert np.count_nonzero(fast.true_range > robot.max_range / 2) > 100  # far walls heard
+    np.testing.assert_array_equal(fast.kind, slow.kind)
+    np.testing.assert_array_equal(fast.range, slow.range)
+    np.testing.assert_array_equal(fast.reflection, slow.reflection)
+
+
 def test_same_seed_same_echoes_other_seed_differs() -> None:
     robot = load_robot("scout2")
     firings = random_firings(300, 4, robot)
