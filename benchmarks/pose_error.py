@@ -33,6 +33,11 @@ themselves in the wrong place after a few metres, so a grid against the true wal
 drift, not the grid): occupied precision, recall and phantom share against the true walls
 (:mod:`sonarcarve.lab.grid_measures`, filled as ``benchmarks/grids.py`` fills them).
 
+``--pose-sigma`` adds the fix tried for what breaks: evidence carving with its range tolerance
+ε widened by 2σ (a newer reading's free space ends 2σ earlier) and the carved grid with
+``CarvedGridParams(pose_sigma=σ)``, σ the condition's position σ as a user would set it from
+the localiser (0 under true poses and drift, where the rows are the defaults' own).
+
 Worlds: the office, t-junction and doorway tours and the held-out generated floor ``random:1``
 (``benchmarks/heldout.py``'s first), the Scout2 ring unless ``--robot`` (``p3dx-front``: the
 Pioneer's 8 front sonars). ``--save FILE`` writes every per-run row as JSON (``--load FILE`` to
@@ -48,7 +53,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -58,7 +63,8 @@ from evidence import KINDS, map_row
 from grids import Factory, _carved, _elfes, _fill, _layer
 from sonarcarve import MethodConfig, SonarMethod, make_method
 from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter
-from sonarcarve.grids import RangeSensorLayerParams
+from sonarcarve.grids import CarvedGrid, CarvedGridParams, OccupancyMap, RangeSensorLayerParams
+from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS
 from sonarcarve.lab.experiments.odometry import pose_corrected
 from sonarcarve.lab.grid_measures import grid_measures
 from sonarcarve.lab.metrics import segment_distance
@@ -80,6 +86,12 @@ class Condition:
     label: str
     localisation_noise: tuple[float, float, float] | None = None
     odometry_drift: bool = False
+
+    @property
+    def position_sigma(self) -> float:
+        """σ of the localisation error in x and y, metres (0 without one): the pose
+        uncertainty a user would give ``--pose-sigma``'s rows."""
+        return 0.0 if self.localisation_noise is None else self.localisation_noise[0]
 
     @property
     def for_grids(self) -> bool:
@@ -108,6 +120,11 @@ GRIDS: tuple[tuple[str, Factory], ...] = (
     ("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
     ("Elfes/octomap grid", _elfes),
 )
+#: Names of the ``--pose-sigma`` rows: evidence carving with ε + 2σ (its newer readings' free
+#: space ending 2σ earlier) and the carved grid with ``pose_sigma`` σ, σ the condition's
+#: position σ (0 under true poses and drift: then the default's row, the same bits).
+EVIDENCE_SIGMA = "evidence, ε + 2σ_pose"
+CARVED_SIGMA = "carved grid, pose_sigma σ"
 #: Issue 9's targets (shares) and the error ratio to centerline's.
 KEEP, REMOVE, MEDIAN_RATIO = 85.0, 85.0, 0.4
 Row = dict[str, float]
@@ -129,13 +146,20 @@ def _corrected_error(sim: Simulation, xy: np.ndarray, t: np.ndarray) -> np.ndarr
     return np.asarray(segment_distance(xy, sim.world.segments)[0])
 
 
-def point_rows(sim: Simulation) -> dict[str, Row]:
+def point_rows(sim: Simulation, pose_sigma: float | None = None) -> dict[str, Row]:
     """Every method's row on one simulation: evidence.py's measures plus absolute errors,
-    raw and with the pose error removed, and the corrected ratios to centerline's."""
+    raw and with the pose error removed, and the corrected ratios to centerline's; with
+    ``pose_sigma`` also :data:`EVIDENCE_SIGMA`'s."""
     config = MethodConfig()
     maps = {name: process_readings(sim.readings, make_method(method, config),
                                    map_filter=map_filter)
             for name, method, map_filter in METHODS}
+    if pose_sigma:
+        wider = replace(config, range_tolerance=config.range_tolerance
+                        + POSE_MARGIN_SIGMAS * pose_sigma)
+        maps[EVIDENCE_SIGMA] = process_readings(sim.readings, make_method("evidence", wider))
+    elif pose_sigma is not None:
+        maps[EVIDENCE_SIGMA] = maps["evidence"]
     center = maps["centerline"].global_map
     center_err = np.full(len(sim.readings), np.nan)
     center_err[center.reading_id] = segment_distance(center.xy, sim.world.segments)[0]
@@ -159,14 +183,18 @@ def point_rows(sim: Simulation) -> dict[str, Row]:
     return rows
 
 
-def grid_rows(sim: Simulation, seed: int) -> dict[str, Row]:
-    """Every grid at every resolution: occupied precision, recall, phantoms (true walls)."""
+def grid_rows(sim: Simulation, seed: int, pose_sigma: float | None = None) -> dict[str, Row]:
+    """Every grid at every resolution: occupied precision, recall, phantoms (true walls); with
+    ``pose_sigma`` also :data:`CARVED_SIGMA`'s."""
+    grids = list(GRIDS)
+    if pose_sigma is not None:
+        grids.insert(1, (CARVED_SIGMA, _carved_with_pose_sigma(pose_sigma)))
     direct = sim.truth.kind == EchoKind.DIRECT
     true_path = np.column_stack((sim.firings.x[sim.truth.firing],
                                  sim.firings.y[sim.truth.firing]))
     rows = {}
     for h in RESOLUTIONS:
-        for name, make in GRIDS:
+        for name, make in grids:
             grid = _fill(make, h, sim, seed)
             m = grid_measures(grid, sim.world.segments, sim.truth.reflection[direct],
                               sim.world.bounds, path=true_path)
@@ -175,8 +203,15 @@ def grid_rows(sim: Simulation, seed: int) -> dict[str, Row]:
     return rows
 
 
+def _carved_with_pose_sigma(sigma: float) -> Factory:
+    def make(h: float, b: tuple[float, float, float, float]) -> OccupancyMap:
+        return CarvedGrid(h, b, params=CarvedGridParams(pose_sigma=sigma))
+    return make
+
+
 def run(worlds: Sequence[str], seeds: int, physics: str, robot: str,
-        conditions: Sequence[Condition], skip_grids: bool) -> dict[str, Any]:
+        conditions: Sequence[Condition], skip_grids: bool,
+        with_sigma: bool = False) -> dict[str, Any]:
     """Every (world, seed, condition): its point rows and (not under drift) grid rows."""
     out: dict[str, Any] = {"physics": physics, "robot": robot, "seeds": seeds, "runs": []}
     for world in worlds:
@@ -184,9 +219,10 @@ def run(worlds: Sequence[str], seeds: int, physics: str, robot: str,
             for condition in conditions:
                 tic = time.perf_counter()
                 sim = simulate_condition(world, seed, physics, robot, condition)
+                sigma = condition.position_sigma if with_sigma else None
                 entry = {"world": world, "seed": seed, "condition": condition.label,
-                         "points": point_rows(sim),
-                         "grids": grid_rows(sim, seed)
+                         "points": point_rows(sim, sigma),
+                         "grids": grid_rows(sim, seed, sigma)
                          if condition.for_grids and not skip_grids else {}}
                 out["runs"].append(entry)
                 print(f"  {physics}, {world}, seed {seed}, {condition.label}: "
@@ -219,7 +255,7 @@ def points_table(data: dict[str, Any], world: str, conditions: Sequence[str]) ->
           "pose error removed | median / centerline's | pose error removed | "
           "p90 / centerline's |")
     print("|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|")
-    methods = [name for name, _, _ in METHODS]
+    methods = list(data["runs"][0]["points"])
     for name in methods:
         for condition in conditions:
             rows = [r["points"][name] for r in _runs(data, world, condition)]
@@ -239,9 +275,11 @@ def claims_table(data: dict[str, Any], worlds: Sequence[str], conditions: Sequen
     """Evidence carving's targets per world and condition: the mean and the seeds meeting it."""
     print(f"\nevidence carving's claims, physics {data['physics']} (mean over seeds; seeds "
           "meeting the target)\n")
+    fixed = EVIDENCE_SIGMA in data["runs"][0]["points"]
+    extra = " direct kept, ε + 2σ | spurious removed, ε + 2σ | median, ε + 2σ |" if fixed else ""
     print("| world | poses | direct kept ≥ 85 % | spurious removed ≥ 85 % | the same with the "
-          "occlusion filter | median ≤ 0.4x centerline's |")
-    print("|---|---|---|---|---|---|")
+          f"occlusion filter | median ≤ 0.4x centerline's |{extra}")
+    print("|---|---|---|---|---|---|" + ("---|---|---|" if fixed else ""))
     for world in worlds:
         for condition in conditions:
             runs = _runs(data, world, condition)
@@ -256,11 +294,17 @@ def claims_table(data: dict[str, Any], worlds: Sequence[str], conditions: Sequen
                 fmt = f"{mean:.2f}" if key == "median_ratio" else f"{mean:.1f}"
                 return f"{fmt} ({met}/{len(rows)})"
 
-            print(f"| {world} | {condition} | "
-                  f"{cell(plain, 'direct_kept', lambda v: v >= KEEP)} | "
-                  f"{cell(plain, 'spurious', lambda v: v >= REMOVE)} | "
-                  f"{cell(hidden, 'spurious', lambda v: v >= REMOVE)} | "
-                  f"{cell(plain, 'median_ratio', lambda v: v <= MEDIAN_RATIO)} |")
+            line = (f"| {world} | {condition} | "
+                    f"{cell(plain, 'direct_kept', lambda v: v >= KEEP)} | "
+                    f"{cell(plain, 'spurious', lambda v: v >= REMOVE)} | "
+                    f"{cell(hidden, 'spurious', lambda v: v >= REMOVE)} | "
+                    f"{cell(plain, 'median_ratio', lambda v: v <= MEDIAN_RATIO)} |")
+            if fixed:
+                wide = [r["points"][EVIDENCE_SIGMA] for r in runs]
+                line += (f" {cell(wide, 'direct_kept', lambda v: v >= KEEP)} | "
+                         f"{cell(wide, 'spurious', lambda v: v >= REMOVE)} | "
+                         f"{cell(wide, 'median_ratio', lambda v: v <= MEDIAN_RATIO)} |")
+            print(line)
 
 
 def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> None:
@@ -273,8 +317,9 @@ def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> 
     print("| resolution (m) | grid | poses | precision | recall | phantoms (%) | "
           "seen walls freed (%) | beats the layer |")
     print("|---:|---|---|---:|---:|---:|---:|---|")
+    names = list(dict.fromkeys(key.rsplit(" @ ", 1)[0] for key in runs_any[0]["grids"]))
     for h in RESOLUTIONS:
-        for name, _ in GRIDS:
+        for name in names:
             for condition in conditions:
                 runs = [r for r in _runs(data, world, condition) if r["grids"]]
                 if not runs:
@@ -282,7 +327,7 @@ def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> 
                 rows = [r["grids"][f"{name} @ {h:.2f}"] for r in runs]
                 layer = [r["grids"][f"RangeSensorLayer, ROS defaults @ {h:.2f}"] for r in runs]
                 wins = ""
-                if name == "carved grid":
+                if name.startswith("carved grid"):
                     won = sum(c["precision"] > lay["precision"] and c["recall"] > lay["recall"]
                               for c, lay in zip(rows, layer, strict=True))
                     wins = f"{won} of {len(rows)}"
@@ -314,6 +359,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true",
                         help="office, seed 0, specular only (a few minutes)")
     parser.add_argument("--skip-grids", action="store_true")
+    parser.add_argument("--pose-sigma", action="store_true",
+                        help="add rows: evidence carving with ε + 2σ and the carved grid with "
+                             "pose_sigma σ, σ the condition's localisation position σ")
     parser.add_argument("--save", type=Path, help="write the per-run rows as JSON")
     parser.add_argument("--load", type=Path, help="print the tables of a --save file and stop")
     args = parser.parse_args(argv)
@@ -326,7 +374,8 @@ def main(argv: list[str] | None = None) -> int:
     conditions = [c for c in CONDITIONS if not args.conditions or c.label in args.conditions]
     everything = []
     for physics in args.physics:
-        data = run(args.worlds, args.seeds, physics, args.robot, conditions, args.skip_grids)
+        data = run(args.worlds, args.seeds, physics, args.robot, conditions, args.skip_grids,
+                   args.pose_sigma)
         print_tables(data)
         everything.append(data)
     if args.save:
