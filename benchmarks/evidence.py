@@ -61,7 +61,7 @@ from sonarcarve.lab.experiments.real_log import line_spread
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, EvidenceOptions
-from sonarcarve.pipeline import process_readings
+from sonarcarve.pipeline import ProcessResult, process_readings
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
 from synthetic import corridor_stream
@@ -143,6 +143,14 @@ def _measure(sim: Simulation, make: Factory, config: MethodConfig,
              centerline_err: np.ndarray, centerline_p90: float,
              map_filter: MapFilter | None = None) -> dict[str, float]:
     result = process_readings(sim.readings, make(config), map_filter=map_filter)
+    return map_row(sim, result, centerline_err, centerline_p90)
+
+
+def map_row(sim: Simulation, result: ProcessResult, centerline_err: np.ndarray,
+            centerline_p90: float) -> dict[str, float]:
+    """The columns of :data:`COLUMNS` for one method's run on ``sim`` (``centerline_err``:
+    centerline's error per reading, NaN where it kept no point; ``centerline_p90``: its map's
+    90th percentile)."""
     gmap = result.global_map
     kind = sim.truth.kind
     kept = np.zeros(len(kind), dtype=bool)

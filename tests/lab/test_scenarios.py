@@ -1,10 +1,10 @@
-"""Scenarios: cutting a path to a length."""
+"""Scenarios: cutting a path to a length, stamping readings with believed poses."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from sonarcarve.lab.scenarios import cut_polyline
+from sonarcarve.lab.scenarios import Scenario, cut_polyline, run_simulation
 
 
 def test_cut_polyline_by_hand() -> None:
@@ -14,3 +14,20 @@ def test_cut_polyline_by_hand() -> None:
     np.testing.assert_allclose(cut_polyline(path, 5.5), [[0, 0], [3, 0], [3, 2.5]])
     np.testing.assert_allclose(cut_polyline(path, 100.0), path)
     np.testing.assert_allclose(cut_polyline(path, None), path)
+
+
+def test_localisation_noise_moves_the_stamps_not_the_echoes() -> None:
+    plain = run_simulation(Scenario("doorway", 0, max_length=3.0))
+    noisy = run_simulation(Scenario("doorway", 0, max_length=3.0,
+                                    localisation_noise=(0.05, 0.02, 1.0)))
+    np.testing.assert_array_equal(noisy.truth.reflection, plain.truth.reflection)
+    np.testing.assert_array_equal(noisy.readings.range, plain.readings.range)
+    assert noisy.odometry is not None
+    assert plain.odometry is None
+    # Sensor origins move by the believed pose's error: centimetres, not zero.
+    moved = np.hypot(noisy.readings.x - plain.readings.x, noisy.readings.y - plain.readings.y)
+    assert 0.0 < float(np.median(moved)) < 0.2
+    still = run_simulation(Scenario("doorway", 0, max_length=3.0,
+                                    localisation_noise=(0.0, 0.0, 1.0)))
+    np.testing.assert_array_equal(still.readings.x, plain.readings.x)
+    np.testing.assert_array_equal(still.readings.theta, plain.readings.theta)

@@ -14,6 +14,7 @@ from sonarcarve.sim.motion import (
     Trajectory,
     explore,
     follow_waypoints,
+    with_localisation_noise,
     with_odometry_drift,
 )
 from sonarcarve.sim.world import World, WorldError, load_world
@@ -215,6 +216,99 @@ def test_odometry_bad_parameters() -> None:
                    {"heading_bias": np.inf}):
         with pytest.raises(WorldError):
             with_odometry_drift(truth, seed=0, **kwargs)  # type: ignore[arg-type]
+
+
+# --- localisation noise ------------------------------------------------------------------------
+# Expected values are the Ornstein-Uhlenbeck process's: stationary std σ and correlation
+# exp(-Δ/τ) between errors Δ seconds apart. Tolerances are about 4 standard errors of the
+# estimates (the large-sample formulas for a Gauss-Markov sequence's variance and lag
+# correlations, Bartlett's), so the fixed seeds are not what makes them pass.
+
+def _uneven(duration: float, short: float = 0.02, long: float = 0.08) -> Trajectory:
+    """A straight run whose poses alternate ``short`` and ``long`` seconds apart."""
+    steps = np.tile([short, long], round(duration / (short + long)))
+    t = np.concatenate(([0.0], np.cumsum(steps)))
+    return Trajectory(t, 0.4 * t, np.zeros_like(t), np.zeros_like(t))
+
+
+def _lag_correlation(e: np.ndarray, first: np.ndarray, second: np.ndarray) -> float:
+    return float(np.corrcoef(e[first], e[second])[0, 1])
+
+
+def test_localisation_error_has_the_stationary_sigma() -> None:
+    truth = _uneven(4000.0)  # 80,001 poses, 4000 τ: std of σ's estimate ≈ σ √(τ / 2T) ≈ 1.1 %
+    noisy = with_localisation_noise(truth, seed=1, position_sigma=0.05, heading_sigma=0.02,
+                                    correlation_time=1.0)
+    assert np.std(noisy.x - truth.x) == pytest.approx(0.05, rel=0.05)
+    assert np.std(noisy.y - truth.y) == pytest.approx(0.05, rel=0.05)
+    assert np.std(noisy.heading - truth.heading) == pytest.approx(0.02, rel=0.05)
+    assert abs(np.mean(noisy.x - truth.x)) < 0.05 * 0.1  # mean: std σ √(2τ/T) ≈ 0.022 σ
+
+
+def test_localisation_error_forgets_itself_at_the_correlation_time() -> None:
+    tau = 2.0
+    truth = _uneven(8000.0)
+    noisy = with_localisation_noise(truth, seed=2, position_sigma=0.03, heading_sigma=0.01,
+                                    correlation_time=tau)
+    n = len(truth)
+    # Poses 20 apart are exactly 1 s apart; 40 apart, 2 s (= τ).
+    for error in (noisy.x - truth.x, noisy.heading - truth.heading):
+        for lag, seconds in ((20, 1.0), (40, 2.0), (100, 5.0)):
+            first = np.arange(n - lag)
+            assert _lag_correlation(error, first, first + lag) == pytest.approx(
+                math.exp(-seconds / tau), abs=0.05)
+        # One pose on: 0.02 s after even poses, 0.08 s after odd ones (the real time step
+        # counts, not a mean one).
+        even, odd = np.arange(0, n - 1, 2), np.arange(1, n - 1, 2)
+        assert _lag_correlation(error, even, even + 1) == pytest.approx(
+            math.exp(-0.02 / tau), abs=0.004)
+        assert _lag_correlation(error, odd, odd + 1) == pytest.approx(
+            math.exp(-0.08 / tau), abs=0.004)
+
+
+def test_localisation_error_is_stationary_from_the_first_pose() -> None:
+    truth = _uneven(0.1)
+    first = np.array([with_localisation_noise(truth, seed=seed, position_sigma=0.05).x[0]
+                      for seed in range(800)])
+    # 800 draws of N(0, σ²): std of σ's estimate σ / √1600 = 2.5 %.
+    assert np.std(first) == pytest.approx(0.05, rel=0.12)
+
+
+def test_localisation_noise_is_seeded() -> None:
+    truth = _straight(10.0)
+    first = with_localisation_noise(truth, seed=3)
+    again = with_localisation_noise(truth, seed=3)
+    for name in ("t", "x", "y", "heading"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(again, name))
+    assert not np.array_equal(first.x, with_localisation_noise(truth, seed=4).x)
+
+
+def test_localisation_noise_of_zero_sigma_is_the_truth() -> None:
+    truth = follow_waypoints(load_world("office").tour, dt=0.05)  # type: ignore[arg-type]
+    still = with_localisation_noise(truth, seed=0, position_sigma=0.0, heading_sigma=0.0)
+    for name in ("t", "x", "y", "heading"):
+        np.testing.assert_array_equal(getattr(still, name), getattr(truth, name))
+    # Each sigma moves only its own coordinates.
+    turned = with_localisation_noise(truth, seed=0, position_sigma=0.0, heading_sigma=0.02)
+    np.testing.assert_array_equal(turned.x, truth.x)
+    np.testing.assert_array_equal(turned.y, truth.y)
+    assert not np.array_equal(turned.heading, truth.heading)
+    moved = with_localisation_noise(truth, seed=0, position_sigma=0.02, heading_sigma=0.0)
+    np.testing.assert_array_equal(moved.heading, truth.heading)
+    assert not np.array_equal(moved.y, truth.y)
+
+
+def test_localisation_noise_bad_parameters() -> None:
+    truth = _straight(1.0)
+    for kwargs, message in (
+            ({"position_sigma": -0.01}, "position_sigma must be a finite number >= 0, got -0.01"),
+            ({"heading_sigma": np.nan}, "heading_sigma must be a finite number >= 0, got nan"),
+            ({"correlation_time": 0.0}, "correlation_time must be a finite number > 0, got 0.0"),
+            ({"correlation_time": np.inf},
+             "correlation_time must be a finite number > 0, got inf")):
+        with pytest.raises(WorldError) as info:
+            with_localisation_noise(truth, seed=0, **kwargs)  # type: ignore[arg-type]
+        assert str(info.value) == message
 
 
 # --- size limits -------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from sonarcarve.sim import (
     load_world,
     random_world,
     simulate,
+    with_localisation_noise,
     with_odometry_drift,
 )
 from sonarcarve.sim.world import WorldError
@@ -26,6 +27,7 @@ _SEEDED: dict[str, Callable[[int], object]] = {
     "load_world": lambda seed: load_world(f"random:{seed}"),
     "explore": lambda seed: explore(load_world("doorway"), 1.0, seed),
     "with_odometry_drift": lambda seed: with_odometry_drift(_LINE, seed),
+    "with_localisation_noise": lambda seed: with_localisation_noise(_LINE, seed),
     "simulate": lambda seed: simulate(load_world("doorway"), load_robot("scout2"), _LINE, seed),
 }
 

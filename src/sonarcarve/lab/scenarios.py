@@ -16,7 +16,12 @@ import numpy.typing as npt
 
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.robot import load_robot
-from sonarcarve.sim.motion import DEFAULT_SPEED, follow_waypoints, with_odometry_drift
+from sonarcarve.sim.motion import (
+    DEFAULT_SPEED,
+    follow_waypoints,
+    with_localisation_noise,
+    with_odometry_drift,
+)
 from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import SonarPhysics
 from sonarcarve.sim.world import World
@@ -58,6 +63,11 @@ class Scenario:
         Stamp the readings with dead-reckoned poses
         (:func:`~sonarcarve.sim.motion.with_odometry_drift` of the path, seeded with ``seed``)
         while echoes still come from the true poses.
+    localisation_noise : (position_sigma, heading_sigma, correlation_time), optional
+        Stamp the readings with a localiser's poses: the true path plus the Gauss-Markov error
+        of :func:`~sonarcarve.sim.motion.with_localisation_noise` (metres, radians, seconds;
+        seeded with ``seed``), added on top of the drift when ``odometry_drift`` is set too.
+        Echoes still come from the true poses.
     """
 
     world: str
@@ -69,6 +79,7 @@ class Scenario:
     physics: tuple[tuple[str, float | str], ...] = ()
     robot: str = "scout2"
     odometry_drift: bool = False
+    localisation_noise: tuple[float, float, float] | None = None
 
 
 def build_world(spec: str) -> World:
@@ -134,4 +145,8 @@ def run_simulation(scenario: Scenario) -> Simulation:
     trajectory = follow_waypoints(cut_polyline(path, scenario.max_length), speed=scenario.speed)
     physics: SonarPhysics = replace(SonarPhysics(), **dict[str, Any](scenario.physics))
     odometry = with_odometry_drift(trajectory, scenario.seed) if scenario.odometry_drift else None
+    if scenario.localisation_noise is not None:
+        position_sigma, heading_sigma, correlation_time = scenario.localisation_noise
+        odometry = with_localisation_noise(odometry or trajectory, scenario.seed, position_sigma,
+                                           heading_sigma, correlation_time)
     return simulate(world, robot, trajectory, scenario.seed, physics=physics, odometry=odometry)

@@ -8,6 +8,7 @@ from sonarcarve.sim.motion import (
     Trajectory,
     explore,
     follow_waypoints,
+    with_localisation_noise,
     with_odometry_drift,
 )
 from sonarcarve.sim.scene import (
@@ -61,5 +62,6 @@ __all__ = [
     "load_world",
     "random_world",
     "simulate",
+    "with_localisation_noise",
     "with_odometry_drift",
 ]

@@ -2,7 +2,8 @@
 
 - :func:`follow_waypoints` drives a polyline at constant speed (turning in place, or on arcs),
 - :func:`explore` wanders a world without colliding, preferring places it has not been,
-- :func:`with_odometry_drift` turns a true trajectory into the dead-reckoned one a robot believes.
+- :func:`with_odometry_drift` turns a true trajectory into the dead-reckoned one a robot believes,
+- :func:`with_localisation_noise` into the one a localiser (AMCL, a fused odometry) reports.
 
 Defaults describe a Nomadic Scout2-like differential drive (the paper's platform): 0.41 m body
 diameter, 0.4 m/s cruising speed, 1 rad/s turning in place. They are typical values chosen for
@@ -23,7 +24,10 @@ from sonarcarve.sim.world import World, WorldError, check_seed
 from sonarcarve.typing import FloatArray
 
 __all__ = [
+    "DEFAULT_CORRELATION_TIME",
     "DEFAULT_DT",
+    "DEFAULT_HEADING_SIGMA",
+    "DEFAULT_POSITION_SIGMA",
     "DEFAULT_SPEED",
     "DEFAULT_TURN_RATE",
     "MAX_COORDINATE",
@@ -32,6 +36,7 @@ __all__ = [
     "Trajectory",
     "explore",
     "follow_waypoints",
+    "with_localisation_noise",
     "with_odometry_drift",
 ]
 
@@ -776,3 +781,117 @@ def _integrate_steps(trajectory: Trajectory, forward: FloatArray, lateral: Float
     y = trajectory.y[0] + np.concatenate(([0.0], np.cumsum(
         forward * np.sin(mid) + lateral * np.cos(mid))))
     return x, y, heading
+
+
+# --------------------------------------------------------------------------------------------
+# Localisation noise
+# --------------------------------------------------------------------------------------------
+
+#: Stationary std of a localiser's position error in x and in y, metres (assumed typical of
+#: AMCL or a fused odometry indoors, not a measurement).
+DEFAULT_POSITION_SIGMA = 0.03
+#: Stationary std of its heading error, radians (1°, assumed likewise).
+DEFAULT_HEADING_SIGMA = math.radians(1.0)
+#: How long its error takes to forget itself, seconds (assumed: a filter updating at a few Hz
+#: whose estimate wanders rather than jumps).
+DEFAULT_CORRELATION_TIME = 1.0
+#: Mixed into the seed so that the same seed draws other numbers here than in
+#: :func:`with_odometry_drift` (the two can be applied to one trajectory).
+_LOCALISATION_STREAM = 0x10CA1
+
+
+def with_localisation_noise(trajectory: Trajectory, seed: int,
+                            position_sigma: float = DEFAULT_POSITION_SIGMA,
+                            heading_sigma: float = DEFAULT_HEADING_SIGMA,
+                            correlation_time: float = DEFAULT_CORRELATION_TIME) -> Trajectory:
+    """The trajectory a localiser believes: the true one plus a slowly wandering error.
+
+    The errors in x, in y (world frame) and in heading are three independent first-order
+    Gauss-Markov (Ornstein-Uhlenbeck) processes, each stationary from the first pose:
+
+        e(t_0) ~ N(0, σ²),   e(t_k) = a_k e(t_{k-1}) + σ √(1 − a_k²) ξ_k,   a_k = exp(−Δt_k / τ),
+
+    with ξ_k standard normal and Δt_k the time between poses: the exact discretisation of
+    de = −e/τ dt + σ √(2/τ) dW, so at any times e has std σ and corr(e(t), e(t + Δ)) =
+    exp(−Δ/τ), however unevenly the poses are spaced. Unlike :func:`with_odometry_drift` the
+    error does not grow: a localiser keeps the robot within a few centimetres of the truth, but
+    not at the truth, and its error changes smoothly (a filter's estimate wanders).
+
+    The defaults, 0.03 m, 1° and 1 s, are assumed typical localisation errors of a robot
+    running AMCL against a good map or a fused wheel/IMU odometry indoors, not measurements.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        True poses.
+    seed : int
+        Same seed, same error (a stream of its own: the same seed in
+        :func:`with_odometry_drift` draws other numbers).
+    position_sigma : float
+        Stationary std of the x and of the y error, metres, >= 0.
+    heading_sigma : float
+        Stationary std of the heading error, radians, >= 0.
+    correlation_time : float
+        τ, seconds, > 0.
+
+    Returns
+    -------
+    Trajectory
+        Same times; equal to ``trajectory`` when both sigmas are 0.
+
+    Raises
+    ------
+    WorldError
+        A negative seed, a negative or non-finite sigma, a correlation time that is not a
+        finite number > 0.
+
+    Examples
+    --------
+    >>> truth = follow_waypoints([[0, 0], [10, 0]])
+    >>> believed = with_localisation_noise(truth, seed=0)
+    >>> bool(abs(believed.x - truth.x).max() < 0.2), bool((believed.t == truth.t).all())
+    (True, True)
+    """
+    _check_localisation_parameters(position_sigma, heading_sigma, correlation_time)
+    seed = check_seed(seed)
+    rng = np.random.default_rng([_LOCALISATION_STREAM, seed])
+    # One draw for the three errors: rows x, y, heading (the order is part of what a seed means).
+    shocks = rng.standard_normal((3, len(trajectory)))
+    decay = np.exp(-np.diff(trajectory.t) / correlation_time)
+    unit = _gauss_markov(shocks, decay)
+    return Trajectory(trajectory.t.copy(), trajectory.x + position_sigma * unit[0],
+                      trajectory.y + position_sigma * unit[1],
+                      trajectory.heading + heading_sigma * unit[2])
+
+
+def _gauss_markov(shocks: FloatArray, decay: FloatArray) -> FloatArray:
+    """Unit-variance stationary Gauss-Markov sequences driven by ``shocks``.
+
+    Parameters
+    ----------
+    shocks : ndarray, shape (m, n)
+        Standard normal draws, one row per sequence.
+    decay : ndarray, shape (n - 1,)
+        exp(−Δt / τ) of each step, in (0, 1].
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+        e[:, 0] = shocks[:, 0]; e[:, k] = decay[k-1] e[:, k-1] + √(1 − decay²) shocks[:, k].
+    """
+    innovation = np.sqrt(1.0 - decay * decay)
+    out = np.empty_like(shocks)
+    out[:, 0] = shocks[:, 0]
+    for k in range(1, shocks.shape[1]):
+        out[:, k] = decay[k - 1] * out[:, k - 1] + innovation[k - 1] * shocks[:, k]
+    return out
+
+
+def _check_localisation_parameters(position_sigma: float, heading_sigma: float,
+                                   correlation_time: float) -> None:
+    """Raise :class:`WorldError` for a negative or non-finite sigma or a bad correlation time."""
+    for name, value in (("position_sigma", position_sigma), ("heading_sigma", heading_sigma)):
+        if not (math.isfinite(value) and value >= 0.0):
+            msg = f"{name} must be a finite number >= 0, got {value}"
+            raise WorldError(msg)
+    _check_positive(correlation_time=correlation_time)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.lab.experiments.appendix_base import AppendixSettings
-from sonarcarve.lab.experiments.odometry import _pose_corrected, odometry_experiment
+from sonarcarve.lab.experiments.odometry import odometry_experiment, pose_corrected
 from sonarcarve.sim.motion import Trajectory
 
 
@@ -18,7 +18,7 @@ def test_pose_correction_undoes_a_known_pose_error() -> None:
     # Believed: shifted 1 m in y and turned 90° about the believed position.
     belief = Trajectory(t, truth.x.copy(), np.ones(3), np.full(3, math.pi / 2))
     # A point 2 m ahead of the robot at t = 1: believed at (1, 1) + 2 (0, 1) = (1, 3).
-    out = _pose_corrected(np.array([[1.0, 3.0]]), np.array([1.0]), truth, belief)
+    out = pose_corrected(np.array([[1.0, 3.0]]), np.array([1.0]), truth, belief)
     np.testing.assert_allclose(out, [[3.0, 0.0]], atol=1e-12)
 
 

@@ -108,7 +108,8 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
 def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
                x: float, y: float, theta: float, r: float, half: float,
                held: FloatArray) -> None:
-    """One reading's free space on the beam's cells nearer than ``r - band``, clamped into
+    """One reading's free space on the beam's cells nearer than ``r - band - free_margin``
+    (``free_margin``: 2 ``pose_sigma``, 0 by default), clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
     occupied (``base <= 0``), and where ``aware`` on the others
     ``γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the cell's
@@ -117,7 +118,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
 
     A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
     from (``docs/carved-grid.md``, "Clearing what was heard")."""
-    reach = r - m.band
+    reach = r - m.band - m.free_margin
     if reach <= 0.0:
         return
     xmin, ymin, h, l_miss, fade = m.xmin, m.ymin, m.h, m.l_miss, m.fade

@@ -7,6 +7,7 @@ bearings, a record per history slot), folding readings in, and reading the map
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +26,7 @@ from sonarcarve.grids.carved.model import model_of
 from sonarcarve.grids.carved.params import (
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
+    POSE_MARGIN_SIGMAS,
     CarvedGridParams,
 )
 from sonarcarve.grids.carved.periods import LOOP_BATCH, FiringPeriods
@@ -95,13 +97,13 @@ class CarvedGrid(CellGrid):
                  ) -> None:
         super().__init__("carved grid", resolution, bounds, MAX_CELLS, "MAX_CELLS")
         (xmin, ymin, _, _), (ny, nx) = self._bounds, self._shape
+        self._params = params if params is not None else CarvedGridParams()
         if method is None:
-            method = make_method(DEFAULT_METHOD, MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE))
+            method = make_method(DEFAULT_METHOD, _default_method_config(self._params))
         elif method.readings:
             msg = (f"carved grid: the method must be fresh, it has {method.readings} readings "
                    f"already")
             raise GridError(msg)
-        self._params = params if params is not None else CarvedGridParams()
         self._method = method
         self._model = model_of(self._params, xmin, ymin, self._resolution, self.band)
         self._l_min, self._l_max = self._model.l_min, self._model.l_max
@@ -466,3 +468,14 @@ class CarvedGrid(CellGrid):
         rows, cols = np.nonzero(self.occupied_mask(threshold))
         xs, ys = self.cell_centers()
         return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
+
+
+def _default_method_config(params: CarvedGridParams) -> MethodConfig:
+    """The default method's configuration: specular-aware at :data:`DEFAULT_MAX_INCIDENCE`, its
+    range tolerance ε widened by :data:`POSE_MARGIN_SIGMAS` ``pose_sigma`` when one is given (a
+    newer reading's free space then stops short of an older arc a pose error moved)."""
+    config = MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE)
+    if params.pose_sigma > 0.0:
+        config = replace(config, range_tolerance=config.range_tolerance
+                         + POSE_MARGIN_SIGMAS * params.pose_sigma)
+    return config

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from sonarcarve.grids.carved.params import CarvedGridParams
+from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS, CarvedGridParams
 from sonarcarve.grids.cells import logit
 
 __all__ = ["Model", "model_of"]
@@ -36,6 +36,7 @@ class Model(NamedTuple):
     through: float  # see_through, metres (0: off)
     lobes: float  # side_lobes: the explanation reaches this many half beam widths past an edge
     lobe_range: float  # side_lobe_range, metres: only echoes at this range or nearer
+    free_margin: float  # free space ends this much before the band, metres (pose_sigma's)
 
 
 def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
@@ -50,4 +51,5 @@ def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
                  fade=float(p.fade_range), aware=p.surface_aware,
                  profile=float(p.band_profile), l_occupied=logit(p.occupied_threshold),
                  through=float(p.see_through), lobes=float(p.side_lobes),
-                 lobe_range=float(p.side_lobe_range))
+                 lobe_range=float(p.side_lobe_range),
+                 free_margin=POSE_MARGIN_SIGMAS * float(p.pose_sigma))

@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 
     from sonarcarve.sim.motion import Trajectory
 
-__all__ = ["EXPERIMENT", "OdometryResult", "odometry_experiment", "plot_odometry"]
+__all__ = ["EXPERIMENT", "OdometryResult", "odometry_experiment", "plot_odometry", "pose_corrected"]
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ class OdometryResult:
     methods: dict[str, JsonDict]
 
 
-def _pose_corrected(xy: FloatArray, t: FloatArray, truth: Trajectory,
+def pose_corrected(xy: FloatArray, t: FloatArray, truth: Trajectory,
                     odometry: Trajectory) -> FloatArray:
     """Map points made from odometry-stamped readings, moved by their reading's pose error.
 
@@ -115,7 +115,7 @@ def _odometry_run(settings: AppendixSettings, seed: int, edges: FloatArray,
         entry: JsonDict = {}
         exact = run_global_map(sim_true.readings, method, config)[0]
         drifted = run_global_map(sim_odo.readings, method, config)[0]
-        corrected = _pose_corrected(drifted.xy, drifted.t, truth, odometry)
+        corrected = pose_corrected(drifted.xy, drifted.t, truth, odometry)
         for name, gmap, xy in (("true_poses", exact, exact.xy), ("odometry", drifted, drifted.xy),
                                ("odometry_corrected", drifted, corrected)):
             err = metrics.segment_distance(xy, segments)[0]
@@ -145,7 +145,7 @@ def odometry_experiment(settings: AppendixSettings) -> tuple[OdometryResult, Art
     Carving and combined, per seed (odometry drift seeded alike, with the defaults of
     :func:`~sonarcarve.sim.motion.with_odometry_drift`): global-map error to the true walls,
     overall and binned by the distance the robot had travelled at each point's reading, raw and
-    pose-corrected (:func:`_pose_corrected`), how far the drift moved each point
+    pose-corrected (:func:`pose_corrected`), how far the drift moved each point
     (``drift_shift``: raw against pose-corrected position), and the dead-reckoned position error
     itself. The raw error to the *nearest* true wall saturates at about half the wall spacing
     once points drift onto other walls; ``drift_shift`` does not.
