@@ -63,6 +63,9 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--free-below", "0.7"], "--free-below must lie in (0, 0.65), got 0.7"),
     (["--free-below", "0"], "--free-below must lie in (0, 0.65), got 0"),
     (["--free-below", "0.2", "--model", "elfes"], "--free-below applies to --model carved only"),
+    (["--pose-sigma", "-0.1"], "--pose-sigma must be a finite number >= 0 metres, got -0.1"),
+    (["--pose-sigma", "0.05", "--model", "range-sensor-layer"],
+     "--pose-sigma applies to --model carved only, not range-sensor-layer"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -217,3 +220,22 @@ def test_a_stray_position_too_large_a_grid_is_named(
     # 0.19509 m left of x = 0): the stray pose stands out.
     assert "over x from -0.69509 to 900001 m and y from -0.5 to 1.5 m" in err
     assert not out.exists()
+
+
+def test_pose_sigma_ends_free_space_two_sigma_before_the_echo(tmp_path: Path) -> None:
+    """Ten echoes at 1 m from one pose (near enough that the fade leaves every beam cell
+    free): the free cells on the beam's axis reach the echo's band, b = (h + ε) / 2 = 0.05 m,
+    by default, and 2 x 0.2 m short of it with --pose-sigma 0.2."""
+    log = tmp_path / "log.csv"
+    beam = [Reading(t=0.2 * k, sensor=0, x=0.0, y=0.0, theta=0.0, range=1.0) for k in range(10)]
+    write_readings_csv(ReadingBatch.from_readings(beam), log)
+    reach = {}
+    for extra in ([], ["--pose-sigma", "0.2"]):
+        out = tmp_path / f"grid{len(extra)}.yaml"
+        assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
+        m = read_map_server(out)
+        i = int((0.0 - m.origin[1]) / 0.05)
+        free = np.flatnonzero(m.cells[i] == 0)
+        reach[bool(extra)] = m.origin[0] + (free.max() + 1) * 0.05  # the far edge of the cell
+    assert reach[False] == pytest.approx(0.95, abs=0.05 + 1e-9)
+    assert reach[True] == pytest.approx(0.55, abs=0.05 + 1e-9)

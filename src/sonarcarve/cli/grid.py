@@ -10,8 +10,9 @@ and Elfes grids take as free space; the range-sensor-layer drops them, as ROS's 
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -54,7 +55,7 @@ __all__ = ["build_grid", "grid", "grid_params", "read_log_for_grid"]
 #: :func:`~sonarcarve.grids.readings_extent`, :class:`~sonarcarve.grids.CarvedGridParams`) ->
 #: the options that set them, for its error messages.
 _FLAGS = {"resolution": "--resolution", "margin": "--margin", "fresh_periods": "--fresh-periods",
-          "free_threshold": "--free-below"}
+          "free_threshold": "--free-below", "pose_sigma": "--pose-sigma"}
 
 
 class GridUsageError(SonarcarveError):
@@ -69,49 +70,47 @@ def _check_model(model: str) -> None:
         raise GridUsageError(msg)
 
 
-def grid_params(model: str, fresh_periods: float | None,
-                free_below: float | None = None) -> CarvedGridParams | None:
+def grid_params(model: str, fresh_periods: float | None, free_below: float | None = None,
+                pose_sigma: float | None = None) -> CarvedGridParams | None:
     """The grid's parameters from the options, for the carved grid only (None: the default):
     ``--fresh-periods`` as :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`,
-    ``--free-below`` as :attr:`~sonarcarve.grids.CarvedGridParams.free_threshold`.
+    ``--free-below`` as :attr:`~sonarcarve.grids.CarvedGridParams.free_threshold`,
+    ``--pose-sigma`` as :attr:`~sonarcarve.grids.CarvedGridParams.pose_sigma`.
 
     Raises
     ------
     GridUsageError
-        Either option for a model other than the carved grid, or out of its range.
+        Any of them for a model other than the carved grid, or out of its range.
     """
-    if fresh_periods is None and free_below is None:
+    options = {"fresh_periods": fresh_periods, "free_threshold": free_below,
+               "pose_sigma": pose_sigma}
+    given: dict[str, Any] = {field: value for field, value in options.items()
+                             if value is not None}
+    if not given:
         return None
     if model != "carved":
-        flag = "--fresh-periods" if fresh_periods is not None else "--free-below"
-        msg = f"{flag} applies to --model carved only, not {model}"
+        msg = f"{_FLAGS[next(iter(given))]} applies to --model carved only, not {model}"
         raise GridUsageError(msg)
-    defaults = CarvedGridParams()
     try:
-        return CarvedGridParams(
-            fresh_periods=defaults.fresh_periods if fresh_periods is None else fresh_periods,
-            free_threshold=defaults.free_threshold if free_below is None else free_below)
+        return replace(CarvedGridParams(), **given)
     except GridError as err:
         raise GridUsageError(flag_message(str(err), _FLAGS)) from None
 
 
 def build_grid(batch: ReadingBatch, model: str, resolution: float,
-               margin: float = 0.5, fresh_periods: float | None = None,
-               free_below: float | None = None) -> BuiltGrid:
+               margin: float = 0.5, params: CarvedGridParams | None = None) -> BuiltGrid:
     """The grid ``model`` (:func:`~sonarcarve.grids.make_grid`) over the readings' extent
     plus ``margin`` (:func:`~sonarcarve.grids.readings_extent`), with every reading in;
-    ``fresh_periods`` and ``free_below`` as in :func:`grid_params`.
+    ``params`` the carved grid's (:func:`grid_params`; None: its defaults).
 
     Raises
     ------
     GridUsageError
-        What the library refuses (an unknown model, a resolution or margin out of range,
-        ``fresh_periods`` below 1, no readings), its parameters named as the options; a
-        resolution larger than the area mapped; ``fresh_periods`` for a model other than the
-        carved grid.
+        What the library refuses (an unknown model, a resolution or margin out of range, no
+        readings), its parameters named as the options; a resolution larger than the area
+        mapped.
     """
     _check_model(model)
-    params = grid_params(model, fresh_periods, free_below)
     try:
         bounds = readings_extent(batch, margin)
         built = make_grid(model, resolution, bounds, params)
@@ -194,6 +193,14 @@ def grid(
     range_topic: RangeTopicOpt = None,
     odom_topic: OdomTopicOpt = None,
     frame: FrameOpt = None,
+    pose_sigma: Annotated[float | None, typer.Option(
+        metavar="METRES",
+        help="--model carved only: the standard deviation of the log's pose error, metres, as "
+             "your localiser reports it (position σ, plus range times heading σ at the ranges "
+             "that matter). A reading's free space then ends 2σ before its echo, so a beam "
+             "stamped a few cm off does not clear the wall it heard. Default 0 (poses taken as "
+             "exact). A trade: with 5 cm / 2° of localisation noise, σ = 0.05 raised office "
+             "recall 0.792 → 0.834 at 0.05 m cells and cost precision 0.591 → 0.558.")] = None,
     no_echo: NoEchoOpt = False,
     max_range: MaxRangeOpt = None,
 ) -> None:
@@ -228,11 +235,14 @@ def grid(
     Example: `sonarcarve grid readings.csv --free-below 0.196 --out grid.yaml` (free only where
     the evidence is strong, as map_saver's threshold)
 
+    Example: `sonarcarve grid amcl.csv --pose-sigma 0.05 --out grid.yaml` (poses from a
+    localiser good to about 5 cm)
+
     Example: `sonarcarve grid gazebo.csv --max-range 5 --out grid.yaml` (a CSV whose silent
     firings are rows with range inf and no max_range column)
     """
     _check_model(model)  # these two before anything is read
-    grid_params(model, fresh_periods, free_below)
+    params = grid_params(model, fresh_periods, free_below, pose_sigma)
     check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
@@ -240,7 +250,7 @@ def grid(
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
     batch, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
-    built = build_grid(batch, model, resolution, margin, fresh_periods, free_below)
+    built = build_grid(batch, model, resolution, margin, params)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
