@@ -53,6 +53,28 @@ def test_odometry_changes_the_stamps_not_the_ranges(tmp_path: Path) -> None:
     assert not np.array_equal(a.x, b.x)
 
 
+def test_pose_noise_moves_the_stamps_by_about_its_sigma(tmp_path: Path) -> None:
+    outs = {name: tmp_path / f"{name}.csv" for name in ("plain", "zero", "noisy", "both")}
+    assert run("--world", "t-junction", "--out", str(outs["plain"])) == 0
+    assert run("--world", "t-junction", "--pose-noise", "0", "0", "--out", str(outs["zero"])) == 0
+    assert run("--world", "t-junction", "--pose-noise", "0.05", "2",
+               "--out", str(outs["noisy"])) == 0
+    assert run("--world", "t-junction", "--odometry", "--pose-noise", "0.05", "2",
+               "--out", str(outs["both"])) == 0
+    assert outs["zero"].read_bytes() == outs["plain"].read_bytes()
+    plain, noisy = read_readings_csv(outs["plain"]), read_readings_csv(outs["noisy"])
+    np.testing.assert_array_equal(plain.range, noisy.range)  # the echoes are the truth's
+    # A sensor's offset turns with the heading error, so the origin moves by the position error
+    # plus at most mount distance x 2°; over a 20 s drive the wandering error (τ = 1 s) has
+    # about 20 independent stretches, so its spread is near σ but not exactly it.
+    spread = float(np.std(noisy.x - plain.x))
+    assert 0.02 < spread < 0.09
+    turn = np.angle(np.exp(1j * (noisy.theta - plain.theta)))
+    assert 0.01 < float(np.std(turn)) < 0.07  # 2° = 0.035 rad
+    both = read_readings_csv(outs["both"])
+    assert not np.array_equal(both.x, noisy.x)  # stacked on the dead-reckoned poses
+
+
 def test_path_file_is_followed(tmp_path: Path) -> None:
     path = tmp_path / "path.csv"
     path.write_text("x,y\n0,0\n0,2.5\n-2,2.5\n")
@@ -200,6 +222,10 @@ def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
     (["--speed", "0"], "error: --speed must be a speed in (0, 10] m/s, got 0"),
     (["--speed", "11"], "error: --speed must be a speed in (0, 10] m/s, got 11"),
     (["--speed", "nan"], "error: --speed must be a speed in (0, 10] m/s, got nan"),
+    (["--pose-noise", "-0.01", "1"], "error: --pose-noise takes two standard deviations >= 0, "
+                                     "metres and degrees, got -0.01 1"),
+    (["--pose-noise", "0.05", "inf"], "error: --pose-noise takes two standard deviations >= 0, "
+                                      "metres and degrees, got 0.05 inf"),
     (["--speed", "1e-6"], "(MAX_POSES): at --speed 1e-06 m/s the drive is too long; raise "
                           "--speed or give a shorter --path"),
 ])

@@ -31,6 +31,7 @@ from sonarcarve.sim.motion import (
     Trajectory,
     explore,
     follow_waypoints,
+    with_localisation_noise,
     with_odometry_drift,
 )
 from sonarcarve.sim.simulate import Simulation, simulate
@@ -135,6 +136,14 @@ def simulate_command(
         "--odometry/--no-odometry",
         help="Stamp readings with drifting dead-reckoned poses instead of the true ones "
              "(echoes still come from the true poses).")] = False,
+    pose_noise: Annotated[tuple[float, float] | None, typer.Option(
+        "--pose-noise", metavar="METRES DEGREES",
+        help="Stamp readings with a localiser's poses: the true (or, with --odometry, the "
+             "dead-reckoned) ones plus a slowly wandering error of this standard deviation in "
+             "position and heading (correlation time 1 s; echoes still come from the true "
+             "poses). 0.03 1 is a good AMCL against a good map (assumed, not measured); "
+             "docs/RESULTS.md, 'Maps from wrong poses', measures the methods at 0.02 0.5 and "
+             "0.05 2.")] = None,
     clean: Annotated[bool, typer.Option(
         "--clean", help="Perfect sensors on smooth walls: no noise, no quantisation, no "
                         "crosstalk, floor or multipath echoes.")] = False,
@@ -173,8 +182,12 @@ def simulate_command(
     Example: `sonarcarve simulate --world office --robot scout2 --seed 1 --out office.csv`
 
     Example: `sonarcarve simulate --world office --out office.mcap` (open it in Foxglove)
+
+    Example: `sonarcarve simulate --world office --pose-noise 0.05 2 --out noisy.csv` (readings
+    stamped as a localiser good to 5 cm and 2° would stamp them)
     """
     _check_motion_options(path, explore_seconds, speed)
+    _check_pose_noise(pose_noise)
     chosen = _physics(physics, clean)
     log_format = _log_format(out)
     if no_echo and log_format.label != "readings":
@@ -189,6 +202,7 @@ def simulate_command(
         trajectory = _trajectory(the_world, path, explore_seconds, seed,
                                  the_robot.robot_radius, speed)
         drift = with_odometry_drift(trajectory, seed=seed) if odometry else None
+        drift = _with_pose_noise(drift or trajectory, seed, pose_noise) or drift
         result = _simulate_with_progress(the_world, the_robot, trajectory, seed, chosen, drift,
                                          no_echo)
     except SonarcarveError as err:
@@ -196,6 +210,28 @@ def simulate_command(
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
     _warn_behind_walls(result)
+
+
+def _check_pose_noise(pose_noise: tuple[float, float] | None) -> None:
+    """Raise :class:`SimulateParameterError` unless ``--pose-noise`` is absent or two finite
+    standard deviations >= 0 (metres, degrees)."""
+    if pose_noise is None:
+        return
+    position, heading_deg = pose_noise
+    if not (math.isfinite(position) and position >= 0.0 and math.isfinite(heading_deg)
+            and heading_deg >= 0.0):
+        msg = (f"--pose-noise takes two standard deviations >= 0, metres and degrees, got "
+               f"{position:g} {heading_deg:g}")
+        raise SimulateParameterError(msg)
+
+
+def _with_pose_noise(believed: Trajectory, seed: int,
+                     pose_noise: tuple[float, float] | None) -> Trajectory | None:
+    """``believed`` with ``--pose-noise`` (metres, degrees) added, or None without it."""
+    if pose_noise is None:
+        return None
+    position, heading_deg = pose_noise
+    return with_localisation_noise(believed, seed, position, math.radians(heading_deg))
 
 
 def _with_speed_hint(err: SonarcarveError, speed: float) -> SonarcarveError:
