@@ -119,6 +119,51 @@ def test_a_fleet_reads_no_echo_rows_up_to_max_range(tmp_path: Path) -> None:
             == (tmp_path / "single.csv").read_bytes())
 
 
+def test_a_bag_or_recording_output_takes_max_range(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The map CSV output with the same --max-range is the oracle of the recording's points;
+    the other filters stay refused for these outputs."""
+    pytest.importorskip("rerun")
+    bare = _csv(tmp_path / "bare.csv", _ECHOES + _SILENT + _FAR)
+    assert _process(bare, tmp_path / "map.csv", "--max-range", "3") == 0
+    capsys.readouterr()
+    map_points = len((tmp_path / "map.csv").read_text().splitlines()) - 1
+    assert _process(bare, tmp_path / "run.rrd", "--max-range", "3") == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "readings in │ 42" in text
+    assert "dropped: echoes beyond --max-range │ 2" in text
+    assert f"points out │ {map_points:,}" in text
+    assert _process(bare, tmp_path / "run.mcap", "--max-range", "3") == 0
+    assert "dropped: echoes beyond --max-range │ 2" in " ".join(capsys.readouterr().out.split())
+    assert _process(bare, tmp_path / "bad.mcap", "--max-range", "3", "--min-range", "0.1") == 2
+    assert "--max-range applies to every output" in capsys.readouterr().err
+    assert not (tmp_path / "bad.mcap").exists()
+
+
+def test_plot_reads_the_no_echo_rows_with_max_range(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("matplotlib")
+    bare = _csv(tmp_path / "bare.csv", _ECHOES + _SILENT + _FAR)
+    assert _process(bare, tmp_path / "map.csv", "--max-range", "3") == 0
+    plot = ["plot", str(tmp_path / "map.csv"), "--readings", str(bare), "--arcs"]
+    assert main([*plot, "--out", str(tmp_path / "a.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.endswith("give the sensors' max range with --max-range)\n"), err
+    assert not (tmp_path / "a.png").exists()
+    assert main([*plot, "--max-range", "3", "--out", str(tmp_path / "b.png")]) == 0
+    assert (tmp_path / "b.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_fleet_names_how_to_give_a_max_range(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bare = _csv(tmp_path / "bare.csv", _ECHOES + _SILENT)
+    assert main(["process", str(bare), "--method", "carve", "--out-dir", str(tmp_path / "maps"),
+                 "--workers", "1"]) != 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "give the sensors' max range with --max-range)" in text.replace("│ ", "")
+
+
 def test_view_takes_max_range(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                               capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("rerun")

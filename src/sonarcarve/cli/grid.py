@@ -196,8 +196,8 @@ def grid(
     pose_sigma: Annotated[float | None, typer.Option(
         metavar="METRES",
         help="--model carved only: the standard deviation of the log's pose error, metres, as "
-             "your localiser reports it (position σ, plus range times heading σ at the ranges "
-             "that matter). A reading's free space then ends 2σ before its echo, so a beam "
+             "your localiser reports it (its position σ; adding range times heading σ was not "
+             "measured). A reading's free space then ends 2σ before its echo, so a beam "
              "stamped a few cm off does not clear the wall it heard. Default 0 (poses taken as "
              "exact). A trade: with 5 cm / 2° of localisation noise, σ = 0.05 raised office "
              "recall 0.792 → 0.834 at 0.05 m cells and cost precision 0.591 → 0.558.")] = None,

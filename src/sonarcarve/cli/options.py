@@ -48,6 +48,7 @@ __all__ = [
     "max_range_hint",
     "read_bag",
     "refuse_bag_options",
+    "with_max_range_hint",
 ]
 
 #: The bag reader's parameters (:func:`~sonarcarve.io.rosbag.read_rosbag`) -> the options.
@@ -170,8 +171,15 @@ def max_range_hint() -> Iterator[None]:
     except SonarcarveError as err:
         if not str(err).endswith(NO_MAX_RANGE):
             raise
-        msg = f"{err} (add a max_range column, or give the sensors' max range with --max-range)"
-        raise type(err)(msg) from None
+        raise type(err)(with_max_range_hint(str(err))) from None
+
+
+def with_max_range_hint(message: str) -> str:
+    """``message`` with the two ways to give a max range if it is the error of a no-echo row
+    without one (a fleet's failed log, for one), else unchanged."""
+    if not message.endswith(NO_MAX_RANGE):
+        return message
+    return f"{message} (add a max_range column, or give the sensors' max range with --max-range)"
 
 
 class MaxRangeError(SonarcarveError):

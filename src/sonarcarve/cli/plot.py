@@ -9,6 +9,7 @@ import typer
 
 from sonarcarve.cli.app import app, console, cut_short, flag_message, summary_table, warn
 from sonarcarve.cli.drawing import draw_offscreen
+from sonarcarve.cli.options import check_max_range, max_range_hint
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.filters import confidence_mask
@@ -63,6 +64,11 @@ def plot(
              "confidence (methods that do not model it) are kept.")] = None,
     title: Annotated[str | None, typer.Option(
         help="The figure's title (default: the counts of points by source).")] = None,
+    max_range: Annotated[float | None, typer.Option(
+        "--max-range", metavar="METRES", show_default="off",
+        help="How far the --readings' no-echo rows (range inf) without a max_range of their "
+             "own listened, as given to `sonarcarve process`; needed only for such rows. "
+             "No echo is dropped here: a map's ids count every row of its readings.")] = None,
 ) -> None:
     """Draw a map CSV to a figure: points coloured by source, the robot's path, a grid map.
 
@@ -81,12 +87,15 @@ def plot(
         msg = f"--confidence-min must lie in [0, 1], got {confidence_min:g}"
         raise PlotUsageError(msg)
     check_figure_path(out, label=f"--out {out}")
+    check_max_range(max_range)
     inputs = [path for path in (map_csv, readings, grid) if path is not None]
     check_output_file(out, inputs=inputs, label=f"--out {out}")
     require("matplotlib", "plot", "Figures")
     points = read_map_csv(map_csv)
     total = len(points)
-    batch = read_readings_csv(readings) if readings is not None else None
+    with max_range_hint():  # a no-echo row without max_range: say how to give one
+        batch = (read_readings_csv(readings, max_range=max_range) if readings is not None
+                 else None)
     if batch is not None:  # refuses another log's readings, naming the map's line
         map_origins(points, batch, source=str(readings), map_file=str(map_csv))
     if confidence_min is not None:

@@ -39,9 +39,11 @@ from sonarcarve.cli.options import (
     bag_options,
     check_max_range,
     check_new_bag,
+    drop_far_echoes,
     max_range_hint,
     read_bag,
     refuse_bag_options,
+    with_max_range_hint,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
@@ -328,10 +330,13 @@ def process(
     source = _single_input(inputs, workers, scheduler)
     output = _output_kind(out)
     refuse_bag_options(source, bag)
-    if output.label != "csv" and (reading_filter is not None or map_filter is not None):
-        msg = (f"--out {out}: the filters (--max-range, --min-range, --jump-threshold, "
-               "--max-error, --occlusion-depth, --outlier-radius) apply to a map CSV output "
-               "only")
+    if output.label != "csv" and _filters_beyond_max_range(reading_filter, map_filter):
+        # A bag or a recording shows the live maps of every reading as it came; --max-range
+        # alone is also the readings' own contract (how far a no-echo row listened), so it
+        # applies to every output.
+        msg = (f"--out {out}: the filters (--min-range, --jump-threshold, --max-error, "
+               "--occlusion-depth, --outlier-radius) apply to a map CSV output only; "
+               "--max-range applies to every output")
         raise ParameterError(msg)
     if map_rate is not None and output.label != "bag":
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
@@ -349,6 +354,15 @@ def process(
     warn([beam_warning, *job.warnings, None if is_bag(source) else cut_short(source)])
     console.print(summary_table(f"sonarcarve process --method {method}", rows))
     return 0
+
+
+def _filters_beyond_max_range(reading_filter: ReadingFilter | None,
+                              map_filter: MapFilter | None) -> bool:
+    """Whether any filter other than ``--max-range`` was asked for."""
+    if map_filter is not None:
+        return True
+    return reading_filter is not None and reading_filter != ReadingFilter(
+        max_range=reading_filter.max_range)
 
 
 def _first_checked(chunks: Iterable[ReadingBatch], found: list[str]) -> Iterator[ReadingBatch]:
@@ -455,6 +469,7 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
     else:
         batch = read_readings_csv(job.source, max_range=job.max_range)
         parent, child, copy_from = "", "", None
+    batch, too_far = drop_far_echoes(batch, job.max_range)
     job.warnings.extend(likely_mistakes(batch))
     grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
             CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
@@ -463,7 +478,8 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
                            rate=job.map_rate, grid=grid)
     ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC)
     copied = sum(n for topic, n in report.messages.items() if topic not in ours)
-    return [("readings in", f"{len(batch):,}"),
+    return [("readings in", f"{len(batch) + too_far:,}"),
+            *_dropped_far_row(job, too_far),
             ("messages copied from the input", f"{copied:,}"),
             *((f"messages on {topic}", f"{report.messages.get(topic, 0):,}") for topic in ours),
             ("bag written to", f"{report.path} ({report.format.value})")]
@@ -473,11 +489,18 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
     """A Rerun recording of the run (no walls: a log has no ground truth)."""
     from sonarcarve.io.rerun_out import write_rerun
 
-    batch = _read_whole(job)
+    batch, too_far = drop_far_echoes(_read_whole(job), job.max_range)
     job.warnings.extend(likely_mistakes(batch))
     global_map = write_rerun(job.out, batch, job.sonar())
-    return [("readings in", f"{len(batch):,}"), ("points out", f"{len(global_map):,}"),
-            ("recording written to", str(job.out))]
+    return [("readings in", f"{len(batch) + too_far:,}"), *_dropped_far_row(job, too_far),
+            ("points out", f"{len(global_map):,}"), ("recording written to", str(job.out))]
+
+
+def _dropped_far_row(job: _Job, too_far: int) -> list[tuple[str, str]]:
+    """The summary's row of echoes ``--max-range`` dropped (none without the option)."""
+    if job.max_range is None:
+        return []
+    return [("dropped: echoes beyond --max-range", f"{too_far:,}")]
 
 
 def _read_whole(job: _Job) -> ReadingBatch:
@@ -549,7 +572,7 @@ def _fleet_table(method: str, rows: Sequence[FleetRow], spec: RunnerSpec) -> Tab
             table.add_row(row.log, f"{row.readings:,}", f"{row.points:,}", f"{row.seconds:.2f}",
                           Path(row.map).name)
         else:
-            table.add_row(row.log, "", "", "", Text(row.error, style="red"))
+            table.add_row(row.log, "", "", "", Text(with_max_range_hint(row.error), style="red"))
     return table
 
 

@@ -213,8 +213,9 @@ class CarvedGridParams:
 
     pose_sigma : float
         Metres >= 0 (finite); 0, the grid as before, bit for bit. The standard deviation of the
-        readings' pose error, as the user knows it from the localiser (position σ, plus range
-        times heading σ at the ranges that matter): each reading's free space ends
+        readings' position error, as the user knows it from the localiser (its position σ;
+        adding range times the heading σ was not measured, and a larger σ trades more
+        precision): each reading's free space ends
         :data:`POSE_MARGIN_SIGMAS` times this before its band, and the default method's range
         tolerance ε grows by as much, so that a beam stamped a few centimetres off does not
         clear the true wall it was heard from. Measured (``benchmarks/pose_error.py

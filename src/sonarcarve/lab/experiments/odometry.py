@@ -75,12 +75,15 @@ class OdometryResult:
 
 
 def pose_corrected(xy: FloatArray, t: FloatArray, truth: Trajectory,
-                    odometry: Trajectory) -> FloatArray:
+                   odometry: Trajectory) -> FloatArray:
     """Map points made from odometry-stamped readings, moved by their reading's pose error.
 
     A point ``p`` placed from the believed pose ``(c_o, h_o)`` at its reading's time goes to
     ``R(h_t - h_o) (p - c_o) + c_t`` with ``(c_t, h_t)`` the true pose then: where the point
     would be had the robot known where it was. What is left is the local map's own error.
+    Exact for a point on one reading's arc; approximate for an intersection point (ATM,
+    combined), which two readings with different pose errors placed: it moves with the error
+    of the reading it is stamped with.
     """
     ox, oy, oh = odometry.pose_at(t)
     tx, ty, th = truth.pose_at(t)
