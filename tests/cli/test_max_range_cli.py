@@ -7,6 +7,7 @@ command must give the same bytes either way.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from pathlib import Path
 
@@ -69,8 +70,10 @@ def test_rows_that_give_a_max_range_keep_theirs(tmp_path: Path) -> None:
 def test_without_max_range_the_error_says_how_to_give_one(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bare = _csv(tmp_path / "bare.csv", _ECHOES + _SILENT)
+    view = (["view", str(bare), "--no-open", "--out", str(tmp_path / "v.rrd")]
+            if importlib.util.find_spec("rerun") is not None else [])
     for args in (["process", str(bare), "--out", str(tmp_path / "m.csv")],
-                 ["grid", str(bare), "--out", str(tmp_path / "g.yaml")]):
+                 ["grid", str(bare), "--out", str(tmp_path / "g.yaml")], *([view] if view else [])):
         assert main(args) == 2
         err = capsys.readouterr().err.strip()
         assert err == (f"sonarcarve: error: {bare}: line 22, column 'range' is infinite but "
@@ -80,16 +83,33 @@ def test_without_max_range_the_error_says_how_to_give_one(
 
 
 @pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "20000"])
-@pytest.mark.parametrize("command", ["process", "grid"])
+@pytest.mark.parametrize("command", ["process", "grid", "view", "plot"])
 def test_an_absurd_max_range_is_refused_before_reading(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str, value: str) -> None:
+    import sonarcarve.cli.plot  # registers the commands
+    import sonarcarve.cli.view  # noqa: F401
+
     bare = _csv(tmp_path / "bare.csv", _ECHOES + _SILENT)
-    out = tmp_path / ("m.csv" if command == "process" else "g.yaml")
+    out = tmp_path / {"process": "m.csv", "grid": "g.yaml", "view": "v.rrd", "plot": "p.png"}[
+        command]
+    if command == "plot":  # plot's argument is a map (its readings come with --readings)
+        _process(bare, tmp_path / "map.csv", "--max-range", "3")
+        bare = tmp_path / "map.csv"
     assert main([command, str(bare), "--max-range", value, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("sonarcarve: error: --max-range must be a finite number > 0")
     assert len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_max_range_takes_up_to_the_readings_limit() -> None:
+    """10,000 m is what a readings CSV accepts as a row's max_range: the option's limit too."""
+    from sonarcarve.cli.options import MaxRangeError, check_max_range
+
+    assert check_max_range(10_000.0) == 10_000.0
+    assert check_max_range(None) is None
+    with pytest.raises(MaxRangeError):
+        check_max_range(10_000.5)
 
 
 def test_grid_takes_max_range_as_process_does(tmp_path: Path,
@@ -175,4 +195,5 @@ def test_view_takes_max_range(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                  "--out", str(tmp_path / "run.rrd")]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "dropped: echoes beyond --max-range │ 2" in text
+    assert "readings │ 40" in text  # the recording maps the readings left, not all 42
     assert (tmp_path / "run.rrd").stat().st_size > 0

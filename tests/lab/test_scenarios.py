@@ -31,3 +31,23 @@ def test_localisation_noise_moves_the_stamps_not_the_echoes() -> None:
                                     localisation_noise=(0.0, 0.0, 1.0)))
     np.testing.assert_array_equal(still.readings.x, plain.readings.x)
     np.testing.assert_array_equal(still.readings.theta, plain.readings.theta)
+
+
+def test_localisation_noise_stacks_on_odometry_drift() -> None:
+    """With both, the believed poses are the dead-reckoned ones plus the same wandering error
+    the true poses get: the error does not depend on the path it is added to."""
+    noise = (0.05, 0.02, 1.0)
+    both = run_simulation(Scenario("doorway", 0, max_length=3.0, odometry_drift=True,
+                                   localisation_noise=noise))
+    drift = run_simulation(Scenario("doorway", 0, max_length=3.0, odometry_drift=True))
+    alone = run_simulation(Scenario("doorway", 0, max_length=3.0, localisation_noise=noise))
+    assert both.odometry is not None
+    assert drift.odometry is not None
+    assert alone.odometry is not None
+    for name in ("x", "y", "heading"):
+        stacked = getattr(both.odometry, name) - getattr(drift.odometry, name)
+        own = getattr(alone.odometry, name) - getattr(alone.trajectory, name)
+        np.testing.assert_allclose(stacked, own, atol=1e-12)
+        assert np.abs(own).max() > 0.0
+    # The drift is still there under the noise: not the noise on the true path alone.
+    assert np.abs(both.odometry.x - alone.odometry.x).max() > 0.0

@@ -266,6 +266,15 @@ def test_localisation_error_forgets_itself_at_the_correlation_time() -> None:
             math.exp(-0.08 / tau), abs=0.004)
 
 
+def test_localisation_errors_in_x_y_and_heading_are_independent() -> None:
+    truth = _uneven(4000.0)  # about 2,000 independent stretches: a correlation's std ≈ 0.02
+    noisy = with_localisation_noise(truth, seed=5, position_sigma=0.05, heading_sigma=0.02)
+    errors = np.vstack((noisy.x - truth.x, noisy.y - truth.y, noisy.heading - truth.heading))
+    correlations = np.corrcoef(errors)
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        assert abs(correlations[i, j]) < 0.1, (i, j, correlations[i, j])
+
+
 def test_localisation_error_is_stationary_from_the_first_pose() -> None:
     truth = _uneven(0.1)
     first = np.array([with_localisation_noise(truth, seed=seed, position_sigma=0.05).x[0]
