@@ -371,6 +371,7 @@ def test_confidence_model_accepts_any_finite_weight_and_a_short_maturity() -> No
     ("max_detect", 1.0, "lie in (0, 1)"), ("max_detect", 0.0, "lie in (0, 1)"),
     ("range_scale", 0.0, "be > 0 metres (inf: no fall with range)"),
     ("support_tolerance", math.inf, "be finite and >= 0 metres"),
+    ("support_tolerance", -0.01, "be finite and >= 0 metres"),
     ("establish", 0.0, "be > 0 (inf: no bin is ever established)"),
     ("protect", 1.1, "lie in [0, 1]"),
     ("viewpoint_spacing", -0.25, "be finite and >= 0 metres"),
@@ -389,3 +390,8 @@ def test_sensor_model_accepts_the_edges() -> None:
                         establish=math.inf, protect=0.0, viewpoint_spacing=0.0, transmit=0.0,
                         confirm=1e-9)
     assert edges.range_scale == math.inf
+
+
+def test_sensor_model_support_tolerance_none_means_follow_epsilon() -> None:
+    assert SensorModel().support_tolerance is None
+    assert SensorModel(support_tolerance=None).params(0.07, 1.0, 0.3).support_tolerance == 0.07

@@ -135,6 +135,11 @@ class SensorModel:
     (``edge_gain``); smooth walls return echoes within 10-20° of the normal (full below 10°,
     nothing but roughness above 30°); 5 % of glancing looks still hear rough walls, edges and
     corners (``rough``); detection halves at 20 m.
+
+    ``support_tolerance`` (ε_s, metres: a newer echo within ε_s of a point's distance supports
+    it) is None by default: it follows the range tolerance ε the model is built with
+    (:meth:`params`), so a user who widens ε for a noisier sensor widens the band of support
+    with it. With the default ε (5 cm) that is the 5 cm this field used to fix.
     """
 
     edge_gain: float = 0.5
@@ -143,7 +148,7 @@ class SensorModel:
     rough: float = 0.05
     max_detect: float = 0.95
     range_scale: float = 20.0
-    support_tolerance: float = 0.05
+    support_tolerance: float | None = None
     establish: float = 1.0
     protect: float = 0.5
     viewpoint_spacing: float = 0.25
@@ -154,6 +159,9 @@ class SensorModel:
         """Refuse values the equations cannot take (ranges of
         :class:`~sonarcarve.geometry.evidence.EvidenceParams`) with ConfigError."""
         right = 0.5 * math.pi
+        if self.support_tolerance is not None:  # None: follow ε (see the class docstring)
+            _check_fields(self, {"support_tolerance": (_finite_at_least_zero,
+                                                       "be finite and >= 0 metres")})
         _check_fields(self, {
             "edge_gain": (lambda v: 0.0 < v <= 1.0, "lie in (0, 1]"),
             "incidence_full": (lambda v: 0.0 <= v < right, "lie in [0, pi/2) radians"),
@@ -164,7 +172,6 @@ class SensorModel:
             # 1 would make one miss infinite evidence (-log(1 - P)).
             "max_detect": (lambda v: 0.0 < v < 1.0, "lie in (0, 1)"),
             "range_scale": (lambda v: v > 0.0, "be > 0 metres (inf: no fall with range)"),
-            "support_tolerance": (_finite_at_least_zero, "be finite and >= 0 metres"),
             "establish": (lambda v: v > 0.0, "be > 0 (inf: no bin is ever established)"),
             "protect": (_fraction, "lie in [0, 1]"),
             "viewpoint_spacing": (_finite_at_least_zero, "be finite and >= 0 metres"),
@@ -177,9 +184,11 @@ class SensorModel:
         """The kernels' :class:`~sonarcarve.geometry.evidence.EvidenceParams` of this sensor
         with ε = ``range_tolerance`` metres, the carving ``threshold`` (evidence) and ATM's ψ
         = ``min_transversal`` radians; ``with_occlusion=False`` never establishes a bin
-        (``establish`` = inf), ``with_transmission=False`` weighs no transmission evidence."""
+        (``establish`` = inf), ``with_transmission=False`` weighs no transmission evidence.
+        ε_s is ``support_tolerance``, or ε itself when that is None."""
+        support = range_tolerance if self.support_tolerance is None else self.support_tolerance
         return EvidenceParams(
-            tolerance=range_tolerance, support_tolerance=self.support_tolerance,
+            tolerance=range_tolerance, support_tolerance=support,
             edge_gain=self.edge_gain, incidence_full=self.incidence_full,
             incidence_zero=self.incidence_zero, rough=self.rough,
             max_detect=self.max_detect, range_scale=self.range_scale,
