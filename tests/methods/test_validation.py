@@ -390,8 +390,3 @@ def test_sensor_model_accepts_the_edges() -> None:
                         establish=math.inf, protect=0.0, viewpoint_spacing=0.0, transmit=0.0,
                         confirm=1e-9)
     assert edges.range_scale == math.inf
-
-
-def test_sensor_model_support_tolerance_none_means_follow_epsilon() -> None:
-    assert SensorModel().support_tolerance is None
-    assert SensorModel(support_tolerance=None).params(0.07, 1.0, 0.3).support_tolerance == 0.07
