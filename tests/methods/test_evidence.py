@@ -745,3 +745,23 @@ def test_the_models_defaults_are_the_methods() -> None:
     assert EvidenceOptions().min_atm_crossings == 3
     assert EvidenceOptions().posterior_placement is True
     assert EvidenceOptions().uncut_posterior is False
+
+
+def test_widening_the_range_tolerance_leaves_the_support_tolerance_at_5_cm() -> None:
+    # Measured (SensorModel's docstring): a support band as wide as a widened ε costs spurious
+    # removal, so ε_s stays where it is when a user widens ε for a noisy sensor.
+    for tolerance in (0.05, 0.10, 0.15):
+        assert _model(EvidenceMethod(range_tolerance=tolerance)).params.support_tolerance == 0.05
+
+
+def test_an_echo_read_8_cm_long_does_not_support_the_wall_when_epsilon_is_10_cm() -> None:
+    # A wall at x = 2 heard head-on by sensor 0, then by sensor 1 beside it reading 8 cm long:
+    # with ε = 10 cm its free space ends 2 cm short of the wall (no free evidence) and its echo
+    # lies beyond ε_s = 5 cm of it (no support); an ε_s following ε would support the wall.
+    method = EvidenceMethod(range_tolerance=0.10)
+    model = _model(method)
+    method.add(_reading(0.0, 0.0, 0.0, 0.0, 2.0, sensor=0))
+    method.add(_reading(0.05, 0.0, 0.05, 0.0, 2.08, sensor=1))
+    first = int(method.history.slots()[0])
+    assert model.support[first].max() == 0.0
+    assert model.free[first].max() == 0.0

@@ -371,6 +371,7 @@ def test_confidence_model_accepts_any_finite_weight_and_a_short_maturity() -> No
     ("max_detect", 1.0, "lie in (0, 1)"), ("max_detect", 0.0, "lie in (0, 1)"),
     ("range_scale", 0.0, "be > 0 metres (inf: no fall with range)"),
     ("support_tolerance", math.inf, "be finite and >= 0 metres"),
+    ("support_tolerance", -0.01, "be finite and >= 0 metres"),
     ("establish", 0.0, "be > 0 (inf: no bin is ever established)"),
     ("protect", 1.1, "lie in [0, 1]"),
     ("viewpoint_spacing", -0.25, "be finite and >= 0 metres"),
