@@ -19,6 +19,11 @@ are simulated with one of those changed at a time:
   ``--beam-width``). The amplitude physics hears through a piston's beam pattern, not the
   robot's nominal width, so there the transducer is resized too (:func:`piston_for_beam`: its
   main lobe's nulls scale with the beam, and its diffuse fan with them);
+- ``beam 45°, told 75°``: the 45° sonar, every method told a 75° beam (the readings' beam width
+  and ``MethodConfig.beam_width``): under the amplitude physics the small piston's first side
+  lobes, about 35° off the axis, hear echoes outside the nominal 45°, and a user who knows the
+  pattern would give the width the sensor really hears in; under the specular physics, which has
+  no side lobes, the same overstates the beam (what that costs);
 - ``noise σ 3 cm`` and ``noise σ 5 cm``: ``SonarPhysics.range_noise`` (still rounded to the inch).
 
 Per method (centerline, paper carving, combined, evidence carving, and evidence with the
@@ -75,6 +80,7 @@ from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.methods.evidence import EvidenceMethod, SensorModel
 from sonarcarve.pipeline import ProcessResult, process_readings
+from sonarcarve.readings import ReadingBatch
 from sonarcarve.sim.amplitude import AmplitudeModel
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import SonarPhysics
@@ -90,12 +96,14 @@ J1_ZERO = float(jn_zeros(1, 1)[0])
 @dataclass(frozen=True)
 class Condition:
     """One way the sonar differs from the default: beam width (degrees), range noise σ
-    (metres), range quantum (metres); None keeps the default."""
+    (metres), range quantum (metres); None keeps the default. ``told_deg``: the beam width the
+    methods are told, when not ``beam_deg`` (None: the simulated one)."""
 
     label: str
     beam_deg: float | None = None
     range_noise: float | None = None
     quantum: float | None = None
+    told_deg: float | None = None
 
     @property
     def remedy(self) -> float | None:
@@ -108,6 +116,7 @@ CONDITIONS = (
     Condition("quantum 1 mm", quantum=0.001),
     Condition("beam 15°", beam_deg=15.0),
     Condition("beam 45°", beam_deg=45.0),
+    Condition("beam 45°, told 75°", beam_deg=45.0, told_deg=75.0),
     Condition("noise σ 3 cm", range_noise=0.03),
     Condition("noise σ 5 cm", range_noise=0.05),
 )
@@ -170,8 +179,9 @@ def method_config(condition: Condition) -> MethodConfig:
     """What a user would tell the methods about this sonar: its beam width and range quantum
     (the range tolerance stays the default: the remedy rows widen it)."""
     config = MethodConfig()
-    if condition.beam_deg is not None:
-        config = replace(config, beam_width=math.radians(condition.beam_deg))
+    told = condition.beam_deg if condition.told_deg is None else condition.told_deg
+    if told is not None:
+        config = replace(config, beam_width=math.radians(told))
     if condition.quantum is not None:
         config = replace(config, range_resolution=condition.quantum)
     return config
@@ -186,16 +196,24 @@ def _evidence(config: MethodConfig, support: float) -> EvidenceMethod:
                           sensor=SensorModel(support_tolerance=support))
 
 
+def told_readings(readings: ReadingBatch, condition: Condition) -> ReadingBatch:
+    """The readings as the methods get them: their beam width ``told_deg`` where set."""
+    if condition.told_deg is None:
+        return readings
+    return replace(readings, beam_width=np.full(len(readings), math.radians(condition.told_deg)))
+
+
 def point_rows(sim: Simulation, condition: Condition) -> dict[str, Row]:
     """Every method's :func:`evidence.map_row` on one simulation (and the remedy's rows)."""
     config = method_config(condition)
+    readings = told_readings(sim.readings, condition)
     maps: dict[str, ProcessResult] = {
-        name: process_readings(sim.readings, make_method(method, config), map_filter=map_filter)
+        name: process_readings(readings, make_method(method, config), map_filter=map_filter)
         for name, method, map_filter in METHODS}
     if condition.remedy is not None:
         wider = replace(config, range_tolerance=condition.remedy)
-        maps[REMEDY] = process_readings(sim.readings, make_method("evidence", wider))
-        maps[REMEDY_WIDE] = process_readings(sim.readings, _evidence(wider, condition.remedy))
+        maps[REMEDY] = process_readings(readings, make_method("evidence", wider))
+        maps[REMEDY_WIDE] = process_readings(readings, _evidence(wider, condition.remedy))
     center = maps["centerline"].global_map
     center_err = np.full(len(sim.readings), np.nan)
     center_err[center.reading_id] = segment_distance(center.xy, sim.world.segments)[0]

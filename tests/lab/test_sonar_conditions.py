@@ -17,6 +17,7 @@ import pytest
 
 from sonarcarve import MethodConfig
 from sonarcarve.lab.scenarios import Scenario
+from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.amplitude import AmplitudeModel, directivity_db
 
@@ -94,3 +95,20 @@ def test_each_condition_changes_the_simulator_and_tells_the_methods(conditions: 
     robot = conditions.scenario("office", 0, "specular", quantum, tmp_path).robot
     assert load_robot(robot).range_resolution == 0.001
     assert conditions.method_config(quantum).range_resolution == 0.001
+
+
+def test_the_told_beam_reaches_the_methods_not_the_simulator(conditions: ModuleType,
+                                                             tmp_path: Path) -> None:
+    told = _condition(conditions, "beam 45°, told 75°")
+    assert conditions.scenario("office", 0, "specular", told, tmp_path).beam_width_deg == 45.0
+    amplitude = conditions.scenario("office", 0, "amplitude", told, tmp_path)
+    assert dict(amplitude.physics)["amplitude"] == conditions.piston_for_beam(45.0)
+    assert conditions.method_config(told).beam_width == pytest.approx(math.radians(75.0))
+    readings = ReadingBatch.from_arrays(t=[0.0, 1.0], sensor=[0, 1], x=[0.0, 0.0],
+                                        y=[0.0, 0.0], theta=[0.0, 1.0], range=[1.0, 2.0],
+                                        beam_width=[math.radians(45.0)] * 2)
+    given = conditions.told_readings(readings, told)
+    np.testing.assert_allclose(given.beam_width, math.radians(75.0))
+    np.testing.assert_array_equal(given.range, readings.range)
+    plain = _condition(conditions, "beam 45°")
+    assert conditions.told_readings(readings, plain) is readings
