@@ -214,6 +214,52 @@ def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
 
 
 @compiled_inline
+def _occlude_past(slot: int, vx: float, vy: float, d: float, half_bin_arc: float, beam: Beam,
+                  free: FloatArray, threshold: float) -> int:
+    """Carve the bins of j behind an established bin of an older arc that j looked past, at
+    offset ``(vx, vy)`` and distance ``d`` from j, half a bin (``half_bin_arc``) wide: j's echo
+    cannot come from behind a surface (sound does not pass through walls; at any angle:
+    ``docs/evidence-carving.md``, "Occlusion"). Returns the bins of j carved."""
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    along = vx * cj + vy * sj
+    return occlude_behind(slot, math.atan2(cj * vy - sj * vx, along), half_bin_arc / d, beam,
+                          free, threshold)
+
+
+@compiled_inline
+def _keep_for_transmission(passed: FloatArray, n_passed: int, i: int, k: int, kb: int,
+                           blocked: float, factor: float, w: float) -> int:
+    """Row ``n_passed`` of ``passed``: older bin ``(i, k)`` that j's sound passed, j's bin
+    ``kb`` behind it, the ``P_beam cos γ`` it would have blocked, the ``protect`` factor and the
+    evidence ``w`` it got. Kept for the transmission pass, which needs j's support from other
+    sensors, known only once every older arc is weighed. Returns the rows now used."""
+    passed[n_passed, 0] = i
+    passed[n_passed, 1] = k
+    passed[n_passed, 2] = kb
+    passed[n_passed, 3] = blocked
+    passed[n_passed, 4] = factor
+    passed[n_passed, 5] = w
+    return n_passed + 1
+
+
+@compiled_inline
+def _add_support(slot: int, i: int, k: int, kb: int, p: float, loc: float, other: bool,
+                 support: FloatArray, located: FloatArray, trans: FloatArray) -> None:
+    """An older bin ``(i, k)`` on j's echo circle: ``P_detect`` of support to it and, mutually,
+    to j's bin ``kb`` at its bearing; the localised support ``loc`` (``P_detect`` times the sine
+    of the angle between the two circles there: tangent circles, one sensor stepping along its
+    axis, say nothing of *where* on the arc the echo came from) to both; and to j's support
+    from other sensors (the transmission's) when ``i`` is another sensor's."""
+    support[i, k] += p
+    support[slot, kb] += p
+    located[i, k] += loc
+    located[slot, kb] += loc
+    if other:
+        trans[kb] += p
+
+
+@compiled_inline
 def _weigh_arc(
     slot: int, i: int, start: int, stop: int, alive_bins: int, other: bool, distinct: bool,
     half_bin_arc: float, beam: Beam, params: EvidenceParams, edges: FloatArray,
@@ -232,8 +278,6 @@ def _weigh_arc(
     bins = free.shape[1]
     threshold = params.threshold
     free_r = beam.free_r
-    cj = beam.cos_axis
-    sj = beam.sin_axis
     e_vx = scratch[0]
     e_vy = scratch[1]
     e_d = scratch[5]
@@ -248,14 +292,11 @@ def _weigh_arc(
         k = e_bin[e]
         d = e_d[e]
         if d >= free_r and abs(d - beam.r) > params.support_tolerance:
-            alive_bins += 1
+            alive_bins += 1  # neither in j's freespace nor on its echo circle
             continue
-        vx = e_vx[e]
-        vy = e_vy[e]
-        sine = e_sine[e]
-        p_beam = e_beam[e]
         p = e_p[e]
         if d < free_r:
+            p_beam = e_beam[e]
             f = free[i, k]
             touched[i] = True
             if distinct:
@@ -263,14 +304,10 @@ def _weigh_arc(
             established = (support[i, k] >= params.establish and f < 0.5 * threshold)
             if d < free_r - params.tolerance:
                 top_through = max(top_through, support[i, k])
-            if established and d < free_r - params.tolerance:
-                # An established surface j looked past (at any angle: docs/evidence-carving.md,
-                # "Occlusion"): the bins of j behind it cannot hold j's echo (sound does not
-                # pass through walls).
-                along = vx * cj + vy * sj
-                occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
-                                            half_bin_arc / d, beam, free, threshold)
-                touched[slot] = True
+                if established:
+                    occluding += _occlude_past(slot, e_vx[e], e_vy[e], d, half_bin_arc, beam,
+                                               free, threshold)
+                    touched[slot] = True
             factor = params.protect if established else 1.0
             w = -math.log1p(-p) * factor
             f += w
@@ -278,30 +315,16 @@ def _weigh_arc(
             if f < threshold:
                 alive_bins += 1
                 if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-                    # Kept for the transmission pass (after j's support is known).
-                    passed[n_passed, 0] = i
-                    passed[n_passed, 1] = k
-                    passed[n_passed, 2] = bin_from_guess(e_guess[e], sine, edges, bins)
-                    passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
-                    passed[n_passed, 4] = factor
-                    passed[n_passed, 5] = w
-                    n_passed += 1
+                    kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
+                    n_passed = _keep_for_transmission(passed, n_passed, i, k, kb,
+                                                      p_beam * e_cos[e], factor, w)
         else:  # on j's echo circle: support, not freespace
             alive_bins += 1
             touched[i] = True
             touched[slot] = True
             top_support = max(top_support, p)
-            # Localised support: times the sine of the angle between the two circles there
-            # (tangent circles, one sensor stepping along its axis, say nothing of *where* on
-            # the arc the echo came from).
-            support[i, k] += p
-            kb = bin_from_guess(e_guess[e], sine, edges, bins)
-            support[slot, kb] += p
-            loc = e_loc[e]
-            located[i, k] += loc
-            located[slot, kb] += loc
-            if other:
-                trans[kb] += p
+            kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
+            _add_support(slot, i, k, kb, p, e_loc[e], other, support, located, trans)
     return alive_bins, top_support, top_looked, n_passed, occluding, top_through
 
 
