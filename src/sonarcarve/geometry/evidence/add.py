@@ -328,6 +328,62 @@ def _weigh_arc(
     return alive_bins, top_support, top_looked, n_passed, occluding, top_through
 
 
+@compiled_inline
+def _cull_older(first_older: int, n_older: int, circle: FloatArray, status: Int8Array,
+                beam: Beam, near_flags: BoolArray, near: SlotArray) -> int:
+    """The cull of the ``n_older`` rows from ``first_older`` on (ring order: two runs of rows
+    where the ring wraps) by :func:`~sonarcarve.geometry.evidence.beam.mark_near`, all rows of
+    a run at once (a loop without branches); the rows that pass, oldest first, into ``near``.
+    Returns how many pass."""
+    storage = status.shape[0]
+    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
+    n_near = 0
+    end = first_older + n_older
+    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
+        mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
+                  near_flags[lo:hi])
+        for i in range(lo, hi):
+            near[n_near] = i
+            n_near += near_flags[i]
+    return n_near
+
+
+@compiled_inline
+def _add_arc_sums(slot: int, i: int, top_support: float, top_looked: float, distinct: bool,
+                  other: bool, viewpoints: FloatArray, looked: FloatArray,
+                  others: FloatArray) -> None:
+    """The per-arc sums of older arc ``i`` and j, mutual: support from distinct viewpoints and
+    from other sensors (the arc's largest support from j, not every bin's, so that one reading
+    counts once), and j's evidence of having looked at ``i`` from a distinct viewpoint."""
+    if distinct:
+        viewpoints[i] += top_support
+        viewpoints[slot] += top_support
+        if top_looked > 0.0:
+            looked[i] += -math.log1p(-top_looked)
+    if other:
+        others[i] += top_support
+        others[slot] += top_support
+
+
+@compiled_inline
+def _finish_new_arc(slot: int, occluding: int, top_through: float, passed: FloatArray,
+                    n_passed: int, trans: FloatArray, free: FloatArray, status: Int8Array,
+                    occluded: FloatArray, through: FloatArray, behind: FloatArray,
+                    params: EvidenceParams) -> int:
+    """What j learns once every older arc is weighed: its share of bins occluded, the support
+    its free sector passed, the transmission evidence (needs all of j's support) and its own
+    status. Returns the arcs this carved fully (j among them when occlusion took every bin)."""
+    bins = free.shape[1]
+    occluded[slot] = occluding / bins
+    through[slot] = top_through
+    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
+    fully = weigh_transmission(slot, passed, n_passed, trans, free, status, params)
+    if occluding >= bins:
+        status[slot] = EVIDENCE_CARVED
+        fully += 1
+    return fully
+
+
 @compiled_borrowing
 def evidence_add(
     slot: int, first_older: int, n_older: int,
@@ -478,16 +534,7 @@ def evidence_add(
     # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
     # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
     # order, so every value is the one loop's.
-    storage = x.shape[0]
-    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
-    n_near = 0
-    end = first_older + n_older
-    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
-        mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
-                  near_flags[lo:hi])
-        for i in range(lo, hi):
-            near[n_near] = i
-            n_near += near_flags[i]
+    n_near = _cull_older(first_older, n_older, circle, status, beam, near_flags, near)
     q = 0
     while q < n_near:
         # Pass 1 and the crossings for the next older arcs, until group_size of them have
@@ -536,25 +583,13 @@ def evidence_add(
                 beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
                 trans, passed, n_passed, occluding, top_through)
             start = stop
-            # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
-            if distinct:
-                viewpoints[i] += top_support
-                viewpoints[slot] += top_support
-                if top_looked > 0.0:
-                    looked[i] += -math.log1p(-top_looked)
-            if other:
-                others[i] += top_support
-                others[slot] += top_support
+            _add_arc_sums(slot, i, top_support, top_looked, distinct, other, viewpoints, looked,
+                          others)
             if alive_bins == 0:
                 status[i] = EVIDENCE_CARVED
                 fully += 1
-    occluded[slot] = occluding / bins
-    through[slot] = top_through
-    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
-    fully += weigh_transmission(slot, passed, n_passed, trans, free, status, params)
-    if occluding >= bins:
-        status[slot] = EVIDENCE_CARVED
-        fully += 1
+    fully += _finish_new_arc(slot, occluding, top_through, passed, n_passed, trans, free, status,
+                             occluded, through, behind, params)
     return fully, crossings, occluding, spilled
 
 
