@@ -384,6 +384,44 @@ def _finish_new_arc(slot: int, occluding: int, top_through: float, passed: Float
     return fully
 
 
+@compiled_inline
+def _weigh_group(slot: int, group: int, group_end: int, x: FloatArray, y: FloatArray,
+                 r: FloatArray, beam_width: FloatArray, sensor: npt.NDArray[np.int64],
+                 viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
+                 near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray, beam: Beam,
+                 params: EvidenceParams, edges: FloatArray, scratch: FloatArray,
+                 e_bin: SlotArray, e_guess: SlotArray, free: FloatArray, support: FloatArray,
+                 located: FloatArray, status: Int8Array, touched: BoolArray, trans: FloatArray,
+                 passed: FloatArray, n_passed: int, occluding: int, top_through: float,
+                 ) -> tuple[int, int, int, float]:
+    """Pass 3 for the group's arcs ``near[group:group_end]``, in the cull's order: each arc's
+    evidence (:func:`_weigh_arc`) and per-arc sums (:func:`_add_arc_sums`), and its status.
+    Returns the arcs carved fully and the updated ``n_passed``, ``occluding`` and
+    ``top_through``."""
+    bins = free.shape[1]
+    fully = 0
+    start = 0
+    for g in range(group, group_end):
+        i = near[g]
+        ox = x[i] - beam.x
+        oy = y[i] - beam.y
+        other = sensor[i] != sensor[slot]
+        distinct = other or ox * ox + oy * oy >= beam.spacing2
+        half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
+        stop = start + arc_marked[g - group]
+        alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
+            slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
+            beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
+            trans, passed, n_passed, occluding, top_through)
+        start = stop
+        _add_arc_sums(slot, i, top_support, top_looked, distinct, other, viewpoints, looked,
+                      others)
+        if alive_bins == 0:
+            status[i] = EVIDENCE_CARVED
+            fully += 1
+    return fully, n_passed, occluding, top_through
+
+
 @compiled_borrowing
 def evidence_add(
     slot: int, first_older: int, n_older: int,
@@ -569,25 +607,11 @@ def evidence_add(
         _detect_entries(n_entries, beam, params.max_detect, params.rough, edges, edge_scale,
                         scratch, e_guess)
         # Pass 3: the evidence, arc after arc, in bin order, then the arc's sums.
-        start = 0
-        for g in range(group, group_end):
-            i = near[g]
-            ox = x[i] - beam.x
-            oy = y[i] - beam.y
-            other = sensor[i] != sensor[slot]
-            distinct = other or ox * ox + oy * oy >= beam.spacing2
-            half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
-            stop = start + arc_marked[g - group]
-            alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
-                slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
-                beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
-                trans, passed, n_passed, occluding, top_through)
-            start = stop
-            _add_arc_sums(slot, i, top_support, top_looked, distinct, other, viewpoints, looked,
-                          others)
-            if alive_bins == 0:
-                status[i] = EVIDENCE_CARVED
-                fully += 1
+        carved, n_passed, occluding, top_through = _weigh_group(
+            slot, group, group_end, x, y, r, beam_width, sensor, viewpoints, looked, others,
+            near, arc_marked, arc_alive, beam, params, edges, scratch, e_bin, e_guess, free,
+            support, located, status, touched, trans, passed, n_passed, occluding, top_through)
+        fully += carved
     fully += _finish_new_arc(slot, occluding, top_through, passed, n_passed, trans, free, status,
                              occluded, through, behind, params)
     return fully, crossings, occluding, spilled
