@@ -385,6 +385,52 @@ def _finish_new_arc(slot: int, occluding: int, top_through: float, passed: Float
 
 
 @compiled_inline
+def _gather_group(slot: int, q: int, n_near: int, group_size: int, x: FloatArray,
+                  y: FloatArray, r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray,
+                  cos_half: FloatArray, bx: FloatArray, by: FloatArray, ex: FloatArray,
+                  ey: FloatArray, free: FloatArray, status: Int8Array, in_beam: BoolArray,
+                  near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray,
+                  scratch: FloatArray, e_bin: SlotArray, bearings: npt.NDArray[np.float32],
+                  counts: npt.NDArray[np.int32], spill: FloatArray, spilled: int, beam: Beam,
+                  params: EvidenceParams, with_atm: bool,
+                  ) -> tuple[int, int, int, int, int, int]:
+    """Pass 1 and the crossings for the culled rows ``near[q:]``, until ``group_size`` of them
+    have bins to weigh: those rows moved to ``near[q:group_end]``, their marked bins the group's
+    entries (:func:`_mark_bins`, :func:`_gather_entries`); an arc with no bin to weigh is done
+    here (pass 3 would add nothing: its sums would add 0.0 to sums of non-negative terms).
+
+    Returns the next row to read, ``group_end``, the entries, the crossings kept, the rows of
+    ``spill`` used and the arcs carved fully.
+    """
+    group = q
+    group_end = q
+    n_entries = 0
+    crossings = 0
+    fully = 0
+    while q < n_near and group_end - group < group_size:
+        i = near[q]
+        q += 1
+        if with_atm:
+            kept, spilled = transversal_crossings(
+                slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
+                counts, spill, spilled)
+            crossings += kept
+        alive_bins, n_in = _mark_bins(i, beam, params.threshold, bx, by, free, in_beam)
+        if n_in == 0:
+            if alive_bins == 0:
+                status[i] = EVIDENCE_CARVED
+                fully += 1
+            continue
+        near[group_end] = i  # q > group_end: a row already read
+        arc_marked[group_end - group] = n_in
+        arc_alive[group_end - group] = alive_bins
+        group_end += 1
+        _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
+        n_entries += n_in
+    return q, group_end, n_entries, crossings, spilled, fully
+
+
+@compiled_inline
 def _weigh_group(slot: int, group: int, group_end: int, x: FloatArray, y: FloatArray,
                  r: FloatArray, beam_width: FloatArray, sensor: npt.NDArray[np.int64],
                  viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
@@ -551,7 +597,6 @@ def evidence_add(
     beam = new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
     edges = trans[bins : 2 * bins + 1]
     edge_scale = trans[2 * bins + 2]  # the guess of bin_of_sine
-    threshold = params.threshold
     e_bin = bin_index[0]  # the entry's bin of its older arc
     e_guess = bin_index[1]  # the guess of the bin of j behind it
     arc_marked = bin_index[2]  # per arc of the group: its entries
@@ -578,30 +623,12 @@ def evidence_add(
         # Pass 1 and the crossings for the next older arcs, until group_size of them have
         # bins to weigh (their rows in ``near[group:group_end]``, their bins the entries).
         group = q
-        group_end = q
-        n_entries = 0
-        while q < n_near and group_end - group < group_size:
-            i = near[q]
-            q += 1
-            if with_atm:
-                kept, spilled = transversal_crossings(
-                    slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
-                    counts, spill, spilled)
-                crossings += kept
-            alive_bins, n_in = _mark_bins(i, beam, threshold, bx, by, free, in_beam)
-            if n_in == 0:
-                # Nothing to weigh: pass 3 would add nothing (its sums would add 0.0 to sums
-                # of non-negative terms, which leaves them as they are).
-                if alive_bins == 0:
-                    status[i] = EVIDENCE_CARVED
-                    fully += 1
-                continue
-            near[group_end] = i  # q > group_end: a row already read
-            arc_marked[group_end - group] = n_in
-            arc_alive[group_end - group] = alive_bins
-            group_end += 1
-            _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
-            n_entries += n_in
+        q, group_end, n_entries, kept, spilled, carved = _gather_group(
+            slot, q, n_near, group_size, x, y, r, cos_axis, sin_axis, cos_half, bx, by, ex, ey,
+            free, status, in_beam, near, arc_marked, arc_alive, scratch, e_bin, bearings,
+            counts, spill, spilled, beam, params, with_atm)
+        crossings += kept
+        fully += carved
         # Pass 2: P_detect of every entry of the group at once (one loop the compiler
         # vectorises when the entries are many).
         _detect_entries(n_entries, beam, params.max_detect, params.rough, edges, edge_scale,
