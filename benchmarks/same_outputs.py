@@ -9,15 +9,18 @@ Run from the repository root (on a shared machine, with ``nice``)::
 
 For a speed change that must not change any output. Each commit's ``src`` is exported with
 ``git archive`` (``WORKTREE``: this checkout's ``src``) and run in a child process with its own
-numba cache. A child simulates the logs of ``--worlds`` (``--seeds``, both echo models) and
-feeds each log to every ``--methods`` method three ways: the whole log in one ``add_many``,
-blocks of 5 readings, and one ``add`` per reading (``--singles`` readings of it). It hashes
-(SHA-256 of the raw bytes) every field of the global map that ``finish`` returns and of the
-local map at the end of the stream and after every 1000 readings of the blocks. At each of
-``--resolutions`` it feeds the log to the carved grid (its default method) and the Elfes grid,
-each made ``around`` the world, whole and in blocks of 5 readings, and hashes the log-odds at
-the end, and the carved grid's after each 25-reading block read. The parent prints each hash
-key's verdict: the same in every commit, or which differ.
+numba cache. A child simulates the logs of ``--worlds`` (``--seeds``, both echo models), each
+also with its no-echo readings (the same firings, those that heard nothing kept as readings of
+range inf: the only path to evidence carving's ``evidence_free``; ``--no-no-echo`` leaves them
+out, for commits whose simulator cannot make them), and feeds each log to every ``--methods``
+method three ways: the whole log in one ``add_many``, blocks of 5 readings, and one ``add`` per
+reading (``--singles`` readings of it). It hashes (SHA-256 of the raw bytes) every field of the
+global map that ``finish`` returns and of the local map at the end of the stream and after every
+1000 readings of the blocks (``evidence`` is among the default methods: no grid runs it by
+default). At each of ``--resolutions`` it feeds the log to the carved grid (its default method)
+and the Elfes grid, each made ``around`` the world, whole and in blocks of 5 readings, and
+hashes the log-odds at the end, and the carved grid's after each 25-reading block read. The
+parent prints each hash key's verdict: the same in every commit, or which differ.
 """
 
 from __future__ import annotations
@@ -35,19 +38,21 @@ WORKTREE = "WORKTREE"
 ROOT = Path(__file__).resolve().parent.parent
 
 # Run in each subprocess: arguments seeds, methods, worlds, resolutions (each comma-separated),
-# singles.
+# singles, silent (1: also the logs with no-echo readings).
 CHILD = r"""
 import hashlib, json, math, sys
 import numpy as np
 from sonarcarve.grids import CarvedGrid, OccupancyGrid
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods import MethodConfig, make_method
+from sonarcarve.sim.simulate import simulate
 
 seeds = [int(s) for s in sys.argv[1].split(",")]
 methods = [m for m in sys.argv[2].split(",") if m]
 worlds = sys.argv[3].split(",")
 resolutions = [float(h) for h in sys.argv[4].split(",")]
 singles = int(sys.argv[5])
+silent = sys.argv[6] == "1"
 out = {}
 
 def digest(value):
@@ -79,30 +84,41 @@ def grids(log, bounds, batch):
             reads.append(digest(grid.log_odds))
         out[f"{log} carved grid {h:g} m reads every 25"] = digest(np.array(reads))
 
+def logs(world, seed, physics):
+    # The scenario's log, and with silent the same firings with the no-echo readings too
+    # (the echoes are the same; the firings that heard nothing add free space only).
+    override = () if physics == "specular" else (("echo_model", physics),)
+    sim = run_simulation(Scenario(world, seed, physics=override))
+    yield f"{world} {seed} {physics}", sim.readings, sim.world.bounds
+    if silent:
+        heard_all = simulate(sim.world, sim.robot, sim.trajectory, sim.seed, physics=sim.physics,
+                             odometry=sim.odometry, no_echo=True)
+        yield f"{world} {seed} {physics} no-echo", heard_all.readings, sim.world.bounds
+
+def feed_methods(log, batch):
+    for name in methods:
+        whole = method(name)
+        whole.add_many(batch)
+        put(f"{log} {name} whole local", whole.local_map())
+        put(f"{log} {name} whole global", whole.finish())
+        blocks = method(name)
+        for start in range(0, len(batch), 5):
+            blocks.add_many(batch[start:start + 5])
+            if (start + 5) % 1000 == 0:
+                put(f"{log} {name} blocks local at {start + 5}", blocks.local_map())
+        put(f"{log} {name} blocks global", blocks.finish())
+        one = method(name)
+        for k in range(min(singles, len(batch))):
+            one.add(batch[k])
+        put(f"{log} {name} singles local", one.local_map())
+        put(f"{log} {name} singles global", one.finish())
+
 for world in worlds:
     for physics in ("specular", "amplitude"):
-        override = () if physics == "specular" else (("echo_model", physics),)
         for seed in seeds:
-            sim = run_simulation(Scenario(world, seed, physics=override))
-            batch = sim.readings
-            log = f"{world} {seed} {physics}"
-            for name in methods:
-                whole = method(name)
-                whole.add_many(batch)
-                put(f"{log} {name} whole local", whole.local_map())
-                put(f"{log} {name} whole global", whole.finish())
-                blocks = method(name)
-                for start in range(0, len(batch), 5):
-                    blocks.add_many(batch[start:start + 5])
-                    if (start + 5) % 1000 == 0:
-                        put(f"{log} {name} blocks local at {start + 5}", blocks.local_map())
-                put(f"{log} {name} blocks global", blocks.finish())
-                one = method(name)
-                for k in range(min(singles, len(batch))):
-                    one.add(batch[k])
-                put(f"{log} {name} singles local", one.local_map())
-                put(f"{log} {name} singles global", one.finish())
-            grids(log, sim.world.bounds, batch)
+            for log, batch, bounds in logs(world, seed, physics):
+                feed_methods(log, batch)
+                grids(log, bounds, batch)
 print(json.dumps(out))
 """
 
@@ -121,13 +137,16 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--commits", nargs="+", default=["HEAD", WORKTREE])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
-    parser.add_argument("--methods", nargs="*", default=["combined", "atm", "carve"],
+    parser.add_argument("--methods", nargs="*", default=["combined", "atm", "carve", "evidence"],
                         help="methods to compare (none: the grids alone)")
     parser.add_argument("--worlds", nargs="+", default=["office"])
     parser.add_argument("--resolutions", type=float, nargs="+", default=[0.1],
                         help="cell sizes of the grids, metres")
     parser.add_argument("--singles", type=int, default=3000,
                         help="readings fed one add() at a time (the start of each log)")
+    parser.add_argument("--no-echo", action=argparse.BooleanOptionalAction, default=True,
+                        help="also each log with its no-echo readings (firings that heard "
+                             "nothing: range inf, free space up to max_range)")
     args = parser.parse_args(argv)
     hashes: dict[str, dict[str, str]] = {}
     with tempfile.TemporaryDirectory(prefix="sonarcarve-same-") as name:
@@ -137,7 +156,8 @@ def main(argv: list[str] | None = None) -> int:
             child = subprocess.run(
                 [sys.executable, "-c", CHILD, ",".join(map(str, args.seeds)),
                  ",".join(args.methods), ",".join(args.worlds),
-                 ",".join(map(str, args.resolutions)), str(args.singles)],
+                 ",".join(map(str, args.resolutions)), str(args.singles),
+                 "1" if args.no_echo else "0"],
                 env=env, check=True, capture_output=True, text=True)
             hashes[commit] = json.loads(child.stdout)
     first, *others = args.commits

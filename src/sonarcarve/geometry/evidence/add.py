@@ -13,13 +13,15 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
 :func:`evidence_add` is a sequence of passes, each an inlined helper: the new arc's profile
-(:func:`_init_new_arc`), the cull of the older rows
-(:func:`~sonarcarve.geometry.evidence.beam.mark_near`), then per group of older arcs the bins
-to weigh (:func:`_mark_bins`, :func:`_gather_entries`), their ``P_detect``
-(:func:`_detect_entries`, :func:`~sonarcarve.geometry.evidence.model.detect_probability`
-inlined) and their evidence (:func:`_weigh_arc`), and last the transmission. Laid out for the
-processor, it gives bit for bit the values of one loop over every arc and bin:
-``docs/evidence-carving.md``, "Evidence, support and the threshold", "Per-arc sums" and
+(:func:`_init_new_arc`), the cull of the older rows (:func:`_cull_older`,
+:func:`~sonarcarve.geometry.evidence.beam.mark_near`), then per group of older arcs the bins
+to weigh and ATM's crossings (:func:`_gather_group`: :func:`_mark_bins`,
+:func:`_gather_entries`), their ``P_detect`` (:func:`_detect_entries`,
+:func:`~sonarcarve.geometry.evidence.model.detect_probability` inlined) and their evidence
+(:func:`_weigh_group`: :func:`_weigh_arc`, :func:`_add_arc_sums`), and last what the new arc
+learns, the transmission included (:func:`_finish_new_arc`). Laid out for the processor, it
+gives bit for bit the values of one loop over every arc and bin: ``docs/evidence-carving.md``,
+"Evidence, support and the threshold", "Per-arc sums" and
 "Speed: the weighing kernel's layout".
 """
 
@@ -214,6 +216,52 @@ def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
 
 
 @compiled_inline
+def _occlude_past(slot: int, vx: float, vy: float, d: float, half_bin_arc: float, beam: Beam,
+                  free: FloatArray, threshold: float) -> int:
+    """Carve the bins of j behind an established bin of an older arc that j looked past, at
+    offset ``(vx, vy)`` and distance ``d`` from j, half a bin (``half_bin_arc``) wide: j's echo
+    cannot come from behind a surface (sound does not pass through walls; at any angle:
+    ``docs/evidence-carving.md``, "Occlusion"). Returns the bins of j carved."""
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    along = vx * cj + vy * sj
+    return occlude_behind(slot, math.atan2(cj * vy - sj * vx, along), half_bin_arc / d, beam,
+                          free, threshold)
+
+
+@compiled_inline
+def _keep_for_transmission(passed: FloatArray, n_passed: int, i: int, k: int, kb: int,
+                           blocked: float, factor: float, w: float) -> int:
+    """Row ``n_passed`` of ``passed``: older bin ``(i, k)`` that j's sound passed, j's bin
+    ``kb`` behind it, the ``P_beam cos γ`` it would have blocked, the ``protect`` factor and the
+    evidence ``w`` it got. Kept for the transmission pass, which needs j's support from other
+    sensors, known only once every older arc is weighed. Returns the rows now used."""
+    passed[n_passed, 0] = i
+    passed[n_passed, 1] = k
+    passed[n_passed, 2] = kb
+    passed[n_passed, 3] = blocked
+    passed[n_passed, 4] = factor
+    passed[n_passed, 5] = w
+    return n_passed + 1
+
+
+@compiled_inline
+def _add_support(slot: int, i: int, k: int, kb: int, p: float, loc: float, other: bool,
+                 support: FloatArray, located: FloatArray, trans: FloatArray) -> None:
+    """An older bin ``(i, k)`` on j's echo circle: ``P_detect`` of support to it and, mutually,
+    to j's bin ``kb`` at its bearing; the localised support ``loc`` (``P_detect`` times the sine
+    of the angle between the two circles there: tangent circles, one sensor stepping along its
+    axis, say nothing of *where* on the arc the echo came from) to both; and to j's support
+    from other sensors (the transmission's) when ``i`` is another sensor's."""
+    support[i, k] += p
+    support[slot, kb] += p
+    located[i, k] += loc
+    located[slot, kb] += loc
+    if other:
+        trans[kb] += p
+
+
+@compiled_inline
 def _weigh_arc(
     slot: int, i: int, start: int, stop: int, alive_bins: int, other: bool, distinct: bool,
     half_bin_arc: float, beam: Beam, params: EvidenceParams, edges: FloatArray,
@@ -232,8 +280,6 @@ def _weigh_arc(
     bins = free.shape[1]
     threshold = params.threshold
     free_r = beam.free_r
-    cj = beam.cos_axis
-    sj = beam.sin_axis
     e_vx = scratch[0]
     e_vy = scratch[1]
     e_d = scratch[5]
@@ -248,14 +294,11 @@ def _weigh_arc(
         k = e_bin[e]
         d = e_d[e]
         if d >= free_r and abs(d - beam.r) > params.support_tolerance:
-            alive_bins += 1
+            alive_bins += 1  # neither in j's freespace nor on its echo circle
             continue
-        vx = e_vx[e]
-        vy = e_vy[e]
-        sine = e_sine[e]
-        p_beam = e_beam[e]
         p = e_p[e]
         if d < free_r:
+            p_beam = e_beam[e]
             f = free[i, k]
             touched[i] = True
             if distinct:
@@ -263,14 +306,10 @@ def _weigh_arc(
             established = (support[i, k] >= params.establish and f < 0.5 * threshold)
             if d < free_r - params.tolerance:
                 top_through = max(top_through, support[i, k])
-            if established and d < free_r - params.tolerance:
-                # An established surface j looked past (at any angle: docs/evidence-carving.md,
-                # "Occlusion"): the bins of j behind it cannot hold j's echo (sound does not
-                # pass through walls).
-                along = vx * cj + vy * sj
-                occluding += occlude_behind(slot, math.atan2(cj * vy - sj * vx, along),
-                                            half_bin_arc / d, beam, free, threshold)
-                touched[slot] = True
+                if established:
+                    occluding += _occlude_past(slot, e_vx[e], e_vy[e], d, half_bin_arc, beam,
+                                               free, threshold)
+                    touched[slot] = True
             factor = params.protect if established else 1.0
             w = -math.log1p(-p) * factor
             f += w
@@ -278,31 +317,157 @@ def _weigh_arc(
             if f < threshold:
                 alive_bins += 1
                 if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-                    # Kept for the transmission pass (after j's support is known).
-                    passed[n_passed, 0] = i
-                    passed[n_passed, 1] = k
-                    passed[n_passed, 2] = bin_from_guess(e_guess[e], sine, edges, bins)
-                    passed[n_passed, 3] = p_beam * e_cos[e]  # blocked, not echoed
-                    passed[n_passed, 4] = factor
-                    passed[n_passed, 5] = w
-                    n_passed += 1
+                    kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
+                    n_passed = _keep_for_transmission(passed, n_passed, i, k, kb,
+                                                      p_beam * e_cos[e], factor, w)
         else:  # on j's echo circle: support, not freespace
             alive_bins += 1
             touched[i] = True
             touched[slot] = True
             top_support = max(top_support, p)
-            # Localised support: times the sine of the angle between the two circles there
-            # (tangent circles, one sensor stepping along its axis, say nothing of *where* on
-            # the arc the echo came from).
-            support[i, k] += p
-            kb = bin_from_guess(e_guess[e], sine, edges, bins)
-            support[slot, kb] += p
-            loc = e_loc[e]
-            located[i, k] += loc
-            located[slot, kb] += loc
-            if other:
-                trans[kb] += p
+            kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
+            _add_support(slot, i, k, kb, p, e_loc[e], other, support, located, trans)
     return alive_bins, top_support, top_looked, n_passed, occluding, top_through
+
+
+@compiled_inline
+def _cull_older(first_older: int, n_older: int, circle: FloatArray, status: Int8Array,
+                beam: Beam, near_flags: BoolArray, near: SlotArray) -> int:
+    """The cull of the ``n_older`` rows from ``first_older`` on (ring order: two runs of rows
+    where the ring wraps) by :func:`~sonarcarve.geometry.evidence.beam.mark_near`, all rows of
+    a run at once (a loop without branches); the rows that pass, oldest first, into ``near``.
+    Returns how many pass."""
+    storage = status.shape[0]
+    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
+    n_near = 0
+    end = first_older + n_older
+    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
+        mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
+                  near_flags[lo:hi])
+        for i in range(lo, hi):
+            near[n_near] = i
+            n_near += near_flags[i]
+    return n_near
+
+
+@compiled_inline
+def _add_arc_sums(slot: int, i: int, top_support: float, top_looked: float, distinct: bool,
+                  other: bool, viewpoints: FloatArray, looked: FloatArray,
+                  others: FloatArray) -> None:
+    """The per-arc sums of older arc ``i`` and j, mutual: support from distinct viewpoints and
+    from other sensors (the arc's largest support from j, not every bin's, so that one reading
+    counts once), and j's evidence of having looked at ``i`` from a distinct viewpoint."""
+    if distinct:
+        viewpoints[i] += top_support
+        viewpoints[slot] += top_support
+        if top_looked > 0.0:
+            looked[i] += -math.log1p(-top_looked)
+    if other:
+        others[i] += top_support
+        others[slot] += top_support
+
+
+@compiled_inline
+def _finish_new_arc(slot: int, occluding: int, top_through: float, passed: FloatArray,
+                    n_passed: int, trans: FloatArray, free: FloatArray, status: Int8Array,
+                    occluded: FloatArray, through: FloatArray, behind: FloatArray,
+                    params: EvidenceParams) -> int:
+    """What j learns once every older arc is weighed: its share of bins occluded, the support
+    its free sector passed, the transmission evidence (needs all of j's support) and its own
+    status. Returns the arcs this carved fully (j among them when occlusion took every bin)."""
+    bins = free.shape[1]
+    occluded[slot] = occluding / bins
+    through[slot] = top_through
+    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
+    fully = weigh_transmission(slot, passed, n_passed, trans, free, status, params)
+    if occluding >= bins:
+        status[slot] = EVIDENCE_CARVED
+        fully += 1
+    return fully
+
+
+@compiled_inline
+def _gather_group(slot: int, q: int, n_near: int, group_size: int, x: FloatArray,
+                  y: FloatArray, r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray,
+                  cos_half: FloatArray, bx: FloatArray, by: FloatArray, ex: FloatArray,
+                  ey: FloatArray, free: FloatArray, status: Int8Array, in_beam: BoolArray,
+                  near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray,
+                  scratch: FloatArray, e_bin: SlotArray, bearings: npt.NDArray[np.float32],
+                  counts: npt.NDArray[np.int32], spill: FloatArray, spilled: int, beam: Beam,
+                  params: EvidenceParams, with_atm: bool,
+                  ) -> tuple[int, int, int, int, int, int]:
+    """Pass 1 and the crossings for the culled rows ``near[q:]``, until ``group_size`` of them
+    have bins to weigh: those rows moved to ``near[q:group_end]``, their marked bins the group's
+    entries (:func:`_mark_bins`, :func:`_gather_entries`); an arc with no bin to weigh is done
+    here (pass 3 would add nothing: its sums would add 0.0 to sums of non-negative terms).
+
+    Returns the next row to read, ``group_end``, the entries, the crossings kept, the rows of
+    ``spill`` used and the arcs carved fully.
+    """
+    group = q
+    group_end = q
+    n_entries = 0
+    crossings = 0
+    fully = 0
+    while q < n_near and group_end - group < group_size:
+        i = near[q]
+        q += 1
+        if with_atm:
+            kept, spilled = transversal_crossings(
+                slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
+                counts, spill, spilled)
+            crossings += kept
+        alive_bins, n_in = _mark_bins(i, beam, params.threshold, bx, by, free, in_beam)
+        if n_in == 0:
+            if alive_bins == 0:
+                status[i] = EVIDENCE_CARVED
+                fully += 1
+            continue
+        near[group_end] = i  # q > group_end: a row already read
+        arc_marked[group_end - group] = n_in
+        arc_alive[group_end - group] = alive_bins
+        group_end += 1
+        _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
+        n_entries += n_in
+    return q, group_end, n_entries, crossings, spilled, fully
+
+
+@compiled_inline
+def _weigh_group(slot: int, group: int, group_end: int, x: FloatArray, y: FloatArray,
+                 r: FloatArray, beam_width: FloatArray, sensor: npt.NDArray[np.int64],
+                 viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
+                 near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray, beam: Beam,
+                 params: EvidenceParams, edges: FloatArray, scratch: FloatArray,
+                 e_bin: SlotArray, e_guess: SlotArray, free: FloatArray, support: FloatArray,
+                 located: FloatArray, status: Int8Array, touched: BoolArray, trans: FloatArray,
+                 passed: FloatArray, n_passed: int, occluding: int, top_through: float,
+                 ) -> tuple[int, int, int, float]:
+    """Pass 3 for the group's arcs ``near[group:group_end]``, in the cull's order: each arc's
+    evidence (:func:`_weigh_arc`) and per-arc sums (:func:`_add_arc_sums`), and its status.
+    Returns the arcs carved fully and the updated ``n_passed``, ``occluding`` and
+    ``top_through``."""
+    bins = free.shape[1]
+    fully = 0
+    start = 0
+    for g in range(group, group_end):
+        i = near[g]
+        ox = x[i] - beam.x
+        oy = y[i] - beam.y
+        other = sensor[i] != sensor[slot]
+        distinct = other or ox * ox + oy * oy >= beam.spacing2
+        half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
+        stop = start + arc_marked[g - group]
+        alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
+            slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
+            beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
+            trans, passed, n_passed, occluding, top_through)
+        start = stop
+        _add_arc_sums(slot, i, top_support, top_looked, distinct, other, viewpoints, looked,
+                      others)
+        if alive_bins == 0:
+            status[i] = EVIDENCE_CARVED
+            fully += 1
+    return fully, n_passed, occluding, top_through
 
 
 @compiled_borrowing
@@ -434,7 +599,6 @@ def evidence_add(
     beam = new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
     edges = trans[bins : 2 * bins + 1]
     edge_scale = trans[2 * bins + 2]  # the guess of bin_of_sine
-    threshold = params.threshold
     e_bin = bin_index[0]  # the entry's bin of its older arc
     e_guess = bin_index[1]  # the guess of the bin of j behind it
     arc_marked = bin_index[2]  # per arc of the group: its entries
@@ -455,83 +619,30 @@ def evidence_add(
     # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
     # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
     # order, so every value is the one loop's.
-    storage = x.shape[0]
-    n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
-    n_near = 0
-    end = first_older + n_older
-    for lo, hi in ((first_older, min(end, storage)), (0, max(end - storage, 0))):
-        mark_near(circle[0, lo:hi], circle[1, lo:hi], circle[2, lo:hi], status[lo:hi], beam,
-                  near_flags[lo:hi])
-        for i in range(lo, hi):
-            near[n_near] = i
-            n_near += near_flags[i]
+    n_near = _cull_older(first_older, n_older, circle, status, beam, near_flags, near)
     q = 0
     while q < n_near:
         # Pass 1 and the crossings for the next older arcs, until group_size of them have
         # bins to weigh (their rows in ``near[group:group_end]``, their bins the entries).
         group = q
-        group_end = q
-        n_entries = 0
-        while q < n_near and group_end - group < group_size:
-            i = near[q]
-            q += 1
-            if with_atm:
-                kept, spilled = transversal_crossings(
-                    slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
-                    counts, spill, spilled)
-                crossings += kept
-            alive_bins, n_in = _mark_bins(i, beam, threshold, bx, by, free, in_beam)
-            if n_in == 0:
-                # Nothing to weigh: pass 3 would add nothing (its sums would add 0.0 to sums
-                # of non-negative terms, which leaves them as they are).
-                if alive_bins == 0:
-                    status[i] = EVIDENCE_CARVED
-                    fully += 1
-                continue
-            near[group_end] = i  # q > group_end: a row already read
-            arc_marked[group_end - group] = n_in
-            arc_alive[group_end - group] = alive_bins
-            group_end += 1
-            _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
-            n_entries += n_in
+        q, group_end, n_entries, kept, spilled, carved = _gather_group(
+            slot, q, n_near, group_size, x, y, r, cos_axis, sin_axis, cos_half, bx, by, ex, ey,
+            free, status, in_beam, near, arc_marked, arc_alive, scratch, e_bin, bearings,
+            counts, spill, spilled, beam, params, with_atm)
+        crossings += kept
+        fully += carved
         # Pass 2: P_detect of every entry of the group at once (one loop the compiler
         # vectorises when the entries are many).
         _detect_entries(n_entries, beam, params.max_detect, params.rough, edges, edge_scale,
                         scratch, e_guess)
         # Pass 3: the evidence, arc after arc, in bin order, then the arc's sums.
-        start = 0
-        for g in range(group, group_end):
-            i = near[g]
-            ox = x[i] - beam.x
-            oy = y[i] - beam.y
-            other = sensor[i] != sensor[slot]
-            distinct = other or ox * ox + oy * oy >= beam.spacing2
-            half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
-            stop = start + arc_marked[g - group]
-            alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
-                slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
-                beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
-                trans, passed, n_passed, occluding, top_through)
-            start = stop
-            # The per-arc sums, mutual: support from distinct viewpoints and other sensors.
-            if distinct:
-                viewpoints[i] += top_support
-                viewpoints[slot] += top_support
-                if top_looked > 0.0:
-                    looked[i] += -math.log1p(-top_looked)
-            if other:
-                others[i] += top_support
-                others[slot] += top_support
-            if alive_bins == 0:
-                status[i] = EVIDENCE_CARVED
-                fully += 1
-    occluded[slot] = occluding / bins
-    through[slot] = top_through
-    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
-    fully += weigh_transmission(slot, passed, n_passed, trans, free, status, params)
-    if occluding >= bins:
-        status[slot] = EVIDENCE_CARVED
-        fully += 1
+        carved, n_passed, occluding, top_through = _weigh_group(
+            slot, group, group_end, x, y, r, beam_width, sensor, viewpoints, looked, others,
+            near, arc_marked, arc_alive, beam, params, edges, scratch, e_bin, e_guess, free,
+            support, located, status, touched, trans, passed, n_passed, occluding, top_through)
+        fully += carved
+    fully += _finish_new_arc(slot, occluding, top_through, passed, n_passed, trans, free, status,
+                             occluded, through, behind, params)
     return fully, crossings, occluding, spilled
 
 

@@ -42,6 +42,45 @@ def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: fl
     e = max(point - hull_lo, hull_hi - point) + 0.5 * step
     return 2.0 * r * math.sin(0.5 * min(e, math.pi))
 
+
+@compiled_inline
+def _placed_bearing(located: FloatArray, free: FloatArray, weights: FloatArray, s: int,
+                    start: int, end: int, lo_axis: float, step: float, cut: bool,
+                    place_located: bool, posterior: bool, posterior_uncut: bool) -> float:
+    """Bearing of the point on the kept run ``start .. end - 1`` of arc ``s``: the posterior's
+    median, the localised support's or the run's middle (eq. 3.6), by the rules of
+    :func:`evidence_estimates`; ``cut`` where evidence has cut the beam."""
+    mid = 0.5 * ((lo_axis + start * step) + (lo_axis + end * step))  # eq. 3.6
+    if place_located and posterior and (cut or posterior_uncut):
+        return posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
+    if place_located and cut:
+        return located_median(located, s, start, end, lo_axis, step, mid)
+    return mid
+
+
+@compiled_inline
+def _atm_median_bound(median: float, runs: int, atm_bound: float, r: float, hull_lo: float,
+                      hull_hi: float, step: float) -> float:
+    """Bound of ATM's median of the kept run's crossings: eq. 5.4 times δ (``atm_bound``) when
+    the run is all that survives, else the surviving hull's (:func:`_hull_bound`: the echo may
+    be in any run)."""
+    return atm_bound if runs == 1 else _hull_bound(r, median, hull_lo, hull_hi, step)
+
+
+@compiled_inline
+def _kept_run_of(s: int, status: Int8Array, free: FloatArray, located: FloatArray,
+                 in_bin: FloatArray, crossing_bin: SlotArray, bearings: npt.NDArray[np.float32],
+                 c: int, half: float, step: float, threshold: float,
+                 ) -> tuple[int, int, int, int, int]:
+    """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` after counting its
+    first ``c`` crossings per bin (they weigh in which run is kept); no run (all 0) for an arc
+    already carved."""
+    if status[s] != EVIDENCE_ALIVE:
+        return 0, 0, 0, 0, 0
+    crossings_per_bin(in_bin, crossing_bin, bearings, s, c, half, step)
+    return kept_run(free, located, in_bin, s, threshold)
+
+
 @compiled
 def evidence_estimates(
     slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
@@ -135,27 +174,20 @@ def evidence_estimates(
         step = phi / bins
         lo_axis = theta[s] - half
         c = counts[s] if with_atm else 0
-        start = end = first = last = runs = 0
-        if status[s] == EVIDENCE_ALIVE:
-            crossings_per_bin(in_bin, crossing_bin, bearings, s, c, half, step)
-            start, end, first, last, runs = kept_run(free, located, in_bin, s, threshold)
+        start, end, first, last, runs = _kept_run_of(s, status, free, located, in_bin,
+                                                      crossing_bin, bearings, c, half, step,
+                                                      threshold)
         if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
             bearing[q] = theta[s]
             width[q] = phi
             max_error[q] = _whole_beam_bound(r[s], phi)
             continue
         has_piece[q] = True
-        lo = lo_axis + start * step
-        hi = lo_axis + end * step
         hull_lo = lo_axis + first * step
         hull_hi = lo_axis + last * step
-        mid = 0.5 * (lo + hi)  # eq. 3.6
-        cut = end - start < bins
-        if place_located and posterior and (cut or posterior_uncut):
-            mid = posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
-        elif place_located and cut:
-            mid = located_median(located, s, start, end, lo_axis, step, mid)
-        width[q] = hi - lo
+        mid = _placed_bearing(located, free, weights, s, start, end, lo_axis, step,
+                              end - start < bins, place_located, posterior, posterior_uncut)
+        width[q] = (lo_axis + end * step) - (lo_axis + start * step)
         piece_support[q], piece_free[q] = run_evidence(support, free, s, start, end, threshold)
         run_count[q] = runs
         hull_share[q] = (hull_hi - hull_lo) / phi
@@ -164,10 +196,9 @@ def evidence_estimates(
         max_error[q] = carved_bound
         kept, median_rel = run_crossings(values, crossing_bin, bearings, s, c, start, end)
         piece_crossings[q] = kept
-        if kept > 0 and kept >= min_crossings:
+        if kept > 0 and kept >= min_crossings:  # section 4: the estimate with the smaller bound
             median = theta[s] + median_rel
-            bound = (atm_bound if runs == 1
-                     else _hull_bound(r[s], median, hull_lo, hull_hi, step))
+            bound = _atm_median_bound(median, runs, atm_bound, r[s], hull_lo, hull_hi, step)
             if bound < carved_bound:
                 bearing[q] = median
                 max_error[q] = bound

@@ -13,7 +13,8 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.geometry._compiled import compiled_borrowing
+from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
+from sonarcarve.geometry.evidence.beam import Beam
 from sonarcarve.geometry.evidence.model import (
     EVIDENCE_ALIVE,
     EVIDENCE_CARVED,
@@ -23,6 +24,87 @@ from sonarcarve.geometry.evidence.model import (
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = ["evidence_free"]
+
+
+@compiled_inline
+def _silent_beam(xj: float, yj: float, max_range: float, theta_j: float, phi_j: float,
+                 params: EvidenceParams) -> Beam:
+    """The no-echo reading as the weighing sees it: a
+    :class:`~sonarcarve.geometry.evidence.beam.Beam` whose echo circle is at ``max_range`` and
+    whose reach ends with its freespace, at ``max_range - ε`` (it heard nothing, so it supports
+    nothing). Its ``step`` is 0: the reading has no bins of its own."""
+    free_r = max_range - params.tolerance
+    cj = math.cos(theta_j)
+    sj = math.sin(theta_j)
+    sin_half_j = math.sin(0.5 * phi_j)
+    cos_half_j = math.cos(0.5 * phi_j)
+    return Beam(
+        xj, yj, max_range, cj, sj, 0.5 * phi_j, 0.0, sin_half_j, cos_half_j * cos_half_j,
+        free_r, free_r, free_r * free_r,
+        cj * cos_half_j + sj * sin_half_j, sj * cos_half_j - cj * sin_half_j,
+        cj * cos_half_j - sj * sin_half_j, sj * cos_half_j + cj * sin_half_j,
+        1.0 - params.edge_gain, 1.0 / params.range_scale, math.cos(params.incidence_full),
+        math.cos(params.incidence_zero), params.viewpoint_spacing * params.viewpoint_spacing,
+    )
+
+
+@compiled_inline
+def _out_of_reach(i: int, beam: Beam, circle: FloatArray, status: Int8Array) -> bool:
+    """The cull of older arc ``i``: already carved, or its bounding circle beyond the end of
+    the freespace or clear of one of the beam's two half-planes (the tests of
+    :func:`~sonarcarve.geometry.evidence.beam.mark_near`, one arc at a time with early exits,
+    as :func:`evidence_free` always did them)."""
+    if status[i] != EVIDENCE_ALIVE:
+        return True
+    dcx = circle[0, i] - beam.x
+    dcy = circle[1, i] - beam.y
+    rho = circle[2, i]
+    if dcx * dcx + dcy * dcy >= (beam.reach + rho) * (beam.reach + rho):
+        return True
+    below_lower_edge = beam.edge1_x * dcy - beam.edge1_y * dcx < -rho
+    return bool(below_lower_edge or dcx * beam.edge2_y - dcy * beam.edge2_x < -rho)
+
+
+@compiled_inline
+def _weigh_silence(i: int, beam: Beam, distinct: bool, params: EvidenceParams, bx: FloatArray,
+                   by: FloatArray, ex: FloatArray, ey: FloatArray, free: FloatArray,
+                   support: FloatArray, touched: BoolArray) -> tuple[int, float]:
+    """Add the no-echo reading's free evidence to the live bins of older arc ``i`` inside its
+    freespace sector (eq. 3.2; ``P_detect`` as
+    :func:`~sonarcarve.geometry.evidence.model.detect_probability`). Returns the arc's live
+    bins left and its largest "looked" ``P_beam`` (0 unless ``distinct``)."""
+    threshold = params.threshold
+    xj = beam.x
+    yj = beam.y
+    cj = beam.cos_axis
+    sj = beam.sin_axis
+    alive_bins = 0
+    top_looked = 0.0
+    for k in range(bx.shape[1]):
+        f = free[i, k]
+        if f >= threshold:
+            continue
+        vx = bx[i, k] - xj
+        vy = by[i, k] - yj
+        d2 = vx * vx + vy * vy
+        along = vx * cj + vy * sj
+        if d2 >= beam.reach2 or along <= 0.0 or along * along < d2 * beam.cos_half2:
+            alive_bins += 1
+            continue
+        d = math.sqrt(d2)
+        u = min(abs(vx * sj - vy * cj) / (d * beam.sin_half), 1.0)
+        p_beam = params.max_detect * (1.0 - beam.edge_loss * u * u) / (1.0 + d * beam.inv_scale)
+        cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) / d
+        p = p_beam * incidence_gain(cos_gamma, beam.cos_full, beam.cos_zero, params.rough)
+        touched[i] = True
+        if distinct:
+            top_looked = max(top_looked, p_beam)
+        established = support[i, k] >= params.establish and f < 0.5 * threshold
+        f += -math.log1p(-p) * (params.protect if established else 1.0)
+        free[i, k] = f
+        if f < threshold:
+            alive_bins += 1
+    return alive_bins, top_looked
 
 
 @compiled_borrowing
@@ -47,67 +129,18 @@ def evidence_free(
     int
         Arcs whose last bin this reading carved.
     """
-    bins = bx.shape[1]
-    threshold = params.threshold
-    free_r = max_range - params.tolerance
-    if free_r <= 0.0:
+    if max_range - params.tolerance <= 0.0:  # no freespace at all
         return 0
-    half_j = 0.5 * phi_j
-    cj = math.cos(theta_j)
-    sj = math.sin(theta_j)
-    sin_half_j = math.sin(half_j)
-    cos_half_j = math.cos(half_j)
-    cos_half_j2 = cos_half_j * cos_half_j
-    reach2 = free_r * free_r
-    edge_loss = 1.0 - params.edge_gain
-    inv_scale = 1.0 / params.range_scale
-    u1x = cj * cos_half_j + sj * sin_half_j
-    u1y = sj * cos_half_j - cj * sin_half_j
-    u2x = cj * cos_half_j - sj * sin_half_j
-    u2y = sj * cos_half_j + cj * sin_half_j
-    cos_full = math.cos(params.incidence_full)
-    cos_zero = math.cos(params.incidence_zero)
-    spacing2 = params.viewpoint_spacing * params.viewpoint_spacing
+    beam = _silent_beam(xj, yj, max_range, theta_j, phi_j, params)
     fully = 0
     for i in older:
-        if status[i] != EVIDENCE_ALIVE:
-            continue
-        dcx = circle[0, i] - xj
-        dcy = circle[1, i] - yj
-        rho = circle[2, i]
-        if dcx * dcx + dcy * dcy >= (free_r + rho) * (free_r + rho):
-            continue
-        if u1x * dcy - u1y * dcx < -rho or dcx * u2y - dcy * u2x < -rho:
+        if _out_of_reach(i, beam, circle, status):
             continue
         ox = x[i] - xj
         oy = y[i] - yj
-        distinct = sensor[i] != sensor_j or ox * ox + oy * oy >= spacing2
-        alive_bins = 0
-        top_looked = 0.0
-        for k in range(bins):
-            f = free[i, k]
-            if f >= threshold:
-                continue
-            vx = bx[i, k] - xj
-            vy = by[i, k] - yj
-            d2 = vx * vx + vy * vy
-            along = vx * cj + vy * sj
-            if d2 >= reach2 or along <= 0.0 or along * along < d2 * cos_half_j2:
-                alive_bins += 1
-                continue
-            d = math.sqrt(d2)
-            u = min(abs(vx * sj - vy * cj) / (d * sin_half_j), 1.0)
-            p_beam = params.max_detect * (1.0 - edge_loss * u * u) / (1.0 + d * inv_scale)
-            cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) / d
-            p = p_beam * incidence_gain(cos_gamma, cos_full, cos_zero, params.rough)
-            touched[i] = True
-            if distinct:
-                top_looked = max(top_looked, p_beam)
-            established = support[i, k] >= params.establish and f < 0.5 * threshold
-            f += -math.log1p(-p) * (params.protect if established else 1.0)
-            free[i, k] = f
-            if f < threshold:
-                alive_bins += 1
+        distinct = sensor[i] != sensor_j or ox * ox + oy * oy >= beam.spacing2
+        alive_bins, top_looked = _weigh_silence(i, beam, distinct, params, bx, by, ex, ey,
+                                                free, support, touched)
         if distinct and top_looked > 0.0:
             looked[i] += -math.log1p(-top_looked)
         if alive_bins == 0:
