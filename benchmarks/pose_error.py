@@ -234,12 +234,14 @@ def run(worlds: Sequence[str], seeds: int, physics: str, robot: str,
 # ============================================================================ tables
 
 
-def _mean(rows: Sequence[Row], key: str) -> float:
+def mean_of(rows: Sequence[Row], key: str) -> float:
+    """The mean of ``key`` over ``rows``, NaN values (a world without that kind) left out."""
     values = [r[key] for r in rows if not math.isnan(r[key])]
     return float(np.mean(values)) if values else math.nan
 
 
-def _pct(value: float) -> str:
+def pct(value: float) -> str:
+    """A share with one decimal, "–" where there is none."""
     return "–" if math.isnan(value) else f"{value:.1f}"
 
 
@@ -261,14 +263,15 @@ def points_table(data: dict[str, Any], world: str, conditions: Sequence[str]) ->
             rows = [r["points"][name] for r in _runs(data, world, condition)]
             if not rows:
                 continue
-            kinds = " / ".join(_pct(_mean(rows, k.label)) for k in KINDS)
-            print(f"| {name} | {condition} | {_mean(rows, 'direct_kept'):.1f} | "
-                  f"{_mean(rows, 'spurious'):.1f} | {kinds} | "
-                  f"{100 * _mean(rows, 'median_m'):.1f} | "
-                  f"{100 * _mean(rows, 'median_fixed_m'):.1f} | "
-                  f"{100 * _mean(rows, 'p90_m'):.1f} | {100 * _mean(rows, 'p90_fixed_m'):.1f} | "
-                  f"{_mean(rows, 'median_ratio'):.2f} | "
-                  f"{_mean(rows, 'median_ratio_fixed'):.2f} | {_mean(rows, 'p90_ratio'):.2f} |")
+            kinds = " / ".join(pct(mean_of(rows, k.label)) for k in KINDS)
+            print(f"| {name} | {condition} | {mean_of(rows, 'direct_kept'):.1f} | "
+                  f"{mean_of(rows, 'spurious'):.1f} | {kinds} | "
+                  f"{100 * mean_of(rows, 'median_m'):.1f} | "
+                  f"{100 * mean_of(rows, 'median_fixed_m'):.1f} | "
+                  f"{100 * mean_of(rows, 'p90_m'):.1f} | "
+                  f"{100 * mean_of(rows, 'p90_fixed_m'):.1f} | "
+                  f"{mean_of(rows, 'median_ratio'):.2f} | "
+                  f"{mean_of(rows, 'median_ratio_fixed'):.2f} | {mean_of(rows, 'p90_ratio'):.2f} |")
 
 
 def claims_table(data: dict[str, Any], worlds: Sequence[str], conditions: Sequence[str]) -> None:
@@ -289,7 +292,7 @@ def claims_table(data: dict[str, Any], worlds: Sequence[str], conditions: Sequen
             hidden = [r["points"]["evidence, occluded points dropped"] for r in runs]
 
             def cell(rows: Sequence[Row], key: str, ok: Callable[[float], bool]) -> str:
-                mean = _mean(rows, key)
+                mean = mean_of(rows, key)
                 met = sum(ok(r[key]) for r in rows if not math.isnan(r[key]))
                 fmt = f"{mean:.2f}" if key == "median_ratio" else f"{mean:.1f}"
                 return f"{fmt} ({met}/{len(rows)})"
@@ -331,9 +334,9 @@ def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> 
                     won = sum(c["precision"] > lay["precision"] and c["recall"] > lay["recall"]
                               for c, lay in zip(rows, layer, strict=True))
                     wins = f"{won} of {len(rows)}"
-                print(f"| {h:.2f} | {name} | {condition} | {_mean(rows, 'precision'):.3f} | "
-                      f"{_mean(rows, 'recall'):.3f} | {100 * _mean(rows, 'phantoms'):.3f} | "
-                      f"{100 * _mean(rows, 'freed'):.2f} | {wins} |")
+                print(f"| {h:.2f} | {name} | {condition} | {mean_of(rows, 'precision'):.3f} | "
+                      f"{mean_of(rows, 'recall'):.3f} | {100 * mean_of(rows, 'phantoms'):.3f} | "
+                      f"{100 * mean_of(rows, 'freed'):.2f} | {wins} |")
 
 
 def print_tables(data: dict[str, Any]) -> None:

@@ -71,7 +71,7 @@ from scipy.special import jn_zeros
 
 from evidence import KINDS, map_row
 from grids import _carved, _fill, _layer, _measure
-from pose_error import KEEP, MEDIAN_RATIO, METHODS, REMOVE
+from pose_error import KEEP, MEDIAN_RATIO, METHODS, REMOVE, mean_of, pct
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.grids import CarvedGrid, CarvedGridParams, OccupancyMap, RangeSensorLayerParams
@@ -263,15 +263,6 @@ def run(worlds: Sequence[str], seeds: int, physics: str, conditions: Sequence[Co
 # ============================================================================ tables
 
 
-def _mean(rows: Sequence[Row], key: str) -> float:
-    values = [r[key] for r in rows if not math.isnan(r[key])]
-    return float(np.mean(values)) if values else math.nan
-
-
-def _pct(value: float) -> str:
-    return "–" if math.isnan(value) else f"{value:.1f}"
-
-
 def _runs(data: dict[str, Any], condition: str, world: str | None = None) -> list[Any]:
     return [r for r in data["runs"] if r["condition"] == condition
             and (world is None or r["world"] == world)]
@@ -280,7 +271,7 @@ def _runs(data: dict[str, Any], condition: str, world: str | None = None) -> lis
 def _cell(rows: Sequence[Row], key: str, ok: Callable[[float], bool]) -> str:
     """The mean over runs and how many runs meet the target."""
     values = [r[key] for r in rows if not math.isnan(r[key])]
-    fmt = f"{_mean(rows, key):.2f}" if key.endswith("ratio") else f"{_mean(rows, key):.1f}"
+    fmt = f"{mean_of(rows, key):.2f}" if key.endswith("ratio") else f"{mean_of(rows, key):.1f}"
     return f"{fmt} ({sum(ok(v) for v in values)}/{len(values)})"
 
 
@@ -296,16 +287,16 @@ def summary_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
         runs = _runs(data, condition)
         for name in runs[0]["points"]:
             rows = [r["points"][name] for r in runs]
-            kinds = " / ".join(_pct(_mean(rows, k.label)) for k in KINDS)
+            kinds = " / ".join(pct(mean_of(rows, k.label)) for k in KINDS)
             evidence = name.startswith("evidence")
             kept = (_cell(rows, "direct_kept", lambda v: v >= KEEP) if evidence
-                    else f"{_mean(rows, 'direct_kept'):.1f}")
+                    else f"{mean_of(rows, 'direct_kept'):.1f}")
             removed = (_cell(rows, "spurious", lambda v: v >= REMOVE) if evidence
-                       else f"{_mean(rows, 'spurious'):.1f}")
+                       else f"{mean_of(rows, 'spurious'):.1f}")
             median = (_cell(rows, "median_ratio", lambda v: v <= MEDIAN_RATIO) if evidence
-                      else f"{_mean(rows, 'median_ratio'):.2f}")
+                      else f"{mean_of(rows, 'median_ratio'):.2f}")
             p90 = (_cell(rows, "p90_ratio", lambda v: v <= 0.5) if evidence
-                   else f"{_mean(rows, 'p90_ratio'):.2f}")
+                   else f"{mean_of(rows, 'p90_ratio'):.2f}")
             print(f"| {condition} | {name} | {kept} | {removed} | {kinds} | {median} | {p90} |")
 
 
@@ -324,7 +315,7 @@ def claims_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
             if not runs:
                 continue
             plain = [r["points"]["evidence"] for r in runs]
-            kinds = " / ".join(_pct(_mean(plain, k.label)) for k in KINDS)
+            kinds = " / ".join(pct(mean_of(plain, k.label)) for k in KINDS)
             line = (f"| {world} | {condition} | {_cell(plain, 'direct_kept', lambda v: v >= KEEP)}"
                     f" | {_cell(plain, 'spurious', lambda v: v >= REMOVE)} | {kinds} | "
                     f"{_cell(plain, 'median_ratio', lambda v: v <= MEDIAN_RATIO)} | "
@@ -360,8 +351,9 @@ def grids_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
                 won = sum(c["precision"] > lay["precision"] and c["recall"] > lay["recall"]
                           for c, lay in zip(rows, layer, strict=True))
                 wins = f"{won} of {len(rows)}"
-            print(f"| {condition} | {name} | {_mean(rows, 'precision'):.3f} | "
-                  f"{_mean(rows, 'recall'):.3f} | {100 * _mean(rows, 'phantoms'):.3f} | {wins} |")
+            print(f"| {condition} | {name} | {mean_of(rows, 'precision'):.3f} | "
+                  f"{mean_of(rows, 'recall'):.3f} | {100 * mean_of(rows, 'phantoms'):.3f} | "
+                  f"{wins} |")
 
 
 def print_tables(data: dict[str, Any]) -> None:
