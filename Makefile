@@ -40,7 +40,7 @@ experiments: $(TEST_STAMP)  ## the paper's full experiments: refreshes docs/RESU
 fuzz: $(TEST_STAMP)  ## thousands of mutated inputs per family through the real CLI (no crash, hang, leftover or changed file)
 	FUZZ_CASES=5000 $(BIN)/python -m pytest -n 2 -m fuzz -q tests/fuzz
 
-bench: $(STAMP)  ## every benchmark (slow: several take minutes): speed, memory, parameter choices, evidence carving, grids, changing scenes (tables for docs/RESULTS.md)
+bench: $(STAMP)  ## the main benchmarks (slow: several take minutes): speed, memory, parameter choices, evidence carving, grids, changing scenes (the held-out and A/B ones run by hand: benchmarks/README.md)
 	$(BIN)/python benchmarks/import_time.py
 	$(BIN)/python benchmarks/throughput.py
 	$(BIN)/python benchmarks/simulate_speed.py
