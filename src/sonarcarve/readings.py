@@ -38,6 +38,7 @@ __all__ = [
     "ReadingBatch",
     "ReadingsError",
     "check_reading",
+    "reading_ids",
     "wrap_angle",
 ]
 
@@ -507,3 +508,24 @@ def _first_bad(where: _Where, column: str, bad: npt.NDArray[np.bool_], problem: 
 def _raise(where: _Where, row: int, column: str, problem: str) -> NoReturn:
     msg = f"{where.row(row)}, column {column!r} {problem}"
     raise ReadingsError(msg)
+
+
+def reading_ids(n: int, ids: npt.ArrayLike | None = None) -> IntArray:
+    """The reading id of each of ``n`` readings: ``ids`` (the input rows of readings a filter
+    kept, so that the map's ids still point at the input) or, without them, 0 .. n - 1.
+
+    Raises
+    ------
+    ReadingsError
+        ``ids`` not one integer per reading, or not increasing (rows of one log, in order).
+    """
+    if ids is None:
+        return np.arange(n, dtype=np.int64)
+    given = np.asarray(ids)
+    if given.shape != (n,) or not np.issubdtype(given.dtype, np.integer):
+        msg = f"reading ids must be {n} integers, one per reading, got shape {given.shape}"
+        raise ReadingsError(msg)
+    if np.any(np.diff(given) <= 0):
+        msg = "reading ids must increase (rows of one log, in order)"
+        raise ReadingsError(msg)
+    return given.astype(np.int64, copy=False)

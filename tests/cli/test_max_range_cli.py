@@ -154,10 +154,34 @@ def test_a_bag_or_recording_output_takes_max_range(
     assert "dropped: echoes beyond --max-range │ 2" in text
     assert f"points out │ {map_points:,}" in text
     assert _process(bare, tmp_path / "run.mcap", "--max-range", "3") == 0
-    assert "dropped: echoes beyond --max-range │ 2" in " ".join(capsys.readouterr().out.split())
+    text = " ".join(capsys.readouterr().out.split())
+    assert "readings in │ 42" in text
+    assert "dropped: echoes beyond --max-range │ 2" in text
     assert _process(bare, tmp_path / "bad.mcap", "--max-range", "3", "--min-range", "0.1") == 2
     assert "--max-range applies to every output" in capsys.readouterr().err
     assert not (tmp_path / "bad.mcap").exists()
+
+
+def test_a_bags_arc_markers_keep_the_input_rows_as_ids(tmp_path: Path) -> None:
+    """An echo dropped mid-log: the markers' ids are the map CSV's (rows of the input)."""
+    from rosbags.highlevel import AnyReader
+
+    from sonarcarve.io.bag_out import ARCS_TOPIC
+
+    far = [(0.95, 0, 0.5, math.pi / 2, "6.0")]
+    log = _csv(tmp_path / "log.csv", _ECHOES[:10] + far + _ECHOES[10:])
+    args = ["--method", "centerline", "--max-range", "3"]
+    assert main(["process", str(log), "--out", str(tmp_path / "map.csv"), *args]) == 0
+    assert main(["process", str(log), "--out", str(tmp_path / "run.mcap"), *args]) == 0
+    map_ids = [int(line.split(",")[0])
+               for line in (tmp_path / "map.csv").read_text().splitlines()[1:]]
+    assert 10 not in map_ids
+    assert max(map_ids) == 20
+    with AnyReader([tmp_path / "run.mcap"]) as reader:
+        arrays = [reader.deserialize(raw, conn.msgtype)
+                  for conn, _, raw in reader.messages()
+                  if conn.topic == ARCS_TOPIC]
+    assert sorted(m.id for m in arrays[-1].markers[1:]) == sorted(map_ids)
 
 
 def test_plot_reads_the_no_echo_rows_with_max_range(
@@ -173,6 +197,11 @@ def test_plot_reads_the_no_echo_rows_with_max_range(
     assert not (tmp_path / "a.png").exists()
     assert main([*plot, "--max-range", "3", "--out", str(tmp_path / "b.png")]) == 0
     assert (tmp_path / "b.png").read_bytes()[:4] == b"\x89PNG"
+    # Without --readings the option has nothing to act on: said, not ignored.
+    assert main(["plot", str(tmp_path / "map.csv"), "--max-range", "3", "--out",
+                 str(tmp_path / "c.png")]) == 2
+    assert "give --readings too" in capsys.readouterr().err
+    assert not (tmp_path / "c.png").exists()
 
 
 def test_a_fleet_names_how_to_give_a_max_range(

@@ -166,3 +166,12 @@ def test_a_grid_is_written_as_occupancy_grids(tmp_path: Path, name: str) -> None
     assert last.info.resolution == pytest.approx(0.5)
     assert (last.info.origin.position.x, last.info.origin.position.y) == (-1.0, -0.5)
     assert last.data.tolist() == [-1, 0, 100, 0, 0, 0]
+
+
+def test_given_ids_are_the_arc_markers_ids(tmp_path: Path) -> None:
+    """Readings a filter kept carry their input rows (the id contract), not their positions."""
+    path = tmp_path / "map.mcap"
+    write_map_bag(path, BATCH, make_method("centerline"), odometry=ODOMETRY, rate=2.0,
+                  ids=[0, 2, 5, 6])
+    markers = [m for _, m in _read(path)[ARCS_TOPIC]][-1].markers
+    assert [m.id for m in markers[1:]] == [0, 2, 5, 6]

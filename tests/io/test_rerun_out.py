@@ -73,6 +73,28 @@ def test_times_are_the_readings_seconds(tmp_path: Path) -> None:
     np.testing.assert_allclose(times.astype("int64") / 1e9, 0.1 * np.arange(N), atol=1e-9)
 
 
+def test_given_ids_are_the_maps_ids_and_the_reading_timeline(tmp_path: Path) -> None:
+    """Readings a filter kept carry their input rows (the id contract), not their positions."""
+    path = tmp_path / "run.rrd"
+    ids = 3 * np.arange(N) + 7
+    global_map = write_rerun(path, _readings(), make_method("centerline"), ids=ids)
+    np.testing.assert_array_equal(np.sort(global_map.reading_id), ids)  # centerline keeps all
+    (chunk,) = _chunks(path)["/world/reading"]
+    np.testing.assert_array_equal(chunk.to_record_batch().column("reading").to_numpy(), ids)
+    with pytest.raises(ReadingsError, match="one per reading"):
+        write_rerun(tmp_path / "bad.rrd", _readings(), make_method("carve"), ids=ids[:-1])
+    with pytest.raises(ReadingsError, match="must increase"):
+        write_rerun(tmp_path / "bad.rrd", _readings(), make_method("carve"), ids=ids[::-1])
+    assert not (tmp_path / "bad.rrd").exists()
+    # Each arc drawn about its own reading's origin: the same strips as with row positions.
+    again = tmp_path / "rows.rrd"
+    write_rerun(again, _readings(), make_method("centerline"))
+    for entity, column in (("/world/arcs", "LineStrips2D:strips"),
+                           ("/world/global_map", "Points2D:positions")):
+        mine, rows = (_chunks(p)[entity][-1].to_record_batch() for p in (path, again))
+        assert mine.column(column).to_pylist() == rows.column(column).to_pylist(), entity
+
+
 def test_a_bad_reading_or_every_writes_nothing(tmp_path: Path) -> None:
     path = tmp_path / "run.rrd"
     with pytest.raises(ConfigError, match="every must be at least 1"):

@@ -249,7 +249,7 @@ def grid(
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
-    batch, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
+    batch, _, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
     built = build_grid(batch, model, resolution, margin, params)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NamedTuple
 
 import typer
 
@@ -25,8 +25,9 @@ from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
 from sonarcarve.io.rosbag import RosbagError, RosbagLog
-from sonarcarve.readings import MAX_READING_RANGE, NO_MAX_RANGE, ReadingBatch
+from sonarcarve.readings import MAX_READING_RANGE, NO_MAX_RANGE, ReadingBatch, reading_ids
 from sonarcarve.robot import load_robot
+from sonarcarve.typing import IntArray
 
 __all__ = [
     "BAG_FLAGS",
@@ -37,6 +38,7 @@ __all__ = [
     "FrameOpt",
     "MaxRangeError",
     "MaxRangeOpt",
+    "NearEchoes",
     "NoEchoOpt",
     "OdomTopicOpt",
     "RangeTopicOpt",
@@ -203,11 +205,21 @@ def check_max_range(max_range: float | None) -> float | None:
     return max_range
 
 
-def drop_far_echoes(batch: ReadingBatch, max_range: float | None) -> tuple[ReadingBatch, int]:
-    """``batch`` without its echoes farther than ``max_range`` (None: all kept), and how many
-    were dropped: ``--max-range`` as ``sonarcarve process`` applies it (a no-echo row keeps its
-    own max_range)."""
+class NearEchoes(NamedTuple):
+    """A log without its echoes beyond ``--max-range`` (:func:`drop_far_echoes`)."""
+
+    batch: ReadingBatch
+    #: The input row of each kept reading: its reading id, so that map ids, arc markers and a
+    #: recording's timeline still point at the input (the id contract).
+    ids: IntArray
+    dropped: int
+
+
+def drop_far_echoes(batch: ReadingBatch, max_range: float | None) -> NearEchoes:
+    """``batch`` without its echoes farther than ``max_range`` (None: all kept), the kept
+    rows and how many were dropped: ``--max-range`` as ``sonarcarve process`` applies it (a
+    no-echo row keeps its own max_range)."""
     if max_range is None:
-        return batch, 0
+        return NearEchoes(batch, reading_ids(len(batch)), 0)
     kept = filter_readings(batch, ReadingFilter(max_range=max_range))
-    return kept.batch, kept.report.too_far
+    return NearEchoes(kept.batch, kept.ids, kept.report.too_far)

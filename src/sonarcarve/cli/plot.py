@@ -88,6 +88,9 @@ def plot(
         raise PlotUsageError(msg)
     check_figure_path(out, label=f"--out {out}")
     check_max_range(max_range)
+    if max_range is not None and readings is None:  # said, not silently ignored
+        msg = "--max-range applies to the --readings' no-echo rows; give --readings too"
+        raise PlotUsageError(msg)
     inputs = [path for path in (map_csv, readings, grid) if path is not None]
     check_output_file(out, inputs=inputs, label=f"--out {out}")
     require("matplotlib", "plot", "Figures")

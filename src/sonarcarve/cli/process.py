@@ -287,7 +287,8 @@ def process(
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
     rows; map filters (--max-error, --occlusion-depth, then --outlier-radius) drop points from
-    the global map.
+    the global map. With a bag or .rrd output only --max-range applies (a recording shows the
+    live maps of the readings as they came).
     Without map filters a map CSV is written as it is made (memory stays flat however long the
     log); map filters need the whole map, so with them it is held in memory until the end.
 
@@ -469,13 +470,13 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
     else:
         batch = read_readings_csv(job.source, max_range=job.max_range)
         parent, child, copy_from = "", "", None
-    batch, too_far = drop_far_echoes(batch, job.max_range)
+    batch, ids, too_far = drop_far_echoes(batch, job.max_range)
     job.warnings.extend(likely_mistakes(batch))
     grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
             CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
     report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
                            frame=parent or "odom", base_frame=child or "base_link",
-                           rate=job.map_rate, grid=grid)
+                           rate=job.map_rate, grid=grid, ids=ids)
     ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC)
     copied = sum(n for topic, n in report.messages.items() if topic not in ours)
     return [("readings in", f"{len(batch) + too_far:,}"),
@@ -489,9 +490,9 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
     """A Rerun recording of the run (no walls: a log has no ground truth)."""
     from sonarcarve.io.rerun_out import write_rerun
 
-    batch, too_far = drop_far_echoes(_read_whole(job), job.max_range)
+    batch, ids, too_far = drop_far_echoes(_read_whole(job), job.max_range)
     job.warnings.extend(likely_mistakes(batch))
-    global_map = write_rerun(job.out, batch, job.sonar())
+    global_map = write_rerun(job.out, batch, job.sonar(), ids=ids)
     return [("readings in", f"{len(batch) + too_far:,}"), *_dropped_far_row(job, too_far),
             ("points out", f"{len(global_map):,}"), ("recording written to", str(job.out))]
 
@@ -661,7 +662,7 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
         rows.append(("readings in", f"{result.readings:,}"))
     else:
         rows += [("readings in", f"{dropped.total:,}"),
-                 ("dropped: beyond --max-range", f"{dropped.too_far:,}"),
+                 ("dropped: echoes beyond --max-range", f"{dropped.too_far:,}"),
                  ("dropped: below --min-range", f"{dropped.too_near:,}"),
                  ("dropped: --jump-threshold", f"{dropped.jumps:,}"),
                  ("readings mapped", f"{result.readings:,}")]

@@ -81,10 +81,10 @@ def view(
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
     with max_range_hint():
-        batch, too_far = drop_far_echoes(read_readings_csv(readings, max_range=max_range),
-                                         max_range)
+        batch, ids, too_far = drop_far_echoes(read_readings_csv(readings, max_range=max_range),
+                                              max_range)
     with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
-        global_map = write_rerun(target, batch, sonar, walls=walls, every=every)
+        global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids)
     viewer = find_viewer() if open_ else None
     rows = [("readings", f"{len(batch):,}"), ("points in global map", f"{len(global_map):,}"),
             *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),

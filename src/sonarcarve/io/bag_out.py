@@ -35,11 +35,12 @@ from types import TracebackType
 from typing import Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.extras import require
 from sonarcarve.io.errors import OutputError
 from sonarcarve.maps import LocalMap, PointSource
-from sonarcarve.readings import Reading, ReadingBatch
+from sonarcarve.readings import Reading, ReadingBatch, reading_ids
 from sonarcarve.typing import FloatArray, IntArray
 
 __all__ = [
@@ -348,6 +349,7 @@ def write_map_bag(
     rate: float = 2.0,
     storage: str = "mcap",
     grid: LiveGrid | None = None,
+    ids: npt.ArrayLike | None = None,
 ) -> BagOutReport:
     """Run ``method`` over ``batch`` and write its live map and arcs as a ROS bag.
 
@@ -375,6 +377,9 @@ def write_map_bag(
     grid : LiveGrid, optional
         A fresh occupancy grid fed the same readings and written as ``/sonarcarve/grid``
         (``nav_msgs/OccupancyGrid``) with every local map.
+    ids : array-like of int, optional
+        Each reading's id (the arc markers' ids): the input rows of readings a filter kept;
+        default, row positions.
 
     Returns
     -------
@@ -397,7 +402,7 @@ def write_map_bag(
         if odometry is not None:
             _write_odometry(out, np.asarray(odometry, dtype=np.float64).reshape(-1, 4), frame,
                             base_frame)
-        _write_maps(out, batch, method, frame, rate, grid)
+        _write_maps(out, batch, reading_ids(len(batch), ids), method, frame, rate, grid)
     return BagOutReport(path=out.path, format=out.format, messages=dict(out.counts))
 
 
@@ -457,8 +462,8 @@ def _write_odometry(out: BagWriter, odometry: FloatArray, frame: str, base_frame
                           "rotation": quaternion(yaw)}}]})
 
 
-def _write_maps(out: BagWriter, batch: ReadingBatch, method: LiveMethod, frame: str,
-                rate: float, grid: LiveGrid | None) -> None:
+def _write_maps(out: BagWriter, batch: ReadingBatch, ids: IntArray, method: LiveMethod,
+                frame: str, rate: float, grid: LiveGrid | None) -> None:
     if len(batch) == 0:
         return
     period = 1.0 / rate
@@ -467,7 +472,7 @@ def _write_maps(out: BagWriter, batch: ReadingBatch, method: LiveMethod, frame: 
         while reading.t >= next_t:
             _write_snapshot(out, method, next_t, frame, grid)
             next_t += period
-        method.add(reading, k)
+        method.add(reading, int(ids[k]))
         if grid is not None:
             grid.add(reading)
     _write_snapshot(out, method, float(batch.t[-1]), frame, grid)

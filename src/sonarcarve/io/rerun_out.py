@@ -36,7 +36,8 @@ from sonarcarve.errors import ConfigError
 from sonarcarve.extras import require
 from sonarcarve.io.atomic import atomic_path
 from sonarcarve.maps import GlobalMap, LocalMap, PointSource
-from sonarcarve.readings import Reading, ReadingBatch
+from sonarcarve.readings import Reading, ReadingBatch, reading_ids
+from sonarcarve.typing import IntArray
 
 __all__ = ["DEFAULT_EVERY", "PATH_PIECE", "SOURCE_RGB", "RerunMapper", "write_rerun"]
 
@@ -85,6 +86,7 @@ def write_rerun(
     walls: npt.ArrayLike | None = None,
     every: int = DEFAULT_EVERY,
     application_id: str = "sonarcarve",
+    ids: npt.ArrayLike | None = None,
 ) -> GlobalMap:
     """Stream ``batch`` through ``method`` and write the run as a Rerun recording at ``path``.
 
@@ -105,6 +107,9 @@ def write_rerun(
         the last one); the new reading and the sensor origins are logged for every reading.
     application_id : str
         The recording's application id (what the viewer groups recordings by).
+    ids : array-like of int, optional
+        Each reading's id (the "reading" timeline and the map's ids): the input rows of
+        readings a filter kept; default, row positions.
 
     Returns
     -------
@@ -132,14 +137,15 @@ def write_rerun(
         recording = rr.RecordingStream(application_id)
         recording.save(tmp)
         try:
-            global_map = _log_run(rr, recording, batch, method, walls, every)
+            global_map = _log_run(rr, recording, batch, reading_ids(len(batch), ids), method,
+                                  walls, every)
         finally:
             recording.flush()
             recording.disconnect()
     return global_map
 
 
-def _log_run(rr: Any, rec: Any, batch: ReadingBatch, method: RerunMapper,
+def _log_run(rr: Any, rec: Any, batch: ReadingBatch, ids: IntArray, method: RerunMapper,
              walls: npt.ArrayLike | None, every: int) -> GlobalMap:
     if walls is not None:
         segments = np.asarray(walls, dtype=np.float64).reshape(-1, 2, 2)
@@ -150,9 +156,9 @@ def _log_run(rr: Any, rec: Any, batch: ReadingBatch, method: RerunMapper,
     latest: dict[int, tuple[float, float]] = {}
     n = len(batch)
     for k, reading in enumerate(batch):
-        method.add(reading, k)
+        method.add(reading, int(ids[k]))
         rec.set_time("time", duration=reading.t)
-        rec.set_time("reading", sequence=k)
+        rec.set_time("reading", sequence=int(ids[k]))
         latest[reading.sensor] = (reading.x, reading.y)
         paths.add(reading.sensor, reading.x, reading.y)
         rec.log("world/robot/sensors", rr.Points2D(list(latest.values()), radii=0.03,
@@ -165,9 +171,10 @@ def _log_run(rr: Any, rec: Any, batch: ReadingBatch, method: RerunMapper,
                 rec.log(f"world/robot/path/{pieces}", _path(rr, paths.take_piece()))
                 pieces += 1
             rec.log("world/robot/path/tail", _path(rr, paths.strips()))
-            _log_points(rr, rec, "world/map", method.local_map(), batch, arcs="world/arcs")
+            _log_points(rr, rec, "world/map", method.local_map(), batch, ids,
+                        arcs="world/arcs")
     global_map = method.finish()
-    _log_points(rr, rec, "world/global_map", global_map, batch, arcs=None)
+    _log_points(rr, rec, "world/global_map", global_map, batch, ids, arcs=None)
     return global_map
 
 
@@ -191,25 +198,26 @@ def _beam(reading: Reading, method: RerunMapper) -> list[npt.NDArray[np.float64]
 
 
 def _log_points(rr: Any, rec: Any, entity: str, points: LocalMap | GlobalMap,
-                batch: ReadingBatch, arcs: str | None) -> None:
+                batch: ReadingBatch, ids: IntArray, arcs: str | None) -> None:
     colors = np.array([SOURCE_RGB[PointSource(int(code))] for code in points.source],
                       dtype=np.uint8).reshape(-1, 3)
     bound = np.where(np.isfinite(points.max_error), points.max_error, _MAX_RADIUS)
     radii = np.clip(bound, _MIN_RADIUS, _MAX_RADIUS)
     rec.log(entity, rr.Points2D(points.xy, colors=colors, radii=radii))
     if arcs is not None:
-        rec.log(arcs, rr.LineStrips2D(_arc_strips(points, batch), colors=colors, radii=0.008))
+        rec.log(arcs, rr.LineStrips2D(_arc_strips(points, batch, ids), colors=colors, radii=0.008))
 
 
-def _arc_strips(points: LocalMap | GlobalMap, batch: ReadingBatch) -> npt.NDArray[np.float64]:
+def _arc_strips(points: LocalMap | GlobalMap, batch: ReadingBatch,
+                ids: IntArray) -> npt.NDArray[np.float64]:
     """Each point's arc as carved: radius r about its reading's origin, ``width`` wide, centred
-    on the point's bearing; shape (n, samples, 2)."""
-    ids = points.reading_id
-    origin = np.column_stack((batch.x[ids], batch.y[ids]))
+    on the point's bearing; shape (n, samples, 2). ``ids``: the readings' ids, increasing."""
+    rows = np.searchsorted(ids, points.reading_id)  # a point's reading, by its id
+    origin = np.column_stack((batch.x[rows], batch.y[rows]))
     delta = points.xy - origin
     bearing = np.arctan2(delta[:, 1], delta[:, 0])
     tau = bearing[:, None] + 0.5 * points.width[:, None] * np.linspace(-1, 1, _ARC_SAMPLES)
-    r = batch.range[ids][:, None]
+    r = batch.range[rows][:, None]
     return np.stack((origin[:, :1] + r * np.cos(tau), origin[:, 1:] + r * np.sin(tau)), axis=-1)
 
 

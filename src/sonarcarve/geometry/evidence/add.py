@@ -270,9 +270,11 @@ def _weigh_arc(
     passed: FloatArray, n_passed: int, occluding: int, top_through: float,
 ) -> tuple[int, float, float, int, int, float]:
     """Pass 3 for older arc ``i``: the evidence of entries ``start .. stop - 1`` (its marked
-    bins, in bin order): freespace evidence, occlusion of j's bins behind established ones and
-    the rows kept for transmission where nearer than ``r_j - ε``, support where on j's echo
-    circle. ``alive_bins`` counts its live bins outside j's reach or beam (pass 1).
+    bins, in bin order): freespace evidence where nearer than ``r_j - ε`` (the rows kept for
+    transmission among them), occlusion of j's bins behind established ones (and the support
+    j looked through) only where nearer than ``r_j - 2ε``, a margin clear of j's own echo;
+    support where on j's echo circle. ``alive_bins`` counts its live bins outside j's reach or
+    beam (pass 1).
 
     Returns ``alive_bins`` with the entries' live bins added, the arc's largest support and
     "looked" ``P_beam``, and the updated ``n_passed``, ``occluding`` and ``top_through``.
