@@ -92,6 +92,9 @@ def _weigh_silence(i: int, beam: Beam, distinct: bool, params: EvidenceParams, b
             alive_bins += 1
             continue
         d = math.sqrt(d2)
+        # detect_probability's formula, written out as evidence_add's passes write it (the same
+        # operations, so the same bits); tests/geometry/test_evidence_passes.py checks both
+        # against a plain reference.
         u = min(abs(vx * sj - vy * cj) / (d * beam.sin_half), 1.0)
         p_beam = params.max_detect * (1.0 - beam.edge_loss * u * u) / (1.0 + d * beam.inv_scale)
         cos_gamma = abs(ex[i, k] * vx + ey[i, k] * vy) / d
