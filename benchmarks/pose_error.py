@@ -240,6 +240,13 @@ def mean_of(rows: Sequence[Row], key: str) -> float:
     return float(np.mean(values)) if values else math.nan
 
 
+def beats_layer(rows: Sequence[Row], layer: Sequence[Row]) -> str:
+    """How many runs' grid beats the layer's of the same run on precision and recall."""
+    won = sum(c["precision"] > lay["precision"] and c["recall"] > lay["recall"]
+              for c, lay in zip(rows, layer, strict=True))
+    return f"{won} of {len(rows)}"
+
+
 def pct(value: float) -> str:
     """A share with one decimal, "–" where there is none."""
     return "–" if math.isnan(value) else f"{value:.1f}"
@@ -329,11 +336,7 @@ def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> 
                     continue
                 rows = [r["grids"][f"{name} @ {h:.2f}"] for r in runs]
                 layer = [r["grids"][f"RangeSensorLayer, ROS defaults @ {h:.2f}"] for r in runs]
-                wins = ""
-                if name.startswith("carved grid"):
-                    won = sum(c["precision"] > lay["precision"] and c["recall"] > lay["recall"]
-                              for c, lay in zip(rows, layer, strict=True))
-                    wins = f"{won} of {len(rows)}"
+                wins = beats_layer(rows, layer) if name.startswith("carved grid") else ""
                 print(f"| {h:.2f} | {name} | {condition} | {mean_of(rows, 'precision'):.3f} | "
                       f"{mean_of(rows, 'recall'):.3f} | {100 * mean_of(rows, 'phantoms'):.3f} | "
                       f"{100 * mean_of(rows, 'freed'):.2f} | {wins} |")
