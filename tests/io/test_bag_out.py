@@ -21,7 +21,7 @@ from sonarcarve.io.bag_out import (
 from sonarcarve.io.errors import OutputError
 from sonarcarve.io.rosbag import RosbagError
 from sonarcarve.methods import make_method
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.readings import ReadingBatch, ReadingsError
 
 # One sonar at the origin facing +x hears a wall 2 m away four times, 0.4 s apart.
 BATCH = ReadingBatch.from_arrays(
@@ -175,3 +175,6 @@ def test_given_ids_are_the_arc_markers_ids(tmp_path: Path) -> None:
                   ids=[0, 2, 5, 6])
     markers = [m for _, m in _read(path)[ARCS_TOPIC]][-1].markers
     assert [m.id for m in markers[1:]] == [0, 2, 5, 6]
+    with pytest.raises(ReadingsError, match="must increase"):
+        write_map_bag(tmp_path / "bad.mcap", BATCH, make_method("carve"), ids=[0, 2, 2, 3])
+    assert not (tmp_path / "bad.mcap").exists()

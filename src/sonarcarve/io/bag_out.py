@@ -392,17 +392,20 @@ def write_map_bag(
         the output's ROS version does not know.
     RosbagError
         ``copy_from`` is no readable bag.
+    ReadingsError
+        ``ids`` not one increasing integer per reading (nothing written).
     """
     if not (math.isfinite(rate) and rate > 0.0):
         msg = f"the local map rate must be > 0 per second, got {rate}"
         raise OutputError(msg)
+    row_ids = reading_ids(len(batch), ids)  # checked before anything is written
     with BagWriter(path, storage) as out:
         if copy_from is not None:
             copy_messages(out, Path(copy_from))
         if odometry is not None:
             _write_odometry(out, np.asarray(odometry, dtype=np.float64).reshape(-1, 4), frame,
                             base_frame)
-        _write_maps(out, batch, reading_ids(len(batch), ids), method, frame, rate, grid)
+        _write_maps(out, batch, row_ids, method, frame, rate, grid)
     return BagOutReport(path=out.path, format=out.format, messages=dict(out.counts))
 
 

@@ -121,7 +121,8 @@ def write_rerun(
     ConfigError
         ``every`` < 1.
     ReadingsError
-        A reading the method refuses (the file is not written).
+        A reading the method refuses, or ``ids`` not one increasing integer per reading (the
+        file is not written).
     OutputError
         ``path`` cannot be written.
     MissingExtraError
@@ -132,13 +133,13 @@ def write_rerun(
         raise ConfigError(msg)
     rr = require("rerun", "viz", "Rerun recordings")
     batch.validate()
+    row_ids = reading_ids(len(batch), ids)
     target = Path(path)
     with atomic_path(target, suffix=".rrd") as tmp:
         recording = rr.RecordingStream(application_id)
         recording.save(tmp)
         try:
-            global_map = _log_run(rr, recording, batch, reading_ids(len(batch), ids), method,
-                                  walls, every)
+            global_map = _log_run(rr, recording, batch, row_ids, method, walls, every)
         finally:
             recording.flush()
             recording.disconnect()
