@@ -12,14 +12,19 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
-:func:`evidence_add` is a sequence of passes, each an inlined helper: the new arc's profile
-(:func:`_init_new_arc`), the cull of the older rows (:func:`_cull_older`,
-:func:`~sonarcarve.geometry.evidence.beam.mark_near`), then per group of older arcs the bins
-to weigh and ATM's crossings (:func:`_gather_group`: :func:`_mark_bins`,
-:func:`_gather_entries`), their ``P_detect`` (:func:`_detect_entries`,
-:func:`~sonarcarve.geometry.evidence.model.detect_probability` inlined) and their evidence
-(:func:`_weigh_group`: :func:`_weigh_arc`, :func:`_add_arc_sums`), and last what the new arc
-learns, the transmission included (:func:`_finish_new_arc`). Laid out for the processor, it
+:func:`evidence_add` is a sequence of passes, each an inlined helper:
+
+1. the new arc's profile (:func:`_init_new_arc`);
+2. the cull of the older rows (:func:`_cull_older`,
+   :func:`~sonarcarve.geometry.evidence.beam.mark_near`);
+3. per group of older arcs, pass 1: the bins to weigh and ATM's crossings
+   (:func:`_gather_group`: :func:`_mark_bins`, :func:`_gather_entries`); pass 2: their
+   ``P_detect`` (:func:`_detect_entries`,
+   :func:`~sonarcarve.geometry.evidence.model.detect_probability` inlined); pass 3: their
+   evidence (:func:`_weigh_group`: :func:`_weigh_arc`, :func:`_add_arc_sums`);
+4. what the new arc learns, the transmission included (:func:`_finish_new_arc`).
+
+Laid out for the processor, it
 gives bit for bit the values of one loop over every arc and bin: ``docs/evidence-carving.md``,
 "Evidence, support and the threshold", "Per-arc sums" and
 "Speed: the weighing kernel's layout".
