@@ -31,7 +31,7 @@ from sonarcarve.io.atomic import atomic_text, make_output_dir
 from sonarcarve.io.rosbag import RosbagLog
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.pipeline import process_readings
-from sonarcarve.readings import ReadingBatch
+from sonarcarve.readings import NO_MAX_RANGE, ReadingBatch
 from sonarcarve.robot import load_robot
 from sonarcarve.runner import ProgressCallback, Runner, SerialRunner, Task, TaskFailure
 
@@ -239,6 +239,9 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
         text = " ".join(str(err).split())
         reason = text if isinstance(err, SonarcarveError) and text else (
             f"{type(err).__name__}: {text}" if text else type(err).__name__)
+        if reason.endswith(NO_MAX_RANGE):  # the summary says how to give one, as process does
+            reason += (" (add a max_range column, or give the run's max range: --max-range, "
+                       "or ReadingFilter(max_range=...) in Python)")
         return FleetRow(log, error=reason)
     reading_report, map_report = result.reading_filter, result.map_filter
     return FleetRow(log, out, result.readings, len(result.global_map), result.fully_carved,

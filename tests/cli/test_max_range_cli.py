@@ -210,7 +210,10 @@ def test_a_fleet_names_how_to_give_a_max_range(
     assert main(["process", str(bare), "--method", "carve", "--out-dir", str(tmp_path / "maps"),
                  "--workers", "1"]) != 0
     text = " ".join(capsys.readouterr().out.split())
-    assert "give the sensors' max range with --max-range)" in text.replace("│ ", "")
+    assert "give the run's max range: --max-range" in text.replace("│ ", "")
+    summary = (tmp_path / "maps" / "summary.csv").read_text()
+    assert "'max_range' is not given (add a max_range column, or give the run's max range: " \
+           "--max-range, or ReadingFilter(max_range=...) in Python)" in summary
 
 
 def test_view_takes_max_range(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,

@@ -50,7 +50,6 @@ __all__ = [
     "max_range_hint",
     "read_bag",
     "refuse_bag_options",
-    "with_max_range_hint",
 ]
 
 #: The bag reader's parameters (:func:`~sonarcarve.io.rosbag.read_rosbag`) -> the options.
@@ -173,12 +172,12 @@ def max_range_hint() -> Iterator[None]:
     except SonarcarveError as err:
         if not str(err).endswith(NO_MAX_RANGE):
             raise
-        raise type(err)(with_max_range_hint(str(err))) from None
+        raise type(err)(_with_max_range_hint(str(err))) from None
 
 
-def with_max_range_hint(message: str) -> str:
+def _with_max_range_hint(message: str) -> str:
     """``message`` with the two ways to give a max range if it is the error of a no-echo row
-    without one (a fleet's failed log, for one), else unchanged."""
+    without one, else unchanged (a fleet's failed log says it itself: :mod:`sonarcarve.fleet`)."""
     if not message.endswith(NO_MAX_RANGE):
         return message
     return f"{message} (add a max_range column, or give the sensors' max range with --max-range)"

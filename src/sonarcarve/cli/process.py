@@ -43,7 +43,6 @@ from sonarcarve.cli.options import (
     max_range_hint,
     read_bag,
     refuse_bag_options,
-    with_max_range_hint,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
@@ -573,7 +572,7 @@ def _fleet_table(method: str, rows: Sequence[FleetRow], spec: RunnerSpec) -> Tab
             table.add_row(row.log, f"{row.readings:,}", f"{row.points:,}", f"{row.seconds:.2f}",
                           Path(row.map).name)
         else:
-            table.add_row(row.log, "", "", "", Text(with_max_range_hint(row.error), style="red"))
+            table.add_row(row.log, "", "", "", Text(row.error, style="red"))
     return table
 
 
