@@ -58,7 +58,7 @@ from latency_openings import parse_variant, variant_method
 from sonarcarve import MethodConfig, ReadingBatch, SonarMethod, make_method
 from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter
 from sonarcarve.lab.experiments.real_log import line_spread
-from sonarcarve.lab.metrics import segment_distance
+from sonarcarve.lab.metrics import off_beam, segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, EvidenceOptions
 from sonarcarve.pipeline import ProcessResult, process_readings
@@ -147,16 +147,27 @@ def _measure(sim: Simulation, make: Factory, config: MethodConfig,
 
 
 def map_row(sim: Simulation, result: ProcessResult, centerline_err: np.ndarray,
-            centerline_p90: float) -> dict[str, float]:
+            centerline_p90: float, told: ReadingBatch | None = None) -> dict[str, float]:
     """The columns of :data:`COLUMNS` for one method's run on ``sim`` (``centerline_err``:
     centerline's error per reading, NaN where it kept no point; ``centerline_p90``: its map's
-    90th percentile)."""
+    90th percentile), and three more that split the direct echoes by where their reflector
+    lies against the beam the method was told (``told``'s beam widths, the simulation's
+    readings by default; :func:`~sonarcarve.lab.metrics.off_beam`): ``off_beam`` (share of
+    direct echoes from outside it), ``in_beam_kept`` and ``off_beam_removed``."""
     gmap = result.global_map
     kind = sim.truth.kind
     kept = np.zeros(len(kind), dtype=bool)
     kept[gmap.reading_id] = True
     err = segment_distance(gmap.xy, sim.world.segments)[0]
-    row = {"direct_kept": 100.0 * float(np.mean(kept[kind == EchoKind.DIRECT]))}
+    direct = kind == EchoKind.DIRECT
+    readings = sim.readings if told is None else told
+    outside = direct & off_beam(np.column_stack([readings.x, readings.y]), readings.theta,
+                                readings.beam_width, sim.truth.reflection)
+    row = {"direct_kept": 100.0 * float(np.mean(kept[direct])),
+           "off_beam": 100.0 * float(np.mean(outside[direct])),
+           "in_beam_kept": 100.0 * float(np.mean(kept[direct & ~outside])),
+           "off_beam_removed": 100.0 * float(np.mean(~kept[outside])) if outside.any()
+           else math.nan}
     for k in KINDS:
         sel = kind == k
         row[k.label] = 100.0 * float(np.mean(~kept[sel])) if sel.any() else math.nan

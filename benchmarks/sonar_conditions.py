@@ -218,7 +218,8 @@ def point_rows(sim: Simulation, condition: Condition) -> dict[str, Row]:
     center_err = np.full(len(sim.readings), np.nan)
     center_err[center.reading_id] = segment_distance(center.xy, sim.world.segments)[0]
     center_p90 = float(np.nanpercentile(center_err, 90.0))
-    return {name: map_row(sim, result, center_err, center_p90) for name, result in maps.items()}
+    return {name: map_row(sim, result, center_err, center_p90, told=readings)
+            for name, result in maps.items()}
 
 
 def grid_rows(sim: Simulation, seed: int, condition: Condition) -> dict[str, Row]:
@@ -331,6 +332,29 @@ def claims_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
             print(line)
 
 
+def beam_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
+    """Direct echoes by where their reflector lies against the beam the methods were told
+    (:func:`~sonarcarve.lab.metrics.off_beam`): the share from outside it, and per method the
+    in-beam ones kept and the off-beam ones removed (mean over runs)."""
+    if "off_beam" not in data["runs"][0]["points"]["evidence"]:
+        return  # a --save file from before the split
+    print(f"\ndirect echoes inside and outside the told beam, physics {data['physics']} (mean "
+          "over runs): off-beam share; in-beam kept (runs ≥ 85 %) / off-beam removed, %\n")
+    names = list(data["runs"][0]["points"])
+    print("| sonar | direct echoes off the told beam (%) | "
+          + " | ".join(names) + " |")
+    print("|---|---:|" + "---|" * len(names))
+    for condition in conditions:
+        runs = _runs(data, condition)
+        cells = []
+        for name in names:
+            rows = [r["points"][name] for r in runs]
+            cells.append(f"{_cell(rows, 'in_beam_kept', lambda v: v >= KEEP)} / "
+                         f"{pct(mean_of(rows, 'off_beam_removed'))}")
+        share = mean_of([r["points"]["evidence"] for r in runs], "off_beam")
+        print(f"| {condition} | {share:.1f} | " + " | ".join(cells) + " |")
+
+
 def grids_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
     runs_any = [r for r in data["runs"] if r["grids"]]
     if not runs_any:
@@ -356,6 +380,7 @@ def print_tables(data: dict[str, Any]) -> None:
     conditions = list(dict.fromkeys(r["condition"] for r in data["runs"]))
     summary_table(data, conditions)
     claims_table(data, conditions)
+    beam_table(data, conditions)
     grids_table(data, conditions)
 
 

@@ -18,6 +18,7 @@ from sonarcarve.lab.metrics import (
     free_width,
     gap_region,
     is_passable,
+    off_beam,
     patch_index,
     patch_latency,
     patch_of_points,
@@ -199,3 +200,43 @@ def test_combine_binned_averages_runs_per_bin_by_hand() -> None:
     assert out["value"][2] is None
     assert out["min"][2] is None
     assert combine_binned(runs, "median")["max"][0] == pytest.approx(0.55)
+
+
+BEAM = math.radians(22.5)
+
+
+def _off(theta: float, bearing_deg: float, r: float, beam: float = BEAM) -> bool:
+    """off_beam of one echo heard by a sensor at (1, 2) aimed at ``theta``, its reflector
+    ``r`` metres away at ``bearing_deg`` from the world's +x axis."""
+    b = math.radians(bearing_deg)
+    hit = [[1.0 + r * math.cos(b), 2.0 + r * math.sin(b)]]
+    return bool(off_beam([[1.0, 2.0]], [theta], [beam], hit)[0])
+
+
+def test_off_beam_inside_and_far_outside_the_beam() -> None:
+    assert not _off(0.0, 5.7, 1.0)  # inside ±11.25°
+    assert _off(0.0, 90.0, 1.0)  # heard abeam: a side lobe
+    assert _off(0.0, -90.0, 1.0)  # either side
+    assert _off(0.0, 180.0, 1.0)  # behind
+
+
+def test_off_beam_tolerance_is_arc_length_past_the_edge() -> None:
+    # 2 m away, 0.02 rad past the edge is 4 cm of arc (inside the 5 cm tolerance), 0.03 rad 6 cm.
+    edge = math.degrees(BEAM / 2)
+    assert not _off(0.0, edge + math.degrees(0.02), 2.0)
+    assert _off(0.0, edge + math.degrees(0.03), 2.0)
+    # the same angle past the edge at 1 m is 3 cm: inside
+    assert not _off(0.0, edge + math.degrees(0.03), 1.0)
+
+
+def test_off_beam_wraps_bearings_across_pi() -> None:
+    # aimed at 179°, reflector at -179° (2° off the axis): inside; at -150° (31° off): outside
+    assert not _off(math.radians(179.0), -179.0, 1.0)
+    assert _off(math.radians(179.0), -150.0, 1.0)
+
+
+def test_off_beam_uses_each_echo_s_told_width_and_skips_missing_reflectors() -> None:
+    assert _off(0.0, 30.0, 1.0, beam=math.radians(45.0))
+    assert not _off(0.0, 30.0, 1.0, beam=math.radians(75.0))
+    nan = off_beam([[0.0, 0.0]], [0.0], [BEAM], [[np.nan, np.nan]])
+    assert nan.tolist() == [False]
