@@ -29,7 +29,10 @@ are simulated with one of those changed at a time:
 Per method (centerline, paper carving, combined, evidence carving, and evidence with the
 occlusion map filter as ``benchmarks/evidence.py`` uses it), on each world's tour, seed and
 physics: direct echoes kept and spurious removed (per kind), and the median and p90 ratios to
-centerline's error on the same readings (:func:`evidence.map_row`). Under the noise conditions
+centerline's error on the same readings (:func:`evidence.map_row`), and the direct echoes split
+by where their reflector lies against the beam the methods were told
+(:func:`~sonarcarve.lab.metrics.off_beam`: the share from outside it, in-beam kept, off-beam
+removed; a wide amplitude beam hears walls through its side lobes). Under the noise conditions
 two more rows: the remedy a user would apply, evidence carving with ε = max(default ε, 2σ)
 (:func:`remedy_tolerance`, ``process --range-tolerance``; the support tolerance ε_s stays
 :class:`~sonarcarve.methods.evidence.SensorModel`'s 5 cm), and the same with ε_s = ε as well
