@@ -86,7 +86,9 @@ def view(
     with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
         global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids)
     viewer = find_viewer() if open_ else None
-    rows = [("readings", f"{len(batch):,}"), ("points in global map", f"{len(global_map):,}"),
+    # Counted as process counts them: every row read, then the ones --max-range dropped.
+    rows = [("readings in", f"{len(batch) + too_far:,}"),
+            ("points in global map", f"{len(global_map):,}"),
             *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
             ("true walls", f"{len(walls):,}" if walls is not None else "none"),
             ("recording saved to", str(target))]
