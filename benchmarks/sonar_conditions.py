@@ -226,15 +226,17 @@ def point_rows(sim: Simulation, condition: Condition) -> dict[str, Row]:
 
 
 def grid_rows(sim: Simulation, seed: int, condition: Condition) -> dict[str, Row]:
-    """The carved grid (under noise also with ``pose_sigma`` σ) and the RangeSensorLayer at
-    0.10 m."""
+    """The carved grid (under noise also with ``pose_sigma`` σ, and with the remedy's ε, ``grid
+    --range-tolerance``) and the RangeSensorLayer at 0.10 m."""
     grids: list[tuple[str, Callable[[float, Any], OccupancyMap]]] = [
         ("carved grid", _carved),
         ("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams()))]
-    if condition.range_noise is not None:
-        params = CarvedGridParams(pose_sigma=condition.range_noise)
-        grids.insert(1, ("carved grid, pose_sigma σ",
-                         lambda h, b: CarvedGrid(h, b, params=params)))
+    if condition.range_noise is not None and condition.remedy is not None:
+        sigma = CarvedGridParams(pose_sigma=condition.range_noise)
+        wider = CarvedGridParams(range_tolerance=condition.remedy)
+        grids[1:1] = [("carved grid, pose_sigma σ", lambda h, b: CarvedGrid(h, b, params=sigma)),
+                      ("carved grid, ε = max(5 cm, 2σ)",
+                       lambda h, b: CarvedGrid(h, b, params=wider))]
     rows = {}
     for name, make in grids:
         m = _measure(_fill(make, GRID_RESOLUTION, sim, seed), sim)

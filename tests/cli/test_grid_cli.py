@@ -66,6 +66,9 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--pose-sigma", "-0.1"], "--pose-sigma must be a finite number >= 0 metres, got -0.1"),
     (["--pose-sigma", "0.05", "--model", "range-sensor-layer"],
      "--pose-sigma applies to --model carved only, not range-sensor-layer"),
+    (["--range-tolerance", "-0.1"], "--range-tolerance must be a finite number >= 0 metres"),
+    (["--range-tolerance", "0.1", "--model", "elfes"],
+     "--range-tolerance applies to --model carved only, not elfes"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -222,20 +225,30 @@ def test_a_stray_position_too_large_a_grid_is_named(
     assert not out.exists()
 
 
-def test_pose_sigma_ends_free_space_two_sigma_before_the_echo(tmp_path: Path) -> None:
-    """Ten echoes at 1 m from one pose (near enough that the fade leaves every beam cell
-    free): the free cells on the beam's axis reach the echo's band, b = (h + ε) / 2 = 0.05 m,
-    by default, and 2 x 0.2 m short of it with --pose-sigma 0.2."""
+def _free_reach(tmp_path: Path, extra: list[str]) -> float:
+    """How far the free cells on the beam's axis reach, metres (the far edge of the last), in
+    the grid of ten echoes at 1 m from one pose (near enough that the fade leaves every beam
+    cell free), 0.05 m cells, with the options ``extra``."""
     log = tmp_path / "log.csv"
     beam = [Reading(t=0.2 * k, sensor=0, x=0.0, y=0.0, theta=0.0, range=1.0) for k in range(10)]
     write_readings_csv(ReadingBatch.from_readings(beam), log)
-    reach = {}
-    for extra in ([], ["--pose-sigma", "0.2"]):
-        out = tmp_path / f"grid{len(extra)}.yaml"
-        assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
-        m = read_map_server(out)
-        i = int((0.0 - m.origin[1]) / 0.05)
-        free = np.flatnonzero(m.cells[i] == 0)
-        reach[bool(extra)] = m.origin[0] + (free.max() + 1) * 0.05  # the far edge of the cell
-    assert reach[False] == pytest.approx(0.95, abs=0.05 + 1e-9)
-    assert reach[True] == pytest.approx(0.55, abs=0.05 + 1e-9)
+    out = tmp_path / f"grid{len(extra)}.yaml"
+    assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
+    m = read_map_server(out)
+    i = int((0.0 - m.origin[1]) / 0.05)
+    free = np.flatnonzero(m.cells[i] == 0)
+    return float(m.origin[0] + (free.max() + 1) * 0.05)
+
+
+def test_pose_sigma_ends_free_space_two_sigma_before_the_echo(tmp_path: Path) -> None:
+    """The free cells reach the echo's band, b = (h + ε) / 2 = 0.05 m, by default, and 2 x
+    0.2 m short of it with --pose-sigma 0.2."""
+    assert _free_reach(tmp_path, []) == pytest.approx(0.95, abs=0.05 + 1e-9)
+    assert _free_reach(tmp_path, ["--pose-sigma", "0.2"]) == pytest.approx(0.55, abs=0.05 + 1e-9)
+
+
+def test_range_tolerance_thickens_the_echo_band(tmp_path: Path) -> None:
+    """The band reaches b = (h + ε) / 2 before the echo: 0.05 m by default (ε 0.05 m, h 0.05 m),
+    0.25 m with --range-tolerance 0.45, so the free cells on the axis end 0.2 m sooner."""
+    assert _free_reach(tmp_path, ["--range-tolerance", "0.45"]) == pytest.approx(
+        0.75, abs=0.05 + 1e-9)

@@ -43,6 +43,15 @@ def test_the_default_method_widens_its_range_tolerance_by_two_sigma() -> None:
     assert _grid(0.03).method.config.range_tolerance == pytest.approx(0.05 + 2 * 0.03)
 
 
+def test_the_default_method_carves_with_the_grid_s_own_range_tolerance() -> None:
+    # grid --range-tolerance: one ε for the band and for carving (a noisy sonar widens both),
+    # pose_sigma's 2σ on top.
+    wide = CarvedGrid(0.1, BOUNDS, params=CarvedGridParams(range_tolerance=0.1))
+    assert wide.method.config.range_tolerance == pytest.approx(0.1)
+    both = CarvedGrid(0.1, BOUNDS, params=CarvedGridParams(range_tolerance=0.1, pose_sigma=0.03))
+    assert both.method.config.range_tolerance == pytest.approx(0.1 + 2 * 0.03)
+
+
 def test_zero_is_the_default() -> None:
     assert CarvedGridParams().pose_sigma == 0.0
     np.testing.assert_array_equal(_grid(0.0).log_odds, _default_grid().log_odds)

@@ -55,7 +55,8 @@ __all__ = ["build_grid", "grid", "grid_params", "read_log_for_grid"]
 #: :func:`~sonarcarve.grids.readings_extent`, :class:`~sonarcarve.grids.CarvedGridParams`) ->
 #: the options that set them, for its error messages.
 _FLAGS = {"resolution": "--resolution", "margin": "--margin", "fresh_periods": "--fresh-periods",
-          "free_threshold": "--free-below", "pose_sigma": "--pose-sigma"}
+          "free_threshold": "--free-below", "pose_sigma": "--pose-sigma",
+          "range_tolerance": "--range-tolerance"}
 
 
 class GridUsageError(SonarcarveError):
@@ -71,11 +72,14 @@ def _check_model(model: str) -> None:
 
 
 def grid_params(model: str, fresh_periods: float | None, free_below: float | None = None,
-                pose_sigma: float | None = None) -> CarvedGridParams | None:
+                pose_sigma: float | None = None,
+                range_tolerance: float | None = None) -> CarvedGridParams | None:
     """The grid's parameters from the options, for the carved grid only (None: the default):
     ``--fresh-periods`` as :attr:`~sonarcarve.grids.CarvedGridParams.fresh_periods`,
     ``--free-below`` as :attr:`~sonarcarve.grids.CarvedGridParams.free_threshold`,
-    ``--pose-sigma`` as :attr:`~sonarcarve.grids.CarvedGridParams.pose_sigma`.
+    ``--pose-sigma`` as :attr:`~sonarcarve.grids.CarvedGridParams.pose_sigma`,
+    ``--range-tolerance`` as :attr:`~sonarcarve.grids.CarvedGridParams.range_tolerance` (the
+    band's ε and its carving's).
 
     Raises
     ------
@@ -83,7 +87,7 @@ def grid_params(model: str, fresh_periods: float | None, free_below: float | Non
         Any of them for a model other than the carved grid, or out of its range.
     """
     options = {"fresh_periods": fresh_periods, "free_threshold": free_below,
-               "pose_sigma": pose_sigma}
+               "pose_sigma": pose_sigma, "range_tolerance": range_tolerance}
     given: dict[str, Any] = {field: value for field, value in options.items()
                              if value is not None}
     if not given:
@@ -201,6 +205,13 @@ def grid(
              "stamped a few cm off does not clear the wall it heard. Default 0 (poses taken as "
              "exact). A trade: with 5 cm / 2° of localisation noise, σ = 0.05 raised office "
              "recall 0.792 → 0.834 at 0.05 m cells and cost precision 0.591 → 0.558.")] = None,
+    range_tolerance: Annotated[float | None, typer.Option(
+        metavar="METRES",
+        help="--model carved only: ε in metres, the echo band's thickness beyond a cell and how "
+             "far short of its range a newer reading's free space ends when it carves (default "
+             "0.05, as process). For a sonar with range noise σ above 2.5 cm give 2σ, as "
+             "process --range-tolerance: at σ 5 cm, 0.10 (docs/RESULTS.md, 'Other "
+             "sonars').")] = None,
     no_echo: NoEchoOpt = False,
     max_range: MaxRangeOpt = None,
 ) -> None:
@@ -242,7 +253,7 @@ def grid(
     firings are rows with range inf and no max_range column)
     """
     _check_model(model)  # these two before anything is read
-    params = grid_params(model, fresh_periods, free_below, pose_sigma)
+    params = grid_params(model, fresh_periods, free_below, pose_sigma, range_tolerance)
     check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)

@@ -7,7 +7,6 @@ bearings, a record per history slot), folding readings in, and reading the map
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
@@ -472,10 +471,10 @@ class CarvedGrid(CellGrid):
 
 def _default_method_config(params: CarvedGridParams) -> MethodConfig:
     """The default method's configuration: specular-aware at :data:`DEFAULT_MAX_INCIDENCE`, its
-    range tolerance ε widened by :data:`POSE_MARGIN_SIGMAS` ``pose_sigma`` when one is given (a
-    newer reading's free space then stops short of an older arc a pose error moved)."""
-    config = MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE)
-    if params.pose_sigma > 0.0:
-        config = replace(config, range_tolerance=config.range_tolerance
-                         + POSE_MARGIN_SIGMAS * params.pose_sigma)
-    return config
+    range tolerance ε the grid's own (one ε for the band and for carving, so that a user who
+    widens it for a noisy sonar widens both), plus :data:`POSE_MARGIN_SIGMAS` ``pose_sigma``
+    when one is given (a newer reading's free space then stops short of an older arc a pose
+    error moved)."""
+    return MethodConfig(max_incidence=DEFAULT_MAX_INCIDENCE,
+                        range_tolerance=params.range_tolerance
+                        + POSE_MARGIN_SIGMAS * params.pose_sigma)
