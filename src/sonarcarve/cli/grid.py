@@ -210,8 +210,9 @@ def grid(
         help="--model carved only: ε in metres, the echo band's thickness beyond a cell and how "
              "far short of its range a newer reading's free space ends when it carves (default "
              "0.05, as process). For a sonar with range noise σ above 2.5 cm give 2σ, as "
-             "process --range-tolerance: at σ 5 cm, 0.10 (docs/RESULTS.md, 'Other "
-             "sonars').")] = None,
+             "process --range-tolerance: at σ 5 cm, 0.10 raised recall 0.874 → 0.887 at 0.10 m "
+             "cells (precision 0.811 → 0.807, a third more phantom cells; docs/RESULTS.md, "
+             "'Other sonars').")] = None,
     no_echo: NoEchoOpt = False,
     max_range: MaxRangeOpt = None,
 ) -> None:
@@ -248,6 +249,9 @@ def grid(
 
     Example: `sonarcarve grid amcl.csv --pose-sigma 0.05 --out grid.yaml` (poses from a
     localiser good to about 5 cm)
+
+    Example: `sonarcarve grid noisy.csv --range-tolerance 0.10 --out grid.yaml` (a sonar
+    whose ranges scatter by about 5 cm)
 
     Example: `sonarcarve grid gazebo.csv --max-range 5 --out grid.yaml` (a CSV whose silent
     firings are rows with range inf and no max_range column)
