@@ -240,3 +240,10 @@ def test_off_beam_uses_each_echo_s_told_width_and_skips_missing_reflectors() -> 
     assert not _off(0.0, 30.0, 1.0, beam=math.radians(75.0))
     nan = off_beam([[0.0, 0.0]], [0.0], [BEAM], [[np.nan, np.nan]])
     assert nan.tolist() == [False]
+
+
+def test_off_beam_reads_each_row_s_own_width() -> None:
+    # two echoes from the same reflector 30° off the axis, told 75° then 45°: inside, outside
+    hit = [[math.cos(math.radians(30.0)), math.sin(math.radians(30.0))]] * 2
+    widths = [math.radians(75.0), math.radians(45.0)]
+    assert off_beam([[0.0, 0.0]] * 2, [0.0, 0.0], widths, hit).tolist() == [False, True]
