@@ -251,3 +251,33 @@ def test_no_echo_is_refused_where_it_does_not_apply(runs: Path, tmp_path: Path,
     assert "--no-echo applies to a readings CSV output" in lines[1]
     assert not (tmp_path / "m.csv").exists()
     assert not (tmp_path / "x.mcap").exists()
+
+
+def _last_grid_free_reach(path: Path) -> float:
+    """How far the free cells on the x axis (y = 0) reach in the bag's last published grid,
+    metres: the far edge of the last free cell (OccupancyGrid rows start at the lower left)."""
+    with AnyReader([path]) as reader:
+        conns = [c for c in reader.connections if c.topic == GRID_TOPIC]
+        *_, (conn, _, raw) = reader.messages(connections=conns)
+        grid = reader.deserialize(raw, conn.msgtype)
+    h, (x0, y0) = grid.info.resolution, (grid.info.origin.position.x, grid.info.origin.position.y)
+    row = np.asarray(grid.data).reshape(grid.info.height, grid.info.width)[int(-y0 / h)]
+    return float(x0 + (np.flatnonzero(row == 0).max() + 1) * h)
+
+
+def test_the_bag_s_grid_carves_with_the_run_s_range_tolerance(tmp_path: Path) -> None:
+    """Ten echoes at 1 m from one pose: the published grid's band reaches b = (h + ε) / 2 before
+    the echo, 0.05 m by default and 0.25 m with --range-tolerance 0.45 (as grid's option)."""
+    log = tmp_path / "log.csv"
+    k = np.arange(10)
+    write_readings_csv(ReadingBatch.from_arrays(t=0.2 * k, sensor=np.zeros(10, dtype=int),
+                                                x=np.zeros(10), y=np.zeros(10),
+                                                theta=np.zeros(10), range=np.ones(10)), log)
+    reach = {}
+    for extra in ([], ["--range-tolerance", "0.45"]):
+        out = tmp_path / f"map{len(extra)}.mcap"
+        assert main(["process", str(log), "--method", "carve", "--grid-resolution", "0.05",
+                     "--out", str(out), *extra]) == 0
+        reach[bool(extra)] = _last_grid_free_reach(out)
+    assert reach[False] == pytest.approx(0.95, abs=0.05 + 1e-9)
+    assert reach[True] == pytest.approx(0.75, abs=0.05 + 1e-9)

@@ -66,6 +66,7 @@ from sonarcarve.readings import ReadingBatch
 if TYPE_CHECKING:  # the grid, bag, Rerun and fleet writers are imported by their output only
     from rich.table import Table
 
+    from sonarcarve.grids import CarvedGrid
     from sonarcarve.runner import RunnerSpec
 
 __all__ = ["EXIT_SOME_LOGS_FAILED", "OUTPUTS", "Output", "process"]
@@ -459,7 +460,6 @@ def _map(job: _Job, sink: MapCsvSink | None) -> ProcessResult:
 
 def _write_bag(job: _Job) -> list[tuple[str, str]]:
     """A ROS bag: the input bag's messages copied through, the live local map and arcs."""
-    from sonarcarve.grids import CarvedGrid, readings_extent
     from sonarcarve.io.bag_out import ARCS_TOPIC, GRID_TOPIC, LOCAL_MAP_TOPIC, write_map_bag
 
     if is_bag(job.source):
@@ -471,8 +471,7 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
         parent, child, copy_from = "", "", None
     batch, ids, too_far = drop_far_echoes(batch, job.max_range)
     job.warnings.extend(likely_mistakes(batch))
-    grid = (None if job.grid_resolution == 0.0 or len(batch) == 0 else
-            CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5)))
+    grid = None if job.grid_resolution == 0.0 or len(batch) == 0 else _bag_grid(job, batch)
     report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
                            frame=parent or "odom", base_frame=child or "base_link",
                            rate=job.map_rate, grid=grid, ids=ids)
@@ -483,6 +482,16 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
             ("messages copied from the input", f"{copied:,}"),
             *((f"messages on {topic}", f"{report.messages.get(topic, 0):,}") for topic in ours),
             ("bag written to", f"{report.path} ({report.format.value})")]
+
+
+def _bag_grid(job: _Job, batch: ReadingBatch) -> CarvedGrid:
+    """The carved grid a bag output publishes: ``--grid-resolution`` cells over the readings
+    plus 0.5 m, carving with the run's ``--range-tolerance`` as ``grid --range-tolerance``
+    does (the grid's own method, specular-aware, is otherwise its default)."""
+    from sonarcarve.grids import CarvedGrid, CarvedGridParams, readings_extent
+
+    params = CarvedGridParams(range_tolerance=job.config.range_tolerance)
+    return CarvedGrid(job.grid_resolution, readings_extent(batch, margin=0.5), params=params)
 
 
 def _write_rrd(job: _Job) -> list[tuple[str, str]]:

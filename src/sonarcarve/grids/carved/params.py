@@ -130,9 +130,10 @@ class CarvedGridParams:
         :meth:`~sonarcarve.grids.carved.CarvedGrid.probabilities` with the threshold up to
         rounding: a cell within a few ulp of a threshold's logit may fall on the other side.
     range_tolerance : float
-        ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``; carving's default 5 cm. The
-        default method carves with the same ε (plus 2 ``pose_sigma``): a noisy sonar widens
-        both (``sonarcarve grid --range-tolerance``).
+        ε, metres >= 0: the occupied band is ``r ± (h + ε)/2``, and the range slack of the
+        repeat test (``repeat_weight``); carving's default 5 cm. The default method carves with
+        the same ε (plus 2 ``pose_sigma``): a noisy sonar widens all three (``sonarcarve grid
+        --range-tolerance``).
     spread : bool
         Spread each echo over its carved interval (``s`` in ``docs/carved-grid.md``); False gives
         every cell of the carved band a whole hit (Elfes' rule, on the carved interval).
