@@ -66,13 +66,14 @@ import math
 import shlex
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
-from evidence import KINDS, map_row
+from evidence import KINDS, Factory, _all_with, map_row
 from heldout import GRIDS, MARGIN, PHYSICS, RESOLUTIONS
 from sonarcarve import make_method
 from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, point_origins
@@ -83,7 +84,7 @@ from sonarcarve.lab.grid_measures import dilate, grid_measures, wall_cells
 from sonarcarve.lab.instrument import RunRecord, record_run
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.maps import GlobalMap
-from sonarcarve.methods import MethodConfig
+from sonarcarve.methods import MethodConfig, SonarMethod
 from sonarcarve.pipeline import ProcessResult
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.generate import TOUR_CLEARANCE
@@ -273,6 +274,12 @@ def cluttered_world() -> tuple[World, World, list[Obstacle]]:
 # -- measures ------------------------------------------------------------------------------------
 
 POINT_ROWS = ("centerline", "carve", "combined", "evidence", "evidence, occluded points dropped")
+OCCLUDED = "evidence, occluded points dropped"
+#: ``--diagnose``: evidence carving with one part off (which part loses the legs; not tuning).
+DIAGNOSTIC_ROWS: dict[str, Factory] = {
+    "evidence, no occlusion rule": _all_with(occlusion=False),
+    "evidence, no confidence filter": lambda c: _all_with()(replace(c, min_confidence=0.0)),
+}
 FATES = ("on its obstacle", "elsewhere", "fully carved", "split", "dropped otherwise")
 MapKey = tuple[str, float]  # (map name, resolution; 0.0 for point maps)
 
@@ -284,6 +291,7 @@ class Truth(NamedTuple):
     owner: np.ndarray        # per segment: obstacle index, -1 for a wall
     types: np.ndarray        # per obstacle: its type (one of TYPES)
     heard: np.ndarray        # per obstacle: some direct echo reflected from it
+    passed_over: np.ndarray  # per obstacle: readings whose freespace holds its centre
     source: np.ndarray       # per reading: obstacle index it reflected from, -1 wall, -2 none
     robot: np.ndarray        # per reading: the sensor's position, shape (n, 2)
     near: np.ndarray         # per (snapshot, obstacle): robot within NEAR of it
@@ -317,7 +325,9 @@ def _truth(sim: Simulation, base: World, obstacles: Sequence[Obstacle]) -> Truth
                             for o in obstacles])
     keep = near.any(axis=1)
     types = np.array([o.type for o in obstacles])
-    return Truth(segments, owner, types, heard, source, robot, near[keep], stops[keep])
+    passed = np.array([len(saw_through(sim, -1, np.asarray(o.outline.center), MethodConfig(),
+                                       len(robot) + 1)) for o in obstacles])
+    return Truth(segments, owner, types, heard, passed, source, robot, near[keep], stops[keep])
 
 
 def belongs(points: np.ndarray, truth: Truth) -> np.ndarray:
@@ -375,20 +385,26 @@ def _process_result(record: RunRecord, gmap: GlobalMap, readings: int) -> Proces
                          record.seconds)
 
 
-def _point_maps(sim: Simulation, truth: Truth, run: Run) -> None:
+def _make(name: str, config: MethodConfig) -> SonarMethod:
+    if name in DIAGNOSTIC_ROWS:
+        return DIAGNOSTIC_ROWS[name](config)
+    return make_method(name, config)
+
+
+def _point_maps(sim: Simulation, truth: Truth, run: Run, rows: Sequence[str]) -> None:
     config = MethodConfig()
     center_err = np.full(len(sim.readings), np.nan)
     center_p90 = math.nan
     record: RunRecord | None = None
-    for name in POINT_ROWS:
-        if name == "evidence, occluded points dropped":  # the evidence row's map, filtered
+    for name in rows:
+        if name == OCCLUDED:  # the evidence row's map, filtered
             assert record is not None
             assert record.method == "evidence"
             gmap = filter_map(record.global_map, MapFilter(occlusion_depth=OCCLUSION_DEPTH),
                               point_origins(record.global_map, sim.readings)).points
             run.near[name, 0.0] = np.full(len(truth.heard), np.nan)
         else:
-            record = record_run(sim.readings, make_method(name, config), truth.stops)
+            record = record_run(sim.readings, _make(name, config), truth.stops)
             gmap = record.global_map
             run.near[name, 0.0] = _found_while_near(record, truth)
         if name == "centerline":
@@ -431,11 +447,12 @@ def _grids(sim: Simulation, base: World, obstacles: Sequence[Obstacle], truth: T
 
 
 def measure(sim: Simulation, base: World, obstacles: Sequence[Obstacle],
-            with_grids: bool = True) -> Run:
-    """Every measure of the module docstring for one simulation of the cluttered world."""
+            with_grids: bool = True, rows: Sequence[str] = POINT_ROWS) -> Run:
+    """Every measure of the module docstring for one simulation of the cluttered world (the
+    point maps of ``rows``)."""
     truth = _truth(sim, base, obstacles)
     run = Run(len(sim.readings), {}, {}, {}, {}, {}, truth)
-    _point_maps(sim, truth, run)
+    _point_maps(sim, truth, run, rows)
     if with_grids:
         _grids(sim, base, obstacles, truth, run)
     return run
@@ -449,12 +466,14 @@ def _simulate(world: World, seed: int, physics_name: str) -> Simulation:
 
 # -- tracing a loss ------------------------------------------------------------------------------
 
-def saw_through(sim: Simulation, reading: int, point: np.ndarray, config: MethodConfig
-                ) -> np.ndarray:
-    """The readings after ``reading``, within one history of it, whose freespace (beam and
-    range minus the tolerance ε, eq. 3.2) contains ``point``: beams that passed over it."""
+def saw_through(sim: Simulation, reading: int, point: np.ndarray, config: MethodConfig,
+                within: int | None = None) -> np.ndarray:
+    """The readings after ``reading``, within ``within`` readings of it (default one
+    history), whose freespace (beam and range minus the tolerance ε, eq. 3.2) contains
+    ``point``: beams that passed over it."""
     r = sim.readings
-    j = np.arange(reading + 1, min(len(r), reading + config.history_size))
+    within = config.history_size if within is None else within
+    j = np.arange(reading + 1, min(len(r), reading + within))
     bearing = np.arctan2(point[1] - r.y[j], point[0] - r.x[j])
     off = np.abs((bearing - r.theta[j] + math.pi) % (2 * math.pi) - math.pi)
     inside = (off <= r.beam_width[j] / 2) & (
@@ -515,6 +534,12 @@ def trace_losses(sim: Simulation, run: Run, obstacles: Sequence[Obstacle],
 
 # -- tables --------------------------------------------------------------------------------------
 
+def _nanmean(values: Sequence[float]) -> float:
+    """Mean of the values that are not NaN; NaN when none is (no echo of that kind)."""
+    kept = [v for v in values if not math.isnan(v)]
+    return float(np.mean(kept)) if kept else math.nan
+
+
 def _pct(value: float) -> str:
     return "–" if math.isnan(value) else f"{value:.1f}"
 
@@ -524,8 +549,8 @@ def _points_table(runs: Sequence[Run]) -> None:
           "multipath removed (%) | spurious removed (%) | median / centerline's | "
           "p90 / centerline's |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
-    for name in POINT_ROWS:
-        m = {c: float(np.nanmean([run.points[name][c] for run in runs]))
+    for name in runs[0].points:
+        m = {c: _nanmean([run.points[name][c] for run in runs])
              for c in ("direct_kept", *[k.label for k in KINDS], "spurious", "median_ratio",
                        "p90_ratio")}
         kinds = " | ".join(_pct(m[k.label]) for k in KINDS)
@@ -579,7 +604,7 @@ def _fates_table(runs: Sequence[Run]) -> None:
     print("\n| method | echoes from | direct echoes | " + " | ".join(f"{f} (%)" for f in FATES)
           + " |")
     print("|---|---|---:|" + "---:|" * len(FATES))
-    for name in POINT_ROWS:
+    for name in runs[0].fates:
         for group, types in groups.items():
             counts = np.zeros(len(FATES))
             for run in runs:
@@ -592,11 +617,20 @@ def _fates_table(runs: Sequence[Run]) -> None:
             print(f"| {name} | {group} | {total:,.0f} | {shares} |")
 
 
-def _heard_line(runs: Sequence[Run], obstacles: Sequence[Obstacle]) -> str:
-    per_type = {t: sum(o.type == t for o in obstacles) for t in TYPES}
-    heard = {t: float(np.mean([np.count_nonzero(run.truth.heard & (run.truth.types == t))
-                               for run in runs])) for t in TYPES}
-    return ", ".join(f"{t}: {heard[t]:.1f} of {per_type[t]}" for t in TYPES)
+def _heard_table(runs: Sequence[Run], obstacles: Sequence[Obstacle]) -> None:
+    print("\n| obstacle | placed | heard (mean over seeds) | direct echoes per heard one, "
+          "median | beams over its centre in the whole run, mean per obstacle |")
+    print("|---|---:|---:|---:|---:|")
+    for kind in TYPES:
+        heard, echoes, over = [], [], []
+        for run in runs:
+            t = run.truth
+            mine = np.flatnonzero(t.types == kind)
+            heard.append(np.count_nonzero(t.heard[mine]))
+            echoes += [int(np.count_nonzero(t.source == k)) for k in mine if t.heard[k]]
+            over += t.passed_over[mine].tolist()
+        print(f"| {kind} | {sum(o.type == kind for o in obstacles)} | {np.mean(heard):.1f} | "
+              f"{np.median(echoes):.0f} | {np.mean(over):.1f} |")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -605,6 +639,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--physics", nargs="+", default=["specular", "amplitude"],
                         choices=["specular", "amplitude"])
     parser.add_argument("--skip-grids", action="store_true")
+    parser.add_argument("--diagnose", action="store_true",
+                        help="add point rows: evidence carving without its occlusion rule, and "
+                             "without its confidence filter (which part loses the legs)")
     parser.add_argument("--trace", action="store_true",
                         help="also print, for seed 0, what became of the echoes of every heard "
                              "leg and column carve and evidence lost")
@@ -624,13 +661,14 @@ def main(argv: list[str] | None = None) -> int:
         runs = []
         for seed in range(args.seeds):
             sim = _simulate(world, seed, physics_name)
-            runs.append(measure(sim, base, obstacles, with_grids=not args.skip_grids))
+            rows = (*POINT_ROWS, *DIAGNOSTIC_ROWS) if args.diagnose else POINT_ROWS
+            runs.append(measure(sim, base, obstacles, not args.skip_grids, rows))
             print(f"  {physics_name}, seed {seed}: {len(sim.readings):,} readings", flush=True)
             if args.trace and seed == 0:
                 trace_losses(sim, runs[-1], obstacles)
         where = f"{world.name}, scout2; seeds 0-{args.seeds - 1}; physics: {physics_name}"
-        print(f"\n{physics_name}: obstacles heard (mean over seeds): "
-              f"{_heard_line(runs, obstacles)}")
+        print(f"\nobstacles heard, {where}")
+        _heard_table(runs, obstacles)
         print(f"\npoints, {where}; mean over seeds")
         _points_table(runs)
         print(f"\nobstacles found, {where}: % of the heard ones (found/heard, summed over "
