@@ -3,6 +3,7 @@
 Run from the repository root (on a shared machine, with ``nice``)::
 
     nice .venv/bin/python benchmarks/clutter.py                       # seeds 0-2, both physics
+    nice .venv/bin/python benchmarks/clutter.py --diagnose --trace    # + evidence parts off, traces
     nice .venv/bin/python benchmarks/clutter.py --physics specular --seeds 1 --skip-grids
     .venv/bin/python benchmarks/clutter.py --write-world              # worlds/clutter.json only
 
@@ -54,7 +55,18 @@ Scout2 ring driving the tour:
 - **fate of the obstacles' direct echoes**: the share of the direct echoes from each kind of
   obstacle (and from walls) that ended as a map point on their obstacle, as a point elsewhere,
   fully carved, split, or dropped otherwise (evidence carving: confidence below its threshold;
-  the occlusion filter): which rule removed them.
+  the occlusion filter): which rule removed them; beside it the share whose reflection lies
+  outside the beam the reading declares (the arc does not hold it);
+- **heard**: per kind, how many were heard, by how many direct echoes, and how many readings
+  of the whole run had the obstacle's centre in their freespace (beam, range minus ε: a beam
+  that passed over it without hearing it, what could carve a heard one away).
+
+``--diagnose`` adds point rows of evidence carving without its occlusion rule and without its
+confidence filter (which part loses the legs; a diagnosis, nothing is tuned on it);
+``--trace`` prints, for seed 0 of each physics, every direct echo of each heard leg and column
+that ``carve`` or ``evidence`` lost: where its point went or which rule removed it (for paper
+carving the reading that fully carved or split it, replayed with
+:func:`~sonarcarve.geometry.carve_arc`; for evidence, its fate in the ``--diagnose`` rows).
 """
 
 from __future__ import annotations
@@ -293,6 +305,7 @@ class Truth(NamedTuple):
     heard: np.ndarray        # per obstacle: some direct echo reflected from it
     passed_over: np.ndarray  # per obstacle: readings whose freespace holds its centre
     source: np.ndarray       # per reading: obstacle index it reflected from, -1 wall, -2 none
+    outside: np.ndarray      # per reading: its reflection lies outside the beam it declares
     robot: np.ndarray        # per reading: the sensor's position, shape (n, 2)
     near: np.ndarray         # per (snapshot, obstacle): robot within NEAR of it
     stops: np.ndarray        # snapshot reading counts
@@ -327,7 +340,17 @@ def _truth(sim: Simulation, base: World, obstacles: Sequence[Obstacle]) -> Truth
     types = np.array([o.type for o in obstacles])
     passed = np.array([len(saw_through(sim, -1, np.asarray(o.outline.center), MethodConfig(),
                                        len(robot) + 1)) for o in obstacles])
-    return Truth(segments, owner, types, heard, passed, source, robot, near[keep], stops[keep])
+    return Truth(segments, owner, types, heard, passed, source, outside_beam(sim), robot,
+                 near[keep], stops[keep])
+
+
+def outside_beam(sim: Simulation) -> np.ndarray:
+    """Per reading: its true reflection point lies outside the beam the reading declares
+    (the arc does not hold it: no method can place it there); False without a reflection."""
+    r, refl = sim.readings, sim.truth.reflection
+    bearing = np.arctan2(refl[:, 1] - r.y, refl[:, 0] - r.x)
+    off = np.abs((bearing - r.theta + math.pi) % (2.0 * math.pi) - math.pi)
+    return np.asarray(np.isfinite(off) & (off > 0.5 * r.beam_width + 1e-9))
 
 
 def belongs(points: np.ndarray, truth: Truth) -> np.ndarray:
@@ -529,6 +552,11 @@ def trace_losses(sim: Simulation, run: Run, obstacles: Sequence[Obstacle],
                 if name == "carve" and fate in ("fully carved", "split"):
                     j, _ = carved_by(sim, int(i), config)
                     line += f" by {_echo_line(sim, truth, j)}"
+                if truth.outside[i]:
+                    line += " (from outside the declared beam)"
+                if name == "evidence":  # with one part off, when --diagnose ran those rows
+                    line += "".join(f"; {other}: {FATES[run.fates[other][i]]}"
+                                    for other in DIAGNOSTIC_ROWS if other in run.fates)
                 print(f"{line}; {len(over)} newer readings passed over its centre")
 
 
@@ -601,20 +629,21 @@ def _grids_table(runs: Sequence[Run]) -> None:
 def _fates_table(runs: Sequence[Run]) -> None:
     groups = {"walls": ("wall",), "legs": ("table leg", "chair leg"),
               "columns": ("column 10 cm", "column 20 cm"), "boxes": ("box",)}
-    print("\n| method | echoes from | direct echoes | " + " | ".join(f"{f} (%)" for f in FATES)
-          + " |")
-    print("|---|---|---:|" + "---:|" * len(FATES))
+    print("\n| method | echoes from | direct echoes | from outside the declared beam (%) | "
+          + " | ".join(f"{f} (%)" for f in FATES) + " |")
+    print("|---|---|---:|---:|" + "---:|" * len(FATES))
     for name in runs[0].fates:
         for group, types in groups.items():
-            counts = np.zeros(len(FATES))
+            counts, outside = np.zeros(len(FATES)), 0
             for run in runs:
-                kind = np.where(run.truth.source >= 0,
-                                run.truth.types[np.maximum(run.truth.source, 0)], "wall")
-                sel = np.isin(kind, types) & (run.truth.source >= -1)
+                t = run.truth
+                kind = np.where(t.source >= 0, t.types[np.maximum(t.source, 0)], "wall")
+                sel = np.isin(kind, types) & (t.source >= -1)
                 counts += np.bincount(run.fates[name][sel], minlength=len(FATES))
+                outside += int(np.count_nonzero(t.outside[sel]))
             total = counts.sum()
             shares = " | ".join(f"{100 * c / total:.1f}" for c in counts)
-            print(f"| {name} | {group} | {total:,.0f} | {shares} |")
+            print(f"| {name} | {group} | {total:,.0f} | {100 * outside / total:.1f} | {shares} |")
 
 
 def _heard_table(runs: Sequence[Run], obstacles: Sequence[Obstacle]) -> None:
