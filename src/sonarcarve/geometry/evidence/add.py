@@ -12,7 +12,9 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
-:func:`evidence_add` is a sequence of passes, each an inlined helper:
+:func:`evidence_add` bundles its arrays by what they hold
+(:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState` and the weighing's scratch) and
+runs a sequence of passes, each an inlined helper taking a few of those bundles:
 
 1. the new arc's profile (:func:`_init_new_arc`);
 2. the cull of the older rows (:func:`_cull_older`,
