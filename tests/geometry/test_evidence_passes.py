@@ -15,6 +15,7 @@ import pytest
 
 from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence import EVIDENCE_ALIVE, EVIDENCE_CARVED
+from sonarcarve.geometry.evidence.arrays import ArcShapes, CrossingArrays, ReadingRows
 from sonarcarve.geometry.evidence.beam import new_beam
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
 from sonarcarve.geometry.evidence.occlusion import occlude_behind
@@ -87,8 +88,9 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
     bins = m.bins
     params = m.params
     _init_new_arc(m, slot)
-    beam = new_beam(slot, h.x, h.y, h.r, h.beam_width, m.cos_axis, m.sin_axis, m.cos_half,
-                     bins, params)
+    readings = ReadingRows(h.x, h.y, h.r, h.theta, h.beam_width, h.sensor)
+    shapes = ArcShapes(m.cos_axis, m.sin_axis, m.cos_half, m.circle, m.bx, m.by, m.ex, m.ey)
+    beam = new_beam(slot, readings, shapes, params)
     edges = m.trans[bins : 2 * bins + 1]
     scale = m.trans[2 * bins + 2]
     threshold = params.threshold
@@ -101,8 +103,8 @@ def _one_loop_add(m: EvidenceModel, slot: int, older: list[int]) -> int:
             continue
         if m.options.atm:
             _, spilled = transversal_crossings(
-                slot, i, h.x, h.y, h.r, m.cos_axis, m.sin_axis, m.cos_half, params.cos_psi,
-                m.bearings, m.counts, m.spill, spilled)
+                slot, i, readings, shapes, params.cos_psi,
+                CrossingArrays(m.bearings, m.counts, m.spill), spilled)
         ox, oy = h.x[i] - xj, h.y[i] - yj
         other = h.sensor[i] != h.sensor[slot]
         distinct = other or ox * ox + oy * oy >= beam.spacing2

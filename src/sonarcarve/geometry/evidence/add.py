@@ -12,7 +12,9 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
-:func:`evidence_add` is a sequence of passes, each an inlined helper:
+:func:`evidence_add` bundles its arrays by what they hold
+(:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState` and the weighing's scratch) and
+runs a sequence of passes, each an inlined helper taking a few of those bundles:
 
 1. the new arc's profile (:func:`_init_new_arc`);
 2. the cull of the older rows (:func:`_cull_older`,
@@ -33,12 +35,24 @@ gives bit for bit the values of one loop over every arc and bin: ``docs/evidence
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import arc_bounding_circle
+from sonarcarve.geometry.evidence.arrays import (
+    ArcEvidence,
+    ArcShapes,
+    BinEvidence,
+    CrossingArrays,
+    EvidenceState,
+    GroupScratch,
+    NewArcScratch,
+    NewArcTally,
+    ReadingRows,
+)
 from sonarcarve.geometry.evidence.beam import Beam, mark_near, new_beam
 from sonarcarve.geometry.evidence.behind import NEWER_ARCS, depth_behind_newer
 from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
@@ -56,63 +70,74 @@ from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 __all__ = ["evidence_add", "evidence_add_many"]
 
 
+class _OlderArc(NamedTuple):
+    """An older arc as pass 3 weighs it."""
+
+    row: int
+    first_entry: int  # its entries in the group: first_entry .. end_entry - 1, in bin order
+    end_entry: int
+    alive_outside: int  # its live bins outside the new beam's reach or beam (pass 1)
+    other: bool  # another sensor's than the new reading
+    distinct: bool  # another sensor's, or from an origin at least viewpoint_spacing away
+    half_bin_arc: float  # Δ_i r_i / 2: half a bin's length along the arc, metres
+
+
 @compiled_inline
-def _init_new_arc(
-    slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
-    beam_width: FloatArray, viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
-    trans: FloatArray, bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, status: Int8Array,
-    touched: BoolArray, occluded: FloatArray, counts: npt.NDArray[np.int32],
-) -> None:
-    """The new arc's profile: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, empty
-    evidence, the bounding circle, and the scratch ``trans`` (arrays of :func:`evidence_add`)."""
+def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
+    """The new arc's shape: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, the
+    bounding circle; its empty evidence; and the scratch ``trans`` (of :func:`evidence_add`)."""
+    readings, shapes, evidence, arcs = state.readings, state.shapes, state.evidence, state.arcs
+    bx, by, ex, ey = shapes.bx, shapes.by, shapes.ex, shapes.ey
     bins = bx.shape[1]
-    xj = x[slot]
-    yj = y[slot]
-    rj = r[slot]
-    half_j = 0.5 * beam_width[slot]
-    step_j = beam_width[slot] / bins
-    cos_axis[slot] = math.cos(theta[slot])
-    sin_axis[slot] = math.sin(theta[slot])
-    cos_half[slot] = math.cos(half_j)
+    xj = readings.x[slot]
+    yj = readings.y[slot]
+    rj = readings.r[slot]
+    theta_j = readings.theta[slot]
+    phi_j = readings.beam_width[slot]
+    half_j = 0.5 * phi_j
+    step_j = phi_j / bins
+    shapes.cos_axis[slot] = math.cos(theta_j)
+    shapes.sin_axis[slot] = math.sin(theta_j)
+    shapes.cos_half[slot] = math.cos(half_j)
     for k in range(bins):
-        tau = theta[slot] - half_j + (k + 0.5) * step_j
+        tau = theta_j - half_j + (k + 0.5) * step_j
         ex[slot, k] = math.cos(tau)
         ey[slot, k] = math.sin(tau)
         bx[slot, k] = xj + rj * ex[slot, k]
         by[slot, k] = yj + rj * ey[slot, k]
-        free[slot, k] = 0.0
-        support[slot, k] = 0.0
-        located[slot, k] = 0.0
-    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta[slot] - half_j, theta[slot] + half_j)
-    circle[0, slot] = c0
-    circle[1, slot] = c1
-    circle[2, slot] = c2
-    status[slot] = EVIDENCE_ALIVE
-    touched[slot] = False
-    occluded[slot] = 0.0
-    viewpoints[slot] = 0.0
-    looked[slot] = 0.0
-    others[slot] = 0.0
-    if trans[2 * bins + 1] != beam_width[slot]:  # the edges' beam width (NaN: none yet)
+        evidence.free[slot, k] = 0.0
+        evidence.support[slot, k] = 0.0
+        evidence.located[slot, k] = 0.0
+    c0, c1, c2 = arc_bounding_circle(xj, yj, rj, theta_j - half_j, theta_j + half_j)
+    shapes.circle[0, slot] = c0
+    shapes.circle[1, slot] = c1
+    shapes.circle[2, slot] = c2
+    arcs.status[slot] = EVIDENCE_ALIVE
+    arcs.touched[slot] = False
+    arcs.occluded[slot] = 0.0
+    arcs.viewpoints[slot] = 0.0
+    arcs.looked[slot] = 0.0
+    arcs.others[slot] = 0.0
+    if trans[2 * bins + 1] != phi_j:  # the edges' beam width (NaN: none yet)
         # The scratch's second part: sines of j's bin edges; they depend on the beam width
         # only, so they are kept while it stays the same (a ring of like sensors: always).
         for k in range(bins + 1):
             trans[bins + k] = math.sin(-half_j + k * step_j)
-        trans[2 * bins + 1] = beam_width[slot]
+        trans[2 * bins + 1] = phi_j
         trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
     for k in range(bins):  # its first part: j's support from other sensors
         trans[k] = 0.0
-    counts[slot] = 0
+    state.crossings.counts[slot] = 0
 
 
 @compiled_inline
-def _mark_bins(i: int, beam: Beam, threshold: float, bx: FloatArray, by: FloatArray,
-               free: FloatArray, in_beam: BoolArray) -> tuple[int, int]:
+def _mark_bins(i: int, beam: Beam, threshold: float, shapes: ArcShapes, free: FloatArray,
+               in_beam: BoolArray) -> tuple[int, int]:
     """Pass 1 for older arc ``i``: ``in_beam[k]`` where bin ``k`` is left to weigh (free
     evidence below T) and lies in j's reach and beam. Returns the live bins outside them and
     the bins marked. No branch, so the compiler runs it on several bins at once."""
+    bx = shapes.bx
+    by = shapes.by
     xj = beam.x
     yj = beam.y
     cj = beam.cos_axis
@@ -136,19 +161,24 @@ def _mark_bins(i: int, beam: Beam, threshold: float, bx: FloatArray, by: FloatAr
 
 
 @compiled_inline
-def _gather_entries(i: int, first: int, n_in: int, beam: Beam, in_beam: BoolArray,
-                    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-                    scratch: FloatArray, e_bin: SlotArray) -> None:
-    """The ``n_in`` bins of arc ``i`` marked by pass 1, in order, as the group's entries from
-    ``first`` on: each bin (``e_bin``), its offset from the new reading and the bin centre's
-    direction (``scratch`` rows 0-4)."""
+def _gather_entries(i: int, first: int, n_in: int, beam: Beam, shapes: ArcShapes,
+                    group: GroupScratch) -> None:
+    """The ``n_in`` bins of arc ``i`` marked by pass 1 (``group.in_beam``), in order, as the
+    group's entries from ``first`` on: each bin (``entry_bin``), its offset from the new
+    reading and the bin centre's direction (``entries`` rows 0-4)."""
+    bx = shapes.bx
+    by = shapes.by
+    ex = shapes.ex
+    ey = shapes.ey
+    in_beam = group.in_beam
+    e_bin = group.entry_bin
     xj = beam.x
     yj = beam.y
-    e_vx = scratch[0]
-    e_vy = scratch[1]
-    e_d2 = scratch[2]
-    e_ex = scratch[3]
-    e_ey = scratch[4]
+    e_vx = group.entries[0]
+    e_vy = group.entries[1]
+    e_d2 = group.entries[2]
+    e_ex = group.entries[3]
+    e_ey = group.entries[4]
     e = first
     for k in range(bx.shape[1]):
         e_bin[e] = k
@@ -165,13 +195,12 @@ def _gather_entries(i: int, first: int, n_in: int, beam: Beam, in_beam: BoolArra
 
 
 @compiled_inline
-def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
-                    edges: FloatArray, edge_scale: float, scratch: FloatArray,
-                    e_guess: SlotArray) -> None:
+def _detect_entries(n_entries: int, beam: Beam, params: EvidenceParams, new_arc: NewArcScratch,
+                    group: GroupScratch) -> None:
     """Pass 2: :func:`~sonarcarve.geometry.evidence.model.detect_probability`, inlined, for
-    the first ``n_entries`` entries of ``scratch`` (rows 0-4 in, rows 5-10 out: distance,
-    sine of the angle to j's axis, ``P_beam``, ``cos γ``, ``P_detect``, localised support),
-    and the guess of the bin of j behind each (``e_guess``).
+    the first ``n_entries`` entries of the group (``entries`` rows 0-4 in, rows 5-10 out:
+    distance, sine of the angle to j's axis, ``P_beam``, ``cos γ``, ``P_detect``, localised
+    support), and the guess of the bin of j behind each (``entry_guess``).
 
     One loop over all of them: the compiler runs it on several entries at once when they are
     many, 20 or more, and the entries are only the bins to weigh, 7 of an older arc's 24 at
@@ -180,8 +209,12 @@ def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
     d² underflows (a range near 1e-300: then inv_d = inf and the values stay finite where
     ``/`` raised ZeroDivisionError).
     """
+    edges = new_arc.edges
+    edge_scale = new_arc.edge_scale
     bins = edges.shape[0] - 1
     first_edge = edges[0]
+    max_detect = params.max_detect
+    rough = params.rough
     cj = beam.cos_axis
     sj = beam.sin_axis
     sin_half = beam.sin_half
@@ -189,6 +222,8 @@ def _detect_entries(n_entries: int, beam: Beam, max_detect: float, rough: float,
     inv_scale = beam.inv_scale
     cos_full = beam.cos_full
     cos_zero = beam.cos_zero
+    scratch = group.entries
+    e_guess = group.entry_guess
     e_vx = scratch[0]
     e_vy = scratch[1]
     e_d2 = scratch[2]
@@ -252,41 +287,49 @@ def _keep_for_transmission(passed: FloatArray, n_passed: int, i: int, k: int, kb
 
 @compiled_inline
 def _add_support(slot: int, i: int, k: int, kb: int, p: float, loc: float, other: bool,
-                 support: FloatArray, located: FloatArray, trans: FloatArray) -> None:
+                 evidence: BinEvidence, other_support: FloatArray) -> None:
     """An older bin ``(i, k)`` on j's echo circle: ``P_detect`` of support to it and, mutually,
     to j's bin ``kb`` at its bearing; the localised support ``loc`` (``P_detect`` times the sine
     of the angle between the two circles there: tangent circles, one sensor stepping along its
     axis, say nothing of *where* on the arc the echo came from) to both; and to j's support
     from other sensors (the transmission's) when ``i`` is another sensor's."""
-    support[i, k] += p
-    support[slot, kb] += p
-    located[i, k] += loc
-    located[slot, kb] += loc
+    evidence.support[i, k] += p
+    evidence.support[slot, kb] += p
+    evidence.located[i, k] += loc
+    evidence.located[slot, kb] += loc
     if other:
-        trans[kb] += p
+        other_support[kb] += p
 
 
 @compiled_inline
-def _weigh_arc(
-    slot: int, i: int, start: int, stop: int, alive_bins: int, other: bool, distinct: bool,
-    half_bin_arc: float, beam: Beam, params: EvidenceParams, edges: FloatArray,
-    scratch: FloatArray, e_bin: SlotArray, e_guess: SlotArray, free: FloatArray,
-    support: FloatArray, located: FloatArray, touched: BoolArray, trans: FloatArray,
-    passed: FloatArray, n_passed: int, occluding: int, top_through: float,
-) -> tuple[int, float, float, int, int, float]:
-    """Pass 3 for older arc ``i``: the evidence of entries ``start .. stop - 1`` (its marked
-    bins, in bin order): freespace evidence where nearer than ``r_j - ε`` (the rows kept for
-    transmission among them), occlusion of j's bins behind established ones (and the support
-    j looked through) only where nearer than ``r_j - 2ε``, a margin clear of j's own echo;
-    support where on j's echo circle. ``alive_bins`` counts its live bins outside j's reach or
-    beam (pass 1).
+def _weigh_arc(slot: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
+               group: GroupScratch, state: EvidenceState, new_arc: NewArcScratch,
+               tally: NewArcTally) -> tuple[int, float, float, NewArcTally]:
+    """Pass 3 for an older arc: the evidence of its entries (its marked bins, in bin order):
+    freespace evidence where nearer than ``r_j - ε`` (the rows kept for transmission among
+    them), occlusion of j's bins behind established ones (and the support j looked through)
+    only where nearer than ``r_j - 2ε``, a margin clear of j's own echo; support where on j's
+    echo circle.
 
-    Returns ``alive_bins`` with the entries' live bins added, the arc's largest support and
-    "looked" ``P_beam``, and the updated ``n_passed``, ``occluding`` and ``top_through``.
+    Returns its live bins (those outside j's reach or beam included), its largest support and
+    "looked" ``P_beam``, and the new arc's tally updated.
     """
+    i = arc.row
+    other = arc.other
+    distinct = arc.distinct
+    half_bin_arc = arc.half_bin_arc
+    free = state.evidence.free
+    support = state.evidence.support
+    touched = state.arcs.touched
+    edges = new_arc.edges
+    passed = new_arc.passed
+    n_passed, occluding, top_through = tally
     bins = free.shape[1]
     threshold = params.threshold
     free_r = beam.free_r
+    scratch = group.entries
+    e_bin = group.entry_bin
+    e_guess = group.entry_guess
     e_vx = scratch[0]
     e_vy = scratch[1]
     e_d = scratch[5]
@@ -295,9 +338,10 @@ def _weigh_arc(
     e_cos = scratch[8]
     e_p = scratch[9]
     e_loc = scratch[10]
+    alive_bins = arc.alive_outside
     top_support = 0.0
     top_looked = 0.0
-    for e in range(start, stop):
+    for e in range(arc.first_entry, arc.end_entry):
         k = e_bin[e]
         d = e_d[e]
         if d >= free_r and abs(d - beam.r) > params.support_tolerance:
@@ -333,17 +377,23 @@ def _weigh_arc(
             touched[slot] = True
             top_support = max(top_support, p)
             kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
-            _add_support(slot, i, k, kb, p, e_loc[e], other, support, located, trans)
-    return alive_bins, top_support, top_looked, n_passed, occluding, top_through
+            _add_support(slot, i, k, kb, p, e_loc[e], other, state.evidence,
+                         new_arc.other_support)
+    return (alive_bins, top_support, top_looked,
+            NewArcTally(n_passed=n_passed, occluding=occluding, top_through=top_through))
 
 
 @compiled_inline
-def _cull_older(first_older: int, n_older: int, circle: FloatArray, status: Int8Array,
-                beam: Beam, near_flags: BoolArray, near: SlotArray) -> int:
+def _cull_older(first_older: int, n_older: int, beam: Beam, state: EvidenceState,
+                group: GroupScratch) -> int:
     """The cull of the ``n_older`` rows from ``first_older`` on (ring order: two runs of rows
     where the ring wraps) by :func:`~sonarcarve.geometry.evidence.beam.mark_near`, all rows of
-    a run at once (a loop without branches); the rows that pass, oldest first, into ``near``.
-    Returns how many pass."""
+    a run at once (a loop without branches); the rows that pass, oldest first, into
+    ``group.near``. Returns how many pass."""
+    circle = state.shapes.circle
+    status = state.arcs.status
+    near = group.near
+    near_flags = group.near_flags
     storage = status.shape[0]
     n_older = min(n_older, storage)  # no window past the rows (no bounds checks here)
     n_near = 0
@@ -358,123 +408,140 @@ def _cull_older(first_older: int, n_older: int, circle: FloatArray, status: Int8
 
 
 @compiled_inline
-def _add_arc_sums(slot: int, i: int, top_support: float, top_looked: float, distinct: bool,
-                  other: bool, viewpoints: FloatArray, looked: FloatArray,
-                  others: FloatArray) -> None:
-    """The per-arc sums of older arc ``i`` and j, mutual: support from distinct viewpoints and
+def _add_arc_sums(slot: int, arc: _OlderArc, top_support: float, top_looked: float,
+                  arcs: ArcEvidence) -> None:
+    """The per-arc sums of an older arc and j, mutual: support from distinct viewpoints and
     from other sensors (the arc's largest support from j, not every bin's, so that one reading
-    counts once), and j's evidence of having looked at ``i`` from a distinct viewpoint."""
-    if distinct:
-        viewpoints[i] += top_support
-        viewpoints[slot] += top_support
+    counts once), and j's evidence of having looked at it from a distinct viewpoint."""
+    i = arc.row
+    if arc.distinct:
+        arcs.viewpoints[i] += top_support
+        arcs.viewpoints[slot] += top_support
         if top_looked > 0.0:
-            looked[i] += -math.log1p(-top_looked)
-    if other:
-        others[i] += top_support
-        others[slot] += top_support
+            arcs.looked[i] += -math.log1p(-top_looked)
+    if arc.other:
+        arcs.others[i] += top_support
+        arcs.others[slot] += top_support
 
 
 @compiled_inline
-def _finish_new_arc(slot: int, occluding: int, top_through: float, passed: FloatArray,
-                    n_passed: int, trans: FloatArray, free: FloatArray, status: Int8Array,
-                    occluded: FloatArray, through: FloatArray, behind: FloatArray,
-                    params: EvidenceParams) -> int:
+def _finish_new_arc(slot: int, tally: NewArcTally, new_arc: NewArcScratch,
+                    state: EvidenceState, params: EvidenceParams) -> int:
     """What j learns once every older arc is weighed: its share of bins occluded, the support
     its free sector passed, the transmission evidence (needs all of j's support) and its own
     status. Returns the arcs this carved fully (j among them when occlusion took every bin)."""
+    free = state.evidence.free
+    arcs = state.arcs
     bins = free.shape[1]
-    occluded[slot] = occluding / bins
-    through[slot] = top_through
-    behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
-    fully = weigh_transmission(slot, passed, n_passed, trans, free, status, params)
-    if occluding >= bins:
-        status[slot] = EVIDENCE_CARVED
+    arcs.occluded[slot] = tally.occluding / bins
+    arcs.through[slot] = tally.top_through
+    arcs.behind[slot] = 0.0  # judged when the arc leaves (evidence_add_many), not on arrival
+    fully = weigh_transmission(slot, new_arc.passed, tally.n_passed, new_arc.other_support,
+                               free, arcs.status, params)
+    if tally.occluding >= bins:
+        arcs.status[slot] = EVIDENCE_CARVED
         fully += 1
     return fully
 
 
 @compiled_inline
-def _gather_group(slot: int, q: int, n_near: int, group_size: int, x: FloatArray,
-                  y: FloatArray, r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray,
-                  cos_half: FloatArray, bx: FloatArray, by: FloatArray, ex: FloatArray,
-                  ey: FloatArray, free: FloatArray, status: Int8Array, in_beam: BoolArray,
-                  near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray,
-                  scratch: FloatArray, e_bin: SlotArray, bearings: npt.NDArray[np.float32],
-                  counts: npt.NDArray[np.int32], spill: FloatArray, spilled: int, beam: Beam,
-                  params: EvidenceParams, with_atm: bool,
-                  ) -> tuple[int, int, int, int, int, int]:
-    """Pass 1 and the crossings for the culled rows ``near[q:]``, until ``group_size`` of them
-    have bins to weigh: those rows moved to ``near[q:group_end]``, their marked bins the group's
-    entries (:func:`_mark_bins`, :func:`_gather_entries`); an arc with no bin to weigh is done
-    here (pass 3 would add nothing: its sums would add 0.0 to sums of non-negative terms).
+def _gather_group(slot: int, q: int, n_near: int, group_size: int, beam: Beam,
+                  params: EvidenceParams, with_atm: bool, state: EvidenceState,
+                  group: GroupScratch, spilled: int) -> tuple[int, int, int, int, int, int]:
+    """Pass 1 and the crossings for the culled rows ``group.near[q:]``, until ``group_size`` of
+    them have bins to weigh: those rows moved to ``near[q:group_end]``, their marked bins the
+    group's entries (:func:`_mark_bins`, :func:`_gather_entries`); an arc with no bin to weigh
+    is done here (pass 3 would add nothing: its sums would add 0.0 to sums of non-negative
+    terms). ``spilled``: the rows of ``state.crossings.spill`` used so far.
 
     Returns the next row to read, ``group_end``, the entries, the crossings kept, the rows of
     ``spill`` used and the arcs carved fully.
     """
-    group = q
+    near = group.near
+    status = state.arcs.status
+    first = q
     group_end = q
     n_entries = 0
     crossings = 0
     fully = 0
-    while q < n_near and group_end - group < group_size:
+    while q < n_near and group_end - first < group_size:
         i = near[q]
         q += 1
         if with_atm:
-            kept, spilled = transversal_crossings(
-                slot, i, x, y, r, cos_axis, sin_axis, cos_half, params.cos_psi, bearings,
-                counts, spill, spilled)
+            kept, spilled = transversal_crossings(slot, i, state.readings, state.shapes,
+                                                  params.cos_psi, state.crossings, spilled)
             crossings += kept
-        alive_bins, n_in = _mark_bins(i, beam, params.threshold, bx, by, free, in_beam)
+        alive_bins, n_in = _mark_bins(i, beam, params.threshold, state.shapes,
+                                      state.evidence.free, group.in_beam)
         if n_in == 0:
             if alive_bins == 0:
                 status[i] = EVIDENCE_CARVED
                 fully += 1
             continue
         near[group_end] = i  # q > group_end: a row already read
-        arc_marked[group_end - group] = n_in
-        arc_alive[group_end - group] = alive_bins
+        group.arc_marked[group_end - first] = n_in
+        group.arc_alive[group_end - first] = alive_bins
         group_end += 1
-        _gather_entries(i, n_entries, n_in, beam, in_beam, bx, by, ex, ey, scratch, e_bin)
+        _gather_entries(i, n_entries, n_in, beam, state.shapes, group)
         n_entries += n_in
     return q, group_end, n_entries, crossings, spilled, fully
 
 
 @compiled_inline
-def _weigh_group(slot: int, group: int, group_end: int, x: FloatArray, y: FloatArray,
-                 r: FloatArray, beam_width: FloatArray, sensor: npt.NDArray[np.int64],
-                 viewpoints: FloatArray, looked: FloatArray, others: FloatArray,
-                 near: SlotArray, arc_marked: SlotArray, arc_alive: SlotArray, beam: Beam,
-                 params: EvidenceParams, edges: FloatArray, scratch: FloatArray,
-                 e_bin: SlotArray, e_guess: SlotArray, free: FloatArray, support: FloatArray,
-                 located: FloatArray, status: Int8Array, touched: BoolArray, trans: FloatArray,
-                 passed: FloatArray, n_passed: int, occluding: int, top_through: float,
-                 ) -> tuple[int, int, int, float]:
-    """Pass 3 for the group's arcs ``near[group:group_end]``, in the cull's order: each arc's
-    evidence (:func:`_weigh_arc`) and per-arc sums (:func:`_add_arc_sums`), and its status.
-    Returns the arcs carved fully and the updated ``n_passed``, ``occluding`` and
-    ``top_through``."""
-    bins = free.shape[1]
+def _weigh_group(slot: int, first: int, group_end: int, beam: Beam, params: EvidenceParams,
+                 state: EvidenceState, group: GroupScratch, new_arc: NewArcScratch,
+                 tally: NewArcTally) -> tuple[int, NewArcTally]:
+    """Pass 3 for the group's arcs ``group.near[first:group_end]``, in the cull's order: each
+    arc's evidence (:func:`_weigh_arc`) and per-arc sums (:func:`_add_arc_sums`), and its
+    status. Returns the arcs carved fully and the new arc's tally updated."""
+    readings = state.readings
+    status = state.arcs.status
+    bins = state.evidence.free.shape[1]
     fully = 0
     start = 0
-    for g in range(group, group_end):
-        i = near[g]
-        ox = x[i] - beam.x
-        oy = y[i] - beam.y
-        other = sensor[i] != sensor[slot]
-        distinct = other or ox * ox + oy * oy >= beam.spacing2
-        half_bin_arc = 0.5 * (beam_width[i] / bins) * r[i]  # Δ_i r_i / 2
-        stop = start + arc_marked[g - group]
-        alive_bins, top_support, top_looked, n_passed, occluding, top_through = _weigh_arc(
-            slot, i, start, stop, arc_alive[g - group], other, distinct, half_bin_arc,
-            beam, params, edges, scratch, e_bin, e_guess, free, support, located, touched,
-            trans, passed, n_passed, occluding, top_through)
+    for g in range(first, group_end):
+        i = group.near[g]
+        ox = readings.x[i] - beam.x
+        oy = readings.y[i] - beam.y
+        other = readings.sensor[i] != readings.sensor[slot]
+        stop = start + group.arc_marked[g - first]
+        arc = _OlderArc(
+            row=i, first_entry=start, end_entry=stop, alive_outside=group.arc_alive[g - first],
+            other=other, distinct=other or ox * ox + oy * oy >= beam.spacing2,
+            half_bin_arc=0.5 * (readings.beam_width[i] / bins) * readings.r[i],  # Δ_i r_i / 2
+        )
+        alive_bins, top_support, top_looked, tally = _weigh_arc(slot, arc, beam, params, group,
+                                                                state, new_arc, tally)
         start = stop
-        _add_arc_sums(slot, i, top_support, top_looked, distinct, other, viewpoints, looked,
-                      others)
+        _add_arc_sums(slot, arc, top_support, top_looked, state.arcs)
         if alive_bins == 0:
             status[i] = EVIDENCE_CARVED
             fully += 1
-    return fully, n_passed, occluding, top_through
+    return fully, tally
+
+
+@compiled_inline
+def _evidence_state(
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
+    others: FloatArray, through: FloatArray, behind: FloatArray,
+    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
+    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    status: Int8Array, touched: BoolArray, occluded: FloatArray,
+    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
+) -> EvidenceState:
+    """The model's arrays, as :func:`evidence_add` takes them, bundled by what they hold
+    (:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`)."""
+    return EvidenceState(
+        readings=ReadingRows(x=x, y=y, r=r, theta=theta, beam_width=beam_width, sensor=sensor),
+        shapes=ArcShapes(cos_axis=cos_axis, sin_axis=sin_axis, cos_half=cos_half,
+                         circle=circle, bx=bx, by=by, ex=ex, ey=ey),
+        evidence=BinEvidence(free=free, support=support, located=located),
+        arcs=ArcEvidence(status=status, touched=touched, viewpoints=viewpoints, looked=looked,
+                         others=others, occluded=occluded, through=through, behind=behind),
+        crossings=CrossingArrays(bearings=bearings, counts=counts, spill=spill),
+    )
 
 
 @compiled_borrowing
@@ -595,28 +662,30 @@ def evidence_add(
         Arcs whose last bin was carved by this reading; ATM crossings kept; bins of the new arc
         carved by occlusion; rows of ``spill`` used (0: every crossing fitted).
     """
+    # The arrays as the passes name them (arrays.py); the passes are inlined helpers
+    # (compiled_inline) and this kernel counts no references (compiled_borrowing), so they
+    # compile to the code of one body: the same bits, and the same speed where numba can
+    # compile without reference counting (measured on numba 0.68; docs/evidence-carving.md,
+    # "Speed: the weighing kernel's layout").
+    state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
+                            through, behind, bx, by, ex, ey, free, support, located, circle,
+                            cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
+                            counts, spill)
+    group = GroupScratch(
+        entries=scratch, entry_bin=bin_index[0], entry_guess=bin_index[1],
+        arc_marked=bin_index[2], arc_alive=bin_index[3], in_beam=in_beam, near=near,
+        near_flags=near_flags,
+    )
     bins = bx.shape[1]
-    # The passes are inlined helpers (compiled_inline) and this kernel counts no references
-    # (compiled_borrowing), so they compile to the code of one body: the same bits, and the
-    # same speed where numba can compile without reference counting (measured on numba 0.68;
-    # docs/evidence-carving.md, "Speed: the weighing kernel's layout").
-    _init_new_arc(slot, x, y, r, theta, beam_width, viewpoints, looked, others, trans, bx, by,
-                  ex, ey, free, support, located, circle, cos_axis, sin_axis, cos_half, status,
-                  touched, occluded, counts)
-    beam = new_beam(slot, x, y, r, beam_width, cos_axis, sin_axis, cos_half, bins, params)
-    edges = trans[bins : 2 * bins + 1]
-    edge_scale = trans[2 * bins + 2]  # the guess of bin_of_sine
-    e_bin = bin_index[0]  # the entry's bin of its older arc
-    e_guess = bin_index[1]  # the guess of the bin of j behind it
-    arc_marked = bin_index[2]  # per arc of the group: its entries
-    arc_alive = bin_index[3]  # per arc of the group: live bins outside j's reach or beam
     group_size = max(1, scratch.shape[1] // bins)  # arcs a group's entries always hold
+    _init_new_arc(slot, state, trans)
+    beam = new_beam(slot, state.readings, state.shapes, params)
+    new_arc = NewArcScratch(other_support=trans[:bins], edges=trans[bins : 2 * bins + 1],
+                            edge_scale=trans[2 * bins + 2], passed=passed)
+    tally = NewArcTally(n_passed=0, occluding=0, top_through=0.0)
     fully = 0
     crossings = 0
-    occluding = 0
-    n_passed = 0
     spilled = 0
-    top_through = 0.0
     # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
     # rows that pass it, oldest first, a group at a time.
     # Marking every row up front gives the one loop's result because nothing in the loop
@@ -626,49 +695,43 @@ def evidence_add(
     # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
     # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
     # order, so every value is the one loop's.
-    n_near = _cull_older(first_older, n_older, circle, status, beam, near_flags, near)
+    n_near = _cull_older(first_older, n_older, beam, state, group)
     q = 0
     while q < n_near:
         # Pass 1 and the crossings for the next older arcs, until group_size of them have
-        # bins to weigh (their rows in ``near[group:group_end]``, their bins the entries).
-        group = q
+        # bins to weigh (their rows in ``near[first:group_end]``, their bins the entries).
+        first = q
         q, group_end, n_entries, kept, spilled, carved = _gather_group(
-            slot, q, n_near, group_size, x, y, r, cos_axis, sin_axis, cos_half, bx, by, ex, ey,
-            free, status, in_beam, near, arc_marked, arc_alive, scratch, e_bin, bearings,
-            counts, spill, spilled, beam, params, with_atm)
+            slot, q, n_near, group_size, beam, params, with_atm, state, group, spilled)
         crossings += kept
         fully += carved
         # Pass 2: P_detect of every entry of the group at once (one loop the compiler
         # vectorises when the entries are many).
-        _detect_entries(n_entries, beam, params.max_detect, params.rough, edges, edge_scale,
-                        scratch, e_guess)
+        _detect_entries(n_entries, beam, params, new_arc, group)
         # Pass 3: the evidence, arc after arc, in bin order, then the arc's sums.
-        carved, n_passed, occluding, top_through = _weigh_group(
-            slot, group, group_end, x, y, r, beam_width, sensor, viewpoints, looked, others,
-            near, arc_marked, arc_alive, beam, params, edges, scratch, e_bin, e_guess, free,
-            support, located, status, touched, trans, passed, n_passed, occluding, top_through)
+        carved, tally = _weigh_group(slot, first, group_end, beam, params, state, group,
+                                     new_arc, tally)
         fully += carved
-    fully += _finish_new_arc(slot, occluding, top_through, passed, n_passed, trans, free, status,
-                             occluded, through, behind, params)
-    return fully, crossings, occluding, spilled
+    fully += _finish_new_arc(slot, tally, new_arc, state, params)
+    return fully, crossings, tally.occluding, spilled
 
 
 @compiled_inline
-def judge_leaving(start: int, n_live: int, x: FloatArray, y: FloatArray, r: FloatArray,
-                  cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-                  status: Int8Array, viewpoints: FloatArray, behind: FloatArray,
-                  params: EvidenceParams, scratch: FloatArray) -> None:
+def judge_leaving(start: int, n_live: int, state: EvidenceState, params: EvidenceParams,
+                  scratch: FloatArray) -> None:
     """The arc leaving the history, ``start - 1`` (the row before the live ones from ``start``
     on, ring order): its ``behind`` set to its depth behind the ``n_live`` first of them
     (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`, the margin ``2ε``);
     left 0 for an arc already carved (it has no point to judge)."""
-    storage = x.shape[0]
+    readings, shapes, arcs = state.readings, state.shapes, state.arcs
+    storage = arcs.status.shape[0]
     leaving = start - 1 if start > 0 else storage - 1
-    if status[leaving] != EVIDENCE_ALIVE:
+    if arcs.status[leaving] != EVIDENCE_ALIVE:
         return
-    behind[leaving] = depth_behind_newer(leaving, start, n_live, x, y, r, cos_axis, sin_axis,
-                                         cos_half, status, viewpoints, params.establish,
-                                         2.0 * params.tolerance, scratch)
+    arcs.behind[leaving] = depth_behind_newer(
+        leaving, start, n_live, readings.x, readings.y, readings.r, shapes.cos_axis,
+        shapes.sin_axis, shapes.cos_half, arcs.status, arcs.viewpoints, params.establish,
+        2.0 * params.tolerance, scratch)
 
 
 @compiled_borrowing
@@ -714,6 +777,10 @@ def evidence_add_many(
         that spills), so the caller moves the spill whenever it is > 0, whatever ``done``.
     """
     storage = x.shape[0]
+    state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
+                            through, behind, bx, by, ex, ey, free, support, located, circle,
+                            cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
+                            counts, spill)
     fully = 0
     crossings = 0
     occluding = 0
@@ -721,8 +788,7 @@ def evidence_add_many(
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
         if sequence >= capacity:
-            judge_leaving(start, min(capacity - 1, NEWER_ARCS), x, y, r, cos_axis, sin_axis,
-                          cos_half, status, viewpoints, behind, params, behind_scratch)
+            judge_leaving(start, min(capacity - 1, NEWER_ARCS), state, params, behind_scratch)
         a, b, c, spilled = evidence_add(
             sequence % storage, start, live - 1, x, y, r, theta, beam_width,
             sensor, viewpoints, looked, others, through, behind, passed, trans, scratch, in_beam,

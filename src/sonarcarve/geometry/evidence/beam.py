@@ -14,10 +14,11 @@ import math
 from typing import NamedTuple
 
 from sonarcarve.geometry._compiled import compiled_inline
+from sonarcarve.geometry.evidence.arrays import ArcShapes, ReadingRows
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE, EvidenceParams
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array
 
-__all__ = ["Beam", "mark_near", "new_beam"]
+__all__ = ["Beam", "beam_of", "mark_near", "new_beam"]
 
 
 class Beam(NamedTuple):
@@ -48,25 +49,40 @@ class Beam(NamedTuple):
 
 
 @compiled_inline
-def new_beam(slot: int, x: FloatArray, y: FloatArray, r: FloatArray, beam_width: FloatArray,
-             cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, bins: int,
+def beam_of(x: float, y: float, r: float, cos_axis: float, sin_axis: float, half: float,
+            cos_half: float, step: float, free_r: float, reach: float,
+            params: EvidenceParams) -> Beam:
+    """A :class:`Beam` from its origin, range, axis ``(cos_axis, sin_axis)``, half-width
+    ``half`` (and its cosine), bin width ``step``, the end of its freespace and its reach;
+    the rest is derived here (call it with keywords: the scalars are easily swapped)."""
+    sin_half = math.sin(half)
+    return Beam(
+        x=x, y=y, r=r, cos_axis=cos_axis, sin_axis=sin_axis, half=half, step=step,
+        sin_half=sin_half, cos_half2=cos_half * cos_half, free_r=free_r, reach=reach,
+        reach2=reach * reach,
+        edge1_x=cos_axis * cos_half + sin_axis * sin_half,
+        edge1_y=sin_axis * cos_half - cos_axis * sin_half,
+        edge2_x=cos_axis * cos_half - sin_axis * sin_half,
+        edge2_y=sin_axis * cos_half + cos_axis * sin_half,
+        edge_loss=1.0 - params.edge_gain, inv_scale=1.0 / params.range_scale,
+        cos_full=math.cos(params.incidence_full), cos_zero=math.cos(params.incidence_zero),
+        spacing2=params.viewpoint_spacing * params.viewpoint_spacing,
+    )
+
+
+@compiled_inline
+def new_beam(slot: int, readings: ReadingRows, shapes: ArcShapes,
              params: EvidenceParams) -> Beam:
     """The new reading's :class:`Beam`, from its row (once
-    :func:`~sonarcarve.geometry.evidence.evidence_add` has initialised it)."""
-    rj = r[slot]
-    half_j = 0.5 * beam_width[slot]
-    cj = cos_axis[slot]
-    sj = sin_axis[slot]
-    sin_half_j = math.sin(half_j)
-    cos_half_j = cos_half[slot]
-    reach = rj + params.support_tolerance
-    return Beam(
-        x[slot], y[slot], rj, cj, sj, half_j, beam_width[slot] / bins, sin_half_j,
-        cos_half_j * cos_half_j, rj - params.tolerance, reach, reach * reach,
-        cj * cos_half_j + sj * sin_half_j, sj * cos_half_j - cj * sin_half_j,
-        cj * cos_half_j - sj * sin_half_j, sj * cos_half_j + cj * sin_half_j,
-        1.0 - params.edge_gain, 1.0 / params.range_scale, math.cos(params.incidence_full),
-        math.cos(params.incidence_zero), params.viewpoint_spacing * params.viewpoint_spacing,
+    :func:`~sonarcarve.geometry.evidence.evidence_add` has set its shape): its echo circle at
+    ``r_j``, its freespace to ``r_j - ε``, its reach to ``r_j + ε_s``."""
+    rj = readings.r[slot]
+    bins = shapes.bx.shape[1]
+    return beam_of(
+        x=readings.x[slot], y=readings.y[slot], r=rj, cos_axis=shapes.cos_axis[slot],
+        sin_axis=shapes.sin_axis[slot], half=0.5 * readings.beam_width[slot],
+        cos_half=shapes.cos_half[slot], step=readings.beam_width[slot] / bins,
+        free_r=rj - params.tolerance, reach=rj + params.support_tolerance, params=params,
     )
 
 

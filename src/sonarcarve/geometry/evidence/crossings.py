@@ -16,6 +16,7 @@ import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.geometry.circles import common_chord
+from sonarcarve.geometry.evidence.arrays import ArcShapes, CrossingArrays, ReadingRows
 from sonarcarve.typing import FloatArray
 
 __all__ = ["transversal_crossings"]
@@ -38,13 +39,15 @@ def _store_crossing(bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.in
 
 
 @compiled_inline
-def transversal_crossings(j: int, i: int, x: FloatArray, y: FloatArray, r: FloatArray,
-                          cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-                          cos_psi: float, bearings: npt.NDArray[np.float32],
-                          counts: npt.NDArray[np.int32], spill: FloatArray, spilled: int,
+def transversal_crossings(j: int, i: int, readings: ReadingRows, shapes: ArcShapes,
+                          cos_psi: float, store: CrossingArrays, spilled: int,
                           ) -> tuple[int, int]:
     """ATM's transversal crossings of arcs ``j`` and ``i`` (as ``methods/atm.py``), stored
-    (:func:`_store_crossing`). Returns the crossings kept and the rows of ``spill`` used."""
+    (:func:`_store_crossing`). Returns the crossings kept and the rows of ``store.spill``
+    used."""
+    x, y, r = readings.x, readings.y, readings.r
+    cos_axis, sin_axis, cos_half = shapes.cos_axis, shapes.sin_axis, shapes.cos_half
+    bearings, counts, spill = store.bearings, store.counts, store.spill
     xj = x[j]
     yj = y[j]
     rj = r[j]

@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
-from sonarcarve.geometry.evidence.beam import Beam
+from sonarcarve.geometry.evidence.beam import Beam, beam_of
 from sonarcarve.geometry.evidence.model import (
     EVIDENCE_ALIVE,
     EVIDENCE_CARVED,
@@ -34,17 +34,10 @@ def _silent_beam(xj: float, yj: float, max_range: float, theta_j: float, phi_j: 
     whose reach ends with its freespace, at ``max_range - ε`` (it heard nothing, so it supports
     nothing). Its ``step`` is 0: the reading has no bins of its own."""
     free_r = max_range - params.tolerance
-    cj = math.cos(theta_j)
-    sj = math.sin(theta_j)
-    sin_half_j = math.sin(0.5 * phi_j)
-    cos_half_j = math.cos(0.5 * phi_j)
-    return Beam(
-        xj, yj, max_range, cj, sj, 0.5 * phi_j, 0.0, sin_half_j, cos_half_j * cos_half_j,
-        free_r, free_r, free_r * free_r,
-        cj * cos_half_j + sj * sin_half_j, sj * cos_half_j - cj * sin_half_j,
-        cj * cos_half_j - sj * sin_half_j, sj * cos_half_j + cj * sin_half_j,
-        1.0 - params.edge_gain, 1.0 / params.range_scale, math.cos(params.incidence_full),
-        math.cos(params.incidence_zero), params.viewpoint_spacing * params.viewpoint_spacing,
+    return beam_of(
+        x=xj, y=yj, r=max_range, cos_axis=math.cos(theta_j), sin_axis=math.sin(theta_j),
+        half=0.5 * phi_j, cos_half=math.cos(0.5 * phi_j), step=0.0, free_r=free_r,
+        reach=free_r, params=params,
     )
 
 
