@@ -56,7 +56,8 @@ Scout2 ring driving the tour:
   obstacle (and from walls) that ended as a map point on their obstacle, as a point elsewhere,
   fully carved, split, or dropped otherwise (evidence carving: confidence below its threshold;
   the occlusion filter): which rule removed them; beside it the share whose reflection lies
-  outside the beam the reading declares (the arc does not hold it);
+  outside the beam the reading declares by more than 5 cm of arc (``lab.metrics.off_beam``:
+  the arc does not hold it);
 - **heard**: per kind, how many were heard, by how many direct echoes, and how many readings
   of the whole run had the obstacle's centre in their freespace (beam, range minus ε: a beam
   that passed over it without hearing it, what could carve a heard one away).
@@ -94,7 +95,7 @@ from sonarcarve.geometry.fate import ArcFate
 from sonarcarve.grids import OCCUPIED, OccupancyMap, trinary
 from sonarcarve.lab.grid_measures import dilate, grid_measures, wall_cells
 from sonarcarve.lab.instrument import RunRecord, record_run
-from sonarcarve.lab.metrics import segment_distance
+from sonarcarve.lab.metrics import off_beam, segment_distance
 from sonarcarve.maps import GlobalMap
 from sonarcarve.methods import MethodConfig, SonarMethod
 from sonarcarve.pipeline import ProcessResult
@@ -345,12 +346,11 @@ def _truth(sim: Simulation, base: World, obstacles: Sequence[Obstacle]) -> Truth
 
 
 def outside_beam(sim: Simulation) -> np.ndarray:
-    """Per reading: its true reflection point lies outside the beam the reading declares
-    (the arc does not hold it: no method can place it there); False without a reflection."""
-    r, refl = sim.readings, sim.truth.reflection
-    bearing = np.arctan2(refl[:, 1] - r.y, refl[:, 0] - r.x)
-    off = np.abs((bearing - r.theta + math.pi) % (2.0 * math.pi) - math.pi)
-    return np.asarray(np.isfinite(off) & (off > 0.5 * r.beam_width + 1e-9))
+    """Per reading: its true reflection point lies outside the beam the reading declares, by
+    more than 5 cm of arc (:func:`~sonarcarve.lab.metrics.off_beam`: the arc does not hold it,
+    no method can place it there); False without a reflection."""
+    r = sim.readings
+    return off_beam(np.column_stack([r.x, r.y]), r.theta, r.beam_width, sim.truth.reflection)
 
 
 def belongs(points: np.ndarray, truth: Truth) -> np.ndarray:
