@@ -32,7 +32,7 @@ tour unchanged) with clutter added by the rule below, fixed before any run.
   within 1 m of a doorway.
 
 **Measures**, for each seed and physics (``specular``, ``amplitude``: :mod:`heldout`'s), the
-Scout2 ring driving the tour:
+Scout2 ring (``--robot``: another) driving the tour:
 
 - the point measures of :func:`evidence.map_row` (direct kept, spurious removed per kind,
   median and p90 error ratios to centerline's) for centerline, paper carving (``carve``),
@@ -481,9 +481,9 @@ def measure(sim: Simulation, base: World, obstacles: Sequence[Obstacle],
     return run
 
 
-def _simulate(world: World, seed: int, physics_name: str) -> Simulation:
+def _simulate(world: World, seed: int, physics_name: str, robot: str = "scout2") -> Simulation:
     assert world.tour is not None
-    return simulate(world, load_robot("scout2"), follow_waypoints(world.tour), seed,
+    return simulate(world, load_robot(robot), follow_waypoints(world.tour), seed,
                     physics=PHYSICS[physics_name])
 
 
@@ -668,6 +668,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--physics", nargs="+", default=["specular", "amplitude"],
                         choices=["specular", "amplitude"])
     parser.add_argument("--skip-grids", action="store_true")
+    parser.add_argument("--robot", default="scout2",
+                        help="the sonars (a built-in robot or a robot YAML), as heldout.py: "
+                             "p3dx-front (8 front sonars, 15° beams) or p3dx (its 16)")
     parser.add_argument("--diagnose", action="store_true",
                         help="add point rows: evidence carving without its occlusion rule, and "
                              "without its confidence filter (which part loses the legs)")
@@ -689,13 +692,13 @@ def main(argv: list[str] | None = None) -> int:
     for physics_name in args.physics:
         runs = []
         for seed in range(args.seeds):
-            sim = _simulate(world, seed, physics_name)
+            sim = _simulate(world, seed, physics_name, args.robot)
             rows = (*POINT_ROWS, *DIAGNOSTIC_ROWS) if args.diagnose else POINT_ROWS
             runs.append(measure(sim, base, obstacles, not args.skip_grids, rows))
             print(f"  {physics_name}, seed {seed}: {len(sim.readings):,} readings", flush=True)
             if args.trace and seed == 0:
                 trace_losses(sim, runs[-1], obstacles)
-        where = f"{world.name}, scout2; seeds 0-{args.seeds - 1}; physics: {physics_name}"
+        where = f"{world.name}, {args.robot}; seeds 0-{args.seeds - 1}; physics: {physics_name}"
         print(f"\nobstacles heard, {where}")
         _heard_table(runs, obstacles)
         print(f"\npoints, {where}; mean over seeds")
