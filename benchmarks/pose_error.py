@@ -247,6 +247,12 @@ def beats_layer(rows: Sequence[Row], layer: Sequence[Row]) -> str:
     return f"{won} of {len(rows)}"
 
 
+def grid_cells(rows: Sequence[Row]) -> str:
+    """A grid's mean precision, recall and phantom share (%) over ``rows``, as table cells."""
+    return (f"{mean_of(rows, 'precision'):.3f} | {mean_of(rows, 'recall'):.3f} | "
+            f"{100 * mean_of(rows, 'phantoms'):.3f}")
+
+
 def pct(value: float) -> str:
     """A share with one decimal, "–" where there is none."""
     return "–" if math.isnan(value) else f"{value:.1f}"
@@ -337,8 +343,7 @@ def grids_table(data: dict[str, Any], world: str, conditions: Sequence[str]) -> 
                 rows = [r["grids"][f"{name} @ {h:.2f}"] for r in runs]
                 layer = [r["grids"][f"RangeSensorLayer, ROS defaults @ {h:.2f}"] for r in runs]
                 wins = beats_layer(rows, layer) if name.startswith("carved grid") else ""
-                print(f"| {h:.2f} | {name} | {condition} | {mean_of(rows, 'precision'):.3f} | "
-                      f"{mean_of(rows, 'recall'):.3f} | {100 * mean_of(rows, 'phantoms'):.3f} | "
+                print(f"| {h:.2f} | {name} | {condition} | {grid_cells(rows)} | "
                       f"{100 * mean_of(rows, 'freed'):.2f} | {wins} |")
 
 

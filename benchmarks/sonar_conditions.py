@@ -74,7 +74,7 @@ from scipy.special import jn_zeros
 
 from evidence import KINDS, map_row
 from grids import _carved, _fill, _layer, _measure
-from pose_error import KEEP, MEDIAN_RATIO, METHODS, REMOVE, beats_layer, mean_of, pct
+from pose_error import KEEP, MEDIAN_RATIO, METHODS, REMOVE, beats_layer, grid_cells, mean_of, pct
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.grids import CarvedGrid, CarvedGridParams, OccupancyMap, RangeSensorLayerParams
@@ -376,9 +376,7 @@ def grids_table(data: dict[str, Any], conditions: Sequence[str]) -> None:
             rows = [r["grids"][name] for r in runs]
             layer = [r["grids"]["RangeSensorLayer, ROS defaults"] for r in runs]
             wins = beats_layer(rows, layer) if name.startswith("carved") else ""
-            print(f"| {condition} | {name} | {mean_of(rows, 'precision'):.3f} | "
-                  f"{mean_of(rows, 'recall'):.3f} | {100 * mean_of(rows, 'phantoms'):.3f} | "
-                  f"{wins} |")
+            print(f"| {condition} | {name} | {grid_cells(rows)} | {wins} |")
 
 
 def print_tables(data: dict[str, Any]) -> None:

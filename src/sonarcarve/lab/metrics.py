@@ -302,8 +302,7 @@ def off_beam(sensor_xy: npt.ArrayLike, theta: npt.ArrayLike, beam_width: npt.Arr
     dx, dy = hit[:, 0] - xy[:, 0], hit[:, 1] - xy[:, 1]
     bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - np.asarray(theta, dtype=np.float64))))
     outside = np.abs(bearing) - 0.5 * np.asarray(beam_width, dtype=np.float64)
-    with np.errstate(invalid="ignore"):
-        return np.asarray(np.hypot(dx, dy) * outside > tolerance)
+    return np.asarray(np.hypot(dx, dy) * outside > tolerance)  # NaN (no reflector): False
 
 
 def count_near_segment(points: npt.ArrayLike, segment: npt.ArrayLike, radius: float) -> int:
