@@ -66,7 +66,11 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--pose-sigma", "-0.1"], "--pose-sigma must be a finite number >= 0 metres, got -0.1"),
     (["--pose-sigma", "0.05", "--model", "range-sensor-layer"],
      "--pose-sigma applies to --model carved only, not range-sensor-layer"),
-    (["--range-tolerance", "-0.1"], "--range-tolerance must be a finite number >= 0 metres"),
+    (["--range-tolerance", "-0.1"], "--range-tolerance must be a number in [0, 1] metres"),
+    (["--range-tolerance", "1e9"], "--range-tolerance must be a number in [0, 1] metres"),
+    (["--range-tolerance", "0.9", "--pose-sigma", "0.1"],
+     "--range-tolerance + 2 --pose-sigma (the ε it carves with) must be at most 1 metres, "
+     "got 1.1"),
     (["--range-tolerance", "0.1", "--model", "elfes"],
      "--range-tolerance applies to --model carved only, not elfes"),
 ])

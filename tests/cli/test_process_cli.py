@@ -82,8 +82,10 @@ def _bad_cases(tmp_path: Path) -> list[tuple[list[str], str]]:
         ([str(good), "--beam-width", "200"], "error: --beam-width must lie in (0, 180) degrees, "
                                              "got 200"),
         ([str(good), "--beam-width", "0"], "error: --beam-width must lie in (0, 180) degrees"),
-        ([str(good), "--range-tolerance", "-1"], "error: --range-tolerance must be finite and "
-                                                 ">= 0 metres, got -1"),
+        ([str(good), "--range-tolerance", "-1"], "error: --range-tolerance must lie in [0, 1] "
+                                                 "metres, got -1"),
+        ([str(good), "--range-tolerance", "2"], "error: --range-tolerance must lie in [0, 1] "
+                                                "metres, got 2"),
         ([str(good), "--min-transversal", "91"], "error: --min-transversal must lie in (0, 90] "
                                                  "degrees, got 91"),
         ([str(good), "--min-transversal", "0"], "error: --min-transversal must lie in (0, 90] "

@@ -67,3 +67,18 @@ def _default_grid() -> CarvedGrid:
 def test_pose_sigma_must_be_finite_and_not_negative(sigma: float) -> None:
     with pytest.raises(GridError, match="pose_sigma"):
         CarvedGridParams(pose_sigma=sigma)
+
+
+@pytest.mark.parametrize(("tolerance", "sigma"), [(1.01, 0.0), (0.9, 0.06), (0.05, 1e9)])
+def test_a_carving_tolerance_past_a_metre_is_refused_up_front(tolerance: float,
+                                                              sigma: float) -> None:
+    # The grid's method carves with ε + 2σ; past MAX_RANGE_TOLERANCE the method would refuse
+    # it with a ConfigError, later and in its own terms.
+    with pytest.raises(GridError, match="range_tolerance"):
+        CarvedGridParams(range_tolerance=tolerance, pose_sigma=sigma)
+
+
+def test_a_carving_tolerance_of_exactly_a_metre_is_accepted() -> None:
+    params = CarvedGridParams(range_tolerance=0.8, pose_sigma=0.1)
+    assert CarvedGrid(0.1, BOUNDS, params=params).method.config.range_tolerance == (
+        pytest.approx(1.0))

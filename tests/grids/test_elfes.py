@@ -294,7 +294,8 @@ def test_the_cell_limit_is_exact() -> None:
 
 @pytest.mark.parametrize("kwargs", [
     {"beam_width": 0.0}, {"beam_width": math.pi}, {"beam_width": math.nan},
-    {"range_tolerance": -0.01}, {"range_tolerance": math.inf},
+    {"range_tolerance": -0.01}, {"range_tolerance": math.inf}, {"range_tolerance": math.nan},
+    {"range_tolerance": 1.01},
     {"p_hit": 0.5}, {"p_hit": 1.0}, {"p_miss": 0.5}, {"p_miss": 0.0},
     {"p_min": 0.5}, {"p_max": 0.5}, {"p_max": 1.0}, {"fade_range": 0.0},
     {"fade_range": math.nan},

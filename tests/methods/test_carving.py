@@ -118,10 +118,15 @@ def test_retired_arcs_are_not_carved() -> None:
     assert method.measures().fully_carved == 0
 
 
-@pytest.mark.parametrize("tolerance", [-0.01, math.nan, math.inf])
+@pytest.mark.parametrize("tolerance", [-0.01, math.nan, math.inf, 1.001, 1e9])
 def test_bad_range_tolerance_is_rejected(tolerance: float) -> None:
-    with pytest.raises(ConfigError, match=r"^range_tolerance must be finite and >= 0 metres"):
+    with pytest.raises(ConfigError, match=r"^range_tolerance must lie in \[0, 1\] metres"):
         CarvingMethod(range_tolerance=tolerance)
+
+
+@pytest.mark.parametrize("tolerance", [0.0, 1.0])
+def test_range_tolerance_bounds_are_accepted(tolerance: float) -> None:
+    assert CarvingMethod(range_tolerance=tolerance).range_tolerance == tolerance
 
 
 def test_factory_reads_the_config() -> None:

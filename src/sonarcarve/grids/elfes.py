@@ -58,7 +58,7 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.scan import cell_range, sector_box
-from sonarcarve.methods.carving import DEFAULT_RANGE_TOLERANCE
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE, MAX_RANGE_TOLERANCE
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading, ReadingBatch
 from sonarcarve.typing import FloatArray
 
@@ -124,9 +124,9 @@ class SonarConeModel:
         if not (math.isfinite(self.beam_width) and 0.0 < self.beam_width < math.pi):
             msg = f"grid: beam_width must lie in (0, pi) radians, got {self.beam_width!r}"
             raise GridError(msg)
-        if not (math.isfinite(self.range_tolerance) and self.range_tolerance >= 0.0):
-            msg = (f"grid: range_tolerance must be a finite number >= 0 metres, "
-                   f"got {self.range_tolerance!r}")
+        if not 0.0 <= self.range_tolerance <= MAX_RANGE_TOLERANCE:
+            msg = (f"grid: range_tolerance must be a number in [0, {MAX_RANGE_TOLERANCE:g}] "
+                   f"metres, got {self.range_tolerance!r}")
             raise GridError(msg)
         check_probability("grid", "p_hit", self.p_hit, 0.5, 1.0)
         check_probability("grid", "p_miss", self.p_miss, 0.0, 0.5)

@@ -25,6 +25,7 @@ __all__ = [
     "DEFAULT_MIN_TRANSVERSAL",
     "DEFAULT_RANGE_TOLERANCE",
     "MAX_HISTORY_SIZE",
+    "MAX_RANGE_TOLERANCE",
     "MethodConfig",
     "check_beam_width",
     "check_carve_probability",
@@ -47,6 +48,13 @@ __all__ = [
 #: of map points to the walls stayed within 2.5 mm of the best ε (1.6-2.5 cm; centerline 12 cm)
 #: and 93-94 % of spurious echoes were still removed. ε = 10 cm costs accuracy (3.7-4 cm).
 DEFAULT_RANGE_TOLERANCE = 0.05
+
+#: Largest range tolerance ε accepted, metres. Beyond it ε is no longer a tolerance: a newer
+#: reading's freespace would stop a metre or more short of its echo, so carving and the grids'
+#: free space would all but stop, silently. The widest ε any benchmark found useful is 0.15 m
+#: (the 5 cm default plus twice a 5 cm pose error, ``benchmarks/pose_error.py``); a 2 % range
+#: error at a Polaroid's 10.7 m limit is 0.2 m.
+MAX_RANGE_TOLERANCE = 1.0
 
 #: Default minimum transversal angle ψ of ATM, radians (20°; see :class:`MethodConfig`).
 DEFAULT_MIN_TRANSVERSAL = math.radians(20.0)
@@ -110,8 +118,12 @@ def _angle_up_to_right(name: str, value: object) -> float:
 
 
 def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
-    """ε in metres, finite and ≥ 0."""
-    return _metres_at_least_zero(name, value)
+    """ε in metres, in [0, :data:`MAX_RANGE_TOLERANCE`]."""
+    rule = f"lie in [0, {MAX_RANGE_TOLERANCE:g}] metres"
+    metres = _number(name, value, rule)
+    if not 0.0 <= metres <= MAX_RANGE_TOLERANCE:
+        _refuse(name, rule, value)
+    return metres
 
 
 def check_min_transversal(value: object, name: str = "min_transversal") -> float:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from sonarcarve.grids.cells import GridError, check_probability, check_real
 from sonarcarve.grids.elfes import ROS_FADE_RANGE
-from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE, MAX_RANGE_TOLERANCE
 
 __all__ = [
     "DEFAULT_FREE_THRESHOLD",
@@ -265,7 +265,8 @@ class CarvedGridParams:
         check_probability(_LABEL, "occupied_threshold", self.occupied_threshold, 0.0, 1.0)
         check_probability(_LABEL, "free_threshold", self.free_threshold, 0.0,
                           self.occupied_threshold)
-        real("range_tolerance", _finite_at_least_zero, "a finite number >= 0 metres")
+        real("range_tolerance", lambda v: 0.0 <= v <= MAX_RANGE_TOLERANCE,
+             f"a number in [0, {MAX_RANGE_TOLERANCE:g}] metres")
         real("spread_length", _finite_at_least_zero, "a finite number >= 0 metres")
         real("fade_range", lambda v: v > 0.0, "> 0 (inf: none) metres")
         check_probability(_LABEL, "p_miss_heard", self.p_miss_heard, 0.0, 0.5)
@@ -282,6 +283,12 @@ class CarvedGridParams:
         real("side_lobe_range", lambda v: v >= 0.0, "a number >= 0 metres (inf: every range)")
         real("band_profile", _finite_at_least_zero, "a finite number >= 0")
         real("pose_sigma", _finite_at_least_zero, "a finite number >= 0 metres")
+        carving_tolerance = self.range_tolerance + POSE_MARGIN_SIGMAS * self.pose_sigma
+        if carving_tolerance > MAX_RANGE_TOLERANCE:  # the default method's ε would refuse it
+            msg = (f"{_LABEL}: range_tolerance + {POSE_MARGIN_SIGMAS:g} pose_sigma (the ε it "
+                   f"carves with) must be at most {MAX_RANGE_TOLERANCE:g} metres, got "
+                   f"{carving_tolerance:g}")
+            raise GridError(msg)
 
 
 def _finite_at_least_zero(value: float) -> bool:
