@@ -35,6 +35,7 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
   whether the sensor heard the point again as it drove at it: a repeat,
   :mod:`~sonarcarve.geometry.repeats`; how far the echo lies behind surfaces the arcs after it
   confirm, judged as it leaves the history, :mod:`~sonarcarve.geometry.evidence.behind`;
+  whether no other sensor's beam ever held it, :mod:`~sonarcarve.geometry.evidence.watch`;
   :class:`ConfidenceModel`), its weights fitted on the
   simulator's truth of one world (``benchmarks/fit_confidence.py``); points below
   ``min_confidence`` are left out of the maps (the default map), so "removed" means: not in
@@ -255,7 +256,7 @@ class EvidenceOptions:
 #: (``behind`` is 0 until the arc leaves the history).
 CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
                        "occluded", "unheard", "range", "width", "others", "through",
-                       "repeated", "behind")
+                       "repeated", "behind", "alone")
 
 
 @dataclass(frozen=True)
@@ -281,8 +282,17 @@ class ConfidenceModel:
     echoes almost never do: ``benchmarks/repeat_echoes.py``) and ``behind`` (metres, capped
     at 3: ``r - d``, ``d`` the distance from the arc's origin to the nearest axis point inside
     its beam nearer than ``r - 2ε`` among the 64 arcs after it that are alive and heard from
-    distinct viewpoints; 0 if none; :mod:`~sonarcarve.geometry.evidence.behind`). Paper,
-    section 6: certainty values per point.
+    distinct viewpoints; 0 if none; :mod:`~sonarcarve.geometry.evidence.behind`) and
+    ``alone`` (1 if no other sensor's beam held the arc's axis point, at any angle and range,
+    in the history: :mod:`~sonarcarve.geometry.evidence.watch`, "Covered"). Paper, section 6:
+    certainty values per point.
+
+    ``alone`` says where ``others`` could not have confirmed the arc: a ring whose beams do not
+    overlap (15° beams 22.5° apart) leaves a wall one sensor faces to that sensor, and the
+    fitted ``others`` (3.3) then reads a wall as a phantom. Only its weight was fitted
+    (``benchmarks/fit_confidence.py --only alone``, the other weights held): 0.674, on the
+    training runs where 2-3 % of the arcs are alone, which cancels a fifth of the missing
+    ``others``. Measured in ``docs/RESULTS.md`` ("The ``others`` feature on other rings").
 
     ``behind`` is judged only when the arc leaves the history, so it is 0 for every arc in the
     history, and for the arcs still there when a log ends (committed unjudged): the live map
@@ -359,6 +369,9 @@ class ConfidenceModel:
     # Fitted alone, the weights above held (``benchmarks/fit_confidence.py --only behind``),
     # same runs: a metre of depth behind confirmed surfaces.
     behind: float = -0.406
+    # Fitted alone, the weights above held (``benchmarks/fit_confidence.py --only alone``), same
+    # runs: no other sensor's beam held the arc's axis point.
+    alone: float = 0.674
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
     unwatched_prior: bool = True  # see "Watched" above; False: every arc matures with age
@@ -446,7 +459,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
                    others: FloatArray, through: FloatArray, repeated: FloatArray,
-                   behind: FloatArray, threshold: float) -> None:
+                   behind: FloatArray, covered: BoolArray, threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -468,6 +481,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 11] = _at_most(through[s], 3.0)
         out[q, 12] = repeated[s]
         out[q, 13] = _at_most(behind[s], 3.0)  # metres; 0 while the arc is in the history
+        out[q, 14] = 0.0 if covered[s] else 1.0  # alone: no other sensor's beam held it
 
 
 #: Older arcs whose bins to weigh the weighing kernel gathers before it weighs them at once
@@ -585,6 +599,8 @@ class EvidenceModel(ArcModel):
         self.repeated = np.zeros(size)
         # Whether a distinct reading looked squarely at the arc (geometry/evidence/watch.py).
         self.watched = np.zeros(size, dtype=bool)
+        # Whether another sensor's beam held the arc's axis point (geometry/evidence/watch.py).
+        self.covered = np.zeros(size, dtype=bool)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -667,8 +683,8 @@ class EvidenceModel(ArcModel):
         from the two readings alone: the same flags whatever the blocks."""
         h = self.history
         mark_watch(first, count, h.capacity, h.x, h.y, h.r, self.cos_axis, self.sin_axis,
-                   self.cos_half, h.sensor, self.watched, self.params.viewpoint_spacing,
-                   self.params.incidence_zero)
+                   self.cos_half, h.sensor, self.watched, self.covered,
+                   self.params.viewpoint_spacing, self.params.incidence_zero)
 
     def mark_repeats(self, first: int, count: int) -> int:
         """Mark the repeats (:func:`~sonarcarve.geometry.repeats.mark_repeats`, ε the range
@@ -717,7 +733,8 @@ class EvidenceModel(ArcModel):
         mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
                                 reading.x, reading.y, reading.theta, beam_width,
                                 reading.max_range, reading.sensor, self.watched,
-                                self.params.viewpoint_spacing, self.params.incidence_zero)
+                                self.covered, self.params.viewpoint_spacing,
+                                self.params.incidence_zero)
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
@@ -840,7 +857,7 @@ class EvidenceMethod(SonarMethod):
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
-                       model.threshold)
+                       model.covered, model.threshold)
         return out
 
     def maturity(self, slots: SlotArray,
