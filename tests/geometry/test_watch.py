@@ -38,21 +38,21 @@ def _flags(rows: list[Row], capacity: int, angle_deg: float,
     sensor = np.full(storage, -1, dtype=np.int64)
     # Stale: every new arc must reset its own flags.
     watched = np.ones(storage, dtype=bool)
-    covered = np.ones(storage, dtype=bool)
+    covering = np.full(storage, 7.0)
     flags: dict[int, tuple[bool, bool]] = {}
     first = 0
     for count in (n,) if blocks is None else blocks:
         for s in range(first, first + count):
             j = s % storage
             if s >= storage:  # the arc this row held is gone: read its flags first
-                flags[s - storage] = (bool(watched[j]), bool(covered[j]))
+                flags[s - storage] = (bool(watched[j]), float(covering[j]))
             x[j], y[j], r[j], theta[j], width[j], sensor[j] = rows[s]
         mark_watch(first, count, capacity, x, y, r, np.cos(theta), np.sin(theta),
-                   np.cos(0.5 * width), sensor, watched, covered, SPACING,
+                   np.cos(0.5 * width), sensor, watched, covering, SPACING,
                    math.radians(angle_deg))
         first += count
     for s in range(max(0, n - storage), n):
-        flags[s] = (bool(watched[s % storage]), bool(covered[s % storage]))
+        flags[s] = (bool(watched[s % storage]), float(covering[s % storage]))
     return (np.array([flags[s][0] for s in range(n)]),
             np.array([flags[s][1] for s in range(n)]))
 
@@ -65,7 +65,7 @@ def _watched(rows: list[Row], capacity: int, angle_deg: float,
 
 def _covered(rows: list[Row], capacity: int, blocks: tuple[int, ...] | None = None,
              storage: int | None = None) -> np.ndarray:
-    """``covered`` of each arc (:func:`_flags`; it does not depend on the look angle)."""
+    """``covering`` of each arc (:func:`_flags`; it does not depend on the look angle)."""
     return _flags(rows, capacity, 30.0, blocks, storage)[1]
 
 
@@ -272,24 +272,28 @@ def test_only_another_sensor_covers() -> None:
     assert _watched(rows, 2, 30.0).tolist() == [True, True]
     assert _covered(rows, 2).tolist() == [False, False]
     rows[1] = (1.0, 0.0, 2.0, math.pi / 2, beam, 1)
-    assert _covered(rows, 2).tolist() == [True, True]
+    assert _covered(rows, 2).tolist() == [1.0, 1.0]
+    # A third reading, of sensor 2, between them: each arc covered by both others' beams.
+    rows.append((0.5, 0.0, 2.0, math.pi / 2, beam, 2))
+    assert _covered(rows, 3).tolist() == [2.0, 2.0, 2.0]
+    assert _covered(rows, 2).tolist() == [1.0, 2.0, 1.0]  # arcs 0 and 2 too far apart
 
 
 def _covered_reference(rows: list[Row], capacity: int) -> np.ndarray:
-    """The module's definition of ``covered``, pair by pair, with atan2."""
+    """The module's definition of ``covering``, pair by pair, with atan2."""
     def holds(at: Row, by: Row) -> bool:
         px = at[0] + at[2] * math.cos(at[3])
         py = at[1] + at[2] * math.sin(at[3])
         off = math.atan2(py - by[1], px - by[0]) - by[3]
         return abs((off + math.pi) % (2 * math.pi) - math.pi) <= by[4] / 2
 
-    out = np.zeros(len(rows), dtype=bool)
+    out = np.zeros(len(rows))
     for j, b in enumerate(rows):
         for i in range(max(0, j - capacity + 1), j):
             a = rows[i]
             if a[5] != b[5]:
-                out[i] |= holds(a, b)
-                out[j] |= holds(b, a)
+                out[i] += holds(a, b)
+                out[j] += holds(b, a)
     return out
 
 
@@ -302,7 +306,8 @@ def test_random_rings_cover_as_the_reference_whatever_the_blocks(seed: int) -> N
                         float(rng.uniform(0.2, 1.5)), int(rng.integers(0, 3)))
                        for _ in range(n)]
     expected = _covered_reference(rows, capacity=8)
-    assert 5 < expected.sum() < n - 3  # covered and lone arcs
+    assert 5 < np.count_nonzero(expected) < n - 3  # covered and lone arcs
+    assert expected.max() > 1.0  # some covered more than once
     np.testing.assert_array_equal(_covered(rows, 8), expected)
     blocks = (5, 1, 8, 3, 8, 8, 7, 8, 4, 8)
     np.testing.assert_array_equal(_covered(rows, 8, blocks=blocks, storage=16), expected)

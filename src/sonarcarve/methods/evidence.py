@@ -459,7 +459,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
                    others: FloatArray, through: FloatArray, repeated: FloatArray,
-                   behind: FloatArray, covered: BoolArray, threshold: float) -> None:
+                   behind: FloatArray, covering: FloatArray, threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -481,7 +481,7 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 11] = _at_most(through[s], 3.0)
         out[q, 12] = repeated[s]
         out[q, 13] = _at_most(behind[s], 3.0)  # metres; 0 while the arc is in the history
-        out[q, 14] = 0.0 if covered[s] else 1.0  # alone: no other sensor's beam held it
+        out[q, 14] = 1.0 if covering[s] == 0.0 else 0.0  # alone: no other sensor's beam held it
 
 
 #: Older arcs whose bins to weigh the weighing kernel gathers before it weighs them at once
@@ -599,8 +599,9 @@ class EvidenceModel(ArcModel):
         self.repeated = np.zeros(size)
         # Whether a distinct reading looked squarely at the arc (geometry/evidence/watch.py).
         self.watched = np.zeros(size, dtype=bool)
-        # Whether another sensor's beam held the arc's axis point (geometry/evidence/watch.py).
-        self.covered = np.zeros(size, dtype=bool)
+        # How many readings of other sensors held the arc's axis point in their beams
+        # (geometry/evidence/watch.py).
+        self.covering = np.zeros(size)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -683,7 +684,7 @@ class EvidenceModel(ArcModel):
         from the two readings alone: the same flags whatever the blocks."""
         h = self.history
         mark_watch(first, count, h.capacity, h.x, h.y, h.r, self.cos_axis, self.sin_axis,
-                   self.cos_half, h.sensor, self.watched, self.covered,
+                   self.cos_half, h.sensor, self.watched, self.covering,
                    self.params.viewpoint_spacing, self.params.incidence_zero)
 
     def mark_repeats(self, first: int, count: int) -> int:
@@ -733,7 +734,7 @@ class EvidenceModel(ArcModel):
         mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
                                 reading.x, reading.y, reading.theta, beam_width,
                                 reading.max_range, reading.sensor, self.watched,
-                                self.covered, self.params.viewpoint_spacing,
+                                self.covering, self.params.viewpoint_spacing,
                                 self.params.incidence_zero)
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
@@ -857,7 +858,7 @@ class EvidenceMethod(SonarMethod):
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
-                       model.covered, model.threshold)
+                       model.covering, model.threshold)
         return out
 
     def maturity(self, slots: SlotArray,

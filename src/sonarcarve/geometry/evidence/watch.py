@@ -35,9 +35,9 @@ directions: each may watch the other), so the values do not depend on how readin
 What is exact: the cone and angle tests on the readings' own numbers, on the axis point (not
 the kept run's point, which moves as carving goes on).
 
-Covered by another sensor (``covered``, the confidence's ``alone`` feature): the same pairs also
-mark whether *another sensor's* beam ever held an arc's axis point, at any angle and any range
-(its echo nearer, farther or none: :func:`mark_watched_by_silence` marks it too). The support of
+Covered by another sensor (``covering``, the confidence's ``alone`` feature): the same pairs also
+count the readings of *another sensor* whose beam held an arc's axis point, at any angle and any
+range (its echo nearer, farther or none: :func:`mark_watched_by_silence` counts it too). The support of
 other sensors (``others``, the confidence's heaviest weight) can only come from such a beam: on a
 ring whose beams do not overlap (15° beams 22.5° apart) a wall one sensor faces is covered by no
 other, and the fitted model would read the missing support as a phantom's
@@ -86,12 +86,12 @@ def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArra
                 xj: float, yj: float, rj: float, cj: float, sj: float, cos_half_j: float,
                 sensor_j: int, spacing2: float, cos_look2: float,
                 watched: npt.NDArray[np.bool_],
-                covered: npt.NDArray[np.bool_]) -> tuple[int, int]:
+                covering: FloatArray) -> tuple[int, int]:
     """For the rows of the arrays (slices of the history's rows) against the reading ``j``
     (origin ``(xj, yj)``, range ``rj``, axis ``(cj, sj)``, half-width of cosine
     ``cos_half_j``): set ``watched[i]`` where ``j`` looked squarely at row ``i``'s axis point
-    (:func:`looks_squarely`, the two distinct) and ``covered[i]`` where ``j`` is another
-    sensor's and its beam holds that point (:func:`holds`); return how many rows looked
+    (:func:`looks_squarely`, the two distinct) and add 1 to ``covering[i]`` where ``j`` is
+    another sensor's and its beam holds that point (:func:`holds`); return how many rows looked
     squarely at ``j``'s axis point and how many rows of other sensors hold it in their beams.
     No branch and indices from 0: the compiler runs it on several rows at once."""
     pxj = xj + rj * cj
@@ -112,7 +112,7 @@ def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArra
         v2 = vx * vx + vy * vy
         watched[i] |= distinct & looks_squarely(vx, vy, v2, cj, sj, cos_half_j2, ci, si,
                                                 cos_look2)
-        covered[i] |= other & holds(vx, vy, v2, cj, sj, cos_half_j2)
+        covering[i] += 1.0 * (other & holds(vx, vy, v2, cj, sj, cos_half_j2))
         # i looks at j's point: w = p_j - o_i, against i's axis and j's.
         wx = pxj - x[i]
         wy = pyj - y[i]
@@ -128,16 +128,16 @@ def watch_pairs(x: FloatArray, y: FloatArray, r: FloatArray, cos_axis: FloatArra
 def mark_watch(first: int, count: int, capacity: int, x: FloatArray, y: FloatArray,
                r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
                sensor: npt.NDArray[np.int64], watched: npt.NDArray[np.bool_],
-               covered: npt.NDArray[np.bool_], spacing: float, look_angle: float) -> None:
+               covering: FloatArray, spacing: float, look_angle: float) -> None:
     """Mark ``watched`` for the arcs of sequence numbers ``first .. first + count - 1`` of a
     history ring (``n`` rows, arc ``s`` in row ``s % n``; ``cos_axis``, ``sin_axis`` and
     ``cos_half`` the cosine and sine of each row's axis and the cosine of its half-width,
     already set), in order: each new arc's flag is reset, then each pair of it and one of the
     ``capacity - 1`` arcs before it (those still in the history) that are distinct (another
     sensor, or origins at least ``spacing`` metres apart) marks each one the other looked at
-    squarely, within ``look_angle`` radians (< π/2) of its axis, and ``covered`` for each one
-    another sensor's beam held the axis point of (:func:`watch_pairs`; each new arc's flag reset
-    too). The block's rows and the up to ``capacity - 1`` before it must all be in the ring (as for
+    squarely, within ``look_angle`` radians (< π/2) of its axis, and counts in ``covering`` the
+    readings of another sensor whose beam held each one's axis point (:func:`watch_pairs`; each
+    new arc's count set from the older arcs). The block's rows and the up to ``capacity - 1`` before it must all be in the ring (as for
     :func:`~sonarcarve.geometry.repeats.mark_repeats`)."""
     storage = x.shape[0]
     spacing2 = spacing * spacing
@@ -154,11 +154,11 @@ def mark_watch(first: int, count: int, capacity: int, x: FloatArray, y: FloatArr
             pair_looked, pair_held = watch_pairs(
                 x[lo:hi], y[lo:hi], r[lo:hi], cos_axis[lo:hi], sin_axis[lo:hi],
                 cos_half[lo:hi], sensor[lo:hi], x[j], y[j], r[j], cos_axis[j], sin_axis[j],
-                cos_half[j], sensor[j], spacing2, cos_look2, watched[lo:hi], covered[lo:hi])
+                cos_half[j], sensor[j], spacing2, cos_look2, watched[lo:hi], covering[lo:hi])
             looked += pair_looked
             held += pair_held
         watched[j] = looked > 0
-        covered[j] = held > 0
+        covering[j] = held
 
 
 @compiled
@@ -166,13 +166,13 @@ def mark_watched_by_silence(slots: npt.NDArray[np.int64], x: FloatArray, y: Floa
                             r: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray,
                             sensor: npt.NDArray[np.int64], xj: float, yj: float, theta_j: float,
                             beam_width_j: float, max_range_j: float, sensor_j: int,
-                            watched: npt.NDArray[np.bool_], covered: npt.NDArray[np.bool_],
+                            watched: npt.NDArray[np.bool_], covering: FloatArray,
                             spacing: float, look_angle: float) -> None:
     """Mark ``watched`` for the history rows ``slots`` whose axis point a no-echo reading
     (origin ``(xj, yj)``, axis ``theta_j``, beam ``beam_width_j``, of sensor ``sensor_j``)
     looked at squarely (:func:`looks_squarely`) within its ``max_range_j`` (not finite: no
-    bound), when the two are distinct; and ``covered`` for those whose axis point its beam
-    held within that range (:func:`holds`) when it is another sensor's."""
+    bound), when the two are distinct; and add 1 to ``covering`` of those whose axis point its
+    beam held within that range (:func:`holds`) when it is another sensor's."""
     cj = math.cos(theta_j)
     sj = math.sin(theta_j)
     cos_half_j = math.cos(0.5 * beam_width_j)
@@ -197,4 +197,4 @@ def mark_watched_by_silence(slots: npt.NDArray[np.int64], x: FloatArray, y: Floa
                           cos_look2):
             watched[i] = True
         if other and holds(vx, vy, v2, cj, sj, cos_half_j2):
-            covered[i] = True
+            covering[i] += 1.0
