@@ -614,7 +614,9 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
         np.minimum(model.looked[slots] / model.threshold, 3.0),
         np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
         (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
-        np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0),
+        np.minimum(model.others[slots] / np.maximum(
+            model.covering[slots] / method.confidence_model.looks_per_support, 1.0), 1.0),
+        np.minimum(model.through[slots], 3.0),
         model.repeated[slots], np.minimum(model.behind[slots], 3.0),
         np.where(model.covering[slots] > 0.0, 0.0, 1.0)])
     features = method.features(slots, raw)

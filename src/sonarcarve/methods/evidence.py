@@ -373,6 +373,9 @@ class ConfidenceModel:
     # runs: no other sensor's beam held the arc's axis point.
     alone: float = 0.674
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
+    # Looks by other sensors one unit of their support answers for (``others`` above): chosen
+    # on the development targets, not fitted; inf: the feature before it.
+    looks_per_support: float = 16.0
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
     unwatched_prior: bool = True  # see "Watched" above; False: every arc matures with age
 
@@ -382,6 +385,7 @@ class ConfidenceModel:
         finite: _Rule = (math.isfinite, "be finite")
         rules = dict.fromkeys(("intercept", *CONFIDENCE_FEATURES, "fresh"), finite)
         rules["maturity_time"] = (lambda v: 0.0 < v < math.inf, "be finite and > 0 seconds")
+        rules["looks_per_support"] = (lambda v: v > 0.0, "be > 0 (inf: support not normalised)")
         _check_fields(self, rules)
         if not isinstance(self.unwatched_prior, bool):  # a JSON "false" would read as on
             msg = f"unwatched_prior must be True or False, got {self.unwatched_prior!r}"
@@ -459,7 +463,8 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
                    others: FloatArray, through: FloatArray, repeated: FloatArray,
-                   behind: FloatArray, covering: FloatArray, threshold: float) -> None:
+                   behind: FloatArray, covering: FloatArray, looks_per_support: float,
+                   threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -477,7 +482,9 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 7] = (1.0 if support[q] <= 0.0 else 0.0) * maturity[q]  # unheard
         out[q, 8] = r[s]
         out[q, 9] = width[q] / beam_width[s]
-        out[q, 10] = _at_most(others[s], 1.0)
+        # Support from other sensors per looks_per_support of their looks (at least 1).
+        looks = covering[s] / looks_per_support
+        out[q, 10] = _at_most(others[s] / (looks if looks > 1.0 else 1.0), 1.0)
         out[q, 11] = _at_most(through[s], 3.0)
         out[q, 12] = repeated[s]
         out[q, 13] = _at_most(behind[s], 3.0)  # metres; 0 while the arc is in the history
@@ -858,7 +865,8 @@ class EvidenceMethod(SonarMethod):
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
-                       model.covering, model.threshold)
+                       model.covering, self.confidence_model.looks_per_support,
+                       model.threshold)
         return out
 
     def maturity(self, slots: SlotArray,
