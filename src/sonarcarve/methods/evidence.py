@@ -272,8 +272,9 @@ class ConfidenceModel:
     capped at 3), ``split`` (surviving runs - 1, capped at 3), ``occluded`` (share of the beam
     carved by occlusion), ``unheard`` (never supported, times the maturity), ``range``
     (metres), ``width`` (kept run over the full beam), ``others`` (support from other
-    sensors, capped at 1: a sensor's own repeated echoes can repeat one systematic error, so
-    they confirm less than another transducer does), ``through`` (support of the surface
+    sensors per ``looks_per_support`` of their looks, capped at 1: a sensor's own repeated
+    echoes can repeat one systematic error, so they confirm less than another transducer does;
+    see "Other rings" below), ``through`` (support of the surface
     the echo's beam passed on its way, capped at 3: multipath echoes read from behind walls)
     and ``repeated`` (1 if another echo of the arc's sensor in the history is a *repeat* of it,
     :mod:`sonarcarve.geometry.repeats`: internally tangent circles, the touch point inside
@@ -287,12 +288,23 @@ class ConfidenceModel:
     in the history: :mod:`~sonarcarve.geometry.evidence.watch`, "Covered"). Paper, section 6:
     certainty values per point.
 
-    ``alone`` says where ``others`` could not have confirmed the arc: a ring whose beams do not
-    overlap (15° beams 22.5° apart) leaves a wall one sensor faces to that sensor, and the
-    fitted ``others`` (3.3) then reads a wall as a phantom. Only its weight was fitted
-    (``benchmarks/fit_confidence.py --only alone``, the other weights held): 0.674, on the
-    training runs where 2-3 % of the arcs are alone, which cancels a fifth of the missing
-    ``others``. Measured in ``docs/RESULTS.md`` ("The ``others`` feature on other rings").
+    Other rings: ``others`` was fitted on a ring whose beams just meet; it fails both ways on
+    others (``docs/RESULTS.md``, "The ``others`` feature on other rings", where both fixes
+    below are measured). Where beams do not overlap (15° beams 22.5° apart) a wall one sensor
+    faces gets no support from another, and the fitted weight (3.3) reads it as a phantom:
+    ``alone`` says that no other sensor's beam held the arc at all. Only its weight was fitted
+    (``benchmarks/fit_confidence.py --only alone``, the other weights held, with
+    ``looks_per_support`` inf): 0.674, a fifth of the missing ``others``. Where beams overlap
+    (45° beams 22.5° apart) a neighbour's echo circle crosses a phantom inside the shared part
+    of the beams and "confirms" it. ``looks_per_support`` ``k`` counts the support per ``k``
+    looks of other sensors (``covering``: readings of another sensor whose beam held the arc's
+    axis point, at any range), ``min(others / max(covering / k, 1), 1)``; the default, inf,
+    leaves ``others`` as fitted. ``k`` = 16 (the smallest of 4, 8, 12, 16, 24 and 32 costing at
+    most 0.5 points of direct echoes on each development world and physics; no fit: refitting
+    ``others`` with it gives a worse log-loss on the training runs at every value tried)
+    removes 6 more points of the 45° amplitude ring's spurious echoes, but costs the car
+    park's amplitude sonars 4-6 points of direct echoes and the Pioneer's front ring 1-2: not
+    kept.
 
     ``behind`` is judged only when the arc leaves the history, so it is 0 for every arc in the
     history, and for the arcs still there when a log ends (committed unjudged): the live map
@@ -373,9 +385,9 @@ class ConfidenceModel:
     # runs: no other sensor's beam held the arc's axis point.
     alone: float = 0.674
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
-    # Looks by other sensors one unit of their support answers for (``others`` above): chosen
-    # on the development targets, not fitted; inf: the feature before it.
-    looks_per_support: float = 16.0
+    # Looks by other sensors one unit of their support answers for (``others`` above); inf (the
+    # default): not normalised. 16 was measured and not kept ("Other rings" above).
+    looks_per_support: float = math.inf
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
     unwatched_prior: bool = True  # see "Watched" above; False: every arc matures with age
 
