@@ -35,13 +35,14 @@ directions: each may watch the other), so the values do not depend on how readin
 What is exact: the cone and angle tests on the readings' own numbers, on the axis point (not
 the kept run's point, which moves as carving goes on).
 
-Covered by another sensor (``covering``, the confidence's ``alone`` feature): the same pairs also
-count the readings of *another sensor* whose beam held an arc's axis point, at any angle and any
-range (its echo nearer, farther or none: :func:`mark_watched_by_silence` counts it too). The support of
-other sensors (``others``, the confidence's heaviest weight) can only come from such a beam: on a
-ring whose beams do not overlap (15° beams 22.5° apart) a wall one sensor faces is covered by no
-other, and the fitted model would read the missing support as a phantom's
-(``docs/RESULTS.md``, "The ``others`` feature on other rings").
+Covered by another sensor (``covering``, the confidence's ``alone`` feature): the same pairs
+also count the readings of *another sensor* whose beam held an arc's axis point, at any angle
+and any range (its echo nearer, farther or none: :func:`mark_watched_by_silence` counts it too;
+each pair once, both ways). The support of other sensors (``others``, the confidence's heaviest
+weight) comes from such beams: on a ring whose beams do not overlap (15° beams 22.5° apart) a
+wall one sensor faces is covered by no other, and the fitted model would read the missing
+support as a phantom's (``docs/RESULTS.md``, "The ``others`` feature on other rings"). The axis
+point stands for the arc: support can still reach an arc whose axis point no other beam held.
 """
 
 from __future__ import annotations
@@ -137,7 +138,8 @@ def mark_watch(first: int, count: int, capacity: int, x: FloatArray, y: FloatArr
     sensor, or origins at least ``spacing`` metres apart) marks each one the other looked at
     squarely, within ``look_angle`` radians (< π/2) of its axis, and counts in ``covering`` the
     readings of another sensor whose beam held each one's axis point (:func:`watch_pairs`; each
-    new arc's count set from the older arcs). The block's rows and the up to ``capacity - 1`` before it must all be in the ring (as for
+    new arc's count set from the older arcs). The block's rows and the up to ``capacity - 1``
+    before it must all be in the ring (as for
     :func:`~sonarcarve.geometry.repeats.mark_repeats`)."""
     storage = x.shape[0]
     spacing2 = spacing * spacing
