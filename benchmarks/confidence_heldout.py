@@ -61,15 +61,18 @@ DEVELOPMENT_PHYSICS = ("specular", "amplitude")
 DEVELOPMENT_SEEDS = 3
 KINDS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
 #: Printed by ``benchmarks/fit_confidence.py --worlds office random:4 ... random:11 --seeds 3``
-#: (``--physics specular amplitude`` for the second): floors that are not heldout.py's.
+#: (``--physics specular amplitude`` for the second): floors that are not heldout.py's. Fitted
+#: before ``alone`` and ``looks_per_support`` (2026-12-04): without them.
 _FLOORS = ConfidenceModel(
     intercept=-2.656, fresh=2.477, maturity_time=2.0, support=0.227, viewpoints=0.753,
     crossings=0.619, free=-0.319, looked=0.214, split=-0.618, occluded=-0.584, unheard=-0.171,
-    range=-0.136, width=0.498, others=3.104, through=0.271, repeated=1.355, behind=0.0)
+    range=-0.136, width=0.498, others=3.104, through=0.271, repeated=1.355, behind=0.0,
+    alone=0.0, looks_per_support=math.inf)
 _FLOORS_BOTH = ConfidenceModel(
     intercept=0.065, fresh=3.116, maturity_time=2.0, support=0.448, viewpoints=0.554,
     crossings=0.729, free=-0.254, looked=-0.096, split=-0.726, occluded=-0.768, unheard=0.031,
-    range=-0.385, width=0.116, others=2.350, through=0.314, repeated=0.915, behind=0.0)
+    range=-0.385, width=0.116, others=2.350, through=0.314, repeated=0.915, behind=0.0,
+    alone=0.0, looks_per_support=math.inf)
 #: The library's default before the ``behind`` feature: only that weight was fitted, the
 #: others held, so it is the default with ``behind`` 0 (the same run then measures the change).
 WITHOUT_BEHIND = replace(ConfidenceModel(), behind=0.0)

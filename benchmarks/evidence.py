@@ -98,7 +98,8 @@ def _all_with(confidence_model: ConfidenceModel | None = None, **options: Any) -
 WITHOUT_REPEATS = ConfidenceModel(
     intercept=-3.645, support=0.277, viewpoints=0.942, crossings=0.668, free=-0.368,
     looked=0.290, split=-0.555, occluded=-0.471, unheard=-0.013, range=-0.063, width=0.549,
-    others=3.386, through=0.285, repeated=0.0, behind=0.0, fresh=2.453, maturity_time=2.0)
+    others=3.386, through=0.285, repeated=0.0, behind=0.0, fresh=2.453, maturity_time=2.0,
+    alone=0.0, looks_per_support=math.inf)  # fitted before alone and the normalisation
 
 
 VARIANTS: dict[str, Factory] = {

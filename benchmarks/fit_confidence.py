@@ -5,6 +5,7 @@ Run from the repository root::
     .venv/bin/python benchmarks/fit_confidence.py
     nice .venv/bin/python benchmarks/fit_confidence.py --worlds office random:4 random:5 --seeds 2
     nice .venv/bin/python benchmarks/fit_confidence.py --only behind
+    nice .venv/bin/python benchmarks/fit_confidence.py --only alone --check
 
 Training data: the runs of every ``--worlds`` world under every ``--physics`` physics (default:
 ONE world and physics, the office tour under the specular physics, seeds 0-2; the arcs of
@@ -32,7 +33,9 @@ printed for it and for 0.5 (the library default: the decision of a calibrated pr
 ``--only NAME ...`` fits only those features' weights (:func:`fit_only`): the intercept, the
 other weights, ``fresh`` and the maturity time stay the library default's. A new feature that
 is 0 wherever the live map reads it (``behind``: judged only when the arc leaves the history)
-then leaves that map as it was, bit for bit.
+then leaves that map as it was, bit for bit. ``alone`` (no other sensor's beam held the arc)
+was fitted the same way, the library's other weights held: it is 1 for a few arcs of the
+training ring, whose beams overlap, and says where ``others`` could not have confirmed an arc.
 
 ``--carve-probability P`` fits the confidence of evidence carving run with that P_carve (its
 features change with it: ``free`` and ``looked`` are in units of the threshold, and what

@@ -13,38 +13,60 @@ import numpy as np
 import pytest
 
 from sonarcarve.geometry.evidence import mark_watch
-from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, SensorModel
+from sonarcarve.methods.evidence import (
+    CONFIDENCE_FEATURES,
+    ConfidenceModel,
+    EvidenceMethod,
+    SensorModel,
+)
 from sonarcarve.readings import ReadingBatch
 
 SPACING = 0.25
 Row = tuple[float, float, float, float, float, int]  # x, y, r, theta, beam width, sensor
 
 
-def _watched(rows: list[Row], capacity: int, angle_deg: float,
-             blocks: tuple[int, ...] | None = None, storage: int | None = None) -> np.ndarray:
-    """``watched`` of each arc (looks within ``angle_deg``) once every row is stored and
-    marked, block by block (one block by default), in a ring of ``storage`` rows (twice the
-    rows by default: nothing overwritten), each read just before its row is reused or at the
-    end."""
+def _flags(rows: list[Row], capacity: int, angle_deg: float,
+           blocks: tuple[int, ...] | None = None,
+           storage: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``watched`` (looks within ``angle_deg``) and ``covered`` of each arc once every row is
+    stored and marked, block by block (one block by default), in a ring of ``storage`` rows
+    (twice the rows by default: nothing overwritten), each read just before its row is reused
+    or at the end."""
     n = len(rows)
     storage = 2 * n if storage is None else storage
     x, y, r, theta, width = (np.zeros(storage) for _ in range(5))
     sensor = np.full(storage, -1, dtype=np.int64)
-    watched = np.ones(storage, dtype=bool)  # stale: every new arc must reset its own flag
-    flags: dict[int, bool] = {}
+    # Stale: every new arc must reset its own flags.
+    watched = np.ones(storage, dtype=bool)
+    covering = np.full(storage, 7.0)
+    flags: dict[int, tuple[bool, bool]] = {}
     first = 0
     for count in (n,) if blocks is None else blocks:
         for s in range(first, first + count):
             j = s % storage
-            if s >= storage:  # the arc this row held is gone: read its flag first
-                flags[s - storage] = bool(watched[j])
+            if s >= storage:  # the arc this row held is gone: read its flags first
+                flags[s - storage] = (bool(watched[j]), float(covering[j]))
             x[j], y[j], r[j], theta[j], width[j], sensor[j] = rows[s]
         mark_watch(first, count, capacity, x, y, r, np.cos(theta), np.sin(theta),
-                   np.cos(0.5 * width), sensor, watched, SPACING, math.radians(angle_deg))
+                   np.cos(0.5 * width), sensor, watched, covering, SPACING,
+                   math.radians(angle_deg))
         first += count
     for s in range(max(0, n - storage), n):
-        flags[s] = bool(watched[s % storage])
-    return np.array([flags[s] for s in range(n)])
+        flags[s] = (bool(watched[s % storage]), float(covering[s % storage]))
+    return (np.array([flags[s][0] for s in range(n)]),
+            np.array([flags[s][1] for s in range(n)]))
+
+
+def _watched(rows: list[Row], capacity: int, angle_deg: float,
+             blocks: tuple[int, ...] | None = None, storage: int | None = None) -> np.ndarray:
+    """``watched`` of each arc (:func:`_flags`)."""
+    return _flags(rows, capacity, angle_deg, blocks, storage)[0]
+
+
+def _covered(rows: list[Row], capacity: int, blocks: tuple[int, ...] | None = None,
+             storage: int | None = None) -> np.ndarray:
+    """``covering`` of each arc (:func:`_flags`; it does not depend on the look angle)."""
+    return _flags(rows, capacity, 30.0, blocks, storage)[1]
 
 
 def test_a_neighbour_looking_from_the_same_place_watches_squarely() -> None:
@@ -223,3 +245,106 @@ def test_a_silent_look_watches_within_its_range() -> None:
 
     assert not np.allclose(with_silence(5.0)[:10], prior)
     np.testing.assert_allclose(with_silence(1.0), prior)  # 1.118 m is beyond its reach
+
+
+def test_another_sensors_beam_covers_at_any_angle_and_range() -> None:
+    # Two sensors at the origin, axes 0° and 20°; arc 0 hears 2 m along 0°, arc 1 0.5 m along
+    # 20°. Arc 0's axis point (2, 0) is 20° off sensor 1's axis: inside a 45° beam (22.5°
+    # half), beyond arc 1's own range (0.5 m: a covering beam's echo may be nearer); outside a
+    # 30° beam (15° half). Arc 1's point is 20° off arc 0's axis likewise.
+    wide, narrow = math.radians(45.0), math.radians(30.0)
+    rows: list[Row] = [(0.0, 0.0, 2.0, 0.0, wide, 0),
+                       (0.0, 0.0, 0.5, math.radians(20.0), wide, 1)]
+    assert _covered(rows, 2).tolist() == [True, True]
+    rows = [(0.0, 0.0, 2.0, 0.0, narrow, 0), (0.0, 0.0, 0.5, math.radians(20.0), narrow, 1)]
+    assert _covered(rows, 2).tolist() == [False, False]
+    # One beam wide, one narrow: only the wide one covers the other's point.
+    rows = [(0.0, 0.0, 2.0, 0.0, narrow, 0), (0.0, 0.0, 0.5, math.radians(20.0), wide, 1)]
+    assert _covered(rows, 2).tolist() == [True, False]
+
+
+def test_only_another_sensor_covers() -> None:
+    # The same sensor 1 m further on, facing the same way with a 90° beam, holds the point in
+    # its beam and looks at it squarely (watched), but covers nothing: it is the same sensor.
+    beam = math.radians(90.0)
+    rows: list[Row] = [(0.0, 0.0, 2.0, math.pi / 2, beam, 0),
+                       (1.0, 0.0, 2.0, math.pi / 2, beam, 0)]
+    assert _watched(rows, 2, 30.0).tolist() == [True, True]
+    assert _covered(rows, 2).tolist() == [False, False]
+    rows[1] = (1.0, 0.0, 2.0, math.pi / 2, beam, 1)
+    assert _covered(rows, 2).tolist() == [1.0, 1.0]
+    # A third reading, of sensor 2, between them: each arc covered by both others' beams.
+    rows.append((0.5, 0.0, 2.0, math.pi / 2, beam, 2))
+    assert _covered(rows, 3).tolist() == [2.0, 2.0, 2.0]
+    assert _covered(rows, 2).tolist() == [1.0, 2.0, 1.0]  # arcs 0 and 2 too far apart
+
+
+def _covered_reference(rows: list[Row], capacity: int) -> np.ndarray:
+    """The module's definition of ``covering``, pair by pair, with atan2."""
+    def holds(at: Row, by: Row) -> bool:
+        px = at[0] + at[2] * math.cos(at[3])
+        py = at[1] + at[2] * math.sin(at[3])
+        off = math.atan2(py - by[1], px - by[0]) - by[3]
+        return abs((off + math.pi) % (2 * math.pi) - math.pi) <= by[4] / 2
+
+    out = np.zeros(len(rows))
+    for j, b in enumerate(rows):
+        for i in range(max(0, j - capacity + 1), j):
+            a = rows[i]
+            if a[5] != b[5]:
+                out[i] += holds(a, b)
+                out[j] += holds(b, a)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_random_rings_cover_as_the_reference_whatever_the_blocks(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 60
+    rows: list[Row] = [(float(rng.uniform(0, 2)), float(rng.uniform(0, 2)),
+                        float(rng.uniform(0.2, 3)), float(rng.uniform(-4, 4)),
+                        float(rng.uniform(0.2, 1.5)), int(rng.integers(0, 3)))
+                       for _ in range(n)]
+    expected = _covered_reference(rows, capacity=8)
+    assert 5 < np.count_nonzero(expected) < n - 3  # covered and lone arcs
+    assert expected.max() > 1.0  # some covered more than once
+    np.testing.assert_array_equal(_covered(rows, 8), expected)
+    blocks = (5, 1, 8, 3, 8, 8, 7, 8, 4, 8)
+    np.testing.assert_array_equal(_covered(rows, 8, blocks=blocks, storage=16), expected)
+
+
+def _alone(readings: ReadingBatch) -> np.ndarray:
+    """The ``alone`` feature of every arc of ``readings`` in the history (capacity 100)."""
+    method = EvidenceMethod(history_size=100, beam_width=math.radians(10.0), min_confidence=0.0)
+    method.add_many(readings)
+    slots = method.history.slots()
+    return method.features(slots)[:, CONFIDENCE_FEATURES.index("alone")]
+
+
+def test_the_alone_feature_is_set_where_no_other_sensor_covered_the_arc() -> None:
+    # One sensor along the wall: every arc alone. Sensor 1, 0.5 m ahead at 116.6°, looks at
+    # each wall point sensor 0 heard (its beam holds it): none alone.
+    np.testing.assert_array_equal(_alone(_wall_readings(False)), 1.0)
+    np.testing.assert_array_equal(_alone(_wall_readings(True)), 0.0)
+
+
+def test_a_silent_look_of_another_sensor_covers_within_its_range() -> None:
+    echoes = _wall_readings(False)
+    n = len(echoes)
+
+    def with_silence(max_range: float, sensor: int) -> np.ndarray:
+        rows = {name: np.column_stack((getattr(echoes, name), silent)).ravel()
+                for name, silent in (("x", echoes.x + 0.5), ("y", np.zeros(n)),
+                                     ("theta", np.full(n, math.atan2(1.0, -0.5))),
+                                     ("range", np.full(n, math.inf)),
+                                     ("sensor", np.full(n, sensor)),
+                                     ("max_range", np.full(n, max_range)))}
+        rows["max_range"][::2] = 5.0
+        batch = ReadingBatch.from_arrays(
+            t=np.arange(2 * n, dtype=float), beam_width=np.full(2 * n, math.radians(10.0)),
+            **rows)
+        return _alone(batch)
+
+    np.testing.assert_array_equal(with_silence(5.0, 1), 0.0)
+    np.testing.assert_array_equal(with_silence(1.0, 1), 1.0)  # 1.118 m is beyond its reach
+    np.testing.assert_array_equal(with_silence(5.0, 0), 1.0)  # its own sensor: no cover

@@ -614,13 +614,21 @@ def test_features_codes_and_confidence_are_the_numpy_formulas_bit_for_bit() -> N
         np.minimum(model.looked[slots] / model.threshold, 3.0),
         np.minimum(np.maximum(runs - 1.0, 0.0), 3.0), model.occluded[slots],
         (support <= 0.0) * maturity, h.r[slots], width / h.beam_width[slots],
-        np.minimum(model.others[slots], 1.0), np.minimum(model.through[slots], 3.0),
-        model.repeated[slots], np.minimum(model.behind[slots], 3.0)])
+        np.minimum(model.others[slots] / np.maximum(
+            model.covering[slots] / method.confidence_model.looks_per_support, 1.0), 1.0),
+        np.minimum(model.through[slots], 3.0),
+        model.repeated[slots], np.minimum(model.behind[slots], 3.0),
+        np.where(model.covering[slots] > 0.0, 0.0, 1.0)])
     features = method.features(slots, raw)
     np.testing.assert_array_equal(features, expected)
-    # No column constant, but behind: 0 for every arc in the history (judged as it leaves).
+    # No column constant, but behind: 0 for every arc in the history (judged as it leaves), and
+    # alone: 0 here, every axis point held by another sensor's beam (a beam holds a point at any
+    # range; both values: tests/geometry/test_watch.py).
     behind = CONFIDENCE_FEATURES.index("behind")
-    assert all(len(np.unique(column)) > 1 for column in np.delete(features, behind, axis=1).T)
+    alone = CONFIDENCE_FEATURES.index("alone")
+    assert all(len(np.unique(column)) > 1
+               for column in np.delete(features, [behind, alone], axis=1).T)
+    np.testing.assert_array_equal(features[:, alone], 0.0)
     np.testing.assert_array_equal(features[:, behind], 0.0)
     cm = method.confidence_model
     fitted = np.full(len(slots), cm.intercept)

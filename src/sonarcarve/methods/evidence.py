@@ -35,6 +35,7 @@ Per arc (the equations: the geometry package and ``docs/evidence-carving.md``):
   whether the sensor heard the point again as it drove at it: a repeat,
   :mod:`~sonarcarve.geometry.repeats`; how far the echo lies behind surfaces the arcs after it
   confirm, judged as it leaves the history, :mod:`~sonarcarve.geometry.evidence.behind`;
+  whether no other sensor's beam ever held it, :mod:`~sonarcarve.geometry.evidence.watch`;
   :class:`ConfidenceModel`), its weights fitted on the
   simulator's truth of one world (``benchmarks/fit_confidence.py``); points below
   ``min_confidence`` are left out of the maps (the default map), so "removed" means: not in
@@ -255,7 +256,7 @@ class EvidenceOptions:
 #: (``behind`` is 0 until the arc leaves the history).
 CONFIDENCE_FEATURES = ("support", "viewpoints", "crossings", "free", "looked", "split",
                        "occluded", "unheard", "range", "width", "others", "through",
-                       "repeated", "behind")
+                       "repeated", "behind", "alone")
 
 
 @dataclass(frozen=True)
@@ -271,8 +272,9 @@ class ConfidenceModel:
     capped at 3), ``split`` (surviving runs - 1, capped at 3), ``occluded`` (share of the beam
     carved by occlusion), ``unheard`` (never supported, times the maturity), ``range``
     (metres), ``width`` (kept run over the full beam), ``others`` (support from other
-    sensors, capped at 1: a sensor's own repeated echoes can repeat one systematic error, so
-    they confirm less than another transducer does), ``through`` (support of the surface
+    sensors per ``looks_per_support`` of their looks, capped at 1: a sensor's own repeated
+    echoes can repeat one systematic error, so they confirm less than another transducer does;
+    see "Other rings" below), ``through`` (support of the surface
     the echo's beam passed on its way, capped at 3: multipath echoes read from behind walls)
     and ``repeated`` (1 if another echo of the arc's sensor in the history is a *repeat* of it,
     :mod:`sonarcarve.geometry.repeats`: internally tangent circles, the touch point inside
@@ -281,8 +283,28 @@ class ConfidenceModel:
     echoes almost never do: ``benchmarks/repeat_echoes.py``) and ``behind`` (metres, capped
     at 3: ``r - d``, ``d`` the distance from the arc's origin to the nearest axis point inside
     its beam nearer than ``r - 2ε`` among the 64 arcs after it that are alive and heard from
-    distinct viewpoints; 0 if none; :mod:`~sonarcarve.geometry.evidence.behind`). Paper,
-    section 6: certainty values per point.
+    distinct viewpoints; 0 if none; :mod:`~sonarcarve.geometry.evidence.behind`) and
+    ``alone`` (1 if no other sensor's beam held the arc's axis point, at any angle and range,
+    in the history: :mod:`~sonarcarve.geometry.evidence.watch`, "Covered"). Paper, section 6:
+    certainty values per point.
+
+    Other rings: ``others`` was fitted on a ring whose beams just meet; it fails both ways on
+    others (``docs/RESULTS.md``, "The ``others`` feature on other rings", where both fixes
+    below are measured). Where beams do not overlap (15° beams 22.5° apart) a wall one sensor
+    faces gets no support from another, and the fitted weight (3.3) reads it as a phantom:
+    ``alone`` says that no other sensor's beam held the arc at all. Only its weight was fitted
+    (``benchmarks/fit_confidence.py --only alone``, the other weights held, with
+    ``looks_per_support`` inf): 0.674, a fifth of the missing ``others``. Where beams overlap
+    (45° beams 22.5° apart) a neighbour's echo circle crosses a phantom inside the shared part
+    of the beams and "confirms" it. ``looks_per_support`` ``k`` counts the support per ``k``
+    looks of other sensors (``covering``: readings of another sensor whose beam held the arc's
+    axis point, at any range), ``min(others / max(covering / k, 1), 1)``; the default, inf,
+    leaves ``others`` as fitted. ``k`` = 16 (the smallest of 4, 8, 12, 16, 24 and 32 costing at
+    most 0.5 points of direct echoes on each development world and physics; no fit: refitting
+    ``others`` with it gives a worse log-loss on the training runs at every value tried)
+    removes 6 more points of the 45° amplitude ring's spurious echoes, but costs the car
+    park's amplitude sonars 4-6 points of direct echoes and the Pioneer's front ring 1-2: not
+    kept.
 
     ``behind`` is judged only when the arc leaves the history, so it is 0 for every arc in the
     history, and for the arcs still there when a log ends (committed unjudged): the live map
@@ -359,7 +381,13 @@ class ConfidenceModel:
     # Fitted alone, the weights above held (``benchmarks/fit_confidence.py --only behind``),
     # same runs: a metre of depth behind confirmed surfaces.
     behind: float = -0.406
+    # Fitted alone, the weights above held (``benchmarks/fit_confidence.py --only alone``), same
+    # runs: no other sensor's beam held the arc's axis point.
+    alone: float = 0.674
     fresh: float = 2.453  # log-odds of the 92.1 % direct share of the training arcs
+    # Looks by other sensors one unit of their support answers for (``others`` above); inf (the
+    # default): not normalised. 16 was measured and not kept ("Other rings" above).
+    looks_per_support: float = math.inf
     maturity_time: float = 2.0  # fitted: local-map log-loss on the training runs
     unwatched_prior: bool = True  # see "Watched" above; False: every arc matures with age
 
@@ -369,6 +397,7 @@ class ConfidenceModel:
         finite: _Rule = (math.isfinite, "be finite")
         rules = dict.fromkeys(("intercept", *CONFIDENCE_FEATURES, "fresh"), finite)
         rules["maturity_time"] = (lambda v: 0.0 < v < math.inf, "be finite and > 0 seconds")
+        rules["looks_per_support"] = (lambda v: v > 0.0, "be > 0 (inf: support not normalised)")
         _check_fields(self, rules)
         if not isinstance(self.unwatched_prior, bool):  # a JSON "false" would read as on
             msg = f"unwatched_prior must be True or False, got {self.unwatched_prior!r}"
@@ -446,7 +475,8 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
                    maturity: FloatArray, viewpoints: FloatArray, looked: FloatArray,
                    occluded: FloatArray, r: FloatArray, beam_width: FloatArray,
                    others: FloatArray, through: FloatArray, repeated: FloatArray,
-                   behind: FloatArray, threshold: float) -> None:
+                   behind: FloatArray, covering: FloatArray, looks_per_support: float,
+                   threshold: float) -> None:
     """The rows of :meth:`EvidenceMethod.features` (:data:`CONFIDENCE_FEATURES` order) for
     ``slots``: the per-slot arrays (``support`` .. ``width``, ``maturity``) from
     :meth:`EvidenceModel.raw`, the per-arc ones indexed by slot. One compiled pass instead of
@@ -464,10 +494,13 @@ def _fill_features(out: FloatArray, slots: SlotArray, support: FloatArray,
         out[q, 7] = (1.0 if support[q] <= 0.0 else 0.0) * maturity[q]  # unheard
         out[q, 8] = r[s]
         out[q, 9] = width[q] / beam_width[s]
-        out[q, 10] = _at_most(others[s], 1.0)
+        # Support from other sensors per looks_per_support of their looks (at least 1).
+        looks = covering[s] / looks_per_support
+        out[q, 10] = _at_most(others[s] / (looks if looks > 1.0 else 1.0), 1.0)
         out[q, 11] = _at_most(through[s], 3.0)
         out[q, 12] = repeated[s]
         out[q, 13] = _at_most(behind[s], 3.0)  # metres; 0 while the arc is in the history
+        out[q, 14] = 1.0 if covering[s] == 0.0 else 0.0  # alone: no other sensor's beam held it
 
 
 #: Older arcs whose bins to weigh the weighing kernel gathers before it weighs them at once
@@ -585,6 +618,9 @@ class EvidenceModel(ArcModel):
         self.repeated = np.zeros(size)
         # Whether a distinct reading looked squarely at the arc (geometry/evidence/watch.py).
         self.watched = np.zeros(size, dtype=bool)
+        # How many readings of other sensors held the arc's axis point in their beams
+        # (geometry/evidence/watch.py).
+        self.covering = np.zeros(size)
         # Scratch for the transmission pass: every older bin at most once (the kernel would
         # skip what did not fit, withholding evidence; a cap of 65,536 rows did from a
         # history of about 1,366 arcs). 11 MB at a history of 10,000 arcs (K = 24).
@@ -667,8 +703,8 @@ class EvidenceModel(ArcModel):
         from the two readings alone: the same flags whatever the blocks."""
         h = self.history
         mark_watch(first, count, h.capacity, h.x, h.y, h.r, self.cos_axis, self.sin_axis,
-                   self.cos_half, h.sensor, self.watched, self.params.viewpoint_spacing,
-                   self.params.incidence_zero)
+                   self.cos_half, h.sensor, self.watched, self.covering,
+                   self.params.viewpoint_spacing, self.params.incidence_zero)
 
     def mark_repeats(self, first: int, count: int) -> int:
         """Mark the repeats (:func:`~sonarcarve.geometry.repeats.mark_repeats`, ε the range
@@ -717,7 +753,8 @@ class EvidenceModel(ArcModel):
         mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
                                 reading.x, reading.y, reading.theta, beam_width,
                                 reading.max_range, reading.sensor, self.watched,
-                                self.params.viewpoint_spacing, self.params.incidence_zero)
+                                self.covering, self.params.viewpoint_spacing,
+                                self.params.incidence_zero)
 
     def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
@@ -840,6 +877,7 @@ class EvidenceMethod(SonarMethod):
                        free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
+                       model.covering, self.confidence_model.looks_per_support,
                        model.threshold)
         return out
 
