@@ -19,13 +19,16 @@ from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.amplitude import AmplitudeModel, convex_mirror_db, mirror_echo_db
 from sonarcarve.sim.scene import DynamicObstacle
 from sonarcarve.sim.sonar import (
+    DEFAULT_PHYSICS,
     NO_ECHO,
+    PHYSICS_NAMES,
     Echoes,
     EchoKind,
     Firings,
     SonarPhysics,
     SonarPhysicsError,
     fire_sonars,
+    named_physics,
 )
 from sonarcarve.sim.sonar.amplitude_facets import _Facets
 from sonarcarve.sim.sonar.wall_geometry import _WallGeometry
@@ -238,3 +241,14 @@ def test_bad_facet_turn_is_refused(turn: float) -> None:
     with pytest.raises(SonarPhysicsError, match="facet_turn"):
         AmplitudeModel(facet_turn=turn)
 
+
+
+def test_named_sensor_models() -> None:
+    assert PHYSICS_NAMES == ("specular", "amplitude", "amplitude-thin")
+    assert named_physics("specular") == DEFAULT_PHYSICS
+    assert named_physics("amplitude") == replace(DEFAULT_PHYSICS, echo_model="amplitude")
+    thin = named_physics("amplitude-thin", SonarPhysics.clean())
+    assert thin == replace(SonarPhysics.clean(), echo_model="amplitude",
+                           amplitude=AmplitudeModel(small_reflectors=True))
+    with pytest.raises(SonarPhysicsError, match="unknown sensor model 'thin'"):
+        named_physics("thin")
