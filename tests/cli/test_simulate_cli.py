@@ -136,7 +136,8 @@ def test_physics_amplitude_is_a_different_sonar(tmp_path: Path,
 @pytest.mark.parametrize(
     ("args", "problem"),
     [
-        (["--world", "doorway", "--physics", "sonic"], "choose specular, amplitude or amplitude-thin"),
+        (["--world", "doorway", "--physics", "sonic"],
+         "choose specular, amplitude or amplitude-thin"),
         (["--world", "atlantis"], "unknown world 'atlantis'"),
         (["--world", "doorway", "--robot", "nomad"], "unknown robot 'nomad'"),
         (["--world", "doorway", "--path", "nowhere.csv"], "no such file"),
@@ -221,7 +222,8 @@ def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("args", "problem"), [
-    (["--physics", "foo"], "error: --physics foo: unknown model; choose specular, amplitude or amplitude-thin"),
+    (["--physics", "foo"], "error: --physics foo: unknown model; choose specular, amplitude or "
+                           "amplitude-thin"),
     (["--explore", "1e9"], "error: --explore must be at most 500,000 seconds (139 hours, the "
                            "simulator's limit of 10,000,000 poses), got 1e+09"),
     (["--speed", "0"], "error: --speed must be a speed in (0, 10] m/s, got 0"),
