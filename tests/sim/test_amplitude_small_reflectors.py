@@ -124,6 +124,20 @@ def test_a_24_gon_is_a_circle_and_a_box_is_not() -> None:
 # --------------------------------------------------------------------------- echoes
 
 
+@pytest.mark.parametrize(("d", "quieter", "louder"), [(1.0, 3.1430, 3.1762),
+                                                      (3.0, 7.2690, 7.3138)])
+def test_leg_level_through_the_simulator(d: float, quieter: float, louder: float) -> None:
+    # The leg's level read through the whole simulator, to 0.1 dB: heard with the threshold
+    # 0.1 dB under it, not with the threshold 0.1 dB over it. Threshold of a detection range R:
+    # -20 log10 R - 3.28 (R - 1); R = 3.1430 gives -16.976 and 3.1762 gives -17.176 (leg at
+    # 1 m: -17.076 dB); R = 7.2690 gives -37.792 and 7.3138 gives -37.992 (at 3 m: -37.892).
+    pose = facing(d, math.radians(40.0))
+    over = replace(THIN, detection_range=quieter)
+    under = replace(THIN, detection_range=louder)
+    assert fire(leg(), *pose, physics(over)).kind[0] == NO_ECHO
+    assert fire(leg(), *pose, physics(under)).kind[0] == EchoKind.DIRECT
+
+
 def test_a_leg_facing_a_facet_is_heard_far_only_as_a_wall() -> None:
     # Facing the middle of a facet (bearing 7.5 degrees), the default model hears the facet as
     # a wall: at 5.5 m -29.57 dB, far above T. As a cylinder: -29.57 - 24.41 = -53.98 dB,

@@ -44,23 +44,25 @@ Levels are in dB relative to the echo of a perfectly reflecting smooth wall met 
 * **small reflectors** (opt-in, :attr:`AmplitudeModel.small_reflectors`): a convex cylinder
   of radius ρ (a table or chair leg, a column; in a world file a run of short walls turning by
   at most :attr:`AmplitudeModel.facet_turn` at each joint) is not an extended mirror. Geometric
-  acoustics with the mirror equation: a sensor at range d from its surface sees the plane
-  mirror's image in the direction along the axis (image at 2d) but, across it, the virtual
-  image of a convex mirror of focal length ρ/2, at depth d' = 1 / (1/d + 2/ρ) behind the
-  surface (the mirror equation 1/s + 1/s' = 2/R of a spherical mirror). Along a ray tube the
-  intensity goes as the inverse product of the wavefront's two principal radii (Pierce,
-  *Acoustics*, ch. 8, ray acoustics), so relative to a plane wall at the same distance the
-  echo is r'/(r' + d) / (d / 2d), and its level::
+  acoustics: along the cylinder's axis the surface is a plane mirror (the reflected wavefront
+  leaves it with radius d and reaches the sensor with 2d); across it a convex mirror of focal
+  length ρ/2, whose virtual image lies d' = 1 / (1/d + 2/ρ) behind the surface (the mirror
+  equation), so the wavefront leaves with radius d' and arrives with d' + d. Along a ray tube
+  the intensity goes as the inverse product of the wavefront's two principal radii (Pierce,
+  *Acoustics*, ch. 8, ray acoustics): the echo is (d / 2d)(d' / (d' + d)) of the intensity at
+  the surface, against (d / 2d)² for a plane, a ratio 2d' / (d' + d) = ρ / (ρ + d)::
 
       L_cyl = L_mirror(d) + 10 log10(ρ / (ρ + d))
 
-  (−17.1 dB for a 2 cm leg at 1 m, −21.8 dB at 3 m). For d ≫ ρ this is Urick's target
-  strength of a long cylinder, TS = 10 log10(a r / 4) with the echo −40 log r + TS: his
-  finite cylinder 10 log10(a L² / 2λ) (*Principles of Underwater Sound*, Table 9.1) with the
-  length that answers at once, the first Fresnel zone L² = λ r / 2, which turns his finite plate
-  (A/λ)² into his infinite plane r²/4 too; his table's a r / 2 for an infinite cylinder is a
-  plane wave's (no spreading on the way in along the axis), 3 dB above a sensor's spherical
-  wave. The echo comes from the point of the circle nearest the sensor, wherever it falls
+  A 2 cm leg answers 17.1 dB under a wall at 1 m and 21.8 dB under it at 3 m (−37.9 dB, still
+  14.5 dB above the threshold on the axis; it falls under it at about 5 m). For d ≫ ρ this is
+  the target strength of a long cylinder, TS = 10 log10(a r / 4) with the echo −40 log r + TS:
+  the finite cylinder's 10 log10(a L² / 2λ) (Urick, *Principles of Underwater Sound*, the table
+  of target strengths of simple forms) with the length that answers at once, the first Fresnel
+  zone L² = λ r / 2, which also turns the finite plate's (A/λ)² into the infinite plane's r²/4.
+  The a r / 2 tabulated for an infinitely long cylinder is a plane wave's (no spreading on the
+  way in along the axis), 3 dB above what a sensor's spherical wave gets back. The echo
+  comes from the point of the circle nearest the sensor, wherever it falls
   (a facet's own foot of the perpendicular would leave gaps at the joints). The facet joints
   are not corners (no edge echo), a facet's diffuse area is at most the cylinder's width 2ρ
   along the surface, and facets are not the mirrors of multipath or crosstalk paths (bounced
