@@ -5,6 +5,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/clutter.py                       # seeds 0-2, both physics
     nice .venv/bin/python benchmarks/clutter.py --diagnose --trace    # + evidence parts off, traces
     nice .venv/bin/python benchmarks/clutter.py --physics specular --seeds 1 --skip-grids
+    nice .venv/bin/python benchmarks/clutter.py --physics amplitude-thin "amplitude-thin, 5 m"
     .venv/bin/python benchmarks/clutter.py --write-world              # worlds/clutter.json only
 
 Every world sonarcarve was developed and held out on is walls. A table leg or a pole answers
@@ -126,7 +127,7 @@ WORLD_FILE = Path(__file__).resolve().parent / "worlds" / "clutter.json"
 #: with small reflectors (legs and columns echo as convex cylinders:
 #: :attr:`~sonarcarve.sim.amplitude.AmplitudeModel.small_reflectors`); and that model on a
 #: sonar 25.3 dB less sensitive (a wall head-on heard to 5 m, not 10.7), a stress case in which
-#: a 2 cm leg is heard on the axis only within about 1.8 m, so most beams that reach a leg
+#: a 2 cm leg is heard on the axis only within about 1.8 m, so many beams that reach a leg
 #: pass over it.
 _THIN = named_physics("amplitude-thin", PHYSICS["amplitude"])
 CLUTTER_PHYSICS = {"specular": PHYSICS["specular"], "amplitude": PHYSICS["amplitude"],

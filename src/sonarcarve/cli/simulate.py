@@ -159,7 +159,7 @@ def simulate_command(
              "walls are missed, near ones heard at wide angles). amplitude-thin: amplitude with "
              "small reflectors: legs and columns (runs of short walls turning by at most 30° "
              "at each joint) echo as convex cylinders, 17 dB under a wall at 1 m for a 2 cm "
-             "leg, so most beams that pass over a thin leg do not hear it.")] = "specular",
+             "leg: heard over a narrower angle and fading sooner with range.")] = "specular",
     no_echo: Annotated[bool, typer.Option(
         "--no-echo",
         help="CSV output: also record the firings that heard nothing, as rows with range inf "
