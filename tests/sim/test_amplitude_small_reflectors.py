@@ -17,7 +17,7 @@ import pytest
 
 from sonarcarve.robot import RobotDescription, load_robot
 from sonarcarve.sim.amplitude import AmplitudeModel, convex_mirror_db, mirror_echo_db
-from sonarcarve.sim.scene import DynamicObstacle
+from sonarcarve.sim.scene import DynamicObstacle, Scene
 from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
     NO_ECHO,
@@ -30,7 +30,7 @@ from sonarcarve.sim.sonar import (
     fire_sonars,
     named_physics,
 )
-from sonarcarve.sim.sonar.amplitude_facets import _Facets
+from sonarcarve.sim.sonar.amplitude_facets import _Facets, _nearest_on_curves
 from sonarcarve.sim.sonar.wall_geometry import _WallGeometry
 from sonarcarve.sim.world import World
 
@@ -121,6 +121,20 @@ def test_a_24_gon_is_a_circle_and_a_box_is_not() -> None:
     assert geometry.scatter.shape[0] == 30
 
 
+def test_every_bearing_belongs_to_exactly_one_facet() -> None:
+    # Sensors 1 m out on every joint's bearing (exactly, where rounding decides) and on random
+    # bearings: one facet's arc holds each, never none (a gap) nor two (a doubled echo).
+    geometry = _WallGeometry.make(World(DynamicObstacle.disc((3.0, -1.0), 0.1).segments))
+    facets = _Facets.make(geometry, math.radians(30.0))
+    bearing = np.concatenate([2 * np.pi * np.arange(24) / 24,
+                              np.random.default_rng(1).uniform(-np.pi, np.pi, 200)])
+    origin = np.array([3.0, -1.0]) + 1.1 * np.column_stack((np.cos(bearing), np.sin(bearing)))
+    walls = np.arange(24)
+    _, distance, inside = _nearest_on_curves(facets, walls, origin, geometry.world.segments)
+    assert inside.sum(axis=1).tolist() == [1] * origin.shape[0]
+    np.testing.assert_allclose(distance[inside], 1.0, atol=1e-12)
+
+
 # --------------------------------------------------------------------------- echoes
 
 
@@ -200,6 +214,22 @@ def test_detection_of_a_leg_falls_with_range_as_the_normal_tail() -> None:
     shares = [(fire(leg(), *facing(d, bearing), noisy, n=2000).kind == EchoKind.DIRECT).mean()
               for d in (4.0, 4.8, 5.6)]
     np.testing.assert_allclose(shares, [1.0, 0.894, 0.143], atol=0.04)
+
+
+def test_a_moving_column_of_a_scene_echoes_as_a_cylinder_where_it_is() -> None:
+    # A 20 cm column moving from (2, 3) to (2, -3) over 6 s, a wall at x = 5 behind it. At
+    # t = 3 s it is on the axis: its circle's nearest point is (1.8, 0), level
+    # -20 log 1.8 - 3.28 * 0.8 + 10 log10(0.2 / 2.0) = -5.11 - 2.62 - 10.00 = -17.73 dB, heard.
+    # At t = 1 and 5 s it is 26.6 degrees off the axis (two-way directivity about -48 dB):
+    # silent, and the wall is heard head-on at 5 m (-13.98 - 13.12 = -27.10 dB).
+    column = DynamicObstacle.disc((2.0, 3.0), 0.2, "column", shift=(0.0, -6.0), t0=0.0, t1=6.0)
+    firings = Firings(t=np.array([1.0, 3.0, 5.0]), sensor=np.zeros(3, dtype=np.int64),
+                      x=np.zeros(3), y=np.zeros(3), theta=np.zeros(3))
+    echoes = fire_sonars(World(np.array([[5.0, -10.0, 5.0, 10.0]])), ring(), firings,
+                         physics(THIN), np.random.default_rng(0), scene=Scene((column,)))
+    np.testing.assert_allclose(echoes.range, [5.0, 1.8, 5.0], atol=1e-9)
+    assert echoes.obstacle.tolist() == [-1, 0, -1]
+    np.testing.assert_allclose(echoes.reflection[1], [1.8, 0.0], atol=1e-9)
 
 
 # --------------------------------------------------------------------------- the default

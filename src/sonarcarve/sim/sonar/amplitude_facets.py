@@ -135,7 +135,11 @@ def _nearest_on_curves(facets: _Facets, walls: IntArray, origin: FloatArray,
     def cross(p: FloatArray, q: FloatArray) -> FloatArray:
         return np.asarray(p[..., 0] * q[..., 1] - p[..., 1] * q[..., 0])
 
-    turn = cross(to_a, to_b)[None]
-    inside = (cross(to_a[None], unit) * turn >= 0.0) & (cross(unit, to_b[None]) * turn >= 0.0)
+    # Each arc from its start A (included) to its end B (excluded), with a rounding margin, so
+    # that a bearing through a joint belongs to exactly one facet.
+    turn = np.sign(cross(to_a, to_b))[None]
+    margin = 1e-9 * rho[None]
+    inside = ((cross(to_a[None], unit) * turn >= -margin)
+              & (cross(unit, to_b[None]) * turn > margin))
     inside &= far > rho[None]
     return np.asarray(point), np.asarray(far - rho[None]), np.asarray(inside)
