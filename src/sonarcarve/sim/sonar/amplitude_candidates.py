@@ -80,10 +80,11 @@ def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
     gap = foot - origin[:, None, :]
     d = np.hypot(gap[..., 0], gap[..., 1])
     on_wall = (t >= 0.0) & (t <= 1.0)
-    curved = np.zeros(0, dtype=np.int64)
+    radius = None  # of the curve each wall is a facet of (inf: a plane wall)
     if scene.facets is not None:
         # A facet of a curve echoes from its circle's point nearest the sensor.
-        curved = np.flatnonzero(scene.facets.curved[scene.index])
+        radius = scene.facets.radius[scene.index]
+        curved = np.flatnonzero(np.isfinite(radius))
         foot[:, curved], d[:, curved], on_wall[:, curved] = _nearest_on_curves(
             scene.facets, scene.index[curved], origin, seg[curved])
         gap = foot - origin[:, None, :]
@@ -92,9 +93,8 @@ def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
     ok &= np.abs(beta) <= math.pi / 2
     fi, wi = np.nonzero(ok)
     level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
-    if curved.size:
-        assert scene.facets is not None
-        level += convex_mirror_db(scene.facets.radius[scene.index[wi]], d[fi, wi])
+    if radius is not None:
+        level += convex_mirror_db(radius[wi], d[fi, wi])
     keep = level >= scene.low
     fi, wi, level = fi[keep], wi[keep], level[keep]
     seen = _in_sight(scene.world, origin[fi], foot[fi, wi], scene.limit)

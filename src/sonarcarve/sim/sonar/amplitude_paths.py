@@ -66,15 +66,11 @@ def _multipath_amplitude(geometry: _WallGeometry, world: World, index: IntArray,
                           robot.max_range)
     total = first + _BOUNCE_OFFSET + second
     good = (wall2 >= 0) & (wall2 != wall[bounce])
-    width: FloatArray | float = np.inf
-    if amp.small_reflectors:
-        # A convex facet echoes diffusely from its width at most and is no mirror for the
-        # retraced path (:mod:`sonarcarve.sim.amplitude`, small reflectors).
-        radius = _facets_of(geometry, amp.facet_turn).radius
-        width = 2.0 * radius[np.maximum(wall2, 0)]
-        mirror_b = good & np.isinf(width)
-    else:
-        mirror_b = good
+    # Small reflectors: a convex facet echoes diffusely from its width 2ρ at most and is no
+    # mirror for a retraced path (:mod:`sonarcarve.sim.amplitude`); a wall is as wide as any.
+    width = np.full(wall2.shape, np.inf) if not amp.small_reflectors else \
+        2.0 * _facets_of(geometry, amp.facet_turn).radius[np.maximum(wall2, 0)]
+    mirror_b = good & np.isinf(width)
     found: list[tuple[IntArray, FloatArray, FloatArray]] = []
     if amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0:
         fold = np.flatnonzero(good & (total >= robot.min_range) & (total <= robot.max_range))
@@ -84,8 +80,7 @@ def _multipath_amplitude(geometry: _WallGeometry, world: World, index: IntArray,
         spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
             else np.zeros(1)
         ray = bounce[fold] % rays
-        across = width if np.isscalar(width) else np.asarray(width)[fold]
-        level = (diffuse_echo_db(amp, total[fold], spread[ray], incidence, c, across)
+        level = (diffuse_echo_db(amp, total[fold], spread[ray], incidence, c, width[fold])
                  + 2.0 * amp.specular_db)
         heard = _heard(level, key, offset + bounce[fold] // rays, _FOLDED, ray, amp)
         found.append((bounce[fold][heard] // rays, total[fold][heard], end[heard]))
