@@ -125,13 +125,19 @@ def test_physics_amplitude_is_a_different_sonar(tmp_path: Path,
     assert run("--world", "doorway", "--seed", "3", "--physics", "specular",
                "--out", str(default)) == 0
     assert default.read_bytes() == spec.read_bytes()
+    # Small reflectors change only curves (runs of short walls): the doorway has none.
+    thin = tmp_path / "t.csv"
+    assert run("--world", "doorway", "--seed", "3", "--physics", "amplitude-thin",
+               "--out", str(thin)) == 0
+    assert thin.read_bytes() == amp.read_bytes()
     capsys.readouterr()
 
 
 @pytest.mark.parametrize(
     ("args", "problem"),
     [
-        (["--world", "doorway", "--physics", "sonic"], "choose specular or amplitude"),
+        (["--world", "doorway", "--physics", "sonic"],
+         "choose specular, amplitude or amplitude-thin"),
         (["--world", "atlantis"], "unknown world 'atlantis'"),
         (["--world", "doorway", "--robot", "nomad"], "unknown robot 'nomad'"),
         (["--world", "doorway", "--path", "nowhere.csv"], "no such file"),
@@ -216,7 +222,8 @@ def test_a_path_through_the_door_is_driven(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("args", "problem"), [
-    (["--physics", "foo"], "error: --physics foo: unknown model; choose specular or amplitude"),
+    (["--physics", "foo"], "error: --physics foo: unknown model; choose specular, amplitude or "
+                           "amplitude-thin"),
     (["--explore", "1e9"], "error: --explore must be at most 500,000 seconds (139 hours, the "
                            "simulator's limit of 10,000,000 poses), got 1e+09"),
     (["--speed", "0"], "error: --speed must be a speed in (0, 10] m/s, got 0"),

@@ -23,12 +23,14 @@ from sonarcarve.sim.sonar import (
     DEFAULT_PHYSICS,
     ECHO_MODELS,
     NO_ECHO,
+    PHYSICS_NAMES,
     Echoes,
     EchoKind,
     Firings,
     SonarPhysics,
     SonarPhysicsError,
     fire_sonars,
+    named_physics,
 )
 from sonarcarve.sim.world import World, WorldError, builtin_worlds, load_world
 
@@ -37,6 +39,7 @@ __all__ = [
     "DEFAULT_PHYSICS",
     "ECHO_MODELS",
     "NO_ECHO",
+    "PHYSICS_NAMES",
     "ROBOT_RADIUS",
     "AmplitudeModel",
     "ChangingScene",
@@ -60,6 +63,7 @@ __all__ = [
     "fire_sonars",
     "follow_waypoints",
     "load_world",
+    "named_physics",
     "random_world",
     "simulate",
     "with_localisation_noise",

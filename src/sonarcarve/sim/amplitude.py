@@ -41,6 +41,33 @@ Levels are in dB relative to the echo of a perfectly reflecting smooth wall met 
 
   with E = :attr:`AmplitudeModel.edge_db`, the level of an edge on the axis at 1 m.
 
+* **small reflectors** (opt-in, :attr:`AmplitudeModel.small_reflectors`): a convex cylinder
+  of radius ρ (a table or chair leg, a column; in a world file a run of short walls turning by
+  at most :attr:`AmplitudeModel.facet_turn` at each joint) is not an extended mirror. Geometric
+  acoustics: along the cylinder's axis the surface is a plane mirror (the reflected wavefront
+  leaves it with radius d and reaches the sensor with 2d); across it a convex mirror of focal
+  length ρ/2, whose virtual image lies d' = 1 / (1/d + 2/ρ) behind the surface (the mirror
+  equation), so the wavefront leaves with radius d' and arrives with d' + d. Along a ray tube
+  the intensity goes as the inverse product of the wavefront's two principal radii (Pierce,
+  *Acoustics*, ch. 8, ray acoustics): the echo is (d / 2d)(d' / (d' + d)) of the intensity at
+  the surface, against (d / 2d)² for a plane, a ratio 2d' / (d' + d) = ρ / (ρ + d)::
+
+      L_cyl = L_mirror(d) + 10 log10(ρ / (ρ + d))
+
+  A 2 cm leg answers 17.1 dB under a wall at 1 m and 21.8 dB under it at 3 m (−37.9 dB, still
+  14.5 dB above the threshold on the axis; it falls under it at about 5 m). For d ≫ ρ this is
+  the target strength of a long cylinder, TS = 10 log10(a r / 4) with the echo −40 log r + TS:
+  the finite cylinder's 10 log10(a L² / 2λ) (Urick, *Principles of Underwater Sound*, the table
+  of target strengths of simple forms) with the length that answers at once, the first Fresnel
+  zone L² = λ r / 2, which also turns the finite plate's (A/λ)² into the infinite plane's r²/4.
+  The a r / 2 tabulated for an infinitely long cylinder is a plane wave's (no spreading on the
+  way in along the axis), 3 dB above what a sensor's spherical wave gets back. The echo
+  comes from the point of the circle nearest the sensor, wherever it falls
+  (a facet's own foot of the perpendicular would leave gaps at the joints). The facet joints
+  are not corners (no edge echo), a facet's diffuse area is at most the cylinder's width 2ρ
+  along the surface, and facets are not the mirrors of multipath or crosstalk paths (bounced
+  off a convex mirror, those spread at least as fast as the direct echo and arrive later).
+
 The sensor hears an echo when ``L + noise_db · z ≥ threshold_db`` with z standard normal, one
 draw per candidate echo; the probability is :func:`detection_probability`. The threshold is the
 level of a perfectly reflecting smooth wall head-on at :attr:`AmplitudeModel.detection_range`.
@@ -53,7 +80,10 @@ answer at any incidence, weakly; edges fade fast with range.
 Simplifications: walls are vertical and the sensors horizontal, so the 3-D beam is cut in its
 horizontal plane (the vertical beam enters only the diffuse area); the Polaroid ranging
 module's time-varying gain is folded into the single threshold; every wall has the same
-surface (reflectivity and diffuse fraction).
+surface (reflectivity and diffuse fraction). With ``small_reflectors`` a flat face narrower than
+the Fresnel zone (√(λ d / 2), 6 cm at 1 m) still echoes like a whole wall: only curved runs
+of facets are corrected; a leg is a vertical cylinder taller than the vertical Fresnel zone
+(its top and bottom edges are not modelled).
 """
 
 from __future__ import annotations
@@ -72,6 +102,7 @@ from sonarcarve.typing import FloatArray
 __all__ = [
     "AmplitudeModel",
     "SonarPhysicsError",
+    "convex_mirror_db",
     "detection_probability",
     "diffuse_echo_db",
     "directivity_db",
@@ -152,6 +183,17 @@ class AmplitudeModel:
         within 90° of the axis.
     fan_rays : int
         Rays across the fan, edges included (odd: one on the axis); 61 rays are 1° apart.
+    small_reflectors : bool
+        Off (the default): every wall, however short, echoes as an extended plane mirror, so a
+        leg drawn as a polygon answers like a wall face. On: runs of short walls that bend by
+        at most ``facet_turn`` at each joint are convex cylinders whose mirror echo spreads
+        faster, by ``10 log10(ρ / (ρ + d))`` (:func:`convex_mirror_db`, module docstring), and
+        whose joints are not corners.
+    facet_turn : float
+        Radians, in (0, π/2]: the largest turn at a joint of two walls (and only two) that
+        makes them facets of one convex curve, when ``small_reflectors`` is on. 30°: polygons
+        of 12 or more sides stand for discs (world files draw them as 24-gons, 15° turns); a
+        box's 90° corners stay corners.
     """
 
     frequency: float = 49_400.0
@@ -167,6 +209,8 @@ class AmplitudeModel:
     noise_db: float = 2.0
     fan_half_angle: float = math.radians(30.0)
     fan_rays: int = 61
+    small_reflectors: bool = False
+    facet_turn: float = math.radians(30.0)
 
     def __post_init__(self) -> None:
         positive = ("frequency", "transducer_radius", "pulse_cycles", "detection_range")
@@ -189,6 +233,8 @@ class AmplitudeModel:
             _bad("fan_half_angle", self.fan_half_angle, "must lie in [0, π/2] radians")
         if self.fan_rays < 1:
             _bad("fan_rays", self.fan_rays, "must be at least 1")
+        if not 0.0 < self.facet_turn <= math.pi / 2:
+            _bad("facet_turn", self.facet_turn, "must lie in (0, π/2] radians")
 
     @property
     def specular_db(self) -> float:
@@ -306,6 +352,29 @@ def mirror_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: npt
     return path_echo_db(model, 2.0 * d, off_axis, off_axis, reflections, sound_speed)
 
 
+def convex_mirror_db(radius: npt.ArrayLike, distance: npt.ArrayLike) -> FloatArray:
+    """Level of a convex cylinder's mirror echo relative to a plane wall's at the same
+    distance, dB: ``10 log10(ρ / (ρ + d))`` (module docstring, small reflectors).
+
+    Parameters
+    ----------
+    radius : array-like
+        The cylinder's radius ρ, metres (> 0; inf: a plane, 0 dB).
+    distance : array-like
+        Sensor to the nearest point of the surface, metres (>= 0).
+
+    Examples
+    --------
+    >>> convex_mirror_db([0.02, 0.2, np.inf], 1.0).round(2).tolist()  # a leg, a column, a wall
+    [-17.08, -7.78, 0.0]
+    """
+    rho = np.asarray(radius, dtype=np.float64)
+    d = np.asarray(distance, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        ratio = np.where(np.isinf(rho), 1.0, rho / (rho + d))
+    return np.asarray(10.0 * np.log10(ratio))
+
+
 def point_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: npt.ArrayLike,
                   strength_db: npt.ArrayLike, sound_speed: float = 343.0) -> FloatArray:
     """Level of a small target: 2 D(α) − 40 log10 r − 2 a (r − 1) + strength, dB.
@@ -320,12 +389,13 @@ def point_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: npt.
 
 
 def diffuse_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: npt.ArrayLike,
-                    incidence: npt.ArrayLike, sound_speed: float = 343.0) -> FloatArray:
+                    incidence: npt.ArrayLike, sound_speed: float = 343.0,
+                    width: npt.ArrayLike = math.inf) -> FloatArray:
     """Level of the diffuse (Lambertian) echo of the wall patch a ray meets, dB (−inf: none).
 
     A point target (40 log spreading) of strength ``6 + 10 log10(σ A)`` with
-    ``σ = ρ² f cos²γ / π`` and ``A = r Ψ (r / cos γ) min(Ψ, cτ / (2 r tan γ))`` (module
-    docstring).
+    ``σ = ρ² f cos²γ / π`` and ``A = r Ψ (r / cos γ) min(Ψ, cτ / (2 r tan γ), w cos γ / r)``
+    (module docstring; ``w`` the widest the surface is, along it, inf for a wall).
 
     Parameters
     ----------
@@ -335,6 +405,9 @@ def diffuse_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: np
         Angle of the ray from the sensor axis, radians.
     incidence : array-like
         Angle between the ray and the wall normal, radians, in [0, π/2].
+    width : array-like
+        Metres: the surface's extent along it that can echo at once (a cylinder's 2ρ with
+        ``small_reflectors``); inf (the default) for a wall wider than the beam.
     """
     r = np.asarray(distance, dtype=np.float64)
     gamma = np.minimum(np.abs(np.asarray(incidence, dtype=np.float64)), math.pi / 2)
@@ -342,6 +415,9 @@ def diffuse_echo_db(model: AmplitudeModel, distance: npt.ArrayLike, off_axis: np
     cos_g = np.cos(gamma)
     tan_g = np.maximum(np.tan(np.minimum(gamma, math.pi / 2 - 1e-9)), 1e-12)
     across = np.minimum(psi, model.pulse_depth(sound_speed) / (r * tan_g))
+    w = np.asarray(width, dtype=np.float64)
+    if np.any(np.isfinite(w)):  # skipped for walls: the default stays bit for bit
+        across = np.minimum(across, w * cos_g / r)
     area = r * psi * r / np.maximum(cos_g, 1e-12) * across
     sigma = model.reflectivity**2 * model.diffuse_fraction * cos_g**2 / math.pi
     with np.errstate(divide="ignore"):

@@ -52,17 +52,25 @@ Import the public names from :mod:`sonarcarve.sim.sonar` (or :mod:`sonarcarve.si
 
 from sonarcarve.sim.amplitude import SonarPhysicsError
 from sonarcarve.sim.sonar.fire import fire_sonars
-from sonarcarve.sim.sonar.physics import DEFAULT_PHYSICS, ECHO_MODELS, SonarPhysics
+from sonarcarve.sim.sonar.physics import (
+    DEFAULT_PHYSICS,
+    ECHO_MODELS,
+    PHYSICS_NAMES,
+    SonarPhysics,
+    named_physics,
+)
 from sonarcarve.sim.sonar.records import NO_ECHO, Echoes, EchoKind, Firings
 
 __all__ = [
     "DEFAULT_PHYSICS",
     "ECHO_MODELS",
     "NO_ECHO",
+    "PHYSICS_NAMES",
     "EchoKind",
     "Echoes",
     "Firings",
     "SonarPhysics",
     "SonarPhysicsError",
     "fire_sonars",
+    "named_physics",
 ]

@@ -14,7 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonarcarve.robot import RobotDescription
-from sonarcarve.sim.amplitude import diffuse_echo_db, mirror_echo_db, point_echo_db
+from sonarcarve.sim.amplitude import (
+    convex_mirror_db,
+    diffuse_echo_db,
+    mirror_echo_db,
+    point_echo_db,
+)
+from sonarcarve.sim.sonar.amplitude_facets import _Facets, _nearest_on_curves
 from sonarcarve.sim.sonar.amplitude_hearing import _CORNER, _DIFFUSE, _MIRROR, _heard
 from sonarcarve.sim.sonar.physics import SonarPhysics
 from sonarcarve.sim.sonar.records import Firings
@@ -33,7 +39,8 @@ class _ChunkScene:
     """What the amplitude model's candidate finders share for one batch of firings: the walls
     near it (``world``, their indices ``index`` in the whole world), the sensors' origins
     (f, 2), the firings' global ids, the pruning level (dB) below which no echo can be heard,
-    the sight-line limit (metres) and the noise key."""
+    the sight-line limit (metres), the noise key and the walls that are facets of curves
+    (None: ``small_reflectors`` off, every wall a plane mirror)."""
 
     chunk: Firings
     robot: RobotDescription
@@ -46,6 +53,7 @@ class _ChunkScene:
     low: float
     limit: float
     key: int
+    facets: _Facets | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,11 +79,22 @@ def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
     foot = a[None] + t[..., None] * edge[None]
     gap = foot - origin[:, None, :]
     d = np.hypot(gap[..., 0], gap[..., 1])
+    on_wall = (t >= 0.0) & (t <= 1.0)
+    radius = None  # of the curve each wall is a facet of (inf: a plane wall)
+    if scene.facets is not None:
+        # A facet of a curve echoes from its circle's point nearest the sensor.
+        radius = scene.facets.radius[scene.index]
+        curved = np.flatnonzero(np.isfinite(radius))
+        foot[:, curved], d[:, curved], on_wall[:, curved] = _nearest_on_curves(
+            scene.facets, scene.index[curved], origin, seg[curved])
+        gap = foot - origin[:, None, :]
     beta = _wrap(np.arctan2(gap[..., 1], gap[..., 0]) - scene.chunk.theta[:, None])
-    ok = (t >= 0.0) & (t <= 1.0) & (d >= robot.min_range) & (d <= robot.max_range)
+    ok = on_wall & (d >= robot.min_range) & (d <= robot.max_range)
     ok &= np.abs(beta) <= math.pi / 2
     fi, wi = np.nonzero(ok)
     level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
+    if radius is not None:
+        level += convex_mirror_db(radius[wi], d[fi, wi])
     keep = level >= scene.low
     fi, wi, level = fi[keep], wi[keep], level[keep]
     seen = _in_sight(scene.world, origin[fi], foot[fi, wi], scene.limit)
@@ -106,7 +125,8 @@ def _diffuse_candidates(scene: _ChunkScene,
     which = np.flatnonzero(hit & (distance >= robot.min_range))
     incidence = np.arccos(np.minimum(np.abs(np.sum(direction[which] * normal[which],
                                                    axis=1)), 1.0))
-    level = diffuse_echo_db(amp, distance[which], np.tile(spread, f)[which], incidence, c)
+    width = np.inf if scene.facets is None else 2.0 * scene.facets.radius[wall[which]]
+    level = diffuse_echo_db(amp, distance[which], np.tile(spread, f)[which], incidence, c, width)
     heard = _heard(level, scene.key, scene.firing_ids[which // rays], _DIFFUSE, which % rays,
                    amp)
     which = which[heard]
@@ -119,8 +139,10 @@ def _corner_candidates(scene: _ChunkScene, corners: _Corners) -> _Candidates | N
     amp, c = scene.physics.amplitude, scene.physics.sound_speed
     robot, origin = scene.robot, scene.origin
     box = scene.box
+    still = np.ones(corners.points.shape[0], dtype=bool) if scene.facets is None \
+        else scene.facets.corner  # the joints of a curve's facets are no edges
     box_keep = np.flatnonzero(
-        (corners.points[:, 0] >= box[0] - robot.max_range)
+        still & (corners.points[:, 0] >= box[0] - robot.max_range)
         & (corners.points[:, 0] <= box[2] + robot.max_range)
         & (corners.points[:, 1] >= box[1] - robot.max_range)
         & (corners.points[:, 1] <= box[3] + robot.max_range))

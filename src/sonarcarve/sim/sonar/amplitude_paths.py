@@ -14,6 +14,7 @@ import numpy as np
 
 from sonarcarve.robot import RobotDescription
 from sonarcarve.sim.amplitude import diffuse_echo_db, path_echo_db
+from sonarcarve.sim.sonar.amplitude_facets import _facets_of
 from sonarcarve.sim.sonar.amplitude_hearing import (
     _CROSSTALK,
     _FOLDED,
@@ -65,6 +66,11 @@ def _multipath_amplitude(geometry: _WallGeometry, world: World, index: IntArray,
                           robot.max_range)
     total = first + _BOUNCE_OFFSET + second
     good = (wall2 >= 0) & (wall2 != wall[bounce])
+    # Small reflectors: a convex facet echoes diffusely from its width 2ρ at most and is no
+    # mirror for a retraced path (:mod:`sonarcarve.sim.amplitude`); a wall is as wide as any.
+    width = np.full(wall2.shape, np.inf) if not amp.small_reflectors else \
+        2.0 * _facets_of(geometry, amp.facet_turn).radius[np.maximum(wall2, 0)]
+    mirror_b = good & np.isinf(width)
     found: list[tuple[IntArray, FloatArray, FloatArray]] = []
     if amp.diffuse_fraction > 0.0 and amp.reflectivity > 0.0:
         fold = np.flatnonzero(good & (total >= robot.min_range) & (total <= robot.max_range))
@@ -74,12 +80,12 @@ def _multipath_amplitude(geometry: _WallGeometry, world: World, index: IntArray,
         spread = np.linspace(-amp.fan_half_angle, amp.fan_half_angle, rays) if rays > 1 \
             else np.zeros(1)
         ray = bounce[fold] % rays
-        level = (diffuse_echo_db(amp, total[fold], spread[ray], incidence, c)
+        level = (diffuse_echo_db(amp, total[fold], spread[ray], incidence, c, width[fold])
                  + 2.0 * amp.specular_db)
         heard = _heard(level, key, offset + bounce[fold] // rays, _FOLDED, ray, amp)
         found.append((bounce[fold][heard] // rays, total[fold][heard], end[heard]))
-    pairs = np.unique(np.column_stack((bounce[good] // rays, wall[bounce][good], wall2[good])),
-                      axis=0)
+    pairs = np.unique(np.column_stack((bounce[mirror_b] // rays, wall[bounce][mirror_b],
+                                       wall2[mirror_b])), axis=0)
     if pairs.shape[0]:
         found.append(_retrace_paths(geometry, world, robot, physics, chunk, origin, pairs,
                                     offset, key))
@@ -160,6 +166,8 @@ def _crosstalk_amplitude(scenery: _Scenery, robot: RobotDescription, firings: Fi
                                             float(ys.max()), margin=far_range)
             if len(world) == 0:
                 continue
+            mirror = np.ones(len(world), dtype=bool) if not amp.small_reflectors else \
+                ~_facets_of(geometry, amp.facet_turn).curved[index]  # facets: no mirrors
             seg = world.segments
             a, edge, normal = seg[:, :2], seg[:, 2:] - seg[:, :2], geometry.normals[index]
             emit = np.column_stack((firings.x[j], firings.y[j]))
@@ -176,7 +184,7 @@ def _crosstalk_amplitude(scenery: _Scenery, robot: RobotDescription, firings: Fi
             t = np.einsum("fwj,wj->fw", x - a[None], edge) / np.sum(edge * edge, axis=1)
             path = np.hypot(line[..., 0], line[..., 1])
             apparent = path / 2.0 - c * (firings.t[k] - firings.t[j])[:, None] / 2.0
-            ok = ((side_e * side_r > 0.0) & (t >= 0.0) & (t <= 1.0)
+            ok = ((side_e * side_r > 0.0) & (t >= 0.0) & (t <= 1.0) & mirror[None]
                   & (apparent >= robot.min_range) & (apparent <= robot.max_range))
             fi, wi = np.nonzero(ok)
             xp = x[fi, wi]

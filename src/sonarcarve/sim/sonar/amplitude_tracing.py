@@ -19,6 +19,7 @@ from sonarcarve.sim.sonar.amplitude_candidates import (
     _diffuse_candidates,
     _mirror_candidates,
 )
+from sonarcarve.sim.sonar.amplitude_facets import _facets_of
 from sonarcarve.sim.sonar.amplitude_hearing import _PRUNE_SIGMAS, _keep_first
 from sonarcarve.sim.sonar.amplitude_paths import _crosstalk_amplitude, _multipath_amplitude
 from sonarcarve.sim.sonar.draws import _Draws
@@ -67,7 +68,7 @@ def _trace_amplitude_chunk(geometry: _WallGeometry, corners: _Corners, robot: Ro
         chunk=chunk, robot=robot, physics=physics, world=near_world, index=near_index, box=box,
         origin=np.column_stack((chunk.x, chunk.y)), firing_ids=offset + np.arange(f),
         low=amp.threshold_db - _PRUNE_SIGMAS * amp.noise_db, limit=robot.max_range + 1.0,
-        key=key,
+        key=key, facets=_facets_of(geometry, amp.facet_turn) if amp.small_reflectors else None,
     )
     found = [_mirror_candidates(scene)]
     fan, diffuse = _diffuse_candidates(scene, geometry)
@@ -87,6 +88,8 @@ def _trace_amplitude_chunk(geometry: _WallGeometry, corners: _Corners, robot: Ro
 
     if physics.multipath_probability > 0.0:
         bounce = np.flatnonzero(fan.hit)
+        if scene.facets is not None:  # a convex facet is no mirror for a bounce (module doc)
+            bounce = bounce[~scene.facets.curved[fan.wall[bounce]]]
         _multipath_amplitude(geometry, near_world, near_index, robot, physics, chunk,
                              scene.origin, fan.direction, fan.wall, fan.point, bounce, fan.rays,
                              out, offset, key)

@@ -16,7 +16,9 @@ from sonarcarve.sim.amplitude import AmplitudeModel, SonarPhysicsError
 __all__ = [
     "DEFAULT_PHYSICS",
     "ECHO_MODELS",
+    "PHYSICS_NAMES",
     "SonarPhysics",
+    "named_physics",
 ]
 
 
@@ -150,6 +152,33 @@ class SonarPhysics:
 
 #: The default sensor model (every effect on, at the documented defaults).
 DEFAULT_PHYSICS = SonarPhysics()
+
+#: The sensor models ``sonarcarve simulate --physics`` and the benchmarks choose by name: each
+#: echo model, and ``"amplitude-thin"``, the amplitude model with small reflectors (legs and
+#: columns echo as convex cylinders, :attr:`AmplitudeModel.small_reflectors`).
+PHYSICS_NAMES = (*ECHO_MODELS, "amplitude-thin")
+
+
+def named_physics(name: str, base: SonarPhysics = DEFAULT_PHYSICS) -> SonarPhysics:
+    """``base`` (every other parameter) with the sensor model named ``name``, one of
+    :data:`PHYSICS_NAMES`.
+
+    Examples
+    --------
+    >>> named_physics("amplitude-thin").amplitude.small_reflectors
+    True
+    >>> named_physics("specular") is DEFAULT_PHYSICS
+    True
+    """
+    if name not in PHYSICS_NAMES:
+        choices = ", ".join(repr(n) for n in PHYSICS_NAMES)
+        msg = f"unknown sensor model {name!r}; choose one of {choices}"
+        raise SonarPhysicsError(msg)
+    echo_model = "amplitude" if name == "amplitude-thin" else name
+    physics = base if echo_model == base.echo_model else replace(base, echo_model=echo_model)
+    if name == "amplitude-thin":
+        physics = replace(physics, amplitude=replace(physics.amplitude, small_reflectors=True))
+    return physics
 
 
 def _bad(name: str, value: object, problem: str) -> None:
