@@ -10,6 +10,7 @@ T = −20 log10(10.7) − 2 · 1.64 · 9.7 = −20.59 − 31.82 = −52.41 dB.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -38,6 +39,9 @@ from sonarcarve.sim.sonar import (
     tracing,
 )
 from sonarcarve.sim.world import World
+
+#: ``random_firings(n, seed, robot)``, the fixture of tests/sim/conftest.py.
+RandomFirings = Callable[[int, int, RobotDescription], Firings]
 
 KA = 2 * math.pi * 49_400 * 0.0192 / 343  # 17.374
 THRESHOLD = -20 * math.log10(10.7) - 2 * 1.64 * 9.7  # -52.41 dB
@@ -231,39 +235,23 @@ def test_corner_hidden_behind_a_silent_wall_is_not_heard() -> None:
 # --------------------------------------------------------------------------- whole simulations
 
 
-def room_world() -> World:
-    walls = [
-        [0, 0, 10, 0], [10, 0, 10, 8], [10, 8, 0, 8], [0, 8, 0, 0],
-        [4, 3, 5, 3], [5, 3, 5, 4], [5, 4, 4, 4], [4, 4, 4, 3],
-        [7, 0, 7, 3], [2, 6, 3.5, 5.2],
-    ]
-    return World(np.array(walls, dtype=float), name="room")
-
-
-def random_firings(n: int, seed: int, robot: RobotDescription) -> Firings:
-    rng = np.random.default_rng(seed)
-    points = rng.uniform([0.3, 0.3], [9.7, 7.7], (4 * n, 2))
-    points = points[room_world().distance_to_walls(points) > 0.35][:n]
-    heading = rng.uniform(-math.pi, math.pi, points.shape[0])
-    sensor = rng.integers(0, robot.n_sensors, points.shape[0])
-    sx, sy, theta = robot.sensor_poses(points[:, 0], points[:, 1], heading, sensor)
-    return Firings(t=0.04 * np.arange(points.shape[0]), sensor=sensor, x=sx, y=sy, theta=theta)
 
 
 AMPLITUDE = SonarPhysics(echo_model="amplitude",
                          amplitude=AmplitudeModel(diffuse_fraction=0.3))
 
 
-def test_truth_of_amplitude_echoes_is_consistent() -> None:
+def test_truth_of_amplitude_echoes_is_consistent(room: World,
+                                                 random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(1500, 11, robot)
-    echoes = fire_sonars(room_world(), robot, firings, AMPLITUDE, np.random.default_rng(5))
+    echoes = fire_sonars(room, robot, firings, AMPLITUDE, np.random.default_rng(5))
     direct = echoes.kind == EchoKind.DIRECT
     assert direct.mean() > 0.5
     origin = np.column_stack((firings.x, firings.y))
     seen_at = np.hypot(*(echoes.reflection - origin).T)
     np.testing.assert_allclose(seen_at[direct], echoes.true_range[direct], atol=1e-9)
-    assert np.all(room_world().distance_to_walls(echoes.reflection[direct]) < 1e-9)
+    assert np.all(room.distance_to_walls(echoes.reflection[direct]) < 1e-9)
     bounced = echoes.kind == EchoKind.MULTIPATH
     assert np.all(echoes.true_range[bounced] > seen_at[bounced])
     # Some direct echoes come from outside the nominal 22.5 degree beam (side lobes).
@@ -275,26 +263,27 @@ def test_truth_of_amplitude_echoes_is_consistent() -> None:
                   & (echoes.range[heard] <= robot.max_range))
 
 
-def test_same_seed_same_echoes_whatever_the_batching(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_same_seed_same_echoes_whatever_the_batching(monkeypatch: pytest.MonkeyPatch, room: World,
+                                                     random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(400, 4, robot)
-    runs = [fire_sonars(room_world(), robot, firings, AMPLITUDE, np.random.default_rng(s))
+    runs = [fire_sonars(room, robot, firings, AMPLITUDE, np.random.default_rng(s))
             for s in (1, 1, 2)]
     np.testing.assert_array_equal(runs[0].kind, runs[1].kind)
     np.testing.assert_array_equal(runs[0].range, runs[1].range)
     assert not np.array_equal(runs[0].range, runs[2].range, equal_nan=True)
     monkeypatch.setattr(tracing, "_CHUNK_FIRINGS", 37)
-    rebatched = fire_sonars(room_world(), robot, firings, AMPLITUDE, np.random.default_rng(1))
+    rebatched = fire_sonars(room, robot, firings, AMPLITUDE, np.random.default_rng(1))
     np.testing.assert_array_equal(runs[0].kind, rebatched.kind)
     np.testing.assert_array_equal(runs[0].range, rebatched.range)
 
 
-def test_the_two_models_hear_differently() -> None:
+def test_the_two_models_hear_differently(room: World, random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(400, 6, robot)
-    specular = fire_sonars(room_world(), robot, firings, SonarPhysics(),
+    specular = fire_sonars(room, robot, firings, SonarPhysics(),
                            np.random.default_rng(3))
-    amplitude = fire_sonars(room_world(), robot, firings, replace(
+    amplitude = fire_sonars(room, robot, firings, replace(
         SonarPhysics(), echo_model="amplitude"), np.random.default_rng(3))
     assert not np.array_equal(specular.range, amplitude.range, equal_nan=True)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -33,6 +34,9 @@ from sonarcarve.sim.sonar import (
 from sonarcarve.sim.sonar.amplitude_facets import _Facets, _nearest_on_curves
 from sonarcarve.sim.sonar.wall_geometry import _WallGeometry
 from sonarcarve.sim.world import World
+
+#: ``random_firings(n, seed, robot)``, the fixture of tests/sim/conftest.py.
+RandomFirings = Callable[[int, int, RobotDescription], Firings]
 
 #: Mirror-only walls, no noise: every decision is a deterministic threshold test.
 SMOOTH = AmplitudeModel(diffuse_fraction=0.0, noise_db=0.0)
@@ -64,23 +68,6 @@ def fire(segments: list[list[float]], x: float, y: float, theta: float, phys: So
                        np.random.default_rng(0))
 
 
-def room_world() -> World:
-    walls = [
-        [0, 0, 10, 0], [10, 0, 10, 8], [10, 8, 0, 8], [0, 8, 0, 0],
-        [4, 3, 5, 3], [5, 3, 5, 4], [5, 4, 4, 4], [4, 4, 4, 3],
-        [7, 0, 7, 3], [2, 6, 3.5, 5.2],
-    ]
-    return World(np.array(walls, dtype=float), name="room")
-
-
-def random_firings(n: int, seed: int, robot: RobotDescription) -> Firings:
-    rng = np.random.default_rng(seed)
-    points = rng.uniform([0.3, 0.3], [9.7, 7.7], (4 * n, 2))
-    points = points[room_world().distance_to_walls(points) > 0.35][:n]
-    heading = rng.uniform(-math.pi, math.pi, points.shape[0])
-    sensor = rng.integers(0, robot.n_sensors, points.shape[0])
-    sx, sy, theta = robot.sensor_poses(points[:, 0], points[:, 1], heading, sensor)
-    return Firings(t=0.04 * np.arange(points.shape[0]), sensor=sensor, x=sx, y=sy, theta=theta)
 
 
 def leg() -> list[list[float]]:
@@ -242,41 +229,44 @@ def digest(kind: np.ndarray, ranges: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
-def room_with_discs() -> World:
+def room_with_discs(room: World) -> World:
     discs = [DynamicObstacle.disc(c, r).segments
              for c, r in (((2.0, 2.0), 0.02), ((7.5, 5.5), 0.2), ((8.5, 2.0), 0.1))]
-    return World(np.concatenate([room_world().segments, *discs]), name="room+discs")
+    return World(np.concatenate([room.segments, *discs]), name="room+discs")
 
 
 @pytest.mark.parametrize(("model", "expected"), [
     (AmplitudeModel(), "8605cd75c3c04ae3"),
     (AmplitudeModel(diffuse_fraction=0.5, noise_db=4.0), "a5807ccb483eae5b"),
 ])
-def test_default_amplitude_echoes_are_unchanged(model: AmplitudeModel, expected: str) -> None:
+def test_default_amplitude_echoes_are_unchanged(model: AmplitudeModel, expected: str,
+                                                room: World,
+                                                random_firings: RandomFirings) -> None:
     # Digests recorded at commit 5d87d34, before small reflectors existed: the option is off by
     # default and every amplitude run stays bit for bit what it was.
     assert not AmplitudeModel().small_reflectors
     robot = load_robot("scout2")
     firings = random_firings(1500, 11, robot)
-    echoes = fire_sonars(room_with_discs(), robot, firings,
+    echoes = fire_sonars(room_with_discs(room), robot, firings,
                          SonarPhysics(echo_model="amplitude", amplitude=model),
                          np.random.default_rng(5))
     assert digest(echoes.kind, echoes.range) == expected
 
 
-def test_small_reflectors_change_nothing_in_a_world_of_walls() -> None:
+def test_small_reflectors_change_nothing_in_a_world_of_walls(room: World,
+                                                             random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(800, 3, robot)
-    runs = [fire_sonars(room_world(), robot, firings, SonarPhysics(
+    runs = [fire_sonars(room, robot, firings, SonarPhysics(
         echo_model="amplitude", amplitude=AmplitudeModel(small_reflectors=on)),
         np.random.default_rng(2)) for on in (False, True)]
     np.testing.assert_array_equal(runs[0].kind, runs[1].kind)
     np.testing.assert_array_equal(runs[0].range, runs[1].range)
-    thin = fire_sonars(room_with_discs(), robot, firings, SonarPhysics(
+    thin = fire_sonars(room_with_discs(room), robot, firings, SonarPhysics(
         echo_model="amplitude", amplitude=AmplitudeModel(small_reflectors=True)),
         np.random.default_rng(2))
     assert not np.array_equal(thin.range, fire_sonars(
-        room_with_discs(), robot, firings, SonarPhysics(echo_model="amplitude"),
+        room_with_discs(room), robot, firings, SonarPhysics(echo_model="amplitude"),
         np.random.default_rng(2)).range, equal_nan=True)
 
 

@@ -6,6 +6,7 @@ Expected ranges come from plane geometry worked out by hand in each test, never 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -24,6 +25,9 @@ from sonarcarve.sim.sonar import (
     wall_geometry,
 )
 from sonarcarve.sim.world import World
+
+#: ``random_firings(n, seed, robot)``, the fixture of tests/sim/conftest.py.
+RandomFirings = Callable[[int, int, RobotDescription], Firings]
 
 CLEAN = SonarPhysics.clean()
 BEAM = math.radians(22.5)
@@ -198,32 +202,13 @@ def test_floor_bounce_during_tilt_episodes() -> None:
     assert np.all(echoes.kind[~floor] == EchoKind.DIRECT)
 
 
-def room_world() -> World:
-    """A 10 x 8 m room with a pillar, a partition and a free-standing wall."""
-    walls = [
-        [0, 0, 10, 0], [10, 0, 10, 8], [10, 8, 0, 8], [0, 8, 0, 0],
-        [4, 3, 5, 3], [5, 3, 5, 4], [5, 4, 4, 4], [4, 4, 4, 3],
-        [7, 0, 7, 3], [2, 6, 3.5, 5.2],
-    ]
-    return World(np.array(walls, dtype=float), name="room")
 
 
-def random_firings(n: int, seed: int, robot: RobotDescription) -> Firings:
-    rng = np.random.default_rng(seed)
-    world = room_world()
-    points = rng.uniform([0.3, 0.3], [9.7, 7.7], (4 * n, 2))
-    points = points[world.distance_to_walls(points) > 0.35][:n]
-    heading = rng.uniform(-math.pi, math.pi, points.shape[0])
-    sensor = rng.integers(0, robot.n_sensors, points.shape[0])
-    sx, sy, theta = robot.sensor_poses(points[:, 0], points[:, 1], heading, sensor)
-    return Firings(t=0.04 * np.arange(points.shape[0]), sensor=sensor, x=sx, y=sy, theta=theta)
-
-
-def test_truth_is_consistent_with_the_readings() -> None:
+def test_truth_is_consistent_with_the_readings(room: World, random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(1500, 11, robot)
     physics = replace(SonarPhysics(), multipath_probability=1.0, crosstalk_probability=0.5)
-    echoes = fire_sonars(room_world(), robot, firings, physics, np.random.default_rng(5))
+    echoes = fire_sonars(room, robot, firings, physics, np.random.default_rng(5))
     kinds = set(echoes.kind.tolist())
     assert {EchoKind.DIRECT, EchoKind.MULTIPATH} <= kinds
     origin = np.column_stack((firings.x, firings.y))
@@ -238,10 +223,10 @@ def test_truth_is_consistent_with_the_readings() -> None:
     bearing = np.arctan2(offset[direct, 1], offset[direct, 0])
     off_axis = np.abs(np.angle(np.exp(1j * (bearing - firings.theta[direct]))))
     assert np.all(off_axis <= BEAM / 2 + 1e-9)
-    assert np.all(room_world().distance_to_walls(echoes.reflection[direct]) < 1e-9)
+    assert np.all(room.distance_to_walls(echoes.reflection[direct]) < 1e-9)
 
     bounced = echoes.kind == EchoKind.MULTIPATH
-    assert np.all(room_world().distance_to_walls(echoes.reflection[bounced]) < 1e-9)
+    assert np.all(room.distance_to_walls(echoes.reflection[bounced]) < 1e-9)
     assert np.all(echoes.true_range[bounced] > seen_at[bounced])  # a detour is longer
     nothing = (echoes.kind == EchoKind.FLOOR) | (echoes.kind == EchoKind.CROSSTALK)
     assert np.all(np.isnan(echoes.reflection[nothing]))
@@ -252,12 +237,11 @@ def test_truth_is_consistent_with_the_readings() -> None:
 
 
 def test_wall_prefilter_and_batching_do_not_change_the_result(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+        monkeypatch: pytest.MonkeyPatch, room: World, random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(600, 2, robot)
     physics = replace(SonarPhysics(), multipath_probability=1.0, crosstalk_probability=1.0)
-    fast = fire_sonars(room_world(), robot, firings, physics, np.random.default_rng(9))
+    fast = fire_sonars(room, robot, firings, physics, np.random.default_rng(9))
 
     def everything(self: object, *box: float, margin: float) -> object:
         geometry = self
@@ -266,7 +250,7 @@ def test_wall_prefilter_and_batching_do_not_change_the_result(
 
     monkeypatch.setattr(wall_geometry._WallGeometry, "near", everything)
     monkeypatch.setattr(tracing, "_CHUNK_FIRINGS", 37)
-    slow = fire_sonars(room_world(), robot, firings, physics, np.random.default_rng(9))
+    slow = fire_sonars(room, robot, firings, physics, np.random.default_rng(9))
     np.testing.assert_array_equal(fast.kind, slow.kind)
     np.testing.assert_array_equal(fast.range, slow.range)
     np.testing.assert_array_equal(fast.reflection, slow.reflection)
@@ -313,10 +297,11 @@ def test_wall_prefilter_keeps_every_wall_within_range_of_a_tour(
     np.testing.assert_array_equal(fast.reflection, slow.reflection)
 
 
-def test_same_seed_same_echoes_other_seed_differs() -> None:
+def test_same_seed_same_echoes_other_seed_differs(room: World,
+                                                  random_firings: RandomFirings) -> None:
     robot = load_robot("scout2")
     firings = random_firings(300, 4, robot)
-    runs = [fire_sonars(room_world(), robot, firings, SonarPhysics(), np.random.default_rng(s))
+    runs = [fire_sonars(room, robot, firings, SonarPhysics(), np.random.default_rng(s))
             for s in (1, 1, 2)]
     np.testing.assert_array_equal(runs[0].range, runs[1].range)
     np.testing.assert_array_equal(runs[0].kind, runs[1].kind)
