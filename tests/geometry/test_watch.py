@@ -148,14 +148,18 @@ def _reference(rows: list[Row], capacity: int) -> np.ndarray:
     return out
 
 
+def _random_rows(seed: int, n: int) -> list[Row]:
+    """``n`` readings of 3 sensors at random in a 2 m square, seeded."""
+    rng = np.random.default_rng(seed)
+    return [(float(rng.uniform(0, 2)), float(rng.uniform(0, 2)), float(rng.uniform(0.2, 3)),
+             float(rng.uniform(-4, 4)), float(rng.uniform(0.2, 1.5)), int(rng.integers(0, 3)))
+            for _ in range(n)]
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_random_rings_match_the_reference_whatever_the_blocks(seed: int) -> None:
-    rng = np.random.default_rng(seed)
     n = 60
-    rows: list[Row] = [(float(rng.uniform(0, 2)), float(rng.uniform(0, 2)),
-                        float(rng.uniform(0.2, 3)), float(rng.uniform(-4, 4)),
-                        float(rng.uniform(0.2, 1.5)), int(rng.integers(0, 3)))
-                       for _ in range(n)]
+    rows = _random_rows(seed, n)
     angles = _reference(rows, capacity=8)
     for angle in (20.0, 30.0, 60.0):
         expected = angles <= math.radians(angle)
@@ -299,12 +303,8 @@ def _covered_reference(rows: list[Row], capacity: int) -> np.ndarray:
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_random_rings_cover_as_the_reference_whatever_the_blocks(seed: int) -> None:
-    rng = np.random.default_rng(seed)
     n = 60
-    rows: list[Row] = [(float(rng.uniform(0, 2)), float(rng.uniform(0, 2)),
-                        float(rng.uniform(0.2, 3)), float(rng.uniform(-4, 4)),
-                        float(rng.uniform(0.2, 1.5)), int(rng.integers(0, 3)))
-                       for _ in range(n)]
+    rows = _random_rows(seed, n)
     expected = _covered_reference(rows, capacity=8)
     assert 5 < np.count_nonzero(expected) < n - 3  # covered and lone arcs
     assert expected.max() > 1.0  # some covered more than once
