@@ -286,3 +286,38 @@ def test_named_sensor_models() -> None:
                            amplitude=AmplitudeModel(small_reflectors=True))
     with pytest.raises(SonarPhysicsError, match="unknown sensor model 'thin'"):
         named_physics("thin")
+
+
+# --------------------------------------------------------------------------- walls, not legs
+
+
+def _bowed_wall(x: float) -> list[list[float]]:
+    """A straight wall 4 m long at ``x`` drawn in 4 pieces whose joints bend 1 mm away from
+    the origin (rounded coordinates): each joint turns the same way, by far less than 30°."""
+    xs = x + np.array([0.0, 0.0007, 0.001, 0.0007, 0.0])
+    ys = np.linspace(-2.0, 2.0, 5)
+    return [[xs[i], ys[i], xs[i + 1], ys[i + 1]] for i in range(4)]
+
+
+@pytest.mark.parametrize(("segments", "x"), [
+    (_bowed_wall(2.0), 0.0),  # its middle pieces bend about a circle of 2 km, concave here
+    (_bowed_wall(5.0), 0.0),
+    (DynamicObstacle.disc((0.0, 0.0), 3.0).segments.tolist(), 0.5),  # a round room, inside
+])
+def test_walls_drawn_in_pieces_are_heard_as_walls(segments: list[list[float]], x: float) -> None:
+    # A wall in pieces and a round room seen from inside are no legs: their mirror echo is a
+    # plane wall's, as with small reflectors off (it was lost: the sensor is inside the circle).
+    plain = fire(segments, x, 0.0, 0.0, physics(SMOOTH))
+    thin = fire(segments, x, 0.0, 0.0, physics(THIN))
+    assert plain.kind.tolist() == [EchoKind.DIRECT]
+    np.testing.assert_array_equal(thin.range, plain.range)
+    assert thin.kind.tolist() == plain.kind.tolist()
+
+
+def test_only_closed_runs_are_curves() -> None:
+    # A bowed wall and a rounded corner (three 30° turns) are open runs: no facets; a leg is.
+    corner = [[-5.0, 2.0, 1.0, 2.0], [1.0, 2.0, 1.5, 1.866], [1.5, 1.866, 1.866, 1.5],
+              [1.866, 1.5, 2.0, 1.0], [2.0, 1.0, 2.0, -5.0]]
+    world = World(np.array(_bowed_wall(2.0) + corner + leg()))
+    facets = _Facets.make(_WallGeometry.make(world), math.radians(30.0))
+    assert facets.curved.tolist() == [False] * 9 + [True] * 24

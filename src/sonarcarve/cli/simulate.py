@@ -157,9 +157,9 @@ def simulate_command(
              "sonarcarve.sim.AmplitudeModel from Python), spreading and absorption with range, "
              "mirror, diffuse and corner echoes against a noisy detection threshold (weak glancing "
              "walls are missed, near ones heard at wide angles). amplitude-thin: amplitude with "
-             "small reflectors: legs and columns (runs of short walls turning by at most 30° "
-             "at each joint) echo as convex cylinders, 17 dB under a wall at 1 m for a 2 cm "
-             "leg: heard over a narrower angle and fading sooner with range.")] = "specular",
+             "small reflectors: legs and columns (closed runs of short walls turning by at most "
+             "30° at each joint) echo as convex cylinders: a leg of 2 cm radius 17 dB under a "
+             "wall at 1 m, heard over a narrower angle and fading sooner.")] = "specular",
     no_echo: Annotated[bool, typer.Option(
         "--no-echo",
         help="CSV output: also record the firings that heard nothing, as rows with range inf "

@@ -42,8 +42,9 @@ Levels are in dB relative to the echo of a perfectly reflecting smooth wall met 
   with E = :attr:`AmplitudeModel.edge_db`, the level of an edge on the axis at 1 m.
 
 * **small reflectors** (opt-in, :attr:`AmplitudeModel.small_reflectors`): a convex cylinder
-  of radius ρ (a table or chair leg, a column; in a world file a run of short walls turning by
-  at most :attr:`AmplitudeModel.facet_turn` at each joint) is not an extended mirror. Geometric
+  of radius ρ (a table or chair leg, a column; in a world file a closed run of short walls
+  turning by at most :attr:`AmplitudeModel.facet_turn` at each joint, seen from outside) is not
+  an extended mirror. Geometric
   acoustics: along the cylinder's axis the surface is a plane mirror (the reflected wavefront
   leaves it with radius d and reaches the sensor with 2d); across it a convex mirror of focal
   length ρ/2, whose virtual image lies d' = 1 / (1/d + 2/ρ) behind the surface (the mirror
@@ -185,8 +186,8 @@ class AmplitudeModel:
         Rays across the fan, edges included (odd: one on the axis); 61 rays are 1° apart.
     small_reflectors : bool
         Off (the default): every wall, however short, echoes as an extended plane mirror, so a
-        leg drawn as a polygon answers like a wall face. On: runs of short walls that bend by
-        at most ``facet_turn`` at each joint are convex cylinders whose mirror echo spreads
+        leg drawn as a polygon answers like a wall face. On: closed runs of short walls that
+        bend by at most ``facet_turn`` at each joint are convex cylinders whose mirror echo spreads
         faster, by ``10 log10(ρ / (ρ + d))`` (:func:`convex_mirror_db`, module docstring), and
         whose joints are not corners.
     facet_turn : float

@@ -83,10 +83,16 @@ def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
     radius = None  # of the curve each wall is a facet of (inf: a plane wall)
     if scene.facets is not None:
         # A facet of a curve echoes from its circle's point nearest the sensor.
-        radius = scene.facets.radius[scene.index]
-        curved = np.flatnonzero(np.isfinite(radius))
-        foot[:, curved], d[:, curved], on_wall[:, curved] = _nearest_on_curves(
-            scene.facets, scene.index[curved], origin, seg[curved])
+        # From inside its circle (a round room's wall) a facet stays a plane mirror.
+        radius = np.repeat(scene.facets.radius[scene.index][None], origin.shape[0], axis=0)
+        curved = np.flatnonzero(np.isfinite(scene.facets.radius[scene.index]))
+        point, distance, on_arc = _nearest_on_curves(scene.facets, scene.index[curved], origin,
+                                                     seg[curved])
+        outside = distance > 0.0
+        foot[:, curved] = np.where(outside[..., None], point, foot[:, curved])
+        d[:, curved] = np.where(outside, distance, d[:, curved])
+        on_wall[:, curved] = np.where(outside, on_arc, on_wall[:, curved])
+        radius[:, curved] = np.where(outside, radius[:, curved], np.inf)
         gap = foot - origin[:, None, :]
     beta = _wrap(np.arctan2(gap[..., 1], gap[..., 0]) - scene.chunk.theta[:, None])
     ok = on_wall & (d >= robot.min_range) & (d <= robot.max_range)
@@ -94,7 +100,7 @@ def _mirror_candidates(scene: _ChunkScene) -> _Candidates:
     fi, wi = np.nonzero(ok)
     level = mirror_echo_db(amp, d[fi, wi], beta[fi, wi], 1, c)
     if radius is not None:
-        level += convex_mirror_db(radius[wi], d[fi, wi])
+        level += convex_mirror_db(radius[fi, wi], d[fi, wi])
     keep = level >= scene.low
     fi, wi, level = fi[keep], wi[keep], level[keep]
     seen = _in_sight(scene.world, origin[fi], foot[fi, wi], scene.limit)

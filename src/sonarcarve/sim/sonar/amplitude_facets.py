@@ -3,11 +3,15 @@
 World files draw a table leg or a column as a regular polygon of short walls. With
 :attr:`~sonarcarve.sim.amplitude.AmplitudeModel.small_reflectors` on, every wall whose two ends
 each meet exactly one other wall turning the same way by at most
-:attr:`~sonarcarve.sim.amplitude.AmplitudeModel.facet_turn` is a *facet* of a circle: the one
-through its ends with the mean turn of its joints as the angle it subtends (a regular polygon's
-circumscribed circle exactly). :class:`_Facets` holds those circles; the echo finders take a
-facet's mirror point on its circle (:func:`_nearest_on_curves`) and its level from
-:func:`~sonarcarve.sim.amplitude.convex_mirror_db`.
+:attr:`~sonarcarve.sim.amplitude.AmplitudeModel.facet_turn`, in a run of such walls that
+closes into a loop, is a *facet* of a circle: the one through its ends with the mean turn of
+its joints as the angle it subtends (a regular polygon's circumscribed circle exactly).
+:class:`_Facets` holds those circles; the echo finders take a facet's mirror point on its
+circle (:func:`_nearest_on_curves`) and its level from
+:func:`~sonarcarve.sim.amplitude.convex_mirror_db`. An open run (a wall drawn in pieces that
+bend a little the same way, a rounded corner, a curved corridor) stays plane walls, and a facet
+seen from inside its circle (a round room) is a plane mirror: the convex-cylinder echo holds
+only outside.
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from sonarcarve.sim.sonar.wall_geometry import _touching_count, _WallGeometry
@@ -60,7 +66,7 @@ class _Facets:
         ends = np.bincount(wall, minlength=n)
         total = np.bincount(wall, weights=np.repeat(turn, 2), minlength=n)
         sides = np.bincount(wall, weights=side, minlength=n)
-        curved = np.flatnonzero((ends == 2) & (np.abs(sides) == 2))
+        curved = np.flatnonzero(_closed((ends == 2) & (np.abs(sides) == 2), owner[joint]))
         edge = seg[curved, 2:] - seg[curved, :2]
         length = np.hypot(edge[:, 0], edge[:, 1])
         rho = length / (2.0 * np.sin(total[curved] / 4.0))  # mean turn / 2
@@ -74,6 +80,20 @@ class _Facets:
             gap, _ = cKDTree(joints).query(geometry.scatter, k=1)
             corner = np.asarray(gap > tol)
         return cls(radius, center, corner)
+
+
+def _closed(candidate: BoolArray, links: IntArray) -> BoolArray:
+    """The ``candidate`` walls whose runs close into loops (a leg's or a column's polygon),
+    ``links`` (k, 2) the two walls of each joint. An open run is a wall drawn in pieces (a
+    bowed or rounded wall, a curved corridor): it stays a plane mirror, heard from both sides.
+    """
+    n = candidate.shape[0]
+    link = links[candidate[links[:, 0]] & candidate[links[:, 1]]]
+    degree = np.bincount(link.ravel(), minlength=n)
+    graph = coo_matrix((np.ones(link.shape[0]), (link[:, 0], link[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    open_runs = np.unique(label[candidate & (degree < 2)])
+    return np.asarray(candidate & ~np.isin(label, open_runs))
 
 
 def _inward(seg: FloatArray) -> FloatArray:
