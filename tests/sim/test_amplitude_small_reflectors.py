@@ -284,6 +284,9 @@ def test_named_sensor_models() -> None:
     thin = named_physics("amplitude-thin", SonarPhysics.clean())
     assert thin == replace(SonarPhysics.clean(), echo_model="amplitude",
                            amplitude=AmplitudeModel(small_reflectors=True))
+    # Each name sets the option, whatever the base had: amplitude from a thin base is plain.
+    assert not named_physics("amplitude", thin).amplitude.small_reflectors
+    assert named_physics("amplitude", thin).echo_model == "amplitude"
     with pytest.raises(SonarPhysicsError, match="unknown sensor model 'thin'"):
         named_physics("thin")
 

@@ -174,10 +174,11 @@ def named_physics(name: str, base: SonarPhysics = DEFAULT_PHYSICS) -> SonarPhysi
         choices = ", ".join(repr(n) for n in PHYSICS_NAMES)
         msg = f"unknown sensor model {name!r}; choose one of {choices}"
         raise SonarPhysicsError(msg)
-    echo_model = "amplitude" if name == "amplitude-thin" else name
+    thin = name == "amplitude-thin"
+    echo_model = "amplitude" if thin else name
     physics = base if echo_model == base.echo_model else replace(base, echo_model=echo_model)
-    if name == "amplitude-thin":
-        physics = replace(physics, amplitude=replace(physics.amplitude, small_reflectors=True))
+    if physics.amplitude.small_reflectors != thin:  # "amplitude" from a thin base: off again
+        physics = replace(physics, amplitude=replace(physics.amplitude, small_reflectors=thin))
     return physics
 
 
