@@ -127,7 +127,7 @@ WORLD_FILE = Path(__file__).resolve().parent / "worlds" / "clutter.json"
 #: with small reflectors (legs and columns echo as convex cylinders:
 #: :attr:`~sonarcarve.sim.amplitude.AmplitudeModel.small_reflectors`); and that model on a
 #: sonar 25.3 dB less sensitive (a wall head-on heard to 5 m, not 10.7), a stress case in which
-#: a 2 cm leg is heard on the axis only within about 1.8 m, so many beams that reach a leg
+#: a leg of 2 cm radius is heard on the axis only within about 1.8 m, so many beams that reach a leg
 #: pass over it.
 _THIN = named_physics("amplitude-thin", PHYSICS["amplitude"])
 CLUTTER_PHYSICS = {"specular": PHYSICS["specular"], "amplitude": PHYSICS["amplitude"],

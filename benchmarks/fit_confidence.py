@@ -35,7 +35,8 @@ other weights, ``fresh`` and the maturity time stay the library default's. A new
 is 0 wherever the live map reads it (``behind``: judged only when the arc leaves the history)
 then leaves that map as it was, bit for bit. ``alone`` (no other sensor's beam held the arc)
 was fitted the same way, the library's other weights held: it is 1 for a few arcs of the
-training ring, whose beams overlap, and says where ``others`` could not have confirmed an arc.
+training ring, whose 22.5° beams just meet, and says where ``others`` could not have
+confirmed an arc.
 
 ``--carve-probability P`` fits the confidence of evidence carving run with that P_carve (its
 features change with it: ``free`` and ``looked`` are in units of the threshold, and what

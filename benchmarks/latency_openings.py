@@ -48,7 +48,7 @@ from sonarcarve.lab.plan import Job, Settings
 from sonarcarve.lab.scenarios import run_simulation
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
-from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod
+from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceMethod
 from sonarcarve.sim.motion import ROBOT_RADIUS
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
@@ -69,7 +69,10 @@ def parse_variant(text: str) -> Variant:
     probability, _, path = text.partition(":")
     model = None
     if path:
-        model = ConfidenceModel(**json.loads(Path(path).read_text(encoding="utf-8")))
+        fields = json.loads(Path(path).read_text(encoding="utf-8"))
+        # A file fitted before a feature existed has no weight for it: 0, not today's default.
+        absent = {name: 0.0 for name in CONFIDENCE_FEATURES if name not in fields}
+        model = ConfidenceModel(**absent, **fields)
     label = f"evidence, P_carve {float(probability):g}" + (f", fit {path}" if path else "")
     return label, float(probability), model
 

@@ -69,7 +69,7 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
     (["--range-tolerance", "-0.1"], "--range-tolerance must be a number in [0, 1] metres"),
     (["--range-tolerance", "1e9"], "--range-tolerance must be a number in [0, 1] metres"),
     (["--range-tolerance", "0.9", "--pose-sigma", "0.1"],
-     "--range-tolerance + 2 --pose-sigma (the ε it carves with) must be at most 1 metres, "
+     "--range-tolerance + 2 --pose-sigma (the ε it carves with) must be at most 1 m, "
      "got 1.1"),
     (["--range-tolerance", "0.1", "--model", "elfes"],
      "--range-tolerance applies to --model carved only, not elfes"),

@@ -276,6 +276,12 @@ def test_bad_facet_turn_is_refused(turn: float) -> None:
         AmplitudeModel(facet_turn=turn)
 
 
+@pytest.mark.parametrize("flag", ["no", 1, None])
+def test_small_reflectors_must_be_a_bool(flag: object) -> None:
+    with pytest.raises(SonarPhysicsError, match="small_reflectors must be True or False"):
+        AmplitudeModel(small_reflectors=flag)  # type: ignore[arg-type]
+
+
 
 def test_named_sensor_models() -> None:
     assert PHYSICS_NAMES == ("specular", "amplitude", "amplitude-thin")

@@ -185,7 +185,8 @@ _BeamWidthOpt = Annotated[float, typer.Option(
          "such column, or a blank cell); a beam_width column, in radians, wins.")]
 _ToleranceOpt = Annotated[float, typer.Option(
     metavar="METRES",
-    help="ε in metres: a newer reading's free space ends ε short of its range (0 = paper). "
+    help="ε in metres, 0 to 1: a newer reading's free space ends ε short of its range (0 = "
+         "paper). "
          "With poses from a localiser good to σ metres, add 2σ (5 cm: 0.15), so that a beam "
          "stamped a little off does not carve the walls it passes (docs/RESULTS.md, 'Maps from "
          "wrong poses').")]

@@ -288,6 +288,12 @@ class ConfidenceModel:
     in the history: :mod:`~sonarcarve.geometry.evidence.watch`, "Covered"). Paper, section 6:
     certainty values per point.
 
+    ``alone`` is counted within the history, so it depends on ``history_size``: with a short
+    history fewer arcs are covered. On a robot with one sonar, or sonars that never share a
+    point, every arc is alone and the feature is a constant +0.674 on every logit, a shift of
+    the intercept that keeps more phantoms; that case was not measured (the rings measured are
+    RESULTS, "The ``others`` feature on other rings").
+
     Other rings: ``others`` was fitted on a ring whose beams just meet; it fails both ways on
     others (``docs/RESULTS.md``, "The ``others`` feature on other rings", where both fixes
     below are measured). Where beams do not overlap (15° beams 22.5° apart) a wall one sensor

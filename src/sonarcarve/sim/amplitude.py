@@ -55,19 +55,21 @@ Levels are in dB relative to the echo of a perfectly reflecting smooth wall met 
 
       L_cyl = L_mirror(d) + 10 log10(ρ / (ρ + d))
 
-  A 2 cm leg answers 17.1 dB under a wall at 1 m and 21.8 dB under it at 3 m (−37.9 dB, still
-  14.5 dB above the threshold on the axis; it falls under it at about 5 m). For d ≫ ρ this is
-  the target strength of a long cylinder, TS = 10 log10(a r / 4) with the echo −40 log r + TS:
-  the finite cylinder's 10 log10(a L² / 2λ) (Urick, *Principles of Underwater Sound*, the table
-  of target strengths of simple forms) with the length that answers at once, the first Fresnel
-  zone L² = λ r / 2, which also turns the finite plate's (A/λ)² into the infinite plane's r²/4.
-  The a r / 2 tabulated for an infinitely long cylinder is a plane wave's (no spreading on the
-  way in along the axis), 3 dB above what a sensor's spherical wave gets back. The echo
-  comes from the point of the circle nearest the sensor, wherever it falls
-  (a facet's own foot of the perpendicular would leave gaps at the joints). The facet joints
-  are not corners (no edge echo), a facet's diffuse area is at most the cylinder's width 2ρ
-  along the surface, and facets are not the mirrors of multipath or crosstalk paths (bounced
-  off a convex mirror, those spread at least as fast as the direct echo and arrive later).
+  A leg of 2 cm radius answers 17.1 dB under a wall at 1 m and 21.8 dB under it at 3 m
+  (−37.9 dB, still 14.5 dB above the threshold on the axis; it falls under it at about 5 m).
+  For d ≫ ρ this is the target strength of a long cylinder, TS = 10 log10(a r / 4) with the
+  echo −40 log r + TS: the finite cylinder's 10 log10(a L² / 2λ) (Urick, *Principles of
+  Underwater Sound*, the table of target strengths of simple forms) with an effective length
+  that answers at once, L² = λ r / 2 (the square of the first Fresnel zone's radius, not its
+  length), which also turns the finite plate's (A/λ)² into the infinite plane's r²/4. The a
+  r / 2 tabulated for an infinitely long cylinder is a plane wave's (no spreading on the way
+  in along the axis), 3 dB above what a sensor's spherical wave gets back. The echo comes
+  from the point of the circle nearest the sensor, wherever it falls (a facet's own foot of
+  the perpendicular would leave gaps at the joints). The facet joints are not corners (no
+  edge echo), a facet's diffuse area is at most the cylinder's width 2ρ along the surface,
+  and facets are not the mirrors of multipath or crosstalk paths: a simplification, not a
+  computed level (bounced off a convex mirror such a path spreads faster than off a wall,
+  but a receiving sensor that hears no direct echo could still hear it).
 
 The sensor hears an echo when ``L + noise_db · z ≥ threshold_db`` with z standard normal, one
 draw per candidate echo; the probability is :func:`detection_probability`. The threshold is the
@@ -82,7 +84,7 @@ Simplifications: walls are vertical and the sensors horizontal, so the 3-D beam 
 horizontal plane (the vertical beam enters only the diffuse area); the Polaroid ranging
 module's time-varying gain is folded into the single threshold; every wall has the same
 surface (reflectivity and diffuse fraction). With ``small_reflectors`` a flat face narrower than
-the Fresnel zone (√(λ d / 2), 6 cm at 1 m) still echoes like a whole wall: only curved runs
+the Fresnel radius (√(λ d / 2), 6 cm at 1 m) still echoes like a whole wall: only curved runs
 of facets are corrected; a leg is a vertical cylinder taller than the vertical Fresnel zone
 (its top and bottom edges are not modelled).
 """
@@ -236,6 +238,8 @@ class AmplitudeModel:
             _bad("fan_rays", self.fan_rays, "must be at least 1")
         if not 0.0 < self.facet_turn <= math.pi / 2:
             _bad("facet_turn", self.facet_turn, "must lie in (0, π/2] radians")
+        if not isinstance(self.small_reflectors, bool):  # "no" would turn it on
+            _bad("small_reflectors", self.small_reflectors, "must be True or False")
 
     @property
     def specular_db(self) -> float:

@@ -37,8 +37,9 @@ the kept run's point, which moves as carving goes on).
 
 Covered by another sensor (``covering``, the confidence's ``alone`` feature): the same pairs
 also count the readings of *another sensor* whose beam held an arc's axis point, at any angle
-and any range (its echo nearer, farther or none: :func:`mark_watched_by_silence` counts it too;
-each pair once, both ways). The support of other sensors (``others``, the confidence's heaviest
+and any range of its echo (nearer, farther or none: :func:`mark_watched_by_silence` counts a
+silent reading too, where the point lies within its maximum range; each pair once, both
+ways). The support of other sensors (``others``, the confidence's heaviest
 weight) comes from such beams: on a ring whose beams do not overlap (15° beams 22.5° apart) a
 wall one sensor faces is covered by no other, and the fitted model would read the missing
 support as a phantom's (``docs/RESULTS.md``, "The ``others`` feature on other rings"). The axis

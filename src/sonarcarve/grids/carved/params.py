@@ -286,7 +286,7 @@ class CarvedGridParams:
         carving_tolerance = self.range_tolerance + POSE_MARGIN_SIGMAS * self.pose_sigma
         if carving_tolerance > MAX_RANGE_TOLERANCE:  # the default method's ε would refuse it
             msg = (f"{_LABEL}: range_tolerance + {POSE_MARGIN_SIGMAS:g} pose_sigma (the ε it "
-                   f"carves with) must be at most {MAX_RANGE_TOLERANCE:g} metres, got "
+                   f"carves with) must be at most {MAX_RANGE_TOLERANCE:g} m, got "
                    f"{carving_tolerance:g}")
             raise GridError(msg)
 
