@@ -86,7 +86,10 @@ module's time-varying gain is folded into the single threshold; every wall has t
 surface (reflectivity and diffuse fraction). With ``small_reflectors`` a flat face narrower than
 the Fresnel radius (√(λ d / 2), 6 cm at 1 m) still echoes like a whole wall: only curved runs
 of facets are corrected; a leg is a vertical cylinder taller than the vertical Fresnel zone
-(its top and bottom edges are not modelled).
+(its top and bottom edges are not modelled). A closed run seen from inside (a round room)
+echoes as a plane mirror for the direct path but is, like a leg, no mirror for multipath or
+crosstalk; a disc that shares a vertex with a wall or another disc is not a closed run, so it
+stays a polygon of plane faces.
 """
 
 from __future__ import annotations
