@@ -1,0 +1,235 @@
+"""What the driven-through map filter (``MapFilter(driven_through=...)``, ``process
+--driven-through``) keeps and removes, beside the same map unfiltered, in the same run.
+
+Run from the repository root (on a shared machine, with ``nice``)::
+
+    nice .venv/bin/python benchmarks/driven_through.py                  # every group, ~25 min
+    nice .venv/bin/python benchmarks/driven_through.py --groups car --seeds 1
+
+The filter drops the map points that the robot's body covered at a later pose
+(:func:`sonarcarve.filters.driven_through_mask`). Groups of simulations (``--groups``):
+
+- ``car``: ``car-parking-12`` along the car park of :mod:`car_park` (as :mod:`parking`), under
+  the specular, amplitude and "amplitude, car transducer" physics;
+- ``scout1`` and ``scout2``: the one-sonar and two-sonar Scout2 robots
+  (``benchmarks/robots/scout2-front-1.yaml``, ``scout2-front-back.yaml``) on the held-out
+  floors of :mod:`heldout` (``random:1``, ``random:2``, ``random:3:40x30``), specular and
+  amplitude;
+- ``dev``: the Scout2 ring on the development worlds (office, t-junction, doorway), specular and
+  amplitude;
+- ``pose``: the Scout2 ring on the office under the localisation error and odometry drift of
+  :mod:`pose_error` (specular), where a revisit may put the body over a wall mapped from a
+  pose that was wrong.
+
+For evidence carving's default map and paper carving's (``carve``), each row pools the runs
+of its group (seeds 0..``--seeds``-1): the direct echoes kept, the spurious ones removed per
+kind (crosstalk, floor, multipath; a reading counts once, kept if its point is in the map), the
+median and p90 distance of the map's points to the true walls (mean over runs), the direct
+points the filter dropped (and their median true error: a misplaced point in free space is
+dropped rightly), and the filter's seconds against the method's. Filters: ``body``, the
+robot's own footprint (:meth:`~sonarcarve.filters.BodyFootprint.of_robot`: mounts and
+``robot_radius``), and ``sensors 0.1 m`` (:meth:`~sonarcarve.filters.BodyFootprint.around_sensors`,
+the fallback without a robot description).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shlex
+import sys
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import car_park
+from heldout import PHYSICS, WORLDS
+from parking import CAR_PHYSICS, ROBOT
+from pose_error import CONDITIONS, simulate_condition
+from sonarcarve import make_method
+from sonarcarve.filters import BodyFootprint, driven_through_mask
+from sonarcarve.lab.metrics import segment_distance
+from sonarcarve.lab.scenarios import Scenario, run_simulation
+from sonarcarve.methods import MethodConfig
+from sonarcarve.pipeline import process_readings
+from sonarcarve.robot import RobotDescription, load_robot
+from sonarcarve.sim.motion import follow_waypoints
+from sonarcarve.sim.simulate import Simulation, simulate
+from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.world import load_world
+
+METHODS = ("evidence", "carve")
+ROBOTS = {"scout1": str(Path(__file__).resolve().parent / "robots" / "scout2-front-1.yaml"),
+          "scout2": str(Path(__file__).resolve().parent / "robots" / "scout2-front-back.yaml")}
+DEV_WORLDS = ("office", "t-junction", "doorway")
+SENSOR_CLEARANCE = 0.1
+SPURIOUS = (EchoKind.CROSSTALK, EchoKind.FLOOR, EchoKind.MULTIPATH)
+
+
+def bodies(robot: RobotDescription) -> dict[str, BodyFootprint | None]:
+    """The filter variants: none, the robot's body, a small disc around each sensor."""
+    return {"unfiltered": None,
+            "body": BodyFootprint.of_robot(robot.mount_x, robot.mount_y, robot.bearing,
+                                           robot.robot_radius),
+            f"sensors {SENSOR_CLEARANCE} m": BodyFootprint.around_sensors(SENSOR_CLEARANCE)}
+
+
+@dataclass
+class Tally:
+    """Counts pooled over the runs of one (group, method, filter) row."""
+
+    direct: int = 0
+    direct_kept: int = 0
+    kinds: dict[int, list[int]] = field(default_factory=dict)  # kind -> [readings, removed]
+    medians: list[float] = field(default_factory=list)
+    p90s: list[float] = field(default_factory=list)
+    dropped_direct: int = 0
+    dropped_direct_error: list[float] = field(default_factory=list)
+    dropped_spurious: int = 0
+    method_s: float = 0.0
+    filter_s: float = 0.0
+    losses: list[str] = field(default_factory=list)
+
+
+def _score(tally: Tally, sim: Simulation, in_map: np.ndarray, err: np.ndarray) -> None:
+    kind = sim.truth.kind
+    direct = kind == EchoKind.DIRECT
+    tally.direct += int(direct.sum())
+    tally.direct_kept += int(in_map[direct].sum())
+    for k in SPURIOUS:
+        counts = tally.kinds.setdefault(int(k), [0, 0])
+        counts[0] += int(np.sum(kind == k))
+        counts[1] += int(np.sum((kind == k) & ~in_map))
+    tally.medians.append(float(np.median(err)) if err.size else math.nan)
+    tally.p90s.append(float(np.percentile(err, 90.0)) if err.size else math.nan)
+
+
+def measure(sim: Simulation, robot: RobotDescription, label: str,
+            rows: dict[tuple[str, str], Tally]) -> None:
+    """Add one simulation's measures to ``rows`` (keyed by method and filter)."""
+    kind = sim.truth.kind
+    for method in METHODS:
+        tic = time.process_time()
+        gmap = process_readings(sim.readings, make_method(method, MethodConfig())).global_map
+        method_s = time.process_time() - tic
+        err = segment_distance(gmap.xy, sim.world.segments)[0]
+        point_direct = kind[gmap.reading_id] == EchoKind.DIRECT
+        for name, body in bodies(robot).items():
+            tally = rows.setdefault((method, name), Tally())
+            keep = np.ones(len(gmap), dtype=bool)
+            if body is not None:
+                tic = time.process_time()
+                keep = ~driven_through_mask(gmap.xy, gmap.t, sim.readings, body)
+                tally.filter_s += time.process_time() - tic
+                dropped = ~keep & point_direct
+                tally.dropped_direct += int(dropped.sum())
+                tally.dropped_direct_error += err[dropped].tolist()
+                tally.dropped_spurious += int(np.sum(~keep & ~point_direct))
+                if dropped.any():
+                    tally.losses.append(f"{label}: {int(dropped.sum())} direct (true error "
+                                        f"median {np.median(err[dropped]):.2f} m)")
+            tally.method_s += method_s
+            in_map = np.zeros(len(kind), dtype=bool)
+            in_map[gmap.reading_id[keep]] = True
+            _score(tally, sim, in_map, err[keep])
+
+
+def _pct(part: int, whole: int) -> str:
+    return f"{100 * part / whole:.1f} ({part}/{whole})" if whole else "–"
+
+
+def print_table(title: str, rows: dict[tuple[str, str], Tally]) -> None:
+    print(f"\n{title}\n")
+    print("| method | filter | direct kept (%) | crosstalk removed (%) | floor removed (%) | "
+          "multipath removed (%) | median / p90 error (m) | direct dropped by the filter "
+          "(median true error, m) | spurious dropped by the filter | filter / method CPU (%) |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for (method, name), t in rows.items():
+        kinds = [_pct(t.kinds[int(k)][1], t.kinds[int(k)][0]) for k in SPURIOUS]
+        dropped = "" if name == "unfiltered" else (
+            f"{t.dropped_direct} ({np.median(t.dropped_direct_error):.2f})"
+            if t.dropped_direct else "0")
+        spurious = "" if name == "unfiltered" else str(t.dropped_spurious)
+        cpu = "" if name == "unfiltered" else f"{100 * t.filter_s / t.method_s:.2f}"
+        print(f"| {method} | {name} | {_pct(t.direct_kept, t.direct)} | {' | '.join(kinds)} | "
+              f"{np.nanmean(t.medians):.3f} / {np.nanmean(t.p90s):.3f} | {dropped} | {spurious} "
+              f"| {cpu} |")
+    for (method, name), t in rows.items():
+        for loss in t.losses:
+            print(f"- loss, {method}, {name}: {loss}")
+
+
+Run = tuple[str, Callable[[], Simulation], RobotDescription]
+
+
+def car_runs(seeds: int) -> Iterator[tuple[str, list[Run]]]:
+    world = load_world(car_park.WORLD_FILE)
+    assert world.tour is not None
+    trajectory = follow_waypoints(world.tour, speed=car_park.SPEED,
+                                  corner_radius=car_park.CORNER_RADIUS)
+    robot = load_robot(ROBOT)
+    for physics_name, physics in CAR_PHYSICS.items():
+        yield f"car park, {ROBOT}, {physics_name}", [
+            (f"seed {seed}", lambda s=seed, p=physics: simulate(world, robot, trajectory, s,
+                                                                physics=p), robot)
+            for seed in range(seeds)]
+
+
+def ring_runs(robot_spec: str, worlds: tuple[str, ...], seeds: int,
+              ) -> Iterator[tuple[str, list[Run]]]:
+    robot = load_robot(robot_spec)
+    for physics_name in ("specular", "amplitude"):
+        overrides = () if physics_name == "specular" else (("echo_model", "amplitude"),)
+        assert physics_name in PHYSICS
+        yield f"{robot.name}, {', '.join(worlds)}, {physics_name}", [
+            (f"{world} seed {seed}",
+             lambda w=world, s=seed, o=overrides: run_simulation(
+                 Scenario(w, s, physics=o, robot=robot_spec)), robot)  # type: ignore[arg-type]
+            for world in worlds for seed in range(seeds)]
+
+
+def pose_runs(seeds: int) -> Iterator[tuple[str, list[Run]]]:
+    robot = load_robot("scout2")
+    for condition in CONDITIONS[1:]:
+        yield f"scout2, office, specular, {condition.label}", [
+            (f"office seed {seed}",
+             lambda s=seed, c=condition: simulate_condition("office", s, "specular", "scout2", c),
+             robot) for seed in range(seeds)]
+
+
+def groups(names: list[str], seeds: int) -> Iterator[tuple[str, list[Run]]]:
+    for name in names:
+        if name == "car":
+            yield from car_runs(seeds)
+        elif name in ROBOTS:
+            yield from ring_runs(ROBOTS[name], WORLDS, seeds)
+        elif name == "dev":
+            yield from ring_runs("scout2", DEV_WORLDS, seeds)
+        elif name == "pose":
+            yield from pose_runs(seeds)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--groups", nargs="+", default=["car", "scout1", "scout2", "dev", "pose"],
+                        choices=["car", "scout1", "scout2", "dev", "pose"])
+    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1 per world")
+    args = parser.parse_args(argv)
+    command = "nice .venv/bin/python benchmarks/driven_through.py " + shlex.join(
+        argv if argv is not None else sys.argv[1:])
+    print(f"`{command.strip()}`")
+    for title, runs in groups(args.groups, args.seeds):
+        rows: dict[tuple[str, str], Tally] = {}
+        for label, make, robot in runs:
+            sim = make()
+            measure(sim, robot, label, rows)
+            print(f"  {title}, {label}: {len(sim.readings):,} readings", flush=True)
+        print_table(title, rows)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
