@@ -919,7 +919,8 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     reach = body.reach
     step = min(DRIVEN_STEP, 0.25 * reach)
     tracks = body.tracks(poses.t, poses.sensor, poses.x, poses.y, poses.theta)
-    path = np.vstack([swept_poses(track, step, reach) for track in tracks])
+    path = np.vstack([swept_poses(_thinned(track, step, reach, margin), step, reach)
+                      for track in tracks])
     from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
 
     pairs = cKDTree(pts).sparse_distance_matrix(cKDTree(path[:, 1:3]), reach,
@@ -930,6 +931,26 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     inside = _inside_outline(pts[point], path[pose], body.outline)
     covered[point[inside]] = True
     return covered
+
+
+def _thinned(track: FloatArray, step: float, reach: float, margin: float) -> FloatArray:
+    """``track`` without the poses that moved it less than half a ``step`` (a corner
+    ``reach`` out included) and less than ``margin`` seconds on: a fast ring or a slow robot
+    logs many poses a centimetre apart, and the cost grows with the poses near each point. The
+    first and last pose, and both ends of a gap longer than :data:`DRIVEN_MAX_GAP`, stay."""
+    if track.shape[0] < 3:
+        return track
+    turn = np.abs(np.angle(np.exp(1j * np.diff(track[:, 3]))))
+    travel = np.concatenate(([0.0], np.cumsum(np.hypot(np.diff(track[:, 1]),
+                                                       np.diff(track[:, 2])) + reach * turn)))
+    place = np.floor(travel / (0.5 * step))
+    clock = np.floor((track[:, 0] - track[0, 0]) / max(margin, 1e-9))
+    gap = np.diff(track[:, 0]) > DRIVEN_MAX_GAP
+    keep = np.ones(track.shape[0], dtype=bool)
+    keep[1:] = (place[1:] != place[:-1]) | (clock[1:] != clock[:-1]) | gap
+    keep[:-1] |= gap
+    keep[-1] = True
+    return track[keep]
 
 
 def _inside_outline(q: FloatArray, pose: FloatArray, outline: FloatArray) -> BoolArray:
