@@ -32,7 +32,10 @@ drops points that lie more than ``occlusion_depth`` behind a surface of the map 
 from their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); only points
 whose error bound is at most half that depth make up the surfaces. It needs the sensor origin of
 every point, which a map does not hold, so :func:`filter_map` takes them (:func:`point_origins`
-looks them up in the readings).
+looks them up in the readings). Before it, also beyond the paper and also off by default, the
+**driven-through** filter drops points that the robot's body covered at a later pose
+(:func:`driven_through_mask`, :class:`BodyFootprint`): ghost walls of late echoes, floor
+echoes, whatever has moved away. It needs the readings themselves, for the body's path.
 """
 
 from __future__ import annotations
@@ -693,6 +696,11 @@ DRIVEN_MARGIN = 0.25
 #: Two consecutive poses of a track further apart in time than this, seconds, are not joined:
 #: the log has a hole and the body's path through it is unknown.
 DRIVEN_MAX_GAP = 2.0
+#: Most distance between two poses of the swept path, metres (and a quarter of the body's
+#: reach for a small body): with poses this close the footprints drawn at them overlap into
+#: the swept strip, whose edges they miss by at most step² / (8 x radius), 1.5 mm for the
+#: Scout2.
+DRIVEN_STEP = 0.05
 #: Sides of the regular polygon inscribed in a round body (inscribed: never larger than the
 #: body; at 16 sides it loses at most 1.9 % of the radius).
 DISC_SIDES = 16
@@ -749,8 +757,12 @@ class BodyFootprint:
     def around_sensors(cls, radius: float) -> BodyFootprint:
         """Without a robot description: a disc of ``radius`` around every sensor's origin.
         The transducer and its housing are solid, so whatever a sensor itself later passed
-        through was no obstacle; a robot's body is larger, so this drops fewer points than
-        :meth:`of_robot` would, never more.
+        through was no obstacle. A sensor sits on the body's rim, so the disc reaches
+        ``radius`` beyond the body on the outside: keep it to the size of the sensor's mount
+        (docs/RESULTS.md, *The body drove through it*, measured 0.05 and 0.1 m). It misses
+        what only the body's middle passed over: ghost walls straight ahead of a single
+        front sonar, whose path the sensor itself does sweep, are caught; a lane a car's
+        middle drove down is not.
 
         Raises
         ------
@@ -854,12 +866,6 @@ def swept_poses(track: FloatArray, step: float, reach: float = 0.0,
     return np.vstack([start[segment] + fraction[:, None] * delta, track[-1:]])
 
 
-#: Most distance between two poses of the swept path, metres (and a quarter of the body's
-#: reach for a small body): with poses this close the footprints drawn at them overlap into
-#: the swept strip, whose edges they miss by at most step² / (8 x radius), 1.5 mm for the
-#: Scout2.
-DRIVEN_STEP = 0.05
-
 
 def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch,
                         body: BodyFootprint, margin: float = DRIVEN_MARGIN) -> BoolArray:
@@ -874,6 +880,12 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     body's whole sweep counts, not only where a reading was taken. The point tested is the
     map's placed point, never the reading's axis: a wide beam's axis may well run down the
     lane the robot then drives (docs/RESULTS.md, *The body drove through it*).
+
+    Why these choices: the footprint errs small (an inscribed polygon; the sensors' hull, which
+    lies inside a convex body), since a wall dropped is worse than a ghost kept. Only poses
+    more than ``margin`` after the reading count, so the reading's own pose and its cycle's
+    never do. The test trusts the poses: a revisit under odometry drift puts the body where
+    the old map is wrong, and can drop a real wall there.
 
     Parameters
     ----------
