@@ -244,11 +244,13 @@ _DrivenOpt = Annotated[str | None, typer.Option(
          "fired faster than its hearing range hears the previous ping's far echo, every time, "
          "a few metres in front of the real wall it then drives towards), floor echoes, and "
          "whatever has moved away. ROBOT (a built-in name such as scout2 or car-parking-12, or "
-         "a robot YAML) gives the body: its sensor mounts and robot_radius; METRES, without a "
-         "robot description, a disc of that radius around each sensor (0.1 is safe; it drops "
-         "less). The map is then the current one: a door the robot later drove through is "
-         "dropped too; under odometry drift a revisit can drop a wall (docs/RESULTS.md, \"The "
-         "body drove through it\").",
+         "a robot YAML) gives the body: its sensor mounts and robot_radius (best: it caught "
+         "83 % of a lone sonar's ghosts and 48 % of a car's); METRES, without a robot "
+         "description, a disc of that radius around each sensor's origin (0.05, a "
+         "transducer's size; it catches fewer, 58 % and 8 %). The map is then the current "
+         "one: whatever the robot later drove over is dropped, a person or a shut door too; "
+         "under odometry drift a revisit can drop a wall (docs/RESULTS.md, \"The body drove "
+         "through it\").",
     rich_help_panel="Filters")]
 
 
