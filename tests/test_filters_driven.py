@@ -77,6 +77,21 @@ def test_each_sensor_is_its_own_track_without_mounts() -> None:
     assert mask.tolist() == [False, True]
 
 
+def test_dense_poses_thinned_still_follow_a_corner_and_a_long_stop() -> None:
+    # An L at 4 m/s, a pose every 0.01 s: the thinned path keeps the corner at (2.1, 0), which
+    # the body covers 0.15 m beyond, and never drove the diagonal ...
+    t = np.arange(103) * 0.01
+    x, y = np.minimum(4.0 * t, 2.1), np.maximum(4.0 * t - 2.1, 0.0)
+    corner = _drive(t.tolist(), x.tolist(), y.tolist())
+    mask = driven_through_mask([[1.0, 1.0], [2.25, 0.0]], [-1.0, -1.0], corner, DISC)
+    assert mask.tolist() == [False, True]
+    # ... and a stop: standing still from 0 to 10 s, the robot covers what it heard at 5 s
+    # 0.19 m behind its sensor (then it drives off, away from it).
+    t = np.arange(1101) * 0.01
+    stop = _drive(t.tolist(), np.maximum(t - 10.0, 0.0).tolist())
+    assert driven_through_mask([[-0.19, 0.0]], [5.0], stop, DISC).tolist() == [True]
+
+
 # A car-like body: sensors at both ends, 4 m apart, and a round middle of 0.5 m radius.
 CAR = BodyFootprint.of_robot([2.0, -2.0], [0.0, 0.0], [0.0, math.pi], 0.5)
 
