@@ -190,10 +190,16 @@ def process_chunks(
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
     origins = (_Origins() if map_filter is not None and map_filter.occlusion_depth is not None
                else None)
+    # Every reading's pose, the dropped ones' too: a reading the filters refuse was still
+    # taken where the robot stood.
+    poses: list[ReadingBatch] | None = (
+        [] if map_filter is not None and map_filter.driven_through is not None else None)
     rows = 0
     for chunk in chunks:
         ids = np.arange(rows, rows + len(chunk), dtype=np.int64)
         rows += len(chunk)
+        if poses is not None:
+            poses.append(chunk)
         if chunk_filter is not None:
             keep = chunk_filter.keep(chunk)
             chunk, ids = chunk[keep], ids[keep]
@@ -206,7 +212,8 @@ def process_chunks(
         filter_report = chunk_filter.report
         if on_progress is not None:
             on_progress(filter_report.total)
-    return _finish(run, timed, filter_report, map_filter, origins)
+    path = None if poses is None else ReadingBatch.concatenate(poses, validate=False)
+    return _finish(run, timed, filter_report, map_filter, origins, path)
 
 
 def _check_run(method: SonarMethod, sample_every: int | None, map_filter: MapFilter | None,
@@ -242,7 +249,8 @@ def _schedule(method: SonarMethod, sample_every: int | None) -> _Schedule:
 
 
 def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterReport | None,
-            map_filter: MapFilter | None, origins: _Origins | None = None) -> ProcessResult:
+            map_filter: MapFilter | None, origins: _Origins | None = None,
+            poses: ReadingBatch | None = None) -> ProcessResult:
     """Finish the run's method and gather what it measured (the map filtered last)."""
     method = run.method
     measures = method.measures()
@@ -256,7 +264,7 @@ def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterRep
     map_report = None
     if map_filter is not None:
         kept = filter_map(global_map, map_filter,
-                          None if origins is None else origins.of(global_map.reading_id))
+                          None if origins is None else origins.of(global_map.reading_id), poses)
         global_map, map_report = kept.points, kept.report
         points = len(global_map)
     return ProcessResult(

@@ -100,7 +100,8 @@ def test_process_help_states_units_and_the_unprocessed_measure(
                    "--max-incidence DEGREES", "--max-range METRES", "--max-error METRES"):
         assert phrase in text, phrase
     assert " FLOAT " not in text
-    assert text.count("[default: (off)]") == 7  # β and the six optional filters
+    assert "--driven-through ROBOT|METRES" in text
+    assert text.count("[default: (off)]") == 8  # β and the seven optional filters
 
 
 def test_worlds_help_shows_one_example_per_line(capsys: pytest.CaptureFixture[str]) -> None:

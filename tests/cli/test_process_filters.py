@@ -81,6 +81,36 @@ def test_occlusion_filter_drops_echoes_read_through_the_wall(
     assert len(read_map_csv(out)) == 60
 
 
+def _forward_and_left(path: Path) -> None:
+    """A Scout2 driving +x at 0.5 m/s, its centre from x = -0.205 to 2.745; even rows: sensor 4
+    (on the left side) hears a wall 1.5 m away; odd rows: sensor 0 (at the front, x) hears
+    something 0.52 m ahead, where the sensor passes about a second later."""
+    n = 60
+    k = np.arange(n)
+    odd = k % 2 == 1
+    x = 0.05 * k
+    write_readings_csv(ReadingBatch.from_arrays(
+        t=0.1 * k, sensor=np.where(odd, 0, 4), x=np.where(odd, x, x - 0.205),
+        y=np.where(odd, 0.0, 0.205), theta=np.where(odd, 0.0, math.pi / 2),
+        range=np.where(odd, 0.52, 1.5)), path)
+
+
+@pytest.mark.parametrize(("body", "last"), [("0.1", 49), ("scout2", 47)])
+def test_driven_through_drops_what_the_robot_drove_over(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], body: str, last: int) -> None:
+    # Odd row k's point lies at x = 0.05 k + 0.52. Sensor 0 ends at x = 2.95: a disc of 0.1 m
+    # around the sensors reaches 3.05 (k up to 49), the Scout2's body (a 0.205 m disc around
+    # the centre, recovered from either sensor's mount) 2.95 (k up to 47).
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _forward_and_left(readings)
+    code = main(["process", str(readings), "--method", "centerline", "--out", str(out),
+                 "--driven-through", body])
+    assert code == 0
+    dropped = set(range(1, last + 1, 2))
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in dropped]
+    assert "dropped: driven through" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize(("options", "text"), [
     (["--max-range", "-1"], "--max-range must be a finite number > 0"),
     (["--min-range", "nan"], "--min-range must be"),
@@ -92,6 +122,10 @@ def test_occlusion_filter_drops_echoes_read_through_the_wall(
     (["--max-error", "-0.5"], "--max-error must be"),
     (["--occlusion-depth", "0"], "--occlusion-depth must be a finite number > 0"),
     (["--occlusion-depth", "inf"], "--occlusion-depth must be"),
+    (["--driven-through", "0"], "--driven-through must be a robot (name or YAML) or a "
+                                "clearance radius > 0"),
+    (["--driven-through", "-inf"], "--driven-through must be"),
+    (["--driven-through", "no-such-robot"], "no-such-robot"),
 ])
 def test_bad_filter_values_are_one_line_errors(tmp_path: Path, options: list[str], text: str,
                                                capsys: pytest.CaptureFixture[str]) -> None:

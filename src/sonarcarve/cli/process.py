@@ -45,7 +45,7 @@ from sonarcarve.cli.options import (
     refuse_bag_options,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
-from sonarcarve.filters import PAPER_MAX_RANGE, MapFilter, ReadingFilter
+from sonarcarve.filters import PAPER_MAX_RANGE, BodyFootprint, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
@@ -62,6 +62,7 @@ from sonarcarve.methods.config import (
 )
 from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch
+from sonarcarve.robot import load_robot
 
 if TYPE_CHECKING:  # the grid, bag, Rerun and fleet writers are imported by their output only
     from rich.table import Table
@@ -236,6 +237,21 @@ _OcclusionOpt = Annotated[float | None, typer.Option(
          "of it make up surfaces. 0.5 is a good start with carve, combined or evidence; not "
          "for centerline maps. docs/RESULTS.md, \"Points behind a surface of the map\".",
     rich_help_panel="Filters")]
+_DrivenOpt = Annotated[str | None, typer.Option(
+    "--driven-through", metavar="ROBOT|METRES", show_default="off",
+    help="Map filter: drop points that the robot's body covered later in the log: no static "
+         "obstacle stands where the robot has since driven. It removes ghost walls (a sonar "
+         "fired faster than its hearing range hears the previous ping's far echo, every time, "
+         "a few metres in front of the real wall it then drives towards), floor echoes, and "
+         "whatever has moved away. ROBOT (a built-in name such as scout2 or car-parking-12, or "
+         "a robot YAML) gives the body: its sensor mounts and robot_radius (best: it caught "
+         "83 % of a lone sonar's ghosts and 48 % of a car's); METRES, without a robot "
+         "description, a disc of that radius around each sensor's origin (0.05, a "
+         "transducer's size; it catches fewer, 58 % and 8 %). The map is then the current "
+         "one: whatever the robot later drove over is dropped, a person or a shut door too; "
+         "under odometry drift a revisit can drop a wall (docs/RESULTS.md, \"The body drove "
+         "through it\").",
+    rich_help_panel="Filters")]
 
 
 @app.command()
@@ -256,6 +272,7 @@ def process(
     outlier_neighbours: _NeighboursOpt = 1,
     max_error: _MaxErrorOpt = None,
     occlusion_depth: _OcclusionOpt = None,
+    driven_through: _DrivenOpt = None,
     map_rate: _MapRateOpt = None,
     grid_resolution: _GridResolutionOpt = None,
     robot: RobotOpt = None,
@@ -287,9 +304,9 @@ def process(
 
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
-    rows; map filters (--max-error, --occlusion-depth, then --outlier-radius) drop points from
-    the global map. With a bag or .rrd output only --max-range applies (a recording shows the
-    live maps of the readings as they came).
+    rows; map filters (--max-error, --driven-through, --occlusion-depth, then --outlier-radius)
+    drop points from the global map. With a bag or .rrd output only --max-range applies (a
+    recording shows the live maps of the readings as they came).
     Without map filters a map CSV is written as it is made (memory stays flat however long the
     log); map filters need the whole map, so with them it is held in memory until the end.
 
@@ -308,6 +325,9 @@ def process(
     Example: `sonarcarve process readings.csv --method evidence --occlusion-depth 0.5 --out
     map.csv` (evidence carving, then multipath points behind walls dropped)
 
+    Example: `sonarcarve process readings.csv --method evidence --driven-through scout2 --out
+    map.csv` (evidence carving, then points the Scout2's body later drove over dropped)
+
     Example: `sonarcarve process run.mcap --out run-map.mcap` (then open run-map.mcap in
     Foxglove)
 
@@ -315,7 +335,8 @@ def process(
     """
     config = _config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
-                                          outlier_neighbours, max_error, occlusion_depth)
+                                          outlier_neighbours, max_error, occlusion_depth,
+                                          driven_through)
     make_method(method, config)  # an unknown method fails before any file is touched
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
@@ -337,8 +358,8 @@ def process(
         # alone is also the readings' own contract (how far a no-echo row listened), so it
         # applies to every output.
         msg = (f"--out {out}: the filters (--min-range, --jump-threshold, --max-error, "
-               "--occlusion-depth, --outlier-radius) apply to a map CSV output only; "
-               "--max-range applies to every output")
+               "--occlusion-depth, --driven-through, --outlier-radius) apply to a map CSV "
+               "output only; --max-range applies to every output")
         raise ParameterError(msg)
     if map_rate is not None and output.label != "bag":
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
@@ -640,7 +661,7 @@ def _run(readings: Path, sonar: SonarMethod, label: str,
 
 def _filters(max_range: float | None, min_range: float | None, jump: float | None,
              radius: float | None, neighbours: int, max_error: float | None,
-             occlusion_depth: float | None = None,
+             occlusion_depth: float | None = None, driven_through: str | None = None,
              ) -> tuple[ReadingFilter | None, MapFilter | None]:
     check_max_range(max_range)  # also what a readings CSV accepts as a row's max_range
     for name, value in (("--max-range", max_range), ("--min-range", min_range),
@@ -660,8 +681,25 @@ def _filters(max_range: float | None, min_range: float | None, jump: float | Non
         raise ParameterError(msg)
     readings = ReadingFilter(max_range=max_range, min_range=min_range, jump_threshold=jump)
     points = MapFilter(max_error=max_error, outlier_radius=radius, outlier_neighbours=neighbours,
-                       occlusion_depth=occlusion_depth)
+                       occlusion_depth=occlusion_depth, driven_through=_body(driven_through))
     return (readings if readings.active else None), (points if points.active else None)
+
+
+def _body(spec: str | None) -> BodyFootprint | None:
+    """``--driven-through``'s body: a disc of METRES around each sensor, or a robot's."""
+    if spec is None:
+        return None
+    try:
+        radius = float(spec)
+    except ValueError:
+        robot = load_robot(spec)  # a name or a YAML; its one-line RobotError otherwise
+        return BodyFootprint.of_robot(robot.mount_x, robot.mount_y, robot.bearing,
+                                      robot.robot_radius)
+    if not (math.isfinite(radius) and radius > 0.0):
+        msg = (f"--driven-through must be a robot (name or YAML) or a clearance radius > 0 "
+               f"(metres), got {spec}")
+        raise ParameterError(msg)
+    return BodyFootprint.around_sensors(radius)
 
 
 def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
@@ -679,6 +717,7 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
     if points is not None:
         rows += [("points before map filters", f"{points.total:,}"),
                  ("dropped: above --max-error", f"{points.max_error:,}"),
+                 ("dropped: driven through", f"{points.driven_through:,}"),
                  ("dropped: behind a surface", f"{points.occluded:,}"),
                  ("dropped: outliers", f"{points.outliers:,}")]
     rows += [("points out", f"{result.points:,}"),
