@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     )
     from sonarcarve.extras import MissingExtraError
     from sonarcarve.filters import (
+        BodyFootprint,
         FilterError,
         MapFilter,
         ReadingFilter,
@@ -121,6 +122,7 @@ _EXPORTS = {
     "LocalMap": "sonarcarve.maps",
     "METHODS": "sonarcarve.methods",
     "MapFilter": "sonarcarve.filters",
+    "BodyFootprint": "sonarcarve.filters",
     "Measures": "sonarcarve.methods",
     "MethodConfig": "sonarcarve.methods",
     "OccupancyGrid": "sonarcarve.grids",
@@ -160,6 +162,7 @@ __all__ = [
     "METHODS",
     "ArcFate",
     "AtmMethod",
+    "BodyFootprint",
     "CallbackSink",
     "CarvedGrid",
     "CarvedGridParams",

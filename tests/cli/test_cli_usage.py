@@ -20,6 +20,13 @@ COMMANDS = ("process", "simulate", "convert", "worlds", "demo", "experiments", "
             "view", "sweep", "warm")
 
 
+@pytest.fixture(autouse=True, scope="module")
+def _commands_registered() -> None:
+    """Every command registered on ``app``, as a first ``main()`` does, so that a test run on
+    its own (``-k``) finds them too."""
+    assert main(["--version"]) == 0
+
+
 @pytest.mark.parametrize(("args", "words"), [
     (["process", "r.csv", "--out", "m.csv", "--bogus"], ["no such option", "--bogus"]),
     (["process", "r.csv"], ["missing option", "--out"]),

@@ -1,0 +1,28 @@
+"""The map and reading filters' error, and the one check of their distances."""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+from sonarcarve.errors import SonarcarveError
+
+__all__ = ["FilterError", "check_positive"]
+
+
+class FilterError(SonarcarveError, ValueError):
+    """A filter parameter outside its valid range."""
+
+
+
+def check_positive(name: str, value: float | None) -> None:
+    """Refuse a distance that is given (not ``None``) but no finite number > 0."""
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        msg = f"{name} must be a finite number > 0 (metres), got {type(value).__name__} {value!r}"
+        raise FilterError(msg)
+    if not (math.isfinite(value) and value > 0.0):
+        msg = f"{name} must be a finite number > 0 (metres), got {value}"
+        raise FilterError(msg)
+

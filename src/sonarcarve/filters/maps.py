@@ -1,0 +1,245 @@
+"""Map filters drop points from a :class:`~sonarcarve.maps.LocalMap` or
+:class:`~sonarcarve.maps.GlobalMap`: maximum-error thresholding (Fig. 13b: points whose
+``max_error`` bound, eq. 5.3, exceeds a threshold) and then the outlier test (a point needs at
+least ``k`` other points within radius ``R``). Thresholding runs first so that inaccurate points
+do not vouch for their neighbours. Between the two, beyond the paper, the **occlusion** filter
+drops points that lie more than ``occlusion_depth`` behind a surface of the map on the line
+from their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); only points
+whose error bound is at most half that depth make up the surfaces. It needs the sensor origin of
+every point, which a map does not hold, so :func:`filter_map` takes them (:func:`point_origins`
+looks them up in the readings). Before it, also beyond the paper and also off by default, the
+**driven-through** filter drops points that the robot's body covered at a later pose
+(:func:`driven_through_mask`, :class:`BodyFootprint`): ghost walls of late echoes, floor
+echoes, whatever has moved away. It needs the readings themselves, for the body's path.
+"""
+
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+import numpy as np
+import numpy.typing as npt
+
+from sonarcarve.filters.checks import FilterError, check_positive
+from sonarcarve.filters.driven_through import BodyFootprint, driven_through_mask
+from sonarcarve.filters.occlusion import occlusion_mask, origins_array
+from sonarcarve.maps import GlobalMap, LocalMap
+from sonarcarve.readings import ReadingBatch
+from sonarcarve.typing import BoolArray
+
+__all__ = ["FilteredMap", "MapFilter", "MapFilterReport", "confidence_mask", "filter_map",
+           "max_error_mask", "outlier_mask"]
+
+_M = TypeVar("_M", LocalMap, GlobalMap)
+
+
+@dataclass(frozen=True)
+class MapFilter:
+    """Which map filters to apply; ``None`` switches a filter off.
+
+    Attributes
+    ----------
+    max_error : float or None
+        Drop points whose ``max_error`` (eq. 5.3) exceeds this, metres (Fig. 13b).
+    outlier_radius : float or None
+        Radius R of the outlier test, metres.
+    outlier_neighbours : int
+        k: a point is kept only with at least k *other* points within R (distance <= R).
+    min_confidence : float or None
+        Drop points whose ``confidence`` (probability of a real surface, section 6) is below
+        this, in [0, 1]; points without one (NaN: the paper's methods) are kept.
+    occlusion_depth : float or None
+        Drop points lying more than this far behind a surface of the map, metres, on the line
+        from the sensor that heard them (:func:`occlusion_mask`; 0.5 m is
+        :data:`OCCLUSION_DEPTH`). Only points whose error bound is at most half of it make up
+        surfaces, so a small depth blocks little. Needs the points' sensor origins
+        (:func:`filter_map`). Not for centerline maps (docs/RESULTS.md, *Points behind a
+        surface of the map*).
+    driven_through : BodyFootprint or None
+        Drop points that this body covered at a later pose (:func:`driven_through_mask`): not
+        static obstacles, whatever made them (late echoes forming a ghost wall in front of a
+        real one, floor echoes, a person who has since left). Needs the readings' poses
+        (:func:`filter_map`). It judges after the fact, so the map is the *current* one: a
+        door that stood shut and that the robot later drove through is dropped too.
+
+    Raises
+    ------
+    FilterError
+        A radius or threshold that is not a finite positive number, k < 1, or a
+        ``driven_through`` that is not a :class:`BodyFootprint`.
+    """
+
+    max_error: float | None = None
+    outlier_radius: float | None = None
+    outlier_neighbours: int = 1
+    min_confidence: float | None = None
+    occlusion_depth: float | None = None
+    driven_through: BodyFootprint | None = None
+
+    def __post_init__(self) -> None:
+        check_positive("max_error", self.max_error)
+        if self.driven_through is not None and not isinstance(self.driven_through,
+                                                              BodyFootprint):
+            msg = (f"driven_through must be a BodyFootprint (BodyFootprint.of_robot or "
+                   f"BodyFootprint.around_sensors), got {type(self.driven_through).__name__}")
+            raise FilterError(msg)
+        check_positive("occlusion_depth", self.occlusion_depth)
+        if self.min_confidence is not None and not 0.0 <= self.min_confidence <= 1.0:
+            msg = f"min_confidence must lie in [0, 1], got {self.min_confidence!r}"
+            raise FilterError(msg)
+        check_positive("outlier_radius", self.outlier_radius)
+        if self.outlier_neighbours < 1:
+            msg = f"outlier_neighbours must be at least 1, got {self.outlier_neighbours}"
+            raise FilterError(msg)
+
+    @property
+    def active(self) -> bool:
+        """True if at least one filter is on."""
+        return (self.max_error is not None or self.outlier_radius is not None
+                or self.min_confidence is not None or self.occlusion_depth is not None
+                or self.driven_through is not None)
+
+
+@dataclass(frozen=True)
+class MapFilterReport:
+    """How many points each map filter dropped (``total`` points in)."""
+
+    total: int
+    max_error: int = 0
+    outliers: int = 0
+    confidence: int = 0
+    occluded: int = 0
+    driven_through: int = 0
+
+    @property
+    def kept(self) -> int:
+        """Points out."""
+        return (self.total - self.max_error - self.outliers - self.confidence - self.occluded
+                - self.driven_through)
+
+
+@dataclass(frozen=True, eq=False)
+class FilteredMap(Generic[_M]):
+    """The result of :func:`filter_map`: the kept points and the counts."""
+
+    points: _M
+    report: MapFilterReport
+
+
+def max_error_mask(max_error: npt.ArrayLike, threshold: float) -> BoolArray:
+    """True where a point's error bound is at most ``threshold`` metres (Fig. 13b).
+
+    Examples
+    --------
+    >>> max_error_mask([0.1, 0.3, np.nan], 0.2).tolist()
+    [True, False, False]
+    """
+    return np.asarray(np.asarray(max_error, dtype=np.float64) <= threshold)
+
+
+def outlier_mask(xy: npt.ArrayLike, radius: float, neighbours: int) -> BoolArray:
+    """True where a point has at least ``neighbours`` other points within ``radius``.
+
+    Parameters
+    ----------
+    xy : array-like, shape (n, 2)
+        Points, metres.
+    radius : float
+        R, metres; a point at distance exactly R counts.
+    neighbours : int
+        k, the number of other points required.
+
+    Examples
+    --------
+    >>> outlier_mask([[0, 0], [0.1, 0], [5, 5]], radius=0.2, neighbours=1).tolist()
+    [True, True, False]
+    """
+    pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    if pts.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
+
+    counts = cKDTree(pts).query_ball_point(pts, r=radius, return_length=True)
+    return np.asarray(counts - 1 >= neighbours)  # the point itself is in its own ball
+
+
+def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
+    """True where a point's confidence is at least ``threshold`` or unknown (NaN).
+
+    Examples
+    --------
+    >>> confidence_mask([0.9, 0.3, np.nan], 0.5).tolist()
+    [True, False, True]
+    """
+    c = np.asarray(confidence, dtype=np.float64)
+    return np.asarray(np.isnan(c) | (c >= threshold))
+
+
+def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None,
+               poses: ReadingBatch | None = None) -> FilteredMap[_M]:
+    """Apply the map filters of ``spec``: confidence, max-error thresholding, driven through,
+    occlusion, then the outlier test.
+
+    Parameters
+    ----------
+    points : LocalMap or GlobalMap
+        The map to filter.
+    spec : MapFilter
+        Which filters, with which thresholds.
+    origins : array-like, shape (n, 2), optional
+        The sensor origin of each point (:func:`point_origins`); needed by the occlusion filter.
+    poses : ReadingBatch, optional
+        The readings of the whole log, for their sensor poses (the body's path); needed by the
+        driven-through filter.
+
+    Returns
+    -------
+    FilteredMap
+        The kept points (same type as ``points``) and how many each filter dropped.
+
+    Raises
+    ------
+    FilterError
+        The occlusion filter without ``origins``, ``origins`` of the wrong shape, or the
+        driven-through filter without ``poses``.
+    """
+    total = len(points)
+    if spec.occlusion_depth is not None and origins is None:
+        msg = ("the occlusion filter needs each point's sensor origin: pass "
+               "origins=point_origins(points, readings)")
+        raise FilterError(msg)
+    if spec.driven_through is not None and poses is None:
+        msg = "the driven-through filter needs the body's path: pass poses=the map's readings"
+        raise FilterError(msg)
+    origin = None if origins is None else origins_array(origins, total)
+    dropped = {"confidence": 0, "max_error": 0, "driven_through": 0, "occluded": 0,
+               "outliers": 0}
+
+    def drop(name: str, keep: BoolArray) -> None:
+        nonlocal points, origin
+        dropped[name] = len(points) - int(keep.sum())
+        points = points.select(keep)
+        origin = None if origin is None else origin[keep]
+
+    if spec.min_confidence is not None:
+        drop("confidence", confidence_mask(points.confidence, spec.min_confidence))
+    if spec.max_error is not None:
+        drop("max_error", max_error_mask(points.max_error, spec.max_error))
+    if spec.driven_through is not None:
+        # Before the occlusion filter, so that a ghost wall hides nothing behind it, and
+        # before the outlier test, so that it vouches for no neighbour.
+        assert poses is not None  # checked above
+        drop("driven_through", ~driven_through_mask(points.xy, points.t, poses,
+                                                     spec.driven_through))
+    if spec.occlusion_depth is not None:
+        # After the confidence and error filters, so that only points the map keeps hide
+        # others; before the outlier test, so that a hidden point vouches for no neighbour.
+        assert origin is not None  # checked above
+        drop("occluded", occlusion_mask(points.xy, origin, points.max_error,
+                                        spec.occlusion_depth))
+    if spec.outlier_radius is not None:
+        drop("outliers", outlier_mask(points.xy, spec.outlier_radius, spec.outlier_neighbours))
+    return FilteredMap(points=points, report=MapFilterReport(total=total, **dropped))
+
