@@ -48,15 +48,16 @@ import numpy.typing as npt
 import heldout
 import parking
 from sonarcarve import MethodConfig, make_method
-from sonarcarve.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.lab.metrics import segment_distance
+from sonarcarve.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.maps import GlobalMap
 from sonarcarve.pipeline import process_readings
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.simulate import Simulation
 from sonarcarve.sim.sonar import EchoKind
 
-ONE_SONAR, TWO_SONARS = "benchmarks/robots/scout2-front-1.yaml", "benchmarks/robots/scout2-front-back.yaml"
+ONE_SONAR = "benchmarks/robots/scout2-front-1.yaml"
+TWO_SONARS = "benchmarks/robots/scout2-front-back.yaml"
 FLOORS = heldout.WORLDS
 DEVELOPMENT = ("office", "t-junction", "doorway")
 SHIPPED = ("amplitude", "specular")
@@ -74,8 +75,8 @@ def _floor_settings(robot: str, physics: tuple[str, ...] = SHIPPED) -> Iterator[
     period = load_robot(robot).firing_period
     for name in physics:
         for world in FLOORS:
-            yield Setting(f"{world}, {name}", period,
-                          lambda w=world, p=name: heldout._simulate(w, 0, heldout.PHYSICS[p], robot))
+            yield Setting(f"{world}, {name}", period, lambda w=world, p=name: heldout._simulate(
+                w, 0, heldout.PHYSICS[p], robot))
 
 
 def _car_settings() -> Iterator[Setting]:
@@ -117,12 +118,16 @@ def evidence_map(sim: Simulation) -> GlobalMap:
     return process_readings(sim.readings, make_method("evidence", MethodConfig())).global_map
 
 
+#: ``late_echo_mask``'s keywords besides the schedule (``--half-width``, ``--surface-error``).
+OPTIONS: dict[str, float] = {}
+
+
 def _late(points: GlobalMap, sim: Simulation, period: float | None) -> npt.NDArray[np.bool_]:
-    if period is None:
-        return late_echo_mask(points.xy, points.reading_id, points.max_error, sim.readings,
-                              firings=schedule(sim), sound_speed=sim.physics.sound_speed)
+    schedule_option = ({"firings": schedule(sim)} if period is None
+                       else {"firing_period": period})
     return late_echo_mask(points.xy, points.reading_id, points.max_error, sim.readings,
-                          firing_period=period, sound_speed=sim.physics.sound_speed)
+                          sound_speed=sim.physics.sound_speed, **schedule_option,  # type: ignore[arg-type]
+                          **OPTIONS)
 
 
 def measures(sim: Simulation, points: GlobalMap) -> dict[str, float]:
@@ -277,7 +282,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--groups", nargs="+", choices=list(GROUPS), default=list(GROUPS))
     parser.add_argument("--trace", choices=list(GROUPS), help="print the ghosts' paths instead")
     parser.add_argument("--timing", action="store_true", help="time the mask against process")
+    parser.add_argument("--half-width", type=float, help="late_echo_mask's half_width, m")
+    parser.add_argument("--surface-error", type=float, help="its surface_error, m")
     args = parser.parse_args(argv)
+    for option in ("half_width", "surface_error"):
+        if getattr(args, option) is not None:
+            OPTIONS[option] = getattr(args, option)
     if args.timing:
         timing()
         return 0
@@ -287,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
             trace(sim, evidence_map(sim), setting.label)
         return 0
     print(f"evidence carving's default map without and with late_echo_mask (c = "
-          f"{SOUND_SPEED:g} m/s; lags 2, tolerance 0.1 m)")
+          f"{SOUND_SPEED:g} m/s; the defaults but {OPTIONS})")
     for group in args.groups:
         runs = [(s.label, run(s)) for s in GROUPS[group]()]
         _table(group, runs)

@@ -26,7 +26,8 @@ receiver. The point is a late echo when
   ``tolerance`` of ``o_k + s u``, heard from this side (its own sensor origin on ``o_k``'s side
   of it along ``u``: a wall's back does not echo towards ``k``), and
 * that surface is visible through ``p``: no surface point lies within ``tolerance`` of the
-  line between them (more than :data:`BETWEEN_MARGIN` from either end). A wall cannot echo from
+  line between them (more than :data:`BETWEEN_MARGIN` from ``p`` and from ``tolerance`` short of
+  the far point). A wall cannot echo from
   behind another wall of the map; a direct echo of a wall with walls behind it stays.
 
 The map is the reference, not the walls: the far wall is usually mapped *after* the ghost, once
@@ -63,6 +64,7 @@ from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "BETWEEN_MARGIN",
+    "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
     "LATE_ECHO_SURFACE_ERROR",
     "LATE_ECHO_TOLERANCE",
@@ -81,6 +83,10 @@ SOUND_SPEED = 343.0
 LATE_ECHO_LAGS = 2
 #: How near the far point a surface point must lie, metres (late13's probe; docs/RESULTS.md).
 LATE_ECHO_TOLERANCE = 0.1
+#: How far across the line from the receiver a surface point at the far point's depth may lie,
+#: metres: a map of a wide beam holds its walls' points sparsely, and a wall that returns a
+#: mirror echo to the receiver meets that line nearly square on.
+LATE_ECHO_HALF_WIDTH = 0.5
 #: Only points whose error bound (eq. 5.3) is at most this make up the far surface and the
 #: surfaces between, metres (cf. the occlusion filter's ``depth / 2``).
 LATE_ECHO_SURFACE_ERROR = 0.5
@@ -221,6 +227,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
                    readings: ReadingBatch, *, reading_ids: npt.ArrayLike | None = None,
                    firings: FiringSchedule | None = None, firing_period: float | None = None,
                    lags: int = LATE_ECHO_LAGS, tolerance: float = LATE_ECHO_TOLERANCE,
+                   half_width: float = LATE_ECHO_HALF_WIDTH,
                    surface_error: float = LATE_ECHO_SURFACE_ERROR,
                    sound_speed: float = SOUND_SPEED) -> BoolArray:
     """True where a map point is a late echo: a visible surface of the map lies where the far
@@ -247,8 +254,10 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     lags : int
         Firings looked back, at least 1.
     tolerance : float
-        Metres between the far point and a surface point, and between the line to it and a
-        surface point that blocks it.
+        Metres between the far point and a surface point along the line (and between the line
+        to it and a surface point that blocks it).
+    half_width : float
+        Metres between the far point and a surface point across the line.
     surface_error : float
         Largest error bound of a surface point, metres.
     sound_speed : float
@@ -275,6 +284,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     [True, False]
     """
     _check_parameters(lags, tolerance, surface_error, sound_speed, firing_period)
+    _check_positive("half_width (metres)", half_width)
     if firings is not None and firing_period is not None:
         msg = "give the firings or a firing_period, not both"
         raise LateEchoError(msg)
@@ -296,12 +306,31 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     if firings is None and firing_period is None:
         firings = FiringSchedule.from_readings(readings)
     return _late_echoes(points, bound, rows, readings, firings, firing_period, lags, tolerance,
-                        surface_error, sound_speed)
+                        half_width, surface_error, sound_speed)
+
+
+def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArray,
+                    far_point: FloatArray, u: FloatArray, tolerance: float,
+                    half_width: float) -> BoolArray:
+    """True where a surface point lies within ``tolerance`` of ``far_point`` along ``u`` and
+    within ``half_width`` across it, heard from this side (its own sensor origin on the near
+    side of it along ``u``: a wall's back does not echo towards the receiver)."""
+    near = tree.query_ball_point(far_point, r=math.hypot(tolerance, half_width))  # type: ignore[attr-defined]
+    counts = np.fromiter((len(n) for n in near), dtype=np.int64, count=len(far_point))
+    owner = np.repeat(np.arange(len(far_point)), counts)
+    found = np.concatenate([np.asarray(n, dtype=np.int64) for n in near] or [np.zeros(0, int)])
+    offset = surface[found] - far_point[owner]
+    along = np.einsum("ij,ij->i", offset, u[owner])
+    across = np.abs(offset[:, 0] * u[owner, 1] - offset[:, 1] * u[owner, 0])
+    facing = np.einsum("ij,ij->i", surface_origin[found] - surface[found], u[owner]) < 0.0
+    hit = (np.abs(along) <= tolerance) & (across <= half_width) & facing
+    return np.asarray(np.bincount(owner, weights=hit, minlength=len(far_point)) > 0)
 
 
 def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings: ReadingBatch,
                  firings: FiringSchedule | None, firing_period: float | None, lags: int,
-                 tolerance: float, surface_error: float, sound_speed: float) -> BoolArray:
+                 tolerance: float, half_width: float, surface_error: float,
+                 sound_speed: float) -> BoolArray:
     """:func:`late_echo_mask` on checked arrays."""
     from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
 
@@ -314,21 +343,20 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
     if len(surface) == 0:
         return late
     tree = cKDTree(points[surface])
+    surface_origin = origin[surface]
     for lag in range(1, lags + 1):
         delay, emitter = _emitters(readings.t[rows], origin, lag, firings, firing_period)
         far = far_echo_distance(readings.range[rows], delay, origin - emitter, u, sound_speed)
         far = np.where(np.isfinite(far), far, -1.0)  # no such firing: no far point
-        candidates = np.flatnonzero(~late & (far > distance + 2.0 * BETWEEN_MARGIN))
+        # The far surface may lie ``tolerance`` short of the far point: the line between
+        # stops ``BETWEEN_MARGIN`` before that.
+        short = BETWEEN_MARGIN + tolerance
+        candidates = np.flatnonzero(~late & (far > distance + BETWEEN_MARGIN + short))
         far_point = origin[candidates] + far[candidates, None] * u[candidates]
-        gap, nearest = tree.query(far_point, distance_upper_bound=tolerance)
-        found = np.isfinite(gap)
-        candidates, far_point = candidates[found], far_point[found]
-        wall = surface[nearest[found]]
-        # Heard from this side: the wall's own sensor stood on o_k's side of it along u.
-        wall_origin = np.column_stack((readings.x[rows[wall]], readings.y[rows[wall]]))
-        facing = np.einsum("ij,ij->i", wall_origin - points[wall], u[candidates]) < 0.0
-        candidates, far_point = candidates[facing], far_point[facing]
+        at_wall = _surface_across(tree, points[surface], surface_origin, far_point,
+                                  u[candidates], tolerance, half_width)
+        candidates, far_point = candidates[at_wall], far_point[at_wall]
         start = points[candidates] + BETWEEN_MARGIN * u[candidates]
-        end = far_point - BETWEEN_MARGIN * u[candidates]
+        end = far_point - short * u[candidates]
         late[candidates[~_blocked(tree, start, end, tolerance)]] = True
     return late
