@@ -48,6 +48,7 @@ import numpy.typing as npt
 import heldout
 import parking
 from sonarcarve import MethodConfig, make_method
+from sonarcarve import late_echoes as late_echoes_module
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.maps import GlobalMap
@@ -169,7 +170,9 @@ def _table(group: str, runs: list[tuple[str, dict[str, dict[str, float]]]]) -> N
     for name, label in (("without", "evidence, default"), ("exact", "+ mask, every firing"),
                         ("period", "+ mask, firing period")):
         def mean(key: str, name: str = name) -> float:
-            return float(np.nanmean([r[name][key] for _, r in runs]))
+            values = np.array([r[name][key] for _, r in runs])
+            return float(np.mean(values[np.isfinite(values)])) if np.isfinite(values).any() \
+                else math.nan
         lost = (f"{sum(r[name]['lost'] for _, r in runs):.0f}, {mean('lost %'):.2f}"
                 if name != "without" else "–")
         print(f"| {label} | {mean('direct'):.1f} | {mean('ghosts'):.1f} | {mean('floor'):.1f} | "
@@ -226,7 +229,7 @@ def trace(sim: Simulation, points: GlobalMap, label: str) -> None:
             found.append((best[1], own, best[2], sim.readings.range[i], best[0]))
     m = np.array(found, dtype=float).reshape(-1, 5)
     share = 100 * len(m) / max(len(ghosts), 1)
-    print(f"  {label}: {len(ghosts)} ghosts of {len(kind)} readings; mirror path matched "
+    print(f"  {label}: {len(ghosts)} ghosts of {len(kind)} readings; a mirror path matched "
           f"{len(m)} ({share:.0f} %)", end="")
     if len(m):
         print(f", lag 1 {100 * np.mean(m[:, 0] == 1):.0f} %, own ping {100 * np.mean(m[:, 1]):.0f}"
@@ -240,16 +243,19 @@ def trace(sim: Simulation, points: GlobalMap, label: str) -> None:
 
 def late13_probe(sim: Simulation, points: GlobalMap) -> npt.NDArray[np.bool_]:
     """Per reading: the point at ``r + c Δt / 2`` on its axis (Δt: the gap since the previous
-    firing) lies within 0.1 m of a point of ``points``."""
+    firing) lies within 0.1 m of the axis point (``r`` along the axis) of a reading that
+    ``points`` kept: late13's probe as it was run, not the product's test."""
     from scipy.spatial import cKDTree
 
     r, f, firing = sim.readings, sim.firings, sim.truth.firing
     gap = np.where(firing >= 1, f.t[firing] - f.t[np.maximum(firing - 1, 0)], np.nan)
+    kept_axis = np.column_stack((r.x + r.range * np.cos(r.theta),
+                                 r.y + r.range * np.sin(r.theta)))[points.reading_id]
     far = r.range + sim.physics.sound_speed * gap / 2
     x, y = r.x + far * np.cos(r.theta), r.y + far * np.sin(r.theta)
     ok = np.isfinite(x)
     near = np.zeros(len(r), dtype=bool)
-    distance = cKDTree(points.xy).query(np.column_stack((x[ok], y[ok])))[0]
+    distance = cKDTree(kept_axis).query(np.column_stack((x[ok], y[ok])))[0]
     near[ok] = distance < 0.1
     return near
 
@@ -284,7 +290,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timing", action="store_true", help="time the mask against process")
     parser.add_argument("--half-width", type=float, help="late_echo_mask's half_width, m")
     parser.add_argument("--surface-error", type=float, help="its surface_error, m")
+    parser.add_argument("--agreement", type=float,
+                        help="the share of a point's neighbours that must agree (AGREEMENT; 0: "
+                             "no vote)")
     args = parser.parse_args(argv)
+    if args.agreement is not None:
+        late_echoes_module.AGREEMENT = args.agreement
     for option in ("half_width", "surface_error"):
         if getattr(args, option) is not None:
             OPTIONS[option] = getattr(args, option)
@@ -297,7 +308,8 @@ def main(argv: list[str] | None = None) -> int:
             trace(sim, evidence_map(sim), setting.label)
         return 0
     print(f"evidence carving's default map without and with late_echo_mask (c = "
-          f"{SOUND_SPEED:g} m/s; the defaults but {OPTIONS})")
+          f"{SOUND_SPEED:g} m/s; the defaults but {OPTIONS}, agreement "
+          f"{late_echoes_module.AGREEMENT})")
     for group in args.groups:
         runs = [(s.label, run(s)) for s in GROUPS[group]()]
         _table(group, runs)

@@ -22,9 +22,13 @@ at distance
 (``|o_k + s u - o_j| + s = L``, squared) which is ``r + c Δt / 2`` when the emitter is the
 receiver. The point is a late echo when
 
-* a *surface* point of the map (error bound at most ``surface_error``) lies within
-  ``tolerance`` of ``o_k + s u``, heard from this side (its own sensor origin on ``o_k``'s side
-  of it along ``u``: a wall's back does not echo towards ``k``), and
+* a *surface* point of the map (error bound at most ``surface_error``) lies at the depth of
+  ``o_k + s u`` along ``u`` within ``tolerance``, and within ``half_width`` across the line,
+  heard from this side (its own sensor origin on ``o_k``'s side of it along ``u``: a wall's
+  back does not echo towards ``k``). Across, because a wide beam's map holds a wall's points
+  sparsely (a car's 70° sensors: the far wall's nearest point 0.2-2 m from the far point, which
+  lay within 0.05 m of the true wall), and a wall that sends a mirror echo back along the line
+  meets it nearly square on, so its points beside the line lie at the same depth; and
 * that surface is visible through ``p``: no surface point lies within ``tolerance`` of the
   line between them (more than :data:`BETWEEN_MARGIN` from ``p`` and from ``tolerance`` short of
   the far point). A wall cannot echo from
@@ -90,6 +94,12 @@ LATE_ECHO_HALF_WIDTH = 0.5
 #: Only points whose error bound (eq. 5.3) is at most this make up the far surface and the
 #: surfaces between, metres (cf. the occlusion filter's ``depth / 2``).
 LATE_ECHO_SURFACE_ERROR = 0.5
+#: A point stays a late echo only if at least this share of the map's points within
+#: :data:`AGREEMENT_RADIUS` of it (itself included) are late echoes too: a ghost wall is all
+#: late echoes, heard square on, while a real wall that another wall stands c Δt / 2 behind
+#: is also heard obliquely (by a ring's other sensors), from where no far point lands on it.
+AGREEMENT = 0.5
+AGREEMENT_RADIUS = 0.3
 #: Surface points this near either end of the line from a point to its far surface are its own
 #: surface or the far one, not a surface between, metres.
 BETWEEN_MARGIN = 0.3
@@ -359,4 +369,20 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
         start = points[candidates] + BETWEEN_MARGIN * u[candidates]
         end = far_point - short * u[candidates]
         late[candidates[~_blocked(tree, start, end, tolerance)]] = True
-    return late
+    return _agreed(points, late)
+
+
+def _agreed(points: FloatArray, late: BoolArray) -> BoolArray:
+    """``late`` where at least :data:`AGREEMENT` of the map's points within
+    :data:`AGREEMENT_RADIUS` of a point (itself included) are late too."""
+    if AGREEMENT <= 0.0 or not late.any():
+        return late
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(points)
+    flagged = np.flatnonzero(late)
+    near = tree.query_ball_point(points[flagged], r=AGREEMENT_RADIUS)
+    share = np.fromiter((late[n].mean() for n in near), dtype=np.float64, count=len(flagged))
+    out = np.zeros_like(late)
+    out[flagged[share >= AGREEMENT]] = True
+    return out
