@@ -97,6 +97,26 @@ def test_a_wall_point_beside_the_line_counts_within_the_half_width() -> None:
     assert not ghost_flag([(1.0, 0.0), *side], half_width=0.25)
 
 
+def test_a_point_of_a_wall_also_heard_obliquely_is_kept() -> None:
+    # Three more points of a wall at x = 1, heard from (0, 3): their far points, 3 m further
+    # along lines slanting down to the right, land on nothing, so only 1 of the 4 points
+    # within 0.3 m of the first is a late echo.
+    points = [(1.0, 0.0), (1.0, 0.1), (1.0, -0.1), (1.0, 0.2), *wall(4.0)]
+    origins = [(0.0, 0.0), *[(0.0, 3.0)] * 3, *[(0.0, 0.0)] * 11]
+    assert not ghost_flag(points, origins=origins)
+    # With one oblique neighbour, half the points near it are late: it stays one.
+    assert ghost_flag([*points[:2], *points[4:]], origins=[*origins[:2], *origins[4:]])
+
+
+def test_a_ghost_wall_heard_square_on_is_flagged_whole() -> None:
+    # The same four points, each heard from straight behind it: every far point is on the wall.
+    points = [(1.0, 0.0), (1.0, 0.1), (1.0, -0.1), (1.0, 0.2), *wall(4.0)]
+    origins = [(0.0, 0.0), (0.0, 0.1), (0.0, -0.1), (0.0, 0.2), *[(0.0, 0.0)] * 11]
+    xy, ids, bound, batch = scene(points, origins)
+    late = late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, sound_speed=C)
+    assert late.tolist() == [True] * 4 + [False] * 11
+
+
 def test_the_exact_path_from_another_sensor() -> None:
     # Emitter at (-2, 0) fires at t = 0, the receiver at the origin at 0.02 and reads 1 m:
     # L = 2 + 6 = 8, and the reflection on the axis is at s with (s + 2) + s = 8, s = 3.
