@@ -20,7 +20,7 @@ firings: every firing's time and sensor origin) and with the robot's ``firing_pe
 (crosstalk), floor and multipath echoes removed (%), median and p90 true error of the map's
 points (m), and the direct echoes' points the mask dropped (count and %: its losses).
 
-Groups: ``one-sonar`` and ``two-sonars`` (``benchmarks/robots/scout2-front-1.yaml`` and
+One table per group and physics. Groups: ``one-sonar`` and ``two-sonars`` (``benchmarks/robots/scout2-front-1.yaml`` and
 ``scout2-front-back.yaml``), ``scout2-ring`` and ``pioneer-ring`` (``scout2``, ``p3dx``) on the
 held-out floors of ``heldout.py`` (seed 0, amplitude and specular); ``car-park``
 (``parking.py``'s car, seeds 0-2, its three physics); ``development`` (office, t-junction,
@@ -312,7 +312,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{late_echoes_module.AGREEMENT})")
     for group in args.groups:
         runs = [(s.label, run(s)) for s in GROUPS[group]()]
-        _table(group, runs)
+        for physics in dict.fromkeys(label.split(", ", 1)[1] for label, _ in runs):
+            _table(f"{group}, {physics}",
+                   [(label, r) for label, r in runs if label.split(", ", 1)[1] == physics])
     return 0
 
 
