@@ -20,11 +20,12 @@ firings: every firing's time and sensor origin) and with the robot's ``firing_pe
 (crosstalk), floor and multipath echoes removed (%), median and p90 true error of the map's
 points (m), and the direct echoes' points the mask dropped (count and %: its losses).
 
-One table per group and physics. Groups: ``one-sonar`` and ``two-sonars`` (``benchmarks/robots/scout2-front-1.yaml`` and
-``scout2-front-back.yaml``), ``scout2-ring`` and ``pioneer-ring`` (``scout2``, ``p3dx``) on the
-held-out floors of ``heldout.py`` (seed 0, amplitude and specular); ``car-park``
-(``parking.py``'s car, seeds 0-2, its three physics); ``development`` (office, t-junction,
-doorway on the Scout2 ring, seeds 0-2, specular and amplitude).
+One table per group and physics. Groups: ``one-sonar`` and ``two-sonars``
+(``benchmarks/robots/scout2-front-1.yaml`` and ``scout2-front-back.yaml``), ``scout2-ring``
+and ``pioneer-ring`` (``scout2``, ``p3dx``) on the held-out floors of ``heldout.py`` (seed 0,
+amplitude and specular); ``car-park`` (``parking.py``'s car, seeds 0-2, its three physics);
+``development`` (office, t-junction, doorway on the Scout2 ring, seeds 0-2, specular and
+amplitude).
 
 ``--trace GROUP`` re-solves each ghost's path (for the amplitude model: the mirror path from
 firing ``j``'s sensor via each wall to firing ``k``'s, lags 1-2, as helper late13's one-off
