@@ -15,10 +15,12 @@ amplitude model's (``amplitude_paths._crosstalk_amplitude``) a mirror path off a
 
 For each group of runs (below), evidence carving's global map with its defaults is made once,
 then the mask is applied to it in the same run, with the exact schedule (the simulator's
-firings: every firing's time and sensor origin) and with the robot's ``firing_period`` alone
-(the emitter taken at the receiver). Per group, means over runs: direct echoes kept, ghosts
-(crosstalk), floor and multipath echoes removed (%), median and p90 true error of the map's
-points (m), and the direct echoes' points the mask dropped (count and %: its losses).
+firings: every firing's time and sensor origin), with the robot's ``firing_period`` alone (the
+emitter taken at the receiver), and with the library's default, the distinct reading times
+(the simulator's logs hold no no-echo readings, so this one misses firings). Per group, means
+over runs: direct echoes kept, ghosts (crosstalk), floor and multipath echoes removed (%), median
+and p90 true error of the map's points (m), and the direct echoes' points the mask dropped
+(count and %: its losses).
 
 One table per group and physics. Groups: ``one-sonar`` and ``two-sonars``
 (``benchmarks/robots/scout2-front-1.yaml`` and ``scout2-front-back.yaml``), ``scout2-ring``
@@ -125,12 +127,17 @@ def evidence_map(sim: Simulation) -> GlobalMap:
 OPTIONS: dict[str, float] = {}
 
 
-def _late(points: GlobalMap, sim: Simulation, period: float | None) -> npt.NDArray[np.bool_]:
-    schedule_option = ({"firings": schedule(sim)} if period is None
-                       else {"firing_period": period})
+def _late(points: GlobalMap, sim: Simulation, period: float | None,
+          from_readings: bool = False) -> npt.NDArray[np.bool_]:
+    """The mask with the simulator's firings, the ``period`` alone, or (``from_readings``) the
+    library's default schedule: the distinct reading times of a log without no-echo readings."""
+    options: dict[str, object] = dict(OPTIONS)
+    if period is not None:
+        options["firing_period"] = period
+    elif not from_readings:
+        options["firings"] = schedule(sim)
     return late_echo_mask(points.xy, points.reading_id, points.max_error, sim.readings,
-                          sound_speed=sim.physics.sound_speed, **schedule_option,  # type: ignore[arg-type]
-                          **OPTIONS)
+                          sound_speed=sim.physics.sound_speed, **options)  # type: ignore[arg-type]
 
 
 def measures(sim: Simulation, points: GlobalMap) -> dict[str, float]:
@@ -150,13 +157,14 @@ def measures(sim: Simulation, points: GlobalMap) -> dict[str, float]:
 
 
 def run(setting: Setting) -> dict[str, dict[str, float]]:
-    """The map without and with the mask (exact schedule; period alone) of one setting."""
+    """The map without and with the mask (each schedule) of one setting."""
     sim = setting.make()
     points = evidence_map(sim)
     direct_points = sim.truth.kind[points.reading_id] == EchoKind.DIRECT
     rows = {"without": measures(sim, points)}
-    for name, period in (("exact", None), ("period", setting.period)):
-        late = _late(points, sim, period)
+    for name, period, from_readings in (("exact", None, False), ("period", setting.period, False),
+                                        ("readings", None, True)):
+        late = _late(points, sim, period, from_readings)
         rows[name] = measures(sim, points.select(~late))
         rows[name]["lost"] = float(np.sum(late & direct_points))
         rows[name]["lost %"] = 100 * float(np.mean(late[direct_points]))
@@ -170,7 +178,8 @@ def _table(group: str, runs: list[tuple[str, dict[str, dict[str, float]]]]) -> N
           "(%) | median error (m) | p90 error (m) | direct points dropped (n, %) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for name, label in (("without", "evidence, default"), ("exact", "+ mask, every firing"),
-                        ("period", "+ mask, firing period")):
+                        ("period", "+ mask, firing period"),
+                        ("readings", "+ mask, reading times (default)")):
         def mean(key: str, name: str = name) -> float:
             values = np.array([r[name][key] for _, r in runs])
             return float(np.mean(values[np.isfinite(values)])) if np.isfinite(values).any() \
