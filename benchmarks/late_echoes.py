@@ -16,8 +16,9 @@ amplitude model's (``amplitude_paths._crosstalk_amplitude``) a mirror path off a
 For each group of runs (below), evidence carving's global map with its defaults is made once,
 then the mask is applied to it in the same run, with the exact schedule (the simulator's
 firings: every firing's time and sensor origin), with the robot's ``firing_period`` alone (the
-emitter taken at the receiver), and with the library's default, the distinct reading times
-(the simulator's logs hold no no-echo readings, so this one misses firings). Per group, means
+emitter taken at the receiver), and with the distinct reading times for the firings
+(``FiringSchedule.from_readings``: the simulator's logs hold no no-echo readings, so this one
+misses firings). Per group, means
 over runs: direct echoes kept, ghosts (crosstalk), floor and multipath echoes removed (%), median
 and p90 true error of the map's points (m), and the direct echoes' points the mask dropped
 (count and %: its losses).
@@ -130,12 +131,13 @@ OPTIONS: dict[str, float] = {}
 def _late(points: GlobalMap, sim: Simulation, period: float | None,
           from_readings: bool = False) -> npt.NDArray[np.bool_]:
     """The mask with the simulator's firings, the ``period`` alone, or (``from_readings``) the
-    library's default schedule: the distinct reading times of a log without no-echo readings."""
+    distinct reading times of a log without no-echo readings for the firings."""
     options: dict[str, object] = dict(OPTIONS)
     if period is not None:
         options["firing_period"] = period
-    elif not from_readings:
-        options["firings"] = schedule(sim)
+    else:
+        options["firings"] = (FiringSchedule.from_readings(sim.readings) if from_readings
+                              else schedule(sim))
     return late_echo_mask(points.xy, points.reading_id, points.max_error, sim.readings,
                           sound_speed=sim.physics.sound_speed, **options)  # type: ignore[arg-type]
 
@@ -179,7 +181,7 @@ def _table(group: str, runs: list[tuple[str, dict[str, dict[str, float]]]]) -> N
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for name, label in (("without", "evidence, default"), ("exact", "+ mask, every firing"),
                         ("period", "+ mask, firing period"),
-                        ("readings", "+ mask, reading times (default)")):
+                        ("readings", "+ mask, reading times")):
         def mean(key: str, name: str = name) -> float:
             values = np.array([r[name][key] for _, r in runs])
             return float(np.mean(values[np.isfinite(values)])) if np.isfinite(values).any() \

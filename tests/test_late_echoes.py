@@ -136,15 +136,22 @@ def test_far_echo_distance_on_a_slanted_line() -> None:
     assert s.tolist() == pytest.approx([2.5])
 
 
-def test_the_default_schedule_is_the_previous_reading_time() -> None:
+def test_the_firings_of_a_log_are_its_reading_times() -> None:
     # The readings are 0.02 s apart: the ghost's previous firing is the reading before it.
     xy, ids, bound, batch = scene([(5.0, 5.0), (1.0, 0.0), *wall(4.0)])
-    assert late_echo_mask(xy, ids, bound, batch, sound_speed=C)[1]
+    firings = FiringSchedule.from_readings(batch)
+    assert late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)[1]
 
 
 def test_empty_map() -> None:
     _, _, _, batch = scene([(1.0, 0.0)])
-    assert late_echo_mask(np.zeros((0, 2)), [], [], batch).shape == (0,)
+    assert late_echo_mask(np.zeros((0, 2)), [], [], batch, firing_period=PERIOD).shape == (0,)
+
+
+def test_a_schedule_is_required() -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0)])
+    with pytest.raises(LateEchoError, match="firing_period"):
+        late_echo_mask(xy, ids, bound, batch)
 
 
 @pytest.mark.parametrize(("options", "words"), [

@@ -40,11 +40,14 @@ filters do (:mod:`sonarcarve.filters`).
 
 **The firing schedule.** A log need not hold every firing: the simulator's logs (and many real
 ones) omit the firings that heard nothing, so the previous reading of the stream may be several
-firings back. Two schedules are offered:
+firings back. So the caller names the schedule, one of two (there is no default: on the
+simulator's logs, which hold no no-echo readings, taking the distinct reading times for the
+firings removed none of the car park's late echoes under the amplitude physics, against 43 %
+with the period; docs/RESULTS.md):
 
 - ``firings``: the time and sensor origin of every firing (:class:`FiringSchedule`); exact
   (the ellipse) when the log has them, e.g. one that records no-echo readings
-  (:meth:`FiringSchedule.from_readings`: the distinct reading times, which is also the default);
+  (:meth:`FiringSchedule.from_readings`: the distinct reading times);
 - ``firing_period``: the time between consecutive firings of the robot (any sensor). Then
   ``Δt = lag × period`` and the emitter is taken to sit at the receiver (the circle of radius
   ``r + c Δt / 2``). For an emitter ``b`` metres from the receiver the far point moves by about
@@ -256,11 +259,11 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     reading_ids : array-like of int, optional
         The id of each of ``readings``, unique (default: its row).
     firings : FiringSchedule, optional
-        Every firing's time and emitter origin (default, without ``firing_period``:
-        :meth:`FiringSchedule.from_readings`).
+        Every firing's time and emitter origin (e.g. :meth:`FiringSchedule.from_readings` of a
+        log with its no-echo readings). Exactly one of ``firings`` and ``firing_period``.
     firing_period : float, optional
-        Seconds between consecutive firings of the robot; the emitter is then taken at the
-        receiver. Not with ``firings``.
+        Seconds between consecutive firings of the robot (any sensor: a robot file's
+        ``firing_period``); the emitter is then taken at the receiver.
     lags : int
         Firings looked back, at least 1.
     tolerance : float
@@ -276,7 +279,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     Raises
     ------
     LateEchoError
-        A parameter out of range, both schedules, arrays of different lengths, a point or
+        A parameter out of range, both schedules or neither, arrays of different lengths, a point or
         origin not finite, a reading id not among the readings, or a reading time that is no
         firing of ``firings``.
 
@@ -295,8 +298,9 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     """
     _check_parameters(lags, tolerance, surface_error, sound_speed, firing_period)
     _check_positive("half_width (metres)", half_width)
-    if firings is not None and firing_period is not None:
-        msg = "give the firings or a firing_period, not both"
+    if (firings is None) == (firing_period is None):
+        msg = ("give either a firing_period (seconds between consecutive firings of the robot) "
+               "or the firings, not both")
         raise LateEchoError(msg)
     points = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     ids = np.asarray(reading_id, dtype=np.int64).reshape(-1)
@@ -313,8 +317,6 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     known = (np.arange(len(readings), dtype=np.int64) if reading_ids is None
              else np.asarray(reading_ids, dtype=np.int64))
     rows = _reading_rows(ids, known)
-    if firings is None and firing_period is None:
-        firings = FiringSchedule.from_readings(readings)
     return _late_echoes(points, bound, rows, readings, firings, firing_period, lags, tolerance,
                         half_width, surface_error, sound_speed)
 
