@@ -54,6 +54,7 @@ if TYPE_CHECKING:
         write_readings_csv,
     )
     from sonarcarve.io.rosbag import RosbagError, SensorMounts
+    from sonarcarve.late_echoes import LateEchoError, late_echo_mask
     from sonarcarve.maps import (
         CallbackSink,
         CountingSink,
@@ -97,6 +98,8 @@ _EXPORTS = {
     "OutputError": "sonarcarve.io",
     "RosbagError": "sonarcarve.io.rosbag",
     "FilterError": "sonarcarve.filters",
+    "LateEchoError": "sonarcarve.late_echoes",
+    "late_echo_mask": "sonarcarve.late_echoes",
     "CrossingStoreError": "sonarcarve.methods.atm",
     "ProcessError": "sonarcarve.pipeline",
     "PollingError": "sonarcarve.polling",
@@ -179,6 +182,7 @@ __all__ = [
     "GlobalMapSink",
     "GridError",
     "InputError",
+    "LateEchoError",
     "LocalMap",
     "MapFilter",
     "Measures",
@@ -211,6 +215,7 @@ __all__ = [
     "chord_error",
     "filter_map",
     "filter_readings",
+    "late_echo_mask",
     "make_grid",
     "make_method",
     "naive_stamps",

@@ -1,0 +1,185 @@
+"""The late-echo test on hand-built maps: every expected value from the geometry by hand.
+
+Sound at 300 m/s and a firing every 0.02 s: a late echo of the previous firing reads
+300 × 0.02 / 2 = 3 m short (6 m for two firings back). The sensor sits at the origin facing +x
+unless a case says otherwise; the ghost point is at x = 1.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.late_echoes import (
+    FiringSchedule,
+    LateEchoError,
+    far_echo_distance,
+    late_echo_mask,
+)
+from sonarcarve.readings import ReadingBatch
+
+C, PERIOD = 300.0, 0.02
+
+
+def wall(x: float) -> list[tuple[float, float]]:
+    """A wall across the x axis at ``x``: 11 points 0.1 m apart."""
+    return [(x, 0.1 * k - 0.5) for k in range(11)]
+
+
+def scene(points: list[tuple[float, float]], origins: list[tuple[float, float]] | None = None,
+          max_error: float = 0.01) -> tuple[np.ndarray, np.ndarray, np.ndarray, ReadingBatch]:
+    """One reading per map point, from its origin (default the sensor at 0, 0) towards it,
+    at times 0.02 s apart: the map's arrays and the readings."""
+    xy = np.array(points, dtype=float)
+    src = np.zeros_like(xy) if origins is None else np.array(origins, dtype=float)
+    offset = xy - src
+    n = len(xy)
+    batch = ReadingBatch.from_arrays(
+        t=PERIOD * np.arange(1, n + 1), sensor=np.zeros(n, int), x=src[:, 0], y=src[:, 1],
+        theta=np.arctan2(offset[:, 1], offset[:, 0]), range=np.hypot(offset[:, 0], offset[:, 1]))
+    return xy, np.arange(n), np.full(n, max_error), batch
+
+
+def ghost_flag(points: list[tuple[float, float]], **kwargs: object) -> bool:
+    """Whether the first point (the ghost candidate) is flagged, with the firing period."""
+    origins = kwargs.pop("origins", None)
+    max_error = kwargs.pop("max_error", 0.01)
+    xy, ids, bound, batch = scene(points, origins, max_error)  # type: ignore[arg-type]
+    options = {"firing_period": PERIOD, "sound_speed": C, **kwargs}
+    return bool(late_echo_mask(xy, ids, bound, batch, **options)[0])  # type: ignore[arg-type]
+
+
+def test_far_wall_behind_a_near_point_makes_it_a_ghost() -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0), *wall(4.0)])
+    late = late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, sound_speed=C)
+    # The ghost's far point is at 1 + 3 = 4, on the wall; the wall's own far points (7 m and
+    # more away) lie on nothing.
+    assert late.tolist() == [True] + [False] * 11
+
+
+def test_a_mapped_wall_in_between_hides_the_far_wall() -> None:
+    assert not ghost_flag([(1.0, 0.0), *wall(4.0), *wall(2.5)])
+
+
+def test_a_direct_echo_with_no_far_wall_is_kept() -> None:
+    assert not ghost_flag([(1.0, 0.0), *wall(6.0)])  # 6 is neither 4 nor, at lag 2, 7
+
+
+def test_two_firings_back() -> None:
+    points = [(1.0, 0.0), *wall(7.0)]  # 1 + 2 × 3
+    assert ghost_flag(points, lags=2)
+    assert not ghost_flag(points, lags=1)
+
+
+def test_the_far_surface_must_have_been_heard_from_this_side() -> None:
+    behind = [(10.0, 0.0)] * 11  # the wall at x = 4 heard from beyond it: its back
+    assert not ghost_flag([(1.0, 0.0), *wall(4.0)], origins=[(0.0, 0.0), *behind])
+
+
+def test_only_points_with_a_small_error_bound_are_surfaces() -> None:
+    assert not ghost_flag([(1.0, 0.0), *wall(4.0)], max_error=0.6)
+    assert ghost_flag([(1.0, 0.0), *wall(4.0)], max_error=0.6, surface_error=0.7)
+
+
+def test_a_point_beside_the_far_point_is_outside_the_tolerance() -> None:
+    assert not ghost_flag([(1.0, 0.0), *wall(4.15)])  # 0.15 m from the far point
+    assert ghost_flag([(1.0, 0.0), *wall(4.15)], tolerance=0.2)
+
+
+def test_a_wall_point_beside_the_line_counts_within_the_half_width() -> None:
+    # Only the wall's points 0.26 m or more off the line from the sensor through the ghost
+    # (the x axis), at the far point's depth.
+    side = [(4.0, 0.26), (4.0, 0.3), (4.0, -0.3)]
+    assert ghost_flag([(1.0, 0.0), *side])  # within 0.5 m across
+    assert not ghost_flag([(1.0, 0.0), *side], half_width=0.25)
+
+
+def test_a_point_of_a_wall_also_heard_obliquely_is_kept() -> None:
+    # Three more points of a wall at x = 1, heard from (0, 3): their far points, 3 m further
+    # along lines slanting down to the right, land on nothing, so only 1 of the 4 points
+    # within 0.3 m of the first is a late echo.
+    points = [(1.0, 0.0), (1.0, 0.1), (1.0, -0.1), (1.0, 0.2), *wall(4.0)]
+    origins = [(0.0, 0.0), *[(0.0, 3.0)] * 3, *[(0.0, 0.0)] * 11]
+    assert not ghost_flag(points, origins=origins)
+    # With one oblique neighbour, half the points near it are late: it stays one.
+    assert ghost_flag([*points[:2], *points[4:]], origins=[*origins[:2], *origins[4:]])
+
+
+def test_a_ghost_wall_heard_square_on_is_flagged_whole() -> None:
+    # The same four points, each heard from straight behind it: every far point is on the wall.
+    points = [(1.0, 0.0), (1.0, 0.1), (1.0, -0.1), (1.0, 0.2), *wall(4.0)]
+    origins = [(0.0, 0.0), (0.0, 0.1), (0.0, -0.1), (0.0, 0.2), *[(0.0, 0.0)] * 11]
+    xy, ids, bound, batch = scene(points, origins)
+    late = late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, sound_speed=C)
+    assert late.tolist() == [True] * 4 + [False] * 11
+
+
+def test_the_exact_path_from_another_sensor() -> None:
+    # Emitter at (-2, 0) fires at t = 0, the receiver at the origin at 0.02 and reads 1 m:
+    # L = 2 + 6 = 8, and the reflection on the axis is at s with (s + 2) + s = 8, s = 3.
+    xy, ids, bound, batch = scene([(1.0, 0.0), *wall(3.0)])
+    firings = FiringSchedule(np.array([0.0, *batch.t]), np.array([-2.0, *batch.x]),
+                             np.array([0.0, *batch.y]))
+    exact = late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)
+    assert exact[0]
+    # With the period alone the emitter is taken at the receiver: the far point is at 4.
+    assert not late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, sound_speed=C)[0]
+
+
+def test_far_echo_distance_on_a_slanted_line() -> None:
+    # Emitter at (0, -1), receiver at the origin, looking along +y, r = 1, c Δt = 4: L = 6 and
+    # (s + 1) + s = 6 gives s = 2.5.
+    s = far_echo_distance([1.0], [4.0 / C], [[0.0, 1.0]], [[0.0, 1.0]], sound_speed=C)
+    assert s.tolist() == pytest.approx([2.5])
+
+
+def test_the_firings_of_a_log_are_its_reading_times() -> None:
+    # The readings are 0.02 s apart: the ghost's previous firing is the reading before it.
+    xy, ids, bound, batch = scene([(5.0, 5.0), (1.0, 0.0), *wall(4.0)])
+    firings = FiringSchedule.from_readings(batch)
+    assert late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)[1]
+
+
+def test_empty_map() -> None:
+    _, _, _, batch = scene([(1.0, 0.0)])
+    assert late_echo_mask(np.zeros((0, 2)), [], [], batch, firing_period=PERIOD).shape == (0,)
+
+
+def test_a_schedule_is_required() -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0)])
+    with pytest.raises(LateEchoError, match="firing_period"):
+        late_echo_mask(xy, ids, bound, batch)
+
+
+@pytest.mark.parametrize(("options", "words"), [
+    ({"tolerance": -0.1}, "tolerance"),
+    ({"tolerance": math.nan}, "tolerance"),
+    ({"lags": 0}, "lags"),
+    ({"lags": 1.5}, "lags"),
+    ({"surface_error": 0.0}, "surface_error"),
+    ({"half_width": -0.5}, "half_width"),
+    ({"firing_period": -1.0}, "firing_period"),
+    ({"firings": FiringSchedule(np.zeros(1), np.zeros(1), np.zeros(1))}, "not both"),
+])
+def test_bad_parameters(options: dict[str, object], words: str) -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0)])
+    options = {"firing_period": PERIOD, **options}
+    with pytest.raises(LateEchoError, match=words):
+        late_echo_mask(xy, ids, bound, batch, **options)  # type: ignore[arg-type]
+
+
+def test_bad_arrays() -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0), (2.0, 0.0)])
+    with pytest.raises(LateEchoError, match="finite"):
+        late_echo_mask([[math.nan, 0.0], [2.0, 0.0]], ids, bound, batch, firing_period=PERIOD)
+    with pytest.raises(LateEchoError, match="reading id"):
+        late_echo_mask(xy, [0, 7], bound, batch, firing_period=PERIOD)
+    with pytest.raises(LateEchoError, match="error bound"):
+        late_echo_mask(xy, ids, bound[:1], batch, firing_period=PERIOD)
+    with pytest.raises(LateEchoError, match="no firing"):
+        late_echo_mask(xy, ids, bound, batch, firings=FiringSchedule(
+            np.array([0.5]), np.zeros(1), np.zeros(1)))
+    assert issubclass(LateEchoError, SonarcarveError)
