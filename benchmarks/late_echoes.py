@@ -1,5 +1,5 @@
-"""The late-echo ("ghost") test against the map (:mod:`sonarcarve.late_echoes`): what it removes
-from evidence carving's default map, and what the simulator's late echoes are.
+"""The late-echo ("ghost") test against the map (:mod:`sonarcarve.filters.late_echoes`): what
+it removes from evidence carving's default map, and what the simulator's late echoes are.
 
 Run from the repository root (on a shared machine, with ``nice``)::
 
@@ -52,10 +52,10 @@ import numpy.typing as npt
 import heldout
 import parking
 from sonarcarve import MethodConfig, make_method
-from sonarcarve import late_echoes as late_echoes_module
+from sonarcarve.filters import late_echoes as late_echoes_module
+from sonarcarve.filters.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
-from sonarcarve.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.maps import GlobalMap
 from sonarcarve.pipeline import process_readings
 from sonarcarve.robot import load_robot

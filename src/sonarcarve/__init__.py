@@ -32,6 +32,7 @@ if TYPE_CHECKING:
         filter_map,
         filter_readings,
     )
+    from sonarcarve.filters.late_echoes import LateEchoError, late_echo_mask
     from sonarcarve.geometry import ArcFate, arc_remainder, carve_arc
     from sonarcarve.grids import (
         CarvedGrid,
@@ -54,7 +55,6 @@ if TYPE_CHECKING:
         write_readings_csv,
     )
     from sonarcarve.io.rosbag import RosbagError, SensorMounts
-    from sonarcarve.late_echoes import LateEchoError, late_echo_mask
     from sonarcarve.maps import (
         CallbackSink,
         CountingSink,
@@ -98,8 +98,8 @@ _EXPORTS = {
     "OutputError": "sonarcarve.io",
     "RosbagError": "sonarcarve.io.rosbag",
     "FilterError": "sonarcarve.filters",
-    "LateEchoError": "sonarcarve.late_echoes",
-    "late_echo_mask": "sonarcarve.late_echoes",
+    "LateEchoError": "sonarcarve.filters.late_echoes",
+    "late_echo_mask": "sonarcarve.filters.late_echoes",
     "CrossingStoreError": "sonarcarve.methods.atm",
     "ProcessError": "sonarcarve.pipeline",
     "PollingError": "sonarcarve.polling",

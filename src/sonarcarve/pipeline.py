@@ -190,16 +190,18 @@ def process_chunks(
     chunk_filter = None if reading_filter is None else _ChunkFilter(reading_filter)
     origins = (_Origins() if map_filter is not None and map_filter.occlusion_depth is not None
                else None)
-    # Every reading's pose, the dropped ones' too: a reading the filters refuse was still
-    # taken where the robot stood.
-    poses: list[ReadingBatch] | None = (
-        [] if map_filter is not None and map_filter.driven_through is not None else None)
+    # Every reading, the dropped ones' too (a reading the filters refuse was still taken where
+    # the robot stood), for the filters that look at the whole log: ids are their rows.
+    log: list[ReadingBatch] | None = (
+        [] if map_filter is not None and (map_filter.driven_through is not None
+                                          or map_filter.late_echo_period is not None)
+        else None)
     rows = 0
     for chunk in chunks:
         ids = np.arange(rows, rows + len(chunk), dtype=np.int64)
         rows += len(chunk)
-        if poses is not None:
-            poses.append(chunk)
+        if log is not None:
+            log.append(chunk)
         if chunk_filter is not None:
             keep = chunk_filter.keep(chunk)
             chunk, ids = chunk[keep], ids[keep]
@@ -212,8 +214,8 @@ def process_chunks(
         filter_report = chunk_filter.report
         if on_progress is not None:
             on_progress(filter_report.total)
-    path = None if poses is None else ReadingBatch.concatenate(poses, validate=False)
-    return _finish(run, timed, filter_report, map_filter, origins, path)
+    readings = None if log is None else ReadingBatch.concatenate(log, validate=False)
+    return _finish(run, timed, filter_report, map_filter, origins, readings)
 
 
 def _check_run(method: SonarMethod, sample_every: int | None, map_filter: MapFilter | None,
@@ -250,7 +252,7 @@ def _schedule(method: SonarMethod, sample_every: int | None) -> _Schedule:
 
 def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterReport | None,
             map_filter: MapFilter | None, origins: _Origins | None = None,
-            poses: ReadingBatch | None = None) -> ProcessResult:
+            readings: ReadingBatch | None = None) -> ProcessResult:
     """Finish the run's method and gather what it measured (the map filtered last)."""
     method = run.method
     measures = method.measures()
@@ -264,7 +266,7 @@ def _finish(run: _Run, timed: _TimedSink | None, filter_report: ReadingFilterRep
     map_report = None
     if map_filter is not None:
         kept = filter_map(global_map, map_filter,
-                          None if origins is None else origins.of(global_map.reading_id), poses)
+                          None if origins is None else origins.of(global_map.reading_id), readings)
         global_map, map_report = kept.points, kept.report
         points = len(global_map)
     return ProcessResult(

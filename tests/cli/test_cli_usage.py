@@ -108,7 +108,8 @@ def test_process_help_states_units_and_the_unprocessed_measure(
         assert phrase in text, phrase
     assert " FLOAT " not in text
     assert "--driven-through ROBOT|METRES" in text
-    assert text.count("[default: (off)]") == 8  # β and the seven optional filters
+    assert "--late-echo-period SECONDS|ROBOT" in text
+    assert text.count("[default: (off)]") == 9  # β and the eight optional filters
 
 
 def test_worlds_help_shows_one_example_per_line(capsys: pytest.CaptureFixture[str]) -> None:

@@ -126,6 +126,10 @@ def test_driven_through_drops_what_the_robot_drove_over(
                                 "clearance radius > 0"),
     (["--driven-through", "-inf"], "--driven-through must be"),
     (["--driven-through", "no-such-robot"], "no-such-robot"),
+    (["--late-echo-period", "0"], "--late-echo-period must be a robot (name or YAML) or a "
+                                  "firing period > 0 (seconds)"),
+    (["--late-echo-period", "nan"], "--late-echo-period must be"),
+    (["--late-echo-period", "no-such-robot"], "no-such-robot"),
 ])
 def test_bad_filter_values_are_one_line_errors(tmp_path: Path, options: list[str], text: str,
                                                capsys: pytest.CaptureFixture[str]) -> None:
@@ -135,3 +139,30 @@ def test_bad_filter_values_are_one_line_errors(tmp_path: Path, options: list[str
     assert text in err
     assert len(err.splitlines()) == 1
     assert not out.exists()
+
+
+def _ghost_wall(path: Path) -> None:
+    """One sensor at the origin facing +x, a narrow beam (0.05 rad), firing every 0.02 s: ten
+    echoes of a wall at x = 4, then ten late echoes of it, read c·Δt/2 = 343 × 0.02 / 2 =
+    3.43 m short, at 0.57 m."""
+    n = 20
+    r = np.where(np.arange(n) < 10, 4.0, 4.0 - 3.43)
+    batch = ReadingBatch.from_arrays(t=0.02 * np.arange(n), sensor=np.zeros(n, int),
+                                     x=np.zeros(n), y=np.zeros(n), theta=np.zeros(n), range=r,
+                                     beam_width=np.full(n, 0.05))
+    write_readings_csv(batch, path)
+
+
+@pytest.mark.parametrize("period", ["0.02", "0.025"])
+def test_late_echo_period_drops_the_ghost_wall_and_keeps_the_wall(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], period: str) -> None:
+    # With the right period the far point of each 0.57 m echo is the wall at 4 m: dropped.
+    # With 0.025 s it is 0.57 + 4.29 = 4.86 m (lag 1) or 9.15 m (lag 2): no wall there, kept.
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _ghost_wall(readings)
+    code = main(["process", str(readings), "--method", "centerline", "--out", str(out),
+                 "--late-echo-period", period])
+    assert code == 0
+    kept = read_map_csv(out).reading_id.tolist()
+    assert kept == (list(range(10)) if period == "0.02" else list(range(20)))
+    assert "dropped: late echoes" in capsys.readouterr().out

@@ -163,9 +163,9 @@ def _map(xy: list[list[float]], t: list[float]) -> GlobalMap:
 def test_filter_map_drops_and_counts_driven_through_points() -> None:
     points = _map([[2.0, 0.0], [2.0, 1.0], [3.0, 0.0]], [0.0, 0.0, 3.5])
     spec = MapFilter(driven_through=DISC)
-    with pytest.raises(FilterError, match="needs the body's path: pass poses="):
+    with pytest.raises(FilterError, match="driven-through filter needs the map's readings"):
         filter_map(points, spec)
-    out = filter_map(points, spec, poses=STRAIGHT)
+    out = filter_map(points, spec, readings=STRAIGHT)
     assert out.points.reading_id.tolist() == [1, 2]
     assert out.report.driven_through == 1
     assert out.report.kept == 2
@@ -175,7 +175,7 @@ def test_driven_through_runs_before_the_outlier_test() -> None:
     # Two points 0.1 m apart vouch for each other; once the body dropped one, the other is alone.
     points = _map([[2.0, 0.0], [2.0, 0.29]], [0.0, 0.0])
     out = filter_map(points, MapFilter(driven_through=DISC, outlier_radius=0.3),
-                     poses=STRAIGHT)
+                     readings=STRAIGHT)
     assert out.report.driven_through == 1
     assert out.report.outliers == 1
 
@@ -194,7 +194,7 @@ def test_the_pipeline_filters_as_filter_map_does_however_the_log_is_cut() -> Non
     b = _forward_and_left()
     spec = MapFilter(driven_through=BodyFootprint.around_sensors(0.1))
     whole = process_readings(b, CenterlineMethod(history_size=10)).global_map
-    expected = filter_map(whole, spec, poses=b).points
+    expected = filter_map(whole, spec, readings=b).points
     # The sensor reaches x = 2.95; a point ahead is passed within 0.1 m up to row 49.
     dropped = list(range(1, 50, 2))
     assert sorted(set(whole.reading_id.tolist()) - set(expected.reading_id.tolist())) == dropped
@@ -215,7 +215,7 @@ def test_readings_the_reading_filters_drop_still_give_the_path() -> None:
     result = process_readings(b, CenterlineMethod(history_size=10), map_filter=spec,
                               reading_filter=near)
     unfiltered = process_readings(b, CenterlineMethod(history_size=10), reading_filter=near)
-    only_kept = filter_map(unfiltered.global_map, spec, poses=b[1::2])
+    only_kept = filter_map(unfiltered.global_map, spec, readings=b[1::2])
     assert 39 in only_kept.points.reading_id.tolist()
     assert 39 not in result.global_map.reading_id.tolist()
     assert result.map_filter is not None

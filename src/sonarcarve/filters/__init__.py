@@ -5,6 +5,9 @@
 - :mod:`~sonarcarve.filters.maps`: drop points from a local or global map
   (:func:`filter_map`): confidence, the paper's maximum-error thresholding, then, beyond the
   paper and off by default, the two filters below, then the outlier test.
+- :mod:`~sonarcarve.filters.late_echoes`: points that are the far echo of an earlier firing
+  off a surface of the map (ghost walls, when a sensor fires faster than its hearing range's
+  round trip).
 - :mod:`~sonarcarve.filters.driven_through`: points the robot's body covered at a later pose
   (ghost walls of late echoes, floor echoes, what has moved away).
 - :mod:`~sonarcarve.filters.occlusion`: points behind a surface of the map, seen from their
@@ -24,6 +27,12 @@ from sonarcarve.filters.driven_through import (
     BodyFootprint,
     driven_through_mask,
     swept_poses,
+)
+from sonarcarve.filters.late_echoes import (
+    SOUND_SPEED,
+    FiringSchedule,
+    LateEchoError,
+    late_echo_mask,
 )
 from sonarcarve.filters.maps import (
     FilteredMap,
@@ -63,6 +72,7 @@ __all__ = [
     "OCCLUSION_DEPTH",
     "OCCLUSION_REACH",
     "PAPER_MAX_RANGE",
+    "SOUND_SPEED",
     "SURFACE_NEIGHBOURS",
     "SURFACE_RADIUS",
     "BodyFootprint",
@@ -70,6 +80,8 @@ __all__ = [
     "FilterError",
     "FilteredMap",
     "FilteredReadings",
+    "FiringSchedule",
+    "LateEchoError",
     "MapFilter",
     "MapFilterReport",
     "ReadingFilter",
@@ -79,6 +91,7 @@ __all__ = [
     "driven_through_mask",
     "filter_map",
     "filter_readings",
+    "late_echo_mask",
     "max_error_mask",
     "occlusion_mask",
     "origins_by_id",

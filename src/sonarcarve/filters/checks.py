@@ -15,14 +15,15 @@ class FilterError(SonarcarveError, ValueError):
 
 
 
-def check_positive(name: str, value: float | None) -> None:
-    """Refuse a distance that is given (not ``None``) but no finite number > 0."""
+def check_positive(name: str, value: float | None, unit: str = "metres") -> None:
+    """Refuse a distance (or a time: ``unit``) that is given (not ``None``) but no finite
+    number > 0."""
     if value is None:
         return
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        msg = f"{name} must be a finite number > 0 (metres), got {type(value).__name__} {value!r}"
+        msg = f"{name} must be a finite number > 0 ({unit}), got {type(value).__name__} {value!r}"
         raise FilterError(msg)
     if not (math.isfinite(value) and value > 0.0):
-        msg = f"{name} must be a finite number > 0 (metres), got {value}"
+        msg = f"{name} must be a finite number > 0 ({unit}), got {value}"
         raise FilterError(msg)
 

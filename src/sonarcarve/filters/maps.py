@@ -8,9 +8,11 @@ from their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occlud
 whose error bound is at most half that depth make up the surfaces. It needs the sensor origin of
 every point, which a map does not hold, so :func:`filter_map` takes them (:func:`point_origins`
 looks them up in the readings). Before it, also beyond the paper and also off by default, the
+**late-echo** filter drops points that are the far echo of an earlier firing off a surface of
+the map (:func:`~sonarcarve.filters.late_echoes.late_echo_mask`: ghost walls), and the
 **driven-through** filter drops points that the robot's body covered at a later pose
 (:func:`driven_through_mask`, :class:`BodyFootprint`): ghost walls of late echoes, floor
-echoes, whatever has moved away. It needs the readings themselves, for the body's path.
+echoes, whatever has moved away. Both need the readings the map was made from.
 """
 
 
@@ -24,6 +26,7 @@ import numpy.typing as npt
 
 from sonarcarve.filters.checks import FilterError, check_positive
 from sonarcarve.filters.driven_through import BodyFootprint, driven_through_mask
+from sonarcarve.filters.late_echoes import late_echo_mask
 from sonarcarve.filters.occlusion import occlusion_mask, origins_array
 from sonarcarve.maps import GlobalMap, LocalMap
 from sonarcarve.readings import ReadingBatch
@@ -57,6 +60,14 @@ class MapFilter:
         surfaces, so a small depth blocks little. Needs the points' sensor origins
         (:func:`filter_map`). Not for centerline maps (docs/RESULTS.md, *Points behind a
         surface of the map*).
+    late_echo_period : float or None
+        Drop points that are the late echo of one of the previous two firings off a surface
+        of the map (:func:`~sonarcarve.filters.late_echoes.late_echo_mask`: ghost walls in
+        front of a real wall, heard when a sensor fires faster than the round trip of its
+        hearing range). The value is the robot's firing period: seconds between consecutive
+        firings of any of its sensors (a robot file's ``firing_period``). Needs each point's
+        reading (:func:`filter_map`). Off by default (docs/RESULTS.md, *Late echoes: a test
+        against the map*).
     driven_through : BodyFootprint or None
         Drop points that this body covered at a later pose (:func:`driven_through_mask`): not
         static obstacles, whatever made them (late echoes forming a ghost wall in front of a
@@ -67,7 +78,7 @@ class MapFilter:
     Raises
     ------
     FilterError
-        A radius or threshold that is not a finite positive number, k < 1, or a
+        A radius, period or threshold that is not a finite positive number, k < 1, or a
         ``driven_through`` that is not a :class:`BodyFootprint`.
     """
 
@@ -76,10 +87,12 @@ class MapFilter:
     outlier_neighbours: int = 1
     min_confidence: float | None = None
     occlusion_depth: float | None = None
+    late_echo_period: float | None = None
     driven_through: BodyFootprint | None = None
 
     def __post_init__(self) -> None:
         check_positive("max_error", self.max_error)
+        check_positive("late_echo_period", self.late_echo_period, unit="seconds")
         if self.driven_through is not None and not isinstance(self.driven_through,
                                                               BodyFootprint):
             msg = (f"driven_through must be a BodyFootprint (BodyFootprint.of_robot or "
@@ -99,7 +112,7 @@ class MapFilter:
         """True if at least one filter is on."""
         return (self.max_error is not None or self.outlier_radius is not None
                 or self.min_confidence is not None or self.occlusion_depth is not None
-                or self.driven_through is not None)
+                or self.late_echo_period is not None or self.driven_through is not None)
 
 
 @dataclass(frozen=True)
@@ -111,13 +124,14 @@ class MapFilterReport:
     outliers: int = 0
     confidence: int = 0
     occluded: int = 0
+    late_echoes: int = 0
     driven_through: int = 0
 
     @property
     def kept(self) -> int:
         """Points out."""
         return (self.total - self.max_error - self.outliers - self.confidence - self.occluded
-                - self.driven_through)
+                - self.late_echoes - self.driven_through)
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,9 +192,10 @@ def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
 
 
 def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None,
-               poses: ReadingBatch | None = None) -> FilteredMap[_M]:
-    """Apply the map filters of ``spec``: confidence, max-error thresholding, driven through,
-    occlusion, then the outlier test.
+               readings: ReadingBatch | None = None,
+               reading_ids: npt.ArrayLike | None = None) -> FilteredMap[_M]:
+    """Apply the map filters of ``spec``: confidence, max-error thresholding, late echoes,
+    driven through, occlusion, then the outlier test.
 
     Parameters
     ----------
@@ -190,9 +205,13 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
         Which filters, with which thresholds.
     origins : array-like, shape (n, 2), optional
         The sensor origin of each point (:func:`point_origins`); needed by the occlusion filter.
-    poses : ReadingBatch, optional
-        The readings of the whole log, for their sensor poses (the body's path); needed by the
-        driven-through filter.
+    readings : ReadingBatch, optional
+        The readings the map was made from, the whole log (those the reading filters dropped
+        too: they were taken where the robot stood): the body's path for the driven-through
+        filter, each point's reading for the late-echo filter.
+    reading_ids : array-like of int, optional
+        The id of each of ``readings`` (default: its row, as
+        :func:`~sonarcarve.pipeline.process_readings` numbers them).
 
     Returns
     -------
@@ -203,19 +222,13 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
     ------
     FilterError
         The occlusion filter without ``origins``, ``origins`` of the wrong shape, or the
-        driven-through filter without ``poses``.
+        late-echo or driven-through filter without ``readings``.
     """
     total = len(points)
-    if spec.occlusion_depth is not None and origins is None:
-        msg = ("the occlusion filter needs each point's sensor origin: pass "
-               "origins=point_origins(points, readings)")
-        raise FilterError(msg)
-    if spec.driven_through is not None and poses is None:
-        msg = "the driven-through filter needs the body's path: pass poses=the map's readings"
-        raise FilterError(msg)
+    _check_inputs(spec, origins, readings)
     origin = None if origins is None else origins_array(origins, total)
-    dropped = {"confidence": 0, "max_error": 0, "driven_through": 0, "occluded": 0,
-               "outliers": 0}
+    dropped = {"confidence": 0, "max_error": 0, "late_echoes": 0, "driven_through": 0,
+               "occluded": 0, "outliers": 0}
 
     def drop(name: str, keep: BoolArray) -> None:
         nonlocal points, origin
@@ -227,11 +240,17 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
         drop("confidence", confidence_mask(points.confidence, spec.min_confidence))
     if spec.max_error is not None:
         drop("max_error", max_error_mask(points.max_error, spec.max_error))
+    # The two ghost filters before the occlusion filter, so that a ghost wall hides nothing
+    # behind it, and before the outlier test, so that it vouches for no neighbour. Late echoes
+    # first: its test needs the far walls, which the map holds whole only before any drop.
+    if spec.late_echo_period is not None:
+        assert readings is not None  # checked above
+        drop("late_echoes", ~late_echo_mask(points.xy, points.reading_id, points.max_error,
+                                            readings, reading_ids=reading_ids,
+                                            firing_period=spec.late_echo_period))
     if spec.driven_through is not None:
-        # Before the occlusion filter, so that a ghost wall hides nothing behind it, and
-        # before the outlier test, so that it vouches for no neighbour.
-        assert poses is not None  # checked above
-        drop("driven_through", ~driven_through_mask(points.xy, points.t, poses,
+        assert readings is not None  # checked above
+        drop("driven_through", ~driven_through_mask(points.xy, points.t, readings,
                                                      spec.driven_through))
     if spec.occlusion_depth is not None:
         # After the confidence and error filters, so that only points the map keeps hide
@@ -243,3 +262,16 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
         drop("outliers", outlier_mask(points.xy, spec.outlier_radius, spec.outlier_neighbours))
     return FilteredMap(points=points, report=MapFilterReport(total=total, **dropped))
 
+
+def _check_inputs(spec: MapFilter, origins: npt.ArrayLike | None,
+                  readings: ReadingBatch | None) -> None:
+    """Refuse a filter of ``spec`` without what it needs, naming what to pass."""
+    if spec.occlusion_depth is not None and origins is None:
+        msg = ("the occlusion filter needs each point's sensor origin: pass "
+               "origins=point_origins(points, readings)")
+        raise FilterError(msg)
+    for name, on in (("late-echo", spec.late_echo_period is not None),
+                     ("driven-through", spec.driven_through is not None)):
+        if on and readings is None:
+            msg = f"the {name} filter needs the map's readings: pass readings=the whole log"
+            raise FilterError(msg)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.errors import SonarcarveError
-from sonarcarve.late_echoes import (
+from sonarcarve.filters.late_echoes import (
     FiringSchedule,
     LateEchoError,
     far_echo_distance,
@@ -183,3 +183,16 @@ def test_bad_arrays() -> None:
         late_echo_mask(xy, ids, bound, batch, firings=FiringSchedule(
             np.array([0.5]), np.zeros(1), np.zeros(1)))
     assert issubclass(LateEchoError, SonarcarveError)
+
+
+def test_map_filter_refuses_a_bad_period_and_a_missing_log() -> None:
+    from sonarcarve.filters import FilterError, MapFilter, filter_map
+    from sonarcarve.maps import GlobalMap
+
+    for bad in (0.0, -0.04, math.inf, math.nan):
+        with pytest.raises(FilterError, match="late_echo_period must be a finite number > 0 "
+                                              r"\(seconds\)"):
+            MapFilter(late_echo_period=bad)
+    assert MapFilter(late_echo_period=0.04).active
+    with pytest.raises(FilterError, match="late-echo filter needs the map's readings"):
+        filter_map(GlobalMap.empty(), MapFilter(late_echo_period=0.04))

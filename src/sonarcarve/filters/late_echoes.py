@@ -65,7 +65,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.filters.checks import FilterError
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
@@ -108,8 +108,9 @@ AGREEMENT_RADIUS = 0.3
 BETWEEN_MARGIN = 0.3
 
 
-class LateEchoError(SonarcarveError, ValueError):
-    """A parameter or array of the late-echo test outside its valid range."""
+class LateEchoError(FilterError):
+    """A parameter or array of the late-echo test outside its valid range (a
+    :class:`~sonarcarve.filters.FilterError`)."""
 
 
 class FiringSchedule(NamedTuple):
