@@ -67,8 +67,8 @@ ONE_SONAR = "benchmarks/robots/scout2-front-1.yaml"
 TWO_SONARS = "benchmarks/robots/scout2-front-back.yaml"
 FLOORS = heldout.WORLDS
 DEVELOPMENT = ("office", "t-junction", "doorway")
-#: The development group's seeds 0..n-1 (``--dev-seeds``).
-SEEDS = [3]
+#: The development group's seeds 0..n-1 (``--dev-seeds``) and the floors' (``--floor-seeds``).
+SEEDS = [3, 1]
 SHIPPED = ("amplitude", "specular")
 
 
@@ -85,8 +85,11 @@ def _floor_settings(robot: str, physics: tuple[str, ...] = SHIPPED) -> Iterator[
     period = load_robot(robot).firing_period
     for name in physics:
         for world in FLOORS:
-            yield Setting(f"{world}, {name}", period, lambda w=world, p=name: heldout._simulate(
-                w, 0, heldout.PHYSICS[p], robot), robot)
+            for seed in range(SEEDS[1]):
+                label = world if seed == 0 else f"{world} seed {seed}"
+                yield Setting(f"{label}, {name}", period,
+                              lambda w=world, s=seed, p=name: heldout._simulate(
+                                  w, s, heldout.PHYSICS[p], robot), robot)
 
 
 def _car_settings() -> Iterator[Setting]:
@@ -379,7 +382,8 @@ def both(groups: list[str]) -> None:
     """The ``--both`` tables, one per group and physics."""
     print("evidence carving's default map through neither, each and both ghost filters "
           "(filter_map: late_echo_period = the robot's firing_period, driven_through = "
-          f"BodyFootprint.of_robot; development seeds 0-{SEEDS[0] - 1})")
+          f"BodyFootprint.of_robot; development seeds 0-{SEEDS[0] - 1}, floors' seeds "
+          f"0-{SEEDS[1] - 1})")
     for group in groups:
         runs = []
         for i, setting in enumerate(GROUPS[group]()):
@@ -425,6 +429,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="the map through neither, each and both ghost filters instead")
     parser.add_argument("--dev-seeds", type=int, default=3,
                         help="the development group's seeds 0..n-1")
+    parser.add_argument("--floor-seeds", type=int, default=1,
+                        help="the held-out floors' seeds 0..n-1 (one-sonar, two-sonars, "
+                             "scout2-ring, pioneer-ring)")
     parser.add_argument("--half-width", type=float, help="late_echo_mask's half_width, m")
     parser.add_argument("--surface-error", type=float, help="its surface_error, m")
     parser.add_argument("--agreement", type=float,
@@ -436,7 +443,7 @@ def main(argv: list[str] | None = None) -> int:
     for option in ("half_width", "surface_error"):
         if getattr(args, option) is not None:
             OPTIONS[option] = getattr(args, option)
-    SEEDS[0] = args.dev_seeds
+    SEEDS[:] = [args.dev_seeds, args.floor_seeds]
     if args.timing:
         timing()
         return 0
