@@ -7,6 +7,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/late_echoes.py --groups car-park one-sonar
     nice .venv/bin/python benchmarks/late_echoes.py --trace one-sonar  # the paths, per run
     nice .venv/bin/python benchmarks/late_echoes.py --timing           # cost against process
+    nice .venv/bin/python benchmarks/late_echoes.py --both --floor-seeds 3  # with driven-through
 
 Both simulator models make their crosstalk as late echoes: the specular model's
 (``sim.sonar.spurious._crosstalk``) is an earlier firing's echo point heard diffusely, the
@@ -36,6 +37,20 @@ script did), and prints per run: ghosts matched, the share of lag 1 and of the s
 ping, the one-way path P/2 and the reading, and late13's probe (the point at ``r + c Δt / 2`` on
 the axis, Δt the lag-1 gap, within 0.1 m of any point of the final map) for ghosts and direct
 echoes.
+
+``--both``: the two ghost filters together, as ``process --late-echo-period ROBOT
+--driven-through ROBOT`` runs them (:func:`~sonarcarve.filters.filter_map` with
+``MapFilter(late_echo_period=firing_period, driven_through=BodyFootprint.of_robot(...))`` of
+the group's robot file): evidence carving's default map through neither, each and both, in the
+same run. Per group and physics: direct echoes kept, ghosts, floor and multipath echoes removed
+(%, mean over runs), median / p90 true error (m), the direct points dropped (count, %, their
+median true error pooled over runs: a misplaced point dropped is no loss), the overlap of the
+two masks on the ghost and direct points of the map (caught by one only, by each), and for the
+car park the parking question of :mod:`parking` read from each map. Each run checks that
+"both" drops exactly the union of the two masks, and the first run of each group that
+:func:`~sonarcarve.pipeline.process_readings` with both filters gives the same map.
+``--floor-seeds`` and ``--dev-seeds`` set the seeds of the held-out floors (default 1) and
+of the development worlds (default 3).
 """
 
 from __future__ import annotations
@@ -284,6 +299,8 @@ def late13_probe(sim: Simulation, points: GlobalMap) -> npt.NDArray[np.bool_]:
 
 #: ``--both``'s maps: evidence carving's default map through which of the two ghost filters.
 COMBINATIONS = ("neither", "late echoes", "driven through", "both")
+#: The car park's gaps wider than 2 m: the 6.0 m slot, the 4.5 m gap, the 3.2 m bay.
+SLOTS = [g for g in parking.all_gaps() if g.length > 2.0]
 #: The true error of each direct point a filter dropped, per (run, combination).
 LOST_ERRORS: dict[tuple[str, str], list[float]] = {}
 
@@ -324,11 +341,17 @@ def run_both(setting: Setting, check_process: bool = False) -> dict[str, dict[st
     kind = sim.truth.kind[points.reading_id]
     err = segment_distance(points.xy, sim.world.segments)[0]
     rows = {"neither": measures(sim, points)}
+    if sim.world.name == "car-park":
+        for i, gap in enumerate(SLOTS):
+            rows["neither"][f"gap {i}"] = parking.read_gap(gap, points=points.xy)
     for name, spec in specs.items():
         kept = filter_map(points, spec, readings=sim.readings).points
         if not _same_points(kept, points.select(~expected[name])):
             raise AssertionError(f"{setting.label}, {name}: filter_map is not the masks' union")
         rows[name] = measures(sim, kept)
+        if sim.world.name == "car-park":
+            for i, gap in enumerate(SLOTS):
+                rows[name][f"gap {i}"] = parking.read_gap(gap, points=kept.xy)
         lost = expected[name] & (kind == EchoKind.DIRECT)
         rows[name]["lost"] = float(lost.sum())
         rows[name]["lost %"] = 100 * float(np.mean(lost[kind == EchoKind.DIRECT]))
@@ -370,12 +393,27 @@ def _both_table(group: str, runs: list[tuple[str, dict[str, dict[str, float]]]])
         print(f"\n{who} points in the map: {total['points']:.0f}; dropped by late echoes only "
               f"{total['late only']:.0f}, by driven through only {total['driven only']:.0f}, by "
               f"each {total['by each']:.0f}", end="")
+    if "gap 0" in runs[0][1]["neither"]:
+        _gap_table(runs)
     print("\n\nper run, ghosts removed neither / late / driven / both (%) of n; direct points "
           "dropped late / driven / both:")
     for label, r in runs:
         print(f"  {label}: " + " / ".join(f"{r[n]['ghosts']:.1f}" for n in COMBINATIONS)
               + f" of {r['neither']['ghosts n']:.0f}; "
               + " / ".join(f"{r[n]['lost']:.0f}" for n in COMBINATIONS[1:]))
+
+
+def _gap_table(runs: list[tuple[str, dict[str, dict[str, float]]]]) -> None:
+    """The car park's parking question (:mod:`parking`) read from each map."""
+    head = " | ".join(f"{g.length:.1f} m {g.row.kind}: read (m), judged present" for g in SLOTS)
+    print(f"\n\n| filters | {head} |\n|---|" + "---:|" * len(SLOTS))
+    for name in COMBINATIONS:
+        cells = []
+        for i, gap in enumerate(SLOTS):
+            read = [r[name][f"gap {i}"] for _, r in runs]
+            judged = sum(x >= parking.slot_needed(gap) for x in read)
+            cells.append(f"{np.mean(read):.2f}, {judged} of {len(read)}")
+        print(f"| {name} | " + " | ".join(cells) + " |", end="\n" if name != "both" else "")
 
 
 def both(groups: list[str]) -> None:
