@@ -46,6 +46,9 @@ default ``combined`` and ``evidence``), best of 3 after a warm-up, on ``syntheti
 corridor loop of N readings (a 16-sensor ring driven round and round a 2 m wide corridor: the
 true walls close beside a path driven again and again, where the filter should drop no true
 echo), with the share of its true and spurious echoes dropped.
+
+With the late-echo filter, in one run (neither / late echoes / driven through / both, as
+``process`` runs them): ``benchmarks/late_echoes.py --both``.
 """
 
 from __future__ import annotations

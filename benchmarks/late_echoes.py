@@ -7,6 +7,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/late_echoes.py --groups car-park one-sonar
     nice .venv/bin/python benchmarks/late_echoes.py --trace one-sonar  # the paths, per run
     nice .venv/bin/python benchmarks/late_echoes.py --timing           # cost against process
+    nice .venv/bin/python benchmarks/late_echoes.py --both --floor-seeds 3  # with driven-through
 
 Both simulator models make their crosstalk as late echoes: the specular model's
 (``sim.sonar.spurious._crosstalk``) is an earlier firing's echo point heard diffusely, the
@@ -36,6 +37,20 @@ script did), and prints per run: ghosts matched, the share of lag 1 and of the s
 ping, the one-way path P/2 and the reading, and late13's probe (the point at ``r + c Δt / 2`` on
 the axis, Δt the lag-1 gap, within 0.1 m of any point of the final map) for ghosts and direct
 echoes.
+
+``--both``: the two ghost filters together, as ``process --late-echo-period ROBOT
+--driven-through ROBOT`` runs them (:func:`~sonarcarve.filters.filter_map` with
+``MapFilter(late_echo_period=firing_period, driven_through=BodyFootprint.of_robot(...))`` of
+the group's robot file): evidence carving's default map through neither, each and both, in the
+same run. Per group and physics: direct echoes kept, ghosts, floor and multipath echoes removed
+(%, mean over runs), median / p90 true error (m), the direct points dropped (count, %, their
+median true error pooled over runs: a misplaced point dropped is no loss), the overlap of the
+two masks on the ghost and direct points of the map (caught by one only, by each), and for the
+car park the parking question of :mod:`parking` read from each map. Each run checks that
+"both" drops exactly the union of the two masks, and the first run of each group that
+:func:`~sonarcarve.pipeline.process_readings` with both filters gives the same map.
+``--floor-seeds`` and ``--dev-seeds`` set the seeds of the held-out floors (default 1) and
+of the development worlds (default 3).
 """
 
 from __future__ import annotations
@@ -52,6 +67,7 @@ import numpy.typing as npt
 import heldout
 import parking
 from sonarcarve import MethodConfig, make_method
+from sonarcarve.filters import BodyFootprint, MapFilter, driven_through_mask, filter_map
 from sonarcarve.filters import late_echoes as late_echoes_module
 from sonarcarve.filters.late_echoes import SOUND_SPEED, FiringSchedule, late_echo_mask
 from sonarcarve.lab.metrics import segment_distance
@@ -66,6 +82,8 @@ ONE_SONAR = "benchmarks/robots/scout2-front-1.yaml"
 TWO_SONARS = "benchmarks/robots/scout2-front-back.yaml"
 FLOORS = heldout.WORLDS
 DEVELOPMENT = ("office", "t-junction", "doorway")
+#: The development group's seeds 0..n-1 (``--dev-seeds``) and the floors' (``--floor-seeds``).
+SEEDS = [3, 1]
 SHIPPED = ("amplitude", "specular")
 
 
@@ -75,14 +93,18 @@ class Setting(NamedTuple):
     label: str
     period: float  # the robot's firing period, s
     make: Callable[[], Simulation]
+    robot: str  # the robot file or name (``--both``: its body)
 
 
 def _floor_settings(robot: str, physics: tuple[str, ...] = SHIPPED) -> Iterator[Setting]:
     period = load_robot(robot).firing_period
     for name in physics:
         for world in FLOORS:
-            yield Setting(f"{world}, {name}", period, lambda w=world, p=name: heldout._simulate(
-                w, 0, heldout.PHYSICS[p], robot))
+            for seed in range(SEEDS[1]):
+                label = world if seed == 0 else f"{world} seed {seed}"
+                yield Setting(f"{label}, {name}", period,
+                              lambda w=world, s=seed, p=name: heldout._simulate(
+                                  w, s, heldout.PHYSICS[p], robot), robot)
 
 
 def _car_settings() -> Iterator[Setting]:
@@ -90,17 +112,17 @@ def _car_settings() -> Iterator[Setting]:
     for name, physics in parking.CAR_PHYSICS.items():
         for seed in range(3):
             yield Setting(f"seed {seed}, {name}", period,
-                          lambda s=seed, p=physics: parking._simulate(s, p))
+                          lambda s=seed, p=physics: parking._simulate(s, p), parking.ROBOT)
 
 
 def _development_settings() -> Iterator[Setting]:
     period = load_robot("scout2").firing_period
     for name in SHIPPED:
         for world in DEVELOPMENT:
-            for seed in range(3):
+            for seed in range(SEEDS[0]):
                 yield Setting(f"{world} {seed}, {name}", period,
                               lambda w=world, s=seed, p=name: heldout._simulate(
-                                  w, s, heldout.PHYSICS[p]))
+                                  w, s, heldout.PHYSICS[p]), "scout2")
 
 
 GROUPS: dict[str, Callable[[], Iterator[Setting]]] = {
@@ -273,6 +295,145 @@ def late13_probe(sim: Simulation, points: GlobalMap) -> npt.NDArray[np.bool_]:
     return near
 
 
+# -- both ghost filters (--both) ----------------------------------------------------------------
+
+#: ``--both``'s maps: evidence carving's default map through which of the two ghost filters.
+COMBINATIONS = ("neither", "late echoes", "driven through", "both")
+#: The car park's gaps wider than 2 m: the 6.0 m slot, the 4.5 m gap, the 3.2 m bay.
+SLOTS = [g for g in parking.all_gaps() if g.length > 2.0]
+#: The true error of each direct point a filter dropped, per (run, combination).
+LOST_ERRORS: dict[tuple[str, str], list[float]] = {}
+
+
+def ghost_specs(setting: Setting) -> dict[str, MapFilter]:
+    """The three filtered variants as ``process --late-echo-period ROBOT --driven-through
+    ROBOT`` builds them: the robot file's ``firing_period`` and its body."""
+    robot = load_robot(setting.robot)
+    body = BodyFootprint.of_robot(robot.mount_x, robot.mount_y, robot.bearing,
+                                  robot.robot_radius)
+    return {"late echoes": MapFilter(late_echo_period=robot.firing_period),
+            "driven through": MapFilter(driven_through=body),
+            "both": MapFilter(late_echo_period=robot.firing_period, driven_through=body)}
+
+
+def _same_points(a: GlobalMap, b: GlobalMap) -> bool:
+    return len(a) == len(b) and bool(np.array_equal(a.reading_id, b.reading_id)
+                                     and np.array_equal(a.xy, b.xy))
+
+
+def run_both(setting: Setting, check_process: bool = False) -> dict[str, dict[str, float]]:
+    """One setting's map through neither, each and both ghost filters (:func:`filter_map`, as
+    ``process`` runs them), with the masks' overlap on ghost and direct points.
+
+    Each filtered map is checked against the masks: late echoes run first on the whole map and
+    the driven-through test looks at each point alone, so "both" must drop exactly the union of
+    the two masks. With ``check_process``, the map of :func:`process_readings` with both
+    filters is checked to be the same as :func:`filter_map`'s."""
+    sim = setting.make()
+    points = evidence_map(sim)
+    specs = ghost_specs(setting)
+    late = late_echo_mask(points.xy, points.reading_id, points.max_error, sim.readings,
+                          firing_period=specs["late echoes"].late_echo_period)
+    body = specs["driven through"].driven_through
+    assert body is not None
+    driven = driven_through_mask(points.xy, points.t, sim.readings, body)
+    expected = {"late echoes": late, "driven through": driven, "both": late | driven}
+    kind = sim.truth.kind[points.reading_id]
+    err = segment_distance(points.xy, sim.world.segments)[0]
+    rows = {"neither": measures(sim, points)}
+    if sim.world.name == "car-park":
+        for i, gap in enumerate(SLOTS):
+            rows["neither"][f"gap {i}"] = parking.read_gap(gap, points=points.xy)
+    for name, spec in specs.items():
+        kept = filter_map(points, spec, readings=sim.readings).points
+        if not _same_points(kept, points.select(~expected[name])):
+            raise AssertionError(f"{setting.label}, {name}: filter_map is not the masks' union")
+        rows[name] = measures(sim, kept)
+        if sim.world.name == "car-park":
+            for i, gap in enumerate(SLOTS):
+                rows[name][f"gap {i}"] = parking.read_gap(gap, points=kept.xy)
+        lost = expected[name] & (kind == EchoKind.DIRECT)
+        rows[name]["lost"] = float(lost.sum())
+        rows[name]["lost %"] = 100 * float(np.mean(lost[kind == EchoKind.DIRECT]))
+        LOST_ERRORS[setting.label, name] = err[lost].tolist()
+    if check_process:
+        both = process_readings(sim.readings, make_method("evidence", MethodConfig()),
+                                map_filter=specs["both"]).global_map
+        if not _same_points(both, points.select(~expected["both"])):
+            raise AssertionError(f"{setting.label}: process_readings differs from filter_map")
+    for who, sel in (("ghost", kind == EchoKind.CROSSTALK), ("direct", kind == EchoKind.DIRECT)):
+        rows["neither"][f"{who} points"] = float(sel.sum())
+        rows["neither"][f"{who} late only"] = float(np.sum(sel & late & ~driven))
+        rows["neither"][f"{who} driven only"] = float(np.sum(sel & driven & ~late))
+        rows["neither"][f"{who} by each"] = float(np.sum(sel & late & driven))
+    return rows
+
+
+def _both_table(group: str, runs: list[tuple[str, dict[str, dict[str, float]]]]) -> None:
+    print(f"\n{group}: {len(runs)} runs; ghosts per run "
+          f"{np.mean([r['neither']['ghosts n'] for _, r in runs]):.0f} (mean)\n")
+    print("| filters | direct kept (%) | ghosts removed (%) | floor removed (%) | multipath "
+          "removed (%) | median / p90 error (m) | direct points dropped (n, %, median true "
+          "error m) |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for name in COMBINATIONS:
+        def mean(key: str, name: str = name) -> float:
+            values = np.array([r[name][key] for _, r in runs])
+            return float(np.mean(values[np.isfinite(values)])) if np.isfinite(values).any() \
+                else math.nan
+
+        errors = [e for label, _ in runs for e in LOST_ERRORS.get((label, name), [])]
+        lost = (f"{sum(r[name]['lost'] for _, r in runs):.0f}, {mean('lost %'):.2f}, "
+                f"{np.median(errors) if errors else math.nan:.2f}" if name != "neither" else "–")
+        print(f"| {name} | {mean('direct'):.1f} | {mean('ghosts'):.1f} | {mean('floor'):.1f} | "
+              f"{mean('multipath'):.1f} | {mean('median'):.3f} / {mean('p90'):.3f} | {lost} |")
+    for who in ("ghost", "direct"):
+        total = {k: sum(r["neither"][f"{who} {k}"] for _, r in runs)
+                 for k in ("points", "late only", "driven only", "by each")}
+        print(f"\n{who} points in the map: {total['points']:.0f}; dropped by late echoes only "
+              f"{total['late only']:.0f}, by driven through only {total['driven only']:.0f}, by "
+              f"each {total['by each']:.0f}", end="")
+    if "gap 0" in runs[0][1]["neither"]:
+        _gap_table(runs)
+    print("\n\nper run, ghosts removed neither / late / driven / both (%) of n; direct points "
+          "dropped late / driven / both:")
+    for label, r in runs:
+        print(f"  {label}: " + " / ".join(f"{r[n]['ghosts']:.1f}" for n in COMBINATIONS)
+              + f" of {r['neither']['ghosts n']:.0f}; "
+              + " / ".join(f"{r[n]['lost']:.0f}" for n in COMBINATIONS[1:]))
+
+
+def _gap_table(runs: list[tuple[str, dict[str, dict[str, float]]]]) -> None:
+    """The car park's parking question (:mod:`parking`) read from each map."""
+    head = " | ".join(f"{g.length:.1f} m {g.row.kind}: read (m), judged present" for g in SLOTS)
+    print(f"\n\n| filters | {head} |\n|---|" + "---:|" * len(SLOTS))
+    for name in COMBINATIONS:
+        cells = []
+        for i, gap in enumerate(SLOTS):
+            read = [r[name][f"gap {i}"] for _, r in runs]
+            judged = sum(x >= parking.slot_needed(gap) for x in read)
+            cells.append(f"{np.mean(read):.2f}, {judged} of {len(read)}")
+        print(f"| {name} | " + " | ".join(cells) + " |", end="\n" if name != "both" else "")
+
+
+def both(groups: list[str]) -> None:
+    """The ``--both`` tables, one per group and physics."""
+    print("evidence carving's default map through neither, each and both ghost filters "
+          "(filter_map: late_echo_period = the robot's firing_period, driven_through = "
+          f"BodyFootprint.of_robot; development seeds 0-{SEEDS[0] - 1}, floors' seeds "
+          f"0-{SEEDS[1] - 1})")
+    for group in groups:
+        runs = []
+        for i, setting in enumerate(GROUPS[group]()):
+            tic = time.process_time()
+            runs.append((setting.label, run_both(setting, check_process=i == 0)))
+            print(f"  {group}, {setting.label}: {time.process_time() - tic:.0f} CPU s",
+                  flush=True)
+        for physics in dict.fromkeys(label.split(", ", 1)[1] for label, _ in runs):
+            _both_table(f"{group}, {physics}",
+                        [(label, r) for label, r in runs if label.split(", ", 1)[1] == physics])
+
+
 # -- cost ---------------------------------------------------------------------------------------
 
 def timing() -> None:
@@ -302,6 +463,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--groups", nargs="+", choices=list(GROUPS), default=list(GROUPS))
     parser.add_argument("--trace", choices=list(GROUPS), help="print the ghosts' paths instead")
     parser.add_argument("--timing", action="store_true", help="time the mask against process")
+    parser.add_argument("--both", action="store_true",
+                        help="the map through neither, each and both ghost filters instead")
+    parser.add_argument("--dev-seeds", type=int, default=3,
+                        help="the development group's seeds 0..n-1")
+    parser.add_argument("--floor-seeds", type=int, default=1,
+                        help="the held-out floors' seeds 0..n-1 (one-sonar, two-sonars, "
+                             "scout2-ring, pioneer-ring)")
     parser.add_argument("--half-width", type=float, help="late_echo_mask's half_width, m")
     parser.add_argument("--surface-error", type=float, help="its surface_error, m")
     parser.add_argument("--agreement", type=float,
@@ -313,8 +481,12 @@ def main(argv: list[str] | None = None) -> int:
     for option in ("half_width", "surface_error"):
         if getattr(args, option) is not None:
             OPTIONS[option] = getattr(args, option)
+    SEEDS[:] = [args.dev_seeds, args.floor_seeds]
     if args.timing:
         timing()
+        return 0
+    if args.both:
+        both(args.groups)
         return 0
     if args.trace:
         for setting in GROUPS[args.trace]():
