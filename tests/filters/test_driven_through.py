@@ -220,3 +220,16 @@ def test_readings_the_reading_filters_drop_still_give_the_path() -> None:
     assert 39 not in result.global_map.reading_id.tolist()
     assert result.map_filter is not None
     assert result.map_filter.driven_through == only_kept.report.driven_through + 1
+
+
+@pytest.mark.parametrize("margin", [math.nan, -0.1, math.inf])
+def test_a_margin_that_is_no_finite_number_at_least_zero_is_refused(margin: float) -> None:
+    # NaN made no pose later (nothing dropped, silently); a negative margin let the reading's
+    # own pose drop it.
+    with pytest.raises(FilterError, match="margin must be a finite number >= 0"):
+        driven_through_mask([[2.0, 0.0]], [0.0], STRAIGHT, DISC, margin=margin)
+
+
+def test_a_point_time_that_is_not_finite_is_refused() -> None:
+    with pytest.raises(FilterError, match="a finite point and a time for each point"):
+        driven_through_mask([[2.0, 0.0]], [math.nan], STRAIGHT, DISC)

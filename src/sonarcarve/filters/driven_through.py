@@ -7,6 +7,7 @@ who has since left. It needs the readings themselves, for the body's path.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -232,8 +233,8 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     Raises
     ------
     FilterError
-        Arrays of different lengths, points that are not finite, or a sensor the body has no
-        mount for.
+        Arrays of different lengths, points or times that are not finite, a ``margin`` that is
+        no finite number >= 0, or a sensor the body has no mount for.
 
     Examples
     --------
@@ -250,9 +251,16 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     """
     pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(t, dtype=np.float64).reshape(-1)
-    if heard.shape != (pts.shape[0],) or not np.all(np.isfinite(pts)):
+    if (heard.shape != (pts.shape[0],) or not np.all(np.isfinite(pts))
+            or not np.all(np.isfinite(heard))):
         msg = (f"the driven-through filter needs a finite point and a time for each point, got "
                f"{pts.shape[0]} points and {heard.shape[0]} times")
+        raise FilterError(msg)
+    # NaN would make no pose later (nothing dropped, silently), a negative margin would let
+    # the reading's own pose drop its point.
+    if (isinstance(margin, bool) or not isinstance(margin, numbers.Real)
+            or not (math.isfinite(margin) and margin >= 0.0)):
+        msg = f"margin must be a finite number >= 0 (seconds), got {margin!r}"
         raise FilterError(msg)
     covered = np.zeros(pts.shape[0], dtype=bool)
     if pts.shape[0] == 0 or len(poses) == 0:
