@@ -196,3 +196,50 @@ def test_map_filter_refuses_a_bad_period_and_a_missing_log() -> None:
     assert MapFilter(late_echo_period=0.04).active
     with pytest.raises(FilterError, match="late-echo filter needs the map's readings"):
         filter_map(GlobalMap.empty(), MapFilter(late_echo_period=0.04))
+
+
+def _two_points() -> tuple[np.ndarray, np.ndarray, np.ndarray, ReadingBatch]:
+    return scene([(1.0, 0.0), (2.0, 0.0)])
+
+
+@pytest.mark.parametrize(("reading_ids", "words"), [
+    ([0, 1, 2], "one id for each of the 2 readings"),  # was an IndexError
+    ([0, 0], "unique"),  # the second point was matched to the first reading, silently
+    ([0.0, 1.5], "whole numbers"),  # 1.5 was read as 1, silently
+])
+def test_bad_reading_ids(reading_ids: list[float], words: str) -> None:
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=words):
+        late_echo_mask(xy, ids, bound, batch, reading_ids=reading_ids, firing_period=PERIOD)
+
+
+def test_a_point_id_that_is_no_whole_number_is_refused() -> None:
+    xy, _, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match="whole numbers"):
+        late_echo_mask(xy, [0.0, 0.7], bound, batch, firing_period=PERIOD)
+
+
+@pytest.mark.parametrize(("firings", "words"), [
+    # Lengths that differ were read as far as the shortest, silently.
+    (FiringSchedule(np.array([0.02, 0.04]), np.zeros(1), np.zeros(3)), "same length"),
+    (FiringSchedule(np.array([0.02, 0.04]), np.array([math.nan, 0.0]), np.zeros(2)), "finite"),
+    # Out of order, the search for a reading's firing failed with a misleading message.
+    (FiringSchedule(np.array([0.04, 0.02]), np.zeros(2), np.zeros(2)), "increasing"),
+])
+def test_bad_firing_schedules(firings: FiringSchedule, words: str) -> None:
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=words):
+        late_echo_mask(xy, ids, bound, batch, firings=firings)
+
+
+def test_lags_beyond_the_limit_are_refused() -> None:
+    # Each lag is one pass over the map: a billion lags ran for hours.
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=r"lags must be a whole number in 1\.\.1000"):
+        late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, lags=10**9)
+
+
+def test_readings_that_are_no_batch_are_refused() -> None:
+    xy, ids, bound, _ = _two_points()
+    with pytest.raises(LateEchoError, match="ReadingBatch"):
+        late_echo_mask(xy, ids, bound, [(0.0, 1.0)], firing_period=PERIOD)  # type: ignore[arg-type]
