@@ -233,3 +233,16 @@ def test_a_margin_that_is_no_finite_number_at_least_zero_is_refused(margin: floa
 def test_a_point_time_that_is_not_finite_is_refused() -> None:
     with pytest.raises(FilterError, match="a finite point and a time for each point"):
         driven_through_mask([[2.0, 0.0]], [math.nan], STRAIGHT, DISC)
+
+
+def test_swept_poses_move_no_corner_more_than_a_step() -> None:
+    # 1 m forward while turning 1 rad: a corner 1 m out moves up to 1 + 1 = 2 m along the
+    # segment (the translation and the turn add up where they point the same way), so at
+    # step 0.1 it takes 20 pieces; 10 (the larger of the two alone) moved it 0.2 m a piece.
+    track = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 1.0, 1.0]])
+    swept = swept_poses(track, step=0.1, reach=1.0)
+    for angle in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False):
+        heading = swept[:, 3] + angle
+        corner = swept[:, 1:3] + np.column_stack([np.cos(heading), np.sin(heading)])
+        moves = np.hypot(*np.diff(corner, axis=0).T)
+        assert moves.max() <= 0.1 + 1e-9

@@ -184,7 +184,9 @@ def swept_poses(track: FloatArray, step: float, reach: float = 0.0,
     start, end = track[:-1], track[1:]
     turn = np.angle(np.exp(1j * (end[:, 3] - start[:, 3])))  # wrapped to [-pi, pi]
     moved = np.hypot(end[:, 1] - start[:, 1], end[:, 2] - start[:, 2])
-    pieces = np.maximum(np.ceil(np.maximum(moved, np.abs(turn) * reach) / step), 1)
+    # A corner moves by the translation plus its arc of the turn (they add where they point
+    # the same way): the larger alone let it move up to twice ``step`` a piece.
+    pieces = np.maximum(np.ceil((moved + np.abs(turn) * reach) / step), 1)
     pieces = np.where(end[:, 0] - start[:, 0] > max_gap, 1, pieces).astype(np.int64)
     segment = np.repeat(np.arange(start.shape[0]), pieces)
     # Each added pose's fraction of the way along its segment: 0, 1/k, ..., (k-1)/k.
