@@ -166,3 +166,17 @@ def test_late_echo_period_drops_the_ghost_wall_and_keeps_the_wall(
     kept = read_map_csv(out).reading_id.tolist()
     assert kept == (list(range(10)) if period == "0.02" else list(range(20)))
     assert "dropped: late echoes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("option", "text"), [
+    ("--driven-through", "--driven-through must be a robot (name or YAML) or a clearance"),
+    ("--late-echo-period", "--late-echo-period must be a robot (name or YAML) or a firing"),
+])
+def test_an_empty_robot_or_number_is_named(tmp_path: Path, option: str, text: str,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    # An empty value was read as the robot file "." and failed with ".: is a directory".
+    code, out = _run(tmp_path, option, "")
+    assert code == 2
+    assert text in capsys.readouterr().err
+    assert not out.exists()
+
