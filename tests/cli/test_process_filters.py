@@ -180,3 +180,13 @@ def test_an_empty_robot_or_number_is_named(tmp_path: Path, option: str, text: st
     assert text in capsys.readouterr().err
     assert not out.exists()
 
+
+def test_a_bag_output_names_every_map_filter_it_refuses(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    readings = tmp_path / "r.csv"
+    _readings(readings)
+    code = main(["process", str(readings), "--out", str(tmp_path / "run.mcap"),
+                 "--late-echo-period", "0.04"])
+    assert code == 2
+    assert "--late-echo-period" in capsys.readouterr().err
+

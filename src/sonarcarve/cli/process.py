@@ -375,8 +375,8 @@ def process(
         # alone is also the readings' own contract (how far a no-echo row listened), so it
         # applies to every output.
         msg = (f"--out {out}: the filters (--min-range, --jump-threshold, --max-error, "
-               "--occlusion-depth, --driven-through, --outlier-radius) apply to a map CSV "
-               "output only; --max-range applies to every output")
+               "--late-echo-period, --driven-through, --occlusion-depth, --outlier-radius) "
+               "apply to a map CSV output only; --max-range applies to every output")
         raise ParameterError(msg)
     if map_rate is not None and output.label != "bag":
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
