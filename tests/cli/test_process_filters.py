@@ -190,3 +190,19 @@ def test_a_bag_output_names_every_map_filter_it_refuses(
     assert code == 2
     assert "--late-echo-period" in capsys.readouterr().err
 
+
+def test_a_robot_without_a_radius_drives_through_with_its_sensors_hull(tmp_path: Path) -> None:
+    # robot_radius 0 is a valid robot file; its body is then the hull of its mounts, which for
+    # the Scout2's 16 sensors on its rim is the 16-gon the 0.205 m disc makes: the same map.
+    from importlib.resources import files
+
+    text = (files("sonarcarve") / "robots" / "scout2.yaml").read_text()
+    robot = tmp_path / "rimless.yaml"
+    robot.write_text(text.replace("robot_radius: 0.205", "robot_radius: 0.0"))
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _forward_and_left(readings)
+    code = main(["process", str(readings), "--method", "centerline", "--out", str(out),
+                 "--driven-through", str(robot)])
+    assert code == 0
+    dropped = set(range(1, 48, 2))
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in dropped]

@@ -246,3 +246,14 @@ def test_swept_poses_move_no_corner_more_than_a_step() -> None:
         corner = swept[:, 1:3] + np.column_stack([np.cos(heading), np.sin(heading)])
         moves = np.hypot(*np.diff(corner, axis=0).T)
         assert moves.max() <= 0.1 + 1e-9
+
+
+def test_a_body_of_radius_zero_is_the_sensors_hull() -> None:
+    square = BodyFootprint.of_robot([1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0],
+                                    [0.0, 0.5 * math.pi, math.pi, -0.5 * math.pi], 0.0)
+    assert square.reach == pytest.approx(1.0)
+    assert len(square.outline) == 4
+    with pytest.raises(FilterError, match="the body has no area"):
+        BodyFootprint.of_robot([1.0, -1.0], [0.0, 0.0], [0.0, math.pi], 0.0)
+    with pytest.raises(FilterError, match="body radius must be a finite number >= 0"):
+        BodyFootprint.of_robot([1.0], [0.0], [0.0], -0.1)

@@ -66,22 +66,34 @@ class BodyFootprint:
         ``robot_radius``) and its sensor mounts. Sensors sit on the body's surface, so for a
         convex body their hull lies inside it; for the car (a 0.9 m radius, half its width)
         the bumper and side sensors make the hull a 4.5 x 1.8 m box with cut corners, where the
-        disc alone would miss both ends.
+        disc alone would miss both ends. A radius of 0 (a robot file may give one) leaves the
+        sensors' hull alone.
 
         Raises
         ------
         FilterError
-            A radius that is not a finite number > 0, or mounts of different lengths.
+            A radius that is not a finite number >= 0, mounts of different lengths, or a body
+            without area (radius 0 and fewer than three sensors off one line).
         """
-        check_positive("body radius", radius)
+        if (isinstance(radius, bool) or not isinstance(radius, numbers.Real)
+                or not (math.isfinite(radius) and radius >= 0.0)):
+            msg = (f"body radius must be a finite number >= 0 (metres; 0: the sensors' hull "
+                   f"alone), got {radius!r}")
+            raise FilterError(msg)
         mx, my, bear = (np.asarray(a, dtype=np.float64).reshape(-1)
                         for a in (mount_x, mount_y, bearing))
         if not mx.shape == my.shape == bear.shape or not np.all(np.isfinite(mx + my + bear)):
             msg = (f"sensor mounts need finite x, y and bearing for each sensor, got "
                    f"{mx.shape[0]}, {my.shape[0]} and {bear.shape[0]} values")
             raise FilterError(msg)
-        corners = np.vstack([_disc_polygon(radius), np.column_stack([mx, my])])
-        return cls(outline=_convex_hull(corners), mount_x=mx, mount_y=my, bearing=bear)
+        mounts = np.column_stack([mx, my])
+        hull = _convex_hull(mounts if radius == 0.0 else np.vstack([_disc_polygon(radius),
+                                                                     mounts]))
+        if hull.shape[0] < 3:  # the monotone chain drops collinear corners
+            msg = ("the body has no area: with a robot_radius of 0 it is the hull of the "
+                   "sensor mounts, which needs three sensors off one line")
+            raise FilterError(msg)
+        return cls(outline=hull, mount_x=mx, mount_y=my, bearing=bear)
 
     @classmethod
     def around_sensors(cls, radius: float) -> BodyFootprint:
