@@ -243,3 +243,12 @@ def test_readings_that_are_no_batch_are_refused() -> None:
     xy, ids, bound, _ = _two_points()
     with pytest.raises(LateEchoError, match="ReadingBatch"):
         late_echo_mask(xy, ids, bound, [(0.0, 1.0)], firing_period=PERIOD)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("shift", [-5e-7, 5e-7])
+def test_firing_times_match_the_readings_within_a_microsecond_either_way(shift: float) -> None:
+    # A schedule logged by another clock (or printed with fewer digits) is a hair off the
+    # readings' times; it was found only when late, never when early.
+    xy, ids, bound, batch = scene([(5.0, 5.0), (1.0, 0.0), *wall(4.0)])
+    firings = FiringSchedule(batch.t + shift, batch.x, batch.y)
+    assert late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)[1]

@@ -30,6 +30,7 @@ from sonarcarve.filters.driven_through import (
 )
 from sonarcarve.filters.late_echoes import (
     BETWEEN_MARGIN,
+    FIRING_TIME_TOLERANCE,
     LATE_ECHO_HALF_WIDTH,
     LATE_ECHO_LAGS,
     LATE_ECHO_SURFACE_ERROR,
@@ -76,6 +77,7 @@ __all__ = [
     "DRIVEN_MARGIN",
     "DRIVEN_MAX_GAP",
     "DRIVEN_STEP",
+    "FIRING_TIME_TOLERANCE",
     "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
     "LATE_ECHO_SURFACE_ERROR",

@@ -71,6 +71,7 @@ from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "BETWEEN_MARGIN",
+    "FIRING_TIME_TOLERANCE",
     "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
     "LATE_ECHO_SURFACE_ERROR",
@@ -107,6 +108,10 @@ AGREEMENT_RADIUS = 0.3
 #: Most firings looked back: each lag is one pass over the map, and 1,000 firings of even the
 #: fastest ring a robot file allows (1e-4 s) are 0.1 s of flight, 34 m of extra path.
 MAX_LATE_ECHO_LAGS = 1000
+#: Seconds between a reading's time and its firing's in a :class:`FiringSchedule`: a schedule
+#: logged by another clock, or printed with fewer digits, is a hair off (a microsecond is
+#: 0.3 mm of sound).
+FIRING_TIME_TOLERANCE = 1e-6
 #: Surface points this near either end of the line from a point to its far surface are its own
 #: surface or the far one, not a surface between, metres.
 BETWEEN_MARGIN = 0.3
@@ -255,9 +260,10 @@ def _emitters(t: FloatArray, origin: FloatArray, lag: int, firings: FiringSchedu
     if firing_period is not None:  # emitter taken at the receiver (module docstring)
         return np.full(len(t), lag * firing_period), origin
     assert firings is not None
-    at = np.searchsorted(firings.t, t - 1e-9)
+    # A reading's firing is the first within FIRING_TIME_TOLERANCE of it, before or after.
+    at = np.searchsorted(firings.t, t - FIRING_TIME_TOLERANCE)
     known = (at < len(firings.t)) & (np.abs(firings.t[np.minimum(at, len(firings.t) - 1)] - t)
-                                     <= 1e-6)
+                                     <= FIRING_TIME_TOLERANCE)
     if not known.all():
         msg = (f"reading time {t[~known][0]!r} is no firing of the schedule: pass every "
                "firing, or a firing_period")
