@@ -252,3 +252,26 @@ def test_firing_times_match_the_readings_within_a_microsecond_either_way(shift: 
     xy, ids, bound, batch = scene([(5.0, 5.0), (1.0, 0.0), *wall(4.0)])
     firings = FiringSchedule(batch.t + shift, batch.x, batch.y)
     assert late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)[1]
+
+
+def test_the_pipeline_finds_each_points_reading_past_dropped_rows_and_chunk_cuts() -> None:
+    # One sensor at the origin facing +x (a 0.05 rad beam), firing every 0.02 s at c = 343
+    # m/s: five echoes beyond the 5 m max range (dropped before mapping), ten of a wall at
+    # 4 m, ten late echoes of it read 343 × 0.02 / 2 = 3.43 m short. The map's ids are input
+    # rows, so the late-echo test must look them up in the whole log, not the kept readings.
+    from sonarcarve.filters import MapFilter, ReadingFilter
+    from sonarcarve.methods import CenterlineMethod
+    from sonarcarve.pipeline import process_chunks
+
+    r = np.concatenate([np.full(5, 5.5), np.full(10, 4.0), np.full(10, 4.0 - 3.43)])
+    n = len(r)
+    batch = ReadingBatch.from_arrays(t=0.02 * np.arange(n), sensor=np.zeros(n, int),
+                                     x=np.zeros(n), y=np.zeros(n), theta=np.zeros(n), range=r,
+                                     beam_width=np.full(n, 0.05))
+    result = process_chunks([batch[:3], batch[3:17], batch[17:]],
+                            CenterlineMethod(history_size=10),
+                            reading_filter=ReadingFilter(max_range=5.0),
+                            map_filter=MapFilter(late_echo_period=0.02))
+    assert result.global_map.reading_id.tolist() == list(range(5, 15))
+    assert result.map_filter is not None
+    assert result.map_filter.late_echoes == 10
