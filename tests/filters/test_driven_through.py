@@ -257,3 +257,14 @@ def test_a_body_of_radius_zero_is_the_sensors_hull() -> None:
         BodyFootprint.of_robot([1.0, -1.0], [0.0, 0.0], [0.0, math.pi], 0.0)
     with pytest.raises(FilterError, match="body radius must be a finite number >= 0"):
         BodyFootprint.of_robot([1.0], [0.0], [0.0], -0.1)
+
+
+def test_a_side_sensor_gives_the_centre_through_its_bearing() -> None:
+    # One sensor on the left rim (bearing +90°) of a 0.5 m disc, driving +x along y = 0: the
+    # sensor rides at y = 0.5 looking +y. The heading is its axis minus its bearing (0); plus
+    # (180°) would put the centre at y = 1 and cover the wrong strip.
+    left = BodyFootprint.of_robot([0.0], [0.5], [0.5 * math.pi], 0.5)
+    t = np.arange(9, dtype=np.float64)
+    poses = _drive(t.tolist(), t.tolist(), [0.5] * t.size, theta=0.5 * math.pi)
+    mask = driven_through_mask([[4.0, -0.4], [4.0, 0.9]], [-1.0, -1.0], poses, left)
+    assert mask.tolist() == [True, False]
