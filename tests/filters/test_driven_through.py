@@ -268,3 +268,11 @@ def test_a_side_sensor_gives_the_centre_through_its_bearing() -> None:
     poses = _drive(t.tolist(), t.tolist(), [0.5] * t.size, theta=0.5 * math.pi)
     mask = driven_through_mask([[4.0, -0.4], [4.0, 0.9]], [-1.0, -1.0], poses, left)
     assert mask.tolist() == [True, False]
+
+
+def test_a_small_body_is_swept_at_half_its_reach() -> None:
+    # A 0.02 m disc driven 1 m in one step: poses 0.05 m apart (DRIVEN_STEP) would leave
+    # x = 0.525 0.025 m from the nearest, outside the disc; at half the reach they do not.
+    tiny = BodyFootprint.around_sensors(0.02)
+    assert driven_through_mask([[0.525, 0.0]], [-1.0], _drive([0.0, 1.0], [0.0, 1.0]),
+                               tiny).tolist() == [True]

@@ -275,3 +275,10 @@ def test_the_pipeline_finds_each_points_reading_past_dropped_rows_and_chunk_cuts
     assert result.global_map.reading_id.tolist() == list(range(5, 15))
     assert result.map_filter is not None
     assert result.map_filter.late_echoes == 10
+
+
+def test_a_surface_point_within_the_tolerance_of_the_line_blocks_it_between_samples() -> None:
+    # The line from the ghost runs from x = 1.3 to 3.6 (0.3 m past the ghost, 0.3 + 0.1 m short
+    # of the far point at 4), sampled every 0.1 m: x = 2.55 lies midway between two samples.
+    assert not ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.095)])  # 0.095 m off the line
+    assert ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.105)])  # 0.105 m: clear of it
