@@ -276,3 +276,9 @@ def test_a_small_body_is_swept_at_half_its_reach() -> None:
     tiny = BodyFootprint.around_sensors(0.02)
     assert driven_through_mask([[0.525, 0.0]], [-1.0], _drive([0.0, 1.0], [0.0, 1.0]),
                                tiny).tolist() == [True]
+
+
+def test_poses_that_are_no_batch_are_refused() -> None:
+    # A list of poses failed with "'list' object has no attribute 't'".
+    with pytest.raises(FilterError, match="poses must be a ReadingBatch"):
+        driven_through_mask([[2.0, 0.0]], [0.0], [(0.0, 0.0, 0.0)], DISC)  # type: ignore[arg-type]

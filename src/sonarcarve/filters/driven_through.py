@@ -247,8 +247,9 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     Raises
     ------
     FilterError
-        Arrays of different lengths, points or times that are not finite, a ``margin`` that is
-        no finite number >= 0, or a sensor the body has no mount for.
+        ``poses`` that are no ReadingBatch, arrays of different lengths, points or times that
+        are not finite, a ``margin`` that is no finite number >= 0, or a sensor the body has no
+        mount for.
 
     Examples
     --------
@@ -263,6 +264,9 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     ...                     body).tolist()
     [True, False, False]
     """
+    if not isinstance(poses, ReadingBatch):
+        msg = f"poses must be a ReadingBatch (the map's log), got {type(poses).__name__}"
+        raise FilterError(msg)
     pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(t, dtype=np.float64).reshape(-1)
     if (heard.shape != (pts.shape[0],) or not np.all(np.isfinite(pts))
