@@ -166,7 +166,8 @@ def process_chunks(
     is sampled at the same readings. Only one batch (and the method's state) is held at a time,
     so a log read with :func:`~sonarcarve.io.readings_csv.iter_readings_csv` is mapped in
     bounded memory, the global map aside; with a ``sink``, the map too (what stays is 8 bytes
-    per unprocessed-share sample).
+    per unprocessed-share sample). The late-echo and driven-through map filters are the
+    exception: they look at the whole log, so with them every batch is kept to the end.
 
     Parameters
     ----------

@@ -166,3 +166,43 @@ def test_late_echo_period_drops_the_ghost_wall_and_keeps_the_wall(
     kept = read_map_csv(out).reading_id.tolist()
     assert kept == (list(range(10)) if period == "0.02" else list(range(20)))
     assert "dropped: late echoes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("option", "text"), [
+    ("--driven-through", "--driven-through must be a robot (name or YAML) or a clearance"),
+    ("--late-echo-period", "--late-echo-period must be a robot (name or YAML) or a firing"),
+])
+def test_an_empty_robot_or_number_is_named(tmp_path: Path, option: str, text: str,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    # An empty value was read as the robot file "." and failed with ".: is a directory".
+    code, out = _run(tmp_path, option, "")
+    assert code == 2
+    assert text in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_bag_output_names_every_map_filter_it_refuses(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    readings = tmp_path / "r.csv"
+    _readings(readings)
+    code = main(["process", str(readings), "--out", str(tmp_path / "run.mcap"),
+                 "--late-echo-period", "0.04"])
+    assert code == 2
+    assert "--late-echo-period" in capsys.readouterr().err
+
+
+def test_a_robot_without_a_radius_drives_through_with_its_sensors_hull(tmp_path: Path) -> None:
+    # robot_radius 0 is a valid robot file; its body is then the hull of its mounts, which for
+    # the Scout2's 16 sensors on its rim is the 16-gon the 0.205 m disc makes: the same map.
+    from importlib.resources import files
+
+    text = (files("sonarcarve") / "robots" / "scout2.yaml").read_text()
+    robot = tmp_path / "rimless.yaml"
+    robot.write_text(text.replace("robot_radius: 0.205", "robot_radius: 0.0"))
+    readings, out = tmp_path / "r.csv", tmp_path / "map.csv"
+    _forward_and_left(readings)
+    code = main(["process", str(readings), "--method", "centerline", "--out", str(out),
+                 "--driven-through", str(robot)])
+    assert code == 0
+    dropped = set(range(1, 48, 2))
+    assert read_map_csv(out).reading_id.tolist() == [i for i in range(60) if i not in dropped]

@@ -220,3 +220,90 @@ def test_readings_the_reading_filters_drop_still_give_the_path() -> None:
     assert 39 not in result.global_map.reading_id.tolist()
     assert result.map_filter is not None
     assert result.map_filter.driven_through == only_kept.report.driven_through + 1
+
+
+@pytest.mark.parametrize("margin", [math.nan, -0.1, math.inf])
+def test_a_margin_that_is_no_finite_number_at_least_zero_is_refused(margin: float) -> None:
+    # NaN made no pose later (nothing dropped, silently); a negative margin let the reading's
+    # own pose drop it.
+    with pytest.raises(FilterError, match="margin must be a finite number >= 0"):
+        driven_through_mask([[2.0, 0.0]], [0.0], STRAIGHT, DISC, margin=margin)
+
+
+def test_a_point_time_that_is_not_finite_is_refused() -> None:
+    with pytest.raises(FilterError, match="a finite point and a time for each point"):
+        driven_through_mask([[2.0, 0.0]], [math.nan], STRAIGHT, DISC)
+
+
+def test_swept_poses_move_no_corner_more_than_a_step() -> None:
+    # 1 m forward while turning 1 rad: a corner 1 m out moves up to 1 + 1 = 2 m along the
+    # segment (the translation and the turn add up where they point the same way), so at
+    # step 0.1 it takes 20 pieces; 10 (the larger of the two alone) moved it 0.2 m a piece.
+    track = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 1.0, 1.0]])
+    swept = swept_poses(track, step=0.1, reach=1.0)
+    for angle in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False):
+        heading = swept[:, 3] + angle
+        corner = swept[:, 1:3] + np.column_stack([np.cos(heading), np.sin(heading)])
+        moves = np.hypot(*np.diff(corner, axis=0).T)
+        assert moves.max() <= 0.1 + 1e-9
+
+
+def test_a_body_of_radius_zero_is_the_sensors_hull() -> None:
+    square = BodyFootprint.of_robot([1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, -1.0],
+                                    [0.0, 0.5 * math.pi, math.pi, -0.5 * math.pi], 0.0)
+    assert square.reach == pytest.approx(1.0)
+    assert len(square.outline) == 4
+    with pytest.raises(FilterError, match="the body has no area"):
+        BodyFootprint.of_robot([1.0, -1.0], [0.0, 0.0], [0.0, math.pi], 0.0)
+    with pytest.raises(FilterError, match="body radius must be a finite number >= 0"):
+        BodyFootprint.of_robot([1.0], [0.0], [0.0], -0.1)
+
+
+def test_a_side_sensor_gives_the_centre_through_its_bearing() -> None:
+    # One sensor on the left rim (bearing +90°) of a 0.5 m disc, driving +x along y = 0: the
+    # sensor rides at y = 0.5 looking +y. The heading is its axis minus its bearing (0); plus
+    # (180°) would put the centre at y = 1 and cover the wrong strip.
+    left = BodyFootprint.of_robot([0.0], [0.5], [0.5 * math.pi], 0.5)
+    t = np.arange(9, dtype=np.float64)
+    poses = _drive(t.tolist(), t.tolist(), [0.5] * t.size, theta=0.5 * math.pi)
+    mask = driven_through_mask([[4.0, -0.4], [4.0, 0.9]], [-1.0, -1.0], poses, left)
+    assert mask.tolist() == [True, False]
+
+
+def test_a_small_body_is_swept_at_half_its_reach() -> None:
+    # A 0.02 m disc driven 1 m in one step: poses 0.05 m apart (DRIVEN_STEP) would leave
+    # x = 0.525 0.025 m from the nearest, outside the disc; at half the reach they do not.
+    tiny = BodyFootprint.around_sensors(0.02)
+    assert driven_through_mask([[0.525, 0.0]], [-1.0], _drive([0.0, 1.0], [0.0, 1.0]),
+                               tiny).tolist() == [True]
+
+
+def test_poses_that_are_no_batch_are_refused() -> None:
+    # A list of poses failed with "'list' object has no attribute 't'".
+    with pytest.raises(FilterError, match="poses must be a ReadingBatch"):
+        driven_through_mask([[2.0, 0.0]], [0.0], [(0.0, 0.0, 0.0)], DISC)  # type: ignore[arg-type]
+
+
+def test_a_path_that_comes_back_many_times_is_paired_with_the_map_a_block_at_a_time(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # A sensor circling a 1 m ring at 1 m/s for 100 s (16 times) pairs each of 2,000 points on
+    # the ring with the poses of every lap: about 160,000 pairs. All at once (with a row of
+    # the outline's corners each) took 2.5 GB on a car's 10-minute loop log.
+    import sonarcarve.filters.driven_through as module
+
+    sizes: list[int] = []
+    inside = module._inside_outline
+
+    def spy(q: np.ndarray, pose: np.ndarray, outline: np.ndarray) -> np.ndarray:
+        sizes.append(len(q))
+        return inside(q, pose, outline)
+
+    monkeypatch.setattr(module, "_inside_outline", spy)
+    t = np.arange(0.0, 100.0, 0.04)
+    loop = _drive(t.tolist(), np.cos(t).tolist(), np.sin(t).tolist())
+    angle = np.linspace(0.0, 2.0 * math.pi, 1000, endpoint=False)
+    on_ring = np.column_stack([np.cos(angle), np.sin(angle)])
+    points = np.vstack([on_ring, 1.5 * on_ring])  # the second 0.5 m off the ring: kept
+    mask = driven_through_mask(points, np.full(2000, -1.0), loop, DISC)
+    assert mask.tolist() == [True] * 1000 + [False] * 1000
+    assert max(sizes) <= 1 << 16

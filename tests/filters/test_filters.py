@@ -512,3 +512,18 @@ def test_pipeline_keeps_origins_for_the_occlusion_filter() -> None:
     assert near.map_filter is not None
     assert near.map_filter.occluded == 0
     assert len(near.global_map) == 40
+
+
+@pytest.mark.parametrize("module", ["readings", "maps", "occlusion", "driven_through",
+                                    "late_echoes"])
+def test_the_package_re_exports_every_public_name_of_its_modules(module: str) -> None:
+    # Its docstring promises "everything is importable from here"; the helpers the modules
+    # share among themselves are the exception.
+    import importlib
+
+    import sonarcarve.filters as package
+
+    shared = {"origins_array"}
+    names = set(importlib.import_module(f"sonarcarve.filters.{module}").__all__) - shared
+    assert sorted(names - set(package.__all__)) == []
+    assert all(hasattr(package, name) for name in names)

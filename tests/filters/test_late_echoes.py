@@ -196,3 +196,89 @@ def test_map_filter_refuses_a_bad_period_and_a_missing_log() -> None:
     assert MapFilter(late_echo_period=0.04).active
     with pytest.raises(FilterError, match="late-echo filter needs the map's readings"):
         filter_map(GlobalMap.empty(), MapFilter(late_echo_period=0.04))
+
+
+def _two_points() -> tuple[np.ndarray, np.ndarray, np.ndarray, ReadingBatch]:
+    return scene([(1.0, 0.0), (2.0, 0.0)])
+
+
+@pytest.mark.parametrize(("reading_ids", "words"), [
+    ([0, 1, 2], "one id for each of the 2 readings"),  # was an IndexError
+    ([0, 0], "unique"),  # the second point was matched to the first reading, silently
+    ([0.0, 1.5], "whole numbers"),  # 1.5 was read as 1, silently
+])
+def test_bad_reading_ids(reading_ids: list[float], words: str) -> None:
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=words):
+        late_echo_mask(xy, ids, bound, batch, reading_ids=reading_ids, firing_period=PERIOD)
+
+
+def test_a_point_id_that_is_no_whole_number_is_refused() -> None:
+    xy, _, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match="whole numbers"):
+        late_echo_mask(xy, [0.0, 0.7], bound, batch, firing_period=PERIOD)
+
+
+@pytest.mark.parametrize(("firings", "words"), [
+    # Lengths that differ were read as far as the shortest, silently.
+    (FiringSchedule(np.array([0.02, 0.04]), np.zeros(1), np.zeros(3)), "same length"),
+    (FiringSchedule(np.array([0.02, 0.04]), np.array([math.nan, 0.0]), np.zeros(2)), "finite"),
+    # Out of order, the search for a reading's firing failed with a misleading message.
+    (FiringSchedule(np.array([0.04, 0.02]), np.zeros(2), np.zeros(2)), "increasing"),
+])
+def test_bad_firing_schedules(firings: FiringSchedule, words: str) -> None:
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=words):
+        late_echo_mask(xy, ids, bound, batch, firings=firings)
+
+
+def test_lags_beyond_the_limit_are_refused() -> None:
+    # Each lag is one pass over the map: a billion lags ran for hours.
+    xy, ids, bound, batch = _two_points()
+    with pytest.raises(LateEchoError, match=r"lags must be a whole number in 1\.\.1000"):
+        late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, lags=10**9)
+
+
+def test_readings_that_are_no_batch_are_refused() -> None:
+    xy, ids, bound, _ = _two_points()
+    with pytest.raises(LateEchoError, match="ReadingBatch"):
+        late_echo_mask(xy, ids, bound, [(0.0, 1.0)], firing_period=PERIOD)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("shift", [-5e-7, 5e-7])
+def test_firing_times_match_the_readings_within_a_microsecond_either_way(shift: float) -> None:
+    # A schedule logged by another clock (or printed with fewer digits) is a hair off the
+    # readings' times; it was found only when late, never when early.
+    xy, ids, bound, batch = scene([(5.0, 5.0), (1.0, 0.0), *wall(4.0)])
+    firings = FiringSchedule(batch.t + shift, batch.x, batch.y)
+    assert late_echo_mask(xy, ids, bound, batch, firings=firings, sound_speed=C)[1]
+
+
+def test_the_pipeline_finds_each_points_reading_past_dropped_rows_and_chunk_cuts() -> None:
+    # One sensor at the origin facing +x (a 0.05 rad beam), firing every 0.02 s at c = 343
+    # m/s: five echoes beyond the 5 m max range (dropped before mapping), ten of a wall at
+    # 4 m, ten late echoes of it read 343 × 0.02 / 2 = 3.43 m short. The map's ids are input
+    # rows, so the late-echo test must look them up in the whole log, not the kept readings.
+    from sonarcarve.filters import MapFilter, ReadingFilter
+    from sonarcarve.methods import CenterlineMethod
+    from sonarcarve.pipeline import process_chunks
+
+    r = np.concatenate([np.full(5, 5.5), np.full(10, 4.0), np.full(10, 4.0 - 3.43)])
+    n = len(r)
+    batch = ReadingBatch.from_arrays(t=0.02 * np.arange(n), sensor=np.zeros(n, int),
+                                     x=np.zeros(n), y=np.zeros(n), theta=np.zeros(n), range=r,
+                                     beam_width=np.full(n, 0.05))
+    result = process_chunks([batch[:3], batch[3:17], batch[17:]],
+                            CenterlineMethod(history_size=10),
+                            reading_filter=ReadingFilter(max_range=5.0),
+                            map_filter=MapFilter(late_echo_period=0.02))
+    assert result.global_map.reading_id.tolist() == list(range(5, 15))
+    assert result.map_filter is not None
+    assert result.map_filter.late_echoes == 10
+
+
+def test_a_surface_point_within_the_tolerance_of_the_line_blocks_it_between_samples() -> None:
+    # The line from the ghost runs from x = 1.3 to 3.6 (0.3 m past the ghost, 0.3 + 0.1 m short
+    # of the far point at 4), sampled every 0.1 m: x = 2.55 lies midway between two samples.
+    assert not ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.095)])  # 0.095 m off the line
+    assert ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.105)])  # 0.105 m: clear of it

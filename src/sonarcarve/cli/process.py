@@ -375,8 +375,8 @@ def process(
         # alone is also the readings' own contract (how far a no-echo row listened), so it
         # applies to every output.
         msg = (f"--out {out}: the filters (--min-range, --jump-threshold, --max-error, "
-               "--occlusion-depth, --driven-through, --outlier-radius) apply to a map CSV "
-               "output only; --max-range applies to every output")
+               "--late-echo-period, --driven-through, --occlusion-depth, --outlier-radius) "
+               "apply to a map CSV output only; --max-range applies to every output")
         raise ParameterError(msg)
     if map_rate is not None and output.label != "bag":
         msg = f"--map-rate applies to a bag output only, not to --out {out}"
@@ -711,10 +711,12 @@ def _firing_period(spec: str | None) -> float | None:
     try:
         period = float(spec)
     except ValueError:
-        return load_robot(spec).firing_period  # a name or a YAML; its one-line RobotError
+        if spec.strip():
+            return load_robot(spec).firing_period  # a name or a YAML; its one-line RobotError
+        period = math.nan  # empty (load_robot would read the folder "."): refused below
     if not (math.isfinite(period) and period > 0.0):
         msg = (f"--late-echo-period must be a robot (name or YAML) or a firing period > 0 "
-               f"(seconds), got {spec}")
+               f"(seconds), got {spec!r}")
         raise ParameterError(msg)
     return period
 
@@ -726,12 +728,15 @@ def _body(spec: str | None) -> BodyFootprint | None:
     try:
         radius = float(spec)
     except ValueError:
-        robot = load_robot(spec)  # a name or a YAML; its one-line RobotError otherwise
-        return BodyFootprint.of_robot(robot.mount_x, robot.mount_y, robot.bearing,
-                                      robot.robot_radius)
+        if not spec.strip():
+            radius = math.nan  # empty (load_robot would read the folder "."): refused below
+        else:
+            robot = load_robot(spec)  # a name or a YAML; its one-line RobotError otherwise
+            return BodyFootprint.of_robot(robot.mount_x, robot.mount_y, robot.bearing,
+                                          robot.robot_radius)
     if not (math.isfinite(radius) and radius > 0.0):
         msg = (f"--driven-through must be a robot (name or YAML) or a clearance radius > 0 "
-               f"(metres), got {spec}")
+               f"(metres), got {spec!r}")
         raise ParameterError(msg)
     return BodyFootprint.around_sensors(radius)
 

@@ -29,9 +29,17 @@ from sonarcarve.filters.driven_through import (
     swept_poses,
 )
 from sonarcarve.filters.late_echoes import (
+    BETWEEN_MARGIN,
+    FIRING_TIME_TOLERANCE,
+    LATE_ECHO_HALF_WIDTH,
+    LATE_ECHO_LAGS,
+    LATE_ECHO_SURFACE_ERROR,
+    LATE_ECHO_TOLERANCE,
+    MAX_LATE_ECHO_LAGS,
     SOUND_SPEED,
     FiringSchedule,
     LateEchoError,
+    far_echo_distance,
     late_echo_mask,
 )
 from sonarcarve.filters.maps import (
@@ -64,10 +72,17 @@ from sonarcarve.filters.readings import (
 )
 
 __all__ = [
+    "BETWEEN_MARGIN",
     "DISC_SIDES",
     "DRIVEN_MARGIN",
     "DRIVEN_MAX_GAP",
     "DRIVEN_STEP",
+    "FIRING_TIME_TOLERANCE",
+    "LATE_ECHO_HALF_WIDTH",
+    "LATE_ECHO_LAGS",
+    "LATE_ECHO_SURFACE_ERROR",
+    "LATE_ECHO_TOLERANCE",
+    "MAX_LATE_ECHO_LAGS",
     "OCCLUSION_CROSSING",
     "OCCLUSION_DEPTH",
     "OCCLUSION_REACH",
@@ -89,6 +104,7 @@ __all__ = [
     "ReadingFilterStream",
     "confidence_mask",
     "driven_through_mask",
+    "far_echo_distance",
     "filter_map",
     "filter_readings",
     "late_echo_mask",

@@ -7,6 +7,7 @@ who has since left. It needs the readings themselves, for the body's path.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,12 @@ DRIVEN_MAX_GAP = 2.0
 #: strip, whose edges they miss by at most step² / (8 x radius): 1.5 mm for the Scout2's
 #: body, 1.6 mm for a 0.05 m disc around a sensor.
 DRIVEN_STEP = 0.05
+#: Poses of the path paired with the map's points at once, and pairs tested against the
+#: outline at once (each costs a row of the outline's corners): a robot that comes back to the
+#: same place, a patrol or a long log, pairs each point with the poses of every visit, and all
+#: pairs at once ran out of memory (45,000 points of a car circling a 3 m ring for 40 minutes).
+_PATH_BLOCK = 256
+_PAIR_BLOCK = 1 << 16
 #: Sides of the regular polygon inscribed in a round body (inscribed: never larger than the
 #: body; at 16 sides it loses at most 1.9 % of the radius).
 DISC_SIDES = 16
@@ -65,22 +72,34 @@ class BodyFootprint:
         ``robot_radius``) and its sensor mounts. Sensors sit on the body's surface, so for a
         convex body their hull lies inside it; for the car (a 0.9 m radius, half its width)
         the bumper and side sensors make the hull a 4.5 x 1.8 m box with cut corners, where the
-        disc alone would miss both ends.
+        disc alone would miss both ends. A radius of 0 (a robot file may give one) leaves the
+        sensors' hull alone.
 
         Raises
         ------
         FilterError
-            A radius that is not a finite number > 0, or mounts of different lengths.
+            A radius that is not a finite number >= 0, mounts of different lengths, or a body
+            without area (radius 0 and fewer than three sensors off one line).
         """
-        check_positive("body radius", radius)
+        if (isinstance(radius, bool) or not isinstance(radius, numbers.Real)
+                or not (math.isfinite(radius) and radius >= 0.0)):
+            msg = (f"body radius must be a finite number >= 0 (metres; 0: the sensors' hull "
+                   f"alone), got {radius!r}")
+            raise FilterError(msg)
         mx, my, bear = (np.asarray(a, dtype=np.float64).reshape(-1)
                         for a in (mount_x, mount_y, bearing))
         if not mx.shape == my.shape == bear.shape or not np.all(np.isfinite(mx + my + bear)):
             msg = (f"sensor mounts need finite x, y and bearing for each sensor, got "
                    f"{mx.shape[0]}, {my.shape[0]} and {bear.shape[0]} values")
             raise FilterError(msg)
-        corners = np.vstack([_disc_polygon(radius), np.column_stack([mx, my])])
-        return cls(outline=_convex_hull(corners), mount_x=mx, mount_y=my, bearing=bear)
+        mounts = np.column_stack([mx, my])
+        hull = _convex_hull(mounts if radius == 0.0 else np.vstack([_disc_polygon(radius),
+                                                                     mounts]))
+        if hull.shape[0] < 3:  # the monotone chain drops collinear corners
+            msg = ("the body has no area: with a robot_radius of 0 it is the hull of the "
+                   "sensor mounts, which needs three sensors off one line")
+            raise FilterError(msg)
+        return cls(outline=hull, mount_x=mx, mount_y=my, bearing=bear)
 
     @classmethod
     def around_sensors(cls, radius: float) -> BodyFootprint:
@@ -183,7 +202,9 @@ def swept_poses(track: FloatArray, step: float, reach: float = 0.0,
     start, end = track[:-1], track[1:]
     turn = np.angle(np.exp(1j * (end[:, 3] - start[:, 3])))  # wrapped to [-pi, pi]
     moved = np.hypot(end[:, 1] - start[:, 1], end[:, 2] - start[:, 2])
-    pieces = np.maximum(np.ceil(np.maximum(moved, np.abs(turn) * reach) / step), 1)
+    # A corner moves by the translation plus its arc of the turn (they add where they point
+    # the same way): the larger alone let it move up to twice ``step`` a piece.
+    pieces = np.maximum(np.ceil((moved + np.abs(turn) * reach) / step), 1)
     pieces = np.where(end[:, 0] - start[:, 0] > max_gap, 1, pieces).astype(np.int64)
     segment = np.repeat(np.arange(start.shape[0]), pieces)
     # Each added pose's fraction of the way along its segment: 0, 1/k, ..., (k-1)/k.
@@ -232,7 +253,8 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     Raises
     ------
     FilterError
-        Arrays of different lengths, points that are not finite, or a sensor the body has no
+        ``poses`` that are no ReadingBatch, arrays of different lengths, points or times that
+        are not finite, a ``margin`` that is no finite number >= 0, or a sensor the body has no
         mount for.
 
     Examples
@@ -248,11 +270,21 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     ...                     body).tolist()
     [True, False, False]
     """
+    if not isinstance(poses, ReadingBatch):
+        msg = f"poses must be a ReadingBatch (the map's log), got {type(poses).__name__}"
+        raise FilterError(msg)
     pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(t, dtype=np.float64).reshape(-1)
-    if heard.shape != (pts.shape[0],) or not np.all(np.isfinite(pts)):
+    if (heard.shape != (pts.shape[0],) or not np.all(np.isfinite(pts))
+            or not np.all(np.isfinite(heard))):
         msg = (f"the driven-through filter needs a finite point and a time for each point, got "
                f"{pts.shape[0]} points and {heard.shape[0]} times")
+        raise FilterError(msg)
+    # NaN would make no pose later (nothing dropped, silently), a negative margin would let
+    # the reading's own pose drop its point.
+    if (isinstance(margin, bool) or not isinstance(margin, numbers.Real)
+            or not (math.isfinite(margin) and margin >= 0.0)):
+        msg = f"margin must be a finite number >= 0 (seconds), got {margin!r}"
         raise FilterError(msg)
     covered = np.zeros(pts.shape[0], dtype=bool)
     if pts.shape[0] == 0 or len(poses) == 0:
@@ -262,15 +294,27 @@ def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch
     tracks = body.tracks(poses.t, poses.sensor, poses.x, poses.y, poses.theta)
     path = np.vstack([swept_poses(_thinned(track, step, reach, margin), step, reach)
                       for track in tracks])
+    return _covered(pts, heard, path, body.outline, reach, margin)
+
+
+def _covered(pts: FloatArray, heard: FloatArray, path: FloatArray, outline: FloatArray,
+             reach: float, margin: float) -> BoolArray:
+    """:func:`driven_through_mask` on checked arrays: the path a block of
+    :data:`_PATH_BLOCK` poses at a time, the points a block already covered left out after."""
     from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
 
-    pairs = cKDTree(pts).sparse_distance_matrix(cKDTree(path[:, 1:3]), reach,
-                                                output_type="ndarray")
-    point, pose = pairs["i"], pairs["j"]
-    later = path[pose, 0] > heard[point] + margin
-    point, pose = point[later], pose[later]
-    inside = _inside_outline(pts[point], path[pose], body.outline)
-    covered[point[inside]] = True
+    covered = np.zeros(pts.shape[0], dtype=bool)
+    points = cKDTree(pts)
+    for first in range(0, path.shape[0], _PATH_BLOCK):
+        block = path[first:first + _PATH_BLOCK]
+        pairs = cKDTree(block[:, 1:3]).sparse_distance_matrix(points, reach,
+                                                              output_type="ndarray")
+        pose, point = pairs["i"], pairs["j"]
+        open_later = ~covered[point] & (block[pose, 0] > heard[point] + margin)
+        pose, point = pose[open_later], point[open_later]
+        for at in range(0, point.shape[0], _PAIR_BLOCK):
+            near, where = point[at:at + _PAIR_BLOCK], pose[at:at + _PAIR_BLOCK]
+            covered[near[_inside_outline(pts[near], block[where], outline)]] = True
     return covered
 
 

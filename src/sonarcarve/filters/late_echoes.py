@@ -71,10 +71,12 @@ from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "BETWEEN_MARGIN",
+    "FIRING_TIME_TOLERANCE",
     "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
     "LATE_ECHO_SURFACE_ERROR",
     "LATE_ECHO_TOLERANCE",
+    "MAX_LATE_ECHO_LAGS",
     "SOUND_SPEED",
     "FiringSchedule",
     "LateEchoError",
@@ -103,6 +105,13 @@ LATE_ECHO_SURFACE_ERROR = 0.5
 #: is also heard obliquely (by a ring's other sensors), from where no far point lands on it.
 AGREEMENT = 0.5
 AGREEMENT_RADIUS = 0.3
+#: Most firings looked back: each lag is one pass over the map, and 1,000 firings of even the
+#: fastest ring a robot file allows (1e-4 s) are 0.1 s of flight, 34 m of extra path.
+MAX_LATE_ECHO_LAGS = 1000
+#: Seconds between a reading's time and its firing's in a :class:`FiringSchedule`: a schedule
+#: logged by another clock, or printed with fewer digits, is a hair off (a microsecond is
+#: 0.3 mm of sound).
+FIRING_TIME_TOLERANCE = 1e-6
 #: Surface points this near either end of the line from a point to its far surface are its own
 #: surface or the far one, not a surface between, metres.
 BETWEEN_MARGIN = 0.3
@@ -178,14 +187,60 @@ def _check_positive(name: str, value: float) -> None:
 
 def _check_parameters(lags: int, tolerance: float, surface_error: float, sound_speed: float,
                       firing_period: float | None) -> None:
-    if isinstance(lags, bool) or not isinstance(lags, numbers.Integral) or lags < 1:
-        msg = f"lags must be a whole number >= 1 (firings looked back), got {lags!r}"
+    if (isinstance(lags, bool) or not isinstance(lags, numbers.Integral)
+            or not 1 <= lags <= MAX_LATE_ECHO_LAGS):
+        msg = (f"lags must be a whole number in 1..{MAX_LATE_ECHO_LAGS} (firings looked back), "
+               f"got {lags!r}")
         raise LateEchoError(msg)
     _check_positive("tolerance (metres)", tolerance)
     _check_positive("surface_error (metres)", surface_error)
     _check_positive("sound_speed (m/s)", sound_speed)
     if firing_period is not None:
         _check_positive("firing_period (seconds)", firing_period)
+
+
+def _whole_numbers(name: str, values: npt.ArrayLike) -> IntArray:
+    """``values`` as int64, or a :class:`LateEchoError` (a cast would read 1.5 as 1)."""
+    raw = np.asarray(values).reshape(-1)
+    if raw.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if raw.dtype.kind in "iu":
+        return raw.astype(np.int64)
+    if raw.dtype.kind != "f" or not np.all(raw == np.round(raw)):  # NaN is no whole number
+        msg = f"{name} must be whole numbers (reading ids), got {raw.dtype} values"
+        raise LateEchoError(msg)
+    return raw.astype(np.int64)
+
+
+def _known_ids(readings: ReadingBatch, reading_ids: npt.ArrayLike | None) -> IntArray:
+    """The id of each of ``readings``: given (one each, unique) or its row."""
+    if reading_ids is None:
+        return np.arange(len(readings), dtype=np.int64)
+    known = _whole_numbers("reading_ids", reading_ids)
+    if known.shape != (len(readings),):
+        msg = (f"reading_ids needs one id for each of the {len(readings)} readings, got "
+               f"{known.shape[0]}")
+        raise LateEchoError(msg)
+    if np.unique(known).shape[0] != known.shape[0]:
+        msg = "reading_ids must be unique: each names one reading"
+        raise LateEchoError(msg)
+    return known
+
+
+def _check_firings(firings: FiringSchedule) -> None:
+    """Refuse a schedule whose arrays differ in length, are not finite, or whose times do not
+    increase (the search for a reading's firing assumes them sorted)."""
+    t, x, y = (np.asarray(a, dtype=np.float64).reshape(-1) for a in firings)
+    if not t.shape == x.shape == y.shape:
+        msg = (f"firings: t, x and y must have the same length, got {t.shape[0]}, {x.shape[0]} "
+               f"and {y.shape[0]}")
+        raise LateEchoError(msg)
+    if not np.all(np.isfinite(np.concatenate((t, x, y)))):
+        msg = "firings: times and origins must be finite"
+        raise LateEchoError(msg)
+    if np.any(np.diff(t) <= 0.0):
+        msg = "firings: times must be increasing (one firing per time)"
+        raise LateEchoError(msg)
 
 
 def _reading_rows(point_ids: IntArray, ids: IntArray) -> IntArray:
@@ -205,9 +260,10 @@ def _emitters(t: FloatArray, origin: FloatArray, lag: int, firings: FiringSchedu
     if firing_period is not None:  # emitter taken at the receiver (module docstring)
         return np.full(len(t), lag * firing_period), origin
     assert firings is not None
-    at = np.searchsorted(firings.t, t - 1e-9)
+    # A reading's firing is the first within FIRING_TIME_TOLERANCE of it, before or after.
+    at = np.searchsorted(firings.t, t - FIRING_TIME_TOLERANCE)
     known = (at < len(firings.t)) & (np.abs(firings.t[np.minimum(at, len(firings.t) - 1)] - t)
-                                     <= 1e-6)
+                                     <= FIRING_TIME_TOLERANCE)
     if not known.all():
         msg = (f"reading time {t[~known][0]!r} is no firing of the schedule: pass every "
                "firing, or a firing_period")
@@ -266,7 +322,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
         Seconds between consecutive firings of the robot (any sensor: a robot file's
         ``firing_period``); the emitter is then taken at the receiver.
     lags : int
-        Firings looked back, at least 1.
+        Firings looked back, 1 to :data:`MAX_LATE_ECHO_LAGS`.
     tolerance : float
         Metres between the far point and a surface point along the line (and between the line
         to it and a surface point that blocks it).
@@ -281,8 +337,9 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     ------
     LateEchoError
         A parameter out of range, both schedules or neither, arrays of different lengths, a point or
-        origin not finite, a reading id not among the readings, or a reading time that is no
-        firing of ``firings``.
+        origin not finite, ids that are no whole numbers, ``reading_ids`` not one unique id a
+        reading, a reading id not among the readings, firings whose times do not increase, or a
+        reading time that is no firing of ``firings``.
 
     Examples
     --------
@@ -303,8 +360,15 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
         msg = ("give either a firing_period (seconds between consecutive firings of the robot) "
                "or the firings, not both")
         raise LateEchoError(msg)
+    if firings is not None:
+        _check_firings(firings)
+        firings = FiringSchedule(*(np.asarray(a, dtype=np.float64).reshape(-1)
+                                   for a in firings))
+    if not isinstance(readings, ReadingBatch):
+        msg = f"readings must be a ReadingBatch (the map's log), got {type(readings).__name__}"
+        raise LateEchoError(msg)
     points = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-    ids = np.asarray(reading_id, dtype=np.int64).reshape(-1)
+    ids = _whole_numbers("reading_id", reading_id)
     bound = np.asarray(max_error, dtype=np.float64).reshape(-1)
     if ids.shape != (len(points),) or bound.shape != (len(points),):
         msg = (f"the late-echo test needs a reading id and an error bound for each of the "
@@ -315,9 +379,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
         raise LateEchoError(msg)
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
-    known = (np.arange(len(readings), dtype=np.int64) if reading_ids is None
-             else np.asarray(reading_ids, dtype=np.int64))
-    rows = _reading_rows(ids, known)
+    rows = _reading_rows(ids, _known_ids(readings, reading_ids))
     return _late_echoes(points, bound, rows, readings, firings, firing_period, lags, tolerance,
                         half_width, surface_error, sound_speed)
 
