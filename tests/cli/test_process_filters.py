@@ -127,7 +127,11 @@ def test_driven_through_drops_what_the_robot_drove_over(
     (["--driven-through", "-inf"], "--driven-through must be"),
     (["--driven-through", "no-such-robot"], "no-such-robot"),
     (["--late-echo-period", "0"], "--late-echo-period must be a robot (name or YAML) or a "
-                                  "firing period > 0 (seconds)"),
+                                  "firing period in 0.0001..3600 (seconds)"),
+    (["--late-echo-period", "1e-9"], "--late-echo-period must be"),
+    (["--late-echo-period", "5000"], "--late-echo-period must be"),
+    (["--late-echo-period", "0.04s"], "--late-echo-period takes plain seconds (0.04)"),
+    (["--late-echo-period", "40 ms"], "--late-echo-period takes plain seconds"),
     (["--late-echo-period", "nan"], "--late-echo-period must be"),
     (["--late-echo-period", "no-such-robot"], "no-such-robot"),
 ])

@@ -282,3 +282,10 @@ def test_a_surface_point_within_the_tolerance_of_the_line_blocks_it_between_samp
     # of the far point at 4), sampled every 0.1 m: x = 2.55 lies midway between two samples.
     assert not ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.095)])  # 0.095 m off the line
     assert ghost_flag([(1.0, 0.0), *wall(4.0), (2.55, 0.105)])  # 0.105 m: clear of it
+
+
+@pytest.mark.parametrize("tolerance", [0.1, 0.3, 0.5])
+def test_a_wide_tolerance_still_finds_the_ghost(tolerance: float) -> None:
+    # The ghost's far point lies on the wall whatever the tolerance; from 0.27 m on the line's
+    # first sample used to reach back to the ghost itself, which then blocked its own line.
+    assert ghost_flag([(1.0, 0.0), *wall(4.0)], tolerance=tolerance)

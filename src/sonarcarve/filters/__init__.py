@@ -3,8 +3,9 @@
 - :mod:`~sonarcarve.filters.readings`: drop readings before a method sees them (maximum and
   minimum range, the jump filter), in a batch or one reading at a time.
 - :mod:`~sonarcarve.filters.maps`: drop points from a local or global map
-  (:func:`filter_map`): confidence, the paper's maximum-error thresholding, then, beyond the
-  paper and off by default, the two filters below, then the outlier test.
+  (:func:`filter_map`), in this order: late echoes (below), confidence, the paper's
+  maximum-error thresholding, driven through and occlusion (below), the paper's outlier test.
+  The three beyond the paper are off by default.
 - :mod:`~sonarcarve.filters.late_echoes`: points that are the far echo of an earlier firing
   off a surface of the map (ghost walls, when a sensor fires faster than its hearing range's
   round trip).
@@ -12,6 +13,8 @@
   (ghost walls of late echoes, floor echoes, what has moved away).
 - :mod:`~sonarcarve.filters.occlusion`: points behind a surface of the map, seen from their
   own sensor (multipath echoes mostly).
+- :mod:`~sonarcarve.filters.checks`: :class:`FilterError` and the one check of a positive
+  parameter they share.
 
 Everything is importable from here (``from sonarcarve.filters import MapFilter``).
 """

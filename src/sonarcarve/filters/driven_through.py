@@ -216,7 +216,6 @@ def swept_poses(track: FloatArray, step: float, reach: float = 0.0,
     return np.vstack([start[segment] + fraction[:, None] * delta, track[-1:]])
 
 
-
 def driven_through_mask(xy: npt.ArrayLike, t: npt.ArrayLike, poses: ReadingBatch,
                         body: BodyFootprint, margin: float = DRIVEN_MARGIN) -> BoolArray:
     """True where the robot's body covered a point at some pose more than ``margin`` seconds

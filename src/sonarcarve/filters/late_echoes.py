@@ -65,7 +65,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.filters.checks import FilterError
+from sonarcarve.filters.checks import FilterError, check_positive
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
@@ -178,13 +178,6 @@ def far_echo_distance(range_: npt.ArrayLike, delay: npt.ArrayLike, offset: npt.A
     return np.asarray((path**2 - np.einsum("ij,ij->i", d, d)) / (2.0 * (path + along)))
 
 
-def _check_positive(name: str, value: float) -> None:
-    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
-            or not (math.isfinite(value) and value > 0.0)):
-        msg = f"{name} must be a finite number > 0, got {value!r}"
-        raise LateEchoError(msg)
-
-
 def _check_parameters(lags: int, tolerance: float, surface_error: float, sound_speed: float,
                       firing_period: float | None) -> None:
     if (isinstance(lags, bool) or not isinstance(lags, numbers.Integral)
@@ -192,11 +185,11 @@ def _check_parameters(lags: int, tolerance: float, surface_error: float, sound_s
         msg = (f"lags must be a whole number in 1..{MAX_LATE_ECHO_LAGS} (firings looked back), "
                f"got {lags!r}")
         raise LateEchoError(msg)
-    _check_positive("tolerance (metres)", tolerance)
-    _check_positive("surface_error (metres)", surface_error)
-    _check_positive("sound_speed (m/s)", sound_speed)
+    check_positive("tolerance", tolerance, "metres", LateEchoError)
+    check_positive("surface_error", surface_error, "metres", LateEchoError)
+    check_positive("sound_speed", sound_speed, "m/s", LateEchoError)
     if firing_period is not None:
-        _check_positive("firing_period (seconds)", firing_period)
+        check_positive("firing_period", firing_period, "seconds", LateEchoError)
 
 
 def _whole_numbers(name: str, values: npt.ArrayLike) -> IntArray:
@@ -355,7 +348,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     [True, False]
     """
     _check_parameters(lags, tolerance, surface_error, sound_speed, firing_period)
-    _check_positive("half_width (metres)", half_width)
+    check_positive("half_width", half_width, "metres", LateEchoError)
     if (firings is None) == (firing_period is None):
         msg = ("give either a firing_period (seconds between consecutive firings of the robot) "
                "or the firings, not both")
@@ -429,19 +422,23 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
         return late
     tree = cKDTree(points[surface])
     surface_origin = origin[surface]
+    # The line's ends keep clear of the point's own surface and of the far one by more than a
+    # sample's ball (:func:`_blocked`, tolerance·√1.25): else, from a tolerance of 0.27 m on,
+    # a point would block its own line and no late echo would ever be found.
+    margin = max(BETWEEN_MARGIN, 1.01 * tolerance * math.sqrt(1.25))
     for lag in range(1, lags + 1):
         delay, emitter = _emitters(readings.t[rows], origin, lag, firings, firing_period)
         far = far_echo_distance(readings.range[rows], delay, origin - emitter, u, sound_speed)
         far = np.where(np.isfinite(far), far, -1.0)  # no such firing: no far point
         # The far surface may lie ``tolerance`` short of the far point: the line between
-        # stops ``BETWEEN_MARGIN`` before that.
-        short = BETWEEN_MARGIN + tolerance
-        candidates = np.flatnonzero(~late & (far > distance + BETWEEN_MARGIN + short))
+        # stops ``margin`` before that, and starts ``margin`` after the point.
+        short = margin + tolerance
+        candidates = np.flatnonzero(~late & (far > distance + margin + short))
         far_point = origin[candidates] + far[candidates, None] * u[candidates]
         at_wall = _surface_across(tree, points[surface], surface_origin, far_point,
                                   u[candidates], tolerance, half_width)
         candidates, far_point = candidates[at_wall], far_point[at_wall]
-        start = points[candidates] + BETWEEN_MARGIN * u[candidates]
+        start = points[candidates] + margin * u[candidates]
         end = far_point - short * u[candidates]
         late[candidates[~_blocked(tree, start, end, tolerance)]] = True
     return _agreed(points, late)

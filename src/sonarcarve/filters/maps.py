@@ -2,17 +2,23 @@
 :class:`~sonarcarve.maps.GlobalMap`: maximum-error thresholding (Fig. 13b: points whose
 ``max_error`` bound, eq. 5.3, exceeds a threshold) and then the outlier test (a point needs at
 least ``k`` other points within radius ``R``). Thresholding runs first so that inaccurate points
-do not vouch for their neighbours. Between the two, beyond the paper, the **occlusion** filter
-drops points that lie more than ``occlusion_depth`` behind a surface of the map on the line
-from their own sensor (multipath echoes mostly; :mod:`sonarcarve.geometry.occluded`); only points
-whose error bound is at most half that depth make up the surfaces. It needs the sensor origin of
-every point, which a map does not hold, so :func:`filter_map` takes them (:func:`point_origins`
-looks them up in the readings). Before it, also beyond the paper and also off by default, the
-**late-echo** filter drops points that are the far echo of an earlier firing off a surface of
-the map (:func:`~sonarcarve.filters.late_echoes.late_echo_mask`: ghost walls), and the
-**driven-through** filter drops points that the robot's body covered at a later pose
-(:func:`driven_through_mask`, :class:`BodyFootprint`): ghost walls of late echoes, floor
-echoes, whatever has moved away. Both need the readings the map was made from.
+do not vouch for their neighbours.
+
+Beyond the paper, each off by default:
+
+- the **late-echo** filter, first of all, drops points that are the far echo of an earlier
+  firing off a surface of the map (:func:`~sonarcarve.filters.late_echoes.late_echo_mask`:
+  ghost walls); it runs before any drop, since it looks for the far walls;
+- between thresholding and the outlier test, the **driven-through** filter drops points that
+  the robot's body covered at a later pose (:func:`~sonarcarve.filters.driven_through_mask`:
+  ghost walls, floor echoes, whatever has moved away); both need the readings the map was
+  made from;
+- then the **occlusion** filter drops points that lie more than ``occlusion_depth`` behind a
+  surface of the map on the line from their own sensor (multipath echoes mostly;
+  :mod:`sonarcarve.geometry.occluded`); only points whose error bound is at most half that
+  depth make up the surfaces. It needs the sensor origin of every point, which a map does not
+  hold, so :func:`filter_map` takes them
+  (:func:`~sonarcarve.filters.occlusion.point_origins` looks them up in the readings).
 """
 
 
@@ -194,7 +200,7 @@ def confidence_mask(confidence: npt.ArrayLike, threshold: float) -> BoolArray:
 def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None,
                readings: ReadingBatch | None = None,
                reading_ids: npt.ArrayLike | None = None) -> FilteredMap[_M]:
-    """Apply the map filters of ``spec``: confidence, max-error thresholding, late echoes,
+    """Apply the map filters of ``spec``: late echoes, confidence, max-error thresholding,
     driven through, occlusion, then the outlier test.
 
     Parameters
@@ -227,7 +233,7 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
     total = len(points)
     _check_inputs(spec, origins, readings)
     origin = None if origins is None else origins_array(origins, total)
-    dropped = {"confidence": 0, "max_error": 0, "late_echoes": 0, "driven_through": 0,
+    dropped = {"late_echoes": 0, "confidence": 0, "max_error": 0, "driven_through": 0,
                "occluded": 0, "outliers": 0}
 
     def drop(name: str, keep: BoolArray) -> None:
@@ -236,18 +242,19 @@ def filter_map(points: _M, spec: MapFilter, origins: npt.ArrayLike | None = None
         points = points.select(keep)
         origin = None if origin is None else origin[keep]
 
-    if spec.min_confidence is not None:
-        drop("confidence", confidence_mask(points.confidence, spec.min_confidence))
-    if spec.max_error is not None:
-        drop("max_error", max_error_mask(points.max_error, spec.max_error))
-    # The two ghost filters before the occlusion filter, so that a ghost wall hides nothing
-    # behind it, and before the outlier test, so that it vouches for no neighbour. Late echoes
-    # first: its test needs the far walls, which the map holds whole only before any drop.
+    # Late echoes first: its test looks for the far walls, which the map holds whole only
+    # before any drop (a --max-error below its own surface limit would take some away).
     if spec.late_echo_period is not None:
         assert readings is not None  # checked above
         drop("late_echoes", ~late_echo_mask(points.xy, points.reading_id, points.max_error,
                                             readings, reading_ids=reading_ids,
                                             firing_period=spec.late_echo_period))
+    if spec.min_confidence is not None:
+        drop("confidence", confidence_mask(points.confidence, spec.min_confidence))
+    if spec.max_error is not None:
+        drop("max_error", max_error_mask(points.max_error, spec.max_error))
+    # The ghost filters before the occlusion filter, so that a ghost wall hides nothing
+    # behind it, and before the outlier test, so that it vouches for no neighbour.
     if spec.driven_through is not None:
         assert readings is not None  # checked above
         drop("driven_through", ~driven_through_mask(points.xy, points.t, readings,
