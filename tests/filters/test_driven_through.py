@@ -307,3 +307,23 @@ def test_a_path_that_comes_back_many_times_is_paired_with_the_map_a_block_at_a_t
     mask = driven_through_mask(points, np.full(2000, -1.0), loop, DISC)
     assert mask.tolist() == [True] * 1000 + [False] * 1000
     assert max(sizes) <= 1 << 16
+
+
+@pytest.mark.parametrize(("outline", "words"), [
+    (np.zeros((0, 2)), "at least three finite"),
+    (np.array([[0.0, 0.0], [1.0, 0.0]]), "at least three finite"),
+    (np.array([[0.0, 0.0], [1.0, 0.0], [np.nan, 1.0]]), "at least three finite"),
+    (np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]]), "counter-clockwise"),  # clockwise
+    (np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.2], [2.0, 1.0], [0.0, 1.0]]), "convex"),
+])
+def test_an_outline_built_directly_is_checked(outline: np.ndarray, words: str) -> None:
+    with pytest.raises(FilterError, match=words):
+        BodyFootprint(outline=outline)
+
+
+def test_a_counter_clockwise_square_built_directly_sweeps_its_width() -> None:
+    # A 0.6 m square riding on the sensor along y = 0 covers |y| < 0.3 behind it.
+    body = BodyFootprint(outline=np.array([[-0.3, -0.3], [0.3, -0.3], [0.3, 0.3], [-0.3, 0.3]]))
+    mask = driven_through_mask([[2.0, 0.25], [2.0, -0.25], [2.0, 0.35]], [0.0] * 3, STRAIGHT,
+                               body)
+    assert mask.tolist() == [True, True, False]

@@ -65,6 +65,24 @@ class BodyFootprint:
     mount_y: FloatArray | None = None
     bearing: FloatArray | None = None
 
+    def __post_init__(self) -> None:
+        # Built directly, an outline must be what the inside test assumes: a convex polygon,
+        # counter-clockwise (a clockwise one would silently cover nothing).
+        outline = np.asarray(self.outline, dtype=np.float64)
+        if (outline.ndim != 2 or outline.shape[0] < 3 or outline.shape[1] != 2
+                or not np.all(np.isfinite(outline))):
+            msg = (f"a body outline needs at least three finite (x, y) corners, got shape "
+                   f"{outline.shape}")
+            raise FilterError(msg)
+        edge = np.roll(outline, -1, axis=0) - outline
+        after = np.roll(edge, -1, axis=0)
+        turn = edge[:, 0] * after[:, 1] - edge[:, 1] * after[:, 0]  # left turns: positive
+        if not np.all(turn > 0.0):
+            msg = ("a body outline must be convex and run counter-clockwise (build one with "
+                   "BodyFootprint.of_robot or BodyFootprint.around_sensors)")
+            raise FilterError(msg)
+        object.__setattr__(self, "outline", outline)
+
     @classmethod
     def of_robot(cls, mount_x: npt.ArrayLike, mount_y: npt.ArrayLike, bearing: npt.ArrayLike,
                  radius: float) -> BodyFootprint:
