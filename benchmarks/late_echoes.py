@@ -1,5 +1,6 @@
-"""The late-echo ("ghost") test against the map (:mod:`sonarcarve.filters.late_echoes`): what
-it removes from evidence carving's default map, and what the simulator's late echoes are.
+"""The late-echo (ghost) map filter: what it removes from evidence carving's default map.
+
+Also what the simulator's late echoes are (:mod:`sonarcarve.filters.late_echoes`).
 
 Run from the repository root (on a shared machine, with ``nice``)::
 
