@@ -318,7 +318,7 @@ def process(
 
     Filters are off unless asked for: reading filters (--max-range, --min-range,
     --jump-threshold) drop readings before mapping, keeping the ids of the others as their input
-    rows; map filters (--max-error, --late-echo-period, --driven-through, --occlusion-depth,
+    rows; map filters (--late-echo-period, --max-error, --driven-through, --occlusion-depth,
     then --outlier-radius) drop points from the global map. With a bag or .rrd output only
     --max-range applies (a recording shows the live maps of the readings as they came).
     Without map filters a map CSV is written as it is made (memory stays flat however long the
@@ -770,8 +770,8 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
     points = result.map_filter
     if points is not None:
         rows += [("points before map filters", f"{points.total:,}"),
-                 ("dropped: above --max-error", f"{points.max_error:,}"),
                  ("dropped: late echoes", f"{points.late_echoes:,}"),
+                 ("dropped: above --max-error", f"{points.max_error:,}"),
                  ("dropped: driven through", f"{points.driven_through:,}"),
                  ("dropped: behind a surface", f"{points.occluded:,}"),
                  ("dropped: outliers", f"{points.outliers:,}")]
