@@ -373,8 +373,8 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
     rows = _reading_rows(ids, _known_ids(readings, reading_ids))
-    return _late_echoes(points, bound, rows, readings, firings, firing_period, lags, tolerance,
-                        half_width, surface_error, sound_speed)
+    settings = _Settings(lags, tolerance, half_width, surface_error, sound_speed)
+    return _late_echoes(points, bound, rows, readings, firings, firing_period, settings)
 
 
 def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArray,
@@ -405,11 +405,21 @@ def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArra
     return hit
 
 
+class _Settings(NamedTuple):
+    """:func:`late_echo_mask`'s parameters of the test itself, checked."""
+
+    lags: int
+    tolerance: float
+    half_width: float
+    surface_error: float
+    sound_speed: float
+
+
 def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings: ReadingBatch,
-                 firings: FiringSchedule | None, firing_period: float | None, lags: int,
-                 tolerance: float, half_width: float, surface_error: float,
-                 sound_speed: float) -> BoolArray:
+                 firings: FiringSchedule | None, firing_period: float | None,
+                 settings: _Settings) -> BoolArray:
     """:func:`late_echo_mask` on checked arrays."""
+    lags, tolerance, half_width, surface_error, sound_speed = settings
     from scipy.spatial import cKDTree  # scipy.spatial costs 0.4 s to import: only when used
 
     origin = np.column_stack((readings.x[rows], readings.y[rows]))
