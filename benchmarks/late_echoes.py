@@ -9,6 +9,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/late_echoes.py --trace one-sonar  # the paths, per run
     nice .venv/bin/python benchmarks/late_echoes.py --timing           # cost against process
     nice .venv/bin/python benchmarks/late_echoes.py --both --floor-seeds 3  # with driven-through
+    nice .venv/bin/python benchmarks/late_echoes.py --both --physics "amplitude, brick"  # brick
 
 Both simulator models make their crosstalk as late echoes: the specular model's
 (``sim.sonar.spurious._crosstalk``) is an earlier firing's echo point heard diffusely, the
@@ -30,7 +31,9 @@ One table per group and physics. Groups: ``one-sonar`` and ``two-sonars``
 and ``pioneer-ring`` (``scout2``, ``p3dx``) on the held-out floors of ``heldout.py`` (seed 0,
 amplitude and specular); ``car-park`` (``parking.py``'s car, seeds 0-2, its three physics);
 ``development`` (office, t-junction, doorway on the Scout2 ring, seeds 0-2, specular and
-amplitude).
+amplitude). ``--physics NAME ...`` runs every group under the named physics instead of its own:
+heldout.py's four (``specular``, ``amplitude``, ``specular, rough``, ``amplitude, brick``), the
+car park's ``amplitude, car transducer``, and the simulator's ``amplitude-thin``.
 
 ``--trace GROUP`` re-solves each ghost's path (for the amplitude model: the mirror path from
 firing ``j``'s sensor via each wall to firing ``k``'s, lags 1-2, as helper late13's one-off
