@@ -9,6 +9,7 @@ Run from the repository root (on a shared machine, with ``nice``)::
     nice .venv/bin/python benchmarks/late_echoes.py --trace one-sonar  # the paths, per run
     nice .venv/bin/python benchmarks/late_echoes.py --timing           # cost against process
     nice .venv/bin/python benchmarks/late_echoes.py --both --floor-seeds 3  # with driven-through
+    nice .venv/bin/python benchmarks/late_echoes.py --both --physics "amplitude, brick"  # brick
 
 Both simulator models make their crosstalk as late echoes: the specular model's
 (``sim.sonar.spurious._crosstalk``) is an earlier firing's echo point heard diffusely, the
@@ -30,7 +31,9 @@ One table per group and physics. Groups: ``one-sonar`` and ``two-sonars``
 and ``pioneer-ring`` (``scout2``, ``p3dx``) on the held-out floors of ``heldout.py`` (seed 0,
 amplitude and specular); ``car-park`` (``parking.py``'s car, seeds 0-2, its three physics);
 ``development`` (office, t-junction, doorway on the Scout2 ring, seeds 0-2, specular and
-amplitude).
+amplitude). ``--physics NAME ...`` runs every group under the named physics instead of its own:
+heldout.py's four (``specular``, ``amplitude``, ``specular, rough``, ``amplitude, brick``), the
+car park's ``amplitude, car transducer``, and the simulator's ``amplitude-thin``.
 
 ``--trace GROUP`` re-solves each ghost's path (for the amplitude model: the mirror path from
 firing ``j``'s sensor via each wall to firing ``k``'s, lags 1-2, as helper late13's one-off
@@ -77,7 +80,7 @@ from sonarcarve.maps import GlobalMap
 from sonarcarve.pipeline import process_readings
 from sonarcarve.robot import load_robot
 from sonarcarve.sim.simulate import Simulation
-from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.sonar import EchoKind, SonarPhysics, named_physics
 
 ONE_SONAR = "benchmarks/robots/scout2-front-1.yaml"
 TWO_SONARS = "benchmarks/robots/scout2-front-back.yaml"
@@ -86,6 +89,13 @@ DEVELOPMENT = ("office", "t-junction", "doorway")
 #: The development group's seeds 0..n-1 (``--dev-seeds``) and the floors' (``--floor-seeds``).
 SEEDS = [3, 1]
 SHIPPED = ("amplitude", "specular")
+#: Every physics ``--physics`` may name: heldout.py's four, the car park's car transducer and the
+#: simulator's ``amplitude-thin`` (small reflectors on the amplitude model).
+ALL_PHYSICS: dict[str, SonarPhysics] = {
+    **heldout.PHYSICS, **parking.CAR_PHYSICS,
+    "amplitude-thin": named_physics("amplitude-thin", heldout.PHYSICS["amplitude"])}
+#: ``--physics``: the physics every group runs under instead of its own (empty: its own).
+CHOSEN: list[str] = []
 
 
 class Setting(NamedTuple):
@@ -97,33 +107,34 @@ class Setting(NamedTuple):
     robot: str  # the robot file or name (``--both``: its body)
 
 
-def _floor_settings(robot: str, physics: tuple[str, ...] = SHIPPED) -> Iterator[Setting]:
+def _floor_settings(robot: str) -> Iterator[Setting]:
     period = load_robot(robot).firing_period
-    for name in physics:
+    for name in CHOSEN or SHIPPED:
         for world in FLOORS:
             for seed in range(SEEDS[1]):
                 label = world if seed == 0 else f"{world} seed {seed}"
                 yield Setting(f"{label}, {name}", period,
                               lambda w=world, s=seed, p=name: heldout._simulate(
-                                  w, s, heldout.PHYSICS[p], robot), robot)
+                                  w, s, ALL_PHYSICS[p], robot), robot)
 
 
 def _car_settings() -> Iterator[Setting]:
     period = load_robot(parking.ROBOT).firing_period
-    for name, physics in parking.CAR_PHYSICS.items():
+    for name in CHOSEN or parking.CAR_PHYSICS:
         for seed in range(3):
             yield Setting(f"seed {seed}, {name}", period,
-                          lambda s=seed, p=physics: parking._simulate(s, p), parking.ROBOT)
+                          lambda s=seed, p=ALL_PHYSICS[name]: parking._simulate(s, p),
+                          parking.ROBOT)
 
 
 def _development_settings() -> Iterator[Setting]:
     period = load_robot("scout2").firing_period
-    for name in SHIPPED:
+    for name in CHOSEN or SHIPPED:
         for world in DEVELOPMENT:
             for seed in range(SEEDS[0]):
                 yield Setting(f"{world} {seed}, {name}", period,
                               lambda w=world, s=seed, p=name: heldout._simulate(
-                                  w, s, heldout.PHYSICS[p]), "scout2")
+                                  w, s, ALL_PHYSICS[p]), "scout2")
 
 
 GROUPS: dict[str, Callable[[], Iterator[Setting]]] = {
@@ -471,6 +482,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--floor-seeds", type=int, default=1,
                         help="the held-out floors' seeds 0..n-1 (one-sonar, two-sonars, "
                              "scout2-ring, pioneer-ring)")
+    parser.add_argument("--physics", nargs="+", choices=list(ALL_PHYSICS), metavar="NAME",
+                        help="run every group under these physics instead of its own (floors "
+                             "and development: amplitude, specular; car park: its three); one "
+                             f"of {', '.join(repr(n) for n in ALL_PHYSICS)}")
     parser.add_argument("--half-width", type=float, help="late_echo_mask's half_width, m")
     parser.add_argument("--surface-error", type=float, help="its surface_error, m")
     parser.add_argument("--agreement", type=float,
@@ -483,6 +498,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, option) is not None:
             OPTIONS[option] = getattr(args, option)
     SEEDS[:] = [args.dev_seeds, args.floor_seeds]
+    CHOSEN[:] = args.physics or []
     if args.timing:
         timing()
         return 0
