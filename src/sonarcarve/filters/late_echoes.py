@@ -71,6 +71,7 @@ from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "BETWEEN_MARGIN",
+    "FAR_SURFACE_POINTS",
     "FIRING_TIME_TOLERANCE",
     "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
@@ -105,6 +106,13 @@ LATE_ECHO_SURFACE_ERROR = 0.5
 #: is also heard obliquely (by a ring's other sensors), from where no far point lands on it.
 AGREEMENT = 0.5
 AGREEMENT_RADIUS = 0.3
+#: Surface points that must lie at a far point (within ``tolerance`` along, ``half_width``
+#: across) for it to count as a far wall.
+FAR_SURFACE_POINTS = 1
+#: A surface point serves as a far wall only with at least this many other surface points
+#: within :data:`FAR_SURFACE_RADIUS` of it (anywhere around it).
+FAR_SURFACE_NEIGHBOURS = 0
+FAR_SURFACE_RADIUS = 0.5
 #: Most firings looked back: each lag is one pass over the map, and 1,000 firings of even the
 #: fastest ring a robot file allows (1e-4 s) are 0.1 s of flight, 34 m of extra path.
 MAX_LATE_ECHO_LAGS = 1000
@@ -401,7 +409,8 @@ def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArra
     across = np.abs(offset[:, 0] * u[owner, 1] - offset[:, 1] * u[owner, 0])
     facing = np.einsum("ij,ij->i", surface_origin[found] - surface[found], u[owner]) < 0.0
     found_here = (np.abs(along) <= tolerance) & (across <= half_width) & facing
-    hit[some] = np.bincount(owner, weights=found_here, minlength=len(far_point)) > 0
+    hit[some] = (np.bincount(owner, weights=found_here, minlength=len(far_point))
+                 >= FAR_SURFACE_POINTS)
     return hit
 
 
@@ -432,6 +441,11 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
         return late
     tree = cKDTree(points[surface])
     surface_origin = origin[surface]
+    far_surface = surface
+    if FAR_SURFACE_NEIGHBOURS > 0:
+        around = tree.query_ball_point(points[surface], r=FAR_SURFACE_RADIUS, return_length=True)
+        far_surface = surface[np.asarray(around) - 1 >= FAR_SURFACE_NEIGHBOURS]
+    far_tree = cKDTree(points[far_surface]) if len(far_surface) else None
     # The line's ends keep clear of the point's own surface and of the far one by more than a
     # sample's ball (:func:`_blocked`, tolerance·√1.25): else, from a tolerance of 0.27 m on,
     # a point would block its own line and no late echo would ever be found.
@@ -445,7 +459,9 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
         short = margin + tolerance
         candidates = np.flatnonzero(~late & (far > distance + margin + short))
         far_point = origin[candidates] + far[candidates, None] * u[candidates]
-        at_wall = _surface_across(tree, points[surface], surface_origin, far_point,
+        if far_tree is None:
+            break
+        at_wall = _surface_across(far_tree, points[far_surface], origin[far_surface], far_point,
                                   u[candidates], tolerance, half_width)
         candidates, far_point = candidates[at_wall], far_point[at_wall]
         start = points[candidates] + margin * u[candidates]
