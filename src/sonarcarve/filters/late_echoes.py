@@ -112,9 +112,6 @@ FAR_SURFACE_POINTS = 1
 #: A surface point serves as a far wall only with at least this many other surface points
 #: within :data:`FAR_SURFACE_RADIUS` of it (anywhere around it).
 FAR_SURFACE_NEIGHBOURS = 0
-#: The :data:`FAR_SURFACE_POINTS` may lie this far across the line, metres (None: half_width);
-#: one of them must still lie within half_width.
-FAR_SURFACE_HALF_WIDTH: float | None = None
 FAR_SURFACE_RADIUS = 0.5
 #: Most firings looked back: each lag is one pass over the map, and 1,000 firings of even the
 #: fastest ring a robot file allows (1e-4 s) are 0.1 s of flight, 34 m of extra path.
@@ -394,9 +391,7 @@ def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArra
     """True where a surface point lies within ``tolerance`` of ``far_point`` along ``u`` and
     within ``half_width`` across it, heard from this side (its own sensor origin on the near
     side of it along ``u``: a wall's back does not echo towards the receiver)."""
-    wide = half_width if FAR_SURFACE_HALF_WIDTH is None else max(FAR_SURFACE_HALF_WIDTH,
-                                                                   half_width)
-    reach = math.hypot(tolerance, wide)
+    reach = math.hypot(tolerance, half_width)
     # Most far points lie in empty space (beyond the walls): one nearest-point query each
     # rules them out, cheaper than gathering every neighbour (on the office tour, half the cost).
     hit = np.zeros(len(far_point), dtype=bool)
@@ -413,12 +408,9 @@ def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArra
     along = np.einsum("ij,ij->i", offset, u[owner])
     across = np.abs(offset[:, 0] * u[owner, 1] - offset[:, 1] * u[owner, 0])
     facing = np.einsum("ij,ij->i", surface_origin[found] - surface[found], u[owner]) < 0.0
-    at_depth = (np.abs(along) <= tolerance) & facing
-    found_here = at_depth & (across <= half_width)
-    found_wide = at_depth & (across <= wide)
-    hit[some] = ((np.bincount(owner, weights=found_here, minlength=len(far_point)) > 0)
-                 & (np.bincount(owner, weights=found_wide, minlength=len(far_point))
-                    >= FAR_SURFACE_POINTS))
+    found_here = (np.abs(along) <= tolerance) & (across <= half_width) & facing
+    hit[some] = (np.bincount(owner, weights=found_here, minlength=len(far_point))
+                 >= FAR_SURFACE_POINTS)
     return hit
 
 
