@@ -76,9 +76,6 @@ from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "BETWEEN_MARGIN",
-    "FAR_SURFACE_NEIGHBOURS",
-    "FAR_SURFACE_POINTS",
-    "FAR_SURFACE_RADIUS",
     "FIRING_TIME_TOLERANCE",
     "LATE_ECHO_HALF_WIDTH",
     "LATE_ECHO_LAGS",
