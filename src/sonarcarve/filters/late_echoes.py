@@ -482,9 +482,10 @@ def _not_alone(tree: object, points: FloatArray, surface: IntArray) -> IntArray:
     if FAR_SURFACE_NEIGHBOURS <= 0:
         return surface
     # The nearest k + 1 (the point itself among them): cheaper than counting all within 2 m.
-    distance = tree.query(points[surface], k=FAR_SURFACE_NEIGHBOURS + 1,  # type: ignore[attr-defined]
-                          distance_upper_bound=FAR_SURFACE_RADIUS)[0]
-    return surface[np.isfinite(np.asarray(distance)[:, -1])]
+    distance: FloatArray = np.asarray(tree.query(  # type: ignore[attr-defined]
+        points[surface], k=FAR_SURFACE_NEIGHBOURS + 1,
+        distance_upper_bound=FAR_SURFACE_RADIUS)[0], dtype=np.float64)
+    return surface[np.isfinite(distance[:, -1])]
 
 
 def _agreed(points: FloatArray, late: BoolArray) -> BoolArray:
