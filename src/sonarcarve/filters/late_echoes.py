@@ -30,10 +30,10 @@ receiver. The point is a late echo when
   lay within 0.05 m of the true wall), and a wall that sends a mirror echo back along the line
   meets it nearly square on, so its points beside the line lie at the same depth;
 * that surface point is no lone point: at least :data:`FAR_SURFACE_NEIGHBOURS` other surface
-  points lie within :data:`FAR_SURFACE_RADIUS` (2 m) of it. Under the rough physics a ghost
-  point that survived carving, or a stray echo, stood in for the far wall and took real wall
-  points with it (the single sonar: 136 direct points dropped, 83 with this rule, ghosts
-  removed the same; docs/RESULTS.md); and
+  points lie within :data:`FAR_SURFACE_RADIUS` (2 m) of it. Under the rough physics a lone
+  stray point stood in for the far wall and took real wall points with it (the single sonar:
+  136 direct points dropped, 83 with this rule, ghosts removed the same; the losses that stay
+  have a cluster of surviving ghosts for their far wall; docs/RESULTS.md); and
 * that surface is visible through ``p``: no surface point lies within ``tolerance`` of the
   line between them (more than :data:`BETWEEN_MARGIN` from ``p`` and from ``tolerance`` short of
   the far point). A wall cannot echo from
@@ -111,8 +111,8 @@ LATE_ECHO_SURFACE_ERROR = 0.5
 AGREEMENT = 0.5
 AGREEMENT_RADIUS = 0.3
 #: A surface point makes a far wall only if at least this many other surface points lie within
-#: :data:`FAR_SURFACE_RADIUS` of it (in any direction): a lone point (a ghost that survived
-#: carving, a stray echo) is no wall. 0: any surface point will do (the test before 2026-12-04).
+#: :data:`FAR_SURFACE_RADIUS` of it (in any direction): a lone stray point is no wall. 0: any
+#: surface point will do (the test before 2026-12-04).
 FAR_SURFACE_NEIGHBOURS = 1
 #: Metres around a far-wall point for :data:`FAR_SURFACE_NEIGHBOURS`: a car's wide beams map a
 #: wall's points up to 2 m apart (at 0.5 and 1.0 m the car park lost 7 points of its ghosts
