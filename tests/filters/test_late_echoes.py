@@ -289,3 +289,22 @@ def test_a_wide_tolerance_still_finds_the_ghost(tolerance: float) -> None:
     # The ghost's far point lies on the wall whatever the tolerance; from 0.27 m on the line's
     # first sample used to reach back to the ghost itself, which then blocked its own line.
     assert ghost_flag([(1.0, 0.0), *wall(4.0)], tolerance=tolerance)
+
+
+def test_a_lone_far_point_is_no_far_wall() -> None:
+    # One surface point at the far point (4, 0) and nothing else within 2 m of it.
+    assert not ghost_flag([(1.0, 0.0), (4.0, 0.0)])
+    assert not ghost_flag([(1.0, 0.0), (4.0, 0.0), (4.0, 2.05)])  # 2.05 m: still alone
+
+
+def test_a_far_point_with_a_surface_neighbour_within_2_m_is_a_far_wall() -> None:
+    # The neighbour lies 1.95 m across the line, outside the 0.5 m window: it only vouches
+    # that the point at the far point is part of something, not alone.
+    assert ghost_flag([(1.0, 0.0), (4.0, 0.0), (4.0, 1.95)])
+
+
+def test_the_neighbour_must_itself_be_a_surface_point() -> None:
+    xy, ids, bound, batch = scene([(1.0, 0.0), (4.0, 0.0), (4.0, 1.0)])
+    bound[2] = 0.6  # above surface_error (0.5)
+    late = late_echo_mask(xy, ids, bound, batch, firing_period=PERIOD, sound_speed=C)
+    assert not late[0]

@@ -28,7 +28,12 @@ receiver. The point is a late echo when
   back does not echo towards ``k``). Across, because a wide beam's map holds a wall's points
   sparsely (a car's 70° sensors: the far wall's nearest point 0.2-2 m from the far point, which
   lay within 0.05 m of the true wall), and a wall that sends a mirror echo back along the line
-  meets it nearly square on, so its points beside the line lie at the same depth; and
+  meets it nearly square on, so its points beside the line lie at the same depth;
+* that surface point is no lone point: at least :data:`FAR_SURFACE_NEIGHBOURS` other surface
+  points lie within :data:`FAR_SURFACE_RADIUS` (2 m) of it. Under the rough physics a lone
+  stray point stood in for the far wall and took real wall points with it (the single sonar:
+  136 direct points dropped, 83 with this rule, ghosts removed the same; the losses that stay
+  have a cluster of surviving ghosts for their far wall; docs/RESULTS.md); and
 * that surface is visible through ``p``: no surface point lies within ``tolerance`` of the
   line between them (more than :data:`BETWEEN_MARGIN` from ``p`` and from ``tolerance`` short of
   the far point). A wall cannot echo from
@@ -105,6 +110,18 @@ LATE_ECHO_SURFACE_ERROR = 0.5
 #: is also heard obliquely (by a ring's other sensors), from where no far point lands on it.
 AGREEMENT = 0.5
 AGREEMENT_RADIUS = 0.3
+#: A surface point makes a far wall only if at least this many other surface points lie within
+#: :data:`FAR_SURFACE_RADIUS` of it (in any direction): a lone stray point is no wall. 0: any
+#: surface point will do (the test before 2026-12-04).
+FAR_SURFACE_NEIGHBOURS = 1
+#: Metres around a far-wall point for :data:`FAR_SURFACE_NEIGHBOURS`: a car's wide beams map a
+#: wall's points up to 2 m apart (at 0.5 and 1.0 m the car park lost 7 points of its ghosts
+#: removed; docs/RESULTS.md).
+FAR_SURFACE_RADIUS = 2.0
+#: Surface points that must lie in the far point's window (``tolerance`` along, ``half_width``
+#: across) for it to count as a far wall. Kept at 1: 2 or 3 spare more direct points but miss
+#: the car park's far walls, which the map holds as single points there (docs/RESULTS.md).
+FAR_SURFACE_POINTS = 1
 #: Most firings looked back: each lag is one pass over the map, and 1,000 firings of even the
 #: fastest ring a robot file allows (1e-4 s) are 0.1 s of flight, 34 m of extra path.
 MAX_LATE_ECHO_LAGS = 1000
@@ -401,7 +418,8 @@ def _surface_across(tree: object, surface: FloatArray, surface_origin: FloatArra
     across = np.abs(offset[:, 0] * u[owner, 1] - offset[:, 1] * u[owner, 0])
     facing = np.einsum("ij,ij->i", surface_origin[found] - surface[found], u[owner]) < 0.0
     found_here = (np.abs(along) <= tolerance) & (across <= half_width) & facing
-    hit[some] = np.bincount(owner, weights=found_here, minlength=len(far_point)) > 0
+    hit[some] = (np.bincount(owner, weights=found_here, minlength=len(far_point))
+                 >= FAR_SURFACE_POINTS)
     return hit
 
 
@@ -431,7 +449,8 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
     if len(surface) == 0:
         return late
     tree = cKDTree(points[surface])
-    surface_origin = origin[surface]
+    far_surface = _not_alone(tree, points, surface)
+    far_tree = cKDTree(points[far_surface]) if len(far_surface) else None
     # The line's ends keep clear of the point's own surface and of the far one by more than a
     # sample's ball (:func:`_blocked`, tolerance·√1.25): else, from a tolerance of 0.27 m on,
     # a point would block its own line and no late echo would ever be found.
@@ -445,13 +464,28 @@ def _late_echoes(points: FloatArray, bound: FloatArray, rows: IntArray, readings
         short = margin + tolerance
         candidates = np.flatnonzero(~late & (far > distance + margin + short))
         far_point = origin[candidates] + far[candidates, None] * u[candidates]
-        at_wall = _surface_across(tree, points[surface], surface_origin, far_point,
+        if far_tree is None:
+            break
+        at_wall = _surface_across(far_tree, points[far_surface], origin[far_surface], far_point,
                                   u[candidates], tolerance, half_width)
         candidates, far_point = candidates[at_wall], far_point[at_wall]
         start = points[candidates] + margin * u[candidates]
         end = far_point - short * u[candidates]
         late[candidates[~_blocked(tree, start, end, tolerance)]] = True
     return _agreed(points, late)
+
+
+def _not_alone(tree: object, points: FloatArray, surface: IntArray) -> IntArray:
+    """The ``surface`` points (indices into ``points``; ``tree`` holds them) with at least
+    :data:`FAR_SURFACE_NEIGHBOURS` others within :data:`FAR_SURFACE_RADIUS`: those that may
+    make a far wall."""
+    if FAR_SURFACE_NEIGHBOURS <= 0:
+        return surface
+    # The nearest k + 1 (the point itself among them): cheaper than counting all within 2 m.
+    distance: FloatArray = np.asarray(tree.query(  # type: ignore[attr-defined]
+        points[surface], k=FAR_SURFACE_NEIGHBOURS + 1,
+        distance_upper_bound=FAR_SURFACE_RADIUS)[0], dtype=np.float64)
+    return surface[np.isfinite(distance[:, -1])]
 
 
 def _agreed(points: FloatArray, late: BoolArray) -> BoolArray:
