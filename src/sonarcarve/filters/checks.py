@@ -1,13 +1,18 @@
-"""The map and reading filters' error, and the one check of their distances."""
+"""What the filters share: their error, the check of a positive parameter, and the lookup of
+each map point's reading by its id."""
 
 from __future__ import annotations
 
 import math
 import numbers
 
-from sonarcarve.errors import SonarcarveError
+import numpy as np
+import numpy.typing as npt
 
-__all__ = ["FilterError", "check_positive"]
+from sonarcarve.errors import SonarcarveError
+from sonarcarve.typing import IntArray
+
+__all__ = ["FilterError", "check_positive", "rows_of_ids"]
 
 
 class FilterError(SonarcarveError, ValueError):
@@ -27,3 +32,23 @@ def check_positive(name: str, value: float | None, unit: str = "metres",
         msg = f"{name} must be a finite number > 0 ({unit}), got {value}"
         raise error(msg)
 
+
+def rows_of_ids(point_ids: npt.ArrayLike, ids: npt.ArrayLike,
+                error: type[FilterError] = FilterError) -> IntArray:
+    """The position in ``ids`` (the readings' ids) of each of ``point_ids`` (the map points'
+    reading ids); ``error`` if ``ids`` repeat or a point's id is not among them."""
+    wanted = np.asarray(point_ids, dtype=np.int64)
+    known = np.asarray(ids, dtype=np.int64)
+    order = np.argsort(known, kind="stable")
+    sorted_ids = known[order]
+    if np.any(sorted_ids[1:] == sorted_ids[:-1]):
+        msg = "reading ids must be unique to look up a point's reading"
+        raise error(msg)
+    at = np.searchsorted(sorted_ids, wanted)
+    found = at < len(known)
+    found[found] = sorted_ids[at[found]] == wanted[found]
+    if not found.all():
+        msg = (f"map point of reading id {int(wanted[~found][0])} has no reading among the "
+               f"{len(known):,} given: pass the readings the map was made from")
+        raise error(msg)
+    return np.asarray(order[at])

@@ -113,7 +113,7 @@ class BodyFootprint:
         mounts = np.column_stack([mx, my])
         hull = _convex_hull(mounts if radius == 0.0 else np.vstack([_disc_polygon(radius),
                                                                      mounts]))
-        if hull.shape[0] < 3:  # the monotone chain drops collinear corners
+        if hull.shape[0] < 3:  # the corners span no area
             msg = ("the body has no area: with a robot_radius of 0 it is the hull of the "
                    "sensor mounts, which needs three sensors off one line")
             raise FilterError(msg)
@@ -178,22 +178,15 @@ def _disc_polygon(radius: float) -> FloatArray:
 
 
 def _convex_hull(corners: FloatArray) -> FloatArray:
-    """The convex hull of ``corners`` (shape (k, 2)), counter-clockwise (monotone chain)."""
-    pts = np.unique(corners, axis=0)  # sorted by x, then y
+    """The convex hull of ``corners`` (shape (k, 2)), counter-clockwise, without corners on
+    its edges; shape (0, 2) when they span no area."""
+    from scipy.spatial import ConvexHull, QhullError  # only when a body is built
 
-    def half(points: FloatArray) -> list[FloatArray]:
-        chain: list[FloatArray] = []
-        for p in points:
-            while len(chain) >= 2 and _cross(chain[-2], chain[-1], p) <= 0.0:
-                chain.pop()
-            chain.append(p)
-        return chain[:-1]
-
-    return np.array(half(pts) + half(pts[::-1]))
-
-
-def _cross(o: FloatArray, a: FloatArray, b: FloatArray) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+    try:
+        hull = ConvexHull(corners)
+    except QhullError:  # fewer than three corners off one line
+        return np.zeros((0, 2))
+    return np.asarray(corners[hull.vertices])  # counter-clockwise in 2-D
 
 
 def swept_poses(track: FloatArray, step: float, reach: float = 0.0,

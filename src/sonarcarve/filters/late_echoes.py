@@ -70,7 +70,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.filters.checks import FilterError, check_positive
+from sonarcarve.filters.checks import FilterError, check_positive, rows_of_ids
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, IntArray
 
@@ -231,10 +231,7 @@ def _known_ids(readings: ReadingBatch, reading_ids: npt.ArrayLike | None) -> Int
         msg = (f"reading_ids needs one id for each of the {len(readings)} readings, got "
                f"{known.shape[0]}")
         raise LateEchoError(msg)
-    if np.unique(known).shape[0] != known.shape[0]:
-        msg = "reading_ids must be unique: each names one reading"
-        raise LateEchoError(msg)
-    return known
+    return known  # unique: rows_of_ids checks
 
 
 def _check_firings(firings: FiringSchedule) -> None:
@@ -251,17 +248,6 @@ def _check_firings(firings: FiringSchedule) -> None:
     if np.any(np.diff(t) <= 0.0):
         msg = "firings: times must be increasing (one firing per time)"
         raise LateEchoError(msg)
-
-
-def _reading_rows(point_ids: IntArray, ids: IntArray) -> IntArray:
-    """The row in ``ids`` of each of ``point_ids``, or a :class:`LateEchoError`."""
-    order = np.argsort(ids, kind="stable")
-    sorted_ids = ids[order]
-    at = np.minimum(np.searchsorted(sorted_ids, point_ids), max(len(ids) - 1, 0))
-    if len(ids) == 0 or np.any(sorted_ids[at] != point_ids):
-        msg = "a map point's reading id is not among the readings: pass the map's readings"
-        raise LateEchoError(msg)
-    return np.asarray(order[at])
 
 
 def _emitters(t: FloatArray, origin: FloatArray, lag: int, firings: FiringSchedule | None,
@@ -389,7 +375,7 @@ def late_echo_mask(xy: npt.ArrayLike, reading_id: npt.ArrayLike, max_error: npt.
         raise LateEchoError(msg)
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
-    rows = _reading_rows(ids, _known_ids(readings, reading_ids))
+    rows = rows_of_ids(ids, _known_ids(readings, reading_ids), LateEchoError)
     settings = _Settings(lags, tolerance, half_width, surface_error, sound_speed)
     return _late_echoes(points, bound, rows, readings, firings, firing_period, settings)
 

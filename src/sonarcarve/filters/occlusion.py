@@ -12,11 +12,11 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.filters.checks import FilterError, check_positive
+from sonarcarve.filters.checks import FilterError, check_positive, rows_of_ids
 from sonarcarve.geometry.occluded import occluded_points
 from sonarcarve.maps import GlobalMap, LocalMap
 from sonarcarve.readings import ReadingBatch
-from sonarcarve.typing import BoolArray, FloatArray, IntArray
+from sonarcarve.typing import BoolArray, FloatArray
 
 __all__ = ["OCCLUSION_CROSSING", "OCCLUSION_DEPTH", "OCCLUSION_REACH", "SURFACE_NEIGHBOURS",
            "SURFACE_RADIUS", "occlusion_mask", "origins_array", "origins_by_id", "point_origins"]
@@ -119,7 +119,7 @@ def point_origins(points: LocalMap | GlobalMap, readings: ReadingBatch,
     """
     ids = (np.arange(len(readings), dtype=np.int64) if reading_ids is None
            else np.asarray(reading_ids, dtype=np.int64))
-    rows = _rows_of(points.reading_id, ids)
+    rows = rows_of_ids(points.reading_id, ids)
     # Times loosely: a tool that rewrote a file may have rounded them.
     same = ((np.abs(readings.t[rows] - points.t) <= 1e-6)
             & (readings.sensor[rows] == points.sensor))
@@ -142,29 +142,9 @@ def origins_by_id(point_ids: npt.ArrayLike, ids: npt.ArrayLike, x: npt.ArrayLike
     FilterError
         An id of ``point_ids`` not in ``ids``, or ``ids`` not unique.
     """
-    rows = _rows_of(point_ids, ids)
+    rows = rows_of_ids(point_ids, ids)
     return np.column_stack([np.asarray(x, dtype=np.float64)[rows],
                             np.asarray(y, dtype=np.float64)[rows]])
-
-
-def _rows_of(point_ids: npt.ArrayLike, ids: npt.ArrayLike) -> IntArray:
-    """The position in ``ids`` of each of ``point_ids`` (:func:`origins_by_id`'s errors)."""
-    wanted = np.asarray(point_ids, dtype=np.int64)
-    known = np.asarray(ids, dtype=np.int64)
-    order = np.argsort(known, kind="stable")
-    sorted_ids = known[order]
-    if np.any(sorted_ids[1:] == sorted_ids[:-1]):
-        msg = "reading ids must be unique to look up a point's reading"
-        raise FilterError(msg)
-    at = np.searchsorted(sorted_ids, wanted)
-    found = at < len(known)
-    found[found] = sorted_ids[at[found]] == wanted[found]
-    if not found.all():
-        msg = (f"map point of reading id {int(wanted[~found][0])} has no reading among the "
-               f"{len(known):,} given: pass the readings the map was made from")
-        raise FilterError(msg)
-    return np.asarray(order[at])
-
 
 
 def origins_array(origins: npt.ArrayLike, total: int) -> FloatArray:
