@@ -13,7 +13,13 @@ import yaml
 from PIL import Image
 
 from sonarcarve.cli import main
-from sonarcarve.lab.demo import DEMO_METHODS, FIGURE_FILES, GRID_FIGURE_FILE, METHOD_LABELS
+from sonarcarve.lab.demo import (
+    DEMO_METHODS,
+    FIGURE_FILES,
+    GRID_FIGURE_FILE,
+    KEPT_FIGURE_FILE,
+    METHOD_LABELS,
+)
 
 PERCENT_FIELDS = ("unprocessed_pct", "fully_carved_pct", "spurious_removed_pct", "true_lost_pct")
 
@@ -44,12 +50,12 @@ def test_cli_writes_every_figure_and_summary(doorway_demo: tuple[Path, str]) -> 
     names = sorted(p.name for p in out.iterdir())
     grid_files = ["carved-grid.yaml", "carved-grid.pgm", "range-sensor-layer.yaml",
                   "range-sensor-layer.pgm"]
-    assert names == sorted([*FIGURE_FILES.values(), GRID_FIGURE_FILE, "approach.gif",
-                            "summary.json", "summary.md", *grid_files])
+    assert names == sorted([*FIGURE_FILES.values(), GRID_FIGURE_FILE, KEPT_FIGURE_FILE,
+                            "approach.gif", "summary.json", "summary.md", *grid_files])
     with Image.open(out / "approach.gif") as gif:
         assert gif.format == "GIF"
         assert gif.n_frames > 10  # an animation, not a still
-    for name in [*FIGURE_FILES.values(), GRID_FIGURE_FILE]:
+    for name in [*FIGURE_FILES.values(), GRID_FIGURE_FILE, KEPT_FIGURE_FILE]:
         with Image.open(out / name) as png:
             assert png.format == "PNG"
             assert min(png.size) >= 400  # a real figure, not an empty canvas

@@ -60,7 +60,7 @@ def test_verdict_names_the_best_paper_method_beside_one_beyond_the_paper(
     assert method_verdict(made_up) == (
         "Sharpest map: evidence carving (beyond the paper), 90% of its points within 10.0 cm "
         "of a true wall (centerline: 90.0 cm; the best of the paper's methods, ATM: 20.0 cm); "
-        "figures 1-3 draw the paper's methods only.")
+        "figures 1-3 draw the paper's methods only, fig. 6 it beside carving.")
     only_paper = dataclasses.replace(made_up, methods=made_up.methods[:4])
     assert method_verdict(only_paper) == (
         "Sharpest map: ATM, 90% of its points within 20.0 cm of a true wall "
@@ -78,7 +78,8 @@ def test_summaries_list_the_animation_when_it_is_written(doorway: DemoResult) ->
 
     assert figures(summary_markdown(doorway, animation=True)) == [
         "fig1-global-maps.png", "fig2-global-maps-zoom.png", "fig3-error-vs-range.png",
-        "fig4-door-local-maps.png", "approach.gif", "fig5-occupancy-grids.png"]
+        "fig4-door-local-maps.png", "approach.gif", "fig5-occupancy-grids.png",
+        "fig6-kept-and-lost.png"]
     assert "approach.gif" not in figures(summary_markdown(doorway))
     assert json.loads(summary_json(doorway, animation=True))["figures"] == figures(
         summary_markdown(doorway, animation=True))

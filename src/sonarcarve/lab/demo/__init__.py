@@ -4,7 +4,7 @@
 centerline, ATM, arc carving, the combined method and evidence carving (beyond the paper) over
 the same readings, builds the carved grid and ROS's range sensor layer from them, and measures
 each against the ground truth the simulator knows. :func:`write_demo_outputs` turns the
-:class:`DemoResult` into ``summary.md``, ``summary.json``, five PNG figures and each grid as a
+:class:`DemoResult` into ``summary.md``, ``summary.json``, six PNG figures and each grid as a
 ROS map_server map. Nothing here prints; the CLI (``sonarcarve demo``) does.
 
 The modules, each importing only those above it:
@@ -16,6 +16,8 @@ The modules, each importing only those above it:
 - :mod:`~sonarcarve.lab.demo.runs`: :func:`run_demo`, running the methods and measuring;
 - :mod:`~sonarcarve.lab.demo.figures`: figures 1-4 (the paper's methods);
 - :mod:`~sonarcarve.lab.demo.grid_figure`: figure 5 (the grids) and which grid is better;
+- :mod:`~sonarcarve.lab.demo.kept_figure`: figure 6 (which echoes paper carving and evidence
+  carving kept, by the truth);
 - :mod:`~sonarcarve.lab.demo.table`: the printed tables, ``summary.md`` and ``summary.json``;
 - :mod:`~sonarcarve.lab.demo.outputs`: writing all of them at once, atomically.
 """
@@ -24,6 +26,7 @@ from sonarcarve.lab.demo.costmaps import GRID_KINDS, grid_bounds, run_grids
 from sonarcarve.lab.demo.doors import DoorApproach, LocalView
 from sonarcarve.lab.demo.figures import FIGURE_FILES, FIGURE_TEXT
 from sonarcarve.lab.demo.grid_figure import GRID_FIGURE_FILE, free_verdict, grid_verdict
+from sonarcarve.lab.demo.kept_figure import KEPT_FIGURE_FILE
 from sonarcarve.lab.demo.outputs import (
     check_output_dir,
     grid_files,
@@ -66,6 +69,7 @@ __all__ = [
     "GRID_FIGURE_FILE",
     "GRID_KINDS",
     "GRID_RESOLUTION",
+    "KEPT_FIGURE_FILE",
     "METHOD_COLORS",
     "METHOD_LABELS",
     "PAPER_METHODS",

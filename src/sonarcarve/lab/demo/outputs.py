@@ -27,6 +27,12 @@ from sonarcarve.lab.demo.grid_figure import (
     GRID_FIGURE_TEXT,
     plot_occupancy_grids,
 )
+from sonarcarve.lab.demo.kept_figure import (
+    KEPT_FIGURE_FILE,
+    KEPT_FIGURE_TEXT,
+    kept_rows,
+    plot_kept_and_lost,
+)
 from sonarcarve.lab.demo.results import DemoResult, GridSummary
 from sonarcarve.lab.demo.scenario import DemoError
 from sonarcarve.lab.demo.table import summary_json, summary_markdown
@@ -67,6 +73,8 @@ def output_captions(result: DemoResult, *, animation: bool = False) -> list[tupl
         out.append((ANIMATION_FILE, ANIMATION_TEXT))
     if result.grids:
         out.append((GRID_FIGURE_FILE, GRID_FIGURE_TEXT))
+    if kept_rows(result):
+        out.append((KEPT_FIGURE_FILE, KEPT_FIGURE_TEXT))
     for grid in result.grids:
         yaml_name, pgm_name = grid_files(grid)
         maker = _GRID_MAKERS.get(grid.kind, grid.label)
@@ -107,6 +115,8 @@ def write_demo_outputs(result: DemoResult, out: str | Path, *,
     }
     if result.grids:
         files[GRID_FIGURE_FILE] = _png(plot_occupancy_grids(result))
+    if kept_rows(result):
+        files[KEPT_FIGURE_FILE] = _png(plot_kept_and_lost(result))
     files |= {
         SUMMARY_MD: summary_markdown(result, animation=animation).encode(),
         SUMMARY_JSON: summary_json(result, animation=animation).encode(),

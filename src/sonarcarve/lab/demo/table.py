@@ -21,6 +21,7 @@ from sonarcarve.lab.demo.grid_figure import (
     free_verdict,
     grid_verdict,
 )
+from sonarcarve.lab.demo.kept_figure import KEPT_FIGURE_FILE, KEPT_FIGURE_TEXT, kept_rows
 from sonarcarve.lab.demo.results import DemoResult, MethodSummary
 from sonarcarve.lab.demo.scenario import (
     APPROACH_DISTANCE,
@@ -187,7 +188,7 @@ def method_verdict(result: DemoResult) -> str:
 
     Examples: "Sharpest map: evidence carving (beyond the paper), 90% of its points within
     12.5 cm of a true wall (centerline: 90.2 cm; the best of the paper's methods, combined:
-    35.3 cm); figures 1-3 draw the paper's methods only."
+    35.3 cm); figures 1-3 draw the paper's methods only, fig. 6 it beside carving."
     """
     rows = [row for row in result.methods if math.isfinite(row.p90_error_m)]
     if len(rows) < 2:
@@ -205,7 +206,7 @@ def method_verdict(result: DemoResult) -> str:
             "of a true wall")
     text += f" ({'; '.join(others)})" if others else ""
     if best.method not in PAPER_METHODS:
-        text += "; figures 1-3 draw the paper's methods only"
+        text += "; figures 1-3 draw the paper's methods only, fig. 6 it beside carving"
     return text + "."
 
 
@@ -299,6 +300,8 @@ def _figures(result: DemoResult, animation: bool) -> list[tuple[str, str]]:
         figures.append((ANIMATION_FILE, ANIMATION_TEXT))
     if result.grids:
         figures.append((GRID_FIGURE_FILE, GRID_FIGURE_TEXT))
+    if kept_rows(result):
+        figures.append((KEPT_FIGURE_FILE, KEPT_FIGURE_TEXT))
     return figures
 
 
