@@ -32,7 +32,8 @@ Means over seeds; each row also counts in how many (world, seed) runs the target
 ``--variant P[:JSON]`` adds point rows of evidence carving with P_carve ``P`` (and the confidence
 model ``fit_confidence.py --save`` wrote), ``--before-watch`` one with every arc maturing with
 age alone (the confidence before unwatched arcs kept the prior); ``--skip-grids`` leaves the
-costmaps out, ``--skip-points`` the point maps.
+costmaps out, ``--skip-points`` the point maps; ``--p-miss P ...`` adds carved grid rows with
+another free-space probability of one look.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ import numpy as np
 from latency_openings import Variant, parse_variant, variant_method
 from sonarcarve import make_method
 from sonarcarve.filters import OCCLUSION_DEPTH, MapFilter, filter_map, point_origins
-from sonarcarve.grids import CarvedGrid, RangeSensorLayer
+from sonarcarve.grids import CarvedGrid, CarvedGridParams, RangeSensorLayer
 from sonarcarve.lab.grid_measures import grid_measures
 from sonarcarve.lab.metrics import segment_distance
 from sonarcarve.lab.scenarios import build_world
@@ -81,6 +82,14 @@ GRIDS: dict[str, GridFactory] = {
     "carved grid": lambda h, b: CarvedGrid(h, b),
     "RangeSensorLayer": lambda h, b: RangeSensorLayer(h, b),
 }
+
+
+def _add_p_miss_rows(values: Sequence[float]) -> None:
+    """``--p-miss``: a carved grid row for each free-space probability of one look
+    (:attr:`~sonarcarve.grids.CarvedGridParams.p_miss`)."""
+    for p in values:
+        GRIDS[f"carved grid, p_miss {p:g}"] = (
+            lambda h, b, p=p: CarvedGrid(h, b, params=CarvedGridParams(p_miss=p)))
 
 
 def _simulate(world_spec: str, seed: int, physics: SonarPhysics,
@@ -210,10 +219,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--occlusion", action="store_true",
                         help="add point rows: combined and evidence with the occlusion map "
                              "filter (MapFilter occlusion_depth 0.5 m)")
+    parser.add_argument("--p-miss", nargs="+", type=float, default=[], metavar="P",
+                        help="add grid rows: the carved grid with p_miss P (the free-space "
+                             "probability of one on-axis look; default 0.4)")
     parser.add_argument("--skip-grids", action="store_true")
     parser.add_argument("--skip-points", action="store_true",
                         help="only the costmaps (the methods' point maps take most of the time)")
     args = parser.parse_args(argv)
+    _add_p_miss_rows(args.p_miss)
     for physics_name in args.physics:
         physics = PHYSICS[physics_name]
         points, grids = [], []
