@@ -171,8 +171,10 @@ def grid(
              "Its folder must exist.")],
     model: Annotated[str, typer.Option(
         "--model", "-m", metavar="NAME",
-        help="carved (arc carving's grid) | range-sensor-layer (ROS's layer, its defaults) | "
-             "elfes (the Elfes/octomap log-odds grid).")] = "carved",
+        help="carved (arc carving's grid, made for rings of sonars) | range-sensor-layer "
+             "(ROS's layer, its defaults; with one or two sonars it marks far more of the floor "
+             "free: docs/RESULTS.md, 'One or two sonars') | elfes (the Elfes/octomap log-odds "
+             "grid).")] = "carved",
     resolution: Annotated[float, typer.Option(
         metavar="METRES",
         help="Cell side, metres; at most the longer side of the area mapped (the readings' "
