@@ -327,3 +327,11 @@ def test_a_counter_clockwise_square_built_directly_sweeps_its_width() -> None:
     mask = driven_through_mask([[2.0, 0.25], [2.0, -0.25], [2.0, 0.35]], [0.0] * 3, STRAIGHT,
                                body)
     assert mask.tolist() == [True, True, False]
+
+
+def test_the_last_pose_before_a_gap_survives_thinning() -> None:
+    # Creeping 4.9 cm in 0.45 s (every pose within half a step and a margin of the one at 0.3 s,
+    # so thinned away), then nothing for 2.55 s (> DRIVEN_MAX_GAP: the two ends are not joined).
+    # Only the last pose before the gap, at x = 0.049, covers the point 0.19 m ahead of it.
+    creep = _drive([0.0, 0.30, 0.40, 0.45, 3.0, 3.1], [0.0, 0.030, 0.040, 0.049, 5.0, 5.1])
+    assert driven_through_mask([[0.239, 0.0]], [0.0], creep, DISC).tolist() == [True]
