@@ -171,8 +171,15 @@ def _carved_with_free_threshold(threshold: float) -> Factory:
     return make
 
 
+def _carved_with_mark_length(length: float) -> Factory:
+    def make(h: float, b: Bounds) -> OccupancyMap:
+        return CarvedGrid(h, b, params=CarvedGridParams(mark_length=length))
+    return make
+
+
 def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
-           free_threshold: float | None = None) -> list[GridKind]:
+           free_threshold: float | None = None,
+           mark_length: float | None = None) -> list[GridKind]:
     kinds = [GridKind("carved grid", _carved)]
     if side_lobes is not None:  # the opt-in rule as a row of its own
         kinds.append(GridKind(f"carved grid, side_lobes {side_lobes:g}",
@@ -180,6 +187,9 @@ def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
     if free_threshold is not None:  # another free threshold as a row of its own
         kinds.append(GridKind(f"carved grid, free below {free_threshold:g}",
                               _carved_with_free_threshold(free_threshold)))
+    if mark_length is not None:  # another length of the newest echo's mark
+        kinds.append(GridKind(f"carved grid, mark_length {mark_length:g}",
+                              _carved_with_mark_length(mark_length)))
     return [
         *kinds,
         GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
@@ -343,6 +353,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="add a row for the carved grid calling a cell free below P "
                              "(CarvedGridParams.free_threshold; 0.196, map_saver's, was the "
                              "default before 0.35)")
+    parser.add_argument("--mark-length", type=float, default=None, metavar="M",
+                        help="add a row for the carved grid whose newest echo's mark is M "
+                             "metres long (CarvedGridParams.mark_length; default: "
+                             "spread_length, 0.2; 0: the point's cell)")
     parser.add_argument("--doors-only", action="store_true",
                         help="only the door table (the layer's phi sweep on the office still "
                              "runs: it picks the layer's best settings)")
@@ -362,7 +376,8 @@ def main(argv: list[str] | None = None) -> int:
                 for s in range(args.seeds)] for w in worlds}
     office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
-    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes, args.free_threshold)
+    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes, args.free_threshold,
+                            args.mark_length)
                   for h in args.resolutions}
     if not args.doors_only:
         for h in args.resolutions:

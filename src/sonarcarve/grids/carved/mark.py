@@ -70,7 +70,7 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
             # circle beyond the arc's own band (it draws no spread value there to raise).
-            half = 0.5 * m.unit / r[slot]
+            half = 0.5 * m.mark / r[slot]
             axis = 0.5 * (theta1 + theta2)
             axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
             edge = 0.5 * (theta2 - theta1)
@@ -82,7 +82,7 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                           max(z1, at - half), min(z2, at + half), whole, heard, m)
         if not explained:
-            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.mark / r[slot])
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                           max(lo[slot], at - half), min(hi[slot], at + half),
                           whole - drawn[slot, 5], heard, m)
@@ -121,7 +121,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     mid = 0.5 * (t1 + t2)
     half = 0.5 * (t2 - t1)
     # Where the point would be drawn: the middle unit, widened as draw_arc widens it.
-    reach = min(0.5 * (hi - lo), 0.5 * m.unit / r) + widen
+    reach = min(0.5 * (hi - lo), 0.5 * m.mark / r) + widen
     r_in, r_out = max(0.0, r - band), r + band
     # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
     # near the carved interval's middle, widened by ``lobes`` half widths past each edge.

@@ -246,6 +246,7 @@ class CarvedGridParams:
     p_miss_heard: float = 0.2
     band_profile: float = 0.0
     fresh_arcs: bool = True
+    mark_length: float | None = None
     fresh_seconds: float = 2.0
     fresh_periods: float = DEFAULT_FRESH_PERIODS
     see_through: float = DEFAULT_SEE_THROUGH
@@ -274,6 +275,8 @@ class CarvedGridParams:
             if not isinstance(getattr(self, name), bool):
                 msg = f"carved grid: {name} must be True or False, got {getattr(self, name)!r}"
                 raise GridError(msg)
+        if self.mark_length is not None:
+            real("mark_length", _finite_at_least_zero, "a finite number >= 0 metres, or None")
         real("see_through", lambda v: v >= 0.0, "a number >= 0 metres (inf: no limit)")
         real("fresh_seconds", lambda v: math.isfinite(v) and v > 0.0, "a finite number > 0")
         real("fresh_periods", lambda v: v >= 1.0, "a number >= 1 firing period (inf: off)")
