@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sonarcarve.grids import CarvedGrid, CarvedGridParams
 from sonarcarve.lab.changing_scenes import (
     GRID_KINDS,
     METHOD_NAMES,
@@ -82,11 +83,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--physics", choices=("specular", "amplitude"), default="specular",
                         help="echo model simulated, as in the other benchmarks (default: "
                              "specular, the simulator's default physics)")
+    parser.add_argument("--mark-length", type=float, default=None, metavar="M",
+                        help="add a row for the carved grid whose newest echo's mark is M "
+                             "metres long (CarvedGridParams.mark_length; 0: the point's cell)")
     args = parser.parse_args(argv)
     args.no_echo = not args.echoes_only
     physics = (DEFAULT_PHYSICS if args.physics == DEFAULT_PHYSICS.echo_model
                else SonarPhysics(echo_model=args.physics))
     seeds = range(args.seeds)
+    if args.mark_length is not None:
+        _add_mark_length_row(args.mark_length)
     grids = (*GRID_KINDS, *(NO_ECHO_GRID_KINDS if args.no_echo else ()))
     if args.no_echo:
         print("\nWith no-echo readings (every firing that heard nothing: free space up to the "
@@ -112,6 +118,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             save_pngs({args.figure.name: fig}, args.figure.parent)
             print(f"\nwrote {args.figure}")
     return 0
+
+
+def _add_mark_length_row(length: float) -> None:
+    """Add a carved grid with ``CarvedGridParams(mark_length=length)`` to the grids every scene
+    maps (this process's registry only)."""
+    params = CarvedGridParams(mark_length=length)
+
+    def make(resolution: float, bounds: tuple[float, float, float, float]) -> CarvedGrid:
+        return CarvedGrid(resolution, bounds, params=params)
+
+    GRID_KINDS[f"carved grid, mark_length {length:g}"] = make
 
 
 def _print_tables(runs: dict[str, list[SceneRun]], h: float, seeds: range,

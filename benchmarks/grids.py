@@ -17,7 +17,8 @@ at that resolution (the sweep is printed), and :class:`~sonarcarve.grids.Occupan
 octomap). Each grid's origin is shifted by a seeded random fraction of a cell.
 
 Then Fig. 2's door: a 0.85 m door approached at 0°, 20°, -35° and 45° from the wall normal,
-aiming 0 and ±0.15 m off its centre, seeds 0-2 (36 approaches, as the openings experiment);
+aiming 0 and ±0.15 m off its centre, seeds 0-2 (36 approaches, as the openings experiment;
+``--door-seeds 9`` draws the same 12 approaches on seeds 0-8, 108 in all);
 when the robot is first 1 m short of the door, is it passable in the grid, i.e. a stretch of at
 least 0.46 m (Scout2 + 5 cm) of the door line with no occupied cell square within 0.25 m (and,
 strictly, with only free cells)? And CPU per reading of each grid on the office log at both
@@ -170,8 +171,15 @@ def _carved_with_free_threshold(threshold: float) -> Factory:
     return make
 
 
+def _carved_with_mark_length(length: float) -> Factory:
+    def make(h: float, b: Bounds) -> OccupancyMap:
+        return CarvedGrid(h, b, params=CarvedGridParams(mark_length=length))
+    return make
+
+
 def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
-           free_threshold: float | None = None) -> list[GridKind]:
+           free_threshold: float | None = None,
+           mark_length: float | None = None) -> list[GridKind]:
     kinds = [GridKind("carved grid", _carved)]
     if side_lobes is not None:  # the opt-in rule as a row of its own
         kinds.append(GridKind(f"carved grid, side_lobes {side_lobes:g}",
@@ -179,6 +187,9 @@ def _kinds(best: RangeSensorLayerParams, side_lobes: float | None = None,
     if free_threshold is not None:  # another free threshold as a row of its own
         kinds.append(GridKind(f"carved grid, free below {free_threshold:g}",
                               _carved_with_free_threshold(free_threshold)))
+    if mark_length is not None:  # another length of the newest echo's mark
+        kinds.append(GridKind(f"carved grid, mark_length {mark_length:g}",
+                              _carved_with_mark_length(mark_length)))
     return [
         *kinds,
         GridKind("RangeSensorLayer, ROS defaults", _layer(RangeSensorLayerParams())),
@@ -206,13 +217,11 @@ def _measures_table(sims: dict[str, list[Simulation]], h: float,
     return out
 
 
-def _door_table(seeds: int, resolutions: Sequence[float],
-                kinds_by_h: dict[float, list[GridKind]],
-                no_echo: bool = False, physics: str = "specular", width: float = DOOR_WIDTH
-                ) -> dict[tuple[float, str], float]:
-    world = build_world(f"doorway:{width:g}")
-    gap = world.openings[0]
-    region = gap_region(gap[0], gap[1], GAP_DEPTH)
+def _door_runs(seeds: int, width: float, physics: str, no_echo: bool
+               ) -> list[tuple[int, float, float, Simulation, int]]:
+    """Fig. 2's approaches: every heading and offset on each of ``seeds`` seeds, each as
+    (seed, heading in degrees, offset in metres, simulation, readings until 1 m short)."""
+    gap = build_world(f"doorway:{width:g}").openings[0]
     runs = []
     for seed in range(seeds):
         for heading in HEADINGS_DEG:
@@ -224,30 +233,44 @@ def _door_table(seeds: int, resolutions: Sequence[float],
                              for p in (aim - 4.3 * direction, aim - 0.8 * direction))
                 sim = _simulate(_scenario(f"doorway:{width:g}", seed, physics, path),
                                 no_echo)
-                stop = first_reading_within(sim, gap, 1.0)
-                runs.append((seed, sim, stop))
-    clearance = passage_clearance(runs[0][1].robot.robot_radius)
+                runs.append((seed, heading, offset, sim, first_reading_within(sim, gap, 1.0)))
+    return runs
+
+
+def _door_table(seeds: int, resolutions: Sequence[float],
+                kinds_by_h: dict[float, list[GridKind]],
+                no_echo: bool = False, physics: str = "specular", width: float = DOOR_WIDTH
+                ) -> dict[tuple[float, str], float]:
+    gap = build_world(f"doorway:{width:g}").openings[0]
+    region = gap_region(gap[0], gap[1], GAP_DEPTH)
+    runs = _door_runs(seeds, width, physics, no_echo)
+    clearance = passage_clearance(runs[0][3].robot.robot_radius)
     print(f"\nFig. 2 door: {width:g} m, {len(runs)} approaches (headings "
           f"{', '.join(f'{h:g}' for h in HEADINGS_DEG)}°, offsets "
           f"{', '.join(f'{o:g}' for o in OFFSETS)} m, seeds 0-{seeds - 1}); grid when the robot "
           f"is first 1 m short; passable: a stretch >= {clearance:.2f} m with no occupied cell "
           f"within {GAP_DEPTH:g} m of the door line (strict: only free cells)\n")
-    print("| resolution (m) | grid | passable (%) | passable, strict (%) | free width (m), mean |")
-    print("|---:|---|---:|---:|---:|")
+    print("| resolution (m) | grid | passable | passable (%) | passable, strict (%) | "
+          "free width (m), mean | closed approaches (seed/heading°/offset m) |")
+    print("|---:|---|---:|---:|---:|---:|---|")
     out = {}
     for h in resolutions:
         for kind in kinds_by_h[h]:
-            widths, strict = [], []
-            for seed, sim, stop in runs:
+            widths, strict, closed = [], [], []
+            for seed, heading, offset, sim, stop in runs:
                 grid = _fill(kind.make, h, sim, seed, sim.readings[:stop])
                 cells = trinary(grid)
                 widths.append(grid_free_width(grid, region, cells=cells))
                 strict.append(grid_free_width(grid, region, strict=True, cells=cells))
-            share = 100.0 * float(np.mean([w >= clearance for w in widths]))
+                if widths[-1] < clearance:
+                    closed.append(f"{seed}/{heading:g}/{offset:+g}")
+            passable = sum(w >= clearance for w in widths)
+            share = 100.0 * passable / len(runs)
             out[(h, kind.label)] = share
-            print(f"| {h:.2f} | {kind.label} | {share:.0f} | "
+            listed = ", ".join(closed) if len(closed) <= 12 else f"{len(closed)} approaches"
+            print(f"| {h:.2f} | {kind.label} | {passable} of {len(runs)} | {share:.0f} | "
                   f"{100.0 * float(np.mean([w >= clearance for w in strict])):.0f} | "
-                  f"{np.mean(widths):.2f} |")
+                  f"{np.mean(widths):.2f} | {listed} |")
     return out
 
 
@@ -309,6 +332,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--worlds", nargs="+", default=["office", "t-junction", "doorway"])
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--door-seeds", type=int, default=None, metavar="N",
+                        help="seeds of the door approaches (default: --seeds); each seed adds "
+                             "the same 12 headings and offsets, 9 seeds make 108 approaches")
     parser.add_argument("--resolutions", type=float, nargs="+", default=[0.05, 0.10])
     parser.add_argument("--figure", type=Path, default=FIGURE)
     parser.add_argument("--no-echo", action="store_true",
@@ -327,10 +353,16 @@ def main(argv: list[str] | None = None) -> int:
                         help="add a row for the carved grid calling a cell free below P "
                              "(CarvedGridParams.free_threshold; 0.196, map_saver's, was the "
                              "default before 0.35)")
+    parser.add_argument("--mark-length", type=float, default=None, metavar="M",
+                        help="add a row for the carved grid whose newest echo's mark is M "
+                             "metres long (CarvedGridParams.mark_length; default: "
+                             "spread_length, 0.2; 0: the point's cell)")
     parser.add_argument("--doors-only", action="store_true",
                         help="only the door table (the layer's phi sweep on the office still "
                              "runs: it picks the layer's best settings)")
     args = parser.parse_args(argv)
+    if args.door_seeds is not None and args.door_seeds < 1:
+        parser.error(f"--door-seeds must be at least 1, got {args.door_seeds}")
     if not 0.3 <= args.door_width <= 3.0:
         parser.error(f"--door-width must lie in [0.3, 3] metres, got {args.door_width:g}")
     tic = time.perf_counter()
@@ -344,13 +376,14 @@ def main(argv: list[str] | None = None) -> int:
                 for s in range(args.seeds)] for w in worlds}
     office = sims.get("office") or [_simulate(_scenario("office", s, args.physics), args.no_echo)
                                     for s in range(args.seeds)]
-    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes, args.free_threshold)
+    kinds_by_h = {h: _kinds(_sweep(office, h), args.side_lobes, args.free_threshold,
+                            args.mark_length)
                   for h in args.resolutions}
     if not args.doors_only:
         for h in args.resolutions:
             _measures_table(sims, h, kinds_by_h[h])
-    _door_table(args.seeds, args.resolutions, kinds_by_h, args.no_echo, args.physics,
-                args.door_width)
+    _door_table(args.door_seeds or args.seeds, args.resolutions, kinds_by_h, args.no_echo,
+                args.physics, args.door_width)
     if not args.doors_only:
         _cpu_table(office[0], args.resolutions, kinds_by_h)
     if args.figure.name and not args.doors_only:  # --figure "" skips it

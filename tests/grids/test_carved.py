@@ -484,6 +484,30 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     assert trinary(grid)[mid] != OCCUPIED  # one spread echo: unsure
 
 
+@pytest.mark.parametrize(("mark_length", "beside_marked"),
+                         [(None, True), (0.1, True), (0.0, False)])
+def test_mark_length_sets_how_much_of_the_arc_the_mark_covers(mark_length: float | None,
+                                                              beside_marked: bool) -> None:
+    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(mark_length=mark_length))
+    _ring_hears_nothing(grid)
+    # The cell one cell beside the middle along the arc: centre (1.825, 0.075), 1.8257 m from
+    # the sensor (inside the band, ±0.05), 0.05 / 1.825 = 0.0274 rad off the axis. The mark
+    # covers ±(mark_length / 2 + h / 2) / 1.825 rad: the default (0.2 m) ±0.068, 0.1 m ±0.041,
+    # 0 (the point's cell) ±0.0137, which leaves this cell its spread value.
+    mid, beside = _cell(grid, FACE_X, ROW_Y), _cell(grid, FACE_X, ROW_Y + H)
+    grid.add(_front(1.0))
+    live = grid.live_log_odds
+    assert live[mid] == pytest.approx(L_HIT)
+    assert live[beside] == pytest.approx(L_HIT if beside_marked else SPREAD_AT_FACE)
+    assert trinary(grid)[mid] == OCCUPIED  # the point is marked whatever its length
+
+
+@pytest.mark.parametrize("bad", [-0.1, math.nan, math.inf, "0.1"])
+def test_mark_length_must_be_a_finite_length_or_none(bad: object) -> None:
+    with pytest.raises(GridError, match="mark_length"):
+        CarvedGridParams(mark_length=bad)  # type: ignore[arg-type]
+
+
 def test_a_mark_expires_when_its_sensor_stays_silent_past_fresh_seconds() -> None:
     # A log without silent firings never shows sensor 0 firing again: its last echo must not
     # stay a whole hit for as long as the arc is in the history (review finding: 20 s).

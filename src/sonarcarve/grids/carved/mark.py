@@ -4,9 +4,10 @@ map does not explain (:func:`refresh_points`).
 Explained: a cell of the arc's band, or for a near echo of a side lobe past its beam's edges, is
 occupied in the map of spread arcs without the arc's own share (:func:`_band_likeliest`); a lobe
 cell counts only if it was heard from near the bearing of the ray to it (:func:`_heard_near`).
-The mark covers the middle ``L`` of the carved interval, unless that map favours another part of
-the band, or a side lobe, and not the middle: then it goes around the likeliest cell there.
-``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark goes" and "Side lobes".
+The mark covers the middle ``mark_length`` (default ``L``) of the carved interval, unless that
+map favours another part of the band, or a side lobe, and not the middle: then it goes around the
+likeliest cell there. ``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark
+goes", "The mark's length" and "Side lobes".
 """
 
 from __future__ import annotations
@@ -56,8 +57,9 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
     ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
     without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
-    ``unit`` of its carved interval around the point's bearing (the middle, or the most likely
-    cell of a band whose middle the map does not favour; clipped to the interval) raised from
+    mark's length ``m.mark`` of its carved interval around the point's bearing (the middle, or
+    the most likely cell of a band whose middle the map does not favour; clipped to the
+    interval) raised from
     its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
     (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
     circle; else take its point out. The spread map does not hold the
@@ -70,7 +72,7 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
             # circle beyond the arc's own band (it draws no spread value there to raise).
-            half = 0.5 * m.unit / r[slot]
+            half = 0.5 * m.mark / r[slot]
             axis = 0.5 * (theta1 + theta2)
             axis += TWO_PI * math.floor((at - axis + math.pi) / TWO_PI)
             edge = 0.5 * (theta2 - theta1)
@@ -82,7 +84,7 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                           max(z1, at - half), min(z2, at + half), whole, heard, m)
         if not explained:
-            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.unit / r[slot])
+            half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.mark / r[slot])
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                           max(lo[slot], at - half), min(hi[slot], at + half),
                           whole - drawn[slot, 5], heard, m)
@@ -104,7 +106,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     map of spread arcs without the arc's own share ``own``,
     ``clamp(base + live - own) > l_occupied``, and the bearing its point goes to: the middle of
     ``[lo, hi]``, unless that map holds no cell more likely occupied than not (above
-    :data:`_LIKELY`) where the middle ``unit`` is drawn and does hold one elsewhere on the band:
+    :data:`_LIKELY`) where the middle ``mark`` is drawn and does hold one elsewhere on the band:
     then the bearing of the band's most likely cell (of equals within :data:`_TIE`, the one nearest
     the middle). Near echoes (``r <= lobe_range``) also look past the beam's edges, ``lobes`` half
     widths, on the same circle: an occupied cell there explains the echo; when the middle is not
@@ -120,8 +122,8 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     t2 = hi + widen
     mid = 0.5 * (t1 + t2)
     half = 0.5 * (t2 - t1)
-    # Where the point would be drawn: the middle unit, widened as draw_arc widens it.
-    reach = min(0.5 * (hi - lo), 0.5 * m.unit / r) + widen
+    # Where the point would be drawn: the middle mark, widened as draw_arc widens it.
+    reach = min(0.5 * (hi - lo), 0.5 * m.mark / r) + widen
     r_in, r_out = max(0.0, r - band), r + band
     # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
     # near the carved interval's middle, widened by ``lobes`` half widths past each edge.

@@ -29,6 +29,7 @@ class Model(NamedTuple):
     l_max: float
     spread: float  # 1.0: spread each echo over its carved interval, 0.0: not
     unit: float  # max(spread_length, h)
+    mark: float  # the newest echo's mark's length: mark_length, or unit when None
     fade: float  # d_f, inf: no fade
     aware: bool
     profile: float  # band_profile
@@ -48,6 +49,7 @@ def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
                  l_miss=logit(p.p_miss), l_heard=logit(p.p_miss_heard),
                  l_min=logit(p.p_min), l_max=logit(p.p_max),
                  spread=1.0 if p.spread else 0.0, unit=max(p.spread_length, h),
+                 mark=max(p.spread_length, h) if p.mark_length is None else p.mark_length,
                  fade=float(p.fade_range), aware=p.surface_aware,
                  profile=float(p.band_profile), l_occupied=logit(p.occupied_threshold),
                  through=float(p.see_through), lobes=float(p.side_lobes),
