@@ -73,6 +73,10 @@ def test_writes_a_map_server_map(readings: Path, tmp_path: Path, model: str) -> 
      "got 1.1"),
     (["--range-tolerance", "0.1", "--model", "elfes"],
      "--range-tolerance applies to --model carved only, not elfes"),
+    (["--mark-length", "-0.1"], "--mark-length must be a finite number >= 0 metres"),
+    (["--mark-length", "inf"], "--mark-length must be a finite number >= 0 metres"),
+    (["--mark-length", "0.2", "--model", "elfes"],
+     "--mark-length applies to --model carved only, not elfes"),
 ])
 def test_bad_options_are_one_line_errors(readings: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str],
@@ -256,3 +260,19 @@ def test_range_tolerance_thickens_the_echo_band(tmp_path: Path) -> None:
     0.25 m with --range-tolerance 0.45, so the free cells on the axis end 0.2 m sooner."""
     assert _free_reach(tmp_path, ["--range-tolerance", "0.45"]) == pytest.approx(
         0.75, abs=0.05 + 1e-9)
+
+
+def test_mark_length_sets_how_much_of_the_newest_arc_is_occupied(tmp_path: Path) -> None:
+    """One echo at 2 m, nothing else on the map: by default the mark is the echo's own cell
+    (and the cell beside it the half-cell widening reaches); --mark-length 0.4 marks 0.4 m of
+    the arc (about 9 cells of 0.05 m) occupied."""
+    log = tmp_path / "log.csv"
+    write_readings_csv(ReadingBatch.from_readings(
+        [Reading(t=0.0, sensor=0, x=0.0, y=0.0, theta=0.0, range=2.0)]), log)
+    occupied = {}
+    for extra in ([], ["--mark-length", "0.4"]):
+        out = tmp_path / f"grid{len(extra)}.yaml"
+        assert main(["grid", str(log), "--resolution", "0.05", "--out", str(out), *extra]) == 0
+        occupied[bool(extra)] = int(np.count_nonzero(read_map_server(out).cells == 100))
+    assert 1 <= occupied[False] <= 3
+    assert occupied[True] >= 8

@@ -484,16 +484,20 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     assert trinary(grid)[mid] != OCCUPIED  # one spread echo: unsure
 
 
-@pytest.mark.parametrize(("mark_length", "beside_marked"),
-                         [(None, True), (0.1, True), (0.0, False)])
-def test_mark_length_sets_how_much_of_the_arc_the_mark_covers(mark_length: float | None,
+@pytest.mark.parametrize(("params", "beside_marked"),
+                         [(CarvedGridParams(mark_length=None), True),
+                          (CarvedGridParams(mark_length=0.1), True),
+                          (CarvedGridParams(mark_length=0.0), False),
+                          (CarvedGridParams(), False)],
+                         ids=["None (0.2 m)", "0.1 m", "0", "default"])
+def test_mark_length_sets_how_much_of_the_arc_the_mark_covers(params: CarvedGridParams,
                                                               beside_marked: bool) -> None:
-    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(mark_length=mark_length))
+    grid = CarvedGrid(H, BOUNDS, params=params)
     _ring_hears_nothing(grid)
     # The cell one cell beside the middle along the arc: centre (1.825, 0.075), 1.8257 m from
     # the sensor (inside the band, ±0.05), 0.05 / 1.825 = 0.0274 rad off the axis. The mark
-    # covers ±(mark_length / 2 + h / 2) / 1.825 rad: the default (0.2 m) ±0.068, 0.1 m ±0.041,
-    # 0 (the point's cell) ±0.0137, which leaves this cell its spread value.
+    # covers ±(mark_length / 2 + h / 2) / 1.825 rad: None (0.2 m) ±0.068, 0.1 m ±0.041,
+    # 0 (the default: the point's cell) ±0.0137, which leaves this cell its spread value.
     mid, beside = _cell(grid, FACE_X, ROW_Y), _cell(grid, FACE_X, ROW_Y + H)
     grid.add(_front(1.0))
     live = grid.live_log_odds
@@ -550,8 +554,9 @@ def test_the_mark_goes_where_the_map_makes_the_echo_likely_when_its_middle_is_no
     the doorway, where the map holds nothing, while the jamb is already likely (not yet
     occupied) from another sensor's echo. The mark goes to the jamb, not into the doorway.
     (Without side lobes: with them the likeliest cells of this scene lie past the beam's edge,
-    ``test_carved_side_lobes.py``.)"""
-    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(side_lobes=0.0))
+    ``test_carved_side_lobes.py``.) With the 0.2 m mark (``mark_length=None``), for which
+    these numbers were worked out."""
+    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(side_lobes=0.0, mark_length=None))
     _ring_hears_nothing(grid)
     # Sensor 1, turned 20° up, hears something at FACE_X; it fires again (backwards), so this
     # echo is spread only: 0.236 on its band, bearings 8.75..31.25° widened by half a cell at
@@ -802,3 +807,4 @@ def test_the_mark_does_not_depend_on_when_the_map_is_read() -> None:
     once.add_many(ReadingBatch.from_readings(readings))
     np.testing.assert_allclose(often.log_odds, once.log_odds, atol=1e-6)
     np.testing.assert_array_equal(often.trinary(), once.trinary())
+

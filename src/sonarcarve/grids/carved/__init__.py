@@ -26,6 +26,7 @@ from sonarcarve.grids.carved.heard import HEARD_BINS, HEARD_NEAR
 from sonarcarve.grids.carved.params import (
     DEFAULT_FREE_THRESHOLD,
     DEFAULT_FRESH_PERIODS,
+    DEFAULT_MARK_LENGTH,
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
     DEFAULT_SEE_THROUGH,
@@ -40,6 +41,7 @@ from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 __all__ = [
     "DEFAULT_FREE_THRESHOLD",
     "DEFAULT_FRESH_PERIODS",
+    "DEFAULT_MARK_LENGTH",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",

@@ -19,6 +19,7 @@ from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE, MAX_RANGE_TOLERAN
 __all__ = [
     "DEFAULT_FREE_THRESHOLD",
     "DEFAULT_FRESH_PERIODS",
+    "DEFAULT_MARK_LENGTH",
     "DEFAULT_MAX_INCIDENCE",
     "DEFAULT_METHOD",
     "DEFAULT_SEE_THROUGH",
@@ -75,6 +76,17 @@ DEFAULT_FRESH_PERIODS = 1.1
 #: *Free space a planner can use*). The map_server YAML keeps 0.196, which reads the trinary
 #: image back exactly (:data:`sonarcarve.io.map_server.FREE_THRESH`).
 DEFAULT_FREE_THRESHOLD = 0.35
+#: How much of its carved interval the newest echo's mark covers, metres
+#: (:attr:`CarvedGridParams.mark_length`): 0, the point's own cell. The mark says where an
+#: unexplained echo most likely came from (a pole dead ahead), and a planner inflates one cell
+#: as it does any obstacle; a longer mark claims cells the echo's own arc does not single out.
+#: It was ``spread_length`` (0.2 m) until 2026-12-04: on an uncarved arc of a jamb 9-11° off the
+#: axis that stretch lay 0.14-0.16 m inside the Fig. 2 door and closed it in 17 of 288
+#: approaches at 0.10 m (1 with 0; docs/RESULTS.md, *The narrow door of the paper*). The price:
+#: the crossing person, first heard at a beam's edge, is marked at 1.2 s (the range sensor
+#: layer's time) instead of 1.0 s, which the 0.2 m mark reached only by lying within the
+#: measure's 0.25 m of the person while centred 0.51 m from it.
+DEFAULT_MARK_LENGTH = 0.0
 #: How far behind a surface a beam saw through it clears (:attr:`CarvedGridParams.see_through`),
 #: metres: the depth of the obstacles a robot meets (a box, a person, a chair), not of a room.
 DEFAULT_SEE_THROUGH = 0.5
@@ -170,12 +182,12 @@ class CarvedGridParams:
         before.
     mark_length : float or None
         Metres >= 0 of the carved interval the newest echo's mark covers (``fresh_arcs``);
-        None (default): ``spread_length`` (at least the cell side), the rule measured so far; 0:
-        the point's own cell (drawn, as every arc, half a cell wider each side). Opt-in ("The
-        mark's length"): 0 opens the Fig. 2 door in 108 of 108 approaches at 0.05 and 0.10 m
-        (105 / 101 with the default) and lowers the changing scenes' phantom shares, but marks
-        the crossing person at 1.2 s instead of 1.0 (the range sensor layer's 1.2): its first
-        echo comes from the beam's edge, and only a mark as long as the default reaches it.
+        :data:`DEFAULT_MARK_LENGTH` (0: the point's own cell, drawn, as every arc, half a cell
+        wider each side); None: ``spread_length`` (at least the cell side), the default until
+        2026-12-04 ("The mark's length"). 0 opens the Fig. 2 door in 108 of 108 approaches at
+        0.05 and 0.10 m (105 / 101 with 0.2 m) and lowers the changing scenes' phantom shares,
+        but marks the crossing person at 1.2 s instead of 1.0 (the range sensor layer's 1.2):
+        its first echo comes from the beam's edge, and only the 0.2 m mark reached it.
     fresh_seconds : float
         Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
         grid has seen; 2.0. A log that drops silent firings (echoes only, or max-range readings
@@ -254,7 +266,7 @@ class CarvedGridParams:
     p_miss_heard: float = 0.2
     band_profile: float = 0.0
     fresh_arcs: bool = True
-    mark_length: float | None = None
+    mark_length: float | None = DEFAULT_MARK_LENGTH
     fresh_seconds: float = 2.0
     fresh_periods: float = DEFAULT_FRESH_PERIODS
     see_through: float = DEFAULT_SEE_THROUGH
