@@ -6,6 +6,7 @@ Run from the repository root::
     .venv/bin/python benchmarks/evidence_speed.py                     # this checkout
     .venv/bin/python benchmarks/evidence_speed.py --commits 7745291 WORKTREE
     .venv/bin/python benchmarks/evidence_speed.py --carve-at 69efe2f   # issue 9's own baseline
+    .venv/bin/python benchmarks/evidence_speed.py --cull-counts        # what reaches the arcs
 
 For each commit (its ``src`` exported as :mod:`ab_trees` does, ``WORKTREE``: this checkout's),
 history and round, ``carve`` and ``evidence`` are measured one right after the other, each
@@ -23,6 +24,13 @@ for evidence "within 2x of today's carving throughput", written when carving was
 kernel of 69efe2f (the commit before evidence carving landed); issue 11 then made carving itself
 4-9x faster. RESULTS reports both ratios: against that baseline (the target as written) and
 against carving now (the stricter reading).
+
+``--cull-counts`` measures no speed: it feeds this checkout's evidence carving the same stream
+one reading at a time and counts, per reading after the warm-up, the older arcs that reach each
+part of the weighing's per-arc work (``geometry/evidence/beam.py``): those whose bounding
+circle passes the cull, those of them whose bounding circle meets the new echo circle (ATM's
+crossings sought), whose live bins' circle is within reach too (pass 1 run), and those with
+bins to weigh; and the bins weighed, those on the echo circle (support) among them.
 """
 
 from __future__ import annotations
@@ -33,7 +41,16 @@ import statistics
 import tempfile
 from pathlib import Path
 
+import numpy as np
+from numba import njit
+
 from ab_trees import WORKTREE, measure, tree_src
+from sonarcarve import MethodConfig, make_method
+from sonarcarve.geometry.evidence.arrays import ArcShapes, ReadingRows
+from sonarcarve.geometry.evidence.beam import clear_of_beam, meets_echo_circle, new_beam
+from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE, EvidenceParams
+from sonarcarve.methods.evidence import EvidenceModel
+from synthetic import corridor_stream
 
 METHODS = ("carve", "evidence")
 
@@ -47,7 +64,12 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--carve-at", metavar="COMMIT",
                         help="also measure carving in this commit's tree (the issue's baseline)")
+    parser.add_argument("--cull-counts", action="store_true",
+                        help="count the arcs reaching each part of the weighing instead")
     args = parser.parse_args()
+    if args.cull_counts:
+        _print_cull_counts(args.histories, args.readings)
+        return
     with tempfile.TemporaryDirectory(prefix="evidence_speed_") as tmp:
         trees = {c: tree_src(c, Path(tmp)) for c in args.commits}
         baseline = tree_src(args.carve_at, Path(tmp)) if args.carve_at else None
@@ -93,6 +115,72 @@ def _print_baseline(commit: str, then: dict[int, list[float]],
               f"{statistics.median(rates):,.0f} | "
               f"{statistics.median(rates) / statistics.median(base):.2f} | "
               f"{max(rates) / max(base):.2f} |")
+
+
+COUNTS = ("culled in", "crossings sought", "pass 1 run", "bins to weigh", "bins weighed",
+          "on the echo circle")
+
+
+@njit
+def _count_cull(slot: int, first: int, n_older: int, readings: ReadingRows, shapes: ArcShapes,
+                live: np.ndarray, free: np.ndarray, status: np.ndarray, params: EvidenceParams,
+                out: np.ndarray) -> None:
+    """Add to ``out`` (:data:`COUNTS`) the older arcs of reading ``slot`` that reach each part
+    of the weighing, from the state before it was added (``live``, ``free``, ``status``)."""
+    beam = new_beam(slot, readings, shapes, params)
+    storage = status.shape[0]
+    circle = shapes.circle
+    for q in range(n_older):
+        i = (first + q) % storage
+        if status[i] != EVIDENCE_ALIVE or clear_of_beam(circle[0, i], circle[1, i],
+                                                        circle[2, i], beam):
+            continue
+        out[0] += 1
+        out[1] += meets_echo_circle(circle[0, i], circle[1, i], circle[2, i], beam)
+        if clear_of_beam(live[0, i], live[1, i], live[2, i], beam):
+            continue
+        out[2] += 1
+        weighed = 0
+        for k in range(free.shape[1]):
+            vx = shapes.bx[i, k] - beam.x
+            vy = shapes.by[i, k] - beam.y
+            d2 = vx * vx + vy * vy
+            along = vx * beam.cos_axis + vy * beam.sin_axis
+            if free[i, k] >= params.threshold or d2 >= beam.reach2 or along <= 0.0 or (
+                    along * along < d2 * beam.cos_half2):
+                continue
+            weighed += 1
+            out[5] += abs(np.sqrt(d2) - beam.r) <= params.support_tolerance and not (
+                np.sqrt(d2) < beam.free_r)
+        out[3] += weighed > 0
+        out[4] += weighed
+
+
+def _print_cull_counts(histories: list[int], readings: int) -> None:
+    """The table of ``--cull-counts`` (module docstring)."""
+    batch = corridor_stream(readings, noise=0.01, spurious_share=0.05, seed=0).batch
+    warm_up = min(2_000, readings // 2)
+    print("| history | " + " | ".join(COUNTS) + " |")
+    print("|---:|" + "---:|" * len(COUNTS))
+    for history in histories:
+        method = make_method("evidence", MethodConfig(history_size=history))
+        model = method.models[0]
+        assert isinstance(model, EvidenceModel)
+        h = method.history
+        method.add_many(batch[:warm_up])
+        out = np.zeros(len(COUNTS))
+        for s in range(warm_up, readings):
+            live, free, status = model.live_circle.copy(), model.free.copy(), model.status.copy()
+            method.add_many(batch[s : s + 1])
+            sequence = h.appended - 1
+            older = min(sequence, history - 1)
+            _count_cull(sequence % h.storage_size, (sequence - older) % h.storage_size, older,
+                        ReadingRows(h.x, h.y, h.r, h.theta, h.beam_width, h.sensor),
+                        ArcShapes(model.cos_axis, model.sin_axis, model.cos_half, model.circle,
+                                  model.bx, model.by, model.ex, model.ey),
+                        live, free, status, model.params, out)
+        per = out / (readings - warm_up)
+        print(f"| {history:,} | " + " | ".join(f"{v:.1f}" for v in per) + " |")
 
 
 if __name__ == "__main__":

@@ -607,6 +607,10 @@ class EvidenceModel(ArcModel):
         self.support = np.zeros((size, bins))
         self.located = np.zeros((size, bins))
         self.circle = np.zeros((3, size))  # rows: centre x, centre y, radius
+        # A circle containing each arc's live bins and their count, redrawn as it loses bins
+        # (geometry/evidence/beam.py, draw_live_circle); infinite until first drawn.
+        self.live_circle = np.zeros((4, size))
+        self.live_circle[2] = np.inf
         self.cos_axis = np.zeros(size)
         self.sin_axis = np.zeros(size)
         self.cos_half = np.zeros(size)
@@ -676,8 +680,9 @@ class EvidenceModel(ArcModel):
         return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
                 self.others, self.through, self.behind, self.passed, self.trans, self.scratch,
                 self.in_beam, self.bin_index, self.near, self.near_flags, self.bx, self.by,
-                self.ex, self.ey, self.free, self.support, self.located, self.circle, self.cos_axis,
-                self.sin_axis, self.cos_half, self.status, self.touched, self.occluded,
+                self.ex, self.ey, self.free, self.support, self.located, self.circle,
+                self.live_circle, self.cos_axis, self.sin_axis, self.cos_half, self.status,
+                self.touched, self.occluded,
                 self.bearings, self.counts, self.spill, self.params, self.options.atm)
 
     def _count(self, counts: tuple[int, int, int]) -> None:

@@ -53,7 +53,14 @@ from sonarcarve.geometry.evidence.arrays import (
     NewArcTally,
     ReadingRows,
 )
-from sonarcarve.geometry.evidence.beam import Beam, mark_near, new_beam
+from sonarcarve.geometry.evidence.beam import (
+    Beam,
+    clear_of_beam,
+    draw_live_circle,
+    mark_near,
+    meets_echo_circle,
+    new_beam,
+)
 from sonarcarve.geometry.evidence.behind import NEWER_ARCS, depth_behind_newer
 from sonarcarve.geometry.evidence.bins import bin_from_guess, sine_guess
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
@@ -452,13 +459,16 @@ def _gather_group(slot: int, q: int, n_near: int, group_size: int, beam: Beam,
     them have bins to weigh: those rows moved to ``near[q:group_end]``, their marked bins the
     group's entries (:func:`_mark_bins`, :func:`_gather_entries`); an arc with no bin to weigh
     is done here (pass 3 would add nothing: its sums would add 0.0 to sums of non-negative
-    terms). ``spilled``: the rows of ``state.crossings.spill`` used so far.
+    terms), as is one the cull found no live bin of within reach (pass 1 would mark none).
+    ``spilled``: the rows of ``state.crossings.spill`` used so far.
 
     Returns the next row to read, ``group_end``, the entries, the crossings kept, the rows of
     ``spill`` used and the arcs carved fully.
     """
     near = group.near
     status = state.arcs.status
+    circle = state.shapes.circle
+    live = state.arcs.live_circle
     first = q
     group_end = q
     n_entries = 0
@@ -467,10 +477,12 @@ def _gather_group(slot: int, q: int, n_near: int, group_size: int, beam: Beam,
     while q < n_near and group_end - first < group_size:
         i = near[q]
         q += 1
-        if with_atm:
+        if with_atm and meets_echo_circle(circle[0, i], circle[1, i], circle[2, i], beam):
             kept, spilled = transversal_crossings(slot, i, state.readings, state.shapes,
                                                   params.cos_psi, state.crossings, spilled)
             crossings += kept
+        if clear_of_beam(live[0, i], live[1, i], live[2, i], beam):
+            continue  # its live bins out of reach: none to weigh, and one left (alive)
         alive_bins, n_in = _mark_bins(i, beam, params.threshold, state.shapes,
                                       state.evidence.free, group.in_beam)
         if n_in == 0:
@@ -493,7 +505,8 @@ def _weigh_group(slot: int, first: int, group_end: int, beam: Beam, params: Evid
                  tally: NewArcTally) -> tuple[int, NewArcTally]:
     """Pass 3 for the group's arcs ``group.near[first:group_end]``, in the cull's order: each
     arc's evidence (:func:`_weigh_arc`) and per-arc sums (:func:`_add_arc_sums`), and its
-    status. Returns the arcs carved fully and the new arc's tally updated."""
+    status, and the circle of its live bins redrawn when it lost some. Returns the arcs carved
+    fully and the new arc's tally updated."""
     readings = state.readings
     status = state.arcs.status
     bins = state.evidence.free.shape[1]
@@ -517,6 +530,9 @@ def _weigh_group(slot: int, first: int, group_end: int, beam: Beam, params: Evid
         if alive_bins == 0:
             status[i] = EVIDENCE_CARVED
             fully += 1
+        elif alive_bins < state.arcs.live_circle[3, i]:  # it lost bins: a smaller circle
+            draw_live_circle(i, readings, state.evidence.free, params.threshold,
+                             state.arcs.live_circle)
     return fully, tally
 
 
@@ -527,7 +543,7 @@ def _evidence_state(
     others: FloatArray, through: FloatArray, behind: FloatArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
 ) -> EvidenceState:
@@ -539,7 +555,8 @@ def _evidence_state(
                          circle=circle, bx=bx, by=by, ex=ex, ey=ey),
         evidence=BinEvidence(free=free, support=support, located=located),
         arcs=ArcEvidence(status=status, touched=touched, viewpoints=viewpoints, looked=looked,
-                         others=others, occluded=occluded, through=through, behind=behind),
+                         others=others, occluded=occluded, through=through, behind=behind,
+                         live_circle=live_circle),
         crossings=CrossingArrays(bearings=bearings, counts=counts, spill=spill),
     )
 
@@ -554,7 +571,7 @@ def evidence_add(
     near: SlotArray, near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
     params: EvidenceParams, with_atm: bool,
@@ -635,6 +652,11 @@ def evidence_add(
     circle : ndarray, shape (3, n)
         A circle containing each full arc (a cheap first test): rows centre x, centre y,
         radius (a row each, so that the cull reads them contiguously).
+    live_circle : ndarray, shape (4, n)
+        A circle containing the centres of each arc's live bins, and their count when it was
+        drawn (:func:`~sonarcarve.geometry.evidence.beam.draw_live_circle`; drawn for
+        ``slot``, redrawn for an older arc that lost bins). The cull weighs only arcs whose
+        live circle is within reach.
     cos_axis, sin_axis, cos_half : ndarray, shape (n,)
         Axis direction and ``cos(φ/2)`` per row (filled for ``slot``).
     status : ndarray of int8, shape (n,)
@@ -669,8 +691,8 @@ def evidence_add(
     # "Speed: the weighing kernel's layout").
     state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
                             through, behind, bx, by, ex, ey, free, support, located, circle,
-                            cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
-                            counts, spill)
+                            live_circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
+                            bearings, counts, spill)
     group = GroupScratch(
         entries=scratch, entry_bin=bin_index[0], entry_guess=bin_index[1],
         arc_marked=bin_index[2], arc_alive=bin_index[3], in_beam=in_beam, near=near,
@@ -713,6 +735,7 @@ def evidence_add(
                                      new_arc, tally)
         fully += carved
     fully += _finish_new_arc(slot, tally, new_arc, state, params)
+    draw_live_circle(slot, state.readings, free, params.threshold, state.arcs.live_circle)
     return fully, crossings, tally.occluding, spilled
 
 
@@ -744,7 +767,7 @@ def evidence_add_many(
     near: SlotArray, near_flags: BoolArray,
     bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
     free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
     status: Int8Array, touched: BoolArray, occluded: FloatArray,
     bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
     params: EvidenceParams, with_atm: bool,
@@ -779,8 +802,8 @@ def evidence_add_many(
     storage = x.shape[0]
     state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
                             through, behind, bx, by, ex, ey, free, support, located, circle,
-                            cos_axis, sin_axis, cos_half, status, touched, occluded, bearings,
-                            counts, spill)
+                            live_circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
+                            bearings, counts, spill)
     fully = 0
     crossings = 0
     occluding = 0
@@ -793,8 +816,8 @@ def evidence_add_many(
             sequence % storage, start, live - 1, x, y, r, theta, beam_width,
             sensor, viewpoints, looked, others, through, behind, passed, trans, scratch, in_beam,
             bin_index, near, near_flags, bx, by, ex, ey, free,
-            support, located, circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
-            bearings, counts, spill, params, with_atm)
+            support, located, circle, live_circle, cos_axis, sin_axis, cos_half, status, touched,
+            occluded, bearings, counts, spill, params, with_atm)
         fully += a
         crossings += b
         occluding += c

@@ -102,6 +102,12 @@ class ArcEvidence(NamedTuple):
         Set when the arc arrives (``behind`` when it leaves): its share of bins carved by
         occlusion, the largest support its free sector passed, its depth behind the newer
         arcs.
+    live_circle : ndarray, shape (4, n)
+        A circle containing the centres of the arc's live bins (free evidence below ``T``):
+        rows centre x, centre y, radius (infinite when none is live), and the live bins
+        counted when it was drawn. Bins are only ever carved, so a circle drawn earlier
+        still contains them; the weighing redraws it once it has carved some
+        (:func:`~sonarcarve.geometry.evidence.beam.draw_live_circle`).
     """
 
     status: Int8Array
@@ -112,6 +118,7 @@ class ArcEvidence(NamedTuple):
     occluded: FloatArray
     through: FloatArray
     behind: FloatArray
+    live_circle: FloatArray
 
 
 class CrossingArrays(NamedTuple):

@@ -3,9 +3,13 @@
 A new reading ``j`` (origin ``o_j``, range ``r_j``, axis ``θ_j``, beam width ``φ_j``) weighs a
 point ``p`` of an older arc only inside its beam and its reach ``|p - o_j| < r_j + ε_s``:
 nearer than ``r_j - ε`` it is freespace (eq. 3.2), within ``ε_s`` of ``r_j`` support. Its
-constants are computed once per reading (:class:`Beam`), and every older arc whose bounding
-circle lies beyond that reach or outside the beam is culled in one loop without branches
-(:func:`mark_near`; ``docs/evidence-carving.md``, "Speed: the weighing kernel's layout").
+constants are computed once per reading (:class:`Beam`), and the older arcs are culled in one
+loop without branches (:func:`mark_near`; ``docs/evidence-carving.md``, "Speed: the weighing
+kernel's layout"): an arc whose bounding circle lies beyond that reach or outside the beam
+is left alone; of the others, ATM's crossings are sought only where the bounding circle meets
+``j``'s echo circle (a crossing lies on it), and bins are weighed only where the circle of
+the arc's *live* bins (:func:`draw_live_circle`) is within reach too. Both tests only drop
+arcs that would have got nothing: every map stays bit for bit the same.
 """
 
 from __future__ import annotations
@@ -14,11 +18,14 @@ import math
 from typing import NamedTuple
 
 from sonarcarve.geometry._compiled import compiled_inline
+from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence.arrays import ArcShapes, ReadingRows
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE, EvidenceParams
+from sonarcarve.geometry.index import box_pad
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array
 
-__all__ = ["Beam", "beam_of", "mark_near", "new_beam"]
+__all__ = ["Beam", "beam_of", "clear_of_beam", "draw_live_circle", "mark_near",
+           "meets_echo_circle", "new_beam"]
 
 
 class Beam(NamedTuple):
@@ -87,27 +94,82 @@ def new_beam(slot: int, readings: ReadingRows, shapes: ArcShapes,
 
 
 @compiled_inline
+def clear_of_beam(cx: float, cy: float, rho: float, beam: Beam) -> bool:
+    """Whether the circle ``(cx, cy, rho)`` lies beyond ``j``'s reach or clear of one of the
+    two half-planes whose intersection is ``j``'s beam (φ < π; as ``geometry/bounds.py``).
+    No branch."""
+    dcx = cx - beam.x
+    dcy = cy - beam.y
+    far = dcx * dcx + dcy * dcy >= (beam.reach + rho) * (beam.reach + rho)
+    below_lower_edge = beam.edge1_x * dcy - beam.edge1_y * dcx < -rho
+    above_upper_edge = dcx * beam.edge2_y - dcy * beam.edge2_x < -rho
+    return far | below_lower_edge | above_upper_edge
+
+
+@compiled_inline
 def mark_near(cx: FloatArray, cy: FloatArray, rho: FloatArray, status: Int8Array,
               beam: Beam, near_flags: BoolArray) -> None:
     """The cull, for each row ``i`` of the arrays (slices of the history's rows): ``near_flags[i]``
     is False where arc ``i`` is no longer alive or its bounding circle (centre ``(cx[i],
-    cy[i])``, radius ``rho[i]``) lies beyond the reach of ``j``'s echo circle, or clear of one
-    of the two half-planes whose intersection is ``j``'s beam (φ < π; as
-    ``geometry/bounds.py``). No branch, and indices from 0 (no test for negative ones): the
-    compiler tests several rows at once."""
-    bx = beam.x
-    by = beam.y
-    reach = beam.reach
-    e1x = beam.edge1_x
-    e1y = beam.edge1_y
-    e2x = beam.edge2_x
-    e2y = beam.edge2_y
+    cy[i])``, radius ``rho[i]``) is clear of ``j``'s beam (:func:`clear_of_beam`). No branch,
+    and indices from 0 (no test for negative ones): the compiler tests several rows at once."""
     for i in range(near_flags.shape[0]):
-        dcx = cx[i] - bx
-        dcy = cy[i] - by
-        r = rho[i]
-        far = dcx * dcx + dcy * dcy >= (reach + r) * (reach + r)
-        below_lower_edge = e1x * dcy - e1y * dcx < -r
-        above_upper_edge = dcx * e2y - dcy * e2x < -r
-        near_flags[i] = (status[i] == EVIDENCE_ALIVE) & (not far) & (not below_lower_edge) & (
-            not above_upper_edge)
+        near_flags[i] = (status[i] == EVIDENCE_ALIVE) & (
+            not clear_of_beam(cx[i], cy[i], rho[i], beam))
+
+
+@compiled_inline
+def meets_echo_circle(cx: float, cy: float, rho: float, beam: Beam) -> bool:
+    """Whether the circle ``(cx, cy, rho)``, an arc's bounding circle, meets ``j``'s echo
+    circle (radius ``r_j`` about ``o_j``), widened by
+    :func:`~sonarcarve.geometry.index.box_pad`: where it does not, ATM can keep no crossing of
+    the two arcs (a kept crossing lies on the echo circle and on the arc, so inside the
+    bounding circle; the pad is far above the rounding of the crossing's closed form)."""
+    dcx = cx - beam.x
+    dcy = cy - beam.y
+    d2 = dcx * dcx + dcy * dcy
+    rj = beam.r
+    ring = rho + box_pad(beam.x, beam.y, rj)
+    beyond = d2 > (rj + ring) * (rj + ring)
+    within = (rj > ring) & (d2 < (rj - ring) * (rj - ring))
+    return not (beyond | within)
+
+
+@compiled_inline
+def draw_live_circle(i: int, readings: ReadingRows, free: FloatArray, threshold: float,
+                     live_circle: FloatArray) -> None:
+    """Column ``i`` of ``live_circle``: a circle containing the centres of arc ``i``'s live
+    bins (free evidence not at ``T``: what pass 1 would weigh), and how many there are.
+
+    The circle is that of the arc (eq. 3.1, :func:`~sonarcarve.geometry.bounds.arc_bounding_circle`)
+    from the first live bin's centre to the last's, at the angles ``τ_k = θ - φ/2 + (k + ½) Δ``
+    written as ``evidence_add`` computes the centres (rounding is monotone in ``k``, so every
+    live bin's ``τ_k`` lies between the two), its radius widened by
+    :func:`~sonarcarve.geometry.index.box_pad`. No live bin: an infinite radius (the cull then
+    leaves the arc to pass 1, which carves it)."""
+    bins = free.shape[1]
+    first = bins
+    last = -1
+    count = 0
+    for k in range(bins):
+        alive = not free[i, k] >= threshold
+        first = min(first, k if alive else bins)
+        last = max(last, k if alive else -1)
+        count += alive
+    x = readings.x[i]
+    y = readings.y[i]
+    r = readings.r[i]
+    live_circle[3, i] = count
+    if count == 0:
+        live_circle[0, i] = x
+        live_circle[1, i] = y
+        live_circle[2, i] = math.inf
+        return
+    theta = readings.theta[i]
+    half = 0.5 * readings.beam_width[i]
+    step = readings.beam_width[i] / bins
+    cx, cy, rho = arc_bounding_circle(x, y, r, theta - half + (first + 0.5) * step,
+                                      theta - half + (last + 0.5) * step)
+    live_circle[0, i] = cx
+    live_circle[1, i] = cy
+    live_circle[2, i] = rho + box_pad(x, y, r)
