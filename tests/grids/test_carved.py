@@ -467,8 +467,8 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     _ring_hears_nothing(grid)
     mid, side = _cell(grid, FACE_X, ROW_Y), _cell(grid, 1.816, ROW_Y + 0.175)
     # The side cell lies on the arc (1.8244 m, 0.0955 rad off the axis, inside φ/2 = 0.196)
-    # but off its middle: the whole hit covers ±(0.1 / 1.825 + 0.05 / (2 x 1.825)) = ±0.068
-    # rad (the middle spread_length, widened by half a cell).
+    # but off its middle: the whole hit covers ±(0.05 / (2 x 1.825)) = ±0.0137 rad (the
+    # default mark, the point's own cell, widened by half a cell; ±0.068 with the 0.2 m mark).
     grid.add(_front(1.0))
     live = grid.live_log_odds
     assert live[mid] == pytest.approx(L_HIT)
