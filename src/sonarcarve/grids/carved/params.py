@@ -186,9 +186,10 @@ class CarvedGridParams:
         :data:`DEFAULT_MARK_LENGTH` (0: the point's own cell, drawn, as every arc, half a cell
         wider each side); None: ``spread_length`` (at least the cell side), the default until
         2026-12-04 ("The mark's length"). 0 opens the Fig. 2 door in 108 of 108 approaches at
-        0.05 and 0.10 m (105 / 101 with 0.2 m; 287 of 288 at both, 281 / 271) and lowers the changing scenes' phantom shares,
-        but marks the crossing person at 1.2 s instead of 1.0 (the range sensor layer's 1.2):
-        its first echo comes from the beam's edge, and only the 0.2 m mark reached it.
+        0.05 and 0.10 m (105 / 101 with 0.2 m; 287 of 288 at both, 281 / 271) and lowers the
+        changing scenes' phantom shares, but marks the crossing person at 1.2 s instead of 1.0
+        (the range sensor layer's 1.2): its first echo comes from the beam's edge, and only the
+        0.2 m mark reached it.
     fresh_seconds : float
         Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
         grid has seen; 2.0. A log that drops silent firings (echoes only, or max-range readings
