@@ -467,8 +467,8 @@ def test_the_mark_is_the_middle_of_the_arc_and_leaves_when_its_sensor_fires_agai
     _ring_hears_nothing(grid)
     mid, side = _cell(grid, FACE_X, ROW_Y), _cell(grid, 1.816, ROW_Y + 0.175)
     # The side cell lies on the arc (1.8244 m, 0.0955 rad off the axis, inside φ/2 = 0.196)
-    # but off its middle: the whole hit covers ±(0.1 / 1.825 + 0.05 / (2 x 1.825)) = ±0.068
-    # rad (the middle spread_length, widened by half a cell).
+    # but off its middle: the whole hit covers ±(0.05 / (2 x 1.825)) = ±0.0137 rad (the
+    # default mark, the point's own cell, widened by half a cell; ±0.068 with the 0.2 m mark).
     grid.add(_front(1.0))
     live = grid.live_log_odds
     assert live[mid] == pytest.approx(L_HIT)
@@ -591,6 +591,31 @@ def test_the_mark_goes_where_the_map_makes_the_echo_likely_when_its_middle_is_no
     # its spread value; an unclipped mark (±3.14° around a cell at 9.6-12°) would reach it (review
     # rev10).
     assert live[_cell(grid, 1.775, 0.425)] == pytest.approx(SPREAD_AT_FACE)
+
+
+def test_the_default_point_mark_also_goes_to_the_jamb_not_into_the_doorway() -> None:
+    """The scene above with the default mark, the point's own cell (``DEFAULT_MARK_LENGTH``):
+    the whole hit still leaves the doorway's middle for the overlap of the two bands (bearings
+    7.96..12.03°), and covers no more than the likeliest cell and its neighbour (the point is
+    drawn half a cell wider each side: ±0.785° at 1.825 m, under one cell's 1.57°)."""
+    grid = CarvedGrid(H, BOUNDS, params=CarvedGridParams(side_lobes=0.0))
+    _ring_hears_nothing(grid)
+    grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
+    grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
+    grid.add(Reading(1.2, 0, 0.0, ROW_Y, 0.0, FACE_X))
+    live = grid.live_log_odds
+    assert live[_cell(grid, FACE_X, ROW_Y)] == pytest.approx(SPREAD_AT_FACE)
+    # The cells holding sensor 0's whole hit over sensor 1's spread value.
+    marked = np.argwhere(np.isclose(live, L_HIT + SPREAD_AT_FACE))
+    assert 1 <= len(marked) <= 2
+    xs, ys = grid.cell_centers()
+    for row, col in marked:
+        bearing = math.degrees(math.atan2(ys[row] - ROW_Y, xs[col]))
+        assert 7.96 - 0.8 <= bearing <= 12.03 + 0.8  # the overlap, widened by half a cell
+    # Nothing else ahead is a whole hit (sensor 1's backward echo at 0.3 m, a whole hit as any
+    # arc shorter than L, lies behind): a mark of 0.2 m would cover 3-4 cells.
+    ahead = xs[None, :] > 1.0
+    assert np.count_nonzero((live >= L_HIT - 1e-9) & ahead) == len(marked)
 
 
 # -- frequent reads: the same map, cheaper ------------------------------------------------------

@@ -223,9 +223,10 @@ def grid(
         metavar="METRES",
         help="--model carved only: how much of its carved arc a sensor's newest echo marks "
              "occupied at once, metres (default 0: the echo's most likely cell; a planner "
-             "inflates it as any obstacle). 0.2, the rule before 2026-12-04, marks an obstacle "
-             "heard at a beam's edge 0.2 s sooner but closed a 0.85 m door at 1 m in 6 % of "
-             "approaches at 0.10 m cells (docs/RESULTS.md, 'The narrow door of the paper').")
+             "inflates it as any obstacle). 0.2, the rule before 2026-12-04, marked a simulated "
+             "crossing person 0.2 s sooner (its first echo came from a beam's edge) but closed "
+             "a 0.85 m door at 1 m in 6 % of approaches at 0.10 m cells (docs/RESULTS.md, 'The "
+             "narrow door of the paper').")
     ] = None,
     no_echo: NoEchoOpt = False,
     max_range: MaxRangeOpt = None,

@@ -60,7 +60,11 @@ def test_verdict_names_the_best_paper_method_beside_one_beyond_the_paper(
     assert method_verdict(made_up) == (
         "Sharpest map: evidence carving (beyond the paper), 90% of its points within 10.0 cm "
         "of a true wall (centerline: 90.0 cm; the best of the paper's methods, ATM: 20.0 cm); "
-        "figures 1-3 draw the paper's methods only, fig. 6 it beside carving.")
+        "figures 1-3 draw the paper's methods only, fig. 6 draws it beside carving.")
+    without_carving = dataclasses.replace(made_up, methods=tuple(
+        row for row in made_up.methods if row.method != "carve"))
+    assert method_verdict(without_carving).endswith(
+        "figures 1-3 draw the paper's methods only.")  # fig. 6 would have no carving panel
     only_paper = dataclasses.replace(made_up, methods=made_up.methods[:4])
     assert method_verdict(only_paper) == (
         "Sharpest map: ATM, 90% of its points within 20.0 cm of a true wall "

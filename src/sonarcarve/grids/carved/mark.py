@@ -4,10 +4,11 @@ map does not explain (:func:`refresh_points`).
 Explained: a cell of the arc's band, or for a near echo of a side lobe past its beam's edges, is
 occupied in the map of spread arcs without the arc's own share (:func:`_band_likeliest`); a lobe
 cell counts only if it was heard from near the bearing of the ray to it (:func:`_heard_near`).
-The mark covers the middle ``mark_length`` (default 0: the point's cell) of the carved interval,
-unless that map favours another part of the band, or a side lobe, and not the middle: then it goes
-around the likeliest cell there. ``docs/carved-grid.md``, "The newest echoes mark at once",
-"Where the mark goes", "The mark's length" and "Side lobes".
+The mark covers the middle ``mark_length`` of the carved interval (by default 0: the point's
+own cell; ``L``, ``spread_length``, when None, the rule before 2026-12-04), unless that map
+favours another part of the band, or a side lobe, and not the middle: then it goes around the
+likeliest cell there. ``docs/carved-grid.md``, "The newest echoes mark at once", "Where the mark
+goes", "The mark's length" and "Side lobes".
 """
 
 from __future__ import annotations

@@ -172,7 +172,8 @@ class CarvedGridParams:
         recall to the layer's (0.895 at 0.05 m); so off.
     fresh_arcs : bool
         Each sensor's newest echo, when no occupied cell on its carved band explains it, is a whole
-        hit on the middle ``spread_length`` of its carved interval (its spread value on the rest)
+        hit on the middle ``mark_length`` of its carved interval (by default the point's own
+        cell, ``spread_length`` before 2026-12-04; its spread value on the rest)
         until that sensor fires again, or would have (``fresh_periods``) ("The newest echoes mark
         at once": a person stepping in front of the robot is marked after one reading). Where the
         map favours another part of the band and not the middle, the whole hit goes around the
@@ -185,9 +186,10 @@ class CarvedGridParams:
         :data:`DEFAULT_MARK_LENGTH` (0: the point's own cell, drawn, as every arc, half a cell
         wider each side); None: ``spread_length`` (at least the cell side), the default until
         2026-12-04 ("The mark's length"). 0 opens the Fig. 2 door in 108 of 108 approaches at
-        0.05 and 0.10 m (105 / 101 with 0.2 m) and lowers the changing scenes' phantom shares,
-        but marks the crossing person at 1.2 s instead of 1.0 (the range sensor layer's 1.2):
-        its first echo comes from the beam's edge, and only the 0.2 m mark reached it.
+        0.05 and 0.10 m (105 / 101 with 0.2 m; 287 of 288 at both, 281 / 271) and lowers the
+        changing scenes' phantom shares, but marks the crossing person at 1.2 s instead of 1.0
+        (the range sensor layer's 1.2): its first echo comes from the beam's edge, and only the
+        0.2 m mark reached it.
     fresh_seconds : float
         Seconds > 0 a newest echo stays fresh at most, counted back from the newest reading the
         grid has seen; 2.0. A log that drops silent firings (echoes only, or max-range readings

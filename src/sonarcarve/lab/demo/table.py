@@ -188,7 +188,8 @@ def method_verdict(result: DemoResult) -> str:
 
     Examples: "Sharpest map: evidence carving (beyond the paper), 90% of its points within
     12.5 cm of a true wall (centerline: 90.2 cm; the best of the paper's methods, combined:
-    35.3 cm); figures 1-3 draw the paper's methods only, fig. 6 it beside carving."
+    35.3 cm); figures 1-3 draw the paper's methods only, fig. 6 draws it beside carving."
+    (fig. 6 is named only when carving ran too: it is what the figure sets it beside.)
     """
     rows = [row for row in result.methods if math.isfinite(row.p90_error_m)]
     if len(rows) < 2:
@@ -206,7 +207,9 @@ def method_verdict(result: DemoResult) -> str:
             "of a true wall")
     text += f" ({'; '.join(others)})" if others else ""
     if best.method not in PAPER_METHODS:
-        text += "; figures 1-3 draw the paper's methods only, fig. 6 it beside carving"
+        text += "; figures 1-3 draw the paper's methods only"
+        if "carve" in {row.method for row in result.methods}:
+            text += ", fig. 6 draws it beside carving"
     return text + "."
 
 
