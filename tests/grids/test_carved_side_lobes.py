@@ -84,11 +84,11 @@ def test_without_side_lobes_or_beyond_their_range_the_echo_is_marked(
     assert trinary(grid)[middle] == OCCUPIED
 
 
-def _likely_surface_in_the_lobe() -> CarvedGrid:
+def _likely_surface_in_the_lobe(params: CarvedGridParams = LOBES) -> CarvedGrid:
     """Sensor 1, turned 20° up, hears something at FACE_X and fires again (backwards): spread
     only, 0.236 on bearings 8.75..31.25° (widened by 0.785°); then sensor 0 hears FACE_X
     straight ahead."""
-    grid = CarvedGrid(H, BOUNDS, params=LOBES)
+    grid = CarvedGrid(H, BOUNDS, params=params)
     _ring_hears_nothing(grid)
     grid.add(Reading(1.0, 1, 0.0, ROW_Y, math.radians(20.0), FACE_X))
     grid.add(Reading(1.1, 1, 0.0, ROW_Y, math.pi, 0.3))
@@ -120,6 +120,20 @@ def test_the_mark_goes_to_a_likely_surface_in_reach_of_a_side_lobe() -> None:
     # 11.15° (1.8092 m): on both bands; the mark starts a cell past the arc's own band, so
     # the echo counts its spread value here and not a whole hit on top of it.
     assert live[_cell(grid, 1.775, 0.375)] == pytest.approx(2 * SPREAD)
+
+
+def test_the_default_point_mark_in_a_side_lobe_is_the_likeliest_cell() -> None:
+    # The scene above with the default mark (the point's own cell): the whole hit goes to the
+    # likeliest cell, (1.825, 0.425) at 12.36° (1.8683 m, on sensor 0's band and sensor 1's),
+    # drawn ±half a cell (±0.785°): 11.58..13.15°. The cell at 14.23°, inside the 0.2 m mark
+    # above, keeps sensor 1's spread value.
+    grid = _likely_surface_in_the_lobe(CarvedGridParams(side_lobes=1.0))
+    live = grid.live_log_odds
+    likeliest = _cell(grid, FACE_X, 0.425)
+    assert live[likeliest] == pytest.approx(SPREAD + L_HIT)
+    assert trinary(grid)[likeliest] == OCCUPIED
+    assert live[_cell(grid, 1.775, 0.475)] == pytest.approx(SPREAD)
+    assert live[_cell(grid, FACE_X, ROW_Y)] == pytest.approx(SPREAD)  # the middle: spread
 
 
 def _lobe_scene(sign: float, read_often: bool = False) -> CarvedGrid:
