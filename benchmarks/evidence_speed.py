@@ -7,6 +7,8 @@ Run from the repository root::
     .venv/bin/python benchmarks/evidence_speed.py --commits 7745291 WORKTREE
     .venv/bin/python benchmarks/evidence_speed.py --carve-at 69efe2f   # issue 9's own baseline
     .venv/bin/python benchmarks/evidence_speed.py --cull-counts        # what reaches the arcs
+    .venv/bin/python benchmarks/evidence_speed.py --floor              # without the weighing
+    .venv/bin/python benchmarks/evidence_speed.py --split              # where the time goes
 
 For each commit (its ``src`` exported as :mod:`ab_trees` does, ``WORKTREE``: this checkout's),
 history and round, ``carve`` and ``evidence`` are measured one right after the other, each
@@ -31,6 +33,22 @@ part of the weighing's per-arc work (``geometry/evidence/beam.py``): those whose
 circle passes the cull, those of them whose bounding circle meets the new echo circle (ATM's
 crossings sought), whose live bins' circle is within reach too (pass 1 run), and those with
 bins to weigh; and the bins weighed, those on the echo circle (support) among them.
+
+``--floor`` bounds what any speed-up of the weighing can reach: in this process, on this
+checkout, round after round, it measures carving, evidence carving, and evidence carving with
+every new arc weighed against no older arc (the kernel called with a history of one arc; the
+repeats, the watch, the estimates, the confidence and the commits run as always), readings per
+CPU second after the same warm-up. Nothing is carved then, so the rest runs on other arcs than
+in the real run: it is the cost of everything but the weighing of the older arcs, not an
+exact part of the real run's time. The table gives the medians, the ratios to carving and the
+share of evidence carving's time that the weighing of the older arcs takes
+(``1 - floor time / evidence time``).
+
+``--split`` times evidence carving's parts on this checkout (after the same warm-up, CPU time,
+each part's calls timed where the model makes them): the weighing kernel, the watch and repeat
+marking, and the commit path (the estimates, the confidence and the points of the arcs that
+leave the history); µs a reading, the median of ``--rounds`` runs, and "rest" for what is left
+(the history, the checks, Python between the parts).
 """
 
 from __future__ import annotations
@@ -39,17 +57,23 @@ import argparse
 import os
 import statistics
 import tempfile
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from ab_trees import WORKTREE, measure, tree_src
 from sonarcarve import MethodConfig, make_method
+from sonarcarve.geometry.evidence import evidence_add_many
 from sonarcarve.geometry.evidence.arrays import ArcShapes, ReadingRows
 from sonarcarve.geometry.evidence.beam import clear_of_beam, meets_echo_circle, new_beam
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE, EvidenceParams
-from sonarcarve.methods.evidence import EvidenceModel
+from sonarcarve.methods import evidence as evidence_module
+from sonarcarve.methods.evidence import EvidenceMethod, EvidenceModel
+from sonarcarve.readings import ReadingBatch
 from synthetic import corridor_stream
 
 METHODS = ("carve", "evidence")
@@ -66,9 +90,19 @@ def main() -> None:
                         help="also measure carving in this commit's tree (the issue's baseline)")
     parser.add_argument("--cull-counts", action="store_true",
                         help="count the arcs reaching each part of the weighing instead")
+    parser.add_argument("--floor", action="store_true",
+                        help="measure evidence carving without the weighing of older arcs too")
+    parser.add_argument("--split", action="store_true",
+                        help="time evidence carving's parts instead")
     args = parser.parse_args()
     if args.cull_counts:
         _print_cull_counts(args.histories, args.readings)
+        return
+    if args.floor:
+        _print_floor(args.histories, args.readings, args.rounds)
+        return
+    if args.split:
+        _print_split(args.histories, args.readings, args.rounds)
         return
     with tempfile.TemporaryDirectory(prefix="evidence_speed_") as tmp:
         trees = {c: tree_src(c, Path(tmp)) for c in args.commits}
@@ -181,6 +215,114 @@ def _print_cull_counts(histories: list[int], readings: int) -> None:
                         live, free, status, model.params, out)
         per = out / (readings - warm_up)
         print(f"| {history:,} | " + " | ".join(f"{v:.1f}" for v in per) + " |")
+
+
+FLOOR_KINDS = ("carve", "evidence", "floor")
+
+
+def _weighing_no_older_arc(model: EvidenceModel) -> Callable[[int, int], None]:
+    """``model.on_add_many`` with each new arc weighed against no older arc: the kernel is
+    called with a history of one arc (its own row); the rest as ``on_add_many`` does it."""
+
+    def on_add_many(first: int, count: int) -> None:
+        end = first + count
+        model.mark_repeats(first, count)
+        arrays = model._arrays()  # the kernel's arguments, as on_add_many passes them
+        while first < end:  # no older arc: no crossing, so no spill
+            _, _, _, first, _ = evidence_add_many(first, end - first, 1, model.behind_scratch,
+                                                  *arrays)
+        model.mark_watch(end - count, count)
+
+    return on_add_many
+
+
+def _floor_rate(kind: str, history: int, batch: ReadingBatch) -> float:
+    """Readings per CPU second of :data:`FLOOR_KINDS` ``kind`` on ``batch`` at ``history``,
+    after a warm-up on its first 2,000 readings (as :mod:`ab_trees` measures)."""
+    _cpu_seconds(kind, history, batch[:2000])
+    return len(batch) / _cpu_seconds(kind, history, batch)
+
+
+def _cpu_seconds(kind: str, history: int, readings: ReadingBatch) -> float:
+    """CPU seconds of a new method of :data:`FLOOR_KINDS` ``kind`` at ``history`` adding
+    ``readings`` in one ``add_many`` and finishing."""
+    method = make_method("carve" if kind == "carve" else "evidence",
+                         MethodConfig(history_size=history))
+    if kind == "floor":
+        model = method.models[0]
+        assert isinstance(model, EvidenceModel)
+        model.on_add_many = _weighing_no_older_arc(model)  # type: ignore[method-assign]
+    start = time.process_time()
+    method.add_many(readings)
+    method.finish()
+    return time.process_time() - start
+
+
+def _print_floor(histories: list[int], readings: int, rounds: int) -> None:
+    """The table of ``--floor`` (module docstring)."""
+    batch = corridor_stream(readings, noise=0.01, spurious_share=0.05, seed=0).batch
+    rates: dict[tuple[int, str], list[float]] = {
+        (h, kind): [] for h in histories for kind in FLOOR_KINDS}
+    print(f"load average at the start: {os.getloadavg()[0]:.1f}\n")
+    for _ in range(rounds):
+        for history in histories:
+            for kind in FLOOR_KINDS:
+                rates[history, kind].append(_floor_rate(kind, history, batch))
+    print("| history | carve median | evidence median | evidence / carve | without the weighing "
+          "| that / carve | weighing's share of evidence's time |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    for history in histories:
+        carve, evidence, floor = (statistics.median(rates[history, kind])
+                                  for kind in FLOOR_KINDS)
+        print(f"| {history:,} | {carve:,.0f} | {evidence:,.0f} | {evidence / carve:.2f} | "
+              f"{floor:,.0f} | {floor / carve:.2f} | {1.0 - evidence / floor:.0%} |")
+    print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
+
+
+#: The parts ``--split`` times: the names the model calls them by in
+#: :mod:`sonarcarve.methods.evidence`, and how the table heads them.
+SPLIT_PARTS = {"evidence_add_many": "weighing kernel", "mark_watch": "watch",
+               "mark_repeats": "repeats"}
+
+
+def _print_split(histories: list[int], readings: int, rounds: int) -> None:
+    """The table of ``--split`` (module docstring)."""
+    batch = corridor_stream(readings, noise=0.01, spurious_share=0.05, seed=0).batch
+    spent: dict[str, float] = {}
+
+    def timed(name: str, part: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any) -> Any:
+            start = time.process_time()
+            out = part(*args)
+            spent[name] = spent.get(name, 0.0) + time.process_time() - start
+            return out
+        return call
+
+    heads = [*SPLIT_PARTS.values(), "commit path", "rest", "total"]
+    saved = {name: getattr(evidence_module, name) for name in SPLIT_PARTS}
+    saved_commit = EvidenceMethod._commit
+    print("| history | " + " | ".join(f"{h} (µs a reading)" for h in heads) + " |")
+    print("|---:|" + "---:|" * len(heads))
+    try:
+        for name, head in SPLIT_PARTS.items():
+            setattr(evidence_module, name, timed(head, saved[name]))
+        EvidenceMethod._commit = timed("commit path", saved_commit)  # type: ignore[method-assign]
+        for history in histories:
+            runs: dict[str, list[float]] = {h: [] for h in heads}
+            for _ in range(rounds):
+                _cpu_seconds("evidence", history, batch[:2000])  # the warm-up
+                spent.clear()
+                total = _cpu_seconds("evidence", history, batch)
+                spent["rest"] = total - sum(spent.values())
+                spent["total"] = total
+                for head in heads:
+                    runs[head].append(spent.get(head, 0.0) / len(batch) * 1e6)
+            print(f"| {history:,} | "
+                  + " | ".join(f"{statistics.median(runs[h]):.2f}" for h in heads) + " |")
+    finally:
+        for name, part in saved.items():
+            setattr(evidence_module, name, part)
+        EvidenceMethod._commit = saved_commit  # type: ignore[method-assign]
 
 
 if __name__ == "__main__":
