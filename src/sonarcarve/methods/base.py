@@ -285,12 +285,13 @@ class SonarMethod(ABC):
                    "ReadingBatch.from_readings(readings) builds one (or call add per Reading)")
             raise ReadingTypeError(msg)
         start = self._readings if first_id is None else first_id
-        if not _plainly_valid(batch, self._last_t):
+        plain = _plainly_valid(batch, self._last_t)  # then no row is a no-echo reading
+        if not plain:
             batch.validate(first_id=start, previous_t=self._last_t)  # the error, or a pass
         n = len(batch)
         if n == 0:
             return
-        no_echo = np.flatnonzero(batch.range == math.inf)
+        no_echo = _NO_ROWS if plain else np.flatnonzero(batch.range == math.inf)
         if not no_echo.size:
             self._add_block(batch, start)
             return
@@ -548,6 +549,9 @@ def arc_point(history: SonarHistory, slots: SlotArray, bearing: FloatArray) -> F
     xy[:, 1] = history.y[slots] + r * np.sin(bearing)
     return xy
 
+
+#: The no-echo rows of a batch :func:`_plainly_valid` passed: none.
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 
 #: The array types :func:`_plainly_valid` hands to its kernel (others: the full check).
 _FLOAT64 = np.dtype(np.float64)

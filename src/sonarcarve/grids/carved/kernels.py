@@ -11,6 +11,7 @@ estimates of only the arcs whose carving state changed (:func:`stale_slots`); an
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -21,13 +22,18 @@ from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, free_space
 from sonarcarve.grids.carved.mark import refresh_points
 from sonarcarve.grids.carved.model import Model
+from sonarcarve.grids.carved.periods import row_period
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "Finals",
     "fold_kernel",
+    "fresh_kernel",
+    "keep_chain",
+    "note_newest",
     "refresh_kernel",
+    "retire_kernel",
     "stale_slots",
     "trinary_kernel",
     "undraw_kernel",
@@ -87,6 +93,34 @@ def undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
             continue
         undraw(live, heard, m, drawn, slot)
         drawn_seq[slot] = -1
+
+
+@compiled
+def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
+                  points: npt.NDArray[np.float32], pdrawn: FloatArray,
+                  pseq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+                  heard: npt.NDArray[np.uint32], m: Model) -> None:
+    """:func:`undraw_kernel` of the arcs ``seqs`` leaving the history, from ``live`` and then
+    from ``points``: one call where two cost 2 µs more a batch (their arguments' unboxing)."""
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        if drawn_seq[slot] == seqs[k]:
+            undraw(live, heard, m, drawn, slot)
+            drawn_seq[slot] = -1
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        if pseq[slot] == seqs[k]:
+            undraw(points, heard, m, pdrawn, slot)
+            pseq[slot] = -1
+
+
+@compiled
+def keep_chain(chain: FloatArray, batch_chain: FloatArray, first: int, first_live: int,
+               storage: int) -> None:
+    """The factors ``batch_chain`` of a batch's arcs ``first, first + 1, ...`` that are still
+    live (sequence number ``>= first_live``) into their slots of ``chain``."""
+    for k in range(max(0, first_live - first), batch_chain.shape[0]):
+        chain[(first + k) % storage] = batch_chain[k]
 
 
 @compiled
@@ -169,3 +203,36 @@ def trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                 out[i, j] = FREE
             else:
                 out[i, j] = UNKNOWN
+
+
+@compiled
+def note_newest(newest: npt.NDArray[np.int64], rows: npt.NDArray[np.int64],
+                seqs: npt.NDArray[np.int64], no_echo: BoolArray) -> None:
+    """Each sensor's newest reading, in order (the last of a sensor's readings wins):
+    ``newest[rows[k]]`` the arc ``seqs[k]``, or -1 when reading ``k`` heard nothing (its arc is
+    then no sensor's newest)."""
+    for k in range(rows.shape[0]):
+        newest[rows[k]] = -1 if no_echo[k] else seqs[k]
+
+
+@compiled
+def fresh_kernel(newest: npt.NDArray[np.int64], first: int, slots: SlotArray, t: FloatArray,
+                 latest: float, seconds: float, periods: float, gaps: FloatArray,
+                 count: npt.NDArray[np.int64], changed: BoolArray, period: FloatArray,
+                 fresh: BoolArray) -> None:
+    """``fresh[k]`` for the live arc ``first + k`` (in ``slots[k]``; ``t`` the history's times)
+    that is its sensor's newest (``newest``, by sensor row) and was heard at or after ``latest -
+    seconds`` and, when ``periods`` is finite, after ``latest - periods * p``, ``p`` its
+    sensor's firing period (:func:`~sonarcarve.grids.carved.periods.row_period`, by the same
+    row: ``gaps .. period``)."""
+    n = slots.shape[0]
+    for row in range(newest.shape[0]):
+        at = newest[row] - first
+        if at < 0 or at >= n:
+            continue
+        heard = t[slots[at]]
+        young = heard >= latest - seconds
+        if young and periods < math.inf:
+            young = heard > latest - periods * row_period(row, gaps, count, changed, period)
+        if young:
+            fresh[at] = True
