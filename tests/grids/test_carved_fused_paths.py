@@ -1,18 +1,21 @@
 """The carved grid's compiled bookkeeping against the numpy and Python it replaced (2026-12-04,
 helper rd16): the bands' intervals from the estimates (:func:`intervals`,
-:func:`carving_intervals`) bit for bit, and which newest echoes are fresh (``_fresh``) by its
-definition. The expected values come from the old code, copied here, never from the new."""
+:func:`carving_intervals`) bit for bit, which newest echoes are fresh (``_fresh``) by its
+definition, and the model as the kernels take it (an array, :func:`model_array`). The expected
+values come from the old code, copied here, or from the definition, never from the new code."""
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import pytest
 
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.grids import CarvedGrid, CarvedGridParams
 from sonarcarve.grids.carved.intervals import carving_intervals, intervals
+from sonarcarve.grids.carved.model import Model, model_array, model_from
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.methods import MethodConfig, make_method
 from sonarcarve.methods.base import Estimates, arc_point
@@ -150,3 +153,15 @@ def test_the_fresh_arcs_are_those_of_the_old_definition(fresh_periods: float) ->
         np.testing.assert_array_equal(got, want)
         checked += int(got.sum())
     assert checked > 50
+
+
+def test_the_kernels_model_array_is_the_model_field_by_field() -> None:
+    # Each field a different number (and ``aware`` both ways): a field read from the wrong
+    # place, or a field added to Model and not to model_from, shows.
+    unpack = numba.njit(lambda v: model_from(v))
+    for aware in (True, False):
+        values = {name: 0.5 + k for k, name in enumerate(Model._fields)}
+        model = Model(**{**values, "aware": aware})  # type: ignore[arg-type]
+        back = unpack(model_array(model))
+        assert tuple(back) == tuple(model)
+        assert type(back.aware) is bool

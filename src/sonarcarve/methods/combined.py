@@ -131,10 +131,11 @@ def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> 
     return found
 
 
-#: Rows of the work array of :meth:`CombinedMethod._estimates`: the width, a quarter of it
+#: Rows of the work array of :meth:`CombinedMethod._point_rows`: the width, a quarter of it
 #: (eq. 5.2's ``E_m / 2``), the point's bearing, carving's bound (first the sine of the quarter),
-#: and the bearing's cosine and sine.
-_WIDTH, _QUARTER, _BEARING, _BOUND, _COS, _SIN = range(6)
+#: the bearing's cosine and sine, and (:meth:`CombinedMethod.point_bearings`) the point seen
+#: from the sensor, ``dy`` and ``dx``.
+_WIDTH, _QUARTER, _BEARING, _BOUND, _COS, _SIN, _DY, _DX = range(8)
 
 
 @compiled_borrowing
@@ -193,6 +194,20 @@ def _place(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, rows: 
         s = slots[k]
         xy[k, 0] = x[s] + r[s] * rows[_COS, k]
         xy[k, 1] = y[s] + r[s] * rows[_SIN, k]
+
+
+@compiled_borrowing
+def _seen_from_sensor(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
+                      rows: FloatArray) -> None:
+    """``rows[_DY], rows[_DX]``: the points :func:`_place` places, less the sensor's position
+    (the same operations as :func:`_place` and then the carved grid's
+    :func:`~sonarcarve.grids.carved.intervals.intervals`)."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        px = x[s] + r[s] * rows[_COS, k]
+        py = y[s] + r[s] * rows[_SIN, k]
+        rows[_DY, k] = py - y[s]
+        rows[_DX, k] = px - x[s]
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -366,10 +381,37 @@ class CombinedMethod(SonarMethod):
         (about 18 µs, two calls a batch: a tenth of the grid's CPU time at 5 readings a read,
         office, 0.10 m; ``benchmarks/grid_reads.py``).
         """
-        carving, atm, h = self._carving, self._atm, self.history
+        h = self.history
         slots = np.asarray(slots, dtype=np.int64)
+        rows, flags, codes = self._point_rows(slots)
+        xy = np.empty((len(slots), 2))
+        _place(slots, h.x, h.y, h.r, rows, xy)
+        return Estimates(alive=flags[0], processed=flags[1], xy=xy, width=rows[_WIDTH],
+                         max_error=rows[_BOUND], source=codes[0], fate=codes[1])
+
+    def point_bearings(self, slots: SlotArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """For the arcs in ``slots``: the bearing of each point seen from its sensor
+        (``arctan2`` of the point less the sensor's position), its width and whether it is
+        alive: what the carved grid reads from :meth:`estimates` for its bands
+        (:func:`~sonarcarve.grids.carved.intervals.intervals`), the same numbers, without the
+        estimates' other fields (one compiled pass and numpy's ``arctan2`` in place of about ten
+        array operations and the :class:`Estimates`; the grid asks at every read).
+
+        Raises the error that stopped a model for good, if one did, as :meth:`estimates`.
+        """
+        self._check_usable()
+        h = self.history
+        slots = np.asarray(slots, dtype=np.int64)
+        rows, flags, _ = self._point_rows(slots)
+        _seen_from_sensor(slots, h.x, h.y, h.r, rows)
+        return np.arctan2(rows[_DY], rows[_DX]), rows[_WIDTH], flags[0]
+
+    def _point_rows(self, slots: SlotArray) -> tuple[FloatArray, BoolArray, Int8Array]:
+        """The work array of :meth:`_estimates` (rows :data:`_WIDTH` .. :data:`_SIN` filled,
+        eight rows), ``alive, processed`` and ``source, fate`` of the int64 ``slots``."""
+        carving, atm, h = self._carving, self._atm, self.history
         n = len(slots)
-        rows = np.empty((6, n))
+        rows = np.empty((8, n))
         flags = np.empty((2, n), dtype=bool)
         codes = np.empty((2, n), dtype=np.int8)
         _carving_rows(slots, carving.lo, carving.hi, rows)
@@ -378,7 +420,4 @@ class CombinedMethod(SonarMethod):
                 *atm.median_state())
         np.cos(rows[_BEARING], out=rows[_COS])
         np.sin(rows[_BEARING], out=rows[_SIN])
-        xy = np.empty((n, 2))
-        _place(slots, h.x, h.y, h.r, rows, xy)
-        return Estimates(alive=flags[0], processed=flags[1], xy=xy, width=rows[_WIDTH],
-                         max_error=rows[_BOUND], source=codes[0], fate=codes[1])
+        return rows, flags, codes

@@ -12,7 +12,12 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.grids.carved.heard import HEARD_DTYPE
-from sonarcarve.grids.carved.intervals import carving_intervals, intervals, known_models
+from sonarcarve.grids.carved.intervals import (
+    carving_intervals,
+    intervals,
+    known_models,
+    store_intervals,
+)
 from sonarcarve.grids.carved.kernels import (
     Finals,
     fold_kernel,
@@ -24,7 +29,7 @@ from sonarcarve.grids.carved.kernels import (
     stale_slots,
     trinary_kernel,
 )
-from sonarcarve.grids.carved.model import model_of
+from sonarcarve.grids.carved.model import model_array, model_of
 from sonarcarve.grids.carved.params import (
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
@@ -40,6 +45,7 @@ from sonarcarve.history import SonarHistory
 from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
@@ -108,6 +114,7 @@ class CarvedGrid(CellGrid):
             raise GridError(msg)
         self._method = method
         self._model = model_of(self._params, xmin, ymin, self._resolution, self.band)
+        self._model_array = model_array(self._model)  # as the kernels take it
         self._l_min, self._l_max = self._model.l_min, self._model.l_max
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
@@ -138,6 +145,9 @@ class CarvedGrid(CellGrid):
         # read asks only for the estimates of the arcs whose state changed since
         # (stale_slots). Any other method is asked for every live arc.
         self._carving, self._atm = known_models(method)
+        # Combined carving's points, asked for their bearings alone (_update_intervals).
+        self._combined = (method if self._atm is not None and isinstance(method, CombinedMethod)
+                          else None)
         self._seen = np.zeros((size, 3), dtype=np.float64)
         self._seen_crossings = np.zeros(size, dtype=np.int32)
         self._no_crossings = np.zeros(size, dtype=np.int32)  # carving alone keeps none
@@ -236,40 +246,39 @@ class CarvedGrid(CellGrid):
         x, y, theta = (np.ascontiguousarray(c) for c in (batch.x, batch.y, batch.theta))
         # Before the method runs: the arcs it retires during the batch are made final (their
         # weight read) as they retire, and an echo later in the batch may repeat them.
-        rows = self._periods.rows(batch.sensor)
-        newest = self._note_newest(rows, seqs, no_echo)
         marked = self._mark_repeats(batch, x, y, theta, seqs, no_echo, n_echo, half, first_seq)
         try:
             method.add_many(batch)
         except BaseException:  # a bad batch changes nothing
-            self._newest = newest
             self._chain[marked] = 1.0
             self._batch_chain = _NO_CHAIN
             raise
-        if self._params.fresh_periods < math.inf:  # only the rule reads the periods
-            self._periods.note_rows(rows, batch.t)
+        self._note_newest(batch, seqs, no_echo)
         history.flush_retired()  # every arc that left the history is final now
         self._keep_batch_chain(history)
         finals = self._take_pending()
         # The batch's newest time is its last: the method checked that times never go back.
         self._latest_t = max(self._latest_t, float(batch.t[-1]))
-        fold_kernel(self._base, self._heard, self._model, x, y, theta, np.ascontiguousarray(r),
-                    half, seqs, history.capacity, finals)
+        fold_kernel(self._base, self._heard, self._model_array, x, y, theta,
+                    np.ascontiguousarray(r), half, seqs, history.capacity, *finals)
         self.readings += n
         self._stale = True
 
-    def _note_newest(self, rows: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64],
-                     no_echo: BoolArray) -> npt.NDArray[np.int64]:
-        """Remember each sensor's newest reading (by its row, ``rows``): its arc's sequence
-        number, or -1 when it heard nothing (its arc is then no sensor's newest). Returns the
-        record as it was before (a bad batch puts it back)."""
-        before = self._newest
-        newest = before.copy()
-        if len(newest) < self._periods.size:  # new sensors: rows for them
-            newest = np.concatenate((newest, np.full(self._periods.size - len(newest), -1)))
-        note_newest(newest, rows, seqs, no_echo)
-        self._newest = newest
-        return before
+    def _note_newest(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
+                     no_echo: BoolArray) -> None:
+        """Remember each sensor's newest reading of the batch (by the sensor's row of the firing
+        periods): its arc's sequence number, or -1 when it heard nothing (its arc is then no
+        sensor's newest); and, when the rule reads them, note the firings' times
+        (:class:`~sonarcarve.grids.carved.periods.FiringPeriods`). One compiled call
+        (:func:`~sonarcarve.grids.carved.kernels.note_newest`), after the method took the batch
+        (a bad batch changes nothing)."""
+        periods = self._periods
+        rows = periods.rows(batch.sensor)
+        if len(self._newest) < periods.size:  # new sensors: rows for them
+            self._newest = np.concatenate(
+                (self._newest, np.full(periods.size - len(self._newest), -1, dtype=np.int64)))
+        note_newest(self._newest, rows, seqs, no_echo, np.ascontiguousarray(batch.t),
+                    self._params.fresh_periods < math.inf, *periods.note_state())
 
     def _mark_repeats(self, batch: ReadingBatch, x: FloatArray, y: FloatArray,
                       theta: FloatArray, seqs: npt.NDArray[np.int64], no_echo: BoolArray,
@@ -319,7 +328,7 @@ class CarvedGrid(CellGrid):
         seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
         self._next_final += len(slots)
         retire_kernel(self._live, self._drawn, self._drawn_seq, self._points, self._pdrawn,
-                      self._pseq, slots, seqs, self._heard, self._model)
+                      self._pseq, slots, seqs, self._heard, self._model_array)
         # Indexing by an array copies: the history's rows are reused.
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = intervals(x, y, est)
@@ -334,7 +343,7 @@ class CarvedGrid(CellGrid):
             return pending[0]
         if not pending:
             return _NO_FINALS
-        return Finals(*(np.concatenate(column) for column in zip(*pending, strict=True)))
+        return Finals._make(np.concatenate(column) for column in zip(*pending, strict=True))
 
     def _sync(self) -> None:
         """Bring ``live`` (and the points) up to date with the method's current carved
@@ -347,13 +356,14 @@ class CarvedGrid(CellGrid):
         if len(slots):
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             self._update_intervals(history, slots, seqs)
-            with_points = self._params.fresh_arcs
-            fresh = self._fresh(slots, seqs) if with_points else np.zeros(len(slots), dtype=bool)
+            params = self._params
             refresh_kernel(self._base, self._live, self._points, self._drawn,
                            self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
-                           history.y, history.r, self._lo, self._hi, self._weight, fresh,
-                           with_points, self._heard, self._model, history.theta1,
-                           history.theta2)
+                           history.y, history.r, self._lo, self._hi, self._weight,
+                           params.fresh_arcs, self._heard, self._model_array, history.theta1,
+                           history.theta2, self._newest, history.t, self._latest_t,
+                           params.fresh_seconds, params.fresh_periods,
+                           *self._periods.fit_state())
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,
@@ -365,10 +375,12 @@ class CarvedGrid(CellGrid):
         combined carving of those and the arc's kept ATM crossings, so only the arcs whose state
         changed since the last read are computed: for carving alone from the model's state as its
         estimates would (:func:`~sonarcarve.grids.carved.intervals.carving_intervals`), for
-        combined by asking the method for them alone (row by row, the same numbers as asking for
-        every arc). Measured for combined (``benchmarks/grid_reads.py``, office, a read every 5
-        readings): the grid's CPU per reading 4.32x -> 3.87x the range sensor layer's at 0.10 m,
-        1.98x -> 1.97x at 0.05 m."""
+        combined by asking the method for those arcs' point bearings alone
+        (:meth:`~sonarcarve.methods.combined.CombinedMethod.point_bearings`: the numbers its
+        estimates give, without building them; stored by
+        :func:`~sonarcarve.grids.carved.intervals.store_intervals`). Measured for combined
+        (``benchmarks/grid_reads.py``, office, a read every 5 readings): the grid's CPU per
+        reading 4.32x -> 3.87x the range sensor layer's at 0.10 m, 1.98x -> 1.97x at 0.05 m."""
         carving = self._carving
         if carving is None:
             stale = slots
@@ -381,11 +393,13 @@ class CarvedGrid(CellGrid):
             if not count:
                 return
             stale = slots[self._changed[:count]]
-            if self._atm is None:
-                lo, hi, weight = carving_intervals(history, carving, stale)
-            else:
-                lo, hi, weight = intervals(history.x[stale], history.y[stale],
-                                           self._method.estimates(stale))
+            combined = self._combined
+            if combined is not None:  # its points' bearings alone, stored in one pass
+                bearing, width, alive = combined.point_bearings(stale)
+                store_intervals(stale, bearing, width, alive, self._chain, self._lo, self._hi,
+                                self._weight)
+                return
+            lo, hi, weight = carving_intervals(history, carving, stale)
         self._lo[stale] = lo
         self._hi[stale] = hi
         self._weight[stale] = weight * self._chain[stale]
@@ -460,7 +474,8 @@ class CarvedGrid(CellGrid):
 
 
 #: No arcs leaving the history (:meth:`CarvedGrid._take_pending`), no factors of a batch.
-_NO_FINALS = Finals(*(np.zeros(0) for _ in range(6)), np.zeros(0, dtype=np.int64))
+_NO_FINALS = Finals(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0),
+                    np.zeros(0, dtype=np.int64))
 _NO_CHAIN = np.ones(0)
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.history import SonarHistory
 from sonarcarve.methods import SonarMethod
@@ -18,7 +18,7 @@ from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
-__all__ = ["carving_intervals", "intervals", "known_models"]
+__all__ = ["carving_intervals", "intervals", "known_models", "store_intervals"]
 
 
 
@@ -77,8 +77,10 @@ def _ends(x: FloatArray, y: FloatArray, xy: FloatArray, width: FloatArray, alive
     _offsets(x, y, xy, rows)
     bearing = np.arctan2(rows[0], rows[1])
     out = np.empty((3, n))
-    weighed = confidence is not None
-    _interval_ends(bearing, width, alive, confidence if weighed else _NONE, weighed, out)
+    if confidence is None:
+        _interval_ends(bearing, width, alive, _NONE, False, out)
+    else:
+        _interval_ends(bearing, width, alive, confidence, True, out)
     return out[0], out[1], out[2]
 
 
@@ -99,7 +101,7 @@ def _interval_ends(bearing: FloatArray, width: FloatArray, alive: BoolArray,
                    confidence: FloatArray, weighed: bool, out: FloatArray) -> None:
     """``out[0], out[1], out[2]``: ``bearing ∓ width / 2`` and the weight, the confidence
     clipped to [0, 1] (1 where NaN or not ``weighed``; 0 where not ``alive``); all three zero
-    where the weight is not positive or the bearing or width is NaN."""
+    where the weight is not positive or the bearing or width is NaN (:func:`_interval`)."""
     for k in range(bearing.shape[0]):
         weight = 1.0
         if weighed:
@@ -107,12 +109,29 @@ def _interval_ends(bearing: FloatArray, width: FloatArray, alive: BoolArray,
             weight = 1.0 if c != c else min(max(c, 0.0), 1.0)
         if not alive[k]:
             weight = 0.0
-        b = bearing[k]
-        half = 0.5 * width[k]
-        if not weight > 0.0 or b != b or half != half:
-            b = 0.0
-            half = 0.0
-            weight = 0.0
-        out[0, k] = b - half
-        out[1, k] = b + half
-        out[2, k] = weight
+        out[0, k], out[1, k], out[2, k] = _interval(bearing[k], width[k], weight)
+
+
+@compiled
+def store_intervals(slots: SlotArray, bearing: FloatArray, width: FloatArray,
+                    alive: BoolArray, chain: FloatArray, lo: FloatArray, hi: FloatArray,
+                    weight: FloatArray) -> None:
+    """The intervals of arcs without a confidence (weight 1 if ``alive``, else 0) into ``lo,
+    hi, weight`` by slot, the weight times the arc's factor ``chain`` (by slot): what
+    :func:`intervals` and then the grid's ``lo[slots] = ...`` give, in one pass."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        start, end, w = _interval(bearing[k], width[k], 1.0 if alive[k] else 0.0)
+        lo[s] = start
+        hi[s] = end
+        weight[s] = w * chain[s]
+
+
+@compiled_inline
+def _interval(bearing: float, width: float, weight: float) -> tuple[float, float, float]:
+    """``(bearing - width / 2, bearing + width / 2, weight)``, all zero where the weight is not
+    positive or the bearing or width is NaN (the arc adds nothing)."""
+    half = 0.5 * width
+    if not weight > 0.0 or bearing != bearing or half != half:
+        return 0.0, 0.0, 0.0
+    return bearing - half, bearing + half, weight

@@ -113,6 +113,12 @@ class FiringPeriods:
         note_kernel(rows, np.ascontiguousarray(t, dtype=np.float64), self._last, self._gaps,
                     self._count, self._changed)
 
+    def note_state(self) -> tuple[FloatArray, FloatArray, npt.NDArray[np.int64],
+                                  npt.NDArray[np.bool_]]:
+        """What :func:`note_kernel` takes besides the rows and times: the newest times, the
+        gaps, their counts and the rows changed since their last fit (by row)."""
+        return self._last, self._gaps, self._count, self._changed
+
     def fit_state(self) -> tuple[FloatArray, npt.NDArray[np.int64], npt.NDArray[np.bool_],
                                  FloatArray]:
         """What :func:`row_period` takes besides the row: the gaps, their counts, the rows
@@ -181,7 +187,7 @@ def row_period(row: int, gaps: FloatArray, count: npt.NDArray[np.int64],
         changed[row] = False
         n = min(count[row], GAP_WINDOW)
         period[row] = fitted_period(np.sort(gaps[row, :n]))
-    return period[row]
+    return float(period[row])
 
 
 @compiled
