@@ -316,10 +316,9 @@ class SonarMethod(ABC):
         while done < n:
             h.commit_for_room()
             stop = min(n, done + h.room())
-            part = slice(done, stop)
-            first = h.append_many(batch.x[part], batch.y[part], batch.range[part],
-                                  batch.theta[part], batch.t[part], batch.sensor[part],
-                                  width[part], start + done)
+            part = batch if stop - done == n else batch[done:stop]  # whole: no slicing
+            first = h.append_many(part.x, part.y, part.range, part.theta, part.t, part.sensor,
+                                  width if stop - done == n else width[done:stop], start + done)
             self._feed_block(first, stop - done)
             done = stop
         self._readings += n
