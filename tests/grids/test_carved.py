@@ -126,9 +126,10 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     # base, live, points, heard bins; per slot what was drawn (spread and point: 6 numbers and
     # the arc), its interval, weight and repeat factor, the carving state they came from (3
     # numbers and the arc), the ATM crossings they came from (and a zero count for carving
-    # alone, two int32) and a position buffer for the arcs that changed
+    # alone, two int32) and a position buffer for the arcs that changed; per live arc a buffer
+    # for the arcs a batch's repeats marked
     expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 4 * 8 + 4 * 8 + 2 * 4
-                                                         + 8)
+                                                         + 8) + 50 * 8
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):

@@ -285,12 +285,13 @@ class SonarMethod(ABC):
                    "ReadingBatch.from_readings(readings) builds one (or call add per Reading)")
             raise ReadingTypeError(msg)
         start = self._readings if first_id is None else first_id
-        if not _plainly_valid(batch, self._last_t):
+        plain = _plainly_valid(batch, self._last_t)  # then no row is a no-echo reading
+        if not plain:
             batch.validate(first_id=start, previous_t=self._last_t)  # the error, or a pass
         n = len(batch)
         if n == 0:
             return
-        no_echo = np.flatnonzero(batch.range == math.inf)
+        no_echo = _NO_ROWS if plain else np.flatnonzero(batch.range == math.inf)
         if not no_echo.size:
             self._add_block(batch, start)
             return
@@ -315,10 +316,9 @@ class SonarMethod(ABC):
         while done < n:
             h.commit_for_room()
             stop = min(n, done + h.room())
-            part = slice(done, stop)
-            first = h.append_many(batch.x[part], batch.y[part], batch.range[part],
-                                  batch.theta[part], batch.t[part], batch.sensor[part],
-                                  width[part], start + done)
+            part = batch if stop - done == n else batch[done:stop]  # whole: no slicing
+            first = h.append_many(part.x, part.y, part.range, part.theta, part.t, part.sensor,
+                                  width if stop - done == n else width[done:stop], start + done)
             self._feed_block(first, stop - done)
             done = stop
         self._readings += n
@@ -548,6 +548,9 @@ def arc_point(history: SonarHistory, slots: SlotArray, bearing: FloatArray) -> F
     xy[:, 1] = history.y[slots] + r * np.sin(bearing)
     return xy
 
+
+#: The no-echo rows of a batch :func:`_plainly_valid` passed: none.
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 
 #: The array types :func:`_plainly_valid` hands to its kernel (others: the full check).
 _FLOAT64 = np.dtype(np.float64)

@@ -31,10 +31,9 @@ from sonarcarve.maps import (
     SOURCE_ATM,
     SOURCE_CARVED,
     SOURCE_CENTERLINE,
-    chord_error,
 )
 from sonarcarve.methods.atm import AtmModel, add_atm_arc, row_median, start_atm_arc
-from sonarcarve.methods.base import Estimates, SonarMethod, arc_point
+from sonarcarve.methods.base import Estimates, SonarMethod
 from sonarcarve.methods.carving import CarvingModel, carve_found, start_carved_arc
 from sonarcarve.methods.config import (
     DEFAULT_MIN_TRANSVERSAL,
@@ -132,34 +131,83 @@ def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> 
     return found
 
 
+#: Rows of the work array of :meth:`CombinedMethod._point_rows`: the width, a quarter of it
+#: (eq. 5.2's ``E_m / 2``), the point's bearing, carving's bound (first the sine of the quarter),
+#: the bearing's cosine and sine, and (:meth:`CombinedMethod.point_bearings`) the point seen
+#: from the sensor, ``dy`` and ``dx``.
+_WIDTH, _QUARTER, _BEARING, _BOUND, _COS, _SIN, _DY, _DX = range(8)
+
+
+@compiled_borrowing
+def _carving_rows(slots: SlotArray, lo: FloatArray, hi: FloatArray, rows: FloatArray) -> None:
+    """Carving's interval of each of ``slots`` into ``rows`` (:data:`_WIDTH` ...): its width
+    ``hi - lo``, a quarter of it and its middle, the operations of
+    :meth:`~sonarcarve.methods.carving.CarvingModel.estimates` and :func:`chord_error`."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        width = hi[s] - lo[s]
+        rows[_WIDTH, k] = width
+        rows[_QUARTER, k] = 0.5 * (0.5 * width)
+        rows[_BEARING, k] = 0.5 * (lo[s] + hi[s])
+
+
 @compiled_borrowing
 def _choose(
     slots: SlotArray, status: Int8Array, carved: BoolArray, counts: npt.NDArray[np.int32],
-    alive: BoolArray, processed: BoolArray, bearing: FloatArray, width: FloatArray,
-    max_error: FloatArray, source: Int8Array, error_bound: float, theta: FloatArray,
-    bearings: npt.NDArray[np.float32], stale: BoolArray, median: FloatArray, span: FloatArray,
-    values: FloatArray,
+    r: FloatArray, rows: FloatArray, flags: BoolArray, codes: Int8Array, error_bound: float,
+    theta: FloatArray, bearings: npt.NDArray[np.float32], stale: BoolArray, median: FloatArray,
+    span: FloatArray, values: FloatArray,
 ) -> None:
     """:func:`combine_carving_atm`, row by row, in place: row ``k`` (``slots[k]``) comes with
-    carving's point bearing, width and bound; where ATM's point wins (the row has kept a
-    crossing and ``error_bound`` is below carving's bound), ATM's bearing ``θ + median``,
-    width (the span), bound and source replace them. ``alive`` and ``processed`` are filled
-    in. A median is sorted again only for a row whose crossings changed (``stale``, as
+    carving's point bearing, width and the sine of a quarter of the width in ``rows``, which
+    becomes carving's bound ``2 r sin(θ_d / 4)`` (:func:`chord_error`); where ATM's point wins
+    (the row has kept a crossing and ``error_bound`` is below carving's bound), ATM's bearing
+    ``θ + median``, width (the span), bound and source replace them. ``flags`` gets ``alive``
+    and ``processed``, ``codes`` the source and carving's fate. A median is sorted again only
+    for a row whose crossings changed (``stale``, as
     :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
     for k in range(slots.shape[0]):
         s = slots[k]
-        alive[k] = status[s] == ALIVE
-        processed[k] = carved[s] or not alive[k] or counts[s] > 0
-        source[k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
-        if counts[s] == 0 or not max_error[k] > error_bound:
+        rows[_BOUND, k] = 2.0 * r[s] * rows[_BOUND, k]
+        alive = status[s] == ALIVE
+        flags[0, k] = alive
+        flags[1, k] = carved[s] or not alive or counts[s] > 0
+        codes[0, k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
+        codes[1, k] = status[s]
+        if counts[s] == 0 or not rows[_BOUND, k] > error_bound:
             continue
         if stale[s]:
             row_median(bearings, counts, s, median, span, values)
             stale[s] = False
-        bearing[k] = theta[s] + median[s]
-        width[k] = span[s]
-        max_error[k] = error_bound
-        source[k] = SOURCE_ATM
+        rows[_BEARING, k] = theta[s] + median[s]
+        rows[_WIDTH, k] = span[s]
+        rows[_BOUND, k] = error_bound
+        codes[0, k] = SOURCE_ATM
+
+
+@compiled_borrowing
+def _place(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, rows: FloatArray,
+           xy: FloatArray) -> None:
+    """The points on the arcs ``slots`` at the bearings whose cosine and sine are in ``rows``
+    (eq. 3.3 and 3.6), the operations of :func:`~sonarcarve.methods.base.arc_point`."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        xy[k, 0] = x[s] + r[s] * rows[_COS, k]
+        xy[k, 1] = y[s] + r[s] * rows[_SIN, k]
+
+
+@compiled_borrowing
+def _seen_from_sensor(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
+                      rows: FloatArray) -> None:
+    """``rows[_DY], rows[_DX]``: the points :func:`_place` places, less the sensor's position
+    (the same operations as :func:`_place` and then the carved grid's
+    :func:`~sonarcarve.grids.carved.intervals.intervals`)."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        px = x[s] + r[s] * rows[_COS, k]
+        py = y[s] + r[s] * rows[_SIN, k]
+        rows[_DY, k] = py - y[s]
+        rows[_DX, k] = px - x[s]
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -323,25 +371,53 @@ class CombinedMethod(SonarMethod):
         crossing and its bound is below carving's, and :func:`_choose` puts its median, span
         and bound there. The point is then placed once, at the chosen bearing, and ATM's
         fallback (the centerline, never chosen) is not computed. The trigonometry stays
-        numpy's (:func:`chord_error`, :func:`arc_point`): numba's libm sine may differ from
-        numpy's vectorised one in the last bit. Why: the carved grid asks for a few arcs at
-        every read and at every retiring block, and the two models' full estimates with the
-        selection between them (about 40 numpy calls, 45-50 µs for 5 arcs, now 10-12) were a
-        quarter of the grid's CPU time at 5 readings a read (office, amplitude physics,
-        0.10 m; ``benchmarks/grid_reads.py``).
+        numpy's, on the same arrays as :func:`~sonarcarve.maps.chord_error` and
+        :func:`~sonarcarve.methods.base.arc_point` give it: numba's libm sine may differ from
+        numpy's vectorised one in the last bit. The rest is three compiled passes over one work
+        array (:func:`_carving_rows`, :func:`_choose`, :func:`_place`), and the fields returned
+        are rows of it. Why: the carved grid asks for a few arcs at every read and at every
+        retiring block; the two models' full estimates with the selection between them cost
+        about 40 numpy calls (45-50 µs for 5 arcs), the numpy version of this 30 numpy calls
+        (about 18 µs, two calls a batch: a tenth of the grid's CPU time at 5 readings a read,
+        office, 0.10 m; ``benchmarks/grid_reads.py``).
         """
+        h = self.history
+        slots = np.asarray(slots, dtype=np.int64)
+        rows, flags, codes = self._point_rows(slots)
+        xy = np.empty((len(slots), 2))
+        _place(slots, h.x, h.y, h.r, rows, xy)
+        return Estimates(alive=flags[0], processed=flags[1], xy=xy, width=rows[_WIDTH],
+                         max_error=rows[_BOUND], source=codes[0], fate=codes[1])
+
+    def point_bearings(self, slots: SlotArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """For the arcs in ``slots``: the bearing of each point seen from its sensor
+        (``arctan2`` of the point less the sensor's position), its width and whether it is
+        alive: what the carved grid reads from :meth:`estimates` for its bands
+        (:func:`~sonarcarve.grids.carved.intervals.intervals`), the same numbers, without the
+        estimates' other fields (one compiled pass and numpy's ``arctan2`` in place of about ten
+        array operations and the :class:`Estimates`; the grid asks at every read).
+
+        Raises the error that stopped a model for good, if one did, as :meth:`estimates`.
+        """
+        self._check_usable()
+        h = self.history
+        slots = np.asarray(slots, dtype=np.int64)
+        rows, flags, _ = self._point_rows(slots)
+        _seen_from_sensor(slots, h.x, h.y, h.r, rows)
+        return np.arctan2(rows[_DY], rows[_DX]), rows[_WIDTH], flags[0]
+
+    def _point_rows(self, slots: SlotArray) -> tuple[FloatArray, BoolArray, Int8Array]:
+        """The work array of :meth:`_estimates` (rows :data:`_WIDTH` .. :data:`_SIN` filled,
+        eight rows), ``alive, processed`` and ``source, fate`` of the int64 ``slots``."""
         carving, atm, h = self._carving, self._atm, self.history
-        lo = carving.lo[slots]
-        hi = carving.hi[slots]
-        width = hi - lo
-        max_error = chord_error(h.r[slots], width)  # as CarvingModel.estimates
-        bearing = 0.5 * (lo + hi)
         n = len(slots)
-        alive = np.empty(n, dtype=bool)
-        processed = np.empty(n, dtype=bool)
-        source = np.empty(n, dtype=np.int8)
-        _choose(np.asarray(slots, dtype=np.int64), carving.status, carving.carved, atm.counts,
-                alive, processed, bearing, width, max_error, source, *atm.median_state())
-        return Estimates(alive=alive, processed=processed, xy=arc_point(h, slots, bearing),
-                         width=width, max_error=max_error, source=source,
-                         fate=carving.status[slots])
+        rows = np.empty((8, n))
+        flags = np.empty((2, n), dtype=bool)
+        codes = np.empty((2, n), dtype=np.int8)
+        _carving_rows(slots, carving.lo, carving.hi, rows)
+        np.sin(rows[_QUARTER], out=rows[_BOUND])
+        _choose(slots, carving.status, carving.carved, atm.counts, h.r, rows, flags, codes,
+                *atm.median_state())
+        np.cos(rows[_BEARING], out=rows[_COS])
+        np.sin(rows[_BEARING], out=rows[_SIN])
+        return rows, flags, codes

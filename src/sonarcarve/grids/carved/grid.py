@@ -12,23 +12,31 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.grids.carved.heard import HEARD_DTYPE
-from sonarcarve.grids.carved.intervals import carving_intervals, intervals, known_models
+from sonarcarve.grids.carved.intervals import (
+    carving_intervals,
+    intervals,
+    known_models,
+    store_intervals,
+)
 from sonarcarve.grids.carved.kernels import (
     Finals,
     fold_kernel,
+    fresh_kernel,
+    keep_chain,
+    note_newest,
     refresh_kernel,
+    retire_kernel,
     stale_slots,
     trinary_kernel,
-    undraw_kernel,
 )
-from sonarcarve.grids.carved.model import model_of
+from sonarcarve.grids.carved.model import model_array, model_of
 from sonarcarve.grids.carved.params import (
     DEFAULT_MAX_INCIDENCE,
     DEFAULT_METHOD,
     POSE_MARGIN_SIGMAS,
     CarvedGridParams,
 )
-from sonarcarve.grids.carved.periods import LOOP_BATCH, FiringPeriods
+from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
 from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.elfes import MAX_CELLS
@@ -37,6 +45,7 @@ from sonarcarve.history import SonarHistory
 from sonarcarve.maps import CountingSink
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.base import Estimates
+from sonarcarve.methods.combined import CombinedMethod
 from sonarcarve.readings import Reading, ReadingBatch
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
@@ -105,6 +114,7 @@ class CarvedGrid(CellGrid):
             raise GridError(msg)
         self._method = method
         self._model = model_of(self._params, xmin, ymin, self._resolution, self.band)
+        self._model_array = model_array(self._model)  # as the kernels take it
         self._l_min, self._l_max = self._model.l_min, self._model.l_max
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
@@ -135,16 +145,22 @@ class CarvedGrid(CellGrid):
         # read asks only for the estimates of the arcs whose state changed since
         # (stale_slots). Any other method is asked for every live arc.
         self._carving, self._atm = known_models(method)
+        # Combined carving's points, asked for their bearings alone (_update_intervals).
+        self._combined = (method if self._atm is not None and isinstance(method, CombinedMethod)
+                          else None)
         self._seen = np.zeros((size, 3), dtype=np.float64)
         self._seen_crossings = np.zeros(size, dtype=np.int32)
         self._no_crossings = np.zeros(size, dtype=np.int32)  # carving alone keeps none
         self._seen_seq = np.full(size, -1, dtype=np.int64)
         self._changed = np.zeros(size, dtype=np.int64)
-        self._pending: list[tuple[FloatArray, ...]] = []
+        self._marked = np.empty(method.history.capacity, dtype=np.int64)  # _mark_repeats
+        self._pending: list[Finals] = []
         self._next_final = 0  # sequence number of the next arc to leave the history
-        # Per sensor, the sequence number of its newest reading's arc (-1: it heard nothing).
-        self._newest: dict[int, int] = {}
-        self._periods = FiringPeriods()  # how long until a sensor has fired again
+        # How long until a sensor has fired again; its rows number the sensors for _newest too.
+        self._periods = FiringPeriods()
+        # Per sensor row, the sequence number of its newest reading's arc (-1: it heard nothing,
+        # or none yet).
+        self._newest = np.full(0, -1, dtype=np.int64)
         self._latest_t = -math.inf  # time of the newest reading seen (fresh_seconds counts back)
         self._stale = False
         self.readings = 0
@@ -194,7 +210,7 @@ class CarvedGrid(CellGrid):
         the method's history and state come on top, fixed by its history size."""
         per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._lo, self._hi,
                     self._weight, self._chain, self._seen, self._seen_crossings,
-                    self._no_crossings, self._seen_seq, self._changed)
+                    self._no_crossings, self._seen_seq, self._changed, self._marked)
         return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
                    + self._heard.nbytes + sum(a.nbytes for a in per_slot))
 
@@ -219,77 +235,70 @@ class CarvedGrid(CellGrid):
         half = 0.5 * batch.beam_widths(method.beam_width)
         r = batch.range
         no_echo = r == math.inf
-        if no_echo.any():  # free up to max_range, and no arc of its own in the history
+        n_echo = n - int(np.count_nonzero(no_echo))
+        if n_echo < n:  # free up to max_range, and no arc of its own in the history
             echo = (~no_echo).astype(np.int64)
             seqs = first_seq + np.cumsum(echo) - 1
             r = np.where(no_echo, batch.max_range + self.band, r)
         else:
             seqs = first_seq + np.arange(n, dtype=np.int64)
+        # The kernels take C-contiguous columns (a batch sliced with a step has none).
+        x, y, theta = (np.ascontiguousarray(c) for c in (batch.x, batch.y, batch.theta))
         # Before the method runs: the arcs it retires during the batch are made final (their
         # weight read) as they retire, and an echo later in the batch may repeat them.
-        newest = dict(self._newest)
-        self._note_newest(batch.sensor, seqs, no_echo)
-        marked = self._mark_repeats(batch, seqs, no_echo, half, first_seq)
+        marked = self._mark_repeats(batch, x, y, theta, seqs, no_echo, n_echo, half, first_seq)
         try:
             method.add_many(batch)
         except BaseException:  # a bad batch changes nothing
-            self._newest = newest
             self._chain[marked] = 1.0
-            self._batch_chain = np.ones(0)
+            self._batch_chain = _NO_CHAIN
             raise
-        if self._params.fresh_periods < math.inf:  # only the rule reads the periods
-            self._periods.note(batch.sensor, batch.t)
+        self._note_newest(batch, seqs, no_echo)
         history.flush_retired()  # every arc that left the history is final now
         self._keep_batch_chain(history)
         finals = self._take_pending()
-        self._latest_t = max(self._latest_t, float(batch.t.max()))
-        fold_kernel(self._base, self._heard, self._model, np.ascontiguousarray(batch.x),
-                    np.ascontiguousarray(batch.y), np.ascontiguousarray(batch.theta),
-                    np.ascontiguousarray(r), np.ascontiguousarray(half), seqs,
-                    history.capacity, finals)
+        # The batch's newest time is its last: the method checked that times never go back.
+        self._latest_t = max(self._latest_t, float(batch.t[-1]))
+        fold_kernel(self._base, self._heard, self._model_array, x, y, theta,
+                    np.ascontiguousarray(r), half, seqs, history.capacity, *finals)
         self.readings += n
         self._stale = True
 
-    def _note_newest(self, sensor: npt.NDArray[np.int64], seqs: npt.NDArray[np.int64],
+    def _note_newest(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
                      no_echo: BoolArray) -> None:
-        """Remember each sensor's newest reading: its arc's sequence number, or -1 when it
-        heard nothing (its arc is then no sensor's newest)."""
-        newest = self._newest
-        # In order, the last reading of each sensor wins; a loop for a robot's few readings, where
-        # np.unique costs more than the loop; for a whole log each sensor once, new sensors
-        # entered in the order of their first reading as the loop enters them.
-        if len(sensor) <= LOOP_BATCH:
-            for s, seq, silent in zip(sensor.tolist(), seqs.tolist(), no_echo.tolist(),
-                                      strict=True):
-                newest[s] = -1 if silent else seq
-            return
-        value = np.where(no_echo, -1, seqs)
-        ids, first = np.unique(sensor, return_index=True)
-        last = len(sensor) - 1 - np.unique(sensor[::-1], return_index=True)[1]
-        order = np.argsort(first, kind="stable")
-        for s, k in zip(ids[order].tolist(), last[order].tolist(), strict=True):
-            newest[s] = int(value[k])
+        """Remember each sensor's newest reading of the batch (by the sensor's row of the firing
+        periods): its arc's sequence number, or -1 when it heard nothing (its arc is then no
+        sensor's newest); and, when the rule reads them, note the firings' times
+        (:class:`~sonarcarve.grids.carved.periods.FiringPeriods`). One compiled call
+        (:func:`~sonarcarve.grids.carved.kernels.note_newest`), after the method took the batch
+        (a bad batch changes nothing)."""
+        periods = self._periods
+        rows = periods.rows(batch.sensor)
+        if len(self._newest) < periods.size:  # new sensors: rows for them
+            self._newest = np.concatenate(
+                (self._newest, np.full(periods.size - len(self._newest), -1, dtype=np.int64)))
+        note_newest(self._newest, rows, seqs, no_echo, np.ascontiguousarray(batch.t),
+                    self._params.fresh_periods < math.inf, *periods.note_state())
 
-    def _mark_repeats(self, batch: ReadingBatch, seqs: npt.NDArray[np.int64],
-                      no_echo: BoolArray, half: FloatArray, first_seq: int) -> SlotArray:
+    def _mark_repeats(self, batch: ReadingBatch, x: FloatArray, y: FloatArray,
+                      theta: FloatArray, seqs: npt.NDArray[np.int64], no_echo: BoolArray,
+                      n_echo: int, half: FloatArray, first_seq: int) -> SlotArray:
         """Give the arcs that the batch's echoes repeat
         (:func:`~sonarcarve.geometry.repeats.is_repeat`) the weight factor
         :attr:`~sonarcarve.grids.carved.CarvedGridParams.repeat_weight`: those of the history in
         ``_chain`` (by slot; the next read recomputes their weights), the batch's own in
         ``_batch_chain`` (by sequence number from ``first_seq``: a long batch reuses slots). Returns
-        the slots of the history's arcs it marked (their factor was 1)."""
+        the slots of the history's arcs it marked (their factor was 1): a view of a buffer the
+        next batch reuses."""
         history = self._method.history
-        n_echo = int(np.count_nonzero(~no_echo))
         self._batch_first = first_seq
         self._batch_chain = np.ones(n_echo)
         if self._params.repeat_weight >= 1.0:
-            return np.zeros(0, dtype=np.int64)
-        marked = np.empty(history.capacity, dtype=np.int64)  # each live arc marked once at most
+            return self._marked[:0]
+        marked = self._marked  # each live arc marked once at most
         count = repeat_kernel(self._chain, self._batch_chain, self._seen_seq, marked, seqs,
-                              first_seq, no_echo, np.ascontiguousarray(batch.sensor),
-                              np.ascontiguousarray(batch.x), np.ascontiguousarray(batch.y),
-                              np.ascontiguousarray(batch.range),
-                              np.ascontiguousarray(batch.theta), np.ascontiguousarray(half),
+                              first_seq, no_echo, np.ascontiguousarray(batch.sensor), x, y,
+                              np.ascontiguousarray(batch.range), theta, half,
                               history.sensor, history.x, history.y, history.r, history.theta,
                               history.beam_width, history.capacity,
                               self._params.range_tolerance, self._params.repeat_weight)
@@ -299,11 +308,10 @@ class CarvedGrid(CellGrid):
         """The batch's arcs still in the history take their factors into their slots."""
         chain = self._batch_chain
         if len(chain):
-            seqs = self._batch_first + np.arange(len(chain), dtype=np.int64)
-            live = seqs >= history.appended - len(history)
-            self._chain[seqs[live] % history.storage_size] = chain[live]
+            keep_chain(self._chain, chain, self._batch_first, history.appended - len(history),
+                       history.storage_size)
         self._batch_first = history.appended
-        self._batch_chain = np.ones(0)
+        self._batch_chain = _NO_CHAIN
 
     def _chain_of(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> FloatArray:
         """Weight factors of the arcs ``seqs`` (in ``slots``): the batch's own from
@@ -319,24 +327,23 @@ class CarvedGrid(CellGrid):
         """Arcs leaving the history: their live contribution out, their final one pending."""
         seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
         self._next_final += len(slots)
-        undraw_kernel(self._live, self._drawn, self._drawn_seq, slots, seqs, self._heard,
-                      self._model)
-        undraw_kernel(self._points, self._pdrawn, self._pseq, slots, seqs, self._heard,
-                      self._model)
+        retire_kernel(self._live, self._drawn, self._drawn_seq, self._points, self._pdrawn,
+                      self._pseq, slots, seqs, self._heard, self._model_array)
+        # Indexing by an array copies: the history's rows are reused.
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = intervals(x, y, est)
         weight *= self._chain_of(slots, seqs)
-        self._pending.append((x.copy(), y.copy(), r.copy(), lo, hi, weight,
-                              seqs.astype(np.float64)))
+        self._pending.append(Finals(x, y, r, lo, hi, weight, seqs))
 
     def _take_pending(self) -> Finals:
-        if self._pending:
-            cols = [np.concatenate(c) for c in zip(*self._pending, strict=True)]
-        else:
-            cols = [np.zeros(0) for _ in range(7)]
-        self._pending = []
-        return Finals(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5],
-                      cols[6].astype(np.int64))
+        """The arcs that left the history since the last call, in order (at a few readings a
+        batch, one block: no copy)."""
+        pending, self._pending = self._pending, []
+        if len(pending) == 1:
+            return pending[0]
+        if not pending:
+            return _NO_FINALS
+        return Finals._make(np.concatenate(column) for column in zip(*pending, strict=True))
 
     def _sync(self) -> None:
         """Bring ``live`` (and the points) up to date with the method's current carved
@@ -349,13 +356,14 @@ class CarvedGrid(CellGrid):
         if len(slots):
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             self._update_intervals(history, slots, seqs)
-            with_points = self._params.fresh_arcs
-            fresh = self._fresh(slots, seqs) if with_points else np.zeros(len(slots), dtype=bool)
+            params = self._params
             refresh_kernel(self._base, self._live, self._points, self._drawn,
                            self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
-                           history.y, history.r, self._lo, self._hi, self._weight, fresh,
-                           with_points, self._heard, self._model, history.theta1,
-                           history.theta2)
+                           history.y, history.r, self._lo, self._hi, self._weight,
+                           params.fresh_arcs, self._heard, self._model_array, history.theta1,
+                           history.theta2, self._newest, history.t, self._latest_t,
+                           params.fresh_seconds, params.fresh_periods,
+                           *self._periods.fit_state())
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,
@@ -367,10 +375,12 @@ class CarvedGrid(CellGrid):
         combined carving of those and the arc's kept ATM crossings, so only the arcs whose state
         changed since the last read are computed: for carving alone from the model's state as its
         estimates would (:func:`~sonarcarve.grids.carved.intervals.carving_intervals`), for
-        combined by asking the method for them alone (row by row, the same numbers as asking for
-        every arc). Measured for combined (``benchmarks/grid_reads.py``, office, a read every 5
-        readings): the grid's CPU per reading 4.32x -> 3.87x the range sensor layer's at 0.10 m,
-        1.98x -> 1.97x at 0.05 m."""
+        combined by asking the method for those arcs' point bearings alone
+        (:meth:`~sonarcarve.methods.combined.CombinedMethod.point_bearings`: the numbers its
+        estimates give, without building them; stored by
+        :func:`~sonarcarve.grids.carved.intervals.store_intervals`). Measured for combined
+        (``benchmarks/grid_reads.py``, office, a read every 5 readings): the grid's CPU per
+        reading 4.32x -> 3.87x the range sensor layer's at 0.10 m, 1.98x -> 1.97x at 0.05 m."""
         carving = self._carving
         if carving is None:
             stale = slots
@@ -383,11 +393,13 @@ class CarvedGrid(CellGrid):
             if not count:
                 return
             stale = slots[self._changed[:count]]
-            if self._atm is None:
-                lo, hi, weight = carving_intervals(history, carving, stale)
-            else:
-                lo, hi, weight = intervals(history.x[stale], history.y[stale],
-                                           self._method.estimates(stale))
+            combined = self._combined
+            if combined is not None:  # its points' bearings alone, stored in one pass
+                bearing, width, alive = combined.point_bearings(stale)
+                store_intervals(stale, bearing, width, alive, self._chain, self._lo, self._hi,
+                                self._weight)
+                return
+            lo, hi, weight = carving_intervals(history, carving, stale)
         self._lo[stale] = lo
         self._hi[stale] = hi
         self._weight[stale] = weight * self._chain[stale]
@@ -397,18 +409,10 @@ class CarvedGrid(CellGrid):
         reading, heard at most ``fresh_seconds`` before the newest reading seen, and less than
         ``fresh_periods`` of its sensor's firing periods before it."""
         fresh = np.zeros(len(seqs), dtype=bool)
-        at = np.fromiter(self._newest.values(), dtype=np.int64, count=len(self._newest))
-        at -= seqs[0]
-        at = at[(at >= 0) & (at < len(seqs))]
-        history, params = self._method.history, self._params
-        t = history.t[slots[at]]
-        young = t >= self._latest_t - params.fresh_seconds
-        if params.fresh_periods < math.inf and len(at):
-            # By then the sensor has fired again; a firing the log does not show heard nothing,
-            # and the echo is no longer in the sensor's current view.
-            periods = self._periods.periods(history.sensor[slots[at]])
-            young &= t > self._latest_t - params.fresh_periods * periods
-        fresh[at[young]] = True
+        params = self._params
+        fresh_kernel(self._newest, int(seqs[0]), slots, self._method.history.t, self._latest_t,
+                     params.fresh_seconds, params.fresh_periods, *self._periods.fit_state(),
+                     fresh)
         return fresh
 
     # -- reading the map ---------------------------------------------------------------------
@@ -467,6 +471,12 @@ class CarvedGrid(CellGrid):
         rows, cols = np.nonzero(self.occupied_mask(threshold))
         xs, ys = self.cell_centers()
         return np.column_stack((xs[cols], ys[rows])).astype(np.float64)
+
+
+#: No arcs leaving the history (:meth:`CarvedGrid._take_pending`), no factors of a batch.
+_NO_FINALS = Finals(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0),
+                    np.zeros(0, dtype=np.int64))
+_NO_CHAIN = np.ones(0)
 
 
 def _default_method_config(params: CarvedGridParams) -> MethodConfig:

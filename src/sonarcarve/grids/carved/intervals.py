@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.history import SonarHistory
 from sonarcarve.methods import SonarMethod
@@ -15,9 +16,9 @@ from sonarcarve.methods.atm import AtmModel
 from sonarcarve.methods.base import Estimates, arc_point
 from sonarcarve.methods.carving import CarvingMethod, CarvingModel
 from sonarcarve.methods.combined import CombinedMethod
-from sonarcarve.typing import FloatArray, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
-__all__ = ["carving_intervals", "intervals", "known_models"]
+__all__ = ["carving_intervals", "intervals", "known_models", "store_intervals"]
 
 
 
@@ -41,9 +42,8 @@ def carving_intervals(history: SonarHistory, model: CarvingModel,
     estimates), without the fields of the estimates the grid does not read (half the cost)."""
     lo, hi = model.lo[slots], model.hi[slots]
     xy = arc_point(history, slots, 0.5 * (lo + hi))  # the point, as CarvingModel.estimates
-    weight = np.where(model.status[slots] == ALIVE, 1.0, 0.0)  # no confidence: 1 if alive
-    return _interval_ends(np.arctan2(xy[:, 1] - history.y[slots], xy[:, 0] - history.x[slots]),
-                          0.5 * (hi - lo), weight)
+    alive = model.status[slots] == ALIVE  # no confidence: 1 if alive
+    return _ends(history.x[slots], history.y[slots], xy, hi - lo, alive, None)
 
 
 def intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray, ...]:
@@ -60,19 +60,78 @@ def intervals(x: FloatArray, y: FloatArray, est: Estimates) -> tuple[FloatArray,
     on the three variants). The posterior point is where the echo most likely came from, so a
     band around it puts the arc's weight where the surface is.
     """
-    weight = np.ones(len(x)) if est.confidence is None else np.where(
-        np.isnan(est.confidence), 1.0, np.clip(est.confidence, 0.0, 1.0))
-    return _interval_ends(np.arctan2(est.xy[:, 1] - y, est.xy[:, 0] - x), 0.5 * est.width,
-                          np.where(est.alive, weight, 0.0))
+    return _ends(x, y, est.xy, est.width, est.alive, est.confidence)
 
 
-def _interval_ends(bearing: FloatArray, half: FloatArray,
-                   weight: FloatArray) -> tuple[FloatArray, ...]:
-    """``(bearing - half, bearing + half, weight)``, all zero for an arc that adds nothing (no
-    weight, or no point: NaN)."""
-    dead = ~(weight > 0.0) | np.isnan(bearing) | np.isnan(half)
-    bearing = np.where(dead, 0.0, bearing)
-    half = np.where(dead, 0.0, half)
-    weight = np.where(dead, 0.0, weight)
-    return (np.ascontiguousarray(bearing - half), np.ascontiguousarray(bearing + half),
-            np.ascontiguousarray(weight, dtype=np.float64))
+def _ends(x: FloatArray, y: FloatArray, xy: FloatArray, width: FloatArray, alive: BoolArray,
+          confidence: FloatArray | None) -> tuple[FloatArray, ...]:
+    """``(bearing - half, bearing + half, weight)`` with the bearing of ``xy`` seen from
+    ``(x, y)``, ``half = width / 2`` and the weight of :func:`intervals`; all zero for an arc
+    that adds nothing (no weight, or no point: NaN).
+
+    Two compiled passes around numpy's arctangent (kept numpy's, as the bits of the maps
+    depend on it): the numpy version, about 15 array operations, cost some 13 µs for the five
+    arcs of a read every 5 readings, twice a batch (``benchmarks/grid_reads.py``)."""
+    n = len(x)
+    rows = np.empty((2, n))
+    _offsets(x, y, xy, rows)
+    bearing = np.arctan2(rows[0], rows[1])
+    out = np.empty((3, n))
+    if confidence is None:
+        _interval_ends(bearing, width, alive, _NONE, False, out)
+    else:
+        _interval_ends(bearing, width, alive, confidence, True, out)
+    return out[0], out[1], out[2]
+
+
+#: The confidence :func:`_interval_ends` is given for estimates without one (not read).
+_NONE = np.zeros(0)
+
+
+@compiled
+def _offsets(x: FloatArray, y: FloatArray, xy: FloatArray, rows: FloatArray) -> None:
+    """``rows[0] = xy[:, 1] - y``, ``rows[1] = xy[:, 0] - x``: the point seen from the sensor."""
+    for k in range(x.shape[0]):
+        rows[0, k] = xy[k, 1] - y[k]
+        rows[1, k] = xy[k, 0] - x[k]
+
+
+@compiled
+def _interval_ends(bearing: FloatArray, width: FloatArray, alive: BoolArray,
+                   confidence: FloatArray, weighed: bool, out: FloatArray) -> None:
+    """``out[0], out[1], out[2]``: ``bearing ∓ width / 2`` and the weight, the confidence
+    clipped to [0, 1] (1 where NaN or not ``weighed``; 0 where not ``alive``); all three zero
+    where the weight is not positive or the bearing or width is NaN (:func:`_interval`)."""
+    for k in range(bearing.shape[0]):
+        weight = 1.0
+        if weighed:
+            c = confidence[k]
+            weight = 1.0 if c != c else min(max(c, 0.0), 1.0)
+        if not alive[k]:
+            weight = 0.0
+        out[0, k], out[1, k], out[2, k] = _interval(bearing[k], width[k], weight)
+
+
+@compiled
+def store_intervals(slots: SlotArray, bearing: FloatArray, width: FloatArray,
+                    alive: BoolArray, chain: FloatArray, lo: FloatArray, hi: FloatArray,
+                    weight: FloatArray) -> None:
+    """The intervals of arcs without a confidence (weight 1 if ``alive``, else 0) into ``lo,
+    hi, weight`` by slot, the weight times the arc's factor ``chain`` (by slot): what
+    :func:`intervals` and then the grid's ``lo[slots] = ...`` give, in one pass."""
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        start, end, w = _interval(bearing[k], width[k], 1.0 if alive[k] else 0.0)
+        lo[s] = start
+        hi[s] = end
+        weight[s] = w * chain[s]
+
+
+@compiled_inline
+def _interval(bearing: float, width: float, weight: float) -> tuple[float, float, float]:
+    """``(bearing - width / 2, bearing + width / 2, weight)``, all zero where the weight is not
+    positive or the bearing or width is NaN (the arc adds nothing)."""
+    half = 0.5 * width
+    if not weight > 0.0 or bearing != bearing or half != half:
+        return 0.0, 0.0, 0.0
+    return bearing - half, bearing + half, weight

@@ -2,7 +2,7 @@
 
 A batch's final updates in reading order (:func:`fold_kernel`: the final band of each arc that left
 the history, then the reading's free space, into ``base``); the live contribution of the arcs
-leaving the history taken out (:func:`undraw_kernel`); a read's refresh of ``live`` and of the
+leaving the history taken out (:func:`retire_kernel`); a read's refresh of ``live`` and of the
 marks, arc by arc where its interval or value changed (:func:`refresh_kernel`), asking for the
 estimates of only the arcs whose carving state changed (:func:`stale_slots`); and the trinary map,
 ``clamp(base + live)`` against the thresholds' logits (:func:`trinary_kernel`).
@@ -11,6 +11,7 @@ estimates of only the arcs whose carving state changed (:func:`stale_slots`); an
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -20,17 +21,22 @@ from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, free_space
 from sonarcarve.grids.carved.mark import refresh_points
-from sonarcarve.grids.carved.model import Model
+from sonarcarve.grids.carved.model import Model, model_from
+from sonarcarve.grids.carved.periods import note_kernel, row_period
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "Finals",
     "fold_kernel",
+    "fresh_kernel",
+    "keep_chain",
+    "mark_fresh",
+    "note_newest",
     "refresh_kernel",
+    "retire_kernel",
     "stale_slots",
     "trinary_kernel",
-    "undraw_kernel",
 ]
 
 
@@ -47,13 +53,19 @@ class Finals(NamedTuple):
 
 
 @compiled
-def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
+def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], model: FloatArray,
                 x: FloatArray, y: FloatArray, theta: FloatArray, r: FloatArray,
                 half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
-                finals: Finals) -> None:
+                final_x: FloatArray, final_y: FloatArray, final_r: FloatArray,
+                final_lo: FloatArray, final_hi: FloatArray, final_weight: FloatArray,
+                final_seq: npt.NDArray[np.int64]) -> None:
     """The final updates of a batch in reading order: before the free space of reading ``k``
     (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
-    final band of every arc it pushed out of the history (``finals.seq + capacity <= seq``)."""
+    final band of every arc it pushed out of the history (:class:`Finals`, its fields one by
+    one: ``final_seq + capacity <= seq``). ``model``: :func:`~sonarcarve.grids.carved.model.
+    model_array` (named tuples cost numba's dispatcher 1-1.5 µs each)."""
+    m = model_from(model)
+    finals = Finals(final_x, final_y, final_r, final_lo, final_hi, final_weight, final_seq)
     p = 0
     nf = finals.seq.shape[0]
     held = np.empty((HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
@@ -77,16 +89,32 @@ def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
 
 
 @compiled
-def undraw_kernel(live: npt.NDArray[np.floating], drawn: FloatArray,
-                  drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
-                  heard: npt.NDArray[np.uint32], m: Model) -> None:
-    """Take the drawn contribution of arcs ``seqs`` (in ``slots``) out of ``live``."""
+def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
+                  points: npt.NDArray[np.float32], pdrawn: FloatArray,
+                  pseq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+                  heard: npt.NDArray[np.uint32], model: FloatArray) -> None:
+    """Take the drawn contribution of the arcs ``seqs`` (in ``slots``) leaving the history out
+    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch)."""
+    m = model_from(model)
     for k in range(slots.shape[0]):
         slot = slots[k]
-        if drawn_seq[slot] != seqs[k]:
-            continue
-        undraw(live, heard, m, drawn, slot)
-        drawn_seq[slot] = -1
+        if drawn_seq[slot] == seqs[k]:
+            undraw(live, heard, m, drawn, slot)
+            drawn_seq[slot] = -1
+    for k in range(slots.shape[0]):
+        slot = slots[k]
+        if pseq[slot] == seqs[k]:
+            undraw(points, heard, m, pdrawn, slot)
+            pseq[slot] = -1
+
+
+@compiled
+def keep_chain(chain: FloatArray, batch_chain: FloatArray, first: int, first_live: int,
+               storage: int) -> None:
+    """The factors ``batch_chain`` of a batch's arcs ``first, first + 1, ...`` that are still
+    live (sequence number ``>= first_live``) into their slots of ``chain``."""
+    for k in range(max(0, first_live - first), batch_chain.shape[0]):
+        chain[(first + k) % storage] = batch_chain[k]
 
 
 @compiled
@@ -95,16 +123,22 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                    drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
                    pseq: npt.NDArray[np.int64], slots: SlotArray,
                    seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                   lo: FloatArray, hi: FloatArray, weight: FloatArray, fresh: BoolArray,
-                   with_points: bool, heard: npt.NDArray[np.uint32], m: Model,
-                   theta1: FloatArray, theta2: FloatArray) -> int:
+                   lo: FloatArray, hi: FloatArray, weight: FloatArray, with_points: bool,
+                   heard: npt.NDArray[np.uint32], model: FloatArray, theta1: FloatArray,
+                   theta2: FloatArray, newest: npt.NDArray[np.int64], t: FloatArray,
+                   latest: float, seconds: float, periods: float, gaps: FloatArray,
+                   count: npt.NDArray[np.int64], refit: BoolArray,
+                   period: FloatArray) -> int:
     """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs ``slots``
     (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
-    (:func:`~sonarcarve.grids.carved.intervals.intervals`) are indexed by slot, ``fresh`` by
-    position. First every arc whose interval or value changed is redrawn into ``live``, then the
-    points are judged on the whole updated spread map
-    (:func:`~sonarcarve.grids.carved.mark.refresh_points`). Returns how many arcs and points
-    changed."""
+    (:func:`~sonarcarve.grids.carved.intervals.intervals`) are indexed by slot. First every arc
+    whose interval or value changed is redrawn into ``live``, then the points are judged on the
+    whole updated spread map (:func:`~sonarcarve.grids.carved.mark.refresh_points`), each
+    sensor's newest arc as fresh as :func:`mark_fresh` says (``newest .. period``, its
+    arguments after ``first``, which is ``seqs[0]``). Returns how many arcs and points changed.
+    ``model``: :func:`~sonarcarve.grids.carved.model.model_array`. One call a read: the fresh
+    arcs worked out in their own kernel cost a dispatch and an array more."""
+    m = model_from(model)
     changed = 0
     for k in range(slots.shape[0]):
         s = slots[k]
@@ -116,6 +150,10 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
         changed += redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
                           hi[s], value, heard, m)
     if with_points:
+        fresh = np.zeros(slots.shape[0], dtype=np.bool_)
+        if slots.shape[0]:
+            mark_fresh(newest, seqs[0], slots, t, latest, seconds, periods, gaps, count, refit,
+                       period, fresh)
         for k in range(slots.shape[0]):
             if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
@@ -169,3 +207,51 @@ def trinary_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                 out[i, j] = FREE
             else:
                 out[i, j] = UNKNOWN
+
+
+@compiled
+def note_newest(newest: npt.NDArray[np.int64], rows: npt.NDArray[np.int64],
+                seqs: npt.NDArray[np.int64], no_echo: BoolArray, t: FloatArray,
+                with_times: bool, last: FloatArray, gaps: FloatArray,
+                count: npt.NDArray[np.int64], refit: BoolArray) -> None:
+    """Each sensor's newest reading, in order (the last of a sensor's readings wins):
+    ``newest[rows[k]]`` the arc ``seqs[k]``, or -1 when reading ``k`` heard nothing (its arc is
+    then no sensor's newest); and, ``with_times``, the readings' times ``t`` noted in the rows'
+    firing periods (:func:`~sonarcarve.grids.carved.periods.note_kernel`, ``last .. refit``)."""
+    for k in range(rows.shape[0]):
+        newest[rows[k]] = -1 if no_echo[k] else seqs[k]
+    if with_times:
+        note_kernel(rows, t, last, gaps, count, refit)
+
+
+@compiled
+def fresh_kernel(newest: npt.NDArray[np.int64], first: int, slots: SlotArray, t: FloatArray,
+                 latest: float, seconds: float, periods: float, gaps: FloatArray,
+                 count: npt.NDArray[np.int64], refit: BoolArray, period: FloatArray,
+                 fresh: BoolArray) -> None:
+    """:func:`mark_fresh` on its own (the grid's reads run it inside :func:`refresh_kernel`)."""
+    mark_fresh(newest, first, slots, t, latest, seconds, periods, gaps, count, refit, period,
+               fresh)
+
+
+@compiled_inline
+def mark_fresh(newest: npt.NDArray[np.int64], first: int, slots: SlotArray, t: FloatArray,
+               latest: float, seconds: float, periods: float, gaps: FloatArray,
+               count: npt.NDArray[np.int64], refit: BoolArray, period: FloatArray,
+               fresh: BoolArray) -> None:
+    """``fresh[k]`` for the live arc ``first + k`` (in ``slots[k]``; ``t`` the history's times)
+    that is its sensor's newest (``newest``, by sensor row) and was heard at or after ``latest -
+    seconds`` and, when ``periods`` is finite, after ``latest - periods * p``, ``p`` its
+    sensor's firing period (:func:`~sonarcarve.grids.carved.periods.row_period`, by the same
+    row: ``gaps .. period``)."""
+    n = slots.shape[0]
+    for row in range(newest.shape[0]):
+        at = newest[row] - first
+        if at < 0 or at >= n:
+            continue
+        heard = t[slots[at]]
+        young = heard >= latest - seconds
+        if young and periods < math.inf:
+            young = heard > latest - periods * row_period(row, gaps, count, refit, period)
+        if young:
+            fresh[at] = True

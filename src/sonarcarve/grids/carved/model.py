@@ -8,10 +8,13 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import numpy as np
+
+from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS, CarvedGridParams
 from sonarcarve.grids.cells import logit
 
-__all__ = ["Model", "model_of"]
+__all__ = ["Model", "model_array", "model_from", "model_of"]
 
 
 class Model(NamedTuple):
@@ -55,3 +58,21 @@ def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
                  through=float(p.see_through), lobes=float(p.side_lobes),
                  lobe_range=float(p.side_lobe_range),
                  free_margin=POSE_MARGIN_SIGMAS * float(p.pose_sigma))
+
+
+def model_array(m: Model) -> np.ndarray:
+    """``m`` as the float64 array the kernels take (:func:`model_from` makes it a
+    :class:`Model` again, the same numbers; ``aware`` as 1.0 or 0.0).
+
+    Why: numba's dispatcher works out the type of a named tuple argument in Python, about 1.5
+    µs a call for :class:`Model`'s twenty fields, where an array costs 0.04 µs; the grid calls
+    three such kernels a batch (``benchmarks/grid_reads.py``, a read every 5 readings)."""
+    return np.array([float(value) for value in m], dtype=np.float64)
+
+
+@compiled_inline
+def model_from(v: np.ndarray) -> Model:
+    """The :class:`Model` of :func:`model_array` ``v``, inside a kernel (field by field, in
+    :class:`Model`'s order)."""
+    return Model(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11],
+                 v[12], v[13] != 0.0, v[14], v[15], v[16], v[17], v[18], v[19])

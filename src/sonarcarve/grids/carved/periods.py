@@ -28,11 +28,11 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from sonarcarve.geometry._compiled import compiled
+from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.typing import FloatArray
 
 __all__ = ["FIT_TOLERANCE", "GAP_QUANTILE", "GAP_WINDOW", "LOOP_BATCH", "MAX_MULTIPLE", "MIN_GAPS",
-           "FiringPeriods", "fitted_period", "note_kernel", "period_kernel"]
+           "FiringPeriods", "fitted_period", "note_kernel", "period_kernel", "row_period"]
 
 GAP_WINDOW = 16
 """Gaps remembered per sensor: the newest, so the period follows a ring that changes its rate."""
@@ -85,6 +85,11 @@ class FiringPeriods:
     def note(self, sensor: npt.NDArray[np.int64], t: FloatArray) -> None:
         """Take a batch's readings, in order (times do not decrease: the batch was validated). A
         reading at the same time as the sensor's previous one is no new firing and adds no gap."""
+        self.note_rows(self.rows(sensor), t)
+
+    def rows(self, sensor: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+        """The row of each of ``sensor`` (a new sensor gets the next free row, in the order of
+        its first reading): the grid keeps its own per-sensor state by the same rows."""
         rows = self._rows
         if len(sensor) <= LOOP_BATCH:
             at = np.array([rows.setdefault(s, len(rows)) for s in sensor.tolist()],
@@ -96,8 +101,29 @@ class FiringPeriods:
             at = np.array([rows[s] for s in ids.tolist()], dtype=np.int64)[inverse.ravel()]
         if len(rows) > len(self._last):
             self._grow(len(rows))
-        note_kernel(at, np.ascontiguousarray(t, dtype=np.float64), self._last, self._gaps,
+        return at
+
+    @property
+    def size(self) -> int:
+        """Rows held (at least the sensors seen)."""
+        return len(self._last)
+
+    def note_rows(self, rows: npt.NDArray[np.int64], t: FloatArray) -> None:
+        """:meth:`note` of the readings of sensor rows ``rows`` (:meth:`rows`)."""
+        note_kernel(rows, np.ascontiguousarray(t, dtype=np.float64), self._last, self._gaps,
                     self._count, self._changed)
+
+    def note_state(self) -> tuple[FloatArray, FloatArray, npt.NDArray[np.int64],
+                                  npt.NDArray[np.bool_]]:
+        """What :func:`note_kernel` takes besides the rows and times: the newest times, the
+        gaps, their counts and the rows changed since their last fit (by row)."""
+        return self._last, self._gaps, self._count, self._changed
+
+    def fit_state(self) -> tuple[FloatArray, npt.NDArray[np.int64], npt.NDArray[np.bool_],
+                                 FloatArray]:
+        """What :func:`row_period` takes besides the row: the gaps, their counts, the rows
+        changed since their last fit and the fitted periods (by row)."""
+        return self._gaps, self._count, self._changed, self._period
 
     def period(self, sensor: int) -> float:
         """The sensor's firing period in seconds; ``inf`` while fewer than :data:`MIN_GAPS` gaps
@@ -145,18 +171,23 @@ def note_kernel(rows: npt.NDArray[np.int64], t: FloatArray, last: FloatArray,
 def period_kernel(rows: npt.NDArray[np.int64], gaps: FloatArray,
                   count: npt.NDArray[np.int64], changed: npt.NDArray[np.bool_],
                   period: FloatArray, out: FloatArray) -> None:
-    """``out[k]``: the period of row ``rows[k]`` (``inf`` for -1, a sensor never seen), refitted
-    (:func:`fitted_period`) if its gaps changed since it was last asked for."""
+    """``out[k]``: the period of row ``rows[k]`` (``inf`` for -1, a sensor never seen)
+    (:func:`row_period`)."""
     for k in range(rows.shape[0]):
         row = rows[k]
-        if row < 0:
-            out[k] = math.inf
-            continue
-        if changed[row]:
-            changed[row] = False
-            n = min(count[row], GAP_WINDOW)
-            period[row] = fitted_period(np.sort(gaps[row, :n]))
-        out[k] = period[row]
+        out[k] = math.inf if row < 0 else row_period(row, gaps, count, changed, period)
+
+
+@compiled_inline
+def row_period(row: int, gaps: FloatArray, count: npt.NDArray[np.int64],
+               changed: npt.NDArray[np.bool_], period: FloatArray) -> float:
+    """The period of row ``row``, refitted (:func:`fitted_period`) if its gaps changed since it
+    was last asked for."""
+    if changed[row]:
+        changed[row] = False
+        n = min(count[row], GAP_WINDOW)
+        period[row] = fitted_period(np.sort(gaps[row, :n]))
+    return float(period[row])
 
 
 @compiled
