@@ -102,6 +102,12 @@ def test_bad_paths_are_one_line_errors(readings: Path, tmp_path: Path,
     assert "does not exist" in err
     assert main(["grid", str(readings), "--out", str(tmp_path / "g.txt")]) == 2
     assert ".yaml" in capsys.readouterr().err
+    # User review: `--out grid.png` was refused only once the grid was built, and without
+    # naming the option; now before anything is read (so not the missing input's error).
+    png = tmp_path / "grid.png"
+    assert main(["grid", str(tmp_path / "none.csv"), "--out", str(png)]) == 2
+    assert capsys.readouterr().err == (f"sonarcarve: error: --out {png}: a map_server map's "
+                                       "name must end in .yaml (GRID.pgm goes beside it)\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["readings.csv"]
 
 

@@ -277,6 +277,9 @@ def grid(
     check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
+    if out.suffix.lower() not in (".yaml", ".yml"):  # before the grid is built, not after
+        msg = f"--out {out}: a map_server map's name must end in .yaml (GRID.pgm goes beside it)"
+        raise GridUsageError(msg)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
