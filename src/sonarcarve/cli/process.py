@@ -139,8 +139,9 @@ _OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", metavar="OUT",
     help="Where to write, for one INPUT; the ending picks what: `.csv` the global map CSV; "
          "`.mcap`, `.bag` or no ending (a rosbag2 folder) a ROS bag with the input bag's "
-         "topics copied through plus /sonarcarve/local_map (PointCloud2) and "
-         "/sonarcarve/arcs (MarkerArray); `.rrd` a Rerun recording. Its folder must exist; "
+         "topics copied through plus /sonarcarve/local_map (PointCloud2), "
+         "/sonarcarve/arcs (MarkerArray) and /sonarcarve/grid (OccupancyGrid, the carved "
+         "grid: --grid-resolution); `.rrd` a Rerun recording. Its folder must exist; "
          "never the input; a bag is never overwritten. Bag and .rrd outputs, and bag inputs, "
          "hold the whole log in memory; CSV to CSV streams (the map too, unless a map filter "
          "is on).",
