@@ -137,9 +137,9 @@ def _check_same_log(points: GlobalMap, batch: ReadingBatch, readings: Path,
         silent = batch.no_echo
         if not silent.any() or not _fits(points, batch[~silent]):
             raise
-        msg = (f"{map_csv} numbers the echoes of {readings} without its "
-               f"{int(silent.sum()):,} no-echo rows (range inf), as a map of a ROS bag made "
-               "without --no-echo does: give --readings converted without --no-echo")
+        msg = (f"{map_csv}: its ids skip the {int(silent.sum()):,} no-echo rows (range inf) "
+               f"of {readings}, as a map of a bag made without --no-echo does: give "
+               "--readings converted without --no-echo")
         raise InputError(msg) from None
 
 
