@@ -102,7 +102,7 @@ def plot(
     with max_range_hint():  # a no-echo row without max_range: say how to give one
         batch = (read_readings_csv(readings, max_range=max_range) if readings is not None
                  else None)
-    if batch is not None:  # refuses another log's readings, naming the map's line
+    if batch is not None and readings is not None:  # another log's readings: refused
         _check_same_log(points, batch, readings, map_csv)
     if confidence_min is not None:
         points = points.select(confidence_mask(points.confidence, confidence_min))
