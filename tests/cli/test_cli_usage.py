@@ -46,6 +46,10 @@ def _commands_registered() -> None:
       "METRES DEGREES)"]),
     (["simulate", "--world", "doorway", "--out", "x.csv", "--pose-noise", "0.05"],
      ["--pose-noise", "requires 2 arguments"]),
+    # User review: "unknown method 'carving'" named no option (grid's --model did).
+    (["process", "r.csv", "--out", "m.csv", "--method", "carving"],
+     ["--method must be one of centerline | carve | atm | combined | evidence, got 'carving'"]),
+    (["view", "r.csv", "--method", "carving"], ["--method must be one of", "got 'carving'"]),
 ])
 def test_usage_errors_are_one_plain_line_exit_2(
     args: list[str], words: list[str], capsys: pytest.CaptureFixture[str],

@@ -38,6 +38,7 @@ from sonarcarve.cli.options import (
     RobotOpt,
     bag_options,
     check_max_range,
+    check_method,
     check_new_bag,
     drop_far_echoes,
     max_range_hint,
@@ -356,7 +357,8 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error, occlusion_depth,
                                           driven_through, late_echo_period)
-    make_method(method, config)  # an unknown method fails before any file is touched
+    check_method(method)  # an unknown method fails before any file is touched
+    make_method(method, config)  # and so does a config the method refuses
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     if out_dir is not None:

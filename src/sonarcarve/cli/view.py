@@ -21,6 +21,7 @@ from sonarcarve.cli.options import (
     RobotOpt,
     bag_options,
     check_max_range,
+    check_method,
     drop_far_echoes,
     max_range_hint,
     read_bag,
@@ -100,6 +101,7 @@ def view(
     if target.suffix.lower() != ".rrd":
         msg = f"--out {target}: a Rerun recording's name must end in .rrd"
         raise ViewUsageError(msg)
+    check_method(method)
     sonar = make_method(method)
     check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
