@@ -24,6 +24,7 @@ from sonarcarve.cli.app import (
     cut_short,
     err_console,
     progress,
+    readings_progress,
     reworded,
     summary_table,
     warn,
@@ -515,9 +516,10 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
     batch, ids, too_far = drop_far_echoes(batch, job.max_range)
     job.warnings.extend(likely_mistakes(batch))
     grid = None if job.grid_resolution == 0.0 or len(batch) == 0 else _bag_grid(job, batch)
-    report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
-                           frame=parent or "odom", base_frame=child or "base_link",
-                           rate=job.map_rate, grid=grid, ids=ids)
+    with readings_progress(job.method, len(batch)) as on_progress:
+        report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
+                               frame=parent or "odom", base_frame=child or "base_link",
+                               rate=job.map_rate, grid=grid, ids=ids, on_progress=on_progress)
     ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC)
     copied = sum(n for topic, n in report.messages.items() if topic not in ours)
     return [("readings in", f"{len(batch) + too_far:,}"),
@@ -543,7 +545,8 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
 
     batch, ids, too_far = drop_far_echoes(_read_whole(job), job.max_range)
     job.warnings.extend(likely_mistakes(batch))
-    global_map = write_rerun(job.out, batch, job.sonar(), ids=ids)
+    with readings_progress(job.method, len(batch)) as on_progress:
+        global_map = write_rerun(job.out, batch, job.sonar(), ids=ids, on_progress=on_progress)
     return [("readings in", f"{len(batch) + too_far:,}"), *_dropped_far_row(job, too_far),
             ("points out", f"{len(global_map):,}"), ("recording written to", str(job.out))]
 

@@ -11,7 +11,15 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, cut_short, reworded, summary_table, warn
+from sonarcarve.cli.app import (
+    app,
+    console,
+    cut_short,
+    readings_progress,
+    reworded,
+    summary_table,
+    warn,
+)
 from sonarcarve.cli.options import (
     FrameOpt,
     MaxRangeOpt,
@@ -109,8 +117,10 @@ def view(
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
     batch, ids, too_far = drop_far_echoes(_read_log(readings, bag, max_range), max_range)
-    with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
-        global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids)
+    with (reworded(ConfigError, {"every": "--every"}),  # write_rerun checks every first
+          readings_progress(method, len(batch)) as on_progress):
+        global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids,
+                                 on_progress=on_progress)
     viewer = find_viewer() if open_ else None
     # Counted as process counts them: every row read, then the ones --max-range dropped.
     rows = [("readings in", f"{len(batch) + too_far:,}"),

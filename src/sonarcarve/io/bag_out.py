@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import shutil
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -350,6 +350,7 @@ def write_map_bag(
     storage: str = "mcap",
     grid: LiveGrid | None = None,
     ids: npt.ArrayLike | None = None,
+    on_progress: Callable[[int], None] | None = None,
 ) -> BagOutReport:
     """Run ``method`` over ``batch`` and write its live map and arcs as a ROS bag.
 
@@ -380,6 +381,10 @@ def write_map_bag(
     ids : array-like of int, optional
         Each reading's id (the arc markers' ids): the input rows of readings a filter kept;
         default, row positions.
+    on_progress : callable, optional
+        Called with the number of readings mapped so far at every local map written and at
+        the end (with ``len(batch)``): for a progress bar (a long log takes milliseconds per
+        reading here, the local map and grid read at ``rate``).
 
     Returns
     -------
@@ -405,7 +410,7 @@ def write_map_bag(
         if odometry is not None:
             _write_odometry(out, np.asarray(odometry, dtype=np.float64).reshape(-1, 4), frame,
                             base_frame)
-        _write_maps(out, batch, row_ids, method, frame, rate, grid)
+        _write_maps(out, batch, row_ids, method, frame, rate, grid, on_progress)
     return BagOutReport(path=out.path, format=out.format, messages=dict(out.counts))
 
 
@@ -466,7 +471,8 @@ def _write_odometry(out: BagWriter, odometry: FloatArray, frame: str, base_frame
 
 
 def _write_maps(out: BagWriter, batch: ReadingBatch, ids: IntArray, method: LiveMethod,
-                frame: str, rate: float, grid: LiveGrid | None) -> None:
+                frame: str, rate: float, grid: LiveGrid | None,
+                on_progress: Callable[[int], None] | None = None) -> None:
     if len(batch) == 0:
         return
     period = 1.0 / rate
@@ -475,10 +481,14 @@ def _write_maps(out: BagWriter, batch: ReadingBatch, ids: IntArray, method: Live
         while reading.t >= next_t:
             _write_snapshot(out, method, next_t, frame, grid)
             next_t += period
+            if on_progress is not None:
+                on_progress(k)
         method.add(reading, int(ids[k]))
         if grid is not None:
             grid.add(reading)
     _write_snapshot(out, method, float(batch.t[-1]), frame, grid)
+    if on_progress is not None:
+        on_progress(len(batch))
 
 
 def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str,
