@@ -275,22 +275,53 @@ class BagWriter:
         return _build(self.typestore, msgtype, fields)
 
 
+#: One field of a message type, its kinds as plain strings (see :func:`_plan`): name, kind
+#: (``NAME``, ``ARRAY``, ``SEQUENCE`` or a base type's), the element's kind and type (a
+#: message type name or a base type tuple) for a nested message or a container, the size of an
+#: array, and the zero value of a plain one.
+_Field = tuple[str, str, str, Any, int, Any]
+
+#: Per typestore and message type, its fields (:data:`_Field`): rosbags describes each with
+#: enums, and a long log's arc markers (thousands of points per message) read those enums'
+#: names some 30 million times, most of the 33 s of the office tour to a bag.
+_PLANS: dict[tuple[int, str], tuple[Any, tuple[_Field, ...]]] = {}
+
+
+def _plan(ts: Any, msgtype: str) -> tuple[_Field, ...]:
+    key = (id(ts), msgtype)
+    cached = _PLANS.get(key)
+    if cached is None or cached[0] is not ts:  # an id reused by another typestore: anew
+        _, defs = ts.fielddefs[msgtype]
+        fields: list[_Field] = []
+        for name, (kind, detail) in defs:
+            if kind.name in {"ARRAY", "SEQUENCE"}:
+                (inner_kind, inner), size = detail
+                fields.append((name, kind.name, inner_kind.name, inner,
+                               size if kind.name == "ARRAY" else 0, None))
+            elif kind.name == "NAME":
+                fields.append((name, "NAME", "", detail, 0, None))
+            else:
+                fields.append((name, kind.name, "", None, 0, _scalar_zero(detail[0])))
+        cached = (ts, tuple(fields))
+        _PLANS[key] = cached
+    return cached[1]
+
+
 def _build(ts: Any, msgtype: str, fields: Mapping[str, Any] | Any) -> Any:
-    if not isinstance(fields, Mapping):
+    if type(fields) is not dict and not isinstance(fields, Mapping):  # dict: the usual, fast
         return fields  # already a message
-    _, defs = ts.fielddefs[msgtype]
-    values = {name: _value(ts, spec, fields[name]) if name in fields else _zero(ts, spec)
-              for name, spec in defs}
+    values = {field[0]: _value(ts, field, fields[field[0]]) if field[0] in fields
+              else _zero(ts, field)
+              for field in _plan(ts, msgtype)}
     return ts.types[msgtype](**values)
 
 
-def _value(ts: Any, spec: Any, value: Any) -> Any:
-    kind, detail = spec
-    if kind.name == "NAME":
-        return _build(ts, detail, value)
-    if kind.name in {"ARRAY", "SEQUENCE"}:
-        (inner_kind, inner), _ = detail
-        if inner_kind.name == "NAME":
+def _value(ts: Any, field: _Field, value: Any) -> Any:
+    _, kind, inner_kind, inner, _, _ = field
+    if kind == "NAME":
+        return _build(ts, inner, value)
+    if kind in {"ARRAY", "SEQUENCE"}:
+        if inner_kind == "NAME":
             return [_build(ts, inner, v) for v in value]
         if inner[0] in _NUMERIC:
             return np.asarray(value, dtype=_DTYPES.get(inner[0], inner[0]))
@@ -298,19 +329,21 @@ def _value(ts: Any, spec: Any, value: Any) -> Any:
     return value
 
 
-def _zero(ts: Any, spec: Any) -> Any:
-    kind, detail = spec
-    if kind.name == "NAME":
-        return _build(ts, detail, {})
-    if kind.name in {"ARRAY", "SEQUENCE"}:
-        (inner_kind, inner), size = detail
-        n = size if kind.name == "ARRAY" else 0
-        if inner_kind.name == "NAME":
-            return [_build(ts, inner, {}) for _ in range(n)]
+def _zero(ts: Any, field: _Field) -> Any:
+    _, kind, inner_kind, inner, size, base = field
+    if kind == "NAME":
+        return _build(ts, inner, {})
+    if kind in {"ARRAY", "SEQUENCE"}:
+        if inner_kind == "NAME":
+            return [_build(ts, inner, {}) for _ in range(size)]
         if inner[0] in _NUMERIC:
-            return np.zeros(n, dtype=_DTYPES.get(inner[0], inner[0]))
-        return [""] * n
-    base = detail[0]
+            return np.zeros(size, dtype=_DTYPES.get(inner[0], inner[0]))
+        return [""] * size
+    return base  # a plain value's zero, made once by _plan
+
+
+def _scalar_zero(base: str) -> Any:
+    """The zero value of the base type ``base`` (``float64``, ``string``, ...)."""
     if base == "string":
         return ""
     if base == "bool":
