@@ -194,3 +194,13 @@ def test_results_md_may_be_new_but_its_folder_must_exist(workdir: Path) -> None:
     with pytest.raises(OutputError, match="is a directory"):
         _check_results_md(workdir / "adir")
     assert not (workdir / "new.md").exists()
+
+
+def test_readings_progress_draws_a_bar_only_for_long_logs() -> None:
+    from sonarcarve.cli.app import SLOW_PROGRESS_MIN_READINGS, readings_progress
+
+    with readings_progress("carve", SLOW_PROGRESS_MIN_READINGS - 1) as short:
+        assert short is None
+    with readings_progress("carve", SLOW_PROGRESS_MIN_READINGS) as long:
+        assert long is not None
+        long(SLOW_PROGRESS_MIN_READINGS // 2)  # the callback the writers call

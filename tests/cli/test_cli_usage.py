@@ -40,6 +40,16 @@ def _commands_registered() -> None:
     (["simulate", "--world", "doorway", "--out", "x.csv", "--odometry=yes"],
      ["--odometry", "does not take a value"]),
     (["experiments", "--out", "o", "--seeds"], ["--seeds", "requires an argument"]),
+    # User review: one value given to an option of two, and the next option read as the second.
+    (["simulate", "--world", "doorway", "--pose-noise", "0.05", "--out", "x.csv"],
+     ["invalid value for '--pose-noise': '--out' is not a number (--pose-noise takes 2 values: "
+      "METRES DEGREES)"]),
+    (["simulate", "--world", "doorway", "--out", "x.csv", "--pose-noise", "0.05"],
+     ["--pose-noise", "requires 2 arguments"]),
+    # User review: "unknown method 'carving'" named no option (grid's --model did).
+    (["process", "r.csv", "--out", "m.csv", "--method", "carving"],
+     ["--method must be one of centerline | carve | atm | combined | evidence, got 'carving'"]),
+    (["view", "r.csv", "--method", "carving"], ["--method must be one of", "got 'carving'"]),
 ])
 def test_usage_errors_are_one_plain_line_exit_2(
     args: list[str], words: list[str], capsys: pytest.CaptureFixture[str],

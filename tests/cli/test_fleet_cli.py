@@ -82,7 +82,7 @@ def test_all_good_exits_0_and_a_cluster_gives_the_same_maps(
     (["--out", "m.csv"], "either --out (one log) or --out-dir"),
     (["--map-rate", "3"], "--map-rate applies to a bag output"),
     (["--workers", "0"], "--workers must be at least 1"),
-    (["--method", "nope"], "unknown method 'nope'"),
+    (["--method", "nope"], "--method must be one of"),
     (["--robot", "no-such-robot"], "unknown robot 'no-such-robot'"),
 ])
 def test_bad_fleet_requests_fail_before_mapping(

@@ -102,6 +102,12 @@ def test_bad_paths_are_one_line_errors(readings: Path, tmp_path: Path,
     assert "does not exist" in err
     assert main(["grid", str(readings), "--out", str(tmp_path / "g.txt")]) == 2
     assert ".yaml" in capsys.readouterr().err
+    # User review: `--out grid.png` was refused only once the grid was built, and without
+    # naming the option; now before anything is read (so not the missing input's error).
+    png = tmp_path / "grid.png"
+    assert main(["grid", str(tmp_path / "none.csv"), "--out", str(png)]) == 2
+    assert capsys.readouterr().err == (f"sonarcarve: error: --out {png}: a map_server map's "
+                                       "name must end in .yaml (GRID.pgm goes beside it)\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["readings.csv"]
 
 
@@ -276,3 +282,39 @@ def test_mark_length_sets_how_much_of_the_newest_arc_is_occupied(tmp_path: Path)
         occupied[bool(extra)] = int(np.count_nonzero(read_map_server(out).cells == 100))
     assert 1 <= occupied[False] <= 3
     assert occupied[True] >= 8
+
+
+@pytest.mark.parametrize("model", ["carved", "range-sensor-layer", "elfes"])
+def test_beam_width_fills_readings_that_carry_none(readings: Path, tmp_path: Path,
+                                                   model: str) -> None:
+    # User review: a bag whose Range messages leave field_of_view 0 (or a CSV without the
+    # column) could be gridded only with a 22.5° cone; process had --beam-width, grid not.
+    wide = ReadingBatch.from_readings(
+        Reading(t=0.1 * k, sensor=0, x=0.05 * k, y=0.0, theta=math.pi / 2, range=1.0,
+                beam_width=math.radians(60.0))
+        for k in range(60))
+    written = tmp_path / "wide.csv"
+    write_readings_csv(wide, written)
+
+    def cells(source: Path, *args: str) -> np.ndarray:
+        out = tmp_path / "grid.yaml"
+        assert main(["grid", str(source), "--model", model, "--resolution", "0.1",
+                     "--out", str(out), *args]) == 0
+        return read_map_server(out).cells
+
+    default = cells(readings)
+    np.testing.assert_array_equal(cells(readings, "--beam-width", "22.5"), default)
+    given = cells(readings, "--beam-width", "60")
+    np.testing.assert_array_equal(given, cells(written))  # as if the CSV had said 60°
+    assert given.shape != default.shape or np.any(given != default)
+    # A beam_width column wins.
+    np.testing.assert_array_equal(cells(written, "--beam-width", "10"), given)
+
+
+def test_a_beam_width_out_of_range_is_one_line(readings: Path, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "grid.yaml"
+    assert main(["grid", str(readings), "--beam-width", "180", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == ("sonarcarve: error: --beam-width must lie in (0, 180) "
+                                       "degrees, got 180\n")
+    assert not out.exists()

@@ -173,3 +173,30 @@ def test_plot_warns_of_a_cut_last_line(run: tuple[Path, Path, GlobalMap], tmp_pa
         f"sonarcarve: warning: {readings}: line {lines:,}, the last, has no line end: if the "
         "file was cut short, its last reading may be wrong (a number cut short still reads as "
         "a number)"]
+
+
+def test_readings_with_no_echo_rows_a_map_left_out_are_named(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # User review: `process run.mcap --out map.csv` numbers the bag's echoes; `plot map.csv
+    # --readings run.csv` with the CSV `convert rosbag --no-echo` wrote said only "does not
+    # match row 3": the silent rows shift every id. Here a silent firing is slipped in
+    # between the echoes a map was made from.
+    monkeypatch.chdir(tmp_path)  # short paths: the message is cut at 300 characters
+    echoes = _readings()
+    global_map = process_readings(echoes, make_method("combined")).global_map
+    write_map_csv(global_map, tmp_path / "map.csv")
+    n = len(echoes)
+    silent = ReadingBatch.from_arrays(t=echoes.t[:2], sensor=echoes.sensor[:2],
+                                      x=echoes.x[:2], y=echoes.y[:2], theta=echoes.theta[:2],
+                                      range=np.full(2, np.inf), max_range=np.full(2, 5.0))
+    everything = ReadingBatch.concatenate([echoes[:1], silent, echoes[1:]])
+    assert len(everything) == n + 2
+    write_readings_csv(everything, tmp_path / "all.csv")
+    out = tmp_path / "map.png"
+    assert main(["plot", "map.csv", "--readings", "all.csv", "--out", "map.png"]) == 2
+    assert capsys.readouterr().err == (
+        "sonarcarve: error: map.csv: its ids skip the 2 no-echo rows (range inf) of all.csv, "
+        "as a map of a bag made without --no-echo does: give --readings converted without "
+        "--no-echo\n")
+    assert not out.exists()

@@ -256,3 +256,23 @@ def test_sensors_behind_walls_are_warned_of(tmp_path: Path,
     assert "car-parking-12's sensors reach 2.28 m from its centre" in err[0]
     assert run("--world", "doorway", "--out", str(tmp_path / "scout.csv")) == 0
     assert "far side of a wall" not in capsys.readouterr().err
+
+
+def test_a_log_whose_truth_file_another_log_shares_says_so(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # User review: `simulate --out run.csv` then `simulate --world t-junction --out run.mcap`
+    # replaced run.truth.json without a word; `view run.csv` then drew the T junction.
+    pytest.importorskip("rosbags")
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--world", "doorway", "--out", "run.csv"]) == 0
+    assert main(["simulate", "--world", "doorway", "--out", "run.csv"]) == 0  # its own: fine
+    assert capsys.readouterr().err == ""
+    assert main(["simulate", "--world", "t-junction", "--out", "run.mcap"]) == 0
+    assert capsys.readouterr().err == (
+        "sonarcarve: warning: run.truth.json was also the truth of run.csv, and now holds "
+        "run.mcap's: give logs of different runs different names\n")
+    assert read_truth_json(tmp_path / "run.truth.json").world.segments.shape == \
+        load_world("t-junction").segments.shape
+    assert main(["simulate", "--world", "doorway", "--out", "other.csv"]) == 0
+    assert capsys.readouterr().err == ""

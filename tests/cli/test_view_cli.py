@@ -143,3 +143,53 @@ def test_a_header_only_log_gives_an_empty_recording_and_one_warning(
     assert err == (f"sonarcarve: warning: {empty} has no readings, only a header: the "
                    "recording is empty\n")
     assert empty.with_suffix(".rrd").is_file()
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A short seeded doorway run written as a readings CSV (run.csv) and a ROS bag (run.mcap),
+    each with its truth file beside it."""
+    pytest.importorskip("rosbags")
+    folder = tmp_path_factory.mktemp("view-runs")
+    for name in ("run.csv", "run.mcap"):
+        assert main(["simulate", "--world", "doorway", "--seed", "3",
+                     "--out", str(folder / name)]) == 0
+    return folder
+
+
+@pytest.mark.usefixtures("headless")
+def test_view_records_a_ros_bag_as_its_readings_csv(simulated: Path, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    # User review: `view run.mcap` said "cannot read as CSV: not UTF-8 text (byte 0x89)", where
+    # process and grid read the same bag.
+    capsys.readouterr()
+    from_csv, from_bag = tmp_path / "csv.rrd", tmp_path / "bag.rrd"
+    assert main(["view", str(simulated / "run.csv"), "--out", str(from_csv)]) == 0
+    csv_out = capsys.readouterr().out
+    assert main(["view", str(simulated / "run.mcap"), "--out", str(from_bag)]) == 0
+    bag_out = capsys.readouterr().out
+    # The same readings (the bag's ranges are float32) give the same counts, and the truth
+    # file beside the bag gives its walls.
+    assert len(_summary_rows(csv_out)) == 3
+    assert _summary_rows(bag_out) == _summary_rows(csv_out)
+    assert {"/world/reading", "/world/map", "/world/walls"} <= _entities(from_bag)
+
+
+@pytest.mark.usefixtures("headless")
+def test_view_takes_the_bag_options_for_bags_only(simulated: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    capsys.readouterr()
+    assert main(["view", str(simulated / "run.csv"), "--no-echo"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "--no-echo apply to ROS bag inputs only" in err
+    silent = simulated / "silent.rrd"
+    assert main(["view", str(simulated / "run.mcap"), "--no-echo", "--out", str(silent)]) == 0
+    assert "no-echo" not in capsys.readouterr().err
+    assert silent.is_file()
+
+
+def _summary_rows(output: str) -> list[str]:
+    """The summary table's rows of counts (readings in, points, true walls), not its paths."""
+    rows = [" ".join(line.replace("│", " ").split()) for line in output.splitlines()]
+    return [row for row in rows if row.startswith(("readings in", "points in", "true walls"))]

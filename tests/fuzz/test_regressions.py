@@ -79,7 +79,7 @@ CASES: dict[str, tuple[dict[str, bytes], list[str], str]] = {
         {}, ["process", "/dev/zero", "--out", "out.csv"],
         "/dev/zero: not text (NUL byte at line 1)"),
     "readings without line breaks": ({"r.csv": b"t,sensor" + b"x" * (2**20 + 5)},
-                                     ["grid", "r.csv", "--out", "out.csv"],
+                                     ["grid", "r.csv", "--out", "out.yaml"],
                                      "line 1 is longer than 1 MiB: not a readings CSV"),
 }
 

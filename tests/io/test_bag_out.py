@@ -178,3 +178,16 @@ def test_given_ids_are_the_arc_markers_ids(tmp_path: Path) -> None:
     with pytest.raises(ReadingsError, match="must increase"):
         write_map_bag(tmp_path / "bad.mcap", BATCH, make_method("carve"), ids=[0, 2, 2, 3])
     assert not (tmp_path / "bad.mcap").exists()
+
+
+def test_progress_is_reported_at_each_local_map_and_at_the_end(tmp_path: Path) -> None:
+    # User review: the office tour to a bag took 33 s with nothing on screen.
+    n = 30
+    batch = ReadingBatch.from_arrays(t=0.1 * np.arange(n), sensor=np.zeros(n, int),
+                                     x=0.05 * np.arange(n), y=np.zeros(n),
+                                     theta=np.full(n, math.pi / 2), range=np.full(n, 2.0))
+    done: list[int] = []
+    write_map_bag(tmp_path / "p.mcap", batch, make_method("carve"), rate=2.0,
+                  on_progress=done.append)
+    # Local maps every 0.5 s of log time: before readings 5, 10, ..., 25, then the last.
+    assert done == [5, 10, 15, 20, 25, n]

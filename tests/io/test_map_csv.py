@@ -143,6 +143,10 @@ GOOD = "0,0.0,2,1.0,-2.5,centerline,0.5,0.75\n"
      "column 'max_error' must be >= 0 metres, got '-1'"),
     (HEADER + "\n" + "0,0,0,0,0,carved,-0.1,1\n", "line 2",
      "column 'width' must be >= 0 radians, got '-0.1'"),
+    # User review: `plot readings.csv` said only "expected header id,t,...".
+    ("t,sensor,x,y,theta,range,beam_width\n0,0,0,0,0,1,0.39\n", "line 1",
+     "it is a readings CSV (t,sensor,x,y,theta,range,beam_width): a map CSV is what "
+     "sonarcarve process writes"),
 ])
 def test_bad_files_fail_with_one_line_naming_file_and_line(
     tmp_path: Path, text: str, where: str, problem: str

@@ -183,3 +183,11 @@ def test_the_path_is_logged_in_pieces_that_join_into_each_sensors_path(
                  for row in _strips(chunks[name]) for strip in row)
     whole_path_every_log = sum(5 * j for j in range(1, n // 5 + 1))  # 16,200 vertices
     assert logged < whole_path_every_log / 4
+
+
+def test_progress_is_reported_every_block_and_at_the_end(tmp_path: Path) -> None:
+    # User review: `view` of a long log drew nothing while it worked.
+    done: list[int] = []
+    write_rerun(tmp_path / "p.rrd", _readings(), make_method("carve"), every=5,
+                on_progress=done.append)
+    assert done == [5, 10, 15, 20, N]

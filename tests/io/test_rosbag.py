@@ -489,6 +489,31 @@ def test_cli_convert_rosbag_with_robot(tmp_path: Path) -> None:
     assert (batch.x[0], batch.y[0]) == (pytest.approx(1.25 + 0.1), pytest.approx(2.2))
 
 
+
+def test_cli_convert_rosbag_names_sensors_without_a_field_of_view(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # User review: a driver that leaves field_of_view 0 got a silent 22.5° cone in process and
+    # grid; convert, the step that checks a bag, now shows each sensor's beam and says so.
+    bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)
+    robot = tmp_path / "two.yaml"
+    robot.write_text(ROBOT_YAML)
+    out = tmp_path / "readings.csv"
+    capsys.readouterr()
+    assert main(["convert", "rosbag", str(bag), "--robot", str(robot), "--out",
+                 str(out)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == ("sonarcarve: warning: sensor 1 (/sonar_10): field_of_view 0, so no "
+                            "beam_width is written and process and grid will assume 22.5°; "
+                            "give the sensors' cone with --beam-width DEGREES\n")
+    lines = captured.out.splitlines()
+    assert lines[0].endswith(f", beam {math.degrees(0.3):.1f}°")  # /sonar_2's 0.3 rad
+    assert lines[1].endswith(", beam not given")
+    assert main(["convert", "rosbag", str(bag), "--robot", str(robot), "--beam-width", "30",
+                 "--out", str(tmp_path / "given.csv")]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    assert captured.out.splitlines()[1].endswith(", beam 30.0°")
+
 def test_cli_convert_rosbag_errors_are_one_line(tmp_path: Path,
                                                 capsys: pytest.CaptureFixture[str]) -> None:
     bag = write_bag(tmp_path / "bag", [*STRAIGHT_ODOM, *STRAIGHT_RANGES], STRAIGHT_TYPES)

@@ -130,3 +130,23 @@ def test_beam_width_in_radians_given_as_degrees() -> None:
 def test_csv_shape_hint(line: str, words: str | None) -> None:
     hint = csv_shape_hint(line)
     assert (hint is None) if words is None else (hint is not None and words in hint)
+
+
+def _driving(speed: float, scale: float = 1.0) -> ReadingBatch:
+    """Two sensors on a robot driving along x at ``speed`` m/s, positions times ``scale``."""
+    n = 40
+    t = 0.1 * np.arange(n)
+    return ReadingBatch.from_arrays(t=t, sensor=np.arange(n) % 2, x=scale * speed * t,
+                                    y=np.zeros(n), theta=np.full(n, 0.5), range=np.full(n, 2.0))
+
+
+def test_positions_in_millimetres_beside_ranges_in_metres_are_named() -> None:
+    # User review: x, y in millimetres and ranges in metres mapped without a word.
+    (warning,) = likely_mistakes(_driving(0.4, scale=1000.0))
+    assert warning == ("the sensors move at 400 m/s between readings (median): are x and y in "
+                       "millimetres? (readings CSV x, y are metres and t seconds)")
+
+
+@pytest.mark.parametrize("speed", [0.0, 0.4, 2.0, 15.0])
+def test_robots_and_cars_in_metres_are_no_mistake(speed: float) -> None:
+    assert likely_mistakes(_driving(speed)) == []

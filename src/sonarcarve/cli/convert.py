@@ -8,10 +8,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.table import Table
 
-from sonarcarve.cli.app import app, console, summary_table
+from sonarcarve.cli.app import app, console, summary_table, warn
 from sonarcarve.cli.options import (
     BAG_PANEL,
     FrameOpt,
@@ -21,12 +22,14 @@ from sonarcarve.cli.options import (
     bag_options,
     read_bag,
 )
+from sonarcarve.constants import DEFAULT_BEAM_WIDTH
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.fleet import BagOptions
 from sonarcarve.io import read_robond, write_readings_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.roboND import ROBOND_BEAM_WIDTH, bundled_robond_dir
 from sonarcarve.io.rosbag import RosbagReport
+from sonarcarve.readings import ReadingBatch
 
 __all__ = ["CONVERTERS", "ConvertOptions", "convert"]
 
@@ -90,8 +93,10 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     batch = bag.readings(log)
     write_readings_csv(batch, out)
     r = log.report
-    for line in _sensor_lines(r):
+    beams = _beam_widths(batch, len(r.sources))
+    for line in _sensor_lines(r, beams):
         console.print(line, soft_wrap=True, highlight=False, markup=False)
+    warn([_no_beam_warning(r, beams)])
     rows = [(f"messages on {topic}", f"{count:,}") for topic, count in r.messages.items()]
     parent, child = r.odometry_frames
     return summary_table(f"ROS bag: {source}", [
@@ -108,14 +113,47 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     ])
 
 
-def _sensor_lines(report: RosbagReport) -> list[str]:
-    """Which topic and frame became which sensor, and where its mount came from: one line each.
+def _sensor_lines(report: RosbagReport, beams: list[float | None]) -> list[str]:
+    """Which topic and frame became which sensor, where its mount came from, and its beam
+    width (``beams``, :func:`_beam_widths`): one line each.
 
     Lines, not a table, so that narrow terminals do not cut the frame names.
     """
     return [f"sensor {i}: {s.topic} frame {s.frame or '(none)'} ← mount {s.mount} "
             f"({s.x:.3f} m, {s.y:.3f} m, {math.degrees(s.bearing):.1f}°), {s.radiation}"
-            for i, s in enumerate(report.sources)]
+            f"{_beam_text(beam)}"
+            for i, (s, beam) in enumerate(zip(report.sources, beams, strict=True))]
+
+
+def _beam_widths(batch: ReadingBatch, sensors: int) -> list[float | None]:
+    """Per sensor, the beam width (radians) its rows were written with: NaN for none (its
+    Range messages' ``field_of_view`` was 0 and no --beam-width was given), None for a sensor
+    without rows."""
+    widths: list[float | None] = []
+    for i in range(sensors):
+        mine = batch.beam_width[batch.sensor == i]
+        widths.append(float(np.median(mine)) if len(mine) else None)
+    return widths
+
+
+def _beam_text(beam: float | None) -> str:
+    if beam is None:
+        return ""
+    return ", beam not given" if math.isnan(beam) else f", beam {math.degrees(beam):.1f}°"
+
+
+def _no_beam_warning(report: RosbagReport, beams: list[float | None]) -> str | None:
+    """A warning naming the sensors whose rows carry no beam width, else None: the methods
+    would take a default cone (22.5°) that may be far from the sensor's."""
+    missing = [i for i, beam in enumerate(beams) if beam is not None and math.isnan(beam)]
+    if not missing:
+        return None
+    named = ", ".join(f"{i} ({report.sources[i].topic})" for i in missing[:3])
+    more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+    which = "sensor" if len(missing) == 1 else "sensors"
+    return (f"{which} {named}{more}: field_of_view 0, so no beam_width is written and process "
+            f"and grid will assume {math.degrees(DEFAULT_BEAM_WIDTH):g}°; give the sensors' "
+            "cone with --beam-width DEGREES")
 
 
 #: Format name (lower case) -> converter(source, out, options).

@@ -10,6 +10,7 @@ and Elfes grids take as free space; the range-sensor-layer drops them, as ROS's 
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
@@ -46,7 +47,7 @@ from sonarcarve.grids import Grid as BuiltGrid
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.map_server import write_map_server
 from sonarcarve.io.readings_csv import read_readings_csv
-from sonarcarve.io.sanity import likely_mistakes
+from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
 from sonarcarve.readings import ReadingBatch
 
 __all__ = ["build_grid", "grid", "grid_params", "read_log_for_grid"]
@@ -230,6 +231,12 @@ def grid(
     ] = None,
     no_echo: NoEchoOpt = False,
     max_range: MaxRangeOpt = None,
+    beam_width: Annotated[float | None, typer.Option(
+        metavar="DEGREES",
+        help="Beam width φ in degrees for readings that carry none: a CSV without a "
+             "beam_width column (or a blank cell), a bag whose Range messages leave "
+             "field_of_view 0. A beam_width value or a field_of_view > 0 wins. Default 22.5 "
+             "(a Polaroid's).")] = None,
 ) -> None:
     """Map a readings CSV or a ROS bag into an occupancy grid, written as a ROS map_server map.
 
@@ -275,19 +282,28 @@ def grid(
     params = grid_params(model, fresh_periods, free_below, pose_sigma, range_tolerance,
                          mark_length)
     check_max_range(max_range)
+    if beam_width is not None and not 0.0 < beam_width < 180.0:
+        msg = f"--beam-width must lie in (0, 180) degrees, got {beam_width:g}"
+        raise GridUsageError(msg)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
+    if out.suffix.lower() not in (".yaml", ".yml"):  # before the grid is built, not after
+        msg = f"--out {out}: a map_server map's name must end in .yaml (GRID.pgm goes beside it)"
+        raise GridUsageError(msg)
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
     batch, _, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
+    if beam_width is not None:
+        batch = batch.with_beam_width(math.radians(beam_width))
     built = build_grid(batch, model, resolution, margin, params)
     cells = trinary(built)
     yaml_path, pgm_path = write_map_server(cells, built.resolution,
                                            (built.bounds[0], built.bounds[1]), out)
     rows, cols = built.shape
     # After the writing: a failed run prints one line only.
-    warn([*likely_mistakes(batch), None if is_bag(readings) else cut_short(readings)])
+    warn([None if beam_width is None else beam_width_mistake(beam_width, "--beam-width"),
+          *likely_mistakes(batch), None if is_bag(readings) else cut_short(readings)])
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),

@@ -132,7 +132,7 @@ def usage_message(err: ClickException) -> str:
         plain = _plain_words(details[0]) if details else None
         if plain is not None:
             message = f"invalid value for {hint}: {plain}"
-    message = " ".join(message.split()).rstrip(".")
+    message = " ".join(message.split()).rstrip(".") + _values_taken(err)
     return message[:1].lower() + message[1:] if message[1:2].islower() else message
 
 
@@ -142,6 +142,19 @@ def _hint(err: ClickException) -> str | None:
         return given
     param = getattr(err, "param", None)
     return str(param.get_error_hint()) if param is not None else None
+
+
+def _values_taken(err: ClickException) -> str:
+    """For an option of several values (``--pose-noise METRES DEGREES``), how many it takes:
+    given one, the next option is read as its second value, and the message names only that
+    (`'--out' is not a number`)."""
+    param = getattr(err, "param", None)
+    nargs = getattr(param, "nargs", 1)
+    if not isinstance(nargs, int) or nargs < 2:
+        return ""
+    name = max(getattr(param, "opts", None) or [str(_hint(err))], key=len)
+    metavar = getattr(param, "metavar", None)
+    return f" ({name} takes {nargs} values" + (f": {metavar})" if metavar else ")")
 
 
 _PLAIN = {

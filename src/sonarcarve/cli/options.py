@@ -38,6 +38,7 @@ __all__ = [
     "FrameOpt",
     "MaxRangeError",
     "MaxRangeOpt",
+    "MethodNameError",
     "NearEchoes",
     "NoEchoOpt",
     "OdomTopicOpt",
@@ -45,6 +46,7 @@ __all__ = [
     "RobotOpt",
     "bag_options",
     "check_max_range",
+    "check_method",
     "check_new_bag",
     "drop_far_echoes",
     "max_range_hint",
@@ -125,6 +127,25 @@ def bag_options(robot: str | None, range_topic: list[str] | None, odom_topic: st
 
 class BagOptionsError(SonarcarveError):
     """Bag options given with an input that is not a ROS bag."""
+
+
+class MethodNameError(SonarcarveError):
+    """A ``--method`` that names no method."""
+
+
+def check_method(name: str) -> None:
+    """Refuse a ``--method`` that names no method, naming the option (as ``grid --model``).
+
+    Raises
+    ------
+    MethodNameError
+        ``--method must be one of centerline | carve | ..., got 'carving'``.
+    """
+    from sonarcarve.methods import METHODS  # the methods' kernels: only when a command runs
+
+    if name not in METHODS:
+        msg = f"--method must be one of {' | '.join(METHODS)}, got {name!r}"
+        raise MethodNameError(msg)
 
 
 def refuse_bag_options(source: Path, bag: BagOptions) -> None:

@@ -15,7 +15,9 @@ from sonarcarve.extras import require
 from sonarcarve.filters import confidence_mask
 from sonarcarve.io import read_map_csv
 from sonarcarve.io.atomic import check_output_file
+from sonarcarve.io.errors import InputError
 from sonarcarve.io.readings_csv import read_readings_csv
+from sonarcarve.maps import GlobalMap
 from sonarcarve.plotting import (
     check_figure_path,
     map_origins,
@@ -24,6 +26,7 @@ from sonarcarve.plotting import (
     read_grid_image,
     save_figure,
 )
+from sonarcarve.readings import ReadingBatch
 
 __all__ = ["plot"]
 
@@ -99,8 +102,8 @@ def plot(
     with max_range_hint():  # a no-echo row without max_range: say how to give one
         batch = (read_readings_csv(readings, max_range=max_range) if readings is not None
                  else None)
-    if batch is not None:  # refuses another log's readings, naming the map's line
-        map_origins(points, batch, source=str(readings), map_file=str(map_csv))
+    if batch is not None and readings is not None:  # another log's readings: refused
+        _check_same_log(points, batch, readings, map_csv)
     if confidence_min is not None:
         points = points.select(confidence_mask(points.confidence, confidence_min))
     image = read_grid_image(grid) if grid is not None else None
@@ -118,3 +121,32 @@ def plot(
         rows.append((f"dropped: confidence < {confidence_min:g}", f"{total - len(points):,}"))
     rows += [("points drawn", f"{len(points):,}"), ("figure written to", str(out))]
     console.print(summary_table("sonarcarve plot", rows))
+
+
+def _check_same_log(points: GlobalMap, batch: ReadingBatch, readings: Path,
+                    map_csv: Path) -> None:
+    """Refuse readings the map was not made from (:func:`map_origins`, naming the map's line).
+
+    A map of a ROS bag made without ``--no-echo`` numbers the bag's echoes only, so the
+    readings ``convert rosbag --no-echo`` wrote (the silent firings as rows too) do not fit
+    it: the usual way to get here from a bag, which the message then names.
+    """
+    try:
+        map_origins(points, batch, source=str(readings), map_file=str(map_csv))
+    except InputError:
+        silent = batch.no_echo
+        if not silent.any() or not _fits(points, batch[~silent]):
+            raise
+        msg = (f"{map_csv}: its ids skip the {int(silent.sum()):,} no-echo rows (range inf) "
+               f"of {readings}, as a map of a bag made without --no-echo does: give "
+               "--readings converted without --no-echo")
+        raise InputError(msg) from None
+
+
+def _fits(points: GlobalMap, batch: ReadingBatch) -> bool:
+    """Whether ``points`` were made from ``batch`` (:func:`map_origins` finds no mismatch)."""
+    try:
+        map_origins(points, batch)
+    except InputError:
+        return False
+    return True

@@ -24,6 +24,7 @@ from sonarcarve.cli.app import (
     cut_short,
     err_console,
     progress,
+    readings_progress,
     reworded,
     summary_table,
     warn,
@@ -38,6 +39,7 @@ from sonarcarve.cli.options import (
     RobotOpt,
     bag_options,
     check_max_range,
+    check_method,
     check_new_bag,
     drop_far_echoes,
     max_range_hint,
@@ -139,8 +141,9 @@ _OutOpt = Annotated[Path | None, typer.Option(
     "--out", "-o", metavar="OUT",
     help="Where to write, for one INPUT; the ending picks what: `.csv` the global map CSV; "
          "`.mcap`, `.bag` or no ending (a rosbag2 folder) a ROS bag with the input bag's "
-         "topics copied through plus /sonarcarve/local_map (PointCloud2) and "
-         "/sonarcarve/arcs (MarkerArray); `.rrd` a Rerun recording. Its folder must exist; "
+         "topics copied through plus /sonarcarve/local_map (PointCloud2), "
+         "/sonarcarve/arcs (MarkerArray) and /sonarcarve/grid (OccupancyGrid, the carved "
+         "grid: --grid-resolution); `.rrd` a Rerun recording. Its folder must exist; "
          "never the input; a bag is never overwritten. Bag and .rrd outputs, and bag inputs, "
          "hold the whole log in memory; CSV to CSV streams (the map too, unless a map filter "
          "is on).",
@@ -355,7 +358,8 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error, occlusion_depth,
                                           driven_through, late_echo_period)
-    make_method(method, config)  # an unknown method fails before any file is touched
+    check_method(method)  # an unknown method fails before any file is touched
+    make_method(method, config)  # and so does a config the method refuses
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     if out_dir is not None:
@@ -512,9 +516,10 @@ def _write_bag(job: _Job) -> list[tuple[str, str]]:
     batch, ids, too_far = drop_far_echoes(batch, job.max_range)
     job.warnings.extend(likely_mistakes(batch))
     grid = None if job.grid_resolution == 0.0 or len(batch) == 0 else _bag_grid(job, batch)
-    report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
-                           frame=parent or "odom", base_frame=child or "base_link",
-                           rate=job.map_rate, grid=grid, ids=ids)
+    with readings_progress(job.method, len(batch)) as on_progress:
+        report = write_map_bag(job.out, batch, job.sonar(), copy_from=copy_from,
+                               frame=parent or "odom", base_frame=child or "base_link",
+                               rate=job.map_rate, grid=grid, ids=ids, on_progress=on_progress)
     ours = (LOCAL_MAP_TOPIC, ARCS_TOPIC, GRID_TOPIC)
     copied = sum(n for topic, n in report.messages.items() if topic not in ours)
     return [("readings in", f"{len(batch) + too_far:,}"),
@@ -540,7 +545,8 @@ def _write_rrd(job: _Job) -> list[tuple[str, str]]:
 
     batch, ids, too_far = drop_far_echoes(_read_whole(job), job.max_range)
     job.warnings.extend(likely_mistakes(batch))
-    global_map = write_rerun(job.out, batch, job.sonar(), ids=ids)
+    with readings_progress(job.method, len(batch)) as on_progress:
+        global_map = write_rerun(job.out, batch, job.sonar(), ids=ids, on_progress=on_progress)
     return [("readings in", f"{len(batch) + too_far:,}"), *_dropped_far_row(job, too_far),
             ("points out", f"{len(global_map):,}"), ("recording written to", str(job.out))]
 

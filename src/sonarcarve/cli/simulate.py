@@ -17,7 +17,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from sonarcarve.cli.app import app, console, progress, summary_table
+from sonarcarve.cli.app import app, console, progress, summary_table, warn
 from sonarcarve.cli.options import check_new_bag
 from sonarcarve.errors import SonarcarveError
 from sonarcarve.io.atomic import atomic_path, check_output_file
@@ -198,6 +198,7 @@ def simulate_command(
         raise SimulateParameterError(msg)
     # Both outputs are checked before the (possibly long) simulation runs.
     truth = _check_outputs(out, log_format, [path, Path(world), Path(robot)])
+    sharing = _logs_sharing_truth(out, truth)  # before this run's log exists
     the_world = load_world(world)
     the_robot = load_robot(robot)
     try:
@@ -212,6 +213,25 @@ def simulate_command(
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
     _warn_behind_walls(result)
+    if sharing:
+        warn([f"{truth} was also the truth of {', '.join(map(str, sharing))}, and now holds "
+              f"{out}'s: give logs of different runs different names"])
+
+
+def _logs_sharing_truth(out: Path, truth: Path) -> list[Path]:
+    """Other logs, already there, whose truth file is ``truth`` too: ``run.csv`` beside a
+    new ``run.mcap`` (both keep their truth in ``run.truth.json``), which this run replaces."""
+    if not truth.exists():
+        return []
+    stem = truth.name[: -len(TRUTH_SUFFIX)]
+    sharing = []
+    for ending in LOG_FORMATS:
+        log = out.with_name(stem + ending)
+        kind = LOG_FORMATS.get(log.suffix.lower())  # "run.v2" is no rosbag2 folder's name
+        if (log != out and kind is not None and kind.truth(log) == truth
+                and (log.is_file() or (log / "metadata.yaml").is_file())):
+            sharing.append(log)
+    return sharing
 
 
 def _check_pose_noise(pose_noise: tuple[float, float] | None) -> None:

@@ -11,14 +11,38 @@ from typing import Annotated
 
 import typer
 
-from sonarcarve.cli.app import app, console, cut_short, reworded, summary_table, warn
-from sonarcarve.cli.options import MaxRangeOpt, check_max_range, drop_far_echoes, max_range_hint
+from sonarcarve.cli.app import (
+    app,
+    console,
+    cut_short,
+    readings_progress,
+    reworded,
+    summary_table,
+    warn,
+)
+from sonarcarve.cli.options import (
+    FrameOpt,
+    MaxRangeOpt,
+    NoEchoOpt,
+    OdomTopicOpt,
+    RangeTopicOpt,
+    RobotOpt,
+    bag_options,
+    check_max_range,
+    check_method,
+    drop_far_echoes,
+    max_range_hint,
+    read_bag,
+    refuse_bag_options,
+)
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
+from sonarcarve.fleet import BagOptions, is_bag
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.readings_csv import read_readings_csv
 from sonarcarve.io.rerun_out import DEFAULT_EVERY, write_rerun
 from sonarcarve.methods import make_method
+from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import FloatArray
 
 __all__ = ["find_viewer", "open_viewer", "view"]
@@ -34,9 +58,11 @@ class ViewUsageError(SonarcarveError):
 @app.command()
 def view(
     readings: Annotated[Path, typer.Argument(
-        metavar="READINGS.csv",
+        metavar="READINGS.csv|BAG",
         help="Readings CSV (`t,sensor,x,y,theta,range[,beam_width]`), e.g. from "
-             "`sonarcarve simulate` or `sonarcarve convert`.")],
+             "`sonarcarve simulate` or `sonarcarve convert`. Or a ROS bag: `*.bag` (ROS 1), "
+             "`*.mcap`, `*.db3` or a rosbag2 folder, read as `sonarcarve process` reads it "
+             "(Range + odometry + TF; see the bag options).")],
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", metavar="RUN.rrd",
         help="Where to save the recording. Default: beside the readings, NAME.rrd.",
@@ -59,6 +85,11 @@ def view(
         help="Open the recording in the Rerun viewer when one can be started (a display "
              "and the `rerun` program).")] = True,
     max_range: MaxRangeOpt = None,
+    robot: RobotOpt = None,
+    range_topic: RangeTopicOpt = None,
+    odom_topic: OdomTopicOpt = None,
+    frame: FrameOpt = None,
+    no_echo: NoEchoOpt = False,
 ) -> None:
     """Record a run for the Rerun viewer: robot path, each reading's arc, the map growing.
 
@@ -70,21 +101,26 @@ def view(
     where it saved it (open it later with `rerun RUN.rrd`).
 
     Example: `sonarcarve view run.csv --method carve --out run.rrd`
+
+    Example: `sonarcarve view run.mcap --no-echo` (a ROS bag; writes run.rrd)
     """
     target = out if out is not None else readings.with_suffix(".rrd")
     check_output_file(target, inputs=[readings], label=f"--out {target}")
     if target.suffix.lower() != ".rrd":
         msg = f"--out {target}: a Rerun recording's name must end in .rrd"
         raise ViewUsageError(msg)
+    check_method(method)
     sonar = make_method(method)
     check_max_range(max_range)
+    bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
+    refuse_bag_options(readings, bag)
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
-    with max_range_hint():
-        batch, ids, too_far = drop_far_echoes(read_readings_csv(readings, max_range=max_range),
-                                              max_range)
-    with reworded(ConfigError, {"every": "--every"}):  # write_rerun checks every first
-        global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids)
+    batch, ids, too_far = drop_far_echoes(_read_log(readings, bag, max_range), max_range)
+    with (reworded(ConfigError, {"every": "--every"}),  # write_rerun checks every first
+          readings_progress(method, len(batch)) as on_progress):
+        global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids,
+                                 on_progress=on_progress)
     viewer = find_viewer() if open_ else None
     # Counted as process counts them: every row read, then the ones --max-range dropped.
     rows = [("readings in", f"{len(batch) + too_far:,}"),
@@ -100,8 +136,18 @@ def view(
         reason = "" if open_ else " (--no-open)"
         console.print(f"no viewer opened{reason}; open the recording with `rerun {target}`")
     if not len(batch):  # a valid file (a header only), so not an error: say so, as process does
-        warn([f"{readings} has no readings, only a header: the recording is empty"])
-    warn([cut_short(readings)])
+        what = "no readings" if is_bag(readings) else "no readings, only a header"
+        warn([f"{readings} has {what}: the recording is empty"])
+    warn([None if is_bag(readings) else cut_short(readings)])
+
+
+def _read_log(source: Path, bag: BagOptions, max_range: float | None) -> ReadingBatch:
+    """The readings of a ROS bag, read with ``bag`` as ``sonarcarve process`` reads it, or of
+    a readings CSV (``max_range``, metres: how far its no-echo rows without one listened)."""
+    if is_bag(source):
+        return bag.readings(read_bag(bag, source))
+    with max_range_hint():
+        return read_readings_csv(source, max_range=max_range)
 
 
 def _walls(readings: Path, world: str | None) -> FloatArray | None:

@@ -25,6 +25,7 @@ import numpy as np
 from sonarcarve.errors import ConfigError
 from sonarcarve.io.atomic import atomic_text
 from sonarcarve.io.errors import InputError, parse_number
+from sonarcarve.io.readings_csv import READINGS_COLUMNS
 from sonarcarve.maps import GlobalMap, PointSource
 from sonarcarve.typing import Int8Array
 
@@ -208,6 +209,9 @@ def read_map_csv(path: str | Path) -> GlobalMap:
     header = tuple(name.strip() for name in rows[0][1]) if rows else ()
     if header[: len(MAP_COLUMNS)] != MAP_COLUMNS:
         msg = f"{path}: line 1, expected header {','.join(MAP_COLUMNS)}"
+        if set(READINGS_COLUMNS) <= set(header):  # the readings instead of their map
+            msg += (f"; it is a readings CSV ({','.join(header)}): a map CSV is what "
+                    "sonarcarve process writes")
         raise InputError(msg)
     body = rows[1:]
     confidence_at = header.index("confidence") if "confidence" in header else None

@@ -25,7 +25,7 @@ written.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -87,6 +87,7 @@ def write_rerun(
     every: int = DEFAULT_EVERY,
     application_id: str = "sonarcarve",
     ids: npt.ArrayLike | None = None,
+    on_progress: Callable[[int], None] | None = None,
 ) -> GlobalMap:
     """Stream ``batch`` through ``method`` and write the run as a Rerun recording at ``path``.
 
@@ -110,6 +111,9 @@ def write_rerun(
     ids : array-like of int, optional
         Each reading's id (the "reading" timeline and the map's ids): the input rows of
         readings a filter kept; default, row positions.
+    on_progress : callable, optional
+        Called with the number of readings logged so far every ``every`` readings and after
+        the last one (with ``len(batch)``): for a progress bar.
 
     Returns
     -------
@@ -139,7 +143,8 @@ def write_rerun(
         recording = rr.RecordingStream(application_id)
         recording.save(tmp)
         try:
-            global_map = _log_run(rr, recording, batch, row_ids, method, walls, every)
+            global_map = _log_run(rr, recording, batch, row_ids, method, walls, every,
+                                  on_progress)
         finally:
             recording.flush()
             recording.disconnect()
@@ -147,7 +152,8 @@ def write_rerun(
 
 
 def _log_run(rr: Any, rec: Any, batch: ReadingBatch, ids: IntArray, method: RerunMapper,
-             walls: npt.ArrayLike | None, every: int) -> GlobalMap:
+             walls: npt.ArrayLike | None, every: int,
+             on_progress: Callable[[int], None] | None = None) -> GlobalMap:
     if walls is not None:
         segments = np.asarray(walls, dtype=np.float64).reshape(-1, 2, 2)
         rec.log("world/walls", rr.LineStrips2D(segments, colors=_WALL_RGB, radii=0.02),
@@ -174,6 +180,8 @@ def _log_run(rr: Any, rec: Any, batch: ReadingBatch, ids: IntArray, method: Reru
             rec.log("world/robot/path/tail", _path(rr, paths.strips()))
             _log_points(rr, rec, "world/map", method.local_map(), batch, ids,
                         arcs="world/arcs")
+            if on_progress is not None:
+                on_progress(k + 1)
     global_map = method.finish()
     _log_points(rr, rec, "world/global_map", global_map, batch, ids, arcs=None)
     return global_map

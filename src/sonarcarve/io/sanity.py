@@ -36,6 +36,11 @@ MAX_RANGE_ECHO_SHARE = 0.05
 #: readings, or a robot in a long hall, reads the same longest range a few times honestly.
 _CLAMPED_MIN_ECHOES = 100
 _CLAMPED_OVER_MEDIAN = 1.5
+#: Sensors moving faster than this between their consecutive readings, m/s (the median over a
+#: log's moves), probably have positions in another unit than the ranges': robots drive at
+#: 0.2-2 m/s and a car parks at 1-2 m/s, while a 0.4 m/s robot whose x, y are in millimetres
+#: moves at 400 "m/s" (and its ranges, in metres, pass the range check).
+SUSPECT_SPEED = 50.0
 #: A ``--beam-width`` (degrees) below this is probably radians: sonar beams are 7-60 degrees,
 #: and 22.5 degrees is 0.39 radians.
 SUSPECT_BEAM_WIDTH_DEG = 2.0
@@ -54,6 +59,8 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
     - ranges with a median of :data:`SUSPECT_MEDIAN_RANGE` m or more: probably centimetres or
       millimetres;
     - a ``beam_width`` below 1 degree: probably another unit (beams are 7-60 degrees);
+    - sensors moving at :data:`SUSPECT_SPEED` m/s or more between their readings: probably
+      positions in millimetres;
     - :data:`MAX_RANGE_ECHO_SHARE` or more of the echoes at exactly their ``max_range``:
       probably a driver's "nothing heard".
 
@@ -87,6 +94,9 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
             unit = "millimetres" if median >= MILLIMETRE_MEDIAN_RANGE else "centimetres"
             found.append(f"the median range is {median:g} m: is it in {unit}? "
                          "(readings CSV range is metres)")
+    fast = _positions_too_fast(batch)
+    if fast:
+        found.append(fast)
     at_limit = _echoes_at_max_range(batch)
     if at_limit:
         found.append(at_limit)
@@ -96,6 +106,25 @@ def likely_mistakes(batch: ReadingBatch) -> list[str]:
                      f"({math.degrees(float(np.min(widths))):.2g} degrees): sonar beams are "
                      "7-60 degrees; is it in another unit?")
     return found
+
+
+def _positions_too_fast(batch: ReadingBatch) -> str | None:
+    """A warning when the sensors move faster than :data:`SUSPECT_SPEED` between their
+    consecutive readings (median over the moves; standing still is left out), else None:
+    positions in millimetres beside ranges in metres (times in seconds)."""
+    order = np.lexsort((batch.t, batch.sensor))  # each sensor's readings in time order
+    sensor, t = batch.sensor[order], batch.t[order]
+    x, y = batch.x[order], batch.y[order]
+    same = (sensor[1:] == sensor[:-1]) & (t[1:] > t[:-1])
+    step = np.hypot(np.diff(x), np.diff(y))[same]
+    moved = step > 0.0
+    if not moved.any():
+        return None
+    speed = float(np.median(step[moved] / np.diff(t)[same][moved]))
+    if speed < SUSPECT_SPEED:
+        return None
+    return (f"the sensors move at {speed:.3g} m/s between readings (median): are x and y in "
+            "millimetres? (readings CSV x, y are metres and t seconds)")
 
 
 def _echoes_at_max_range(batch: ReadingBatch) -> str | None:
