@@ -258,6 +258,21 @@ def test_sensors_behind_walls_are_warned_of(tmp_path: Path,
     assert "far side of a wall" not in capsys.readouterr().err
 
 
+def test_an_explore_that_never_moves_is_warned_of(tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """The car's 0.9 m disc finds no open place to drive to on this generated floor (its planner
+    keeps 1.02 m from walls), so it stays where it starts; the Scout2 drives off."""
+    world = "random:7:40x30"
+    assert run("--world", world, "--robot", "car-parking-12", "--explore", "3",
+               "--out", str(tmp_path / "car.csv")) == 0
+    err = capsys.readouterr().err
+    assert ("the robot did not move in 3 s: --explore found no open place its 0.9 m body could "
+            "reach" in err)
+    assert "wider than 2.04 m" in err
+    assert run("--world", world, "--explore", "3", "--out", str(tmp_path / "scout.csv")) == 0
+    assert "did not move" not in capsys.readouterr().err
+
+
 def test_a_log_whose_truth_file_another_log_shares_says_so(
         tmp_path: Path, capsys: pytest.CaptureFixture[str],
         monkeypatch: pytest.MonkeyPatch) -> None:

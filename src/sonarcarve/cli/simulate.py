@@ -27,6 +27,7 @@ from sonarcarve.sim.motion import (
     DEFAULT_DT,
     DEFAULT_SPEED,
     MAX_POSES,
+    PLAN_MARGIN,
     Trajectory,
     explore,
     follow_waypoints,
@@ -213,6 +214,8 @@ def simulate_command(
     log_format.write(result, out, truth)
     console.print(_summary(result, out, truth, log_format.label))
     _warn_behind_walls(result)
+    if explore_seconds is not None:
+        _warn_if_never_moved(result, explore_seconds)
     if sharing:
         warn([f"{truth} was also the truth of {', '.join(map(str, sharing))}, and now holds "
               f"{out}'s: give logs of different runs different names"])
@@ -277,6 +280,19 @@ def _warn_behind_walls(result: Simulation) -> None:
               f"side of a wall: {robot.name}'s sensors reach {reach:.2f} m from its centre, "
               f"its body disc only {robot.robot_radius:g} m; give a --path that keeps "
               f"{reach:.2f} m from walls", file=sys.stderr)
+
+
+def _warn_if_never_moved(result: Simulation, explore_seconds: float) -> None:
+    """One stderr line when ``--explore`` left the robot where it started: its planner found no
+    open place the robot's body could reach (a car in a world of narrow rooms), and a log from
+    one spot is seldom what was wanted. Under a centimetre counts as still: turning in place
+    (a car's slow start) moves the centre a little."""
+    if result.trajectory.path_length >= 0.01:
+        return
+    radius = result.robot.robot_radius
+    warn([f"the robot did not move in {explore_seconds:g} s: --explore found no open place its "
+          f"{radius:g} m body could reach from where it starts; give a --path, or a world whose "
+          f"rooms and corridors are wider than {2.0 * (radius + PLAN_MARGIN):.2f} m"])
 
 
 def _check_motion_options(path: Path | None, explore_seconds: float | None,

@@ -32,6 +32,7 @@ __all__ = [
     "DEFAULT_TURN_RATE",
     "MAX_COORDINATE",
     "MAX_POSES",
+    "PLAN_MARGIN",
     "ROBOT_RADIUS",
     "Trajectory",
     "explore",
@@ -301,7 +302,8 @@ def _sample(pieces: Sequence[_Piece], dt: float, t0: float) -> Trajectory:
 # --------------------------------------------------------------------------------------------
 
 _GRID_RESOLUTION = 0.1   # planning cell side, metres
-_PLAN_MARGIN = 0.12      # the planner keeps this much more than the robot radius from walls
+#: Metres the explorer's planner keeps from walls beyond the robot's radius.
+PLAN_MARGIN = 0.12
 _STEP_MARGIN = 0.02      # every executed pose keeps at least radius + this from walls
 _VISIT_CELL = 1.0        # side of the visited-place memory's cells, metres
 _VISIT_RADIUS = 1.5      # cells whose centre comes this close count as visited
@@ -574,7 +576,7 @@ def explore(world: World, seconds: float, seed: int, speed: float = DEFAULT_SPEE
     """
     _check_explore_parameters(seconds, seed, speed, dt, robot_radius, turn_rate)
     rng = np.random.default_rng(seed)
-    grid = _PlanningGrid.build(world, robot_radius + _PLAN_MARGIN)
+    grid = _PlanningGrid.build(world, robot_radius + PLAN_MARGIN)
     # The start pose draws from ``rng`` before the explorer does (seeded runs depend on it).
     pose = _start_pose(world, grid, start, rng)
     _check_start_clear(world, pose, robot_radius)
