@@ -353,7 +353,7 @@ def test_point_bearings_are_what_the_estimates_give_the_grids_bands(seed: int) -
     assert not both.estimates(live).alive.all()  # removed arcs are among them
 
 
-def test_a_slot_outside_the_history_is_an_index_error_not_other_memory() -> None:
+def test_a_slot_outside_the_history_or_not_an_integer_is_an_index_error() -> None:
     # The compiled passes do not check their indices: a slot past the storage read other
     # memory (garbage, or a crash for a far one) until review rev16. Numpy's rules otherwise:
     # a negative slot counts back from the end.
@@ -367,3 +367,7 @@ def test_a_slot_outside_the_history_is_an_index_error_not_other_memory() -> None
                 ask(np.array([0, slot]))
     last = both.estimates(np.array([-1]))
     np.testing.assert_array_equal(last.xy, both.estimates(np.array([storage - 1])).xy)
+    for ask in (both.estimates, both.point_bearings):  # not truncated to slot 1
+        with pytest.raises(IndexError, match="slots must be integers"):
+            ask(np.array([1.5]))
+    assert len(both.estimates([]).xy) == 0  # an empty list is no float slot

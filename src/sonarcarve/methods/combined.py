@@ -220,6 +220,16 @@ def _seen_from_sensor(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatAr
         rows[_DX, k] = px - x[s]
 
 
+def _slot_indices(slots: SlotArray) -> SlotArray:
+    """``slots`` as the int64 array the compiled passes take; a float slot is an ``IndexError``,
+    as numpy's indexing makes it, not truncated to the slot below (review rev16)."""
+    slots = np.asarray(slots)
+    if slots.dtype.kind not in "iu" and slots.size:
+        msg = f"slots must be integers, not {slots.dtype}"
+        raise IndexError(msg)
+    return slots.astype(np.int64, copy=False)
+
+
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
     """Per arc, the better of carving's and ATM's estimates (section 4).
 
@@ -392,7 +402,7 @@ class CombinedMethod(SonarMethod):
         office, 0.10 m; ``benchmarks/grid_reads.py``).
         """
         h = self.history
-        slots = np.asarray(slots, dtype=np.int64)
+        slots = _slot_indices(slots)
         rows, flags, codes = self._point_rows(slots)
         xy = np.empty((len(slots), 2))
         _place(slots, h.x, h.y, h.r, rows, xy)
@@ -411,11 +421,12 @@ class CombinedMethod(SonarMethod):
         (eq. 5.1), bool.
 
         Raises the error that stopped a model for good, if one did, as :meth:`estimates`;
-        ``IndexError`` for a slot outside the history's storage, as :meth:`estimates`.
+        ``IndexError`` for a slot outside the history's storage or not an integer, as
+        :meth:`estimates`.
         """
         self._check_usable()
         h = self.history
-        slots = np.asarray(slots, dtype=np.int64)
+        slots = _slot_indices(slots)
         rows, flags, _ = self._point_rows(slots)
         _seen_from_sensor(slots, h.x, h.y, h.r, rows)
         return np.arctan2(rows[_DY], rows[_DX]), rows[_WIDTH], flags[0]
