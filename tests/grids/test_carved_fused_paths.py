@@ -1,8 +1,9 @@
 """The carved grid's compiled bookkeeping against the numpy and Python it replaced (2026-12-04,
 helper rd16): the bands' intervals from the estimates (:func:`intervals`,
-:func:`carving_intervals`) bit for bit, which newest echoes are fresh (``_fresh``) by its
-definition, and the model as the kernels take it (an array, :func:`model_array`). The expected
-values come from the old code, copied here, or from the definition, never from the new code."""
+:func:`carving_intervals`) bit for bit, their store by slot (:func:`store_intervals`, review
+rev16), which newest echoes are fresh (``_fresh``) by its definition, and the model as the kernels
+take it (an array, :func:`model_array`). The expected values come from the old code, copied here,
+or from the definition, never from the new code."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import pytest
 
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.grids import CarvedGrid, CarvedGridParams
-from sonarcarve.grids.carved.intervals import carving_intervals, intervals
+from sonarcarve.grids.carved.intervals import carving_intervals, intervals, store_intervals
 from sonarcarve.grids.carved.model import Model, model_array, model_from
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.methods import MethodConfig, make_method
@@ -165,3 +166,31 @@ def test_the_kernels_model_array_is_the_model_field_by_field() -> None:
         back = unpack(model_array(model))
         assert tuple(back) == tuple(model)
         assert type(back.aware) is bool
+
+
+def test_store_intervals_stores_the_numpy_intervals_times_the_factors_by_slot() -> None:
+    # What the grid stored before (review rev16): intervals() of the estimates, then
+    # lo[slots] = ..., weight[slots] = weight * chain[slots]; slots in any order, the others
+    # untouched; NaN bearings and widths and dead arcs give zeros.
+    rng = np.random.default_rng(4)
+    storage, n = 40, 17
+    slots = rng.permutation(storage)[:n]
+    bearing = rng.uniform(-math.pi, math.pi, n)
+    bearing[rng.random(n) < 0.15] = np.nan
+    width = rng.uniform(0.0, 0.6, n)
+    width[rng.random(n) < 0.15] = np.nan
+    alive = rng.random(n) < 0.7
+    chain = rng.uniform(0.0, 1.0, storage)
+    lo, hi, weight = (np.full(storage, -7.0) for _ in range(3))
+    store_intervals(slots, bearing, width, alive, chain, lo, hi, weight)
+    dead = ~alive | np.isnan(bearing) | np.isnan(width)
+    half = np.where(dead, 0.0, 0.5 * width)
+    middle = np.where(dead, 0.0, bearing)
+    want_lo, want_hi = np.full(storage, -7.0), np.full(storage, -7.0)
+    want_weight = np.full(storage, -7.0)
+    want_lo[slots], want_hi[slots] = middle - half, middle + half
+    want_weight[slots] = np.where(dead, 0.0, 1.0) * chain[slots]
+    for got, want in ((lo, want_lo), (hi, want_hi), (weight, want_weight)):
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+    assert dead.any()
+    assert not dead.all()

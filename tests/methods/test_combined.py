@@ -329,3 +329,45 @@ def test_a_store_growth_that_never_reaches_the_kernel_fails_instead_of_looping(
     assert len(raised) == 1
     assert isinstance(raised[0], RuntimeError)
     assert "stopped twice at the same arc" in str(raised[0])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_point_bearings_are_what_the_estimates_give_the_grids_bands(seed: int) -> None:
+    # The carved grid reads a band's bearing, width and life from point_bearings in place of
+    # the estimates (review rev16): the bearing of the estimate's point seen from its sensor,
+    # bit for bit, for live and removed arcs (the estimates themselves are checked against the
+    # two models run alone above).
+    batch = _wandering_stream(600, seed, spread=2.0, huge_share=0.02)
+    both = make_method("combined", MethodConfig(history_size=80, max_incidence=math.radians(20)))
+    assert isinstance(both, CombinedMethod)
+    both.add_many(batch)
+    h = both.history
+    live = h.slots()
+    for slots in (live, live[::-1][:7], live[:1], live[:0]):
+        est = both.estimates(slots)
+        bearing, width, alive = both.point_bearings(slots)
+        want = np.arctan2(est.xy[:, 1] - h.y[slots], est.xy[:, 0] - h.x[slots])
+        np.testing.assert_array_equal(bearing.view(np.int64), want.view(np.int64))
+        np.testing.assert_array_equal(width.view(np.int64), est.width.view(np.int64))
+        np.testing.assert_array_equal(alive, est.alive)
+    assert not both.estimates(live).alive.all()  # removed arcs are among them
+
+
+def test_a_slot_outside_the_history_or_not_an_integer_is_an_index_error() -> None:
+    # The compiled passes do not check their indices: a slot past the storage read other
+    # memory (garbage, or a crash for a far one) until review rev16. Numpy's rules otherwise:
+    # a negative slot counts back from the end.
+    both = make_method("combined", MethodConfig(history_size=20))
+    assert isinstance(both, CombinedMethod)
+    both.add_many(_wandering_stream(60, 3, spread=2.0, huge_share=0.0))
+    storage = both.history.storage_size
+    for slot in (storage, storage + 3, -storage - 1):
+        for ask in (both.estimates, both.point_bearings):
+            with pytest.raises(IndexError, match=f"slot {slot} is out of bounds"):
+                ask(np.array([0, slot]))
+    last = both.estimates(np.array([-1]))
+    np.testing.assert_array_equal(last.xy, both.estimates(np.array([storage - 1])).xy)
+    for ask in (both.estimates, both.point_bearings):  # not truncated to slot 1
+        with pytest.raises(IndexError, match="slots must be integers"):
+            ask(np.array([1.5]))
+    assert len(both.estimates([]).xy) == 0  # an empty list is no float slot

@@ -316,9 +316,10 @@ class SonarMethod(ABC):
         while done < n:
             h.commit_for_room()
             stop = min(n, done + h.room())
-            part = batch if stop - done == n else batch[done:stop]  # whole: no slicing
+            whole = stop - done == n  # the common case: the columns as they are, no slicing
+            part, part_width = (batch, width) if whole else (batch[done:stop], width[done:stop])
             first = h.append_many(part.x, part.y, part.range, part.theta, part.t, part.sensor,
-                                  width if stop - done == n else width[done:stop], start + done)
+                                  part_width, start + done)
             self._feed_block(first, stop - done)
             done = stop
         self._readings += n

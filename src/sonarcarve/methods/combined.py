@@ -139,16 +139,26 @@ _WIDTH, _QUARTER, _BEARING, _BOUND, _COS, _SIN, _DY, _DX = range(8)
 
 
 @compiled_borrowing
-def _carving_rows(slots: SlotArray, lo: FloatArray, hi: FloatArray, rows: FloatArray) -> None:
+def _carving_rows(slots: SlotArray, lo: FloatArray, hi: FloatArray, rows: FloatArray) -> int:
     """Carving's interval of each of ``slots`` into ``rows`` (:data:`_WIDTH` ...): its width
     ``hi - lo``, a quarter of it and its middle, the operations of
-    :meth:`~sonarcarve.methods.carving.CarvingModel.estimates` and :func:`chord_error`."""
+    :meth:`~sonarcarve.methods.carving.CarvingModel.estimates` and
+    :func:`~sonarcarve.maps.chord_error`.
+
+    Returns -1, or the position of the first slot outside ``lo`` (the rows then unfinished):
+    numba does not check its indices, and the passes after this one index the history's and
+    the models' arrays, all as long as ``lo``, by the same slots (a slot outside them read
+    other memory, or crashed the process: review rev16)."""
+    storage = lo.shape[0]
     for k in range(slots.shape[0]):
         s = slots[k]
+        if not -storage <= s < storage:  # a negative slot counts back, as numpy's index does
+            return k
         width = hi[s] - lo[s]
         rows[_WIDTH, k] = width
         rows[_QUARTER, k] = 0.5 * (0.5 * width)
         rows[_BEARING, k] = 0.5 * (lo[s] + hi[s])
+    return -1
 
 
 @compiled_borrowing
@@ -160,11 +170,11 @@ def _choose(
 ) -> None:
     """:func:`combine_carving_atm`, row by row, in place: row ``k`` (``slots[k]``) comes with
     carving's point bearing, width and the sine of a quarter of the width in ``rows``, which
-    becomes carving's bound ``2 r sin(θ_d / 4)`` (:func:`chord_error`); where ATM's point wins
-    (the row has kept a crossing and ``error_bound`` is below carving's bound), ATM's bearing
-    ``θ + median``, width (the span), bound and source replace them. ``flags`` gets ``alive``
-    and ``processed``, ``codes`` the source and carving's fate. A median is sorted again only
-    for a row whose crossings changed (``stale``, as
+    becomes carving's bound ``2 r sin(θ_d / 4)`` (:func:`~sonarcarve.maps.chord_error`); where
+    ATM's point wins (the row has kept a crossing and ``error_bound`` is below carving's
+    bound), ATM's bearing ``θ + median``, width (the span), bound and source replace them.
+    ``flags`` gets ``alive`` and ``processed``, ``codes`` the source and carving's fate. A
+    median is sorted again only for a row whose crossings changed (``stale``, as
     :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
     for k in range(slots.shape[0]):
         s = slots[k]
@@ -208,6 +218,16 @@ def _seen_from_sensor(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatAr
         py = y[s] + r[s] * rows[_SIN, k]
         rows[_DY, k] = py - y[s]
         rows[_DX, k] = px - x[s]
+
+
+def _slot_indices(slots: SlotArray) -> SlotArray:
+    """``slots`` as the int64 array the compiled passes take; a float slot is an ``IndexError``,
+    as numpy's indexing makes it, not truncated to the slot below (review rev16)."""
+    slots = np.asarray(slots)
+    if slots.dtype.kind not in "iu" and slots.size:
+        msg = f"slots must be integers, not {slots.dtype}"
+        raise IndexError(msg)
+    return slots.astype(np.int64, copy=False)
 
 
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
@@ -382,7 +402,7 @@ class CombinedMethod(SonarMethod):
         office, 0.10 m; ``benchmarks/grid_reads.py``).
         """
         h = self.history
-        slots = np.asarray(slots, dtype=np.int64)
+        slots = _slot_indices(slots)
         rows, flags, codes = self._point_rows(slots)
         xy = np.empty((len(slots), 2))
         _place(slots, h.x, h.y, h.r, rows, xy)
@@ -397,11 +417,16 @@ class CombinedMethod(SonarMethod):
         estimates' other fields (one compiled pass and numpy's ``arctan2`` in place of about ten
         array operations and the :class:`Estimates`; the grid asks at every read).
 
-        Raises the error that stopped a model for good, if one did, as :meth:`estimates`.
+        Returns ``(bearing, width, alive)``, each of shape (len(slots),): radians, radians
+        (eq. 5.1), bool.
+
+        Raises the error that stopped a model for good, if one did, as :meth:`estimates`;
+        ``IndexError`` for a slot outside the history's storage or not an integer, as
+        :meth:`estimates`.
         """
         self._check_usable()
         h = self.history
-        slots = np.asarray(slots, dtype=np.int64)
+        slots = _slot_indices(slots)
         rows, flags, _ = self._point_rows(slots)
         _seen_from_sensor(slots, h.x, h.y, h.r, rows)
         return np.arctan2(rows[_DY], rows[_DX]), rows[_WIDTH], flags[0]
@@ -414,7 +439,11 @@ class CombinedMethod(SonarMethod):
         rows = np.empty((8, n))
         flags = np.empty((2, n), dtype=bool)
         codes = np.empty((2, n), dtype=np.int8)
-        _carving_rows(slots, carving.lo, carving.hi, rows)
+        outside = _carving_rows(slots, carving.lo, carving.hi, rows)
+        if outside >= 0:
+            msg = (f"slot {slots[outside]} is out of bounds for the history's "
+                   f"{len(carving.lo)} slots")
+            raise IndexError(msg)
         np.sin(rows[_QUARTER], out=rows[_BOUND])
         _choose(slots, carving.status, carving.carved, atm.counts, h.r, rows, flags, codes,
                 *atm.median_state())

@@ -407,7 +407,10 @@ class CarvedGrid(CellGrid):
     def _fresh(self, slots: SlotArray, seqs: npt.NDArray[np.int64]) -> BoolArray:
         """Which of the live arcs ``seqs`` (consecutive, in ``slots``) is its sensor's newest
         reading, heard at most ``fresh_seconds`` before the newest reading seen, and less than
-        ``fresh_periods`` of its sensor's firing periods before it."""
+        ``fresh_periods`` of its sensor's firing periods before it. The reads work this out
+        inside :func:`~sonarcarve.grids.carved.kernels.refresh_kernel` (the same
+        :func:`~sonarcarve.grids.carved.kernels.mark_fresh`, one call a read); this is its
+        seam for the tests."""
         fresh = np.zeros(len(seqs), dtype=bool)
         params = self._params
         fresh_kernel(self._newest, int(seqs[0]), slots, self._method.history.t, self._latest_t,

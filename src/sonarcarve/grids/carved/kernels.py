@@ -62,8 +62,9 @@ def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], mo
     """The final updates of a batch in reading order: before the free space of reading ``k``
     (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
     final band of every arc it pushed out of the history (:class:`Finals`, its fields one by
-    one: ``final_seq + capacity <= seq``). ``model``: :func:`~sonarcarve.grids.carved.model.
-    model_array` (named tuples cost numba's dispatcher 1-1.5 µs each)."""
+    one: ``final_seq + capacity <= seq``). ``model``:
+    :func:`~sonarcarve.grids.carved.model.model_array` (named tuples cost numba's dispatcher
+    1-1.5 µs each)."""
     m = model_from(model)
     finals = Finals(final_x, final_y, final_r, final_lo, final_hi, final_weight, final_seq)
     p = 0

@@ -13,13 +13,16 @@ import numpy as np
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS, CarvedGridParams
 from sonarcarve.grids.cells import logit
+from sonarcarve.typing import FloatArray
 
 __all__ = ["Model", "model_array", "model_from", "model_of"]
 
 
 class Model(NamedTuple):
-    """The grid's geometry and sensor model as the kernels use them (metres, log-odds), one
-    argument instead of eighteen positional numbers that could be swapped unnoticed."""
+    """The grid's geometry and sensor model as the kernels use them (metres, log-odds), by
+    name instead of twenty positional numbers that could be swapped unnoticed. The kernels are
+    passed it as :func:`model_array` and name its fields again at their entry
+    (:func:`model_from`)."""
 
     xmin: float
     ymin: float
@@ -60,7 +63,7 @@ def model_of(params: CarvedGridParams, xmin: float, ymin: float, h: float,
                  free_margin=POSE_MARGIN_SIGMAS * float(p.pose_sigma))
 
 
-def model_array(m: Model) -> np.ndarray:
+def model_array(m: Model) -> FloatArray:
     """``m`` as the float64 array the kernels take (:func:`model_from` makes it a
     :class:`Model` again, the same numbers; ``aware`` as 1.0 or 0.0).
 
@@ -71,7 +74,7 @@ def model_array(m: Model) -> np.ndarray:
 
 
 @compiled_inline
-def model_from(v: np.ndarray) -> Model:
+def model_from(v: FloatArray) -> Model:
     """The :class:`Model` of :func:`model_array` ``v``, inside a kernel (field by field, in
     :class:`Model`'s order)."""
     return Model(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11],
