@@ -142,6 +142,22 @@ def test_shares_are_within_zero_and_one(name: str, stream: ReadingBatch) -> None
     assert result.fully_carved + result.split <= len(stream)
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_a_slot_outside_the_history_or_not_an_integer_is_an_index_error(
+        name: str, stream: ReadingBatch) -> None:
+    # numpy's rules for every method: compiled estimates do not check their indices, and a slot
+    # far past the storage crashed evidence carving's (segmentation fault, review rev16).
+    method = _method(name)
+    method.add_many(stream[:200])
+    storage = method.history.storage_size
+    for slot in (storage, storage + 3, 10**7, -storage - 1):
+        with pytest.raises(IndexError):
+            method.estimates(np.array([0, slot]))
+    with pytest.raises(IndexError):
+        method.estimates(np.array([1.5]))
+    assert len(method.estimates(np.array([0, 1])).xy) == 2
+
+
 def test_centerline_processes_everything_at_once(stream: ReadingBatch) -> None:
     method = _method("centerline")
     for k in range(60):
