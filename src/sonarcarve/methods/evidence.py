@@ -538,20 +538,15 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
         fate[q] = UNCHANGED if has[q] else FULLY_CARVED
 
 
-def _checked_slots(slots: SlotArray, storage: int) -> SlotArray:
-    """``slots`` as the int64 array the compiled estimates take, refused as numpy's indexing
-    refuses them (``IndexError``: a float, or outside ``-storage .. storage - 1``): the kernels
-    do not check bounds, and a slot past the storage read other memory or crashed."""
+def _checked_slots(slots: SlotArray) -> SlotArray:
+    """``slots`` as the int64 array the compiled estimates take; a float slot is an
+    ``IndexError``, as numpy's indexing makes it, not truncated to the slot below (the
+    estimates' kernel refuses a slot outside the storage)."""
     slots = np.asarray(slots)
     if slots.size and slots.dtype.kind not in "iu":
         msg = f"slots must be integers, not {slots.dtype}"
         raise IndexError(msg)
-    slots = np.ascontiguousarray(slots, dtype=np.int64)
-    if slots.size and (slots.min() < -storage or slots.max() >= storage):
-        bad = slots[(slots < -storage) | (slots >= storage)][0]
-        msg = f"slot {bad} is out of bounds for the history's {storage} slots"
-        raise IndexError(msg)
-    return slots
+    return np.ascontiguousarray(slots, dtype=np.int64)
 
 
 class EvidenceModel(ArcModel):
@@ -791,7 +786,7 @@ class EvidenceModel(ArcModel):
         self.check_usable()
         h, o = self.history, self.options
         return evidence_estimates(
-            _checked_slots(slots, h.storage_size), h.x, h.y, h.r, h.theta, h.beam_width,
+            _checked_slots(slots), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
             self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
             o.uncut_posterior, o.min_atm_crossings,

@@ -150,6 +150,12 @@ def evidence_estimates(
         Number of surviving runs.
     hull_share : float
         Surviving hull width over the full beam.
+
+    Raises
+    ------
+    IndexError
+        A slot outside ``-len(x) .. len(x) - 1`` (compiled indexing checks no bounds: such a
+        slot read other memory, or crashed the process).
     """
     n = slots.shape[0]
     bins = free.shape[1]
@@ -169,6 +175,8 @@ def evidence_estimates(
     weights = np.zeros(bins)
     for q in range(n):
         s = slots[q]
+        if s < -x.shape[0] or s >= x.shape[0]:  # compiled indexing checks no bounds
+            raise IndexError("a slot is out of bounds for the history's storage")
         phi = beam_width[s]
         half = 0.5 * phi
         step = phi / bins
