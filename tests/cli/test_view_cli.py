@@ -193,3 +193,87 @@ def _summary_rows(output: str) -> list[str]:
     """The summary table's rows of counts (readings in, points, true walls), not its paths."""
     rows = [" ".join(line.replace("│", " ").split()) for line in output.splitlines()]
     return [row for row in rows if row.startswith(("readings in", "points in", "true walls"))]
+
+
+def _global_map_xy(path: Path) -> np.ndarray:
+    """The points of the recording's global map (its last Points2D at /world/global_map)."""
+    for chunk in rerun_chunk.RrdReader(path).stream().to_chunks():
+        if str(chunk.entity_path) == "/world/global_map":
+            column = chunk.to_record_batch().column("Points2D:positions")
+            return np.array(column[len(column) - 1].as_py(), dtype=np.float64).reshape(-1, 2)
+    msg = f"{path}: no global map"
+    raise AssertionError(msg)
+
+
+@pytest.fixture(scope="module")
+def without_beam_width(simulated: Path) -> Path:
+    """The simulated doorway run without its beam_width column: --beam-width then applies."""
+    lines = (simulated / "run.csv").read_text().splitlines()
+    path = simulated / "run6.csv"
+    path.write_text("".join(",".join(line.split(",")[:6]) + "\n" for line in lines))
+    return path
+
+
+# Values the doorway run's global map is sensitive to (checked: each changes its points).
+_METHOD_OPTIONS = [
+    ["--history", "20"],
+    ["--beam-width", "40"],
+    ["--range-tolerance", "0.15"],
+    ["--method", "atm", "--min-transversal", "60"],
+    ["--max-incidence", "30"],
+]
+
+
+@pytest.mark.usefixtures("headless")
+@pytest.mark.parametrize("option", _METHOD_OPTIONS, ids=lambda o: o[-2])
+def test_view_maps_with_process_s_method_options(without_beam_width: Path, tmp_path: Path,
+                                                  option: list[str]) -> None:
+    # User review: view had none of process's method options, so a recording could not show a
+    # run mapped with other parameters than the defaults. The recording's global map is the
+    # map process writes with the same options, and not the one with the defaults.
+    log = str(without_beam_width)
+    base = option[:2] if option[0] == "--method" else []  # the method the option tunes
+    maps = {}
+    for name, args in (("given", option), ("default", base)):
+        rrd, csv = tmp_path / f"{name}.rrd", tmp_path / f"{name}.csv"
+        assert main(["view", log, *args, "--out", str(rrd), "--no-open"]) == 0
+        assert main(["process", log, *args, "--out", str(csv)]) == 0
+        from_process = np.loadtxt(csv, delimiter=",", skiprows=1, usecols=(3, 4), ndmin=2)
+        maps[name] = _global_map_xy(rrd)
+        np.testing.assert_allclose(maps[name], from_process, atol=1e-6)
+    assert maps["given"].shape != maps["default"].shape or not np.allclose(
+        maps["given"], maps["default"])
+
+
+@pytest.mark.usefixtures("headless")
+@pytest.mark.parametrize(("args", "problem"), [
+    (["--history", "0"], "--history"),
+    (["--beam-width", "200"], "--beam-width"),
+    (["--range-tolerance", "-1"], "--range-tolerance"),
+    (["--min-transversal", "0"], "--min-transversal"),
+    (["--max-incidence", "95"], "--max-incidence"),
+])
+def test_a_bad_method_option_is_one_line_exit_2_naming_it(
+        readings: Path, capsys: pytest.CaptureFixture[str], args: list[str],
+        problem: str) -> None:
+    assert main(["view", str(readings), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert problem in err
+    assert not readings.with_suffix(".rrd").exists()
+    # process says the same about the same value (one set of checks for both commands)
+    assert main(["process", str(readings), *args, "--out", str(readings.with_name("m.csv"))]) == 2
+    assert capsys.readouterr().err.replace("process", "view") == err.replace("process", "view")
+
+
+def test_view_lists_process_s_method_options_with_the_same_help(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    texts = []
+    for command in ("view", "process"):
+        assert main([command, "--help"]) == 0
+        texts.append(" ".join(capsys.readouterr().out.replace("│", " ").split()))
+    for option in ("--history", "--beam-width", "--range-tolerance", "--min-transversal",
+                   "--max-incidence"):
+        assert option in texts[0]
+    assert "ε in metres, 0 to 1" in texts[0]
+    assert "β in degrees, in [0, 90]" in texts[0]

@@ -16,6 +16,9 @@ from sonarcarve.io.bag_out import (
     LOCAL_MAP_FIELDS,
     LOCAL_MAP_TOPIC,
     BagFormat,
+    BagWriter,
+    arc_markers,
+    stamp,
     write_map_bag,
 )
 from sonarcarve.io.errors import OutputError
@@ -191,3 +194,35 @@ def test_progress_is_reported_at_each_local_map_and_at_the_end(tmp_path: Path) -
                   on_progress=done.append)
     # Local maps every 0.5 s of log time: before readings 5, 10, ..., 25, then the last.
     assert done == [5, 10, 15, 20, 25, n]
+
+
+# A sensor driving along y past a wall, so that carving leaves arcs of several widths.
+_DRIVE = ReadingBatch.from_arrays(
+    t=0.1 * np.arange(24), sensor=np.zeros(24, int), x=np.zeros(24), y=0.1 * np.arange(24),
+    theta=np.zeros(24), range=np.where(np.arange(24) % 3 == 0, 2.0, 2.4), beam_width=[0.4] * 24)
+
+
+@pytest.mark.parametrize("name", ["map.mcap", "map.bag"])
+def test_the_arc_markers_written_are_the_messages_built_from_their_mappings(
+        tmp_path: Path, name: str) -> None:
+    # Bag output CPU: write_map_bag builds each arc's points as Point messages at once and
+    # shares the markers' zero-valued parts; the bytes must be those of the plain way, each
+    # field from a mapping (BagWriter.message, arc_markers without `point`).
+    path = tmp_path / name
+    write_map_bag(path, _DRIVE, make_method("combined"), rate=2.0)
+    method = make_method("combined")
+    for k, reading in enumerate(_DRIVE):
+        method.add(reading, k)
+    header = {"stamp": stamp(float(_DRIVE.t[-1])), "frame_id": "odom"}
+    mappings = arc_markers(method, header)
+    assert len(mappings) > 3
+    assert len({len(m.get("points", ())) for m in mappings}) > 2  # strips of several lengths
+    msgtype = "visualization_msgs/msg/MarkerArray"
+    with BagWriter(tmp_path / f"plain-{name}") as plain:
+        message = plain.message(msgtype, {"markers": mappings})
+        expected = (plain.typestore.serialize_ros1(message, msgtype) if plain.is_ros1
+                    else plain.typestore.serialize_cdr(message, msgtype))
+    with AnyReader([path]) as reader:
+        arcs = [c for c in reader.connections if c.topic == ARCS_TOPIC]
+        *_, (_, _, last) = reader.messages(connections=arcs)
+    assert bytes(last) == bytes(expected)

@@ -1,16 +1,20 @@
 """Options more than one command takes, declared once: how to read a ROS bag, bag outputs,
-the sensors' max range.
+the sensors' max range, the method and its parameters.
 
 ``sonarcarve convert rosbag``, ``sonarcarve process`` and ``sonarcarve grid`` read bags the
 same way; each takes the options below in its signature and turns them into a
 :class:`~sonarcarve.fleet.BagOptions` with :func:`bag_options`; :func:`refuse_bag_options`
 refuses them for a readings CSV input. ``sonarcarve process``, ``grid`` and ``view`` take
 ``--max-range`` (:data:`MAX_RANGE_HELP`): the readings CSV contract lets a no-echo row (range
-``inf``) leave its ``max_range`` empty when the run gives one for all.
+``inf``) leave its ``max_range`` empty when the run gives one for all. ``sonarcarve process``
+and ``view`` map with ``--method`` and its parameters (``--history``, ``--beam-width``,
+``--range-tolerance``, ``--min-transversal``, ``--max-incidence``), turned into a
+:class:`~sonarcarve.methods.MethodConfig` by :func:`method_config`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,12 +23,15 @@ from typing import Annotated, NamedTuple
 import typer
 
 from sonarcarve.cli.app import reworded
-from sonarcarve.errors import SonarcarveError
+from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.filters import ReadingFilter, filter_readings
 from sonarcarve.fleet import BagOptions, is_bag
+from sonarcarve.geometry import NO_INCIDENCE_LIMIT
+from sonarcarve.history import MAX_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
 from sonarcarve.io.rosbag import RosbagError, RosbagLog
+from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, MethodConfig, check_degrees
 from sonarcarve.readings import MAX_READING_RANGE, NO_MAX_RANGE, ReadingBatch, reading_ids
 from sonarcarve.robot import load_robot
 from sonarcarve.typing import IntArray
@@ -32,24 +39,33 @@ from sonarcarve.typing import IntArray
 __all__ = [
     "BAG_FLAGS",
     "BAG_PANEL",
+    "DEFAULT_BEAM_WIDTH_DEG",
+    "DEFAULT_TRANSVERSAL_DEG",
     "MAX_RANGE_HELP",
     "RUNNER_FLAGS",
     "BagOptionsError",
+    "BeamWidthOpt",
     "FrameOpt",
+    "HistoryOpt",
+    "IncidenceOpt",
     "MaxRangeError",
     "MaxRangeOpt",
     "MethodNameError",
+    "MethodOpt",
     "NearEchoes",
     "NoEchoOpt",
     "OdomTopicOpt",
     "RangeTopicOpt",
     "RobotOpt",
+    "ToleranceOpt",
+    "TransversalOpt",
     "bag_options",
     "check_max_range",
     "check_method",
     "check_new_bag",
     "drop_far_echoes",
     "max_range_hint",
+    "method_config",
     "read_bag",
     "refuse_bag_options",
 ]
@@ -104,6 +120,44 @@ NoEchoOpt = Annotated[bool, typer.Option(
          "as free space: carving and the carved and Elfes grids clear with them (ROS's "
          "range-sensor-layer drops +Inf, as on a robot); they add no point.",
     rich_help_panel=BAG_PANEL)]
+
+
+#: ``sonarcarve process`` and ``view``: the method and its parameters (:func:`method_config`).
+MethodOpt = Annotated[str, typer.Option(
+    "--method", "-m", metavar="NAME",
+    help="centerline | carve | atm | combined | evidence. `combined` runs carving and ATM on "
+         "one history and keeps, per arc, the estimate with the smaller error bound; "
+         "`evidence` is evidence carving (beyond the paper): free-space evidence accumulated "
+         "across each beam, ATM inside it, and a confidence column per point.")]
+HistoryOpt = Annotated[int, typer.Option(
+    metavar="ARCS", help=f"Arcs kept in the history (paper: 250; at most {MAX_HISTORY_SIZE}).")]
+BeamWidthOpt = Annotated[float, typer.Option(
+    metavar="DEGREES",
+    help="Beam width φ in degrees, used only for readings without a beam_width value (no "
+         "such column, or a blank cell); a beam_width column, in radians, wins.")]
+ToleranceOpt = Annotated[float, typer.Option(
+    metavar="METRES",
+    help="ε in metres, 0 to 1: a newer reading's free space ends ε short of its range (0 = "
+         "paper). "
+         "With poses from a localiser good to σ metres, add 2σ (5 cm: 0.15), so that a beam "
+         "stamped a little off does not carve the walls it passes (docs/RESULTS.md, 'Maps from "
+         "wrong poses').")]
+#: ``--beam-width``'s default, degrees (paper: 22.5°; MethodConfig's default, in radians).
+DEFAULT_BEAM_WIDTH_DEG = 22.5
+#: ``--min-transversal``'s default, degrees (the config's, in radians, rounded for the help).
+DEFAULT_TRANSVERSAL_DEG = round(math.degrees(DEFAULT_MIN_TRANSVERSAL), 6)
+TransversalOpt = Annotated[float, typer.Option(
+    metavar="DEGREES",
+    help="ψ in degrees, in (0, 90]: ATM's minimum angle between two arcs at their "
+         "intersection.")]
+IncidenceOpt = Annotated[float | None, typer.Option(
+    metavar="DEGREES", show_default="off",
+    help="β in degrees, in [0, 90]: specular-aware carving (beyond the paper; off by "
+         "default). A newer reading then does not carve the part of an older arc whose "
+         "implied wall (facing the older sensor) it would meet at more than β from the "
+         "normal: smooth walls send no echo at such glancing angles, so the newer "
+         "reading's free space says nothing there. 90 = off = the paper. Example: "
+         "--max-incidence 30.")]
 
 
 def read_bag(bag: BagOptions, source: str | Path) -> RosbagLog:
@@ -243,3 +297,32 @@ def drop_far_echoes(batch: ReadingBatch, max_range: float | None) -> NearEchoes:
         return NearEchoes(batch, reading_ids(len(batch)), 0)
     kept = filter_readings(batch, ReadingFilter(max_range=max_range))
     return NearEchoes(kept.batch, kept.ids, kept.report.too_far)
+
+
+def method_config(history: int, beam_width_deg: float, tolerance: float,
+                  transversal_deg: float, incidence_deg: float | None) -> MethodConfig:
+    """The method options (``--history``, ...) in SI units; :class:`MethodConfig` checks
+    every value (one-line errors).
+
+    The config speaks radians and its own field names; the options given in degrees are
+    checked here first, in degrees, and any other error names the option (``--history``), not
+    the field (``history_size``).
+    """
+    check_degrees("beam_width", beam_width_deg, "--beam-width")
+    check_degrees("min_transversal", transversal_deg, "--min-transversal")
+    if incidence_deg is not None:
+        check_degrees("max_incidence", incidence_deg, "--max-incidence")
+    incidence = NO_INCIDENCE_LIMIT
+    if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
+        incidence = math.radians(incidence_deg)
+    with reworded(ConfigError, _OPTION_OF_FIELD):
+        return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
+                            range_tolerance=tolerance,
+                            min_transversal=math.radians(transversal_deg),
+                            max_incidence=incidence)
+
+
+#: MethodConfig's field -> the option that sets it, for its error messages.
+_OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tolerance",
+                    "beam_width": "--beam-width", "min_transversal": "--min-transversal",
+                    "max_incidence": "--max-incidence"}

@@ -30,38 +30,42 @@ from sonarcarve.cli.app import (
     warn,
 )
 from sonarcarve.cli.options import (
+    DEFAULT_BEAM_WIDTH_DEG,
+    DEFAULT_TRANSVERSAL_DEG,
     MAX_RANGE_HELP,
     RUNNER_FLAGS,
+    BeamWidthOpt,
     FrameOpt,
+    HistoryOpt,
+    IncidenceOpt,
+    MethodOpt,
     NoEchoOpt,
     OdomTopicOpt,
     RangeTopicOpt,
     RobotOpt,
+    ToleranceOpt,
+    TransversalOpt,
     bag_options,
     check_max_range,
     check_method,
     check_new_bag,
     drop_far_echoes,
     max_range_hint,
+    method_config,
     read_bag,
     refuse_bag_options,
 )
-from sonarcarve.errors import ConfigError, SonarcarveError
+from sonarcarve.errors import SonarcarveError
 from sonarcarve.filters import PAPER_MAX_RANGE, BodyFootprint, MapFilter, ReadingFilter
 from sonarcarve.fleet import SUMMARY_NAME, BagOptions, FleetRow, is_bag
-from sonarcarve.geometry import NO_INCIDENCE_LIMIT as DEFAULT_MAX_INCIDENCE
-from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.io import read_readings_csv, write_map_csv
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.map_csv import MapCsvSink, map_csv_sink
 from sonarcarve.io.readings_csv import count_data_lines, iter_readings_csv
 from sonarcarve.io.sanity import beam_width_mistake, likely_mistakes
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
-from sonarcarve.methods.config import (
-    DEFAULT_MIN_TRANSVERSAL,
-    DEFAULT_RANGE_TOLERANCE,
-    check_degrees,
-)
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.pipeline import ProcessResult, process_chunks, process_readings
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.robot import FIRING_PERIOD_RANGE, load_robot
@@ -175,38 +179,6 @@ _MapRateOpt = Annotated[float | None, typer.Option(
     metavar="PER_SECOND",
     help=f"Bag output: local maps (and arc markers) per second of log time [default: "
          f"{_DEFAULT_MAP_RATE:g}].", show_default=False)]
-_MethodOpt = Annotated[str, typer.Option(
-    "--method", "-m", metavar="NAME",
-    help="centerline | carve | atm | combined | evidence. `combined` runs carving and ATM on "
-         "one history and keeps, per arc, the estimate with the smaller error bound; "
-         "`evidence` is evidence carving (beyond the paper): free-space evidence accumulated "
-         "across each beam, ATM inside it, and a confidence column per point.")]
-_HistoryOpt = Annotated[int, typer.Option(
-    metavar="ARCS", help=f"Arcs kept in the history (paper: 250; at most {MAX_HISTORY_SIZE}).")]
-_BeamWidthOpt = Annotated[float, typer.Option(
-    metavar="DEGREES",
-    help="Beam width φ in degrees, used only for readings without a beam_width value (no "
-         "such column, or a blank cell); a beam_width column, in radians, wins.")]
-_ToleranceOpt = Annotated[float, typer.Option(
-    metavar="METRES",
-    help="ε in metres, 0 to 1: a newer reading's free space ends ε short of its range (0 = "
-         "paper). "
-         "With poses from a localiser good to σ metres, add 2σ (5 cm: 0.15), so that a beam "
-         "stamped a little off does not carve the walls it passes (docs/RESULTS.md, 'Maps from "
-         "wrong poses').")]
-_DEFAULT_TRANSVERSAL_DEG = round(math.degrees(DEFAULT_MIN_TRANSVERSAL), 6)
-_TransversalOpt = Annotated[float, typer.Option(
-    metavar="DEGREES",
-    help="ψ in degrees, in (0, 90]: ATM's minimum angle between two arcs at their "
-         "intersection.")]
-_IncidenceOpt = Annotated[float | None, typer.Option(
-    metavar="DEGREES", show_default="off",
-    help="β in degrees, in [0, 90]: specular-aware carving (beyond the paper; off by "
-         "default). A newer reading then does not carve the part of an older arc whose "
-         "implied wall (facing the older sensor) it would meet at more than β from the "
-         "normal: smooth walls send no echo at such glancing angles, so the newer "
-         "reading's free space says nothing there. 90 = off = the paper. Example: "
-         "--max-incidence 30.")]
 _MaxRangeOpt = Annotated[float | None, typer.Option(
     metavar="METRES", show_default="off",
     help=f"{MAX_RANGE_HELP} No-echo rows that give a max_range keep theirs. The paper "
@@ -275,12 +247,12 @@ def process(
     inputs: _InputsArg,
     out: _OutOpt = None,
     out_dir: _OutDirOpt = None,
-    method: _MethodOpt = "combined",
-    history: _HistoryOpt = DEFAULT_HISTORY_SIZE,
-    beam_width: _BeamWidthOpt = 22.5,
-    range_tolerance: _ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
-    min_transversal: _TransversalOpt = _DEFAULT_TRANSVERSAL_DEG,
-    max_incidence: _IncidenceOpt = None,
+    method: MethodOpt = "combined",
+    history: HistoryOpt = DEFAULT_HISTORY_SIZE,
+    beam_width: BeamWidthOpt = DEFAULT_BEAM_WIDTH_DEG,
+    range_tolerance: ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
+    min_transversal: TransversalOpt = DEFAULT_TRANSVERSAL_DEG,
+    max_incidence: IncidenceOpt = None,
     max_range: _MaxRangeOpt = None,
     min_range: _MinRangeOpt = None,
     jump_threshold: _JumpOpt = None,
@@ -354,7 +326,7 @@ def process(
 
     Example: `sonarcarve process logs/*.csv logs/*.bag --out-dir maps --workers 4`
     """
-    config = _config(history, beam_width, range_tolerance, min_transversal, max_incidence)
+    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error, occlusion_depth,
                                           driven_through, late_echo_period)
@@ -629,35 +601,6 @@ def _fleet_table(method: str, rows: Sequence[FleetRow], spec: RunnerSpec) -> Tab
         else:
             table.add_row(row.log, "", "", "", Text(row.error, style="red"))
     return table
-
-
-def _config(history: int, beam_width_deg: float, tolerance: float, transversal_deg: float,
-            incidence_deg: float | None) -> MethodConfig:
-    """The options in SI units; :class:`MethodConfig` checks every value (one-line errors).
-
-    The config speaks radians and its own field names; the options given in degrees are
-    checked here first, in degrees, and any other error names the option (``--history``), not
-    the field (``history_size``).
-    """
-    check_degrees("beam_width", beam_width_deg, "--beam-width")
-    check_degrees("min_transversal", transversal_deg, "--min-transversal")
-    if incidence_deg is not None:
-        check_degrees("max_incidence", incidence_deg, "--max-incidence")
-    incidence = DEFAULT_MAX_INCIDENCE
-    if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
-        incidence = math.radians(incidence_deg)
-    with reworded(ConfigError, _OPTION_OF_FIELD):
-        return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
-                            range_tolerance=tolerance,
-                            min_transversal=math.radians(transversal_deg),
-                            max_incidence=incidence)
-
-
-#: MethodConfig's field -> the option that sets it, for its error messages.
-_OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tolerance",
-                    "beam_width": "--beam-width", "min_transversal": "--min-transversal",
-                    "max_incidence": "--max-incidence"}
-
 
 
 def _run(readings: Path, sonar: SonarMethod, label: str,

@@ -21,27 +21,39 @@ from sonarcarve.cli.app import (
     warn,
 )
 from sonarcarve.cli.options import (
+    DEFAULT_BEAM_WIDTH_DEG,
+    DEFAULT_TRANSVERSAL_DEG,
+    BeamWidthOpt,
     FrameOpt,
+    HistoryOpt,
+    IncidenceOpt,
     MaxRangeOpt,
+    MethodOpt,
     NoEchoOpt,
     OdomTopicOpt,
     RangeTopicOpt,
     RobotOpt,
+    ToleranceOpt,
+    TransversalOpt,
     bag_options,
     check_max_range,
     check_method,
     drop_far_echoes,
     max_range_hint,
+    method_config,
     read_bag,
     refuse_bag_options,
 )
 from sonarcarve.errors import ConfigError, SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.fleet import BagOptions, is_bag
+from sonarcarve.history import DEFAULT_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.readings_csv import read_readings_csv
 from sonarcarve.io.rerun_out import DEFAULT_EVERY, write_rerun
+from sonarcarve.io.sanity import beam_width_mistake
 from sonarcarve.methods import make_method
+from sonarcarve.methods.config import DEFAULT_RANGE_TOLERANCE
 from sonarcarve.readings import ReadingBatch
 from sonarcarve.typing import FloatArray
 
@@ -67,10 +79,12 @@ def view(
         "--out", "-o", metavar="RUN.rrd",
         help="Where to save the recording. Default: beside the readings, NAME.rrd.",
         show_default=False)] = None,
-    method: Annotated[str, typer.Option(
-        "--method", "-m", metavar="NAME",
-        help="centerline | carve | atm | combined | evidence (evidence carving, beyond the "
-             "paper).")] = "combined",
+    method: MethodOpt = "combined",
+    history: HistoryOpt = DEFAULT_HISTORY_SIZE,
+    beam_width: BeamWidthOpt = DEFAULT_BEAM_WIDTH_DEG,
+    range_tolerance: ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
+    min_transversal: TransversalOpt = DEFAULT_TRANSVERSAL_DEG,
+    max_incidence: IncidenceOpt = None,
     world: Annotated[str | None, typer.Option(
         "--world", "-w", metavar="WORLD",
         help="Draw this world's walls (built-in name, random:SEED, walls .json, ROS map "
@@ -103,14 +117,21 @@ def view(
     Example: `sonarcarve view run.csv --method carve --out run.rrd`
 
     Example: `sonarcarve view run.mcap --no-echo` (a ROS bag; writes run.rrd)
+
+    Example: `sonarcarve view run.csv --range-tolerance 0.15 --max-incidence 30` (the method's
+    options are process's)
     """
     target = out if out is not None else readings.with_suffix(".rrd")
     check_output_file(target, inputs=[readings], label=f"--out {target}")
     if target.suffix.lower() != ".rrd":
         msg = f"--out {target}: a Rerun recording's name must end in .rrd"
         raise ViewUsageError(msg)
+    # The method and its parameters as process checks them, so that a recording can show a run
+    # mapped as process mapped it.
+    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence)
     check_method(method)
-    sonar = make_method(method)
+    sonar = make_method(method, config)
+    beam_warning = beam_width_mistake(beam_width, "--beam-width")
     check_max_range(max_range)
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)
     refuse_bag_options(readings, bag)
@@ -138,7 +159,7 @@ def view(
     if not len(batch):  # a valid file (a header only), so not an error: say so, as process does
         what = "no readings" if is_bag(readings) else "no readings, only a header"
         warn([f"{readings} has {what}: the recording is empty"])
-    warn([None if is_bag(readings) else cut_short(readings)])
+    warn([beam_warning, None if is_bag(readings) else cut_short(readings)])
 
 
 def _read_log(source: Path, bag: BagOptions, max_range: float | None) -> ReadingBatch:

@@ -256,7 +256,9 @@ class BagWriter:
 
     def write(self, topic: str, msgtype: str, t: float, fields: Mapping[str, Any]) -> None:
         """Write one message built from ``fields`` (see :meth:`message`), logged at ``t`` s."""
-        message = self.message(msgtype, fields)
+        # Zero-valued parts shared within the message (a marker array's thousands of unused
+        # textures and lifetimes built once): it is serialised and dropped, never changed.
+        message = _build(self.typestore, msgtype, fields, {})
         data = (self.typestore.serialize_ros1(message, msgtype) if self.is_ros1
                 else self.typestore.serialize_cdr(message, msgtype))
         self.write_raw(topic, msgtype, t, data)
@@ -280,14 +282,17 @@ class BagWriter:
 #: message type name or a base type tuple) for a nested message or a container, the size of an
 #: array, and the zero value of a plain one.
 _Field = tuple[str, str, str, Any, int, Any]
+#: A type's fields as (name, zero) pairs in its order, when all are plain values; else None.
+_Flat = tuple[tuple[str, Any], ...] | None
 
-#: Per typestore and message type, its fields (:data:`_Field`): rosbags describes each with
-#: enums, and a long log's arc markers (thousands of points per message) read those enums'
-#: names some 30 million times, most of the 33 s of the office tour to a bag.
-_PLANS: dict[tuple[int, str], tuple[Any, tuple[_Field, ...]]] = {}
+#: Per typestore and message type, its fields (:data:`_Field`) and, for a type of plain fields
+#: only (geometry_msgs/Point), their names and zeros (:func:`_flat`): rosbags describes each
+#: field with enums, and a long log's arc markers (thousands of points per message) read those
+#: enums' names some 30 million times, most of the 33 s of the office tour to a bag.
+_PLANS: dict[tuple[int, str], tuple[Any, tuple[_Field, ...], _Flat]] = {}
 
 
-def _plan(ts: Any, msgtype: str) -> tuple[_Field, ...]:
+def _planned(ts: Any, msgtype: str) -> tuple[Any, tuple[_Field, ...], _Flat]:
     key = (id(ts), msgtype)
     cached = _PLANS.get(key)
     if cached is None or cached[0] is not ts:  # an id reused by another typestore: anew
@@ -302,34 +307,74 @@ def _plan(ts: Any, msgtype: str) -> tuple[_Field, ...]:
                 fields.append((name, "NAME", "", detail, 0, None))
             else:
                 fields.append((name, kind.name, "", None, 0, _scalar_zero(detail[0])))
-        cached = (ts, tuple(fields))
+        plain = all(field[1] not in {"NAME", "ARRAY", "SEQUENCE"} for field in fields)
+        flat = tuple((field[0], field[5]) for field in fields) if plain else None
+        cached = (ts, tuple(fields), flat)
         _PLANS[key] = cached
-    return cached[1]
+    return cached
 
 
-def _build(ts: Any, msgtype: str, fields: Mapping[str, Any] | Any) -> Any:
+def _plan(ts: Any, msgtype: str) -> tuple[_Field, ...]:
+    return _planned(ts, msgtype)[1]
+
+
+def _flat(ts: Any, msgtype: str) -> _Flat:
+    """The fields' names and zeros, in the type's order, if every field is a plain value."""
+    return _planned(ts, msgtype)[2]
+
+
+def _build(ts: Any, msgtype: str, fields: Mapping[str, Any] | Any,
+           zeros: dict[_Field, Any] | None = None) -> Any:
+    """A message of ``msgtype`` from ``fields`` (see :meth:`BagWriter.message`); with
+    ``zeros``, the zero value of each field not given is built once and kept there (shared
+    by every message built with the same ``zeros``)."""
     if type(fields) is not dict and not isinstance(fields, Mapping):  # dict: the usual, fast
         return fields  # already a message
-    values = {field[0]: _value(ts, field, fields[field[0]]) if field[0] in fields
-              else _zero(ts, field)
+    flat = _flat(ts, msgtype)
+    if flat is not None:  # plain fields only (a Point, a Time): no field needs a plan
+        return ts.types[msgtype](*[fields.get(name, zero) for name, zero in flat])
+    values = {field[0]: _value(ts, field, fields[field[0]], zeros) if field[0] in fields
+              else _zero(ts, field, zeros)
               for field in _plan(ts, msgtype)}
     return ts.types[msgtype](**values)
 
 
-def _value(ts: Any, field: _Field, value: Any) -> Any:
+def _value(ts: Any, field: _Field, value: Any, zeros: dict[_Field, Any] | None) -> Any:
     _, kind, inner_kind, inner, _, _ = field
     if kind == "NAME":
-        return _build(ts, inner, value)
+        return _build(ts, inner, value, zeros)
     if kind in {"ARRAY", "SEQUENCE"}:
         if inner_kind == "NAME":
-            return [_build(ts, inner, v) for v in value]
+            return _build_all(ts, inner, value, zeros)
         if inner[0] in _NUMERIC:
             return np.asarray(value, dtype=_DTYPES.get(inner[0], inner[0]))
         return list(value)
     return value
 
 
-def _zero(ts: Any, field: _Field) -> Any:
+def _build_all(ts: Any, msgtype: str, values: Iterable[Any],
+               zeros: dict[_Field, Any] | None) -> list[Any]:
+    """``[_build(ts, msgtype, v) for v in values]``, faster for a type of plain fields (an arc
+    marker's points, thousands a message): the class and the fields looked up once."""
+    flat = _flat(ts, msgtype)
+    if flat is None:
+        return [_build(ts, msgtype, v, zeros) for v in values]
+    cls = ts.types[msgtype]
+    return [v if type(v) is cls  # already a message (arc_markers' points)
+            else cls(*[v.get(name, zero) for name, zero in flat]) if type(v) is dict
+            else _build(ts, msgtype, v) for v in values]
+
+
+def _zero(ts: Any, field: _Field, zeros: dict[_Field, Any] | None) -> Any:
+    if zeros is None or field[1] not in {"NAME", "ARRAY", "SEQUENCE"}:  # a plain value: as is
+        return _new_zero(ts, field)
+    zero = zeros.get(field)
+    if zero is None:
+        zero = zeros[field] = _new_zero(ts, field)
+    return zero
+
+
+def _new_zero(ts: Any, field: _Field) -> Any:
     _, kind, inner_kind, inner, size, base = field
     if kind == "NAME":
         return _build(ts, inner, {})
@@ -530,8 +575,9 @@ def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str,
     header = {"stamp": stamp(t), "frame_id": frame}
     out.write(LOCAL_MAP_TOPIC, "sensor_msgs/msg/PointCloud2", t,
               {"header": header, **point_cloud_fields(local)})
+    point = out.typestore.types["geometry_msgs/msg/Point"]  # the points as messages at once
     out.write(ARCS_TOPIC, "visualization_msgs/msg/MarkerArray", t,
-              {"markers": arc_markers(method, header)})
+              {"markers": arc_markers(method, header, point=point)})
     if grid is not None:
         out.write(GRID_TOPIC, "nav_msgs/msg/OccupancyGrid", t,
                   {"header": header, **occupancy_grid_fields(grid, t)})
@@ -570,9 +616,17 @@ def point_cloud_fields(local: LocalMap) -> dict[str, Any]:
     }
 
 
-def arc_markers(method: LiveMethod, header: Mapping[str, Any]) -> list[dict[str, Any]]:
+def arc_markers(method: LiveMethod, header: Mapping[str, Any], *,
+                point: Callable[[float, float, float], Any] | None = None,
+                ) -> list[dict[str, Any]]:
     """Marker mappings: ``DELETEALL``, then one ``LINE_STRIP`` per live arc of ``method``'s
-    history: radius r about the sensor origin, the estimate's width centred on its point."""
+    history: radius r about the sensor origin, the estimate's width centred on its point.
+
+    ``point(x, y, z)`` makes each point of a strip (default: a mapping); a bag writer passes
+    its ``geometry_msgs/Point`` class, which skips a mapping and its reading for each of the
+    millions of points of a long log.
+    """
+    make_point = _point_mapping if point is None else point
     h = method.history
     slots = h.slots()
     est = method.estimates(slots)
@@ -591,7 +645,11 @@ def arc_markers(method: LiveMethod, header: Mapping[str, Any]) -> list[dict[str,
             "type": _MARKER_LINE_STRIP, "action": 0,
             "pose": {"orientation": {"w": 1.0}}, "scale": {"x": 0.02},
             "color": {"r": rgb[0], "g": rgb[1], "b": rgb[2], "a": 1.0},
-            "points": [{"x": ox + r * math.cos(a), "y": oy + r * math.sin(a)}
+            "points": [make_point(ox + r * math.cos(a), oy + r * math.sin(a), 0.0)
                        for a in tau.tolist()],
         })
     return markers
+
+
+def _point_mapping(x: float, y: float, z: float) -> dict[str, float]:
+    return {"x": x, "y": y, "z": z}
