@@ -33,7 +33,7 @@ from sonarcarve.maps import (
     SOURCE_CENTERLINE,
 )
 from sonarcarve.methods.atm import AtmModel, add_atm_arc, row_median, start_atm_arc
-from sonarcarve.methods.base import Estimates, SonarMethod
+from sonarcarve.methods.base import Estimates, SonarMethod, slot_indices
 from sonarcarve.methods.carving import CarvingModel, carve_found, start_carved_arc
 from sonarcarve.methods.config import (
     DEFAULT_MIN_TRANSVERSAL,
@@ -220,16 +220,6 @@ def _seen_from_sensor(slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatAr
         rows[_DX, k] = px - x[s]
 
 
-def _slot_indices(slots: SlotArray) -> SlotArray:
-    """``slots`` as the int64 array the compiled passes take; a float slot is an ``IndexError``,
-    as numpy's indexing makes it, not truncated to the slot below (review rev16)."""
-    slots = np.asarray(slots)
-    if slots.dtype.kind not in "iu" and slots.size:
-        msg = f"slots must be integers, not {slots.dtype}"
-        raise IndexError(msg)
-    return slots.astype(np.int64, copy=False)
-
-
 def combine_carving_atm(carving: Estimates, atm: Estimates) -> Estimates:
     """Per arc, the better of carving's and ATM's estimates (section 4).
 
@@ -402,7 +392,7 @@ class CombinedMethod(SonarMethod):
         office, 0.10 m; ``benchmarks/grid_reads.py``).
         """
         h = self.history
-        slots = _slot_indices(slots)
+        slots = slot_indices(slots)
         rows, flags, codes = self._point_rows(slots)
         xy = np.empty((len(slots), 2))
         _place(slots, h.x, h.y, h.r, rows, xy)
@@ -426,7 +416,7 @@ class CombinedMethod(SonarMethod):
         """
         self._check_usable()
         h = self.history
-        slots = _slot_indices(slots)
+        slots = slot_indices(slots)
         rows, flags, _ = self._point_rows(slots)
         _seen_from_sensor(slots, h.x, h.y, h.r, rows)
         return np.arctan2(rows[_DY], rows[_DX]), rows[_WIDTH], flags[0]

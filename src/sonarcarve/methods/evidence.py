@@ -81,7 +81,14 @@ from sonarcarve.maps import (
     GlobalMap,
 )
 from sonarcarve.methods.atm import CrossingStore, atm_error_bound
-from sonarcarve.methods.base import ArcModel, Estimates, Measures, SonarMethod, arc_point
+from sonarcarve.methods.base import (
+    ArcModel,
+    Estimates,
+    Measures,
+    SonarMethod,
+    arc_point,
+    slot_indices,
+)
 from sonarcarve.methods.config import (
     DEFAULT_CARVE_PROBABILITY,
     DEFAULT_EVIDENCE_BINS,
@@ -538,17 +545,6 @@ def _fill_codes(slots: SlotArray, has: BoolArray, is_atm: BoolArray, width: Floa
         fate[q] = UNCHANGED if has[q] else FULLY_CARVED
 
 
-def _checked_slots(slots: SlotArray) -> SlotArray:
-    """``slots`` as the int64 array the compiled estimates take; a float slot is an
-    ``IndexError``, as numpy's indexing makes it, not truncated to the slot below (the
-    estimates' kernel refuses a slot outside the storage)."""
-    slots = np.asarray(slots)
-    if slots.size and slots.dtype.kind not in "iu":
-        msg = f"slots must be integers, not {slots.dtype}"
-        raise IndexError(msg)
-    return np.ascontiguousarray(slots, dtype=np.int64)
-
-
 class EvidenceModel(ArcModel):
     """Evidence profiles, occlusion and ATM crossings over a shared history.
 
@@ -786,7 +782,7 @@ class EvidenceModel(ArcModel):
         self.check_usable()
         h, o = self.history, self.options
         return evidence_estimates(
-            _checked_slots(slots), h.x, h.y, h.r, h.theta, h.beam_width,
+            slot_indices(slots), h.x, h.y, h.r, h.theta, h.beam_width,
             self.free, self.support, self.located, self.status, self.bearings, self.counts,
             self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
             o.uncut_posterior, o.min_atm_crossings,
