@@ -318,3 +318,22 @@ def test_a_beam_width_out_of_range_is_one_line(readings: Path, tmp_path: Path,
     assert capsys.readouterr().err == ("sonarcarve: error: --beam-width must lie in (0, 180) "
                                        "degrees, got 180\n")
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("sensors", "model", "noted"), [
+    (1, "carved", True), (2, "carved", True), (3, "carved", False),
+    (1, "range-sensor-layer", False), (1, "elfes", False)])
+def test_a_carved_grid_of_one_or_two_sonars_notes_the_layer_frees_more(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], sensors: int, model: str,
+        noted: bool) -> None:
+    batch = ReadingBatch.from_readings(
+        Reading(t=0.1 * k, sensor=k % sensors, x=0.05 * k, y=0.0, theta=math.pi / 2, range=1.0)
+        for k in range(60))
+    path = tmp_path / "readings.csv"
+    write_readings_csv(batch, path)
+    assert main(["grid", str(path), "--model", model, "--resolution", "0.1",
+                 "--out", str(tmp_path / "grid.yaml")]) == 0
+    out = " ".join(capsys.readouterr().out.split())  # rich wraps at the terminal's width
+    plural = "s" if sensors > 1 else ""
+    assert (f"Few sonars: {sensors} sonar{plural} in this log." in out) is noted
+    assert ("--model range-sensor-layer frees more of the floor" in out) is noted
