@@ -68,7 +68,9 @@ def _robond(directory: Path | None, out: Path, opts: ConvertOptions) -> Table:
     write_readings_csv(log.batch, out)
     r = log.report
     source = directory if directory is not None else f"{bundled_robond_dir()} (bundled)"
-    return summary_table(f"roboND log: {source}", [
+    # The source in a row, not the title: the bundled log's path would wrap a title over lines.
+    return summary_table("convert roboND", [
+        ("source", str(source)),
         ("records", f"{r.records:,}"),
         ("sensor values", f"{r.values:,}"),
         ("no echo (dropped)", f"{r.no_echo:,}"),
@@ -99,7 +101,8 @@ def _rosbag(source: Path | None, out: Path, opts: ConvertOptions) -> Table:
     warn([_no_beam_warning(r, beams)])
     rows = [(f"messages on {topic}", f"{count:,}") for topic, count in r.messages.items()]
     parent, child = r.odometry_frames
-    return summary_table(f"ROS bag: {source}", [
+    return summary_table("convert rosbag", [
+        ("source", str(source)),
         *rows,
         ("odometry", f"{r.odometry_topic} ({parent or '?'} → {child or '?'})"),
         ("sensors", f"{len(r.sensors):,}"),
