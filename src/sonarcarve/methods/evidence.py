@@ -71,6 +71,15 @@ from sonarcarve.geometry.evidence import (
     mark_watch,
     mark_watched_by_silence,
 )
+from sonarcarve.geometry.evidence.arrays import (
+    AddScratch,
+    ArcEvidence,
+    ArcShapes,
+    BinEvidence,
+    CrossingArrays,
+    EvidenceState,
+    ReadingRows,
+)
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
@@ -664,6 +673,26 @@ class EvidenceModel(ArcModel):
         # a history of 10,000 arcs).
         self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
+        self._bundle()
+
+    def _bundle(self) -> None:
+        """The per-arc arrays and the work arrays of the weighing kernels as their bundles
+        (:mod:`~sonarcarve.geometry.evidence.arrays`, where each array is described): the
+        same arrays as the attributes, bundled once."""
+        self._shapes = ArcShapes(cos_axis=self.cos_axis, sin_axis=self.sin_axis,
+                                 cos_half=self.cos_half, circle=self.circle, bx=self.bx,
+                                 by=self.by, ex=self.ex, ey=self.ey)
+        self._evidence = BinEvidence(free=self.free, support=self.support,
+                                     located=self.located)
+        self._arcs = ArcEvidence(status=self.status, touched=self.touched,
+                                 viewpoints=self.viewpoints, looked=self.looked,
+                                 others=self.others, occluded=self.occluded,
+                                 through=self.through, behind=self.behind,
+                                 live_circle=self.live_circle)
+        self._scratch = AddScratch(passed=self.passed, trans=self.trans, entries=self.scratch,
+                                   in_beam=self.in_beam, bin_index=self.bin_index,
+                                   near=self.near, near_flags=self.near_flags,
+                                   depth=self.behind_scratch)
 
     @property
     def bearings(self) -> np.ndarray:
@@ -680,17 +709,21 @@ class EvidenceModel(ArcModel):
         """Crossings stored per row (:class:`~sonarcarve.methods.atm.CrossingStore`)."""
         return self.store.counts
 
-    def _arrays(self) -> tuple[Any, ...]:
-        """The history's rows, the per-arc state and the model, in the order of
-        :func:`~sonarcarve.geometry.evidence.evidence_add` (after its first two arguments)."""
+    def _bundles(self) -> tuple[EvidenceState, AddScratch, EvidenceParams, bool]:
+        """The weighing kernels' arguments after the sequence numbers
+        (:func:`~sonarcarve.geometry.evidence.evidence_add_many`): the state, the work arrays,
+        the sensor model and whether to find ATM crossings. The history's rows and the
+        crossing store are bundled afresh each call (the store's bearings are replaced when it
+        grows); the per-arc arrays were bundled once (:meth:`_allocate`)."""
         h = self.history
-        return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
-                self.others, self.through, self.behind, self.passed, self.trans, self.scratch,
-                self.in_beam, self.bin_index, self.near, self.near_flags, self.bx, self.by,
-                self.ex, self.ey, self.free, self.support, self.located, self.circle,
-                self.live_circle, self.cos_axis, self.sin_axis, self.cos_half, self.status,
-                self.touched, self.occluded,
-                self.bearings, self.counts, self.spill, self.params, self.options.atm)
+        state = EvidenceState(
+            readings=ReadingRows(x=h.x, y=h.y, r=h.r, theta=h.theta, beam_width=h.beam_width,
+                                 sensor=h.sensor),
+            shapes=self._shapes, evidence=self._evidence, arcs=self._arcs,
+            crossings=CrossingArrays(bearings=self.bearings, counts=self.counts,
+                                     spill=self.spill),
+        )
+        return state, self._scratch, self.params, self.options.atm
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -708,8 +741,7 @@ class EvidenceModel(ArcModel):
         self.mark_repeats(first, count)
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
-                first, end - first, self.history.capacity, self.behind_scratch,
-                *self._arrays())
+                first, end - first, self.history.capacity, *self._bundles())
             self._count((fully, crossings, occluding))
             if spilled:
                 self._take_spill(spilled)
