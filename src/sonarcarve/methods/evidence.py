@@ -63,7 +63,9 @@ from sonarcarve.errors import ConfigError
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
+    EstimateRules,
     EvidenceParams,
+    PieceEstimates,
     evidence_add_many,
     evidence_estimates,
     evidence_free,
@@ -604,6 +606,11 @@ class EvidenceModel(ArcModel):
                                     with_occlusion=options.occlusion,
                                     with_transmission=options.transmission)
         self.range_tolerance = range_tolerance
+        self._rules = EstimateRules(
+            threshold=self.threshold, atm_bound=self.atm_bound, with_atm=options.atm,
+            place_located=options.located_placement, posterior=options.posterior_placement,
+            posterior_uncut=options.uncut_posterior, min_crossings=options.min_atm_crossings,
+        )
         self._allocate(history, bins, options.atm)
         self._fully = 0
         self._crossings = 0
@@ -808,37 +815,32 @@ class EvidenceModel(ArcModel):
                                 self.covering, self.params.viewpoint_spacing,
                                 self.params.incidence_zero)
 
-    def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
+    def raw(self, slots: SlotArray) -> PieceEstimates:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
         the model has stopped: :meth:`check_usable`)."""
         self.check_usable()
-        h, o = self.history, self.options
-        return evidence_estimates(
-            slot_indices(slots), h.x, h.y, h.r, h.theta, h.beam_width,
-            self.free, self.support, self.located, self.status, self.bearings, self.counts,
-            self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
-            o.uncut_posterior, o.min_atm_crossings,
-        )
+        state = self._bundles()[0]
+        return evidence_estimates(slot_indices(slots), state.readings, state.evidence,
+                                  self.status, state.crossings, self._rules)
 
     def estimates(self, slots: SlotArray) -> Estimates:
         """Points of the kept runs; ``alive`` where a bin survives (confidence applied by the
         method). ``confidence`` is left to the method."""
         return self.estimates_from_raw(slots, self.raw(slots))
 
-    def estimates_from_raw(self, slots: SlotArray, raw: tuple[np.ndarray, ...]) -> Estimates:
+    def estimates_from_raw(self, slots: SlotArray, raw: PieceEstimates) -> Estimates:
         """:meth:`estimates` from an already computed :meth:`raw`."""
-        has, bearing, width, max_error, _, is_atm, _, _, _, _ = raw
         h = self.history
         n = len(slots)
         processed = np.empty(n, dtype=np.bool_)
         source = np.empty(n, dtype=np.int8)
         fate = np.empty(n, dtype=np.int8)
-        _fill_codes(np.ascontiguousarray(slots, dtype=np.int64), has, is_atm, width,
-                    h.beam_width, self.touched, self.counts, self.status, processed, source,
-                    fate)
+        _fill_codes(np.ascontiguousarray(slots, dtype=np.int64), raw.has_piece, raw.is_atm,
+                    raw.width, h.beam_width, self.touched, self.counts, self.status, processed,
+                    source, fate)
         return Estimates(
-            alive=has, processed=processed, xy=arc_point(h, slots, bearing), width=width,
-            max_error=max_error, source=source, fate=fate,
+            alive=raw.has_piece, processed=processed, xy=arc_point(h, slots, raw.bearing),
+            width=raw.width, max_error=raw.max_error, source=source, fate=fate,
         )
 
     def counters(self) -> dict[str, int]:
@@ -913,7 +915,7 @@ class EvidenceMethod(SonarMethod):
                               c.carve_probability, c.min_transversal, c.range_resolution,
                               options=self.options, sensor=self.sensor),)
 
-    def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
+    def features(self, slots: SlotArray, raw: PieceEstimates | None = None,
                  maturity: np.ndarray | None = None) -> np.ndarray:
         """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`);
         ``raw`` (:meth:`EvidenceModel.raw`) and ``maturity`` (:meth:`maturity`) of the same
@@ -922,11 +924,11 @@ class EvidenceMethod(SonarMethod):
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
         maturity = self.maturity(slots, raw) if maturity is None else maturity
-        _, _, width, _, support, _, crossings, free, runs, _ = raw
         h = self.history
         out = np.empty((len(slots), len(CONFIDENCE_FEATURES)))
-        _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
-                       free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
+        _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), raw.piece_support,
+                       raw.piece_crossings, raw.piece_free, raw.runs, raw.width,
+                       np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
                        model.covering, self.confidence_model.looks_per_support,
@@ -934,7 +936,7 @@ class EvidenceMethod(SonarMethod):
         return out
 
     def maturity(self, slots: SlotArray,
-                 raw: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
+                 raw: PieceEstimates | None = None) -> np.ndarray:
         """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,); ``raw``
         (:meth:`EvidenceModel.raw` of the same slots) when the caller has it already.
 
@@ -953,7 +955,7 @@ class EvidenceMethod(SonarMethod):
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
-        judged = model.watched[slots] | (raw[4] <= 0.0)  # raw[4]: the kept run's support
+        judged = model.watched[slots] | (raw.piece_support <= 0.0)
         return self.confidence_model.maturity(now - h.t[slots], judged)
 
     def _estimates(self, slots: SlotArray) -> Estimates:
@@ -961,7 +963,7 @@ class EvidenceMethod(SonarMethod):
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots)
-        has = raw[0]
+        has = raw.has_piece
         base = model.estimates_from_raw(slots, raw)
         maturity = self.maturity(slots, raw)
         confidence = self.confidence_model.confidence(self.features(slots, raw, maturity),

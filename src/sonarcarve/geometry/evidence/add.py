@@ -378,7 +378,7 @@ def _weigh_support_entry(slot: int, e: int, arc: _OlderArc, group: GroupScratch,
     freespace, to it and to j's bin at its bearing (:func:`_add_support`). Returns its
     ``P_detect``."""
     i = arc.row
-    p = group.entries[9, e]
+    p: float = group.entries[9, e]  # P_detect
     state.arcs.touched[i] = True
     state.arcs.touched[slot] = True
     kb = bin_from_guess(group.entry_guess[e], group.entries[6, e], new_arc.edges,

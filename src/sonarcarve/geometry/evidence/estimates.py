@@ -11,11 +11,12 @@ widened by half a bin at each end (``E_s = 2 r sin(e/2)``, eq. 5.3;
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.evidence.arrays import BinEvidence, CrossingArrays, ReadingRows
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE
 from sonarcarve.geometry.evidence.placement import located_median, posterior_median
 from sonarcarve.geometry.evidence.runs import (
@@ -26,7 +27,100 @@ from sonarcarve.geometry.evidence.runs import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["evidence_estimates"]
+__all__ = ["EstimateRules", "PieceEstimates", "evidence_estimates"]
+
+
+class EstimateRules(NamedTuple):
+    """How :func:`evidence_estimates` keeps a piece, places its point and bounds it.
+
+    Attributes
+    ----------
+    threshold : float
+        ``T``: a bin with free evidence at or above it is carved.
+    atm_bound : float
+        ATM's bound of a median of crossings, eq. 5.4 times δ, metres.
+    with_atm : bool
+        Count the arcs' ATM crossings (without: none is read).
+    place_located : bool
+        Place the point by the evidence, not at the kept run's middle (eq. 3.6).
+    posterior : bool
+        With ``place_located``: at the median of the posterior over the run's bins, not of
+        its localised support.
+    posterior_uncut : bool
+        With both: a beam nothing has cut is placed by the posterior too, not at its middle.
+    min_crossings : int
+        Crossings the kept run needs before their median may place the point.
+
+    :func:`evidence_estimates` gives each rule's reason and measurement.
+    """
+
+    threshold: float
+    atm_bound: float
+    with_atm: bool
+    place_located: bool
+    posterior: bool = True
+    posterior_uncut: bool = False
+    min_crossings: int = 3
+
+
+class PieceEstimates(NamedTuple):
+    """What :func:`evidence_estimates` gives per slot, shape (n,) each.
+
+    Attributes
+    ----------
+    has_piece : ndarray of bool
+        At least one bin survives.
+    bearing : ndarray
+        Bearing of the point, radians (unwrapped near the axis).
+    width : ndarray
+        Width of the kept run, radians.
+    max_error : ndarray
+        Bound, metres.
+    piece_support : ndarray
+        Largest support of a bin in the kept run.
+    is_atm : ndarray of bool
+        The point is an ATM median.
+    piece_crossings : ndarray
+        ATM crossings inside the kept run.
+    piece_free : ndarray
+        Mean free evidence over the kept run, in units of ``T``.
+    runs : ndarray
+        Number of surviving runs.
+    hull_share : ndarray
+        Surviving hull width over the full beam.
+    """
+
+    has_piece: BoolArray
+    bearing: FloatArray
+    width: FloatArray
+    max_error: FloatArray
+    piece_support: FloatArray
+    is_atm: BoolArray
+    piece_crossings: FloatArray
+    piece_free: FloatArray
+    runs: FloatArray
+    hull_share: FloatArray
+
+
+class _KeptRun(NamedTuple):
+    """An arc's kept run, ``start .. end - 1`` in bins, within its surviving hull
+    ``first .. last - 1``, and its number of surviving runs (0: none, the arc is carved)."""
+
+    start: int
+    end: int
+    first: int
+    last: int
+    runs: int
+
+
+class _RunScratch(NamedTuple):
+    """Work arrays of one arc's kept run: crossings per bin (K,), the run's crossings and
+    their bins (C,), the posterior's weights (K,)."""
+
+    in_bin: FloatArray
+    values: FloatArray
+    crossing_bin: SlotArray
+    weights: FloatArray
 
 
 @compiled_inline
@@ -68,29 +162,104 @@ def _atm_median_bound(median: float, runs: int, atm_bound: float, r: float, hull
 
 
 @compiled_inline
-def _kept_run_of(s: int, status: Int8Array, free: FloatArray, located: FloatArray,
-                 in_bin: FloatArray, crossing_bin: SlotArray, bearings: npt.NDArray[np.float32],
-                 c: int, half: float, step: float, threshold: float,
-                 ) -> tuple[int, int, int, int, int]:
-    """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` after counting its
-    first ``c`` crossings per bin (they weigh in which run is kept); no run (all 0) for an arc
-    already carved."""
+def _empty_estimates(n: int) -> PieceEstimates:
+    """:class:`PieceEstimates` of ``n`` slots, all zero (no piece)."""
+    return PieceEstimates(
+        has_piece=np.zeros(n, dtype=np.bool_), bearing=np.zeros(n), width=np.zeros(n),
+        max_error=np.zeros(n), piece_support=np.zeros(n), is_atm=np.zeros(n, dtype=np.bool_),
+        piece_crossings=np.zeros(n), piece_free=np.zeros(n), runs=np.zeros(n),
+        hull_share=np.zeros(n),
+    )
+
+
+@compiled_inline
+def _kept_run_of(s: int, c: int, phi: float, status: Int8Array, evidence: BinEvidence,
+                 crossings: CrossingArrays, threshold: float, work: _RunScratch) -> _KeptRun:
+    """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` (beam width ``phi``)
+    after counting its first ``c`` crossings per bin (they weigh in which run is kept; their
+    bins stay in ``work.crossing_bin``); no run (all 0) for an arc already carved."""
     if status[s] != EVIDENCE_ALIVE:
-        return 0, 0, 0, 0, 0
-    crossings_per_bin(in_bin, crossing_bin, bearings, s, c, half, step)
-    return kept_run(free, located, in_bin, s, threshold)
+        return _KeptRun(start=0, end=0, first=0, last=0, runs=0)
+    crossings_per_bin(work.in_bin, work.crossing_bin, crossings.bearings, s, c, 0.5 * phi,
+                      phi / work.in_bin.shape[0])
+    start, end, first, last, runs = kept_run(evidence.free, evidence.located, work.in_bin, s,
+                                             threshold)
+    return _KeptRun(start=start, end=end, first=first, last=last, runs=runs)
+
+
+@compiled_inline
+def _carved_piece(q: int, s: int, run: _KeptRun, readings: ReadingRows, evidence: BinEvidence,
+                  rules: EstimateRules, weights: FloatArray, out: PieceEstimates) -> None:
+    """Row ``q`` of ``out`` for arc ``s`` and its kept ``run``: the point evidence carving
+    places (:func:`_placed_bearing`) with the surviving hull's bound (:func:`_hull_bound`,
+    eq. 5.3), and the run's evidence."""
+    bins = evidence.free.shape[1]
+    phi = readings.beam_width[s]
+    half = 0.5 * phi
+    step = phi / bins
+    lo_axis = readings.theta[s] - half
+    hull_lo = lo_axis + run.first * step
+    hull_hi = lo_axis + run.last * step
+    mid = _placed_bearing(evidence.located, evidence.free, weights, s, run.start, run.end,
+                          lo_axis, step, run.end - run.start < bins, rules.place_located,
+                          rules.posterior, rules.posterior_uncut)
+    out.has_piece[q] = True
+    out.width[q] = (lo_axis + run.end * step) - (lo_axis + run.start * step)
+    out.piece_support[q], out.piece_free[q] = run_evidence(evidence.support, evidence.free, s,
+                                                           run.start, run.end, rules.threshold)
+    out.runs[q] = run.runs
+    out.hull_share[q] = (hull_hi - hull_lo) / phi
+    out.bearing[q] = mid
+    out.max_error[q] = _hull_bound(readings.r[s], mid, hull_lo, hull_hi, step)
+
+
+@compiled_inline
+def _atm_in_run(q: int, s: int, c: int, run: _KeptRun, readings: ReadingRows,
+                crossings: CrossingArrays, rules: EstimateRules, work: _RunScratch,
+                out: PieceEstimates) -> None:
+    """ATM's crossings of arc ``s`` (of its first ``c``) inside its kept ``run``, into row
+    ``q`` of ``out``; their median replaces the carved point when there are at least
+    ``min_crossings`` of them and its bound (:func:`_atm_median_bound`) is the smaller
+    (section 4: the estimate with the smaller bound)."""
+    kept, median_rel = run_crossings(work.values, work.crossing_bin, crossings.bearings, s, c,
+                                     run.start, run.end)
+    out.piece_crossings[q] = kept
+    if kept > 0 and kept >= rules.min_crossings:
+        phi = readings.beam_width[s]
+        step = phi / work.in_bin.shape[0]
+        lo_axis = readings.theta[s] - 0.5 * phi
+        median = readings.theta[s] + median_rel
+        bound = _atm_median_bound(median, run.runs, rules.atm_bound, readings.r[s],
+                                  lo_axis + run.first * step, lo_axis + run.last * step, step)
+        if bound < out.max_error[q]:  # the carved point's bound
+            out.bearing[q] = median
+            out.max_error[q] = bound
+            out.is_atm[q] = True
+
+
+@compiled_inline
+def _estimate_slot(q: int, s: int, readings: ReadingRows, evidence: BinEvidence,
+                   status: Int8Array, crossings: CrossingArrays, rules: EstimateRules,
+                   work: _RunScratch, out: PieceEstimates) -> None:
+    """Row ``q`` of ``out`` for arc ``s``: its kept run (:func:`_kept_run_of`), then the
+    carved point (:func:`_carved_piece`) or ATM's median (:func:`_atm_in_run`); an arc with no
+    bin left keeps the whole beam's middle (eq. 3.3) and its bound."""
+    phi = readings.beam_width[s]
+    c = crossings.counts[s] if rules.with_atm else 0
+    run = _kept_run_of(s, c, phi, status, evidence, crossings, rules.threshold, work)
+    if run.runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
+        out.bearing[q] = readings.theta[s]
+        out.width[q] = phi
+        out.max_error[q] = _whole_beam_bound(readings.r[s], phi)
+        return
+    _carved_piece(q, s, run, readings, evidence, rules, work.weights, out)
+    _atm_in_run(q, s, c, run, readings, crossings, rules, work, out)
 
 
 @compiled
-def evidence_estimates(
-    slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
-    beam_width: FloatArray, free: FloatArray, support: FloatArray, located: FloatArray,
-    status: Int8Array,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
-    atm_bound: float, with_atm: bool, place_located: bool, posterior: bool = True,
-    posterior_uncut: bool = False, min_crossings: int = 3,
-) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
-           FloatArray, FloatArray, FloatArray, FloatArray]:
+def evidence_estimates(slots: SlotArray, readings: ReadingRows, evidence: BinEvidence,
+                       status: Int8Array, crossings: CrossingArrays,
+                       rules: EstimateRules) -> PieceEstimates:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
@@ -128,28 +297,23 @@ def evidence_estimates(
     ``2 r sin(e/2)`` with ``e`` the largest angle from the point to the far end of the surviving
     hull plus ``Δ/2`` (eq. 5.3).
 
+    Parameters
+    ----------
+    slots : ndarray of int64, shape (n,)
+        The history rows to estimate.
+    readings, evidence, crossings
+        The model's readings, per-bin evidence and ATM's crossing store
+        (:mod:`~sonarcarve.geometry.evidence.arrays`; only ``crossings.bearings`` and
+        ``counts`` are read).
+    status : ndarray of int8
+        ``EVIDENCE_ALIVE`` or ``EVIDENCE_CARVED`` per row.
+    rules : EstimateRules
+        The threshold, ATM's bound and the placement rules above.
+
     Returns
     -------
-    has_piece : bool
-        At least one bin survives.
-    bearing : float
-        Bearing of the point, radians (unwrapped near the axis).
-    width : float
-        Width of the kept run, radians.
-    max_error : float
-        Bound, metres.
-    piece_support : float
-        Largest support of a bin in the kept run.
-    is_atm : bool
-        The point is an ATM median.
-    piece_crossings : float
-        ATM crossings inside the kept run.
-    piece_free : float
-        Mean free evidence over the kept run, in units of ``T``.
-    runs : float
-        Number of surviving runs.
-    hull_share : float
-        Surviving hull width over the full beam.
+    PieceEstimates
+        Per slot: the piece, its point, width and bound, and the evidence behind it.
 
     Raises
     ------
@@ -158,58 +322,15 @@ def evidence_estimates(
         slot read other memory, or crashed the process).
     """
     n = slots.shape[0]
-    bins = free.shape[1]
-    has_piece = np.zeros(n, dtype=np.bool_)
-    bearing = np.zeros(n)
-    width = np.zeros(n)
-    max_error = np.zeros(n)
-    piece_support = np.zeros(n)
-    is_atm = np.zeros(n, dtype=np.bool_)
-    piece_crossings = np.zeros(n)
-    piece_free = np.zeros(n)
-    run_count = np.zeros(n)
-    hull_share = np.zeros(n)
-    in_bin = np.zeros(bins)
-    values = np.zeros(bearings.shape[1])
-    crossing_bin = np.zeros(bearings.shape[1], dtype=np.int64)
-    weights = np.zeros(bins)
+    bins = evidence.free.shape[1]
+    columns = crossings.bearings.shape[1]
+    out = _empty_estimates(n)
+    work = _RunScratch(in_bin=np.zeros(bins), values=np.zeros(columns),
+                       crossing_bin=np.zeros(columns, dtype=np.int64), weights=np.zeros(bins))
+    storage = readings.x.shape[0]
     for q in range(n):
         s = slots[q]
-        if s < -x.shape[0] or s >= x.shape[0]:  # compiled indexing checks no bounds
+        if s < -storage or s >= storage:  # compiled indexing checks no bounds
             raise IndexError("a slot is out of bounds for the history's storage")
-        phi = beam_width[s]
-        half = 0.5 * phi
-        step = phi / bins
-        lo_axis = theta[s] - half
-        c = counts[s] if with_atm else 0
-        start, end, first, last, runs = _kept_run_of(s, status, free, located, in_bin,
-                                                      crossing_bin, bearings, c, half, step,
-                                                      threshold)
-        if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
-            bearing[q] = theta[s]
-            width[q] = phi
-            max_error[q] = _whole_beam_bound(r[s], phi)
-            continue
-        has_piece[q] = True
-        hull_lo = lo_axis + first * step
-        hull_hi = lo_axis + last * step
-        mid = _placed_bearing(located, free, weights, s, start, end, lo_axis, step,
-                              end - start < bins, place_located, posterior, posterior_uncut)
-        width[q] = (lo_axis + end * step) - (lo_axis + start * step)
-        piece_support[q], piece_free[q] = run_evidence(support, free, s, start, end, threshold)
-        run_count[q] = runs
-        hull_share[q] = (hull_hi - hull_lo) / phi
-        carved_bound = _hull_bound(r[s], mid, hull_lo, hull_hi, step)
-        bearing[q] = mid
-        max_error[q] = carved_bound
-        kept, median_rel = run_crossings(values, crossing_bin, bearings, s, c, start, end)
-        piece_crossings[q] = kept
-        if kept > 0 and kept >= min_crossings:  # section 4: the estimate with the smaller bound
-            median = theta[s] + median_rel
-            bound = _atm_median_bound(median, runs, atm_bound, r[s], hull_lo, hull_hi, step)
-            if bound < carved_bound:
-                bearing[q] = median
-                max_error[q] = bound
-                is_atm[q] = True
-    return (has_piece, bearing, width, max_error, piece_support, is_atm, piece_crossings,
-            piece_free, run_count, hull_share)
+        _estimate_slot(q, s, readings, evidence, status, crossings, rules, work, out)
+    return out
