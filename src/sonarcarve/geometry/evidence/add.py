@@ -52,6 +52,7 @@ from sonarcarve.geometry.evidence.arrays import (
     GroupScratch,
     NewArcScratch,
     NewArcTally,
+    ReadingRows,
 )
 from sonarcarve.geometry.evidence.beam import (
     Beam,
@@ -90,20 +91,18 @@ class _OlderArc(NamedTuple):
 
 
 @compiled_inline
-def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
-    """The new arc's shape: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, the
-    bounding circle; its empty evidence; and the scratch ``trans``
-    (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`'s)."""
-    readings, shapes, evidence, arcs = state.readings, state.shapes, state.evidence, state.arcs
+def _shape_new_arc(slot: int, readings: ReadingRows, shapes: ArcShapes,
+                   evidence: BinEvidence) -> None:
+    """The new arc's shape: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, their
+    directions, the axis and the bounding circle; and its bins' empty evidence."""
     bx, by, ex, ey = shapes.bx, shapes.by, shapes.ex, shapes.ey
     bins = bx.shape[1]
     xj = readings.x[slot]
     yj = readings.y[slot]
     rj = readings.r[slot]
     theta_j = readings.theta[slot]
-    phi_j = readings.beam_width[slot]
-    half_j = 0.5 * phi_j
-    step_j = phi_j / bins
+    half_j = 0.5 * readings.beam_width[slot]
+    step_j = readings.beam_width[slot] / bins
     shapes.cos_axis[slot] = math.cos(theta_j)
     shapes.sin_axis[slot] = math.sin(theta_j)
     shapes.cos_half[slot] = math.cos(half_j)
@@ -120,21 +119,41 @@ def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
     shapes.circle[0, slot] = c0
     shapes.circle[1, slot] = c1
     shapes.circle[2, slot] = c2
+
+
+@compiled_inline
+def _reset_new_arc_scratch(phi_j: float, bins: int, trans: FloatArray) -> None:
+    """``trans`` (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`'s) for a new arc of
+    beam width ``phi_j`` and ``bins`` bins: its support from other sensors zeroed; the sines
+    of its bin edges and the guess's scale depend on the beam width only, so they are
+    recomputed only when it changes (a ring of like sensors: never after the first
+    reading)."""
+    if trans[2 * bins + 1] != phi_j:  # the edges' beam width (NaN: none yet)
+        half_j = 0.5 * phi_j
+        step_j = phi_j / bins
+        for k in range(bins + 1):
+            trans[bins + k] = math.sin(-half_j + k * step_j)
+        trans[2 * bins + 1] = phi_j
+        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
+    for k in range(bins):
+        trans[k] = 0.0
+
+
+@compiled_inline
+def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
+    """The new arc's row before it is weighed: its shape and empty evidence
+    (:func:`_shape_new_arc`), its per-arc records (alive, untouched, zero sums and
+    crossings) and the scratch ``trans`` (:func:`_reset_new_arc_scratch`)."""
+    _shape_new_arc(slot, state.readings, state.shapes, state.evidence)
+    arcs = state.arcs
     arcs.status[slot] = EVIDENCE_ALIVE
     arcs.touched[slot] = False
     arcs.occluded[slot] = 0.0
     arcs.viewpoints[slot] = 0.0
     arcs.looked[slot] = 0.0
     arcs.others[slot] = 0.0
-    if trans[2 * bins + 1] != phi_j:  # the edges' beam width (NaN: none yet)
-        # The scratch's second part: sines of j's bin edges; they depend on the beam width
-        # only, so they are kept while it stays the same (a ring of like sensors: always).
-        for k in range(bins + 1):
-            trans[bins + k] = math.sin(-half_j + k * step_j)
-        trans[2 * bins + 1] = phi_j
-        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
-    for k in range(bins):  # its first part: j's support from other sensors
-        trans[k] = 0.0
+    bins = state.evidence.free.shape[1]
+    _reset_new_arc_scratch(state.readings.beam_width[slot], bins, trans)
     state.crossings.counts[slot] = 0
 
 

@@ -138,17 +138,20 @@ def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: fl
 
 
 @compiled_inline
-def _placed_bearing(located: FloatArray, free: FloatArray, weights: FloatArray, s: int,
-                    start: int, end: int, lo_axis: float, step: float, cut: bool,
-                    place_located: bool, posterior: bool, posterior_uncut: bool) -> float:
-    """Bearing of the point on the kept run ``start .. end - 1`` of arc ``s``: the posterior's
-    median, the localised support's or the run's middle (eq. 3.6), by the rules of
-    :func:`evidence_estimates`; ``cut`` where evidence has cut the beam."""
+def _placed_bearing(s: int, run: _KeptRun, lo_axis: float, step: float,
+                    evidence: BinEvidence, rules: EstimateRules, weights: FloatArray) -> float:
+    """Bearing of the point on the kept ``run`` of arc ``s`` (its bins from ``lo_axis``,
+    ``step`` wide): the posterior's median, the localised support's or the run's middle
+    (eq. 3.6), by the rules of :func:`evidence_estimates`; ``weights`` is the posterior's
+    scratch."""
+    start, end = run.start, run.end
+    cut = end - start < evidence.free.shape[1]  # evidence has cut the beam
     mid = 0.5 * ((lo_axis + start * step) + (lo_axis + end * step))  # eq. 3.6
-    if place_located and posterior and (cut or posterior_uncut):
-        return posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
-    if place_located and cut:
-        return located_median(located, s, start, end, lo_axis, step, mid)
+    if rules.place_located and rules.posterior and (cut or rules.posterior_uncut):
+        return posterior_median(evidence.located, evidence.free, weights, s, start, end,
+                                lo_axis, step, mid)
+    if rules.place_located and cut:
+        return located_median(evidence.located, s, start, end, lo_axis, step, mid)
     return mid
 
 
@@ -200,9 +203,7 @@ def _carved_piece(q: int, s: int, run: _KeptRun, readings: ReadingRows, evidence
     lo_axis = readings.theta[s] - half
     hull_lo = lo_axis + run.first * step
     hull_hi = lo_axis + run.last * step
-    mid = _placed_bearing(evidence.located, evidence.free, weights, s, run.start, run.end,
-                          lo_axis, step, run.end - run.start < bins, rules.place_located,
-                          rules.posterior, rules.posterior_uncut)
+    mid = _placed_bearing(s, run, lo_axis, step, evidence, rules, weights)
     out.has_piece[q] = True
     out.width[q] = (lo_axis + run.end * step) - (lo_axis + run.start * step)
     out.piece_support[q], out.piece_free[q] = run_evidence(evidence.support, evidence.free, s,
