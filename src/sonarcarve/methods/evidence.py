@@ -79,8 +79,9 @@ from sonarcarve.geometry.evidence.arrays import (
     ArcShapes,
     BinEvidence,
     CrossingArrays,
-    EvidenceState,
+    PlainBundle,
     ReadingRows,
+    plain,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
@@ -606,11 +607,11 @@ class EvidenceModel(ArcModel):
                                     with_occlusion=options.occlusion,
                                     with_transmission=options.transmission)
         self.range_tolerance = range_tolerance
-        self._rules = EstimateRules(
+        self._plain_rules = plain(EstimateRules(
             threshold=self.threshold, atm_bound=self.atm_bound, with_atm=options.atm,
             place_located=options.located_placement, posterior=options.posterior_placement,
             posterior_uncut=options.uncut_posterior, min_crossings=options.min_atm_crossings,
-        )
+        ))
         self._allocate(history, bins, options.atm)
         self._fully = 0
         self._crossings = 0
@@ -686,20 +687,19 @@ class EvidenceModel(ArcModel):
         """The per-arc arrays and the work arrays of the weighing kernels as their bundles
         (:mod:`~sonarcarve.geometry.evidence.arrays`, where each array is described): the
         same arrays as the attributes, bundled once."""
-        self._shapes = ArcShapes(cos_axis=self.cos_axis, sin_axis=self.sin_axis,
-                                 cos_half=self.cos_half, circle=self.circle, bx=self.bx,
-                                 by=self.by, ex=self.ex, ey=self.ey)
-        self._evidence = BinEvidence(free=self.free, support=self.support,
-                                     located=self.located)
-        self._arcs = ArcEvidence(status=self.status, touched=self.touched,
-                                 viewpoints=self.viewpoints, looked=self.looked,
-                                 others=self.others, occluded=self.occluded,
-                                 through=self.through, behind=self.behind,
-                                 live_circle=self.live_circle)
-        self._scratch = AddScratch(passed=self.passed, trans=self.trans, entries=self.scratch,
-                                   in_beam=self.in_beam, bin_index=self.bin_index,
-                                   near=self.near, near_flags=self.near_flags,
-                                   depth=self.behind_scratch)
+        shapes = ArcShapes(cos_axis=self.cos_axis, sin_axis=self.sin_axis,
+                           cos_half=self.cos_half, circle=self.circle, bx=self.bx, by=self.by,
+                           ex=self.ex, ey=self.ey)
+        evidence = BinEvidence(free=self.free, support=self.support, located=self.located)
+        arcs = ArcEvidence(status=self.status, touched=self.touched, viewpoints=self.viewpoints,
+                           looked=self.looked, others=self.others, occluded=self.occluded,
+                           through=self.through, behind=self.behind,
+                           live_circle=self.live_circle)
+        scratch = AddScratch(passed=self.passed, trans=self.trans, entries=self.scratch,
+                             in_beam=self.in_beam, bin_index=self.bin_index, near=self.near,
+                             near_flags=self.near_flags, depth=self.behind_scratch)
+        self._plain_parts = plain((shapes, evidence, arcs))
+        self._plain_scratch = plain(scratch)
 
     @property
     def bearings(self) -> np.ndarray:
@@ -716,21 +716,24 @@ class EvidenceModel(ArcModel):
         """Crossings stored per row (:class:`~sonarcarve.methods.atm.CrossingStore`)."""
         return self.store.counts
 
-    def _bundles(self) -> tuple[EvidenceState, AddScratch, EvidenceParams, bool]:
+    def _bundles(self) -> tuple[PlainBundle, PlainBundle, EvidenceParams, bool]:
         """The weighing kernels' arguments after the sequence numbers
-        (:func:`~sonarcarve.geometry.evidence.evidence_add_many`): the state, the work arrays,
-        the sensor model and whether to find ATM crossings. The history's rows and the
-        crossing store are bundled afresh each call (the store's bearings are replaced when it
-        grows); the per-arc arrays were bundled once (:meth:`_allocate`)."""
+        (:func:`~sonarcarve.geometry.evidence.evidence_add_many`): the state and the work
+        arrays (as :func:`~sonarcarve.geometry.evidence.arrays.plain` tuples, which numba
+        types faster at the call), the sensor model and whether to find ATM crossings."""
+        return self._state(), self._plain_scratch, self.params, self.options.atm
+
+    def _state(self) -> PlainBundle:
+        """The model's :class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`, plain.
+        The history's rows and the crossing store are bundled afresh each call (the store's
+        bearings are replaced when it grows); the per-arc arrays were bundled once
+        (:meth:`_bundle`)."""
         h = self.history
-        state = EvidenceState(
-            readings=ReadingRows(x=h.x, y=h.y, r=h.r, theta=h.theta, beam_width=h.beam_width,
-                                 sensor=h.sensor),
-            shapes=self._shapes, evidence=self._evidence, arcs=self._arcs,
-            crossings=CrossingArrays(bearings=self.bearings, counts=self.counts,
-                                     spill=self.spill),
-        )
-        return state, self._scratch, self.params, self.options.atm
+        readings = ReadingRows(x=h.x, y=h.y, r=h.r, theta=h.theta, beam_width=h.beam_width,
+                               sensor=h.sensor)
+        crossings = CrossingArrays(bearings=self.bearings, counts=self.counts,
+                                   spill=self.spill)
+        return (tuple(readings), *self._plain_parts, tuple(crossings))
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -819,9 +822,9 @@ class EvidenceModel(ArcModel):
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
         the model has stopped: :meth:`check_usable`)."""
         self.check_usable()
-        state = self._bundles()[0]
-        return evidence_estimates(slot_indices(slots), state.readings, state.evidence,
-                                  self.status, state.crossings, self._rules)
+        readings, _, evidence, _, crossings = self._state()  # EvidenceState's parts, plain
+        return evidence_estimates(slot_indices(slots), readings, evidence, self.status,
+                                  crossings, self._plain_rules)
 
     def estimates(self, slots: SlotArray) -> Estimates:
         """Points of the kept runs; ``alive`` where a bin survives (confidence applied by the

@@ -52,7 +52,10 @@ from sonarcarve.geometry.evidence.arrays import (
     GroupScratch,
     NewArcScratch,
     NewArcTally,
+    PlainBundle,
     ReadingRows,
+    named_scratch,
+    named_state,
 )
 from sonarcarve.geometry.evidence.beam import (
     Beam,
@@ -673,9 +676,9 @@ def _add_reading(slot: int, first_older: int, n_older: int, state: EvidenceState
 
 
 @compiled_borrowing
-def evidence_add(slot: int, first_older: int, n_older: int, state: EvidenceState,
-                 scratch: AddScratch, params: EvidenceParams,
-                 with_atm: bool) -> tuple[int, int, int, int]:
+def evidence_add(slot: int, first_older: int, n_older: int,
+                 state: EvidenceState | PlainBundle, scratch: AddScratch | PlainBundle,
+                 params: EvidenceParams, with_atm: bool) -> tuple[int, int, int, int]:
     """Add reading ``slot``: initialise its profile, then weigh it against every older arc.
 
     Parameters
@@ -691,9 +694,12 @@ def evidence_add(slot: int, first_older: int, n_older: int, state: EvidenceState
     state : EvidenceState
         The model's arrays (:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`:
         each array's meaning and shape there): the new arc's row filled, the older arcs'
-        evidence updated in place.
+        evidence updated in place. Named, or :func:`~sonarcarve.geometry.evidence.arrays.plain`
+        (faster to call: the module docstring of
+        :mod:`~sonarcarve.geometry.evidence.arrays`).
     scratch : AddScratch
-        The work arrays (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`).
+        The work arrays (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`), named or
+        plain.
     params : EvidenceParams
         The sensor model.
     with_atm : bool
@@ -706,7 +712,8 @@ def evidence_add(slot: int, first_older: int, n_older: int, state: EvidenceState
         carved by occlusion; rows of ``state.crossings.spill`` used (0: every crossing
         fitted).
     """
-    return _add_reading(slot, first_older, n_older, state, scratch, params, with_atm)
+    return _add_reading(slot, first_older, n_older, named_state(state), named_scratch(scratch),
+                        params, with_atm)
 
 
 @compiled_inline
@@ -728,9 +735,9 @@ def judge_leaving(start: int, n_live: int, state: EvidenceState, params: Evidenc
 
 
 @compiled_borrowing
-def evidence_add_many(first: int, count: int, capacity: int, state: EvidenceState,
-                      scratch: AddScratch, params: EvidenceParams,
-                      with_atm: bool) -> tuple[int, int, int, int, int]:
+def evidence_add_many(first: int, count: int, capacity: int,
+                      state: EvidenceState | PlainBundle, scratch: AddScratch | PlainBundle,
+                      params: EvidenceParams, with_atm: bool) -> tuple[int, int, int, int, int]:
     """:func:`evidence_add` for the arcs of sequence numbers ``first .. first + count - 1``,
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
@@ -758,6 +765,8 @@ def evidence_add_many(first: int, count: int, capacity: int, state: EvidenceStat
         ``done == first + count`` (the block's last arc spilled, as every single ``add()``
         that spills), so the caller moves the spill whenever it is > 0, whatever ``done``.
     """
+    state = named_state(state)
+    scratch = named_scratch(scratch)
     storage = state.arcs.status.shape[0]
     fully = 0
     crossings = 0

@@ -16,7 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.geometry.evidence.arrays import BinEvidence, CrossingArrays, ReadingRows
+from sonarcarve.geometry.evidence.arrays import (
+    BinEvidence,
+    CrossingArrays,
+    PlainBundle,
+    ReadingRows,
+)
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE
 from sonarcarve.geometry.evidence.placement import located_median, posterior_median
 from sonarcarve.geometry.evidence.runs import (
@@ -258,9 +263,10 @@ def _estimate_slot(q: int, s: int, readings: ReadingRows, evidence: BinEvidence,
 
 
 @compiled
-def evidence_estimates(slots: SlotArray, readings: ReadingRows, evidence: BinEvidence,
-                       status: Int8Array, crossings: CrossingArrays,
-                       rules: EstimateRules) -> PieceEstimates:
+def evidence_estimates(slots: SlotArray, readings: ReadingRows | PlainBundle,
+                       evidence: BinEvidence | PlainBundle, status: Int8Array,
+                       crossings: CrossingArrays | PlainBundle,
+                       rules: EstimateRules | PlainBundle) -> PieceEstimates:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
@@ -311,6 +317,9 @@ def evidence_estimates(slots: SlotArray, readings: ReadingRows, evidence: BinEvi
     rules : EstimateRules
         The threshold, ATM's bound and the placement rules above.
 
+    Each bundle may be named or :func:`~sonarcarve.geometry.evidence.arrays.plain` (faster
+    to call: the module docstring of :mod:`~sonarcarve.geometry.evidence.arrays`).
+
     Returns
     -------
     PieceEstimates
@@ -322,6 +331,10 @@ def evidence_estimates(slots: SlotArray, readings: ReadingRows, evidence: BinEvi
         A slot outside ``-len(x) .. len(x) - 1`` (compiled indexing checks no bounds: such a
         slot read other memory, or crashed the process).
     """
+    readings = ReadingRows(*readings)
+    evidence = BinEvidence(*evidence)
+    crossings = CrossingArrays(*crossings)
+    rules = EstimateRules(*rules)
     n = slots.shape[0]
     bins = evidence.free.shape[1]
     columns = crossings.bearings.shape[1]
