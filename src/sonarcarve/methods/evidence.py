@@ -66,6 +66,7 @@ from sonarcarve.geometry.evidence import (
     EstimateRules,
     EvidenceParams,
     PieceEstimates,
+    SilentReading,
     evidence_add_many,
     evidence_estimates,
     evidence_free,
@@ -806,12 +807,10 @@ class EvidenceModel(ArcModel):
         self.check_usable()
         h = self.history
         slots = np.ascontiguousarray(h.slots())
-        self._fully += evidence_free(
-            reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
-            slots, h.x, h.y, h.beam_width, h.sensor, self.looked,
-            self.bx, self.by, self.ex, self.ey, self.free, self.support, self.circle,
-            self.status, self.touched, self.params,
-        )
+        silent = SilentReading(x=reading.x, y=reading.y, max_range=reading.max_range,
+                               theta=reading.theta, beam_width=beam_width, sensor=reading.sensor)
+        # Plain tuples: numba types them faster at the call (arrays.plain).
+        self._fully += evidence_free(tuple(silent), slots, self._state(), self.params)
         mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
                                 reading.x, reading.y, reading.theta, beam_width,
                                 reading.max_range, reading.sensor, self.watched,

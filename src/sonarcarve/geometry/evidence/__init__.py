@@ -45,7 +45,7 @@ from sonarcarve.geometry.evidence.estimates import (
     PieceEstimates,
     evidence_estimates,
 )
-from sonarcarve.geometry.evidence.free import evidence_free
+from sonarcarve.geometry.evidence.free import SilentReading, evidence_free
 from sonarcarve.geometry.evidence.model import (
     EVIDENCE_ALIVE,
     EVIDENCE_CARVED,
@@ -61,6 +61,7 @@ __all__ = [
     "EstimateRules",
     "EvidenceParams",
     "PieceEstimates",
+    "SilentReading",
     "detect_probability",
     "evidence_add",
     "evidence_add_many",
