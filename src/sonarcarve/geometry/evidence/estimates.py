@@ -14,6 +14,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.evidence.arrays import (
@@ -118,6 +119,30 @@ class _KeptRun(NamedTuple):
     runs: int
 
 
+class _SlotBeam(NamedTuple):
+    """An arc's beam as :func:`evidence_estimates` reads it (metres, radians): its bins are
+    ``step`` wide from ``lo_axis = theta - half``."""
+
+    r: float
+    theta: float
+    phi: float
+    half: float
+    step: float
+    lo_axis: float
+
+
+class _Piece(NamedTuple):
+    """An arc's piece as carving leaves it: point bearing, kept run's width, the bound, the
+    run's largest support and mean free evidence (in ``T``), the hull's share of the beam."""
+
+    bearing: float
+    width: float
+    max_error: float
+    support: float
+    free: float
+    hull_share: float
+
+
 class _RunScratch(NamedTuple):
     """Work arrays of one arc's kept run: crossings per bin (K,), the run's crossings and
     their bins (C,), the posterior's weights (K,)."""
@@ -143,20 +168,19 @@ def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: fl
 
 
 @compiled_inline
-def _placed_bearing(s: int, run: _KeptRun, lo_axis: float, step: float,
-                    evidence: BinEvidence, rules: EstimateRules, weights: FloatArray) -> float:
+def _placed_bearing(s: int, run: _KeptRun, lo_axis: float, step: float, located: FloatArray,
+                    free: FloatArray, rules: EstimateRules, weights: FloatArray) -> float:
     """Bearing of the point on the kept ``run`` of arc ``s`` (its bins from ``lo_axis``,
     ``step`` wide): the posterior's median, the localised support's or the run's middle
     (eq. 3.6), by the rules of :func:`evidence_estimates`; ``weights`` is the posterior's
     scratch."""
     start, end = run.start, run.end
-    cut = end - start < evidence.free.shape[1]  # evidence has cut the beam
+    cut = end - start < free.shape[1]  # evidence has cut the beam
     mid = 0.5 * ((lo_axis + start * step) + (lo_axis + end * step))  # eq. 3.6
     if rules.place_located and rules.posterior and (cut or rules.posterior_uncut):
-        return posterior_median(evidence.located, evidence.free, weights, s, start, end,
-                                lo_axis, step, mid)
+        return posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
     if rules.place_located and cut:
-        return located_median(evidence.located, s, start, end, lo_axis, step, mid)
+        return located_median(located, s, start, end, lo_axis, step, mid)
     return mid
 
 
@@ -181,85 +205,82 @@ def _empty_estimates(n: int) -> PieceEstimates:
 
 
 @compiled_inline
-def _kept_run_of(s: int, c: int, phi: float, status: Int8Array, evidence: BinEvidence,
-                 crossings: CrossingArrays, threshold: float, work: _RunScratch) -> _KeptRun:
-    """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` (beam width ``phi``)
-    after counting its first ``c`` crossings per bin (they weigh in which run is kept; their
-    bins stay in ``work.crossing_bin``); no run (all 0) for an arc already carved."""
+def _slot_beam(r: float, theta: float, phi: float, bins: int) -> _SlotBeam:
+    """An arc's beam as its estimate reads it: range ``r``, axis ``theta``, width ``phi``."""
+    half = 0.5 * phi
+    return _SlotBeam(r=r, theta=theta, phi=phi, half=half, step=phi / bins,
+                     lo_axis=theta - half)
+
+
+@compiled_inline
+def _kept_run_of(s: int, c: int, beam: _SlotBeam, status: Int8Array, evidence: BinEvidence,
+                 bearings: npt.NDArray[np.float32], threshold: float,
+                 in_bin: FloatArray, crossing_bin: SlotArray) -> _KeptRun:
+    """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` after counting its
+    first ``c`` crossings per bin (they weigh in which run is kept; their bins stay in
+    ``work.crossing_bin``); no run (all 0) for an arc already carved."""
     if status[s] != EVIDENCE_ALIVE:
         return _KeptRun(start=0, end=0, first=0, last=0, runs=0)
-    crossings_per_bin(work.in_bin, work.crossing_bin, crossings.bearings, s, c, 0.5 * phi,
-                      phi / work.in_bin.shape[0])
-    start, end, first, last, runs = kept_run(evidence.free, evidence.located, work.in_bin, s,
+    crossings_per_bin(in_bin, crossing_bin, bearings, s, c, beam.half, beam.step)
+    start, end, first, last, runs = kept_run(evidence.free, evidence.located, in_bin, s,
                                              threshold)
     return _KeptRun(start=start, end=end, first=first, last=last, runs=runs)
 
 
 @compiled_inline
-def _carved_piece(q: int, s: int, run: _KeptRun, readings: ReadingRows, evidence: BinEvidence,
-                  rules: EstimateRules, weights: FloatArray, out: PieceEstimates) -> None:
-    """Row ``q`` of ``out`` for arc ``s`` and its kept ``run``: the point evidence carving
-    places (:func:`_placed_bearing`) with the surviving hull's bound (:func:`_hull_bound`,
+def _carved_piece(s: int, run: _KeptRun, beam: _SlotBeam, evidence: BinEvidence,
+                  rules: EstimateRules, weights: FloatArray) -> _Piece:
+    """Arc ``s``'s piece as evidence carving leaves it: the point it places on the kept
+    ``run`` (:func:`_placed_bearing`) with the surviving hull's bound (:func:`_hull_bound`,
     eq. 5.3), and the run's evidence."""
-    bins = evidence.free.shape[1]
-    phi = readings.beam_width[s]
-    half = 0.5 * phi
-    step = phi / bins
-    lo_axis = readings.theta[s] - half
-    hull_lo = lo_axis + run.first * step
-    hull_hi = lo_axis + run.last * step
-    mid = _placed_bearing(s, run, lo_axis, step, evidence, rules, weights)
-    out.has_piece[q] = True
-    out.width[q] = (lo_axis + run.end * step) - (lo_axis + run.start * step)
-    out.piece_support[q], out.piece_free[q] = run_evidence(evidence.support, evidence.free, s,
-                                                           run.start, run.end, rules.threshold)
-    out.runs[q] = run.runs
-    out.hull_share[q] = (hull_hi - hull_lo) / phi
-    out.bearing[q] = mid
-    out.max_error[q] = _hull_bound(readings.r[s], mid, hull_lo, hull_hi, step)
+    hull_lo = beam.lo_axis + run.first * beam.step
+    hull_hi = beam.lo_axis + run.last * beam.step
+    mid = _placed_bearing(s, run, beam.lo_axis, beam.step, evidence.located, evidence.free,
+                          rules, weights)
+    support, free = run_evidence(evidence.support, evidence.free, s, run.start, run.end,
+                                 rules.threshold)
+    return _Piece(
+        bearing=mid,
+        width=(beam.lo_axis + run.end * beam.step) - (beam.lo_axis + run.start * beam.step),
+        max_error=_hull_bound(beam.r, mid, hull_lo, hull_hi, beam.step), support=support,
+        free=free, hull_share=(hull_hi - hull_lo) / beam.phi,
+    )
 
 
 @compiled_inline
-def _atm_in_run(q: int, s: int, c: int, run: _KeptRun, readings: ReadingRows,
-                crossings: CrossingArrays, rules: EstimateRules, work: _RunScratch,
-                out: PieceEstimates) -> None:
-    """ATM's crossings of arc ``s`` (of its first ``c``) inside its kept ``run``, into row
-    ``q`` of ``out``; their median replaces the carved point when there are at least
-    ``min_crossings`` of them and its bound (:func:`_atm_median_bound`) is the smaller
-    (section 4: the estimate with the smaller bound)."""
-    kept, median_rel = run_crossings(work.values, work.crossing_bin, crossings.bearings, s, c,
-                                     run.start, run.end)
-    out.piece_crossings[q] = kept
+def _atm_median(s: int, c: int, run: _KeptRun, beam: _SlotBeam,
+                bearings: npt.NDArray[np.float32], rules: EstimateRules, values: FloatArray,
+                crossing_bin: SlotArray) -> tuple[int, float, float]:
+    """ATM's crossings of arc ``s`` (of its first ``c``) inside its kept ``run``: how many,
+    their median bearing and its bound (:func:`_atm_median_bound`; infinite when fewer than
+    ``min_crossings``, so that the carved point stays)."""
+    kept, median_rel = run_crossings(values, crossing_bin, bearings, s, c, run.start, run.end)
     if kept > 0 and kept >= rules.min_crossings:
-        phi = readings.beam_width[s]
-        step = phi / work.in_bin.shape[0]
-        lo_axis = readings.theta[s] - 0.5 * phi
-        median = readings.theta[s] + median_rel
-        bound = _atm_median_bound(median, run.runs, rules.atm_bound, readings.r[s],
-                                  lo_axis + run.first * step, lo_axis + run.last * step, step)
-        if bound < out.max_error[q]:  # the carved point's bound
-            out.bearing[q] = median
-            out.max_error[q] = bound
-            out.is_atm[q] = True
+        median = beam.theta + median_rel
+        bound = _atm_median_bound(median, run.runs, rules.atm_bound, beam.r,
+                                  beam.lo_axis + run.first * beam.step,
+                                  beam.lo_axis + run.last * beam.step, beam.step)
+        return kept, median, bound
+    return kept, 0.0, math.inf
 
 
 @compiled_inline
-def _estimate_slot(q: int, s: int, readings: ReadingRows, evidence: BinEvidence,
-                   status: Int8Array, crossings: CrossingArrays, rules: EstimateRules,
-                   work: _RunScratch, out: PieceEstimates) -> None:
-    """Row ``q`` of ``out`` for arc ``s``: its kept run (:func:`_kept_run_of`), then the
-    carved point (:func:`_carved_piece`) or ATM's median (:func:`_atm_in_run`); an arc with no
-    bin left keeps the whole beam's middle (eq. 3.3) and its bound."""
-    phi = readings.beam_width[s]
-    c = crossings.counts[s] if rules.with_atm else 0
-    run = _kept_run_of(s, c, phi, status, evidence, crossings, rules.threshold, work)
-    if run.runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
-        out.bearing[q] = readings.theta[s]
-        out.width[q] = phi
-        out.max_error[q] = _whole_beam_bound(readings.r[s], phi)
-        return
-    _carved_piece(q, s, run, readings, evidence, rules, work.weights, out)
-    _atm_in_run(q, s, c, run, readings, crossings, rules, work, out)
+def _store_piece(q: int, run: _KeptRun, piece: _Piece, kept: int, median: float,
+                 median_bound: float, out: PieceEstimates) -> None:
+    """Row ``q`` of ``out``: the carved ``piece``, its point replaced by ATM's ``median`` of
+    the ``kept`` crossings where that bound is the smaller (section 4: the estimate with the
+    smaller bound)."""
+    use_atm = median_bound < piece.max_error
+    out.has_piece[q] = True
+    out.width[q] = piece.width
+    out.piece_support[q] = piece.support
+    out.piece_free[q] = piece.free
+    out.runs[q] = run.runs
+    out.hull_share[q] = piece.hull_share
+    out.bearing[q] = median if use_atm else piece.bearing
+    out.max_error[q] = median_bound if use_atm else piece.max_error
+    out.is_atm[q] = use_atm
+    out.piece_crossings[q] = kept
 
 
 @compiled
@@ -346,5 +367,17 @@ def evidence_estimates(slots: SlotArray, readings: ReadingRows | PlainBundle,
         s = slots[q]
         if s < -storage or s >= storage:  # compiled indexing checks no bounds
             raise IndexError("a slot is out of bounds for the history's storage")
-        _estimate_slot(q, s, readings, evidence, status, crossings, rules, work, out)
+        beam = _slot_beam(readings.r[s], readings.theta[s], readings.beam_width[s], bins)
+        c = crossings.counts[s] if rules.with_atm else 0
+        run = _kept_run_of(s, c, beam, status, evidence, crossings.bearings, rules.threshold,
+                           work.in_bin, work.crossing_bin)
+        if run.runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
+            out.bearing[q] = beam.theta
+            out.width[q] = beam.phi
+            out.max_error[q] = _whole_beam_bound(beam.r, beam.phi)
+            continue
+        piece = _carved_piece(s, run, beam, evidence, rules, work.weights)
+        kept, median, median_bound = _atm_median(s, c, run, beam, crossings.bearings, rules,
+                                                 work.values, work.crossing_bin)
+        _store_piece(q, run, piece, kept, median, median_bound, out)
     return out
