@@ -81,6 +81,13 @@ from sonarcarve.typing import BoolArray, FloatArray
 __all__ = ["evidence_add", "evidence_add_many"]
 
 
+#: The rows of :class:`~sonarcarve.geometry.evidence.arrays.GroupScratch`'s ``entries``:
+#: an entry's offset from the new reading, its bin centre's direction (pass 1), then its
+#: distance, the sine of its angle to j's axis, ``P_beam``, ``cos γ``, ``P_detect`` and
+#: localised support (pass 2).
+_VX, _VY, _D2, _EX, _EY, _D, _SINE, _P_BEAM, _COS_GAMMA, _P_DETECT, _LOCATED = range(11)
+
+
 class _OlderArc(NamedTuple):
     """An older arc as pass 3 weighs it."""
 
@@ -204,11 +211,11 @@ def _gather_entries(i: int, first: int, n_in: int, beam: Beam, shapes: ArcShapes
     e_bin = group.entry_bin
     xj = beam.x
     yj = beam.y
-    e_vx = group.entries[0]
-    e_vy = group.entries[1]
-    e_d2 = group.entries[2]
-    e_ex = group.entries[3]
-    e_ey = group.entries[4]
+    e_vx = group.entries[_VX]
+    e_vy = group.entries[_VY]
+    e_d2 = group.entries[_D2]
+    e_ex = group.entries[_EX]
+    e_ey = group.entries[_EY]
     e = first
     for k in range(bx.shape[1]):
         e_bin[e] = k
@@ -254,17 +261,17 @@ def _detect_entries(n_entries: int, beam: Beam, params: EvidenceParams, new_arc:
     cos_zero = beam.cos_zero
     scratch = group.entries
     e_guess = group.entry_guess
-    e_vx = scratch[0]
-    e_vy = scratch[1]
-    e_d2 = scratch[2]
-    e_ex = scratch[3]
-    e_ey = scratch[4]
-    e_d = scratch[5]
-    e_sine = scratch[6]
-    e_beam = scratch[7]
-    e_cos = scratch[8]
-    e_p = scratch[9]
-    e_loc = scratch[10]
+    e_vx = scratch[_VX]
+    e_vy = scratch[_VY]
+    e_d2 = scratch[_D2]
+    e_ex = scratch[_EX]
+    e_ey = scratch[_EY]
+    e_d = scratch[_D]
+    e_sine = scratch[_SINE]
+    e_beam = scratch[_P_BEAM]
+    e_cos = scratch[_COS_GAMMA]
+    e_p = scratch[_P_DETECT]
+    e_loc = scratch[_LOCATED]
     for e in range(n_entries):
         vx = e_vx[e]
         vy = e_vy[e]
@@ -344,14 +351,14 @@ def _pass_established(slot: int, e: int, arc: _OlderArc, beam: Beam, params: Evi
     i = arc.row
     k = group.entry_bin[e]
     support = state.evidence.support
-    d = group.entries[5, e]
+    d = group.entries[_D, e]
     n_passed, occluding, top_through = tally
     established = (support[i, k] >= params.establish
                    and state.evidence.free[i, k] < 0.5 * params.threshold)
     if d < beam.free_r - params.tolerance:
         top_through = max(top_through, support[i, k])
         if established:
-            occluding += _occlude_past(slot, group.entries[0, e], group.entries[1, e], d,
+            occluding += _occlude_past(slot, group.entries[_VX, e], group.entries[_VY, e], d,
                                        arc.half_bin_arc, beam, state.evidence.free,
                                        params.threshold)
             state.arcs.touched[slot] = True
@@ -372,8 +379,8 @@ def _weigh_free_entry(slot: int, e: int, arc: _OlderArc, beam: Beam, params: Evi
     i = arc.row
     k = group.entry_bin[e]
     free = state.evidence.free
-    p = group.entries[9, e]
-    p_beam = group.entries[7, e]
+    p = group.entries[_P_DETECT, e]
+    p_beam = group.entries[_P_BEAM, e]
     f = free[i, k]
     state.arcs.touched[i] = True
     established, tally = _pass_established(slot, e, arc, beam, params, group, state, tally)
@@ -385,10 +392,10 @@ def _weigh_free_entry(slot: int, e: int, arc: _OlderArc, beam: Beam, params: Evi
     passed = new_arc.passed
     n_passed = tally.n_passed
     if alive and params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-        kb = bin_from_guess(group.entry_guess[e], group.entries[6, e], new_arc.edges,
+        kb = bin_from_guess(group.entry_guess[e], group.entries[_SINE, e], new_arc.edges,
                             free.shape[1])
         n_passed = _keep_for_transmission(passed, n_passed, i, k, kb,
-                                          p_beam * group.entries[8, e], factor, w)
+                                          p_beam * group.entries[_COS_GAMMA, e], factor, w)
     return alive, NewArcTally(n_passed=n_passed, occluding=tally.occluding,
                               top_through=tally.top_through)
 
@@ -400,12 +407,12 @@ def _weigh_support_entry(slot: int, e: int, arc: _OlderArc, group: GroupScratch,
     freespace, to it and to j's bin at its bearing (:func:`_add_support`). Returns its
     ``P_detect``."""
     i = arc.row
-    p: float = group.entries[9, e]  # P_detect
+    p: float = group.entries[_P_DETECT, e]
     state.arcs.touched[i] = True
     state.arcs.touched[slot] = True
-    kb = bin_from_guess(group.entry_guess[e], group.entries[6, e], new_arc.edges,
+    kb = bin_from_guess(group.entry_guess[e], group.entries[_SINE, e], new_arc.edges,
                         state.evidence.free.shape[1])
-    _add_support(slot, i, group.entry_bin[e], kb, p, group.entries[10, e], arc.other,
+    _add_support(slot, i, group.entry_bin[e], kb, p, group.entries[_LOCATED, e], arc.other,
                  state.evidence, new_arc.other_support)
     return p
 
@@ -423,7 +430,7 @@ def _weigh_arc(slot: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
     Returns its live bins (those outside j's reach or beam included), its largest support and
     "looked" ``P_beam`` (from a distinct viewpoint only), and the new arc's tally updated.
     """
-    distances = group.entries[5]
+    distances = group.entries[_D]
     alive_bins = arc.alive_outside
     top_support = 0.0
     top_looked = 0.0
@@ -433,7 +440,7 @@ def _weigh_arc(slot: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
             alive_bins += 1  # neither in j's freespace nor on its echo circle
         elif d < beam.free_r:
             if arc.distinct:
-                top_looked = max(top_looked, group.entries[7, e])  # its P_beam
+                top_looked = max(top_looked, group.entries[_P_BEAM, e])
             alive, tally = _weigh_free_entry(slot, e, arc, beam, params, group, state,
                                              new_arc, tally)
             alive_bins += alive
