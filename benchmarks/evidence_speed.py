@@ -227,10 +227,9 @@ def _weighing_no_older_arc(model: EvidenceModel) -> Callable[[int, int], None]:
     def on_add_many(first: int, count: int) -> None:
         end = first + count
         model.mark_repeats(first, count)
-        arrays = model._arrays()  # the kernel's arguments, as on_add_many passes them
+        bundles = model._bundles()  # the kernel's arguments, as on_add_many passes them
         while first < end:  # no older arc: no crossing, so no spill
-            _, _, _, first, _ = evidence_add_many(first, end - first, 1, model.behind_scratch,
-                                                  *arrays)
+            _, _, _, first, _ = evidence_add_many(first, end - first, 1, *bundles)
         model.mark_watch(end - count, count)
 
     return on_add_many

@@ -3,7 +3,6 @@ kernels (beyond the paper)."""
 
 from __future__ import annotations
 
-import inspect
 import math
 
 import numpy as np
@@ -11,10 +10,12 @@ import pytest
 from numba import njit
 
 from sonarcarve.geometry.evidence import (
+    EstimateRules,
     detect_probability,
     evidence_estimates,
     evidence_threshold,
 )
+from sonarcarve.geometry.evidence.arrays import BinEvidence, CrossingArrays, ReadingRows
 from sonarcarve.geometry.evidence.bins import bin_of_sine
 from sonarcarve.geometry.evidence.runs import _sort_in_place
 
@@ -111,11 +112,17 @@ def _place(free: list[float], located: list[float], crossings: tuple[float, ...]
     bearings[0, : len(crossings)] = crossings
     counts = np.array([len(crossings)], dtype=np.int32)
     one = np.zeros(1)
+    readings = ReadingRows(x=one, y=one, r=np.array([2.0]), theta=one,
+                           beam_width=np.array([0.4]), sensor=np.zeros(1, dtype=np.int64))
+    rules = EstimateRules(threshold=_T, atm_bound=atm_bound, with_atm=True, place_located=True,
+                          posterior=posterior, posterior_uncut=uncut,
+                          min_crossings=min_crossings)
     raw = evidence_estimates(
-        np.array([0], dtype=np.int64), one, one, np.array([2.0]), one, np.array([0.4]), f,
-        loc.copy(), loc, np.zeros(1, dtype=np.int8), bearings, counts, _T, atm_bound, True,
-        True, posterior, uncut, min_crossings)
-    return float(raw[1][0]), float(raw[3][0]), bool(raw[5][0])
+        np.array([0], dtype=np.int64), readings, BinEvidence(free=f, support=loc.copy(),
+                                                             located=loc),
+        np.zeros(1, dtype=np.int8), CrossingArrays(bearings=bearings, counts=counts,
+                                                   spill=np.zeros((1, 2))), rules)
+    return float(raw.bearing[0]), float(raw.max_error[0]), bool(raw.is_atm[0])
 
 
 def test_misses_lower_a_bins_weight_by_the_chance_they_were_all_misses() -> None:
@@ -271,9 +278,9 @@ def test_the_split_arc_keeps_the_run_with_localised_support_not_the_longer_one()
 
 
 def test_the_kernels_default_atm_count_is_the_documented_three() -> None:
-    # Nothing in the library calls evidence_estimates without min_crossings, so a drifted
-    # default would go unnoticed until someone did.
-    parameters = inspect.signature(evidence_estimates.py_func).parameters
-    assert parameters["min_crossings"].default == 3
-    assert parameters["posterior"].default is True
-    assert parameters["posterior_uncut"].default is False
+    # Nothing in the library makes EstimateRules without min_crossings, so a drifted default
+    # would go unnoticed until someone did.
+    rules = EstimateRules(threshold=_T, atm_bound=0.01, with_atm=True, place_located=True)
+    assert rules.min_crossings == 3
+    assert rules.posterior is True
+    assert rules.posterior_uncut is False

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from sonarcarve.geometry.bounds import arc_bounding_circle
-from sonarcarve.geometry.evidence import EVIDENCE_ALIVE, EVIDENCE_CARVED
+from sonarcarve.geometry.evidence import EVIDENCE_ALIVE, EVIDENCE_CARVED, evidence_add
 from sonarcarve.geometry.evidence.arrays import ArcShapes, CrossingArrays, ReadingRows
 from sonarcarve.geometry.evidence.beam import new_beam
 from sonarcarve.geometry.evidence.crossings import transversal_crossings
@@ -283,3 +283,35 @@ def test_the_passes_in_small_groups_give_the_one_loops_bits(monkeypatch: pytest.
     monkeypatch.setattr(evidence_method, "_GROUP_ARCS", group_arcs)
     model, _ = _run_both(_log((), False), 40, 24, start=270)
     assert model.scratch.shape[1] == group_arcs * 24  # the groups were that small
+
+
+def test_the_single_reading_kernel_gives_the_block_kernels_bits() -> None:
+    """``evidence_add`` (one reading; the block kernel inlines its body) against
+    ``evidence_add_many`` over the same readings, blocks of 30, bit for bit. The history is
+    longer than the readings: no arc leaves it, whose ``behind`` only the block kernel judges."""
+    readings = _log((), False)[:150]
+    method = EvidenceMethod(history_size=200, evidence_bins=24)
+    twin = copy.deepcopy(method)
+    model = twin.models[0]
+    assert isinstance(model, EvidenceModel)
+
+    def one_at_a_time(first: int, count: int) -> None:
+        model.mark_repeats(first, count)
+        storage = model.history.storage_size
+        for sequence in range(first, first + count):
+            _, _, _, spilled = evidence_add(sequence % storage, 0, sequence, *model._bundles())
+            if spilled:
+                model._take_spill(spilled)
+        model.mark_watch(first, count)
+
+    model.on_add_many = one_at_a_time  # type: ignore[method-assign]
+    for lo in range(0, len(readings), 30):
+        method.add_many(readings[lo : lo + 30])
+        twin.add_many(readings[lo : lo + 30])
+    blocks = method.models[0]
+    assert isinstance(blocks, EvidenceModel)
+    for name in STATE:
+        a, b = getattr(blocks, name), getattr(model, name)
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), name
+    assert (model.free >= model.threshold).any()  # carving happened
+    assert model.counts.any()

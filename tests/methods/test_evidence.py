@@ -11,6 +11,15 @@ import pytest
 
 from sonarcarve import MethodConfig, make_method
 from sonarcarve.errors import ConfigError, SonarcarveError
+from sonarcarve.geometry.evidence.arrays import (
+    AddScratch,
+    ArcEvidence,
+    ArcShapes,
+    BinEvidence,
+    CrossingArrays,
+    EvidenceState,
+    ReadingRows,
+)
 from sonarcarve.history import SonarHistory
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import PointSource
@@ -773,3 +782,24 @@ def test_an_echo_read_8_cm_long_does_not_support_the_wall_when_epsilon_is_10_cm(
     first = int(method.history.slots()[0])
     assert model.support[first].max() == 0.0
     assert model.free[first].max() == 0.0
+
+
+def test_the_kernels_get_each_bundles_arrays_in_field_order() -> None:
+    """The model hands the kernels its arrays as plain tuples (``arrays.plain``), which the
+    kernels name by position: a swapped pair would weigh the wrong arrays without an error.
+    Every field is the model's (or the history's) attribute of that name; two scratch
+    arrays keep their older attribute names."""
+    method = EvidenceMethod(history_size=10)
+    model = method.models[0]
+    assert isinstance(model, EvidenceModel)
+    state, scratch, _, _ = model._bundles()
+    bundles = (ReadingRows, ArcShapes, BinEvidence, ArcEvidence, CrossingArrays)
+    assert EvidenceState._fields == ("readings", "shapes", "evidence", "arcs", "crossings")
+    sources = (method.history, model, model, model, model)
+    for bundle, part, source in zip(bundles, state, sources, strict=True):
+        assert len(part) == len(bundle._fields)
+        for field, array in zip(bundle._fields, part, strict=True):
+            assert array is getattr(source, field), field
+    renamed = {"entries": "scratch", "depth": "behind_scratch"}
+    for field, array in zip(AddScratch._fields, scratch, strict=True):
+        assert array is getattr(model, renamed.get(field, field)), field

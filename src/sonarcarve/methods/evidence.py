@@ -63,13 +63,24 @@ from sonarcarve.errors import ConfigError
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.geometry.evidence import (
     EVIDENCE_ALIVE,
+    EstimateRules,
     EvidenceParams,
+    PieceEstimates,
+    SilentReading,
     evidence_add_many,
     evidence_estimates,
     evidence_free,
     evidence_threshold,
     mark_watch,
     mark_watched_by_silence,
+)
+from sonarcarve.geometry.evidence.arrays import (
+    AddScratch,
+    ArcEvidence,
+    ArcShapes,
+    BinEvidence,
+    PlainBundle,
+    plain,
 )
 from sonarcarve.geometry.fate import FULLY_CARVED, UNCHANGED
 from sonarcarve.geometry.repeats import mark_repeats
@@ -595,6 +606,11 @@ class EvidenceModel(ArcModel):
                                     with_occlusion=options.occlusion,
                                     with_transmission=options.transmission)
         self.range_tolerance = range_tolerance
+        self._plain_rules = plain(EstimateRules(
+            threshold=self.threshold, atm_bound=self.atm_bound, with_atm=options.atm,
+            place_located=options.located_placement, posterior=options.posterior_placement,
+            posterior_uncut=options.uncut_posterior, min_crossings=options.min_atm_crossings,
+        ))
         self._allocate(history, bins, options.atm)
         self._fully = 0
         self._crossings = 0
@@ -664,6 +680,25 @@ class EvidenceModel(ArcModel):
         # a history of 10,000 arcs).
         self.store = CrossingStore(size, most if with_atm else 1, "evidence carving's")
         self.spill = np.zeros((most if with_atm else 1, 2))
+        self._bundle()
+
+    def _bundle(self) -> None:
+        """The per-arc arrays and the work arrays of the weighing kernels as their bundles
+        (:mod:`~sonarcarve.geometry.evidence.arrays`, where each array is described): the
+        same arrays as the attributes, bundled once."""
+        shapes = ArcShapes(cos_axis=self.cos_axis, sin_axis=self.sin_axis,
+                           cos_half=self.cos_half, circle=self.circle, bx=self.bx, by=self.by,
+                           ex=self.ex, ey=self.ey)
+        evidence = BinEvidence(free=self.free, support=self.support, located=self.located)
+        arcs = ArcEvidence(status=self.status, touched=self.touched, viewpoints=self.viewpoints,
+                           looked=self.looked, others=self.others, occluded=self.occluded,
+                           through=self.through, behind=self.behind,
+                           live_circle=self.live_circle)
+        scratch = AddScratch(passed=self.passed, trans=self.trans, entries=self.scratch,
+                             in_beam=self.in_beam, bin_index=self.bin_index, near=self.near,
+                             near_flags=self.near_flags, depth=self.behind_scratch)
+        self._plain_parts = plain((shapes, evidence, arcs))
+        self._plain_scratch = plain(scratch)
 
     @property
     def bearings(self) -> np.ndarray:
@@ -680,17 +715,25 @@ class EvidenceModel(ArcModel):
         """Crossings stored per row (:class:`~sonarcarve.methods.atm.CrossingStore`)."""
         return self.store.counts
 
-    def _arrays(self) -> tuple[Any, ...]:
-        """The history's rows, the per-arc state and the model, in the order of
-        :func:`~sonarcarve.geometry.evidence.evidence_add` (after its first two arguments)."""
+    def _bundles(self) -> tuple[PlainBundle, PlainBundle, EvidenceParams, bool]:
+        """The weighing kernels' arguments after the sequence numbers
+        (:func:`~sonarcarve.geometry.evidence.evidence_add_many`): the state and the work
+        arrays (as :func:`~sonarcarve.geometry.evidence.arrays.plain` tuples, which numba
+        types faster at the call), the sensor model and whether to find ATM crossings."""
+        return self._state(), self._plain_scratch, self.params, self.options.atm
+
+    def _state(self) -> PlainBundle:
+        """The model's :class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`, plain.
+        The history's rows and the crossing store are bundled afresh each call (the store's
+        bearings are replaced when it grows), as tuples in their bundles' field order
+        (:class:`~sonarcarve.geometry.evidence.arrays.ReadingRows`,
+        :class:`~sonarcarve.geometry.evidence.arrays.CrossingArrays`: building those and
+        unnaming them cost 1 µs a call); the per-arc arrays were bundled once
+        (:meth:`_bundle`)."""
         h = self.history
-        return (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor, self.viewpoints, self.looked,
-                self.others, self.through, self.behind, self.passed, self.trans, self.scratch,
-                self.in_beam, self.bin_index, self.near, self.near_flags, self.bx, self.by,
-                self.ex, self.ey, self.free, self.support, self.located, self.circle,
-                self.live_circle, self.cos_axis, self.sin_axis, self.cos_half, self.status,
-                self.touched, self.occluded,
-                self.bearings, self.counts, self.spill, self.params, self.options.atm)
+        readings = (h.x, h.y, h.r, h.theta, h.beam_width, h.sensor)
+        crossings = (self.bearings, self.counts, self.spill)
+        return (readings, *self._plain_parts, crossings)
 
     def _count(self, counts: tuple[int, int, int]) -> None:
         fully, crossings, occluding = counts
@@ -708,8 +751,7 @@ class EvidenceModel(ArcModel):
         self.mark_repeats(first, count)
         while first < end:
             fully, crossings, occluding, first, spilled = evidence_add_many(
-                first, end - first, self.history.capacity, self.behind_scratch,
-                *self._arrays())
+                first, end - first, self.history.capacity, *self._bundles())
             self._count((fully, crossings, occluding))
             if spilled:
                 self._take_spill(spilled)
@@ -764,49 +806,42 @@ class EvidenceModel(ArcModel):
         self.check_usable()
         h = self.history
         slots = np.ascontiguousarray(h.slots())
-        self._fully += evidence_free(
-            reading.x, reading.y, reading.max_range, reading.theta, beam_width, reading.sensor,
-            slots, h.x, h.y, h.beam_width, h.sensor, self.looked,
-            self.bx, self.by, self.ex, self.ey, self.free, self.support, self.circle,
-            self.status, self.touched, self.params,
-        )
+        silent = SilentReading(x=reading.x, y=reading.y, max_range=reading.max_range,
+                               theta=reading.theta, beam_width=beam_width, sensor=reading.sensor)
+        # Plain tuples: numba types them faster at the call (arrays.plain).
+        self._fully += evidence_free(tuple(silent), slots, self._state(), self.params)
         mark_watched_by_silence(slots, h.x, h.y, h.r, self.cos_axis, self.sin_axis, h.sensor,
                                 reading.x, reading.y, reading.theta, beam_width,
                                 reading.max_range, reading.sensor, self.watched,
                                 self.covering, self.params.viewpoint_spacing,
                                 self.params.incidence_zero)
 
-    def raw(self, slots: SlotArray) -> tuple[np.ndarray, ...]:
+    def raw(self, slots: SlotArray) -> PieceEstimates:
         """:func:`~sonarcarve.geometry.evidence.evidence_estimates` for ``slots`` (refused once
         the model has stopped: :meth:`check_usable`)."""
         self.check_usable()
-        h, o = self.history, self.options
-        return evidence_estimates(
-            slot_indices(slots), h.x, h.y, h.r, h.theta, h.beam_width,
-            self.free, self.support, self.located, self.status, self.bearings, self.counts,
-            self.threshold, self.atm_bound, o.atm, o.located_placement, o.posterior_placement,
-            o.uncut_posterior, o.min_atm_crossings,
-        )
+        readings, _, evidence, _, crossings = self._state()  # EvidenceState's parts, plain
+        return evidence_estimates(slot_indices(slots), readings, evidence, self.status,
+                                  crossings, self._plain_rules)
 
     def estimates(self, slots: SlotArray) -> Estimates:
         """Points of the kept runs; ``alive`` where a bin survives (confidence applied by the
         method). ``confidence`` is left to the method."""
         return self.estimates_from_raw(slots, self.raw(slots))
 
-    def estimates_from_raw(self, slots: SlotArray, raw: tuple[np.ndarray, ...]) -> Estimates:
+    def estimates_from_raw(self, slots: SlotArray, raw: PieceEstimates) -> Estimates:
         """:meth:`estimates` from an already computed :meth:`raw`."""
-        has, bearing, width, max_error, _, is_atm, _, _, _, _ = raw
         h = self.history
         n = len(slots)
         processed = np.empty(n, dtype=np.bool_)
         source = np.empty(n, dtype=np.int8)
         fate = np.empty(n, dtype=np.int8)
-        _fill_codes(np.ascontiguousarray(slots, dtype=np.int64), has, is_atm, width,
-                    h.beam_width, self.touched, self.counts, self.status, processed, source,
-                    fate)
+        _fill_codes(np.ascontiguousarray(slots, dtype=np.int64), raw.has_piece, raw.is_atm,
+                    raw.width, h.beam_width, self.touched, self.counts, self.status, processed,
+                    source, fate)
         return Estimates(
-            alive=has, processed=processed, xy=arc_point(h, slots, bearing), width=width,
-            max_error=max_error, source=source, fate=fate,
+            alive=raw.has_piece, processed=processed, xy=arc_point(h, slots, raw.bearing),
+            width=raw.width, max_error=raw.max_error, source=source, fate=fate,
         )
 
     def counters(self) -> dict[str, int]:
@@ -881,7 +916,7 @@ class EvidenceMethod(SonarMethod):
                               c.carve_probability, c.min_transversal, c.range_resolution,
                               options=self.options, sensor=self.sensor),)
 
-    def features(self, slots: SlotArray, raw: tuple[np.ndarray, ...] | None = None,
+    def features(self, slots: SlotArray, raw: PieceEstimates | None = None,
                  maturity: np.ndarray | None = None) -> np.ndarray:
         """The confidence's features of ``slots`` now, shape (n, F) (:class:`ConfidenceModel`);
         ``raw`` (:meth:`EvidenceModel.raw`) and ``maturity`` (:meth:`maturity`) of the same
@@ -890,11 +925,11 @@ class EvidenceMethod(SonarMethod):
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
         maturity = self.maturity(slots, raw) if maturity is None else maturity
-        _, _, width, _, support, _, crossings, free, runs, _ = raw
         h = self.history
         out = np.empty((len(slots), len(CONFIDENCE_FEATURES)))
-        _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), support, crossings,
-                       free, runs, width, np.ascontiguousarray(maturity, dtype=np.float64),
+        _fill_features(out, np.ascontiguousarray(slots, dtype=np.int64), raw.piece_support,
+                       raw.piece_crossings, raw.piece_free, raw.runs, raw.width,
+                       np.ascontiguousarray(maturity, dtype=np.float64),
                        model.viewpoints, model.looked, model.occluded, h.r, h.beam_width,
                        model.others, model.through, model.repeated, model.behind,
                        model.covering, self.confidence_model.looks_per_support,
@@ -902,7 +937,7 @@ class EvidenceMethod(SonarMethod):
         return out
 
     def maturity(self, slots: SlotArray,
-                 raw: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
+                 raw: PieceEstimates | None = None) -> np.ndarray:
         """:meth:`ConfidenceModel.maturity` of ``slots`` now, shape (n,); ``raw``
         (:meth:`EvidenceModel.raw` of the same slots) when the caller has it already.
 
@@ -921,7 +956,7 @@ class EvidenceMethod(SonarMethod):
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots) if raw is None else raw
-        judged = model.watched[slots] | (raw[4] <= 0.0)  # raw[4]: the kept run's support
+        judged = model.watched[slots] | (raw.piece_support <= 0.0)
         return self.confidence_model.maturity(now - h.t[slots], judged)
 
     def _estimates(self, slots: SlotArray) -> Estimates:
@@ -929,7 +964,7 @@ class EvidenceMethod(SonarMethod):
         model = self.models[0]
         assert isinstance(model, EvidenceModel)
         raw = model.raw(slots)
-        has = raw[0]
+        has = raw.has_piece
         base = model.estimates_from_raw(slots, raw)
         maturity = self.maturity(slots, raw)
         confidence = self.confidence_model.confidence(self.features(slots, raw, maturity),

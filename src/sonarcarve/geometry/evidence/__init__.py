@@ -40,8 +40,12 @@ Modules, from the model up:
 from __future__ import annotations
 
 from sonarcarve.geometry.evidence.add import evidence_add, evidence_add_many
-from sonarcarve.geometry.evidence.estimates import evidence_estimates
-from sonarcarve.geometry.evidence.free import evidence_free
+from sonarcarve.geometry.evidence.estimates import (
+    EstimateRules,
+    PieceEstimates,
+    evidence_estimates,
+)
+from sonarcarve.geometry.evidence.free import SilentReading, evidence_free
 from sonarcarve.geometry.evidence.model import (
     EVIDENCE_ALIVE,
     EVIDENCE_CARVED,
@@ -54,7 +58,10 @@ from sonarcarve.geometry.evidence.watch import mark_watch, mark_watched_by_silen
 __all__ = [
     "EVIDENCE_ALIVE",
     "EVIDENCE_CARVED",
+    "EstimateRules",
     "EvidenceParams",
+    "PieceEstimates",
+    "SilentReading",
     "detect_probability",
     "evidence_add",
     "evidence_add_many",

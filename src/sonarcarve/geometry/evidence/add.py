@@ -12,23 +12,25 @@ older live arc inside its beam (``d = |p - o_j|``):
   (:mod:`~sonarcarve.geometry.evidence.transmission`) and ATM crossings
   (:mod:`~sonarcarve.geometry.evidence.crossings`).
 
-:func:`evidence_add` bundles its arrays by what they hold
-(:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState` and the weighing's scratch) and
-runs a sequence of passes, each an inlined helper taking a few of those bundles:
+:func:`evidence_add` takes the model's arrays and its work arrays as two bundles
+(:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`,
+:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`: what each array holds is documented
+there) and runs a sequence of passes, each an inlined helper taking a few bundles:
 
 1. the new arc's profile (:func:`_init_new_arc`);
 2. the cull of the older rows (:func:`_cull_older`,
    :func:`~sonarcarve.geometry.evidence.beam.mark_near`);
-3. per group of older arcs, pass 1: the bins to weigh and ATM's crossings
-   (:func:`_gather_group`: :func:`_mark_bins`, :func:`_gather_entries`); pass 2: their
-   ``P_detect`` (:func:`_detect_entries`,
+3. per group of older arcs (:func:`_weigh_older`), pass 1: the bins to weigh and ATM's
+   crossings (:func:`_gather_group`: :func:`_mark_bins`, :func:`_gather_entries`); pass 2:
+   their ``P_detect`` (:func:`_detect_entries`,
    :func:`~sonarcarve.geometry.evidence.model.detect_probability` inlined); pass 3: their
-   evidence (:func:`_weigh_group`: :func:`_weigh_arc`, :func:`_add_arc_sums`);
+   evidence (:func:`_weigh_group`: :func:`_weigh_arc`, whose steps are
+   :func:`_weigh_free_entry` with :func:`_pass_established` and :func:`_weigh_support_entry`;
+   then :func:`_add_arc_sums`);
 4. what the new arc learns, the transmission included (:func:`_finish_new_arc`).
 
-Laid out for the processor, it
-gives bit for bit the values of one loop over every arc and bin: ``docs/evidence-carving.md``,
-"Evidence, support and the threshold", "Per-arc sums" and
+Laid out for the processor, it gives bit for bit the values of one loop over every arc and
+bin: ``docs/evidence-carving.md``, "Evidence, support and the threshold", "Per-arc sums" and
 "Speed: the weighing kernel's layout".
 """
 
@@ -38,20 +40,22 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.bounds import arc_bounding_circle
 from sonarcarve.geometry.evidence.arrays import (
+    AddScratch,
     ArcEvidence,
     ArcShapes,
     BinEvidence,
-    CrossingArrays,
     EvidenceState,
     GroupScratch,
     NewArcScratch,
     NewArcTally,
+    PlainBundle,
     ReadingRows,
+    named_scratch,
+    named_state,
 )
 from sonarcarve.geometry.evidence.beam import (
     Beam,
@@ -72,9 +76,16 @@ from sonarcarve.geometry.evidence.model import (
 )
 from sonarcarve.geometry.evidence.occlusion import occlude_behind
 from sonarcarve.geometry.evidence.transmission import weigh_transmission
-from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray
 
 __all__ = ["evidence_add", "evidence_add_many"]
+
+
+#: The rows of :class:`~sonarcarve.geometry.evidence.arrays.GroupScratch`'s ``entries``:
+#: an entry's offset from the new reading, its bin centre's direction (pass 1), then its
+#: distance, the sine of its angle to j's axis, ``P_beam``, ``cos γ``, ``P_detect`` and
+#: localised support (pass 2).
+_VX, _VY, _D2, _EX, _EY, _D, _SINE, _P_BEAM, _COS_GAMMA, _P_DETECT, _LOCATED = range(11)
 
 
 class _OlderArc(NamedTuple):
@@ -90,19 +101,18 @@ class _OlderArc(NamedTuple):
 
 
 @compiled_inline
-def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
-    """The new arc's shape: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, the
-    bounding circle; its empty evidence; and the scratch ``trans`` (of :func:`evidence_add`)."""
-    readings, shapes, evidence, arcs = state.readings, state.shapes, state.evidence, state.arcs
+def _shape_new_arc(slot: int, readings: ReadingRows, shapes: ArcShapes,
+                   evidence: BinEvidence) -> None:
+    """The new arc's shape: bin centres p_k on C_j (eq. 2.1) at τ_k = θ1 + (k + ½) Δ, their
+    directions, the axis and the bounding circle; and its bins' empty evidence."""
     bx, by, ex, ey = shapes.bx, shapes.by, shapes.ex, shapes.ey
     bins = bx.shape[1]
     xj = readings.x[slot]
     yj = readings.y[slot]
     rj = readings.r[slot]
     theta_j = readings.theta[slot]
-    phi_j = readings.beam_width[slot]
-    half_j = 0.5 * phi_j
-    step_j = phi_j / bins
+    half_j = 0.5 * readings.beam_width[slot]
+    step_j = readings.beam_width[slot] / bins
     shapes.cos_axis[slot] = math.cos(theta_j)
     shapes.sin_axis[slot] = math.sin(theta_j)
     shapes.cos_half[slot] = math.cos(half_j)
@@ -119,21 +129,41 @@ def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
     shapes.circle[0, slot] = c0
     shapes.circle[1, slot] = c1
     shapes.circle[2, slot] = c2
+
+
+@compiled_inline
+def _reset_new_arc_scratch(phi_j: float, bins: int, trans: FloatArray) -> None:
+    """``trans`` (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`'s) for a new arc of
+    beam width ``phi_j`` and ``bins`` bins: its support from other sensors zeroed; the sines
+    of its bin edges and the guess's scale depend on the beam width only, so they are
+    recomputed only when it changes (a ring of like sensors: never after the first
+    reading)."""
+    if trans[2 * bins + 1] != phi_j:  # the edges' beam width (NaN: none yet)
+        half_j = 0.5 * phi_j
+        step_j = phi_j / bins
+        for k in range(bins + 1):
+            trans[bins + k] = math.sin(-half_j + k * step_j)
+        trans[2 * bins + 1] = phi_j
+        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
+    for k in range(bins):
+        trans[k] = 0.0
+
+
+@compiled_inline
+def _init_new_arc(slot: int, state: EvidenceState, trans: FloatArray) -> None:
+    """The new arc's row before it is weighed: its shape and empty evidence
+    (:func:`_shape_new_arc`), its per-arc records (alive, untouched, zero sums and
+    crossings) and the scratch ``trans`` (:func:`_reset_new_arc_scratch`)."""
+    _shape_new_arc(slot, state.readings, state.shapes, state.evidence)
+    arcs = state.arcs
     arcs.status[slot] = EVIDENCE_ALIVE
     arcs.touched[slot] = False
     arcs.occluded[slot] = 0.0
     arcs.viewpoints[slot] = 0.0
     arcs.looked[slot] = 0.0
     arcs.others[slot] = 0.0
-    if trans[2 * bins + 1] != phi_j:  # the edges' beam width (NaN: none yet)
-        # The scratch's second part: sines of j's bin edges; they depend on the beam width
-        # only, so they are kept while it stays the same (a ring of like sensors: always).
-        for k in range(bins + 1):
-            trans[bins + k] = math.sin(-half_j + k * step_j)
-        trans[2 * bins + 1] = phi_j
-        trans[2 * bins + 2] = bins / (trans[2 * bins] - trans[bins])
-    for k in range(bins):  # its first part: j's support from other sensors
-        trans[k] = 0.0
+    bins = state.evidence.free.shape[1]
+    _reset_new_arc_scratch(state.readings.beam_width[slot], bins, trans)
     state.crossings.counts[slot] = 0
 
 
@@ -181,11 +211,11 @@ def _gather_entries(i: int, first: int, n_in: int, beam: Beam, shapes: ArcShapes
     e_bin = group.entry_bin
     xj = beam.x
     yj = beam.y
-    e_vx = group.entries[0]
-    e_vy = group.entries[1]
-    e_d2 = group.entries[2]
-    e_ex = group.entries[3]
-    e_ey = group.entries[4]
+    e_vx = group.entries[_VX]
+    e_vy = group.entries[_VY]
+    e_d2 = group.entries[_D2]
+    e_ex = group.entries[_EX]
+    e_ey = group.entries[_EY]
     e = first
     for k in range(bx.shape[1]):
         e_bin[e] = k
@@ -231,17 +261,17 @@ def _detect_entries(n_entries: int, beam: Beam, params: EvidenceParams, new_arc:
     cos_zero = beam.cos_zero
     scratch = group.entries
     e_guess = group.entry_guess
-    e_vx = scratch[0]
-    e_vy = scratch[1]
-    e_d2 = scratch[2]
-    e_ex = scratch[3]
-    e_ey = scratch[4]
-    e_d = scratch[5]
-    e_sine = scratch[6]
-    e_beam = scratch[7]
-    e_cos = scratch[8]
-    e_p = scratch[9]
-    e_loc = scratch[10]
+    e_vx = scratch[_VX]
+    e_vy = scratch[_VY]
+    e_d2 = scratch[_D2]
+    e_ex = scratch[_EX]
+    e_ey = scratch[_EY]
+    e_d = scratch[_D]
+    e_sine = scratch[_SINE]
+    e_beam = scratch[_P_BEAM]
+    e_cos = scratch[_COS_GAMMA]
+    e_p = scratch[_P_DETECT]
+    e_loc = scratch[_LOCATED]
     for e in range(n_entries):
         vx = e_vx[e]
         vy = e_vy[e]
@@ -309,85 +339,116 @@ def _add_support(slot: int, i: int, k: int, kb: int, p: float, loc: float, other
 
 
 @compiled_inline
+def _pass_established(slot: int, e: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
+                      group: GroupScratch, state: EvidenceState,
+                      tally: NewArcTally) -> tuple[bool, NewArcTally]:
+    """Whether the older bin of entry ``e``, in j's freespace, is *established* (support at
+    least ``establish``, free evidence below ``T / 2``), and what j learns passing it, only
+    where it is nearer than ``r_j - 2ε`` (a margin clear of j's own echo): the support of the
+    surface its sound passed (``top_through``) and, past an established bin, the bins of j
+    behind it carved by occlusion (:func:`_occlude_past`). Returns the verdict and the new
+    arc's tally updated."""
+    i = arc.row
+    k = group.entry_bin[e]
+    support = state.evidence.support
+    d = group.entries[_D, e]
+    n_passed, occluding, top_through = tally
+    established = (support[i, k] >= params.establish
+                   and state.evidence.free[i, k] < 0.5 * params.threshold)
+    if d < beam.free_r - params.tolerance:
+        top_through = max(top_through, support[i, k])
+        if established:
+            occluding += _occlude_past(slot, group.entries[_VX, e], group.entries[_VY, e], d,
+                                       arc.half_bin_arc, beam, state.evidence.free,
+                                       params.threshold)
+            state.arcs.touched[slot] = True
+    return established, NewArcTally(n_passed=n_passed, occluding=occluding,
+                                    top_through=top_through)
+
+
+@compiled_inline
+def _weigh_free_entry(slot: int, e: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
+                      group: GroupScratch, state: EvidenceState, new_arc: NewArcScratch,
+                      tally: NewArcTally) -> tuple[bool, NewArcTally]:
+    """Entry ``e`` of an older arc, nearer than ``r_j - ε``: j heard nothing there, so the bin
+    gains ``w = -log(1 - P_detect)`` of free evidence (eq. 3.2), times ``protect`` where it is
+    established (:func:`_pass_established`). A bin still alive that j's sound passed
+    obliquely (``P_detect < P_beam``) is kept for the transmission pass
+    (:func:`_keep_for_transmission`). Returns whether the bin is still alive (below ``T``)
+    and the new arc's tally updated."""
+    i = arc.row
+    k = group.entry_bin[e]
+    free = state.evidence.free
+    p = group.entries[_P_DETECT, e]
+    p_beam = group.entries[_P_BEAM, e]
+    f = free[i, k]
+    state.arcs.touched[i] = True
+    established, tally = _pass_established(slot, e, arc, beam, params, group, state, tally)
+    factor = params.protect if established else 1.0
+    w = -math.log1p(-p) * factor
+    f += w
+    free[i, k] = f
+    alive = f < params.threshold
+    passed = new_arc.passed
+    n_passed = tally.n_passed
+    if alive and params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
+        kb = bin_from_guess(group.entry_guess[e], group.entries[_SINE, e], new_arc.edges,
+                            free.shape[1])
+        n_passed = _keep_for_transmission(passed, n_passed, i, k, kb,
+                                          p_beam * group.entries[_COS_GAMMA, e], factor, w)
+    return alive, NewArcTally(n_passed=n_passed, occluding=tally.occluding,
+                              top_through=tally.top_through)
+
+
+@compiled_inline
+def _weigh_support_entry(slot: int, e: int, arc: _OlderArc, group: GroupScratch,
+                         state: EvidenceState, new_arc: NewArcScratch) -> float:
+    """Entry ``e`` of an older arc, on j's echo circle (``|d - r_j| <= ε_s``): support, not
+    freespace, to it and to j's bin at its bearing (:func:`_add_support`). Returns its
+    ``P_detect``."""
+    i = arc.row
+    p: float = group.entries[_P_DETECT, e]
+    state.arcs.touched[i] = True
+    state.arcs.touched[slot] = True
+    kb = bin_from_guess(group.entry_guess[e], group.entries[_SINE, e], new_arc.edges,
+                        state.evidence.free.shape[1])
+    _add_support(slot, i, group.entry_bin[e], kb, p, group.entries[_LOCATED, e], arc.other,
+                 state.evidence, new_arc.other_support)
+    return p
+
+
+@compiled_inline
 def _weigh_arc(slot: int, arc: _OlderArc, beam: Beam, params: EvidenceParams,
                group: GroupScratch, state: EvidenceState, new_arc: NewArcScratch,
                tally: NewArcTally) -> tuple[int, float, float, NewArcTally]:
     """Pass 3 for an older arc: the evidence of its entries (its marked bins, in bin order):
-    freespace evidence where nearer than ``r_j - ε`` (the rows kept for transmission among
-    them), occlusion of j's bins behind established ones (and the support j looked through)
-    only where nearer than ``r_j - 2ε``, a margin clear of j's own echo; support where on j's
-    echo circle.
+    freespace evidence where nearer than ``r_j - ε`` (:func:`_weigh_free_entry`: the rows
+    kept for transmission among them, and occlusion of j's bins behind established ones and
+    the support j looked through only where nearer than ``r_j - 2ε``, a margin clear of j's
+    own echo); support where on j's echo circle (:func:`_weigh_support_entry`).
 
     Returns its live bins (those outside j's reach or beam included), its largest support and
-    "looked" ``P_beam``, and the new arc's tally updated.
+    "looked" ``P_beam`` (from a distinct viewpoint only), and the new arc's tally updated.
     """
-    i = arc.row
-    other = arc.other
-    distinct = arc.distinct
-    half_bin_arc = arc.half_bin_arc
-    free = state.evidence.free
-    support = state.evidence.support
-    touched = state.arcs.touched
-    edges = new_arc.edges
-    passed = new_arc.passed
-    n_passed, occluding, top_through = tally
-    bins = free.shape[1]
-    threshold = params.threshold
-    free_r = beam.free_r
-    scratch = group.entries
-    e_bin = group.entry_bin
-    e_guess = group.entry_guess
-    e_vx = scratch[0]
-    e_vy = scratch[1]
-    e_d = scratch[5]
-    e_sine = scratch[6]
-    e_beam = scratch[7]
-    e_cos = scratch[8]
-    e_p = scratch[9]
-    e_loc = scratch[10]
+    distances = group.entries[_D]
     alive_bins = arc.alive_outside
     top_support = 0.0
     top_looked = 0.0
     for e in range(arc.first_entry, arc.end_entry):
-        k = e_bin[e]
-        d = e_d[e]
-        if d >= free_r and abs(d - beam.r) > params.support_tolerance:
+        d = distances[e]
+        if d >= beam.free_r and abs(d - beam.r) > params.support_tolerance:
             alive_bins += 1  # neither in j's freespace nor on its echo circle
-            continue
-        p = e_p[e]
-        if d < free_r:
-            p_beam = e_beam[e]
-            f = free[i, k]
-            touched[i] = True
-            if distinct:
-                top_looked = max(top_looked, p_beam)
-            established = (support[i, k] >= params.establish and f < 0.5 * threshold)
-            if d < free_r - params.tolerance:
-                top_through = max(top_through, support[i, k])
-                if established:
-                    occluding += _occlude_past(slot, e_vx[e], e_vy[e], d, half_bin_arc, beam,
-                                               free, threshold)
-                    touched[slot] = True
-            factor = params.protect if established else 1.0
-            w = -math.log1p(-p) * factor
-            f += w
-            free[i, k] = f
-            if f < threshold:
-                alive_bins += 1
-                if params.transmit > 0.0 and p < p_beam and n_passed < passed.shape[0]:
-                    kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
-                    n_passed = _keep_for_transmission(passed, n_passed, i, k, kb,
-                                                      p_beam * e_cos[e], factor, w)
-        else:  # on j's echo circle: support, not freespace
+        elif d < beam.free_r:
+            if arc.distinct:
+                top_looked = max(top_looked, group.entries[_P_BEAM, e])
+            alive, tally = _weigh_free_entry(slot, e, arc, beam, params, group, state,
+                                             new_arc, tally)
+            alive_bins += alive
+        else:
             alive_bins += 1
-            touched[i] = True
-            touched[slot] = True
-            top_support = max(top_support, p)
-            kb = bin_from_guess(e_guess[e], e_sine[e], edges, bins)
-            _add_support(slot, i, k, kb, p, e_loc[e], other, state.evidence,
-                         new_arc.other_support)
-    return (alive_bins, top_support, top_looked,
-            NewArcTally(n_passed=n_passed, occluding=occluding, top_through=top_through))
+            top_support = max(top_support,
+                              _weigh_support_entry(slot, e, arc, group, state, new_arc))
+    return alive_bins, top_support, top_looked, tally
 
 
 @compiled_inline
@@ -537,45 +598,94 @@ def _weigh_group(slot: int, first: int, group_end: int, beam: Beam, params: Evid
 
 
 @compiled_inline
-def _evidence_state(
-    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
-    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, behind: FloatArray,
-    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-    status: Int8Array, touched: BoolArray, occluded: FloatArray,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
-) -> EvidenceState:
-    """The model's arrays, as :func:`evidence_add` takes them, bundled by what they hold
-    (:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`)."""
-    return EvidenceState(
-        readings=ReadingRows(x=x, y=y, r=r, theta=theta, beam_width=beam_width, sensor=sensor),
-        shapes=ArcShapes(cos_axis=cos_axis, sin_axis=sin_axis, cos_half=cos_half,
-                         circle=circle, bx=bx, by=by, ex=ex, ey=ey),
-        evidence=BinEvidence(free=free, support=support, located=located),
-        arcs=ArcEvidence(status=status, touched=touched, viewpoints=viewpoints, looked=looked,
-                         others=others, occluded=occluded, through=through, behind=behind,
-                         live_circle=live_circle),
-        crossings=CrossingArrays(bearings=bearings, counts=counts, spill=spill),
+def _group_scratch(scratch: AddScratch) -> GroupScratch:
+    """The work arrays of the bin passes, by the names the passes use."""
+    return GroupScratch(
+        entries=scratch.entries, entry_bin=scratch.bin_index[0],
+        entry_guess=scratch.bin_index[1], arc_marked=scratch.bin_index[2],
+        arc_alive=scratch.bin_index[3], in_beam=scratch.in_beam, near=scratch.near,
+        near_flags=scratch.near_flags,
     )
 
 
+@compiled_inline
+def _new_arc_scratch(scratch: AddScratch, bins: int) -> NewArcScratch:
+    """The new arc's side of the weighing, once :func:`_init_new_arc` has set the sines of its
+    bin edges in ``scratch.trans`` (``edge_scale`` is read from there)."""
+    trans = scratch.trans
+    return NewArcScratch(other_support=trans[:bins], edges=trans[bins : 2 * bins + 1],
+                         edge_scale=trans[2 * bins + 2], passed=scratch.passed)
+
+
+@compiled_inline
+def _weigh_older(slot: int, n_near: int, beam: Beam, params: EvidenceParams, with_atm: bool,
+                 state: EvidenceState, group: GroupScratch,
+                 new_arc: NewArcScratch) -> tuple[int, int, int, NewArcTally]:
+    """The new arc against the ``n_near`` older rows that passed the cull
+    (``group.near[:n_near]``, oldest first), a group of them at a time: pass 1 and the
+    crossings (:func:`_gather_group`), pass 2 (:func:`_detect_entries`: ``P_detect`` of every
+    entry of the group at once, one loop the compiler vectorises when the entries are many),
+    pass 3 (:func:`_weigh_group`: the evidence, arc after arc, in bin order, then the arc's
+    sums). Returns the arcs carved fully, the crossings kept, the rows of ``spill`` used and
+    the new arc's tally.
+
+    Marking every row up front (the cull) gives the one loop's result because nothing here
+    changes another older arc's status or bounding circle, nor the free evidence of a row
+    other than the arc in hand and the new one (``slot``, never an older row): the new arc's
+    status and the transmission come after it. For the same reason pass 1 can read every
+    arc's free evidence of a group before pass 3 writes any of them, and pass 2 reads only
+    geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs' order, so
+    every value is the one loop's.
+    """
+    bins = state.evidence.free.shape[1]
+    group_size = max(1, group.entries.shape[1] // bins)  # arcs a group's entries always hold
+    tally = NewArcTally(n_passed=0, occluding=0, top_through=0.0)
+    fully = 0
+    crossings = 0
+    spilled = 0
+    q = 0
+    while q < n_near:
+        first = q  # the group's rows end up in near[first:group_end]
+        q, group_end, n_entries, kept, spilled, carved = _gather_group(
+            slot, q, n_near, group_size, beam, params, with_atm, state, group, spilled)
+        crossings += kept
+        fully += carved
+        _detect_entries(n_entries, beam, params, new_arc, group)
+        carved, tally = _weigh_group(slot, first, group_end, beam, params, state, group,
+                                     new_arc, tally)
+        fully += carved
+    return fully, crossings, spilled, tally
+
+
+@compiled_inline
+def _add_reading(slot: int, first_older: int, n_older: int, state: EvidenceState,
+                 scratch: AddScratch, params: EvidenceParams,
+                 with_atm: bool) -> tuple[int, int, int, int]:
+    """:func:`evidence_add`, inlined into :func:`evidence_add_many`: as a call there (the
+    bundles flattened into some 300 arguments) the kernel was 7 % slower per reading at
+    history 250 (measured on numba 0.68, CPU time of the kernel, the best of 7 runs)."""
+    # The passes are inlined helpers (compiled_inline), as this is, into kernels that count
+    # no references (compiled_borrowing), so they compile to the code of one body: the same
+    # bits, and the same speed where numba can compile without reference counting (measured
+    # on numba 0.68; docs/evidence-carving.md, "Speed: the weighing kernel's layout").
+    bins = state.evidence.free.shape[1]
+    group = _group_scratch(scratch)
+    _init_new_arc(slot, state, scratch.trans)
+    beam = new_beam(slot, state.readings, state.shapes, params)
+    new_arc = _new_arc_scratch(scratch, bins)
+    n_near = _cull_older(first_older, n_older, beam, state, group)
+    fully, crossings, spilled, tally = _weigh_older(slot, n_near, beam, params, with_atm,
+                                                    state, group, new_arc)
+    fully += _finish_new_arc(slot, tally, new_arc, state, params)
+    draw_live_circle(slot, state.readings, state.evidence.free, params.threshold,
+                     state.arcs.live_circle)
+    return fully, crossings, tally.occluding, spilled
+
+
 @compiled_borrowing
-def evidence_add(
-    slot: int, first_older: int, n_older: int,
-    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
-    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
-    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
-    near: SlotArray, near_flags: BoolArray,
-    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-    status: Int8Array, touched: BoolArray, occluded: FloatArray,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
-    params: EvidenceParams, with_atm: bool,
-) -> tuple[int, int, int, int]:
+def evidence_add(slot: int, first_older: int, n_older: int,
+                 state: EvidenceState | PlainBundle, scratch: AddScratch | PlainBundle,
+                 params: EvidenceParams, with_atm: bool) -> tuple[int, int, int, int]:
     """Add reading ``slot``: initialise its profile, then weigh it against every older arc.
 
     Parameters
@@ -588,91 +698,15 @@ def evidence_add(
         skipped. ``0 <= first_older < n`` and ``n_older < n``, ``slot`` not among them (the
         history's storage is twice its capacity); a longer window is cut to ``n`` rows, since
         the kernel runs without bounds checks.
-    x, y, r, theta, beam_width : ndarray, shape (n,)
-        The history's rows (metres, radians).
-    sensor : ndarray of int64, shape (n,)
-        The history's sensor index per row.
-    viewpoints : ndarray, shape (n,)
-        Support from distinct viewpoints per arc: the sum, over newer or older readings of
-        another sensor or from an origin at least ``viewpoint_spacing`` away whose echo circle
-        passes through the arc, of the largest ``P_detect`` of that support (updated in place).
-    looked : ndarray, shape (n,)
-        "Looked through" evidence per arc: ``-log(1 - P)`` summed over distinct viewpoints
-        whose free sector covers a bin still alive, ``P`` the largest detection over those bins
-        *without* the incidence factor (a phantom in open space has no surface to be glancing
-        at; how much this says about a real surface is left to the confidence fit).
-    others : ndarray, shape (n,)
-        Support from *other sensors* per arc: as ``viewpoints``, but only over readings of
-        another sensor. A systematic phantom (crosstalk off the same wall, a multipath path)
-        repeats for one sensor as the robot moves, so one sensor's repeated echoes confirm
-        each other without being independent; another transducer at another mounting angle
-        is closer to independent (updated in place).
-    through : ndarray, shape (n,)
-        Per new arc, the largest support of an older live bin its free sector passed
-        (nearer than ``r_j - 2ε``): how well heard the surface is that its echo would have had
-        to cross; the graded form of the occlusion rule (filled for ``slot``).
-    behind : ndarray, shape (n,)
-        Per arc, how far its echo lies behind a surface the history holds inside its beam,
-        judged only when the arc leaves the history (:func:`evidence_add_many`,
-        :mod:`~sonarcarve.geometry.evidence.behind`): set to 0 for ``slot`` here, so an arc
-        in the history always has 0 (its confidence, and so the live map, do not depend on
-        the feature).
-    passed : ndarray, shape (m, 6)
-        Scratch for the transmission pass: one row per older live bin in the new beam's free
-        sector (``m`` at least the older arcs' bins); overwritten.
-    trans : ndarray, shape (2 K + 3,)
-        Scratch: the new arc's support per bin from other sensors' older echoes (overwritten),
-        then the sines of its bin edges, the beam width they are for (NaN before the first
-        reading) and the scale of the guess of
-        :func:`~sonarcarve.geometry.evidence.bins.bin_of_sine` (kept between readings of the same
-        beam width).
-    scratch : ndarray, shape (11, G K)
-        Scratch of the bin passes (overwritten), ``G >= 1`` older arcs' bins: one entry per
-        bin to weigh of a group of up to ``G`` arcs, its offset from the new reading and the
-        bin centre's direction (rows 0-4), and what
-        :func:`~sonarcarve.geometry.evidence.model.detect_probability` computes of it
-        (rows 5-10).
-    in_beam : ndarray of bool, shape (K,)
-        Scratch (overwritten): the older arc's bins to weigh.
-    bin_index : ndarray of int64, shape (4, G K)
-        Scratch (overwritten): per entry its bin and the guess of
-        :func:`~sonarcarve.geometry.evidence.bins.bin_of_sine`; per arc of the group its entries and
-        its live bins outside the new beam.
-    near, near_flags : ndarray of int64 and bool, shape (n,)
-        Scratch (overwritten): the rows that pass the cull (then the group's rows with bins
-        to weigh), and the cull's verdict per row.
-    bx, by, ex, ey : ndarray, shape (n, K)
-        Bin centre points and their unit directions from the arc's origin (filled for ``slot``).
-    free, support : ndarray, shape (n, K)
-        Evidence of empty space and support per bin (updated in place).
-    located : ndarray, shape (n, K)
-        Support per bin times the sine of the angle at which the two echo circles meet there:
-        how much the support says about where on the arc the echo came from (updated in
-        place; it picks the kept run of a split arc).
-    circle : ndarray, shape (3, n)
-        A circle containing each full arc (a cheap first test): rows centre x, centre y,
-        radius (a row each, so that the cull reads them contiguously).
-    live_circle : ndarray, shape (4, n)
-        A circle containing the centres of each arc's live bins, and their count when it was
-        drawn (:func:`~sonarcarve.geometry.evidence.beam.draw_live_circle`; drawn for
-        ``slot``, redrawn for an older arc that lost bins). The cull weighs only arcs whose
-        live circle is within reach.
-    cos_axis, sin_axis, cos_half : ndarray, shape (n,)
-        Axis direction and ``cos(φ/2)`` per row (filled for ``slot``).
-    status : ndarray of int8, shape (n,)
-        ``EVIDENCE_ALIVE`` or ``EVIDENCE_CARVED``.
-    touched : ndarray of bool, shape (n,)
-        The arc has received evidence (processed, Table I).
-    occluded : ndarray, shape (n,)
-        Share of the arc's bins carved by occlusion when it arrived (the multipath flag).
-    bearings, counts : ndarray
-        ATM's crossing store (bearings relative to the axis), as in ``methods/atm.py``:
-        ``bearings`` has a column per crossing the busiest arc has kept so far, ``counts`` the
-        crossings of each row, spilled ones included.
-    spill : ndarray, shape (m, 2)
-        Where crossings go that do not fit their row: ``(row, bearing)`` in the order found;
-        ``m`` at least ``4 (older + 1)`` (an arc meets each older arc at most twice, and each
-        crossing goes to two rows). The caller widens the store and moves them there.
+    state : EvidenceState
+        The model's arrays (:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`:
+        each array's meaning and shape there): the new arc's row filled, the older arcs'
+        evidence updated in place. Named, or :func:`~sonarcarve.geometry.evidence.arrays.plain`
+        (faster to call: the module docstring of
+        :mod:`~sonarcarve.geometry.evidence.arrays`).
+    scratch : AddScratch
+        The work arrays (:class:`~sonarcarve.geometry.evidence.arrays.AddScratch`), named or
+        plain.
     params : EvidenceParams
         The sensor model.
     with_atm : bool
@@ -682,61 +716,11 @@ def evidence_add(
     -------
     fully_carved, crossings, occluded_bins, spilled : int
         Arcs whose last bin was carved by this reading; ATM crossings kept; bins of the new arc
-        carved by occlusion; rows of ``spill`` used (0: every crossing fitted).
+        carved by occlusion; rows of ``state.crossings.spill`` used (0: every crossing
+        fitted).
     """
-    # The arrays as the passes name them (arrays.py); the passes are inlined helpers
-    # (compiled_inline) and this kernel counts no references (compiled_borrowing), so they
-    # compile to the code of one body: the same bits, and the same speed where numba can
-    # compile without reference counting (measured on numba 0.68; docs/evidence-carving.md,
-    # "Speed: the weighing kernel's layout").
-    state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
-                            through, behind, bx, by, ex, ey, free, support, located, circle,
-                            live_circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
-                            bearings, counts, spill)
-    group = GroupScratch(
-        entries=scratch, entry_bin=bin_index[0], entry_guess=bin_index[1],
-        arc_marked=bin_index[2], arc_alive=bin_index[3], in_beam=in_beam, near=near,
-        near_flags=near_flags,
-    )
-    bins = bx.shape[1]
-    group_size = max(1, scratch.shape[1] // bins)  # arcs a group's entries always hold
-    _init_new_arc(slot, state, trans)
-    beam = new_beam(slot, state.readings, state.shapes, params)
-    new_arc = NewArcScratch(other_support=trans[:bins], edges=trans[bins : 2 * bins + 1],
-                            edge_scale=trans[2 * bins + 2], passed=passed)
-    tally = NewArcTally(n_passed=0, occluding=0, top_through=0.0)
-    fully = 0
-    crossings = 0
-    spilled = 0
-    # The cull, for all older rows at once (two runs of rows: the ring wraps), then the
-    # rows that pass it, oldest first, a group at a time.
-    # Marking every row up front gives the one loop's result because nothing in the loop
-    # below changes another older arc's status or bounding circle, nor the free evidence
-    # of a row other than the arc in hand and the new one (``slot``, never an older row):
-    # status[slot] and the transmission come after the loop. For the same reason pass 1 can
-    # read every arc's free evidence of a group before pass 3 writes any of them, and pass 2
-    # reads only geometry: the passes run over a group's arcs in turn, and pass 3 in the arcs'
-    # order, so every value is the one loop's.
-    n_near = _cull_older(first_older, n_older, beam, state, group)
-    q = 0
-    while q < n_near:
-        # Pass 1 and the crossings for the next older arcs, until group_size of them have
-        # bins to weigh (their rows in ``near[first:group_end]``, their bins the entries).
-        first = q
-        q, group_end, n_entries, kept, spilled, carved = _gather_group(
-            slot, q, n_near, group_size, beam, params, with_atm, state, group, spilled)
-        crossings += kept
-        fully += carved
-        # Pass 2: P_detect of every entry of the group at once (one loop the compiler
-        # vectorises when the entries are many).
-        _detect_entries(n_entries, beam, params, new_arc, group)
-        # Pass 3: the evidence, arc after arc, in bin order, then the arc's sums.
-        carved, tally = _weigh_group(slot, first, group_end, beam, params, state, group,
-                                     new_arc, tally)
-        fully += carved
-    fully += _finish_new_arc(slot, tally, new_arc, state, params)
-    draw_live_circle(slot, state.readings, free, params.threshold, state.arcs.live_circle)
-    return fully, crossings, tally.occluding, spilled
+    return _add_reading(slot, first_older, n_older, named_state(state), named_scratch(scratch),
+                        params, with_atm)
 
 
 @compiled_inline
@@ -758,30 +742,19 @@ def judge_leaving(start: int, n_live: int, state: EvidenceState, params: Evidenc
 
 
 @compiled_borrowing
-def evidence_add_many(
-    first: int, count: int, capacity: int, behind_scratch: FloatArray,
-    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
-    sensor: npt.NDArray[np.int64], viewpoints: FloatArray, looked: FloatArray,
-    others: FloatArray, through: FloatArray, behind: FloatArray, passed: FloatArray,
-    trans: FloatArray, scratch: FloatArray, in_beam: BoolArray, bin_index: SlotArray,
-    near: SlotArray, near_flags: BoolArray,
-    bx: FloatArray, by: FloatArray, ex: FloatArray, ey: FloatArray,
-    free: FloatArray, support: FloatArray, located: FloatArray, circle: FloatArray,
-    live_circle: FloatArray, cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-    status: Int8Array, touched: BoolArray, occluded: FloatArray,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], spill: FloatArray,
-    params: EvidenceParams, with_atm: bool,
-) -> tuple[int, int, int, int, int]:
+def evidence_add_many(first: int, count: int, capacity: int,
+                      state: EvidenceState | PlainBundle, scratch: AddScratch | PlainBundle,
+                      params: EvidenceParams, with_atm: bool) -> tuple[int, int, int, int, int]:
     """:func:`evidence_add` for the arcs of sequence numbers ``first .. first + count - 1``,
     in order, each against the ``capacity - 1`` (or fewer) arcs before it: one compiled call
     per block of readings (no Python between arcs), the same result as one call per arc.
 
-    The arrays are those of :func:`evidence_add`, and ``behind_scratch`` (shape (n,),
-    overwritten) for the depth behind the newer arcs. Before arc ``s`` is added, the arc it
+    The bundles are those of :func:`evidence_add`. Before arc ``s`` is added, the arc it
     pushes out of the history (``s - capacity``) gets its ``behind``: the depth behind the
     :data:`~sonarcarve.geometry.evidence.behind.NEWER_ARCS` arcs after it
-    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`), judged on the state it
-    leaves with, so the same whatever the blocks. Arcs still in the history keep 0.
+    (:func:`~sonarcarve.geometry.evidence.behind.depth_behind_newer`, in ``scratch.depth``),
+    judged on the state it leaves with, so the same whatever the blocks. Arcs still in the
+    history keep 0.
 
     It stops after the first arc whose crossings did not all fit the store (they are in
     ``spill``; every other part of that arc is done): the caller widens the store, moves the
@@ -799,11 +772,9 @@ def evidence_add_many(
         ``done == first + count`` (the block's last arc spilled, as every single ``add()``
         that spills), so the caller moves the spill whenever it is > 0, whatever ``done``.
     """
-    storage = x.shape[0]
-    state = _evidence_state(x, y, r, theta, beam_width, sensor, viewpoints, looked, others,
-                            through, behind, bx, by, ex, ey, free, support, located, circle,
-                            live_circle, cos_axis, sin_axis, cos_half, status, touched, occluded,
-                            bearings, counts, spill)
+    state = named_state(state)
+    scratch = named_scratch(scratch)
+    storage = state.arcs.status.shape[0]
     fully = 0
     crossings = 0
     occluding = 0
@@ -811,17 +782,12 @@ def evidence_add_many(
         live = min(sequence + 1, capacity)
         start = (sequence + 1 - live) % storage
         if sequence >= capacity:
-            judge_leaving(start, min(capacity - 1, NEWER_ARCS), state, params, behind_scratch)
-        a, b, c, spilled = evidence_add(
-            sequence % storage, start, live - 1, x, y, r, theta, beam_width,
-            sensor, viewpoints, looked, others, through, behind, passed, trans, scratch, in_beam,
-            bin_index, near, near_flags, bx, by, ex, ey, free,
-            support, located, circle, live_circle, cos_axis, sin_axis, cos_half, status, touched,
-            occluded, bearings, counts, spill, params, with_atm)
+            judge_leaving(start, min(capacity - 1, NEWER_ARCS), state, params, scratch.depth)
+        a, b, c, spilled = _add_reading(sequence % storage, start, live - 1, state, scratch,
+                                        params, with_atm)
         fully += a
         crossings += b
         occluding += c
         if spilled:
             return fully, crossings, occluding, sequence + 1, spilled
     return fully, crossings, occluding, first + count, 0
-

@@ -11,11 +11,18 @@ widened by half a bin at each end (``E_s = 2 r sin(e/2)``, eq. 5.3;
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
+from sonarcarve.geometry.evidence.arrays import (
+    BinEvidence,
+    CrossingArrays,
+    PlainBundle,
+    ReadingRows,
+)
 from sonarcarve.geometry.evidence.model import EVIDENCE_ALIVE
 from sonarcarve.geometry.evidence.placement import located_median, posterior_median
 from sonarcarve.geometry.evidence.runs import (
@@ -26,7 +33,124 @@ from sonarcarve.geometry.evidence.runs import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["evidence_estimates"]
+__all__ = ["EstimateRules", "PieceEstimates", "evidence_estimates"]
+
+
+class EstimateRules(NamedTuple):
+    """How :func:`evidence_estimates` keeps a piece, places its point and bounds it.
+
+    Attributes
+    ----------
+    threshold : float
+        ``T``: a bin with free evidence at or above it is carved.
+    atm_bound : float
+        ATM's bound of a median of crossings, eq. 5.4 times δ, metres.
+    with_atm : bool
+        Count the arcs' ATM crossings (without: none is read).
+    place_located : bool
+        Place the point by the evidence, not at the kept run's middle (eq. 3.6).
+    posterior : bool
+        With ``place_located``: at the median of the posterior over the run's bins, not of
+        its localised support.
+    posterior_uncut : bool
+        With both: a beam nothing has cut is placed by the posterior too, not at its middle.
+    min_crossings : int
+        Crossings the kept run needs before their median may place the point.
+
+    :func:`evidence_estimates` gives each rule's reason and measurement.
+    """
+
+    threshold: float
+    atm_bound: float
+    with_atm: bool
+    place_located: bool
+    posterior: bool = True
+    posterior_uncut: bool = False
+    min_crossings: int = 3
+
+
+class PieceEstimates(NamedTuple):
+    """What :func:`evidence_estimates` gives per slot, shape (n,) each.
+
+    Attributes
+    ----------
+    has_piece : ndarray of bool
+        At least one bin survives.
+    bearing : ndarray
+        Bearing of the point, radians (unwrapped near the axis).
+    width : ndarray
+        Width of the kept run, radians.
+    max_error : ndarray
+        Bound, metres.
+    piece_support : ndarray
+        Largest support of a bin in the kept run.
+    is_atm : ndarray of bool
+        The point is an ATM median.
+    piece_crossings : ndarray
+        ATM crossings inside the kept run.
+    piece_free : ndarray
+        Mean free evidence over the kept run, in units of ``T``.
+    runs : ndarray
+        Number of surviving runs.
+    hull_share : ndarray
+        Surviving hull width over the full beam.
+    """
+
+    has_piece: BoolArray
+    bearing: FloatArray
+    width: FloatArray
+    max_error: FloatArray
+    piece_support: FloatArray
+    is_atm: BoolArray
+    piece_crossings: FloatArray
+    piece_free: FloatArray
+    runs: FloatArray
+    hull_share: FloatArray
+
+
+class _KeptRun(NamedTuple):
+    """An arc's kept run, ``start .. end - 1`` in bins, within its surviving hull
+    ``first .. last - 1``, and its number of surviving runs (0: none, the arc is carved)."""
+
+    start: int
+    end: int
+    first: int
+    last: int
+    runs: int
+
+
+class _SlotBeam(NamedTuple):
+    """An arc's beam as :func:`evidence_estimates` reads it (metres, radians): its bins are
+    ``step`` wide from ``lo_axis = theta - half``."""
+
+    r: float
+    theta: float
+    phi: float
+    half: float
+    step: float
+    lo_axis: float
+
+
+class _Piece(NamedTuple):
+    """An arc's piece as carving leaves it: point bearing, kept run's width, the bound, the
+    run's largest support and mean free evidence (in ``T``), the hull's share of the beam."""
+
+    bearing: float
+    width: float
+    max_error: float
+    support: float
+    free: float
+    hull_share: float
+
+
+class _RunScratch(NamedTuple):
+    """Work arrays of one arc's kept run: crossings per bin (K,), the run's crossings and
+    their bins (C,), the posterior's weights (K,)."""
+
+    in_bin: FloatArray
+    values: FloatArray
+    crossing_bin: SlotArray
+    weights: FloatArray
 
 
 @compiled_inline
@@ -44,16 +168,18 @@ def _hull_bound(r: float, point: float, hull_lo: float, hull_hi: float, step: fl
 
 
 @compiled_inline
-def _placed_bearing(located: FloatArray, free: FloatArray, weights: FloatArray, s: int,
-                    start: int, end: int, lo_axis: float, step: float, cut: bool,
-                    place_located: bool, posterior: bool, posterior_uncut: bool) -> float:
-    """Bearing of the point on the kept run ``start .. end - 1`` of arc ``s``: the posterior's
-    median, the localised support's or the run's middle (eq. 3.6), by the rules of
-    :func:`evidence_estimates`; ``cut`` where evidence has cut the beam."""
+def _placed_bearing(s: int, run: _KeptRun, lo_axis: float, step: float, located: FloatArray,
+                    free: FloatArray, rules: EstimateRules, weights: FloatArray) -> float:
+    """Bearing of the point on the kept ``run`` of arc ``s`` (its bins from ``lo_axis``,
+    ``step`` wide): the posterior's median, the localised support's or the run's middle
+    (eq. 3.6), by the rules of :func:`evidence_estimates`; ``weights`` is the posterior's
+    scratch."""
+    start, end = run.start, run.end
+    cut = end - start < free.shape[1]  # evidence has cut the beam
     mid = 0.5 * ((lo_axis + start * step) + (lo_axis + end * step))  # eq. 3.6
-    if place_located and posterior and (cut or posterior_uncut):
+    if rules.place_located and rules.posterior and (cut or rules.posterior_uncut):
         return posterior_median(located, free, weights, s, start, end, lo_axis, step, mid)
-    if place_located and cut:
+    if rules.place_located and cut:
         return located_median(located, s, start, end, lo_axis, step, mid)
     return mid
 
@@ -68,29 +194,100 @@ def _atm_median_bound(median: float, runs: int, atm_bound: float, r: float, hull
 
 
 @compiled_inline
-def _kept_run_of(s: int, status: Int8Array, free: FloatArray, located: FloatArray,
-                 in_bin: FloatArray, crossing_bin: SlotArray, bearings: npt.NDArray[np.float32],
-                 c: int, half: float, step: float, threshold: float,
-                 ) -> tuple[int, int, int, int, int]:
+def _empty_estimates(n: int) -> PieceEstimates:
+    """:class:`PieceEstimates` of ``n`` slots, all zero (no piece)."""
+    return PieceEstimates(
+        has_piece=np.zeros(n, dtype=np.bool_), bearing=np.zeros(n), width=np.zeros(n),
+        max_error=np.zeros(n), piece_support=np.zeros(n), is_atm=np.zeros(n, dtype=np.bool_),
+        piece_crossings=np.zeros(n), piece_free=np.zeros(n), runs=np.zeros(n),
+        hull_share=np.zeros(n),
+    )
+
+
+@compiled_inline
+def _slot_beam(r: float, theta: float, phi: float, bins: int) -> _SlotBeam:
+    """An arc's beam as its estimate reads it: range ``r``, axis ``theta``, width ``phi``."""
+    half = 0.5 * phi
+    return _SlotBeam(r=r, theta=theta, phi=phi, half=half, step=phi / bins,
+                     lo_axis=theta - half)
+
+
+@compiled_inline
+def _kept_run_of(s: int, c: int, beam: _SlotBeam, status: Int8Array, evidence: BinEvidence,
+                 bearings: npt.NDArray[np.float32], threshold: float,
+                 in_bin: FloatArray, crossing_bin: SlotArray) -> _KeptRun:
     """:func:`~sonarcarve.geometry.evidence.runs.kept_run` of arc ``s`` after counting its
-    first ``c`` crossings per bin (they weigh in which run is kept); no run (all 0) for an arc
-    already carved."""
+    first ``c`` crossings per bin (they weigh in which run is kept; their bins stay in
+    ``work.crossing_bin``); no run (all 0) for an arc already carved."""
     if status[s] != EVIDENCE_ALIVE:
-        return 0, 0, 0, 0, 0
-    crossings_per_bin(in_bin, crossing_bin, bearings, s, c, half, step)
-    return kept_run(free, located, in_bin, s, threshold)
+        return _KeptRun(start=0, end=0, first=0, last=0, runs=0)
+    crossings_per_bin(in_bin, crossing_bin, bearings, s, c, beam.half, beam.step)
+    start, end, first, last, runs = kept_run(evidence.free, evidence.located, in_bin, s,
+                                             threshold)
+    return _KeptRun(start=start, end=end, first=first, last=last, runs=runs)
+
+
+@compiled_inline
+def _carved_piece(s: int, run: _KeptRun, beam: _SlotBeam, evidence: BinEvidence,
+                  rules: EstimateRules, weights: FloatArray) -> _Piece:
+    """Arc ``s``'s piece as evidence carving leaves it: the point it places on the kept
+    ``run`` (:func:`_placed_bearing`) with the surviving hull's bound (:func:`_hull_bound`,
+    eq. 5.3), and the run's evidence."""
+    hull_lo = beam.lo_axis + run.first * beam.step
+    hull_hi = beam.lo_axis + run.last * beam.step
+    mid = _placed_bearing(s, run, beam.lo_axis, beam.step, evidence.located, evidence.free,
+                          rules, weights)
+    support, free = run_evidence(evidence.support, evidence.free, s, run.start, run.end,
+                                 rules.threshold)
+    return _Piece(
+        bearing=mid,
+        width=(beam.lo_axis + run.end * beam.step) - (beam.lo_axis + run.start * beam.step),
+        max_error=_hull_bound(beam.r, mid, hull_lo, hull_hi, beam.step), support=support,
+        free=free, hull_share=(hull_hi - hull_lo) / beam.phi,
+    )
+
+
+@compiled_inline
+def _atm_median(s: int, c: int, run: _KeptRun, beam: _SlotBeam,
+                bearings: npt.NDArray[np.float32], rules: EstimateRules, values: FloatArray,
+                crossing_bin: SlotArray) -> tuple[int, float, float]:
+    """ATM's crossings of arc ``s`` (of its first ``c``) inside its kept ``run``: how many,
+    their median bearing and its bound (:func:`_atm_median_bound`; infinite when fewer than
+    ``min_crossings``, so that the carved point stays)."""
+    kept, median_rel = run_crossings(values, crossing_bin, bearings, s, c, run.start, run.end)
+    if kept > 0 and kept >= rules.min_crossings:
+        median = beam.theta + median_rel
+        bound = _atm_median_bound(median, run.runs, rules.atm_bound, beam.r,
+                                  beam.lo_axis + run.first * beam.step,
+                                  beam.lo_axis + run.last * beam.step, beam.step)
+        return kept, median, bound
+    return kept, 0.0, math.inf
+
+
+@compiled_inline
+def _store_piece(q: int, run: _KeptRun, piece: _Piece, kept: int, median: float,
+                 median_bound: float, out: PieceEstimates) -> None:
+    """Row ``q`` of ``out``: the carved ``piece``, its point replaced by ATM's ``median`` of
+    the ``kept`` crossings where that bound is the smaller (section 4: the estimate with the
+    smaller bound)."""
+    use_atm = median_bound < piece.max_error
+    out.has_piece[q] = True
+    out.width[q] = piece.width
+    out.piece_support[q] = piece.support
+    out.piece_free[q] = piece.free
+    out.runs[q] = run.runs
+    out.hull_share[q] = piece.hull_share
+    out.bearing[q] = median if use_atm else piece.bearing
+    out.max_error[q] = median_bound if use_atm else piece.max_error
+    out.is_atm[q] = use_atm
+    out.piece_crossings[q] = kept
 
 
 @compiled
-def evidence_estimates(
-    slots: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray,
-    beam_width: FloatArray, free: FloatArray, support: FloatArray, located: FloatArray,
-    status: Int8Array,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], threshold: float,
-    atm_bound: float, with_atm: bool, place_located: bool, posterior: bool = True,
-    posterior_uncut: bool = False, min_crossings: int = 3,
-) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray,
-           FloatArray, FloatArray, FloatArray, FloatArray]:
+def evidence_estimates(slots: SlotArray, readings: ReadingRows | PlainBundle,
+                       evidence: BinEvidence | PlainBundle, status: Int8Array,
+                       crossings: CrossingArrays | PlainBundle,
+                       rules: EstimateRules | PlainBundle) -> PieceEstimates:
     """Per slot: the surviving piece, its point, width and bound, and the evidence behind it.
 
     The surviving bins form runs; with several (a *split* arc), the run with the most
@@ -128,28 +325,26 @@ def evidence_estimates(
     ``2 r sin(e/2)`` with ``e`` the largest angle from the point to the far end of the surviving
     hull plus ``Δ/2`` (eq. 5.3).
 
+    Parameters
+    ----------
+    slots : ndarray of int64, shape (n,)
+        The history rows to estimate.
+    readings, evidence, crossings
+        The model's readings, per-bin evidence and ATM's crossing store
+        (:mod:`~sonarcarve.geometry.evidence.arrays`; only ``crossings.bearings`` and
+        ``counts`` are read).
+    status : ndarray of int8
+        ``EVIDENCE_ALIVE`` or ``EVIDENCE_CARVED`` per row.
+    rules : EstimateRules
+        The threshold, ATM's bound and the placement rules above.
+
+    Each bundle may be named or :func:`~sonarcarve.geometry.evidence.arrays.plain` (faster
+    to call: the module docstring of :mod:`~sonarcarve.geometry.evidence.arrays`).
+
     Returns
     -------
-    has_piece : bool
-        At least one bin survives.
-    bearing : float
-        Bearing of the point, radians (unwrapped near the axis).
-    width : float
-        Width of the kept run, radians.
-    max_error : float
-        Bound, metres.
-    piece_support : float
-        Largest support of a bin in the kept run.
-    is_atm : bool
-        The point is an ATM median.
-    piece_crossings : float
-        ATM crossings inside the kept run.
-    piece_free : float
-        Mean free evidence over the kept run, in units of ``T``.
-    runs : float
-        Number of surviving runs.
-    hull_share : float
-        Surviving hull width over the full beam.
+    PieceEstimates
+        Per slot: the piece, its point, width and bound, and the evidence behind it.
 
     Raises
     ------
@@ -157,59 +352,32 @@ def evidence_estimates(
         A slot outside ``-len(x) .. len(x) - 1`` (compiled indexing checks no bounds: such a
         slot read other memory, or crashed the process).
     """
+    readings = ReadingRows(*readings)
+    evidence = BinEvidence(*evidence)
+    crossings = CrossingArrays(*crossings)
+    rules = EstimateRules(*rules)
     n = slots.shape[0]
-    bins = free.shape[1]
-    has_piece = np.zeros(n, dtype=np.bool_)
-    bearing = np.zeros(n)
-    width = np.zeros(n)
-    max_error = np.zeros(n)
-    piece_support = np.zeros(n)
-    is_atm = np.zeros(n, dtype=np.bool_)
-    piece_crossings = np.zeros(n)
-    piece_free = np.zeros(n)
-    run_count = np.zeros(n)
-    hull_share = np.zeros(n)
-    in_bin = np.zeros(bins)
-    values = np.zeros(bearings.shape[1])
-    crossing_bin = np.zeros(bearings.shape[1], dtype=np.int64)
-    weights = np.zeros(bins)
+    bins = evidence.free.shape[1]
+    columns = crossings.bearings.shape[1]
+    out = _empty_estimates(n)
+    work = _RunScratch(in_bin=np.zeros(bins), values=np.zeros(columns),
+                       crossing_bin=np.zeros(columns, dtype=np.int64), weights=np.zeros(bins))
+    storage = readings.x.shape[0]
     for q in range(n):
         s = slots[q]
-        if s < -x.shape[0] or s >= x.shape[0]:  # compiled indexing checks no bounds
+        if s < -storage or s >= storage:  # compiled indexing checks no bounds
             raise IndexError("a slot is out of bounds for the history's storage")
-        phi = beam_width[s]
-        half = 0.5 * phi
-        step = phi / bins
-        lo_axis = theta[s] - half
-        c = counts[s] if with_atm else 0
-        start, end, first, last, runs = _kept_run_of(s, status, free, located, in_bin,
-                                                      crossing_bin, bearings, c, half, step,
-                                                      threshold)
-        if runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
-            bearing[q] = theta[s]
-            width[q] = phi
-            max_error[q] = _whole_beam_bound(r[s], phi)
+        beam = _slot_beam(readings.r[s], readings.theta[s], readings.beam_width[s], bins)
+        c = crossings.counts[s] if rules.with_atm else 0
+        run = _kept_run_of(s, c, beam, status, evidence, crossings.bearings, rules.threshold,
+                           work.in_bin, work.crossing_bin)
+        if run.runs == 0:  # nothing survives: the whole beam's middle (eq. 3.3)
+            out.bearing[q] = beam.theta
+            out.width[q] = beam.phi
+            out.max_error[q] = _whole_beam_bound(beam.r, beam.phi)
             continue
-        has_piece[q] = True
-        hull_lo = lo_axis + first * step
-        hull_hi = lo_axis + last * step
-        mid = _placed_bearing(located, free, weights, s, start, end, lo_axis, step,
-                              end - start < bins, place_located, posterior, posterior_uncut)
-        width[q] = (lo_axis + end * step) - (lo_axis + start * step)
-        piece_support[q], piece_free[q] = run_evidence(support, free, s, start, end, threshold)
-        run_count[q] = runs
-        hull_share[q] = (hull_hi - hull_lo) / phi
-        carved_bound = _hull_bound(r[s], mid, hull_lo, hull_hi, step)
-        bearing[q] = mid
-        max_error[q] = carved_bound
-        kept, median_rel = run_crossings(values, crossing_bin, bearings, s, c, start, end)
-        piece_crossings[q] = kept
-        if kept > 0 and kept >= min_crossings:  # section 4: the estimate with the smaller bound
-            median = theta[s] + median_rel
-            bound = _atm_median_bound(median, runs, atm_bound, r[s], hull_lo, hull_hi, step)
-            if bound < carved_bound:
-                bearing[q] = median
-                max_error[q] = bound
-                is_atm[q] = True
-    return (has_piece, bearing, width, max_error, piece_support, is_atm, piece_crossings,
-            piece_free, run_count, hull_share)
+        piece = _carved_piece(s, run, beam, evidence, rules, work.weights)
+        kept, median, median_bound = _atm_median(s, c, run, beam, crossings.bearings, rules,
+                                                 work.values, work.crossing_bin)
+        _store_piece(q, run, piece, kept, median, median_bound, out)
+    return out

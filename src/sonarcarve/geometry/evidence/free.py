@@ -9,11 +9,16 @@ beam nearer than ``max_range - ε``, and no support, occlusion, crossing or arc 
 from __future__ import annotations
 
 import math
-
-import numpy as np
-import numpy.typing as npt
+from typing import NamedTuple
 
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
+from sonarcarve.geometry.evidence.arrays import (
+    ArcShapes,
+    BinEvidence,
+    EvidenceState,
+    PlainBundle,
+    named_state,
+)
 from sonarcarve.geometry.evidence.beam import Beam, beam_of
 from sonarcarve.geometry.evidence.model import (
     EVIDENCE_ALIVE,
@@ -23,21 +28,33 @@ from sonarcarve.geometry.evidence.model import (
 )
 from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
-__all__ = ["evidence_free"]
+__all__ = ["SilentReading", "evidence_free"]
+
+
+class SilentReading(NamedTuple):
+    """A reading that heard nothing up to ``max_range``: origin ``(x, y)`` and ``max_range``
+    (metres), axis ``theta`` and ``beam_width`` (radians), and its ``sensor``."""
+
+    x: float
+    y: float
+    max_range: float
+    theta: float
+    beam_width: float
+    sensor: int
 
 
 @compiled_inline
-def _silent_beam(xj: float, yj: float, max_range: float, theta_j: float, phi_j: float,
-                 params: EvidenceParams) -> Beam:
+def _silent_beam(reading: SilentReading, params: EvidenceParams) -> Beam:
     """The no-echo reading as the weighing sees it: a
     :class:`~sonarcarve.geometry.evidence.beam.Beam` whose echo circle is at ``max_range`` and
     whose reach ends with its freespace, at ``max_range - ε`` (it heard nothing, so it supports
     nothing). Its ``step`` is 0: the reading has no bins of its own."""
-    free_r = max_range - params.tolerance
+    free_r = reading.max_range - params.tolerance
+    half = 0.5 * reading.beam_width
     return beam_of(
-        x=xj, y=yj, r=max_range, cos_axis=math.cos(theta_j), sin_axis=math.sin(theta_j),
-        half=0.5 * phi_j, cos_half=math.cos(0.5 * phi_j), step=0.0, free_r=free_r,
-        reach=free_r, params=params,
+        x=reading.x, y=reading.y, r=reading.max_range, cos_axis=math.cos(reading.theta),
+        sin_axis=math.sin(reading.theta), half=half, cos_half=math.cos(half), step=0.0,
+        free_r=free_r, reach=free_r, params=params,
     )
 
 
@@ -59,13 +76,15 @@ def _out_of_reach(i: int, beam: Beam, circle: FloatArray, status: Int8Array) -> 
 
 
 @compiled_inline
-def _weigh_silence(i: int, beam: Beam, distinct: bool, params: EvidenceParams, bx: FloatArray,
-                   by: FloatArray, ex: FloatArray, ey: FloatArray, free: FloatArray,
-                   support: FloatArray, touched: BoolArray) -> tuple[int, float]:
+def _weigh_silence(i: int, beam: Beam, distinct: bool, params: EvidenceParams,
+                   shapes: ArcShapes, evidence: BinEvidence,
+                   touched: BoolArray) -> tuple[int, float]:
     """Add the no-echo reading's free evidence to the live bins of older arc ``i`` inside its
     freespace sector (eq. 3.2; ``P_detect`` as
     :func:`~sonarcarve.geometry.evidence.model.detect_probability`). Returns the arc's live
     bins left and its largest "looked" ``P_beam`` (0 unless ``distinct``)."""
+    bx, by, ex, ey = shapes.bx, shapes.by, shapes.ex, shapes.ey
+    free, support = evidence.free, evidence.support
     threshold = params.threshold
     xj = beam.x
     yj = beam.y
@@ -104,42 +123,42 @@ def _weigh_silence(i: int, beam: Beam, distinct: bool, params: EvidenceParams, b
 
 
 @compiled_borrowing
-def evidence_free(
-    xj: float, yj: float, max_range: float, theta_j: float, phi_j: float, sensor_j: int,
-    older: SlotArray, x: FloatArray, y: FloatArray, beam_width: FloatArray,
-    sensor: npt.NDArray[np.int64], looked: FloatArray, bx: FloatArray, by: FloatArray,
-    ex: FloatArray, ey: FloatArray, free: FloatArray, support: FloatArray, circle: FloatArray,
-    status: Int8Array, touched: BoolArray, params: EvidenceParams,
-) -> int:
-    """Add the free-space evidence of a no-echo reading against every ``older`` arc.
+def evidence_free(reading: SilentReading | PlainBundle, older: SlotArray,
+                  state: EvidenceState | PlainBundle, params: EvidenceParams) -> int:
+    """Add the free-space evidence of a no-echo ``reading`` against every ``older`` arc.
 
-    The reading is at ``(xj, yj)`` (metres) along ``theta_j`` with beam width ``phi_j``
-    (radians), from sensor ``sensor_j``, and heard nothing up to ``max_range`` metres: every
-    bin centre of a live arc inside its beam nearer than ``max_range - ε`` gains
-    ``-log(1 - P_detect)`` (times ``protect`` where the bin is established), as in
+    The reading heard nothing up to ``max_range`` metres: every bin centre of a live arc
+    inside its beam nearer than ``max_range - ε`` gains ``-log(1 - P_detect)`` (times
+    ``protect`` where the bin is established), as in
     :func:`~sonarcarve.geometry.evidence.evidence_add`; ``touched`` and ``looked`` are updated
-    the same way. The arrays are those of :func:`~sonarcarve.geometry.evidence.evidence_add`.
+    the same way. ``state`` is the model's arrays as ``evidence_add`` takes them
+    (:class:`~sonarcarve.geometry.evidence.arrays.EvidenceState`, named or
+    :func:`~sonarcarve.geometry.evidence.arrays.plain`; the readings, the shapes, the
+    evidence, ``status``, ``touched`` and ``looked`` are read). ``reading`` may be plain too.
 
     Returns
     -------
     int
         Arcs whose last bin this reading carved.
     """
-    if max_range - params.tolerance <= 0.0:  # no freespace at all
+    reading = SilentReading(*reading)
+    state = named_state(state)
+    if reading.max_range - params.tolerance <= 0.0:  # no freespace at all
         return 0
-    beam = _silent_beam(xj, yj, max_range, theta_j, phi_j, params)
+    beam = _silent_beam(reading, params)
+    readings, arcs = state.readings, state.arcs
     fully = 0
     for i in older:
-        if _out_of_reach(i, beam, circle, status):
+        if _out_of_reach(i, beam, state.shapes.circle, arcs.status):
             continue
-        ox = x[i] - xj
-        oy = y[i] - yj
-        distinct = sensor[i] != sensor_j or ox * ox + oy * oy >= beam.spacing2
-        alive_bins, top_looked = _weigh_silence(i, beam, distinct, params, bx, by, ex, ey,
-                                                free, support, touched)
+        ox = readings.x[i] - reading.x
+        oy = readings.y[i] - reading.y
+        distinct = readings.sensor[i] != reading.sensor or ox * ox + oy * oy >= beam.spacing2
+        alive_bins, top_looked = _weigh_silence(i, beam, distinct, params, state.shapes,
+                                                state.evidence, arcs.touched)
         if distinct and top_looked > 0.0:
-            looked[i] += -math.log1p(-top_looked)
+            arcs.looked[i] += -math.log1p(-top_looked)
         if alive_bins == 0:
-            status[i] = EVIDENCE_CARVED
+            arcs.status[i] = EVIDENCE_CARVED
             fully += 1
     return fully
