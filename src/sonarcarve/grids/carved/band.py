@@ -153,9 +153,9 @@ def redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
            r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
            m: Model, tiles: Tiles) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
-    changed anything (its cells marked in ``tiles``). The same arc drawn before with another interval or value is moved in
-    one pass (:func:`_move_arc`: the same additions, cell by cell, as taking it out and
-    drawing it again)."""
+    changed anything (its cells marked in ``tiles``). The same arc drawn before with another
+    interval or value is moved in one pass (:func:`_move_arc`: the same additions, cell by
+    cell, as taking it out and drawing it again)."""
     if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
             and drawn[slot, 5] == value):
         return 0

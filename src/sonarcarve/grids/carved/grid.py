@@ -218,9 +218,9 @@ class CarvedGrid(CellGrid):
         """Memory of the grid's own state (the cell arrays and the per-slot record), bytes;
         the method's history and state come on top, fixed by its history size."""
         per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._judged,
-                    self._judged_seq, self._judged_box, self._lo, self._hi, self._weight, self._chain,
-                    self._seen, self._seen_crossings, self._no_crossings, self._seen_seq,
-                    self._changed, self._marked)
+                    self._judged_seq, self._judged_box, self._lo, self._hi, self._weight,
+                    self._chain, self._seen, self._seen_crossings, self._no_crossings,
+                    self._seen_seq, self._changed, self._marked)
         return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
                    + self._heard.nbytes + self._tiles.nbytes
                    + sum(a.nbytes for a in per_slot))

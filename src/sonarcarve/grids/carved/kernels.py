@@ -150,8 +150,9 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
     ``lo, hi, weight`` then; ``judged_box``: its reach box,
     :func:`~sonarcarve.grids.carved.mark.reach_box`) with the same interval and weight is not
     judged again when no tile of its reach box is marked (``tiles``: what changed ``base``,
-    ``live`` or ``heard`` since; :func:`_unchanged`): the judgment would give the mark it has. The tiles are unmarked after
-    the judgments (:func:`~sonarcarve.grids.carved.tiles.next_read`)."""
+    ``live`` or ``heard`` since; :func:`_unchanged`): the judgment would give the mark it has.
+    The tiles are unmarked after the judgments
+    (:func:`~sonarcarve.grids.carved.tiles.next_read`)."""
     m = model_from(model)
     changed = 0
     for k in range(slots.shape[0]):

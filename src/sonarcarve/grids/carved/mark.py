@@ -125,7 +125,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     ``i0, i1, j0, j1``: the cells it looks at, :func:`reach_box` (worked out by the caller,
     which keeps it to know later whether any of them changed)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
-    ny, nx = base.shape
+    nx = base.shape[1]
     widen, axis, e_half = _reach(m, r, lo, hi, theta1, theta2)
     t1 = lo - widen
     t2 = hi + widen
