@@ -144,6 +144,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
         if lo > hi:
             continue
         ja, jb = cell_range(x + lo, x + hi, xmin, h, nx)
+        first, last = nx, -1  # the row's changed cells, marked once after it
         for j in range(max(j0, ja), min(j1, jb) + 1):
             dx = xmin + (j + 0.5) * h - x
             d2 = dx * dx + dy * dy
@@ -161,7 +162,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                 if quick == quick:  # not NaN: decided, the exact update's very bits
                     base[i, j] = quick
                     if base[i, j] != cell:
-                        mark_cells(tiles, i, j, j)
+                        first, last = min(first, j), max(last, j)
                     if cell > 0.0 and quick <= 0.0:
                         heard[i, j] = 0
                     continue
@@ -185,7 +186,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                 miss = audible * m.l_heard + (1.0 - audible) * miss
             base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
             if base[i, j] != cell:
-                mark_cells(tiles, i, j, j)
+                first, last = min(first, j), max(last, j)
             # Freed: the surface it was heard from is believed gone, so are its bearings (else
             # a later, different surface here would be cleared at full strength from them).
             # Now, at the crossing, and not when a band next marks the cell: the bits are read
@@ -196,6 +197,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             # as it does when the bits are read.
             if cell > 0.0 and base[i, j] <= 0.0:
                 heard[i, j] = 0
+        mark_cells(tiles, i, first, last)
     if n_held:
         _free_behind(base, heard, m, held, n_held, tiles)
 
