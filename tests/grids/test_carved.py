@@ -127,12 +127,9 @@ def test_memory_is_bounded_by_the_map_and_the_history() -> None:
     # the arc), its interval, weight and repeat factor, the carving state they came from (3
     # numbers and the arc), the ATM crossings they came from (and a zero count for carving
     # alone, two int32) and a position buffer for the arcs that changed; per live arc a buffer
-    # for the arcs a batch's repeats marked; per slot the last judgment of a fresh arc (its lo,
-    # hi, weight, the arc and its reach box: 3 floats and 5 ints), and a tile of 4 x 4 cells
-    # (an int64) per 16 cells, plus a row for the read's number
-    tiles = (math.ceil(rows / 4) + 1) * math.ceil(cols / 4) * 8
+    # for the arcs a batch's repeats marked
     expected = rows * cols * (4 + 8 + 4 + 4) + 2 * 50 * (2 * (6 * 8 + 8) + 4 * 8 + 4 * 8 + 2 * 4
-                                                         + 8 + 3 * 8 + 5 * 8) + 50 * 8 + tiles
+                                                         + 8) + 50 * 8
     assert grid.nbytes == expected
     rng = np.random.default_rng(0)
     for block in range(5):

@@ -20,7 +20,6 @@ from sonarcarve.grids.carved import band
 from sonarcarve.grids.carved import free_space as fs
 from sonarcarve.grids.carved.heard import HEARD_BINS, heard_bin
 from sonarcarve.grids.carved.model import Model, model_of
-from sonarcarve.grids.carved.tiles import TILE_SHIFT, marked, tile_grid
 from sonarcarve.grids.scan import bearing_off
 from sonarcarve.methods import atm
 
@@ -32,14 +31,6 @@ SHAPE = (40, 40)
 def _model(**changes: float) -> Model:
     params = CarvedGridParams(**changes)  # type: ignore[arg-type]
     return model_of(params, XMIN, YMIN, H, 0.5 * (H + params.range_tolerance))
-
-
-def _assert_tiles_cover(tiles: np.ndarray, changed: np.ndarray) -> int:
-    """Every ``changed`` cell lies in a marked tile (:mod:`sonarcarve.grids.carved.tiles`);
-    returns how many changed."""
-    rows, cols = np.nonzero(changed)
-    assert marked(tiles)[rows >> TILE_SHIFT, cols >> TILE_SHIFT].all()
-    return len(rows)
 
 
 def test_the_arctangent_series_stays_within_its_bound() -> None:
@@ -137,17 +128,13 @@ def test_free_space_stores_the_exact_updates_bits(changes: dict[str, float],
     rng = np.random.default_rng(11)
     held = np.empty((fs.HELD, 7))
     heard = np.zeros(SHAPE, dtype=np.uint32)
-    changed = 0
     for _ in range(30):
         base = _random_base(rng, m)
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, half)
-        before, tiles = base.copy(), tile_grid(SHAPE)
-        fs.free_space(base, heard, m, x, y, theta, r, half, held, tiles)
+        fs.free_space(base, heard, m, x, y, theta, r, half, held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
-        changed += _assert_tiles_cover(tiles, before != base)
-    assert changed > 100
 
 
 def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quick_path() -> None:
@@ -166,9 +153,7 @@ def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quic
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, 0.5 * math.radians(22.5))
-        tiles = tile_grid(SHAPE)
-        fs.free_space(base, heard, m, x, y, theta, r, 0.5 * math.radians(22.5), held, tiles)
-        _assert_tiles_cover(tiles, before != base)
+        fs.free_space(base, heard, m, x, y, theta, r, 0.5 * math.radians(22.5), held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
         crossed = (before > 0.0) & (base <= 0.0)
         freed += int(crossed.sum())
@@ -215,11 +200,9 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
     grid = np.zeros(SHAPE, np.float32)
     heard = np.zeros(SHAPE, np.uint32)
     x, y = 0.03, -0.02
-    tiles = tile_grid(SHAPE)
-    band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5, tiles)
+    band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5)
     rows, cols = np.nonzero(heard)
     assert len(rows) > 40
-    assert _assert_tiles_cover(tiles, grid != 0) == len(rows)
     # And exactly the band's cells, as draw_arc defines it (plain Python: centre within the band
     # of the circle, bearing within the interval widened by half a cell), each given the value.
     widen = 0.5 * H / 1.5

@@ -18,7 +18,6 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.heard import heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.tiles import Tiles, mark_cells
 from sonarcarve.grids.scan import (
     SERIES_T,
     atan_series,
@@ -57,12 +56,11 @@ def arc_value(r: float, lo: float, hi: float, weight: float, m: Model,
 @compiled
 def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.uint32],
              m: Model, x: float, y: float, r: float, lo: float, hi: float,
-             value: float, tiles: Tiles) -> None:
+             value: float) -> None:
     """Add ``value`` to the cells of the arc's band (clamped into ``[l_min, l_max]`` if
     ``clamp``): centre within ``band`` of the circle, bearing within ``[lo, hi]`` widened by
     ``h / 2r``. A final (``clamp``) band with ``value > 0`` also records in ``heard`` the
-    bearing each cell was heard from. Marks in ``tiles`` each row's stretch of cells it scans
-    (:func:`~sonarcarve.grids.carved.tiles.mark_cells`)."""
+    bearing each cell was heard from."""
     if value == 0.0:
         return
     xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
@@ -83,8 +81,6 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
-        mark_cells(tiles, i, a0, a1)
-        mark_cells(tiles, i, b0, b1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 dx = xmin + (j + 0.5) * h - x
@@ -151,22 +147,22 @@ def _heard_bin_of(dx: float, dy: float, mid: float, cos_mid: float, sin_mid: flo
 def redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
            drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, x: float, y: float,
            r: float, lo: float, hi: float, value: float, heard: npt.NDArray[np.uint32],
-           m: Model, tiles: Tiles) -> int:
+           m: Model) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``[lo, hi]`` in ``live``; 1 if that
-    changed anything (its cells marked in ``tiles``). The same arc drawn before with another
-    interval or value is moved in one pass (:func:`_move_arc`: the same additions, cell by
-    cell, as taking it out and drawing it again)."""
+    changed anything. The same arc drawn before with another interval or value is moved in
+    one pass (:func:`_move_arc`: the same additions, cell by cell, as taking it out and
+    drawing it again)."""
     if (drawn_seq[slot] == seq and drawn[slot, 3] == lo and drawn[slot, 4] == hi
             and drawn[slot, 5] == value):
         return 0
     if (drawn_seq[slot] >= 0 and drawn[slot, 0] == x and drawn[slot, 1] == y
             and drawn[slot, 2] == r):
         _move_arc(live, heard, m, x, y, r, drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5],
-                  lo, hi, value, tiles)
+                  lo, hi, value)
     else:
         if drawn_seq[slot] >= 0:
-            undraw(live, heard, m, drawn, slot, tiles)
-        draw_arc(live, False, heard, m, x, y, r, lo, hi, value, tiles)
+            undraw(live, heard, m, drawn, slot)
+        draw_arc(live, False, heard, m, x, y, r, lo, hi, value)
     drawn[slot, 0] = x
     drawn[slot, 1] = y
     drawn[slot, 2] = r
@@ -181,14 +177,14 @@ def redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
 def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: Model,
               x: float, y: float, r: float,
               lo0: float, hi0: float, value0: float, lo1: float, hi1: float,
-              value1: float, tiles: Tiles) -> None:
+              value1: float) -> None:
     """``draw_arc(live, ..., lo0, hi0, value0)`` then ``draw_arc(live, ..., lo1, hi1,
     value1)`` for one arc (same origin and radius), in one pass over the cells: each cell of
     the band gets the same two additions in the same order (so the same sum, bit for bit), and
     its distance and bearing are computed once instead of twice."""
     if value0 == 0.0 or value1 == 0.0:  # one of the two draws nothing
-        draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0, tiles)
-        draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1, tiles)
+        draw_arc(live, False, heard, m, x, y, r, lo0, hi0, value0)
+        draw_arc(live, False, heard, m, x, y, r, lo1, hi1, value1)
         return
     xmin, ymin, h, band, profile = m.xmin, m.ymin, m.h, m.band, m.profile
     ny, nx = live.shape
@@ -208,8 +204,6 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
     for i in range(i0, i1 + 1):
         dy = ymin + (i + 0.5) * h - y
         a0, a1, b0, b1 = ring_columns(dy, r_in, r_out, x, xmin, h, nx, j0, j1)
-        mark_cells(tiles, i, a0, a1)
-        mark_cells(tiles, i, b0, b1)
         for part in range(2):
             for j in range(a0 if part == 0 else b0, (a1 if part == 0 else b1) + 1):
                 dx = xmin + (j + 0.5) * h - x
@@ -234,8 +228,7 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
 
 @compiled_inline
 def undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: Model,
-           drawn: FloatArray, slot: int, tiles: Tiles) -> None:
-    """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``
-    (its cells marked in ``tiles``)."""
+           drawn: FloatArray, slot: int) -> None:
+    """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``."""
     draw_arc(live, False, heard, m, drawn[slot, 0], drawn[slot, 1], drawn[slot, 2],
-             drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5], tiles)
+             drawn[slot, 3], drawn[slot, 4], -drawn[slot, 5])

@@ -22,7 +22,6 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.heard import audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.tiles import Tiles, mark_cells
 from sonarcarve.grids.scan import (
     EDGE,
     SERIES_ERROR,
@@ -108,7 +107,7 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
 @compiled_inline
 def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
                x: float, y: float, theta: float, r: float, half: float,
-               held: FloatArray, tiles: Tiles) -> None:
+               held: FloatArray) -> None:
     """One reading's free space on the beam's cells nearer than ``r - band - free_margin``
     (``free_margin``: 2 ``pose_sigma``, 0 by default), clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
@@ -118,9 +117,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
     fade for all).
 
     A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
-    from (``docs/carved-grid.md``, "Clearing what was heard"). Each cell whose value changed is
-    marked in ``tiles`` (:func:`~sonarcarve.grids.carved.tiles.mark_cells`; its bearings change
-    only with it)."""
+    from (``docs/carved-grid.md``, "Clearing what was heard")."""
     reach = r - m.band - m.free_margin
     if reach <= 0.0:
         return
@@ -144,7 +141,6 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
         if lo > hi:
             continue
         ja, jb = cell_range(x + lo, x + hi, xmin, h, nx)
-        first, last = nx, -1  # the row's changed cells, marked once after it
         for j in range(max(j0, ja), min(j1, jb) + 1):
             dx = xmin + (j + 0.5) * h - x
             d2 = dx * dx + dy * dy
@@ -161,8 +157,6 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                                       dw, m)
                 if quick == quick:  # not NaN: decided, the exact update's very bits
                     base[i, j] = quick
-                    if base[i, j] != cell:
-                        first, last = min(first, j), max(last, j)
                     if cell > 0.0 and quick <= 0.0:
                         heard[i, j] = 0
                     continue
@@ -185,8 +179,6 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                     continue
                 miss = audible * m.l_heard + (1.0 - audible) * miss
             base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
-            if base[i, j] != cell:
-                first, last = min(first, j), max(last, j)
             # Freed: the surface it was heard from is believed gone, so are its bearings (else
             # a later, different surface here would be cleared at full strength from them).
             # Now, at the crossing, and not when a band next marks the cell: the bits are read
@@ -197,9 +189,8 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             # as it does when the bits are read.
             if cell > 0.0 and base[i, j] <= 0.0:
                 heard[i, j] = 0
-        mark_cells(tiles, i, first, last)
     if n_held:
-        _free_behind(base, heard, m, held, n_held, tiles)
+        _free_behind(base, heard, m, held, n_held)
 
 
 @compiled_inline
@@ -262,7 +253,7 @@ def _stored(cell: float, change: float, error: float, m: Model) -> float:
 
 @compiled_inline
 def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
-                 held: FloatArray, n: int, tiles: Tiles) -> None:
+                 held: FloatArray, n: int) -> None:
     """The free space of the cells believed occupied that one beam passed (``held``: row,
     column, distance, bearing off the axis, profile, audibility, faded miss), each as audible
     as the most audible such cell in front of it on its ray (nearer by at least a cell and by
@@ -281,7 +272,5 @@ def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m
         cell = base[i, j]
         miss = audible * m.l_heard + (1.0 - audible) * held[p, 6]
         base[i, j] = min(m.l_max, max(m.l_min, cell + held[p, 4] * miss))
-        if base[i, j] != cell:
-            mark_cells(tiles, i, j, j)
         if cell > 0.0 and base[i, j] <= 0.0:
             heard[i, j] = 0

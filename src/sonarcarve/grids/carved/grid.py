@@ -38,7 +38,6 @@ from sonarcarve.grids.carved.params import (
 )
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.grids.carved.repeats import repeat_kernel
-from sonarcarve.grids.carved.tiles import tile_grid
 from sonarcarve.grids.cells import CellGrid, GridError, bounds_around, check_probability, logit
 from sonarcarve.grids.elfes import MAX_CELLS
 from sonarcarve.grids.occupancy import Int8Grid
@@ -124,8 +123,6 @@ class CarvedGrid(CellGrid):
         self._points = np.zeros((ny, nx), dtype=np.float32)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
         self._heard = np.zeros((ny, nx), dtype=HEARD_DTYPE)
-        # The tiles of cells whose base, live or heard changed since the last read (tiles.py).
-        self._tiles = tile_grid((ny, nx))
         size = method.history.storage_size
         # Per slot, what was drawn into ``live``: x, y, r, lo, hi, value; and the arc's
         # sequence number (its position in the stream of arcs), -1 for nothing.
@@ -133,12 +130,6 @@ class CarvedGrid(CellGrid):
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
         self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
         self._pseq = np.full(size, -1, dtype=np.int64)
-        # Per slot, the fresh arc judged at the last read (-1: none), its lo, hi, weight then
-        # and the cells its judgment read: judged again only where those changed
-        # (kernels.refresh_kernel).
-        self._judged = np.zeros((size, 3), dtype=np.float64)
-        self._judged_seq = np.full(size, -1, dtype=np.int64)
-        self._judged_box = np.zeros((size, 4), dtype=np.int64)
         # Per slot, the interval and weight (intervals) of the live arc at the last read.
         self._lo = np.zeros(size)
         self._hi = np.zeros(size)
@@ -217,13 +208,11 @@ class CarvedGrid(CellGrid):
     def nbytes(self) -> int:
         """Memory of the grid's own state (the cell arrays and the per-slot record), bytes;
         the method's history and state come on top, fixed by its history size."""
-        per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._judged,
-                    self._judged_seq, self._judged_box, self._lo, self._hi, self._weight,
-                    self._chain, self._seen, self._seen_crossings, self._no_crossings,
-                    self._seen_seq, self._changed, self._marked)
+        per_slot = (self._drawn, self._drawn_seq, self._pdrawn, self._pseq, self._lo, self._hi,
+                    self._weight, self._chain, self._seen, self._seen_crossings,
+                    self._no_crossings, self._seen_seq, self._changed, self._marked)
         return int(self._base.nbytes + self._live.nbytes + self._points.nbytes
-                   + self._heard.nbytes + self._tiles.nbytes
-                   + sum(a.nbytes for a in per_slot))
+                   + self._heard.nbytes + sum(a.nbytes for a in per_slot))
 
     # -- updates -----------------------------------------------------------------------------
 
@@ -271,7 +260,7 @@ class CarvedGrid(CellGrid):
         # The batch's newest time is its last: the method checked that times never go back.
         self._latest_t = max(self._latest_t, float(batch.t[-1]))
         fold_kernel(self._base, self._heard, self._model_array, x, y, theta,
-                    np.ascontiguousarray(r), half, seqs, history.capacity, *finals, self._tiles)
+                    np.ascontiguousarray(r), half, seqs, history.capacity, *finals)
         self.readings += n
         self._stale = True
 
@@ -339,7 +328,7 @@ class CarvedGrid(CellGrid):
         seqs = self._next_final + np.arange(len(slots), dtype=np.int64)
         self._next_final += len(slots)
         retire_kernel(self._live, self._drawn, self._drawn_seq, self._points, self._pdrawn,
-                      self._pseq, slots, seqs, self._heard, self._model_array, self._tiles)
+                      self._pseq, slots, seqs, self._heard, self._model_array)
         # Indexing by an array copies: the history's rows are reused.
         x, y, r = history.x[slots], history.y[slots], history.r[slots]
         lo, hi, weight = intervals(x, y, est)
@@ -372,8 +361,7 @@ class CarvedGrid(CellGrid):
                            self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
                            history.y, history.r, self._lo, self._hi, self._weight,
                            params.fresh_arcs, self._heard, self._model_array, history.theta1,
-                           history.theta2, self._tiles, self._judged, self._judged_seq,
-                           self._judged_box, self._newest, history.t, self._latest_t,
+                           history.theta2, self._newest, history.t, self._latest_t,
                            params.fresh_seconds, params.fresh_periods,
                            *self._periods.fit_state())
         self._stale = False

@@ -20,10 +20,9 @@ import numpy.typing as npt
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, free_space
-from sonarcarve.grids.carved.mark import reach_box, refresh_points
+from sonarcarve.grids.carved.mark import refresh_points
 from sonarcarve.grids.carved.model import Model, model_from
 from sonarcarve.grids.carved.periods import note_kernel, row_period
-from sonarcarve.grids.carved.tiles import Tiles, any_marked, next_read
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
@@ -59,12 +58,11 @@ def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], mo
                 half: FloatArray, seqs: npt.NDArray[np.int64], capacity: int,
                 final_x: FloatArray, final_y: FloatArray, final_r: FloatArray,
                 final_lo: FloatArray, final_hi: FloatArray, final_weight: FloatArray,
-                final_seq: npt.NDArray[np.int64], tiles: Tiles) -> None:
+                final_seq: npt.NDArray[np.int64]) -> None:
     """The final updates of a batch in reading order: before the free space of reading ``k``
     (arc sequence number ``seqs[k]``; for a no-echo reading, the newest arc before it), the
     final band of every arc it pushed out of the history (:class:`Finals`, its fields one by
-    one: ``final_seq + capacity <= seq``); the cells they change marked in ``tiles``
-    (:mod:`~sonarcarve.grids.carved.tiles`). ``model``:
+    one: ``final_seq + capacity <= seq``). ``model``:
     :func:`~sonarcarve.grids.carved.model.model_array` (named tuples cost numba's dispatcher
     1-1.5 µs each)."""
     m = model_from(model)
@@ -74,42 +72,40 @@ def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], mo
     held = np.empty((HELD if m.through > 0.0 else 0, 7), dtype=np.float64)
     for k in range(x.shape[0]):
         while p < nf and finals.seq[p] + capacity <= seqs[k]:
-            _draw_final(base, heard, m, finals, p, tiles)
+            _draw_final(base, heard, m, finals, p)
             p += 1
-        free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held, tiles)
+        free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
     while p < nf:
-        _draw_final(base, heard, m, finals, p, tiles)
+        _draw_final(base, heard, m, finals, p)
         p += 1
 
 
 @compiled_inline
 def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
-                finals: Finals, p: int, tiles: Tiles) -> None:
+                finals: Finals, p: int) -> None:
     """Arc ``p`` of ``finals`` into ``base``, for good."""
     value = arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
     draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
-             finals.hi[p], value, tiles)
+             finals.hi[p], value)
 
 
 @compiled
 def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np.int64],
                   points: npt.NDArray[np.float32], pdrawn: FloatArray,
                   pseq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
-                  heard: npt.NDArray[np.uint32], model: FloatArray, tiles: Tiles) -> None:
+                  heard: npt.NDArray[np.uint32], model: FloatArray) -> None:
     """Take the drawn contribution of the arcs ``seqs`` (in ``slots``) leaving the history out
-    of ``live`` (its cells marked in ``tiles``) and then out of ``points`` (one call: two cost 2
-    µs more a batch)."""
+    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch)."""
     m = model_from(model)
     for k in range(slots.shape[0]):
         slot = slots[k]
         if drawn_seq[slot] == seqs[k]:
-            undraw(live, heard, m, drawn, slot, tiles)
+            undraw(live, heard, m, drawn, slot)
             drawn_seq[slot] = -1
-    untracked = np.zeros((0, 0), dtype=np.int64)  # the points change no judgment
     for k in range(slots.shape[0]):
         slot = slots[k]
         if pseq[slot] == seqs[k]:
-            undraw(points, heard, m, pdrawn, slot, untracked)
+            undraw(points, heard, m, pdrawn, slot)
             pseq[slot] = -1
 
 
@@ -130,11 +126,9 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                    seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
                    lo: FloatArray, hi: FloatArray, weight: FloatArray, with_points: bool,
                    heard: npt.NDArray[np.uint32], model: FloatArray, theta1: FloatArray,
-                   theta2: FloatArray, tiles: Tiles, judged: FloatArray,
-                   judged_seq: npt.NDArray[np.int64], judged_box: npt.NDArray[np.int64],
-                   newest: npt.NDArray[np.int64],
-                   t: FloatArray, latest: float, seconds: float, periods: float,
-                   gaps: FloatArray, count: npt.NDArray[np.int64], refit: BoolArray,
+                   theta2: FloatArray, newest: npt.NDArray[np.int64], t: FloatArray,
+                   latest: float, seconds: float, periods: float, gaps: FloatArray,
+                   count: npt.NDArray[np.int64], refit: BoolArray,
                    period: FloatArray) -> int:
     """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs ``slots``
     (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
@@ -144,15 +138,7 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
     sensor's newest arc as fresh as :func:`mark_fresh` says (``newest .. period``, its
     arguments after ``first``, which is ``seqs[0]``). Returns how many arcs and points changed.
     ``model``: :func:`~sonarcarve.grids.carved.model.model_array`. One call a read: the fresh
-    arcs worked out in their own kernel cost a dispatch and an array more.
-
-    A fresh arc judged at the read before (``judged_seq``, by slot: the arc; ``judged``: its
-    ``lo, hi, weight`` then; ``judged_box``: its reach box,
-    :func:`~sonarcarve.grids.carved.mark.reach_box`) with the same interval and weight is not
-    judged again when no tile of its reach box is marked (``tiles``: what changed ``base``,
-    ``live`` or ``heard`` since; :func:`_unchanged`): the judgment would give the mark it has.
-    The tiles are unmarked after the judgments
-    (:func:`~sonarcarve.grids.carved.tiles.next_read`)."""
+    arcs worked out in their own kernel cost a dispatch and an array more."""
     m = model_from(model)
     changed = 0
     for k in range(slots.shape[0]):
@@ -163,57 +149,19 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
                 and drawn[s, 5] == value):
             continue
         changed += redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
-                          hi[s], value, heard, m, tiles)
+                          hi[s], value, heard, m)
     if with_points:
         fresh = np.zeros(slots.shape[0], dtype=np.bool_)
         if slots.shape[0]:
             mark_fresh(newest, seqs[0], slots, t, latest, seconds, periods, gaps, count, refit,
                        period, fresh)
-        ny, nx = base.shape
-        untracked = np.zeros((0, 0), dtype=np.int64)  # the points change no judgment
         for k in range(slots.shape[0]):
-            s = slots[k]
-            if not (fresh[k] and weight[s] > 0.0):  # no judgment: the point goes, if any
-                judged_seq[s] = -1
-                if pseq[s] < 0:
-                    continue
-            elif _unchanged(tiles, judged, judged_seq, judged_box, s, seqs[k], lo[s], hi[s],
-                            weight[s]):
+            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
                 continue
-            else:
-                judged_seq[s] = seqs[k]
-                judged[s, 0] = lo[s]
-                judged[s, 1] = hi[s]
-                judged[s, 2] = weight[s]
-                i0, i1, j0, j1 = reach_box(m, ny, nx, x[s], y[s], r[s], lo[s], hi[s],
-                                           theta1[s], theta2[s])
-                judged_box[s, 0] = i0
-                judged_box[s, 1] = i1
-                judged_box[s, 2] = j0
-                judged_box[s, 3] = j1
             changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
-                                      s, seqs[k], x, y, r, lo, hi, weight, fresh[k],
-                                      heard, m, theta1[s], theta2[s], judged_box[s],
-                                      untracked)
-        next_read(tiles)
+                                      slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],
+                                      heard, m, theta1[slots[k]], theta2[slots[k]])
     return changed
-
-
-@compiled_inline
-def _unchanged(tiles: Tiles, judged: FloatArray, judged_seq: npt.NDArray[np.int64],
-               judged_box: npt.NDArray[np.int64], slot: int, seq: int, lo: float, hi: float,
-               weight: float) -> bool:
-    """Whether the fresh arc ``seq`` in ``slot`` was judged at the read before with the same
-    ``lo, hi, weight`` and nothing its judgment reads changed since: no marked tile in its reach
-    box (``judged_box``, kept from that judgment: a function of the same interval and of the
-    arc's origin, range and beam). Its own spread value is a function of those too
-    (:func:`~sonarcarve.grids.carved.band.arc_value`); the live arcs' records it may read (side
-    lobes) change only with their bands in ``live``, which mark their cells."""
-    if not (judged_seq[slot] == seq and judged[slot, 0] == lo and judged[slot, 1] == hi
-            and judged[slot, 2] == weight):
-        return False
-    return not any_marked(tiles, judged_box[slot, 0], judged_box[slot, 1], judged_box[slot, 2],
-                          judged_box[slot, 3])
 
 
 @compiled

@@ -22,7 +22,6 @@ from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import arc_value, redraw, undraw
 from sonarcarve.grids.carved.heard import HEARD_BINS, HEARD_NEAR, audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.carved.tiles import Tiles
 from sonarcarve.grids.scan import (
     TWO_PI,
     bearing_off,
@@ -34,7 +33,7 @@ from sonarcarve.grids.scan import (
 )
 from sonarcarve.typing import FloatArray
 
-__all__ = ["reach_box", "refresh_points"]
+__all__ = ["refresh_points"]
 
 #: Log-odds above which a cell counts as more likely occupied than not where a fresh arc's
 #: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
@@ -55,8 +54,7 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
                    pseq: npt.NDArray[np.int64], slot: int, seq: int, x: FloatArray,
                    y: FloatArray, r: FloatArray, lo: FloatArray, hi: FloatArray,
                    weight: FloatArray, fresh: bool, heard: npt.NDArray[np.uint32],
-                   m: Model, theta1: float, theta2: float, box: npt.NDArray[np.int64],
-                   untracked: Tiles) -> int:
+                   m: Model, theta1: float, theta2: float) -> int:
     """Draw the arc in ``slot`` into ``points`` as carving's point estimate if it is
     ``fresh`` (its sensor's newest reading) and the map of spread arcs (``base + live``,
     without the arc's own spread value) does not explain it (:func:`_band_likeliest`): the
@@ -66,14 +64,11 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
     its spread value to a whole hit, or, where the likeliest cell lies in reach of a side lobe
     (``theta1, theta2``: the beam), a whole hit around it clipped to the lobe's stretch of the
     circle; else take its point out. The spread map does not hold the
-    points, so the fresh arcs' order does not matter. Returns 1 if its point changed.
-    ``box``: the arc's :func:`reach_box` (read only when it is judged); ``untracked``: tiles
-    that record nothing (shape (0, 0)): a mark changes no cell the judgments read."""
+    points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
     if fresh and weight[slot] > 0.0:
         explained, at, side = _band_likeliest(base, live, heard, drawn, drawn_seq, slot, m,
                                               x[slot], y[slot], r[slot], lo[slot], hi[slot],
-                                              drawn[slot, 5], theta1, theta2, box[0], box[1],
-                                              box[2], box[3])
+                                              drawn[slot, 5], theta1, theta2)
         whole = arc_value(r[slot], lo[slot], hi[slot], weight[slot], m, True)
         if not explained and side != 0.0:
             # In a side lobe: a whole hit around ``at``, clipped to the lobe's stretch of the
@@ -88,14 +83,14 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
             inner = edge + m.h / r[slot]
             z1, z2 = (axis + inner, axis + reach) if side > 0.0 else (axis - reach, axis - inner)
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
-                          max(z1, at - half), min(z2, at + half), whole, heard, m, untracked)
+                          max(z1, at - half), min(z2, at + half), whole, heard, m)
         if not explained:
             half = min(0.5 * (hi[slot] - lo[slot]), 0.5 * m.mark / r[slot])
             return redraw(points, pdrawn, pseq, slot, seq, x[slot], y[slot], r[slot],
                           max(lo[slot], at - half), min(hi[slot], at + half),
-                          whole - drawn[slot, 5], heard, m, untracked)
+                          whole - drawn[slot, 5], heard, m)
     if pseq[slot] >= 0:
-        undraw(points, heard, m, pdrawn, slot, untracked)
+        undraw(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
         return 1
     return 0
@@ -106,8 +101,7 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
                     heard: npt.NDArray[np.uint32], drawn: FloatArray,
                     drawn_seq: npt.NDArray[np.int64], slot: int, m: Model, x: float,
                     y: float, r: float, lo: float, hi: float, own: float, theta1: float,
-                    theta2: float, i0: int, i1: int, j0: int,
-                    j1: int) -> tuple[bool, float, float]:
+                    theta2: float) -> tuple[bool, float, float]:
     """``(explained, bearing, side)`` of a fresh arc: whether a cell of its band (as
     :func:`~sonarcarve.grids.carved.band.draw_arc` draws it, without a profile) is occupied in the
     map of spread arcs without the arc's own share ``own``,
@@ -121,12 +115,10 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     its lobe (+1 counter-clockwise of the axis, -1 clockwise; 0: on the band). A lobe cell counts
     only if it was heard from near the bearing of this sensor's ray to it (:func:`_heard_near`,
     the arc's own ``slot`` aside; ``heard``, ``drawn``, ``drawn_seq``: the record of final bands and
-    the live arcs); equally likely cells in both lobes explain the echo (no side is favoured).
-    ``i0, i1, j0, j1``: the cells it looks at, :func:`reach_box` (worked out by the caller,
-    which keeps it to know later whether any of them changed)."""
+    the live arcs); equally likely cells in both lobes explain the echo (no side is favoured)."""
     xmin, ymin, h, band = m.xmin, m.ymin, m.h, m.band
-    nx = base.shape[1]
-    widen, axis, e_half = _reach(m, r, lo, hi, theta1, theta2)
+    ny, nx = base.shape
+    widen = 0.5 * h / r
     t1 = lo - widen
     t2 = hi + widen
     mid = 0.5 * (t1 + t2)
@@ -134,6 +126,17 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
     # Where the point would be drawn: the middle mark, widened as draw_arc widens it.
     reach = min(0.5 * (hi - lo), 0.5 * m.mark / r) + widen
     r_in, r_out = max(0.0, r - band), r + band
+    # The side lobes' reach (CarvedGridParams.side_lobes): the beam [theta1, theta2], written
+    # near the carved interval's middle, widened by ``lobes`` half widths past each edge.
+    axis = 0.5 * (theta1 + theta2)
+    axis += TWO_PI * math.floor((mid - axis + math.pi) / TWO_PI)
+    e_half = 0.0
+    if m.lobes > 0.0 and r <= m.lobe_range:
+        e_half = 0.5 * (1.0 + m.lobes) * (theta2 - theta1) + widen
+    s1, s2 = (min(t1, axis - e_half), max(t2, axis + e_half)) if e_half > 0.0 else (t1, t2)
+    xlo, ylo, xhi, yhi = sector_box(x, y, s1, s2, r_in, r_out)
+    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
+    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
     cos_mid, sin_mid, cos_half = math.cos(mid), math.sin(mid), cos_bound(half)
     cos_ax, sin_ax, cos_e = math.cos(axis), math.sin(axis), cos_bound(e_half)
     b_half = 0.5 * (theta2 - theta1) + widen
@@ -204,42 +207,6 @@ def _band_likeliest(base: npt.NDArray[np.float32], live: FloatArray,
             return True, bearing, 0.0
         return (False, at_ccw, 1.0) if best_ccw > best_cw else (False, at_cw, -1.0)
     return False, 0.5 * (lo + hi) if middle_likely else bearing, 0.0
-
-
-@compiled_inline
-def _reach(m: Model, r: float, lo: float, hi: float, theta1: float,
-           theta2: float) -> tuple[float, float, float]:
-    """``(widen, axis, e_half)`` of a fresh arc's judgment (:func:`_band_likeliest`): how far
-    its band is widened past ``[lo, hi]`` each side (half a cell, as
-    :func:`~sonarcarve.grids.carved.band.draw_arc` widens it), and its side lobes' reach
-    (:attr:`~sonarcarve.grids.carved.CarvedGridParams.side_lobes`): the beam ``[theta1,
-    theta2]``'s axis, written near the carved interval's middle, and the half width its lobes
-    reach to, ``lobes`` half widths past each edge (0: no lobes)."""
-    widen = 0.5 * m.h / r
-    mid = 0.5 * ((lo - widen) + (hi + widen))  # the widened interval's, as _band_likeliest's
-    axis = 0.5 * (theta1 + theta2)
-    axis += TWO_PI * math.floor((mid - axis + math.pi) / TWO_PI)
-    e_half = 0.0
-    if m.lobes > 0.0 and r <= m.lobe_range:
-        e_half = 0.5 * (1.0 + m.lobes) * (theta2 - theta1) + widen
-    return widen, axis, e_half
-
-
-@compiled_inline
-def reach_box(m: Model, ny: int, nx: int, x: float, y: float, r: float, lo: float, hi: float,
-              theta1: float, theta2: float) -> tuple[int, int, int, int]:
-    """``(i0, i1, j0, j1)``: the rows and columns of the cells whose ``base``, ``live`` and
-    ``heard`` the judgment of the fresh arc ``(x, y, r)``, carved ``[lo, hi]``, beam ``[theta1,
-    theta2]``, reads (:func:`_band_likeliest`): its band, widened past the beam's edges by the
-    side lobes' reach, in a grid of ``ny`` x ``nx`` cells."""
-    widen, axis, e_half = _reach(m, r, lo, hi, theta1, theta2)
-    t1 = lo - widen
-    t2 = hi + widen
-    s1, s2 = (min(t1, axis - e_half), max(t2, axis + e_half)) if e_half > 0.0 else (t1, t2)
-    xlo, ylo, xhi, yhi = sector_box(x, y, s1, s2, max(0.0, r - m.band), r + m.band)
-    j0, j1 = cell_range(xlo, xhi, m.xmin, m.h, nx)
-    i0, i1 = cell_range(ylo, yhi, m.ymin, m.h, ny)
-    return i0, i1, j0, j1
 
 
 @compiled_inline
