@@ -196,9 +196,10 @@ class SonarHistory:
             self._on_evict(slots)
 
 
-# numba's own per-file cache, not sonarcarve.geometry._compiled's (this module sits beside the
-# geometry, below it in no layer): the kernel calls no other kernel and none calls it, so its
-# file alone keys it soundly (the exceptions that module's docstring names).
+# numba's own per-file cache, not sonarcarve.geometry._compiled's (the history and the geometry
+# are independent layers of the package, pyproject.toml's import contract): the kernel calls no
+# other kernel and none calls it, so its own file keys its cache soundly (one of the exceptions
+# _compiled's docstring names).
 @njit(cache=True)
 def _store_block(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
                  r: npt.NDArray[np.float64], theta: npt.NDArray[np.float64],
