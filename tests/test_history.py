@@ -152,3 +152,22 @@ def test_append_many_writes_every_row_as_append_does(capacity: int, blocks: list
         for name in COLUMNS:
             np.testing.assert_array_equal(getattr(many, name)[many.slots()],
                                           getattr(one, name)[one.slots()], err_msg=name)
+
+
+def test_append_many_takes_columns_with_a_step() -> None:
+    # A batch sliced with a step hands append_many columns that are not contiguous (the
+    # compiled store takes any layout): the rows are those of the same values contiguous.
+    rng = np.random.default_rng(3)
+    cols = {"x": rng.normal(size=14), "y": rng.normal(size=14), "r": rng.uniform(0.1, 5.0, 14),
+            "theta": rng.uniform(-3.0, 3.0, 14), "t": np.arange(14.0),
+            "sensor": rng.integers(0, 16, 14), "beam_width": rng.uniform(0.1, 1.0, 14)}
+    stepped, plain = SonarHistory(4), SonarHistory(4)
+    stepped.append_many(**{k: v[::2] for k, v in cols.items()}, first_id=3)
+    plain.append_many(**{k: v[::2].copy() for k, v in cols.items()}, first_id=3)
+    for name in COLUMNS:
+        np.testing.assert_array_equal(getattr(stepped, name), getattr(plain, name),
+                                      err_msg=name)
+    assert plain.reading_id.tolist() == [3, 4, 5, 6, 7, 8, 9, -1]
+    theta, width = cols["theta"][::2], cols["beam_width"][::2]
+    np.testing.assert_array_equal(plain.theta1[:7], theta - 0.5 * width)
+    np.testing.assert_array_equal(plain.theta2[:7], theta + 0.5 * width)

@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
+from numba import njit
 
 from sonarcarve.errors import ConfigError
 from sonarcarve.readings import Reading
@@ -151,43 +152,20 @@ class SonarHistory:
         The vectorised twin of :meth:`append` for a batch of validated readings: the rows are
         written exactly as :meth:`append` writes them, but no arc retires through ``on_evict``
         here (the caller calls :meth:`commit_for_room` between batches), so the models must
-        then process the arcs in order, as if they had been appended one by one.
+        then process the arcs in order, as if they had been appended one by one. The rows are
+        written in one compiled pass (:func:`_store_block`).
         """
         n = len(x)
         if n > self.room():
             msg = f"append_many of {n} arcs with room for {self.room()}"
             raise ValueError(msg)
         first = self._appended
-        start = first % self.storage_size
-        head = min(n, self.storage_size - start)  # rows up to the end of the storage, then 0..
-        if head == n:  # the common case: one run of rows, the columns as they are
-            self._write(slice(start, start + n), x, y, r, theta, t, sensor, beam_width, first_id)
-        else:  # the block wraps: its head up to the end of the storage, then from its start
-            for rows, part in ((slice(start, start + head), slice(0, head)),
-                               (slice(0, n - head), slice(head, n))):
-                self._write(rows, x[part], y[part], r[part], theta[part], t[part], sensor[part],
-                            beam_width[part], first_id + part.start)
+        _store_block(x, y, r, theta, t, sensor, beam_width, first_id,
+                     first % self.storage_size, self.x, self.y, self.r, self.theta,
+                     self.theta1, self.theta2, self.t, self.beam_width, self.sensor,
+                     self.reading_id)
         self._appended = first + n
         return first
-
-    def _write(self, rows: slice, x: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
-               r: npt.NDArray[np.float64], theta: npt.NDArray[np.float64],
-               t: npt.NDArray[np.float64], sensor: npt.NDArray[np.int64],
-               beam_width: npt.NDArray[np.float64], first_id: int) -> None:
-        """Rows ``rows`` (a run of slots) as :meth:`append` writes them, ids from ``first_id``.
-        Why no slicing of the columns when the block does not wrap: ten views cost 1.5 µs of
-        the 8 µs a 5-reading block took (``benchmarks/grid_reads.py``, a read every 5)."""
-        half = 0.5 * beam_width
-        self.x[rows] = x
-        self.y[rows] = y
-        self.r[rows] = r
-        self.theta[rows] = theta
-        self.theta1[rows] = theta - half
-        self.theta2[rows] = theta + half
-        self.t[rows] = t
-        self.beam_width[rows] = beam_width
-        self.sensor[rows] = sensor
-        self.reading_id[rows] = np.arange(first_id, first_id + len(x))
 
     def slots(self) -> npt.NDArray[np.int64]:
         """Live slots from oldest to newest, shape (len(self),) (a read-only view)."""
@@ -216,3 +194,43 @@ class SonarHistory:
         self._committed = end
         if self._on_evict is not None:
             self._on_evict(slots)
+
+
+# numba's own per-file cache, not sonarcarve.geometry._compiled's (the history and the geometry
+# are independent layers of the package, pyproject.toml's import contract): the kernel calls no
+# other kernel and none calls it, so its own file keys its cache soundly (one of the exceptions
+# _compiled's docstring names).
+@njit(cache=True)
+def _store_block(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
+                 r: npt.NDArray[np.float64], theta: npt.NDArray[np.float64],
+                 t: npt.NDArray[np.float64], sensor: npt.NDArray[np.int64],
+                 beam_width: npt.NDArray[np.float64], first_id: int, start: int,
+                 to_x: npt.NDArray[np.float64], to_y: npt.NDArray[np.float64],
+                 to_r: npt.NDArray[np.float64], to_theta: npt.NDArray[np.float64],
+                 to_theta1: npt.NDArray[np.float64], to_theta2: npt.NDArray[np.float64],
+                 to_t: npt.NDArray[np.float64], to_beam_width: npt.NDArray[np.float64],
+                 to_sensor: npt.NDArray[np.int64],
+                 to_reading_id: npt.NDArray[np.int64]) -> None:
+    """Arcs ``k = 0, 1, ...`` of a block into the rows ``(start + k) mod storage`` of the
+    history's columns ``to_x .. to_reading_id``, as :meth:`SonarHistory.append` writes one
+    (``theta1, theta2 = theta -/+ beam_width / 2``, id ``first_id + k``), wrapping past the
+    end of the storage. One pass: the numpy version (a slice assignment per column, two for
+    a block that wraps) took 6.8 µs for a 5-arc block, most of it per-call overhead.
+    """
+    storage = to_x.shape[0]
+    row = start
+    for k in range(x.shape[0]):
+        if row == storage:
+            row = 0
+        half = 0.5 * beam_width[k]
+        to_x[row] = x[k]
+        to_y[row] = y[k]
+        to_r[row] = r[k]
+        to_theta[row] = theta[k]
+        to_theta1[row] = theta[k] - half
+        to_theta2[row] = theta[k] + half
+        to_t[row] = t[k]
+        to_beam_width[row] = beam_width[k]
+        to_sensor[row] = sensor[k]
+        to_reading_id[row] = first_id + k
+        row += 1

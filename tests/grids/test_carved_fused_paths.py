@@ -1,8 +1,9 @@
 """The carved grid's compiled bookkeeping against the numpy and Python it replaced (2026-12-04,
 helper rd16): the bands' intervals from the estimates (:func:`intervals`,
 :func:`carving_intervals`) bit for bit, their store by slot (:func:`store_intervals`, review
-rev16), which newest echoes are fresh (``_fresh``) by its definition, and the model as the kernels
-take it (an array, :func:`model_array`). The expected values come from the old code, copied here,
+rev16), which newest echoes are fresh (``_fresh``) by its definition, the model as the kernels
+take it (an array, :func:`model_array`), and (2026-12-05, helper rd17) a batch's columns for the
+fold (:func:`batch_columns`). The expected values come from the old code, copied here,
 or from the definition, never from the new code."""
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import pytest
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.grids import CarvedGrid, CarvedGridParams
 from sonarcarve.grids.carved.intervals import carving_intervals, intervals, store_intervals
+from sonarcarve.grids.carved.kernels import batch_columns
 from sonarcarve.grids.carved.model import Model, model_array, model_from
 from sonarcarve.grids.carved.periods import FiringPeriods
 from sonarcarve.methods import MethodConfig, make_method
@@ -194,3 +196,45 @@ def test_store_intervals_stores_the_numpy_intervals_times_the_factors_by_slot() 
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
     assert dead.any()
     assert not dead.all()
+
+
+def _numpy_batch_columns(batch: ReadingBatch, default_width: float, band: float,
+                         first_seq: int) -> tuple[np.ndarray, ...]:
+    """``CarvedGrid.add_many``'s columns as it worked them out in numpy before 2026-12-05."""
+    half = 0.5 * batch.beam_widths(default_width)
+    r = batch.range
+    no_echo = r == math.inf
+    n_echo = len(batch) - int(np.count_nonzero(no_echo))
+    if n_echo < len(batch):
+        seqs = first_seq + np.cumsum((~no_echo).astype(np.int64)) - 1
+        r = np.where(no_echo, batch.max_range + band, r)
+    else:
+        seqs = first_seq + np.arange(len(batch), dtype=np.int64)
+    return half, r, seqs, no_echo, np.array(n_echo)
+
+
+@pytest.mark.parametrize("n", [1, 5, 64, 257])
+@pytest.mark.parametrize("step", [1, 2])
+def test_batch_columns_are_the_numpy_ones(n: int, step: int) -> None:
+    # Widths given and NaN (the method's default), echoes and no-echo readings (none, some,
+    # all), columns with a step (a batch sliced with one), bit for bit.
+    rng = np.random.default_rng(n * step)
+    for share in (0.0, 0.3, 1.0):
+        m = n * step
+        r = rng.uniform(0.2, 5.0, m)
+        r[rng.random(m) < share] = math.inf
+        width = rng.uniform(0.1, 0.6, m)
+        width[rng.random(m) < 0.3] = np.nan
+        batch = ReadingBatch.from_arrays(
+            t=np.arange(m) * 0.01, sensor=np.arange(m) % 7, x=rng.normal(size=m),
+            y=rng.normal(size=m), theta=rng.uniform(-3.0, 3.0, m), range=r, beam_width=width,
+            max_range=rng.uniform(5.0, 6.0, m))[::step]
+        first = int(rng.integers(0, 1000))
+        got = batch_columns(batch.beam_width, 0.3927, batch.range, batch.max_range, 0.075,
+                            first)
+        expected = _numpy_batch_columns(batch, 0.3927, 0.075, first)
+        for name, a, b in zip(("half", "reach", "seqs", "no_echo", "echoes"), got, expected,
+                              strict=True):
+            a, b = (np.ascontiguousarray(np.atleast_1d(v)) for v in (a, b))
+            assert a.dtype == b.dtype, name
+            np.testing.assert_array_equal(a.view(np.uint8), b.view(np.uint8), err_msg=name)

@@ -11,10 +11,10 @@ files of every module that may hold a kernel (:data:`KERNEL_FOLDERS`): any edit 
 invalidates every cached kernel at once, and an unchanged tree reuses the cache. The rule that
 keeps this sound: a compiled kernel calls only kernels defined under :data:`KERNEL_FOLDERS`.
 
-The exception: the kernels of ``io/float_text.py`` (the CSV number parser) and
-``lab/metrics.py`` use plain ``numba.njit(cache=True)``. Each calls only kernels of its own file
-and no kernel elsewhere calls it, so numba's own per-file key is sound for them, and an edit to
-the geometry does not make the CSV reader recompile.
+The exception: the kernels of ``io/float_text.py`` (the CSV number parser), ``lab/metrics.py``
+and ``history.py`` (storing a block of arcs in the history) use plain ``numba.njit(cache=True)``.
+Each calls only kernels of its own file and no kernel elsewhere calls it, so numba's own per-file
+key is sound for them, and an edit to the geometry does not make the CSV reader recompile.
 """
 
 from __future__ import annotations

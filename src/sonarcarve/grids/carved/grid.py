@@ -20,6 +20,7 @@ from sonarcarve.grids.carved.intervals import (
 )
 from sonarcarve.grids.carved.kernels import (
     Finals,
+    batch_columns,
     fold_kernel,
     fresh_kernel,
     keep_chain,
@@ -232,16 +233,10 @@ class CarvedGrid(CellGrid):
         method = self._method
         history = method.history
         first_seq = history.appended
-        half = 0.5 * batch.beam_widths(method.beam_width)
-        r = batch.range
-        no_echo = r == math.inf
-        n_echo = n - int(np.count_nonzero(no_echo))
-        if n_echo < n:  # free up to max_range, and no arc of its own in the history
-            echo = (~no_echo).astype(np.int64)
-            seqs = first_seq + np.cumsum(echo) - 1
-            r = np.where(no_echo, batch.max_range + self.band, r)
-        else:
-            seqs = first_seq + np.arange(n, dtype=np.int64)
+        # A no-echo reading's free space reaches max_range, and it has no arc of its own.
+        half, r, seqs, no_echo, n_echo = batch_columns(
+            batch.beam_width, method.beam_width, batch.range, batch.max_range, self.band,
+            first_seq)
         # The kernels take C-contiguous columns (a batch sliced with a step has none).
         x, y, theta = (np.ascontiguousarray(c) for c in (batch.x, batch.y, batch.theta))
         # Before the method runs: the arcs it retires during the batch are made final (their
@@ -260,7 +255,7 @@ class CarvedGrid(CellGrid):
         # The batch's newest time is its last: the method checked that times never go back.
         self._latest_t = max(self._latest_t, float(batch.t[-1]))
         fold_kernel(self._base, self._heard, self._model_array, x, y, theta,
-                    np.ascontiguousarray(r), half, seqs, history.capacity, *finals)
+                    r, half, seqs, history.capacity, *finals)
         self.readings += n
         self._stale = True
 

@@ -28,6 +28,7 @@ from sonarcarve.typing import BoolArray, FloatArray, SlotArray
 
 __all__ = [
     "Finals",
+    "batch_columns",
     "fold_kernel",
     "fresh_kernel",
     "keep_chain",
@@ -50,6 +51,36 @@ class Finals(NamedTuple):
     hi: FloatArray
     weight: FloatArray
     seq: npt.NDArray[np.int64]
+
+
+@compiled
+def batch_columns(beam_width: FloatArray, default_width: float, r: FloatArray,
+                  max_range: FloatArray, band: float, first_seq: int
+                  ) -> tuple[FloatArray, FloatArray, npt.NDArray[np.int64], BoolArray, int]:
+    """What the fold and the bookkeeping take from a batch, in one pass: each reading's half
+    beam width (its ``beam_width``, or ``default_width`` where it is NaN, halved), the range
+    its free space reaches (``r``; ``max_range + band`` for a reading that heard nothing,
+    ``r = inf``), its arc's sequence number from ``first_seq`` (a no-echo reading's: the
+    newest arc before it, as it has none), whether it heard nothing, and how many did hear.
+    Before 2026-12-05 about 6 µs of numpy for a 5-reading batch (``benchmarks/grid_reads.py``,
+    a read every 5 readings)."""
+    n = r.shape[0]
+    half = np.empty(n)
+    reach = np.empty(n)
+    seqs = np.empty(n, dtype=np.int64)
+    no_echo = np.empty(n, dtype=np.bool_)
+    seq = first_seq - 1
+    for k in range(n):
+        width = beam_width[k]
+        half[k] = 0.5 * (default_width if math.isnan(width) else width)
+        no_echo[k] = r[k] == math.inf
+        if no_echo[k]:
+            reach[k] = max_range[k] + band
+        else:
+            reach[k] = r[k]
+            seq += 1
+        seqs[k] = seq
+    return half, reach, seqs, no_echo, seq + 1 - first_seq
 
 
 @compiled
