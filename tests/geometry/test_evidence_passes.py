@@ -200,6 +200,16 @@ STATE = ("free", "support", "located", "status", "touched", "occluded", "viewpoi
          "circle")
 
 
+def _assert_same_state(fast: Any, model: EvidenceModel) -> None:
+    """Every array of :data:`STATE` the same in both models, bit for bit (±0 and NaN too)."""
+    assert isinstance(fast, EvidenceModel)
+    for name in STATE:
+        a, b = getattr(fast, name), getattr(model, name)
+        assert a.shape == b.shape, name
+        assert a.dtype == b.dtype, name
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), name
+
+
 def _log(physics: tuple[tuple[str, str], ...], no_echo: bool) -> Any:
     sim = run_simulation(Scenario("office", 1, max_length=10.0, physics=physics))
     if no_echo:  # silent firings between the echoes: evidence_free reads the same state
@@ -229,13 +239,7 @@ def _run_both(readings: Any, history: int, bins: int, start: int,
     for lo in range(start, start + 240, 30):
         method.add_many(readings[lo : lo + 30])
         oracle.add_many(readings[lo : lo + 30])
-        fast = method.models[0]
-        assert isinstance(fast, EvidenceModel)
-        for name in STATE:
-            a, b = getattr(fast, name), getattr(model, name)
-            assert a.shape == b.shape, name
-            assert a.dtype == b.dtype, name
-            assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), name  # bits, ±0, NaN
+        _assert_same_state(method.models[0], model)
         occluded |= bool((model.occluded > 0.0).any())
     mine, theirs = method.local_map(), oracle.local_map()
     assert np.array_equal(mine.xy, theirs.xy)
@@ -308,10 +312,6 @@ def test_the_single_reading_kernel_gives_the_block_kernels_bits() -> None:
     for lo in range(0, len(readings), 30):
         method.add_many(readings[lo : lo + 30])
         twin.add_many(readings[lo : lo + 30])
-    blocks = method.models[0]
-    assert isinstance(blocks, EvidenceModel)
-    for name in STATE:
-        a, b = getattr(blocks, name), getattr(model, name)
-        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), name
+    _assert_same_state(method.models[0], model)
     assert (model.free >= model.threshold).any()  # carving happened
     assert model.counts.any()
