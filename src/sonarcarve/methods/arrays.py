@@ -36,12 +36,14 @@ from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
 
 __all__ = [
     "AtmArcs",
+    "AtmMedians",
     "CarveScratch",
     "CarvedArcs",
     "CarvingRules",
     "HistoryRows",
     "PairScratch",
     "PlainBundle",
+    "PointWork",
     "history_rows",
     "in_a_row",
     "live_slots",
@@ -160,6 +162,45 @@ class AtmArcs(NamedTuple):
     bearings: npt.NDArray[np.float32]
     counts: npt.NDArray[np.int32]
     stale: BoolArray
+
+
+class AtmMedians(NamedTuple):
+    """ATM's points as :meth:`~sonarcarve.methods.atm.AtmModel.medians` keeps them.
+
+    Attributes
+    ----------
+    bearings, counts, stale : ndarray
+        :class:`AtmArcs`' crossing store, its counts and stale marks.
+    median, span : ndarray, shape (storage,)
+        Median and span (max − min) of each row's bearings, radians, valid where not stale.
+    values : ndarray, shape (columns,)
+        Work array as wide as the store, for the sort.
+    """
+
+    bearings: npt.NDArray[np.float32]
+    counts: npt.NDArray[np.int32]
+    stale: BoolArray
+    median: FloatArray
+    span: FloatArray
+    values: FloatArray
+
+
+class PointWork(NamedTuple):
+    """The work arrays of :class:`~sonarcarve.methods.combined.CombinedMethod`'s points.
+
+    Attributes
+    ----------
+    rows : ndarray, shape (8, n)
+        Width, quarter, bearing, bound, cos, sin, dy, dx of each point (``_WIDTH`` ..).
+    flags : ndarray of bool, shape (2, n)
+        ``alive`` and ``processed``.
+    codes : ndarray of int8, shape (2, n)
+        The source and carving's fate.
+    """
+
+    rows: FloatArray
+    flags: BoolArray
+    codes: Int8Array
 
 
 class PairScratch(NamedTuple):

@@ -557,9 +557,9 @@ class AtmModel(ArcModel):
         end = first + count
         while first < end:
             atm, cos_psi, scratch = self.kernel_state()
-            kept, first, needed = _add_arcs(first, end - first, h.capacity, cos_psi,
-                                            self._use_index, *history_rows(h), *atm, *scratch,
-                                            *self._index)
+            kept, first, needed = _add_arcs(
+                first, end - first, h.capacity, cos_psi, self._use_index,
+                *(history_rows(h) + atm + scratch + self._index))
             self._kept += kept
             if first < end:
                 self.make_room(needed)
@@ -627,15 +627,16 @@ class AtmModel(ArcModel):
             self._stale[rows] = False
         return self._median[slots], self._span[slots]
 
-    def median_state(self) -> tuple[float, FloatArray, npt.NDArray[np.float32], BoolArray,
-                                    FloatArray, FloatArray, FloatArray]:
-        """What a kernel placing ATM's points takes besides the counts
-        (:func:`row_median`): the error bound, the axes θ, the crossing store, the stale
-        marks, the cached medians and spans, and a work array as wide as the store."""
+    def median_state(self) -> tuple[float, npt.NDArray[np.float32], npt.NDArray[np.int32],
+                                    BoolArray, FloatArray, FloatArray, FloatArray]:
+        """What a kernel placing ATM's points takes (:func:`row_median`): the error bound, then
+        :class:`~sonarcarve.methods.arrays.AtmMedians`' arrays (the crossing store, its counts,
+        the stale marks, the cached medians and spans, and a work array as wide as the
+        store)."""
         if self._values.shape[0] != self.bearings.shape[1]:
             self._values = np.zeros(self.bearings.shape[1])
-        return (self.error_bound, self.history.theta, self.bearings, self._stale,
-                self._median, self._span, self._values)
+        return (self.error_bound, self.bearings, self.counts, self._stale, self._median,
+                self._span, self._values)
 
     def counters(self) -> dict[str, int]:
         """``atm_crossings``: transversal crossings kept since the start (each counted once)."""

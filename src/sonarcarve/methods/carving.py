@@ -391,7 +391,8 @@ class CarvingModel(ArcModel):
         self.scratch = CarveScratch(np.zeros(size, dtype=np.int64), *scratch_arrays())
         # The bundles as the kernels take them from Python (the arrays module's docstring).
         self._plain = (tuple(self.arcs), tuple(self.rules), tuple(self.scratch))
-        self._arrays = in_a_row(*self._plain, index_arrays(self.index))
+        self._arrays_without_index = in_a_row(*self._plain)
+        self._arrays = self._arrays_without_index + index_arrays(self.index)
         self._fully_carved = 0
         self._split = 0
 
@@ -427,8 +428,8 @@ class CarvingModel(ArcModel):
         half = 0.5 * beam_width
         fully, split = _carve_free(
             reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
-            h.appended, h.capacity, prune, *history_rows(h), *in_a_row(*self._plain),
-            *index_arrays(index))
+            h.appended, h.capacity, prune,
+            *history_rows(h), *(self._arrays_without_index + index_arrays(index)))
         self.count_removed(fully, split)
 
     def estimates(self, slots: SlotArray) -> Estimates:

@@ -34,11 +34,13 @@ from sonarcarve.maps import (
 )
 from sonarcarve.methods.arrays import (
     AtmArcs,
+    AtmMedians,
     CarvedArcs,
     CarveScratch,
     CarvingRules,
     HistoryRows,
     PairScratch,
+    PointWork,
     history_rows,
     in_a_row,
     live_slots,
@@ -198,36 +200,66 @@ def _carving_rows(slots: SlotArray, lo: FloatArray, hi: FloatArray, rows: FloatA
 
 @compiled_borrowing
 def _choose(
-    slots: SlotArray, status: Int8Array, carved: BoolArray, counts: npt.NDArray[np.int32],
-    r: FloatArray, rows: FloatArray, flags: BoolArray, codes: Int8Array, error_bound: float,
-    theta: FloatArray, bearings: npt.NDArray[np.float32], stale: BoolArray, median: FloatArray,
-    span: FloatArray, values: FloatArray,
+    slots: SlotArray, rows: FloatArray, flags: BoolArray, codes: Int8Array,
+    # the history's ranges and axes, carving's fates
+    r: FloatArray, theta: FloatArray, status: Int8Array, carved: BoolArray,
+    # ATM's bound, then AtmMedians
+    error_bound: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    stale: BoolArray, median: FloatArray, span: FloatArray, values: FloatArray,
 ) -> None:
     """:func:`combine_carving_atm`, row by row, in place: row ``k`` (``slots[k]``) comes with
     carving's point bearing, width and the sine of a quarter of the width in ``rows``, which
-    becomes carving's bound ``2 r sin(θ_d / 4)`` (:func:`~sonarcarve.maps.chord_error`); where
-    ATM's point wins (the row has kept a crossing and ``error_bound`` is below carving's
-    bound), ATM's bearing ``θ + median``, width (the span), bound and source replace them.
-    ``flags`` gets ``alive`` and ``processed``, ``codes`` the source and carving's fate. A
-    median is sorted again only for a row whose crossings changed (``stale``, as
-    :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
+    becomes carving's bound (:func:`_carving_choice`); where ATM's point wins (the row has kept
+    a crossing and ``error_bound`` is below carving's bound), ATM's bearing, width, bound and
+    source replace them (:func:`_atm_choice`). ``flags`` gets ``alive`` and ``processed``,
+    ``codes`` the source and carving's fate.
+
+    The bundles' fields come as separate parameters (the comments say whose), as for the
+    kernels that add arcs (:mod:`~sonarcarve.methods.arrays`): the carved grid asks at every
+    read.
+    """
+    work = PointWork(rows, flags, codes)
+    medians = AtmMedians(bearings, counts, stale, median, span, values)
     for k in range(slots.shape[0]):
         s = slots[k]
-        rows[_BOUND, k] = 2.0 * r[s] * rows[_BOUND, k]
-        alive = status[s] == ALIVE
-        flags[0, k] = alive
-        flags[1, k] = carved[s] or not alive or counts[s] > 0
-        codes[0, k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
-        codes[1, k] = status[s]
+        _carving_choice(k, s, r, status, carved, counts, work)
         if counts[s] == 0 or not rows[_BOUND, k] > error_bound:
             continue
-        if stale[s]:
-            row_median(bearings, counts, s, median, span, values)
-            stale[s] = False
-        rows[_BEARING, k] = theta[s] + median[s]
-        rows[_WIDTH, k] = span[s]
-        rows[_BOUND, k] = error_bound
-        codes[0, k] = SOURCE_ATM
+        _atm_choice(k, s, theta, error_bound, medians, work)
+
+
+@compiled_inline
+def _carving_choice(k: int, s: int, r: FloatArray, status: Int8Array, carved: BoolArray,
+                    counts: npt.NDArray[np.int32], work: PointWork) -> None:
+    """Row ``k`` as carving places slot ``s``: its bound ``2 r sin(θ_d / 4)`` (eq. 5.3,
+    :func:`~sonarcarve.maps.chord_error`) from the sine in ``rows[_BOUND]``, ``alive``,
+    ``processed`` by either model (carved, removed, or with ``counts`` of kept crossings), the
+    source (``carved`` or ``centerline``) and carving's fate."""
+    rows, flags, codes = work
+    rows[_BOUND, k] = 2.0 * r[s] * rows[_BOUND, k]
+    alive = status[s] == ALIVE
+    flags[0, k] = alive
+    flags[1, k] = carved[s] or not alive or counts[s] > 0
+    codes[0, k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
+    codes[1, k] = status[s]
+
+
+@compiled_inline
+def _atm_choice(k: int, s: int, theta: FloatArray, error_bound: float, medians: AtmMedians,
+                work: PointWork) -> None:
+    """Row ``k`` as ATM places slot ``s`` (section 2-D): its bearing ``θ + median``, width (the
+    span), bound (eq. 5.4) and source. The median is sorted again only for a row whose
+    crossings changed (``stale``, as :meth:`~sonarcarve.methods.atm.AtmModel.medians`
+    does)."""
+    rows, _, codes = work
+    if medians.stale[s]:
+        row_median(medians.bearings, medians.counts, s, medians.median, medians.span,
+                   medians.values)
+        medians.stale[s] = False
+    rows[_BEARING, k] = theta[s] + medians.median[s]
+    rows[_WIDTH, k] = medians.span[s]
+    rows[_BOUND, k] = error_bound
+    codes[0, k] = SOURCE_ATM
 
 
 @compiled_borrowing
@@ -467,7 +499,7 @@ class CombinedMethod(SonarMethod):
                    f"{len(carving.lo)} slots")
             raise IndexError(msg)
         np.sin(rows[_QUARTER], out=rows[_BOUND])
-        _choose(slots, carving.status, carving.carved, atm.counts, h.r, rows, flags, codes,
+        _choose(slots, rows, flags, codes, h.r, h.theta, carving.status, carving.carved,
                 *atm.median_state())
         np.cos(rows[_BEARING], out=rows[_COS])
         np.sin(rows[_BEARING], out=rows[_SIN])
