@@ -73,9 +73,6 @@ from sonarcarve.typing import BoolArray, FloatArray, Int8Array, IntArray, SlotAr
 
 I32Array = npt.NDArray[np.int32]
 
-#: The closed form's work arrays ``cuts, starts, ends, flags``
-#: (:func:`~sonarcarve.geometry.intervals.carve_core`), views of :class:`CarveScratch`'s.
-CarveWork = tuple[FloatArray, FloatArray, FloatArray, BoolArray]
 
 __all__ = [
     "DEFAULT_RANGE_TOLERANCE",
@@ -151,29 +148,6 @@ def start_carved_arc(slot: int, history: HistoryRows, arcs: CarvedArcs,
 
 
 @compiled_inline
-def _fate_of(i: int, history: HistoryRows, arcs: CarvedArcs, sector: Sector,
-             work: CarveWork) -> tuple[int, float, float]:
-    """What ``sector`` does to the alive arc ``i`` (eq. 3.5): ``(fate, new lo, new hi)``, the
-    interval only for ``SHRUNK``. Cheapest test first: its bounding circle
-    (:func:`~sonarcarve.geometry.bounds.circle_against_sector`), then the arc's own ends
-    (:func:`_clear_of_sector`), then the closed form
-    (:func:`~sonarcarve.geometry.intervals.carve_core`, its work arrays ``work``)."""
-    x, y, r, bounds = history.x, history.y, history.r, arcs.bounds
-    fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
-                                 sector)
-    if fate == UNCHANGED:
-        return UNCHANGED, 0.0, 0.0
-    new_lo = arcs.lo[i]
-    new_hi = arcs.hi[i]
-    if fate == UNDECIDED:
-        if _clear_of_sector(i, history, arcs, sector):
-            return UNCHANGED, 0.0, 0.0
-        cuts, starts, ends, flags = work
-        return carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts, starts, ends, flags)
-    return fate, new_lo, new_hi
-
-
-@compiled_inline
 def _shrink(i: int, new_lo: float, new_hi: float, history: HistoryRows,
             arcs: CarvedArcs) -> None:
     """Arc ``i`` carved to ``[new_lo, new_hi]``: the end that moved loses its cached
@@ -196,16 +170,29 @@ def carve_found(found: int, history: HistoryRows, arcs: CarvedArcs, sector: Sect
     others it leaves unchanged). Arcs already removed are skipped; an arc it removes leaves
     ``index`` too when ``prune`` (an index of the alive arcs; a shared index keeps every live
     arc). Returns ``(fully carved, split)``."""
-    work = (scratch.bearings[0], scratch.bearings[1], scratch.bearings[2], scratch.flags)
+    x, y, r, lo, hi, bounds = history.x, history.y, history.r, arcs.lo, arcs.hi, arcs.bounds
+    cuts, starts, ends = scratch.bearings[0], scratch.bearings[1], scratch.bearings[2]
     fully = 0
     split = 0
     for k in range(found):
         i = scratch.candidates[k]
         if arcs.status[i] != ALIVE:
             continue
-        fate, new_lo, new_hi = _fate_of(i, history, arcs, sector, work)
+        # Cheapest test first: the arc's bounding circle, then its ends, then the closed form.
+        # (The tests stay in this loop: a step returning the fate made carving 4-8 % slower.)
+        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i],
+                                     r[i], sector)
         if fate == UNCHANGED:
             continue
+        new_lo = lo[i]
+        new_hi = hi[i]
+        if fate == UNDECIDED:
+            if _clear_of_sector(i, history, arcs, sector):
+                continue
+            fate, new_lo, new_hi = carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
+                                              starts, ends, scratch.flags)
+            if fate == UNCHANGED:
+                continue
         arcs.carved[i] = True
         if fate == SHRUNK:
             _shrink(i, new_lo, new_hi, history, arcs)
