@@ -294,8 +294,8 @@ def add_atm_arc(slot: int, found: int, cos_psi: float, history: HistoryRows, atm
     crossings found and stored) and the call returns ``(0, needed)``, the columns the store
     needs to hold them all (:func:`_take_back`); the caller grows it and calls again.
 
-    Most pairs fail the transversal test, so it comes first and costs no square root or trig
-    (:func:`_crosses_at_psi`, eq. 2.2). The beam test compares ``(p − o)·axis`` with
+    Most pairs fail the transversal test (ψ of eq. 2.2 and 5.4), so it comes first and costs
+    no square root or trig (:func:`_crosses_at_psi`). The beam test compares ``(p − o)·axis`` with
     ``r cos(φ/2)`` (``|τ − θ| ≤ φ/2`` for ``φ < π``); only kept crossings pay for an arctangent
     (:func:`_bearing32`).
     """
