@@ -33,12 +33,15 @@ SCRIPT = """
 import math
 import numpy as np
 from sonarcarve.geometry.sector import Sector
+from sonarcarve.methods.arrays import CarvedArcs, HistoryRows
 from sonarcarve.methods.carving import _clear_of_sector
 sector = Sector(0.0, 0.0, 2.0, -0.2, math.cos(-0.2), math.sin(-0.2),
                 0.2, math.cos(0.2), math.sin(0.2), 1.0)
 zero = np.zeros(1)
-print(_clear_of_sector(0, zero, zero, np.ones(1), np.array([-0.1]), np.array([0.1]),
-                       np.full((1, 4), np.nan), sector))
+history = HistoryRows(zero, zero, np.ones(1), zero, zero, zero, zero)
+arcs = CarvedArcs(np.array([-0.1]), np.array([0.1]), np.zeros((1, 3)), np.full((1, 4), np.nan),
+                  np.zeros(1, dtype=np.int8), np.zeros(1, dtype=bool))
+print(_clear_of_sector(0, history, arcs, sector))
 """
 
 

@@ -47,7 +47,6 @@ from sonarcarve.geometry._compiled import compiled, compiled_borrowing, compiled
 from sonarcarve.geometry.arctan import SERIES_ERROR, SERIES_T, atan_series
 from sonarcarve.geometry.index import (
     ArcIndex,
-    IndexArrays,
     arc_box,
     index_arrays,
     index_insert,
@@ -57,6 +56,14 @@ from sonarcarve.geometry.index import (
 )
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
+from sonarcarve.methods.arrays import (
+    AtmArcs,
+    HistoryRows,
+    PairScratch,
+    PlainBundle,
+    history_rows,
+    live_slots,
+)
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
 from sonarcarve.methods.config import (
     DEFAULT_MIN_TRANSVERSAL,
@@ -64,7 +71,9 @@ from sonarcarve.methods.config import (
     check_min_transversal,
     check_range_resolution,
 )
-from sonarcarve.typing import BoolArray, FloatArray, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, IntArray, SlotArray
+
+I32Array = npt.NDArray[np.int32]
 
 __all__ = [
     "BEARING_MARGIN",
@@ -228,42 +237,72 @@ def _bearing32(cross: float, along: float) -> float:
 
 
 @compiled_inline
-def add_atm_arc(
-    x: FloatArray,
-    y: FloatArray,
-    r: FloatArray,
-    cos_axis: FloatArray,
-    sin_axis: FloatArray,
-    cos_half: FloatArray,
-    slot: int,
-    older: SlotArray,
-    found: int,
-    cos_psi: float,
-    bearings: npt.NDArray[np.float32],
-    counts: npt.NDArray[np.int32],
-    tally: npt.NDArray[np.int32],
-    stale: BoolArray,
-) -> tuple[int, int]:
-    """Intersect the arc in ``slot`` with the ``older[:found]`` arcs and store the kept
-    crossings.
+def _crosses_at_psi(rj: float, ri: float, d2: float, cos_psi: float) -> bool:
+    """Whether two circles of radii ``rj, ri``, centres ``√d2`` apart, cross at an angle of at
+    least ψ. With ``cos γ = (rj² + ri² − d²) / (2 rj ri)`` the test reads
+    ``|rj² + ri² − d²| ≤ 2 rj ri cos ψ``: no square root or trig, and for ψ > 0 it also implies
+    that the circles cross (``|cos γ| < 1``). Both crossings of a pair share one transversal
+    angle, so it rejects the pair at once. (``d2 = 0`` passes only for equal, concentric
+    circles at ψ = 0: they never cross.)"""
+    return not (abs(rj * rj + ri * ri - d2) > 2.0 * rj * ri * cos_psi or d2 == 0.0)
+
+
+@compiled_inline
+def _store_crossing(slot: int, i: int, px: float, py: float, along_j: float, qx: float,
+                    qy: float, along_i: float, atm: AtmArcs) -> None:
+    """Append a kept crossing to the rows of the new arc ``slot`` and of the older arc ``i``,
+    as bearings relative to each one's axis (:func:`_bearing32`; ``p``, ``q``: the crossing
+    relative to their origins, ``along_*`` its component along their axes), and mark row
+    ``i`` stale (its median must be computed again)."""
+    cos_axis, sin_axis, bearings, counts = atm.cos_axis, atm.sin_axis, atm.bearings, atm.counts
+    bearings[slot, counts[slot]] = _bearing32(cos_axis[slot] * py - sin_axis[slot] * px,
+                                              along_j)
+    counts[slot] += 1
+    bearings[i, counts[i]] = _bearing32(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
+    counts[i] += 1
+    atm.stale[i] = True
+
+
+@compiled_inline
+def _take_back(slot: int, found: int, kept: int, atm: AtmArcs, scratch: PairScratch) -> int:
+    """Undo :func:`add_atm_arc` for the arc in ``slot``, whose crossings did not all fit: its
+    partners lose the crossings stored with it and its row is emptied. Returns the columns the
+    store needs to hold them all."""
+    counts, tally = atm.counts, scratch.tally
+    needed = kept
+    for k in range(found):
+        i = scratch.candidates[k]
+        counts[i] -= tally[k, 1]
+        needed = max(needed, counts[i] + tally[k, 0])
+    counts[slot] = 0
+    return needed
+
+
+@compiled_inline
+def add_atm_arc(slot: int, found: int, cos_psi: float, history: HistoryRows, atm: AtmArcs,
+                scratch: PairScratch) -> tuple[int, int]:
+    """Intersect the arc in ``slot`` with the ``scratch.candidates[:found]`` older arcs and
+    store the kept crossings.
 
     Kept: ``|cos γ| ≤ cos ψ`` (transversal angle ≥ ψ) and inside both full beams (eq. 2.1). Each
-    kept crossing is appended to both rows of ``bearings`` as a bearing relative to that arc's
-    axis, and both rows are marked ``stale`` (their medians must be computed again). Returns
-    ``(kept, 0)``: the number of crossings kept.
+    kept crossing is appended to both rows of ``atm.bearings`` as a bearing relative to that
+    arc's axis, and both rows are marked ``stale`` (their medians must be computed again).
+    Returns ``(kept, 0)``: the number of crossings kept.
 
     When a row is full, nothing of this arc stays: its partners' rows lose the crossings stored
-    with it (the last ones of each row; ``tally[k]`` counts, for ``older[k]``, the crossings
-    found and stored) and the call returns ``(0, needed)``, the columns the store needs to hold
-    them all; the caller grows it and calls again.
+    with it (the last ones of each row; ``scratch.tally[k]`` counts, for ``candidates[k]``, the
+    crossings found and stored) and the call returns ``(0, needed)``, the columns the store
+    needs to hold them all (:func:`_take_back`); the caller grows it and calls again.
 
-    Most pairs fail the transversal test, so it comes first and costs no square root or trig:
-    with ``cos γ = (rj² + ri² − d²) / (2 rj ri)`` it reads ``|rj² + ri² − d²| ≤ 2 rj ri cos ψ``,
-    which for ψ > 0 also implies that the circles cross (``|cos γ| < 1``). The beam test
-    compares ``(p − o)·axis`` with ``r cos(φ/2)`` (``|τ − θ| ≤ φ/2`` for ``φ < π``); only kept
-    crossings pay for an arctangent (:func:`_bearing32`).
+    Most pairs fail the transversal test (ψ of eq. 2.2 and 5.4), so it comes first and costs
+    no square root or trig (:func:`_crosses_at_psi`). The beam test compares ``(p − o)·axis`` with
+    ``r cos(φ/2)`` (``|τ − θ| ≤ φ/2`` for ``φ < π``); only kept crossings pay for an arctangent
+    (:func:`_bearing32`).
     """
-    width = bearings.shape[1]
+    x, y, r = history.x, history.y, history.r
+    cos_axis, sin_axis, cos_half, counts = atm.cos_axis, atm.sin_axis, atm.cos_half, atm.counts
+    tally = scratch.tally
+    width = atm.bearings.shape[1]
     xj, yj, rj = x[slot], y[slot], r[slot]
     cj, sj, hj = cos_axis[slot], sin_axis[slot], cos_half[slot]
     kept = 0
@@ -271,21 +310,19 @@ def add_atm_arc(
     for k in range(found):
         tally[k, 0] = 0
         tally[k, 1] = 0
-        i = older[k]
+        i = scratch.candidates[k]
         ri = r[i]
         dx = x[i] - xj
         dy = y[i] - yj
         d2 = dx * dx + dy * dy
-        # Both crossings of a pair share one transversal angle: reject the pair at once. (d2 = 0
-        # passes only for equal, concentric circles at ψ = 0: they never cross.)
-        if abs(rj * rj + ri * ri - d2) > 2.0 * rj * ri * cos_psi or d2 == 0.0:
+        if not _crosses_at_psi(rj, ri, d2, cos_psi):
             continue
         a, h = common_chord(d2, rj, ri)
         d = math.sqrt(d2)
         ux = dx / d
         uy = dy / d
         for sign in (1.0, -1.0):
-            # The crossing relative to o_j (p) and to o_i (q).
+            # The crossing relative to o_j (p) and to o_i (q), and the two beam tests.
             px = a * ux - sign * h * uy
             py = a * uy + sign * h * ux
             along_j = px * cj + py * sj
@@ -301,85 +338,84 @@ def add_atm_arc(
             full = full or counts[slot] >= width or counts[i] >= width
             if full:
                 continue  # only counted from now on: see the docstring
-            bearings[slot, counts[slot]] = _bearing32(cj * py - sj * px, along_j)
-            counts[slot] += 1
-            bearings[i, counts[i]] = _bearing32(cos_axis[i] * qy - sin_axis[i] * qx, along_i)
-            counts[i] += 1
-            stale[i] = True
+            _store_crossing(slot, i, px, py, along_j, qx, qy, along_i, atm)
             tally[k, 1] += 1
     if not full:
         return kept, 0
-    needed = kept
-    for k in range(found):
-        i = older[k]
-        counts[i] -= tally[k, 1]
-        needed = max(needed, counts[i] + tally[k, 0])
-    counts[slot] = 0
-    return 0, needed
+    return 0, _take_back(slot, found, kept, atm, scratch)
 
 
 @compiled_inline
-def start_atm_arc(slot: int, theta: FloatArray, beam_width: FloatArray, cos_axis: FloatArray,
-                  sin_axis: FloatArray, cos_half: FloatArray, counts: npt.NDArray[np.int32],
-                  stale: BoolArray) -> None:
+def start_atm_arc(slot: int, history: HistoryRows, atm: AtmArcs) -> None:
     """A new arc in ``slot``: no crossings yet, and its axis and half-beam cosines for the beam
     tests of :func:`add_atm_arc`."""
-    counts[slot] = 0
-    stale[slot] = True
-    axis = theta[slot]  # read once, so that cos and sin become one sincos call
-    cos_axis[slot] = math.cos(axis)
-    sin_axis[slot] = math.sin(axis)
-    cos_half[slot] = math.cos(0.5 * beam_width[slot])
+    atm.counts[slot] = 0
+    atm.stale[slot] = True
+    axis = history.theta[slot]  # read once, so that cos and sin become one sincos call
+    atm.cos_axis[slot] = math.cos(axis)
+    atm.sin_axis[slot] = math.sin(axis)
+    atm.cos_half[slot] = math.cos(0.5 * history.beam_width[slot])
 
 
 @compiled_borrowing
 def _add_arcs(
-    first: int, count: int, capacity: int,
+    first: int, count: int, capacity: int, cos_psi: float, use_index: bool,
+    # HistoryRows
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     theta1: FloatArray, theta2: FloatArray,
+    # AtmArcs, PairScratch
     cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
-    cos_psi: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
-    index_arrays: IndexArrays, candidates: SlotArray, tally: npt.NDArray[np.int32],
-    stale: BoolArray, use_index: bool,
+    crossings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], stale: BoolArray,
+    pair_candidates: SlotArray, tally: npt.NDArray[np.int32],
+    # ArcIndex
+    head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
+    stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
 ) -> tuple[int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: reset each one's crossings and intersect it with the live arcs before it
     (:func:`add_atm_arc`).
 
-    ``index_arrays`` is the :class:`~sonarcarve.geometry.index.ArcIndex` as a plain tuple (numba's
-    dispatcher types it much faster than a NamedTuple). With ``use_index`` only the arcs the
-    index returns for the new arc's box
+    The arguments after ``use_index``: the history's, ATM's (:meth:`AtmModel.kernel_state`) and
+    the index's arrays: numba's dispatcher unboxes separate arguments fastest (about 0.05 µs an
+    array, twice that in a tuple, several µs for NamedTuples), and a single ``add()`` costs
+    5-7 µs, so the bundles of :mod:`~sonarcarve.methods.arrays` come as their fields, one after
+    the other (the comments say which), and are named on the first lines. With ``use_index``
+    only the arcs the index returns for the new arc's box
     (:func:`~sonarcarve.geometry.index.query_box`) are intersected: a kept crossing lies on both
     full beams, so both boxes contain it. ``index`` holds the live arcs (ATM removes none).
     Off (ψ < :data:`MIN_INDEXED_TRANSVERSAL`), every live arc is: the crossings of nearly
     tangent circles are too ill-conditioned for the boxes' padding.
 
     Returns ``(kept, done, needed)``: the crossings kept, the sequence number after the last arc
-    done (``first + count`` when all are) and, when it stops early, the columns ``bearings``
-    needs for arc ``done`` (0 otherwise). It stops at an arc whose crossings do not fit, having
-    taken them back (:func:`add_atm_arc`) and changed nothing else of that arc that a second call
-    would not redo the same way, so the caller grows the store and calls again from ``done``.
+    done (``first + count`` when all are) and, when it stops early, the columns the crossing
+    store needs for arc ``done`` (0 otherwise). It stops at an arc whose crossings do not fit,
+    having taken them back (:func:`add_atm_arc`) and changed nothing else of that arc that a
+    second call would not redo the same way, so the caller grows the store and calls again from
+    ``done``.
 
     Compiled without reference counting
     (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`): it only borrows its arrays.
     """
-    storage = x.shape[0]
-    index = ArcIndex(*index_arrays)
+    history = HistoryRows(x, y, r, theta, beam_width, theta1, theta2)
+    atm = AtmArcs(cos_axis, sin_axis, cos_half, crossings, counts, stale)
+    pairs = PairScratch(pair_candidates, tally)
+    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick,
+                     cell_size)
+    storage = history.x.shape[0]
     kept = 0
     for sequence in range(first, first + count):
         slot = sequence % storage
         if sequence >= capacity:
-            index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
-        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
-        found = query_box(index, xmin, xmax, ymin, ymax, candidates) if use_index else -1
+            index_remove(index, (sequence - capacity) % storage)  # it left the history
+        start_atm_arc(slot, history, atm)
+        xmin, xmax, ymin, ymax = arc_box(history.x[slot], history.y[slot], history.r[slot],
+                                         history.theta1[slot], history.theta2[slot])
+        found = -1
+        if use_index:
+            found = query_box(index, xmin, xmax, ymin, ymax, pairs.candidates)
         if found < 0:
-            found = 0
-            for older in range(max(0, sequence - capacity + 1), sequence):
-                candidates[found] = older % storage
-                found += 1
-        arc_kept, needed = add_atm_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
-                                       found, cos_psi, bearings, counts, tally, stale)
+            found = live_slots(sequence - capacity + 1, sequence, storage, pairs.candidates)
+        arc_kept, needed = add_atm_arc(slot, found, cos_psi, history, atm, pairs)
         if needed:
             return kept, sequence, needed
         kept += arc_kept
@@ -486,9 +522,12 @@ class AtmModel(ArcModel):
         self._cos_half = np.zeros(history.storage_size)
         self._use_index = self.min_transversal >= MIN_INDEXED_TRANSVERSAL
         self.index = make_index(history.storage_size)
-        self._candidates = np.zeros(history.storage_size, dtype=np.int64)
-        # Crossings found and stored with each candidate, to take them back (add_atm_arc).
-        self._tally = np.zeros((history.storage_size, 2), dtype=np.int32)
+        self._index = index_arrays(self.index)
+        # The older arcs to intersect, and the crossings found and stored with each, to take
+        # them back (add_atm_arc); plain, as the kernels take it from Python.
+        self._scratch = tuple(PairScratch(
+            np.zeros(history.storage_size, dtype=np.int64),
+            np.zeros((history.storage_size, 2), dtype=np.int32)))
         # Median and span of each row's bearings, valid where the row is not stale.
         self._median = np.zeros(history.storage_size)
         self._span = np.zeros(history.storage_size)
@@ -517,12 +556,10 @@ class AtmModel(ArcModel):
         h = self.history
         end = first + count
         while first < end:
+            atm, cos_psi, scratch = self.kernel_state()
             kept, first, needed = _add_arcs(
-                first, end - first, h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1,
-                h.theta2, self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi,
-                self.bearings, self.counts, index_arrays(self.index), self._candidates,
-                self._tally, self._stale, self._use_index,
-            )
+                first, end - first, h.capacity, cos_psi, self._use_index,
+                *(history_rows(h) + atm + scratch + self._index))
             self._kept += kept
             if first < end:
                 self.make_room(needed)
@@ -542,15 +579,15 @@ class AtmModel(ArcModel):
         :data:`MIN_INDEXED_TRANSVERSAL`), rather than a scan of every live arc."""
         return self._use_index
 
-    def kernel_state(self) -> tuple[FloatArray, FloatArray, FloatArray, float,
-                                    npt.NDArray[np.float32], npt.NDArray[np.int32],
-                                    npt.NDArray[np.int32], BoolArray]:
-        """``cos θ, sin θ, cos(φ/2)`` per slot, ``cos ψ``, the crossing store and its counts,
-        the per-candidate tally and the stale marks: what a kernel adding arcs to this model
-        takes (:func:`add_atm_arc`; the store is replaced when it grows, so ask again after
-        :meth:`make_room`)."""
-        return (self._cos_axis, self._sin_axis, self._cos_half, self._cos_psi, self.bearings,
-                self.counts, self._tally, self._stale)
+    def kernel_state(self) -> tuple[PlainBundle, float, PlainBundle]:
+        """What a kernel adding arcs to this model takes (:func:`add_atm_arc`), plain: its
+        :class:`~sonarcarve.methods.arrays.AtmArcs` (``cos θ, sin θ, cos(φ/2)`` per slot, the
+        crossing store, its counts and the stale marks; the store is replaced when it grows, so
+        ask again after :meth:`make_room`), ``cos ψ``, and its
+        :class:`~sonarcarve.methods.arrays.PairScratch` (the candidates and their tally)."""
+        atm = (self._cos_axis, self._sin_axis, self._cos_half, self.bearings, self.counts,
+               self._stale)
+        return atm, self._cos_psi, self._scratch
 
     def count_kept(self, kept: int) -> None:
         """Add crossings kept by a kernel that the method ran for this model."""
@@ -590,15 +627,16 @@ class AtmModel(ArcModel):
             self._stale[rows] = False
         return self._median[slots], self._span[slots]
 
-    def median_state(self) -> tuple[float, FloatArray, npt.NDArray[np.float32], BoolArray,
-                                    FloatArray, FloatArray, FloatArray]:
-        """What a kernel placing ATM's points takes besides the counts
-        (:func:`row_median`): the error bound, the axes θ, the crossing store, the stale
-        marks, the cached medians and spans, and a work array as wide as the store."""
+    def median_state(self) -> tuple[float, npt.NDArray[np.float32], npt.NDArray[np.int32],
+                                    BoolArray, FloatArray, FloatArray, FloatArray]:
+        """What a kernel placing ATM's points takes (:func:`row_median`): the error bound, then
+        :class:`~sonarcarve.methods.arrays.AtmMedians`' arrays (the crossing store, its counts,
+        the stale marks, the cached medians and spans, and a work array as wide as the
+        store)."""
         if self._values.shape[0] != self.bearings.shape[1]:
             self._values = np.zeros(self.bearings.shape[1])
-        return (self.error_bound, self.history.theta, self.bearings, self._stale,
-                self._median, self._span, self._values)
+        return (self.error_bound, self.bearings, self.counts, self._stale, self._median,
+                self._span, self._values)
 
     def counters(self) -> dict[str, int]:
         """``atm_crossings``: transversal crossings kept since the start (each counted once)."""

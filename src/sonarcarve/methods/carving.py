@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT, arc_bounding_circle
 from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
@@ -38,7 +39,6 @@ from sonarcarve.geometry.circular import scratch_arrays
 from sonarcarve.geometry.fate import ALIVE, FULLY_CARVED, SHRUNK, UNCHANGED
 from sonarcarve.geometry.index import (
     ArcIndex,
-    IndexArrays,
     arc_box_of_ends,
     index_arrays,
     index_insert,
@@ -51,6 +51,16 @@ from sonarcarve.geometry.intervals import carve_core
 from sonarcarve.geometry.sector import Sector, make_sector
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, SonarHistory
 from sonarcarve.maps import PointSource, chord_error
+from sonarcarve.methods.arrays import (
+    CarvedArcs,
+    CarveScratch,
+    CarvingRules,
+    HistoryRows,
+    PlainBundle,
+    history_rows,
+    in_a_row,
+    live_slots,
+)
 from sonarcarve.methods.base import ArcModel, Estimates, SonarMethod, arc_point
 from sonarcarve.methods.config import (
     DEFAULT_RANGE_TOLERANCE,
@@ -59,7 +69,10 @@ from sonarcarve.methods.config import (
     check_range_tolerance,
 )
 from sonarcarve.readings import DEFAULT_BEAM_WIDTH, Reading
-from sonarcarve.typing import BoolArray, FloatArray, Int8Array, SlotArray
+from sonarcarve.typing import BoolArray, FloatArray, Int8Array, IntArray, SlotArray
+
+I32Array = npt.NDArray[np.int32]
+
 
 __all__ = [
     "DEFAULT_RANGE_TOLERANCE",
@@ -72,8 +85,7 @@ __all__ = [
 
 
 @compiled_inline
-def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: FloatArray,
-                     hi: FloatArray, tips: FloatArray, sector: Sector) -> bool:
+def _clear_of_sector(i: int, history: HistoryRows, arcs: CarvedArcs, sector: Sector) -> bool:
     """The sector leaves arc ``i`` unchanged, by a test without trigonometry: the arc is clear
     of its disk (:func:`~sonarcarve.geometry.bounds.arc_clear_of_disk`) or of one of its
     half-planes (:func:`~sonarcarve.geometry.bounds.arc_clear_of_wedge`).
@@ -82,23 +94,24 @@ def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Fl
     many times between changes, and carving mostly moves one end of an arc (cos and sin of the
     same double: the same values whenever they are computed).
     """
+    tips = arcs.tips
     if math.isnan(tips[i, 0]):
         # The angle read once: a store into ``tips`` between reads of ``lo[i]`` (which it might
         # alias, for the compiler) kept cos and sin of one angle from becoming one sincos call.
-        start = lo[i]
+        start = arcs.lo[i]
         cos_start = math.cos(start)
         sin_start = math.sin(start)
         tips[i, 0] = cos_start
         tips[i, 1] = sin_start
     if math.isnan(tips[i, 2]):
-        end = hi[i]
+        end = arcs.hi[i]
         cos_end = math.cos(end)
         sin_end = math.sin(end)
         tips[i, 2] = cos_end
         tips[i, 3] = sin_end
-    ox = x[i]
-    oy = y[i]
-    radius = r[i]
+    ox = history.x[i]
+    oy = history.y[i]
+    radius = history.r[i]
     clo = tips[i, 0]
     slo = tips[i, 1]
     chi = tips[i, 2]
@@ -108,175 +121,207 @@ def _clear_of_sector(i: int, x: FloatArray, y: FloatArray, r: FloatArray, lo: Fl
 
 
 @compiled_inline
-def start_carved_arc(
-    slot: int, x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray,
-    theta2: FloatArray, lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray,
-    status: Int8Array, carved: BoolArray, tolerance: float, max_incidence: float,
-) -> Sector:
+def start_carved_arc(slot: int, history: HistoryRows, arcs: CarvedArcs,
+                     rules: CarvingRules) -> Sector:
     """A new arc in ``slot``: alive, not carved, its full beam (section 3) and the circle around
     it; returns its freespace sector (eq. 3.2), which carves the older arcs. The arc's
     ``tips`` are its beam's edge directions, which the sector has computed: ``e(θ1), e(θ2)``
     of the same angles, the values :func:`_clear_of_sector` would compute."""
-    start = theta1[slot]
-    end = theta2[slot]
-    lo[slot] = start
-    hi[slot] = end
+    x, y, r = history.x, history.y, history.r
+    start = history.theta1[slot]
+    end = history.theta2[slot]
+    arcs.lo[slot] = start
+    arcs.hi[slot] = end
     cx, cy, radius = arc_bounding_circle(x[slot], y[slot], r[slot], start, end)
-    bounds[slot, 0] = cx
-    bounds[slot, 1] = cy
-    bounds[slot, 2] = radius
-    status[slot] = ALIVE
-    carved[slot] = False
-    sector = make_sector(x[slot], y[slot], r[slot], start, end, tolerance, max_incidence)
-    tips[slot, 0] = sector.u1x
-    tips[slot, 1] = sector.u1y
-    tips[slot, 2] = sector.u2x
-    tips[slot, 3] = sector.u2y
+    arcs.bounds[slot, 0] = cx
+    arcs.bounds[slot, 1] = cy
+    arcs.bounds[slot, 2] = radius
+    arcs.status[slot] = ALIVE
+    arcs.carved[slot] = False
+    sector = make_sector(x[slot], y[slot], r[slot], start, end, rules.tolerance,
+                         rules.max_incidence)
+    arcs.tips[slot, 0] = sector.u1x
+    arcs.tips[slot, 1] = sector.u1y
+    arcs.tips[slot, 2] = sector.u2x
+    arcs.tips[slot, 3] = sector.u2y
     return sector
 
 
 @compiled_inline
-def carve_found(
-    found: int, candidates: SlotArray, x: FloatArray, y: FloatArray, r: FloatArray,
-    lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
-    carved: BoolArray, sector: Sector, index: ArcIndex, prune: bool, cuts: FloatArray,
-    starts: FloatArray, ends: FloatArray, flags: BoolArray,
-) -> tuple[int, int]:
-    """Carve the arcs ``candidates[:found]`` by ``sector``: the step of
+def _shrink(i: int, new_lo: float, new_hi: float, history: HistoryRows,
+            arcs: CarvedArcs) -> None:
+    """Arc ``i`` carved to ``[new_lo, new_hi]``: the end that moved loses its cached
+    direction, and its bounding circle is drawn again."""
+    if new_lo != arcs.lo[i]:
+        arcs.tips[i, 0] = math.nan
+    if new_hi != arcs.hi[i]:
+        arcs.tips[i, 2] = math.nan
+    arcs.lo[i] = new_lo
+    arcs.hi[i] = new_hi
+    arcs.bounds[i, 0], arcs.bounds[i, 1], arcs.bounds[i, 2] = arc_bounding_circle(
+        history.x[i], history.y[i], history.r[i], new_lo, new_hi)
+
+
+@compiled_inline
+def carve_found(found: int, history: HistoryRows, arcs: CarvedArcs, sector: Sector,
+                index: ArcIndex, prune: bool, scratch: CarveScratch) -> tuple[int, int]:
+    """Carve the arcs ``scratch.candidates[:found]`` by ``sector``: the step of
     :func:`~sonarcarve.geometry.carve_arcs`, arc by arc, for the arcs the index returned (the
     others it leaves unchanged). Arcs already removed are skipped; an arc it removes leaves
     ``index`` too when ``prune`` (an index of the alive arcs; a shared index keeps every live
     arc). Returns ``(fully carved, split)``."""
+    x, y, r, lo, hi, bounds = history.x, history.y, history.r, arcs.lo, arcs.hi, arcs.bounds
+    cuts, starts, ends = scratch.bearings[0], scratch.bearings[1], scratch.bearings[2]
     fully = 0
     split = 0
     for k in range(found):
-        i = candidates[k]
-        if status[i] != ALIVE:
+        i = scratch.candidates[k]
+        if arcs.status[i] != ALIVE:
             continue
-        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i], r[i],
-                                     sector)
+        # Cheapest test first: the arc's bounding circle, then its ends, then the closed form.
+        # (The tests stay in this loop: a step returning the fate made carving 4-8 % slower.)
+        fate = circle_against_sector(bounds[i, 0], bounds[i, 1], bounds[i, 2], x[i], y[i],
+                                     r[i], sector)
         if fate == UNCHANGED:
             continue
         new_lo = lo[i]
         new_hi = hi[i]
         if fate == UNDECIDED:
-            if _clear_of_sector(i, x, y, r, lo, hi, tips, sector):
+            if _clear_of_sector(i, history, arcs, sector):
                 continue
             fate, new_lo, new_hi = carve_core(x[i], y[i], r[i], new_lo, new_hi, sector, cuts,
-                                              starts, ends, flags)
+                                              starts, ends, scratch.flags)
             if fate == UNCHANGED:
                 continue
-        carved[i] = True
+        arcs.carved[i] = True
         if fate == SHRUNK:
-            if new_lo != lo[i]:
-                tips[i, 0] = math.nan
-            if new_hi != hi[i]:
-                tips[i, 2] = math.nan
-            lo[i] = new_lo
-            hi[i] = new_hi
-            bounds[i, 0], bounds[i, 1], bounds[i, 2] = arc_bounding_circle(
-                x[i], y[i], r[i], new_lo, new_hi)
+            _shrink(i, new_lo, new_hi, history, arcs)
+            continue
+        arcs.status[i] = fate
+        if prune:
+            index_remove(index, i)
+        if fate == FULLY_CARVED:
+            fully += 1
         else:
-            status[i] = fate
-            if prune:
-                index_remove(index, i)
-            if fate == FULLY_CARVED:
-                fully += 1
-            else:
-                split += 1
+            split += 1
     return fully, split
 
 
 @compiled_borrowing
 def _add_arcs(
     first: int, count: int, capacity: int,
-    x: FloatArray, y: FloatArray, r: FloatArray, theta1: FloatArray, theta2: FloatArray,
+    # HistoryRows
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    theta1: FloatArray, theta2: FloatArray,
+    # CarvedArcs, CarvingRules, CarveScratch
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
-    carved: BoolArray, tolerance: float, max_incidence: float, index_arrays: IndexArrays,
+    carved: BoolArray, tolerance: float, max_incidence: float,
     candidates: SlotArray, bearings: FloatArray, flags: BoolArray,
+    # ArcIndex
+    head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
+    stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
 ) -> tuple[int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers; slot = sequence mod storage), in
     order: initialise each as its full beam (section 3), carve the live arcs before it by its
-    freespace (eq. 3.5), then enter it in the index (``index_arrays``: an
-    :class:`~sonarcarve.geometry.index.ArcIndex` as a plain tuple, which numba's dispatcher
-    types in a fraction of the time a NamedTuple takes: a microsecond of every ``add()``).
+    freespace (eq. 3.5), then enter it in the index. The arguments after ``capacity``: the
+    history's, carving's (:meth:`CarvingModel.kernel_state`) and the index's arrays:
+    numba's dispatcher unboxes separate arguments fastest (about 0.05 µs an
+    array, twice that in a tuple, several µs for NamedTuples), and a single ``add()`` costs
+    5-7 µs, so the bundles of :mod:`~sonarcarve.methods.arrays` come as their fields, one after
+    the other (the comments say which), and are named on the first lines.
 
     ``index`` holds exactly the live, alive arcs: the arc leaving the history and the arcs
     carving removes are taken out. Each reading carves only the arcs the index returns for its
     sector whose bounding circles it does not leave clear
     (:func:`~sonarcarve.geometry.index.query_sector_circles`), the same arcs the all-pairs
     :func:`~sonarcarve.geometry.carve_arcs` would change, with the same step, so the results
-    are identical. One compiled call
-    per block: Python between readings cost more than the carving.
+    are identical. One compiled call per block: Python between readings cost more than the
+    carving.
 
-    ``bearings, flags`` are the closed form's work arrays
-    (:func:`~sonarcarve.geometry.circular.scratch_arrays`): the kernel counts no references
-    (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`, half of its time before), so it
-    cannot allocate them.
+    The kernel counts no references
+    (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`, half of its time before), so
+    it cannot allocate its work arrays: :class:`~sonarcarve.methods.arrays.CarveScratch`.
     """
-    storage = x.shape[0]
-    index = ArcIndex(*index_arrays)
-    cuts = bearings[0]
-    starts = bearings[1]
-    ends = bearings[2]
+    history = HistoryRows(x, y, r, theta, beam_width, theta1, theta2)
+    arcs = CarvedArcs(lo, hi, bounds, tips, status, carved)
+    rules = CarvingRules(tolerance, max_incidence)
+    scratch = CarveScratch(candidates, bearings, flags)
+    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick,
+                     cell_size)
+    storage = history.x.shape[0]
     fully = 0
     split = 0
     for sequence in range(first, first + count):
         slot = sequence % storage
         if sequence >= capacity:
-            index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        sector = start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
-                                  carved, tolerance, max_incidence)
+            index_remove(index, (sequence - capacity) % storage)  # it left the history
+        sector = start_carved_arc(slot, history, arcs, rules)
         if sector.radius > 0.0:
-            # The arcs near the sector whose circles it does not leave clear.
-            found = query_sector_circles(index, sector, bounds, candidates)
-            if found < 0:  # a huge sector: every live arc before this one
-                found = 0
-                for older in range(max(0, sequence - capacity + 1), sequence):
-                    candidates[found] = older % storage
-                    found += 1
-            arcs_fully, arcs_split = carve_found(
-                found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
-                True, cuts, starts, ends, flags)
+            arcs_fully, arcs_split = _carve_older(sequence, capacity, history, arcs, sector,
+                                                  index, scratch)
             fully += arcs_fully
             split += arcs_split
-        # The box of the full beam, from the edge directions its sector has computed.
-        xmin, xmax, ymin, ymax = arc_box_of_ends(x[slot], y[slot], r[slot], theta1[slot],
-                                                 theta2[slot], sector.u1x, sector.u1y,
-                                                 sector.u2x, sector.u2y)
-        index_insert(index, slot, xmin, xmax, ymin, ymax)
+        _enter(slot, history, sector, index)
     return fully, split
+
+
+@compiled_inline
+def _carve_older(sequence: int, capacity: int, history: HistoryRows, arcs: CarvedArcs,
+                 sector: Sector, index: ArcIndex, scratch: CarveScratch) -> tuple[int, int]:
+    """Carve the live arcs before arc ``sequence`` by its ``sector`` (eq. 3.5): those near the
+    sector whose circles it does not leave clear; the removed ones leave ``index``."""
+    found = query_sector_circles(index, sector, arcs.bounds, scratch.candidates)
+    if found < 0:  # a huge sector: every live arc before this one
+        found = live_slots(sequence - capacity + 1, sequence, history.x.shape[0],
+                           scratch.candidates)
+    return carve_found(found, history, arcs, sector, index, True, scratch)
+
+
+@compiled_inline
+def _enter(slot: int, history: HistoryRows, sector: Sector, index: ArcIndex) -> None:
+    """Enter the new arc in ``slot`` in ``index``, by the box of its full beam, from the edge
+    directions its sector has computed."""
+    xmin, xmax, ymin, ymax = arc_box_of_ends(
+        history.x[slot], history.y[slot], history.r[slot], history.theta1[slot],
+        history.theta2[slot], sector.u1x, sector.u1y, sector.u2x, sector.u2y)
+    index_insert(index, slot, xmin, xmax, ymin, ymax)
 
 
 @compiled_borrowing
 def _carve_free(
     fx: float, fy: float, fr: float, f_lo: float, f_hi: float, appended: int, capacity: int,
-    x: FloatArray, y: FloatArray, r: FloatArray,
+    prune: bool,
+    # HistoryRows
+    x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
+    theta1: FloatArray, theta2: FloatArray,
+    # CarvedArcs, CarvingRules, CarveScratch
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
-    carved: BoolArray, tolerance: float, max_incidence: float, index_arrays: IndexArrays,
-    candidates: SlotArray, prune: bool, bearings: FloatArray, flags: BoolArray,
+    carved: BoolArray, tolerance: float, max_incidence: float,
+    candidates: SlotArray, bearings: FloatArray, flags: BoolArray,
+    # ArcIndex
+    head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
+    stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
 ) -> tuple[int, int]:
     """Carve the live arcs (the ``appended`` arcs so far, the newest ``capacity`` of them live)
     by the freespace of a no-echo reading at ``(fx, fy)`` over ``[f_lo, f_hi]`` that listened
     to ``fr`` metres (its sector ends at ``fr - tolerance``). The carving step of
-    :func:`_add_arcs`, without a new arc; returns ``(fully carved, split)``. ``prune``: the
-    index holds only the alive arcs (:func:`carve_found`)."""
-    storage = x.shape[0]
-    index = ArcIndex(*index_arrays)
-    cuts = bearings[0]
-    starts = bearings[1]
-    ends = bearings[2]
-    sector = make_sector(fx, fy, fr, f_lo, f_hi, tolerance, max_incidence)
+    :func:`_add_arcs`, without a new arc, on the same arrays; returns
+    ``(fully carved, split)``. ``prune``: the index holds only the alive arcs
+    (:func:`carve_found`)."""
+    history = HistoryRows(x, y, r, theta, beam_width, theta1, theta2)
+    arcs = CarvedArcs(lo, hi, bounds, tips, status, carved)
+    rules = CarvingRules(tolerance, max_incidence)
+    scratch = CarveScratch(candidates, bearings, flags)
+    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick,
+                     cell_size)
+    sector = make_sector(fx, fy, fr, f_lo, f_hi, rules.tolerance, rules.max_incidence)
     if sector.radius <= 0.0:
         return 0, 0
-    found = query_sector(index, sector, candidates)
+    found = query_sector(index, sector, scratch.candidates)
     if found < 0:  # a huge sector: every live arc
-        found = 0
-        for older in range(max(0, appended - capacity), appended):
-            candidates[found] = older % storage
-            found += 1
-    return carve_found(found, candidates, x, y, r, lo, hi, bounds, tips, status, carved,
-                       sector, index, prune, cuts, starts, ends, flags)
+        found = live_slots(appended - capacity, appended, history.x.shape[0],
+                           scratch.candidates)
+    return carve_found(found, history, arcs, sector, index, prune, scratch)
 
 
 class CarvingModel(ArcModel):
@@ -327,8 +372,14 @@ class CarvingModel(ArcModel):
         self.status = np.full(size, ALIVE, dtype=np.int8)
         self.carved = np.zeros(size, dtype=bool)
         self.index = make_index(size)
-        self._candidates = np.zeros(size, dtype=np.int64)
-        self._bearings, self._flags = scratch_arrays()
+        self.arcs = CarvedArcs(self.lo, self.hi, self.bounds, self.tips, self.status,
+                               self.carved)
+        self.rules = CarvingRules(self.range_tolerance, self.max_incidence)
+        self.scratch = CarveScratch(np.zeros(size, dtype=np.int64), *scratch_arrays())
+        # The bundles as the kernels take them from Python (the arrays module's docstring).
+        self._plain = (tuple(self.arcs), tuple(self.rules), tuple(self.scratch))
+        self._arrays_without_index = in_a_row(*self._plain)
+        self._arrays = self._arrays_without_index + index_arrays(self.index)
         self._fully_carved = 0
         self._split = 0
 
@@ -336,14 +387,15 @@ class CarvingModel(ArcModel):
         """Start each new arc ``first .. first + count - 1`` as its full beam and carve the
         older live arcs by its freespace, in one compiled call (the spatial index finds the arcs
         to carve)."""
-        h = self.history
-        fully, split = _add_arcs(
-            first, count, h.capacity, h.x, h.y, h.r, h.theta1, h.theta2,
-            self.lo, self.hi, self.bounds, self.tips, self.status, self.carved,
-            self.range_tolerance, self.max_incidence, index_arrays(self.index), self._candidates,
-            self._bearings, self._flags,
-        )
+        fully, split = _add_arcs(first, count, self.history.capacity,
+                                 *history_rows(self.history), *self._arrays)
         self.count_removed(fully, split)
+
+    def kernel_state(self) -> tuple[PlainBundle, PlainBundle, PlainBundle]:
+        """What a kernel carving this model's arcs takes, plain: its
+        :class:`~sonarcarve.methods.arrays.CarvedArcs`, :class:`~sonarcarve.methods.arrays.
+        CarvingRules` and :class:`~sonarcarve.methods.arrays.CarveScratch`."""
+        return self._plain
 
     def count_removed(self, fully: int, split: int) -> None:
         """Add arcs removed by a kernel that the method ran for this model."""
@@ -363,10 +415,8 @@ class CarvingModel(ArcModel):
         half = 0.5 * beam_width
         fully, split = _carve_free(
             reading.x, reading.y, reading.max_range, reading.theta - half, reading.theta + half,
-            h.appended, h.capacity, h.x, h.y, h.r, self.lo, self.hi, self.bounds, self.tips,
-            self.status, self.carved, self.range_tolerance, self.max_incidence,
-            index_arrays(index), self._candidates, prune, self._bearings, self._flags,
-        )
+            h.appended, h.capacity, prune,
+            *history_rows(h), *(self._arrays_without_index + index_arrays(index)))
         self.count_removed(fully, split)
 
     def estimates(self, slots: SlotArray) -> Estimates:

@@ -15,12 +15,12 @@ import numpy.typing as npt
 
 from sonarcarve.constants import DEFAULT_BEAM_WIDTH, POLAROID_RANGE_RESOLUTION
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
-from sonarcarve.geometry._compiled import compiled_borrowing
-from sonarcarve.geometry.circular import scratch_arrays
+from sonarcarve.geometry._compiled import compiled_borrowing, compiled_inline
 from sonarcarve.geometry.fate import ALIVE
 from sonarcarve.geometry.index import (
     ArcIndex,
     arc_box,
+    index_arrays,
     index_insert,
     index_remove,
     query_box,
@@ -31,6 +31,19 @@ from sonarcarve.maps import (
     SOURCE_ATM,
     SOURCE_CARVED,
     SOURCE_CENTERLINE,
+)
+from sonarcarve.methods.arrays import (
+    AtmArcs,
+    AtmMedians,
+    CarvedArcs,
+    CarveScratch,
+    CarvingRules,
+    HistoryRows,
+    PairScratch,
+    PointWork,
+    history_rows,
+    in_a_row,
+    live_slots,
 )
 from sonarcarve.methods.atm import AtmModel, add_atm_arc, row_median, start_atm_arc
 from sonarcarve.methods.base import Estimates, SonarMethod, slot_indices
@@ -52,83 +65,107 @@ __all__ = ["CombinedMethod", "combine_carving_atm"]
 @compiled_borrowing
 def _add_joint(
     first: int, count: int, capacity: int,
+    # HistoryRows
     x: FloatArray, y: FloatArray, r: FloatArray, theta: FloatArray, beam_width: FloatArray,
     theta1: FloatArray, theta2: FloatArray,
+    # CarvedArcs, CarvingRules, CarveScratch
     lo: FloatArray, hi: FloatArray, bounds: FloatArray, tips: FloatArray, status: Int8Array,
     carved: BoolArray, tolerance: float, max_incidence: float,
-    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray, cos_psi: float,
-    bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
-    tally: npt.NDArray[np.int32], stale: BoolArray,
+    candidates: SlotArray, bearings: FloatArray, flags: BoolArray,
+    # AtmArcs, cos ψ, PairScratch
+    cos_axis: FloatArray, sin_axis: FloatArray, cos_half: FloatArray,
+    crossings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32], stale: BoolArray,
+    cos_psi: float, pair_candidates: SlotArray, tally: npt.NDArray[np.int32],
+    # ArcIndex
     head: I32Array, next_entry: I32Array, prev_entry: I32Array, entries: I32Array,
     stamp: IntArray, bucket_stamp: IntArray, tick: IntArray, cell_size: FloatArray,
-    candidates: SlotArray, scratch_bearings: FloatArray, scratch_flags: BoolArray,
 ) -> tuple[int, int, int, int, int]:
     """Arcs ``first .. first + count - 1`` (sequence numbers) through ATM and carving, in
     order, with one index of every live arc for both: per arc what ATM's ``_add_arcs`` does
-    (its crossings with the live arcs whose boxes meet its own), then what carving's does (its
-    freespace carves the older alive arcs; the arcs carving removed are in the index and
-    skipped), and the arc enters the index once. The two models touch disjoint state, so each
-    ends exactly as when run alone.
+    (its crossings with the live arcs whose boxes meet its own, :func:`_cross_arc`), then what
+    carving's does (its freespace carves the older alive arcs; the arcs carving removed are in
+    the index and skipped, :func:`_carve_by_arc`), and the arc enters the index once. The two
+    models touch disjoint state, so each ends exactly as when run alone.
+
+    The arguments after ``capacity``: the history's, carving's
+    (:meth:`~sonarcarve.methods.carving.CarvingModel.kernel_state`), ATM's
+    (:meth:`~sonarcarve.methods.atm.AtmModel.kernel_state`) and the index's arrays. numba's
+    dispatcher unboxes separate arguments fastest (about 0.05 µs an array, twice that in a
+    tuple, several µs for NamedTuples), and a single ``add()`` costs 5-7 µs, so the bundles of
+    :mod:`~sonarcarve.methods.arrays` come as their fields, one after the other (the comments
+    say which), and are named on the first lines. The kernel counts no references
+    (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`), so it cannot allocate its work
+    arrays: both scratch bundles.
 
     Returns ``(crossings kept, fully carved, split, done, needed)``: ``done`` is the sequence
     number after the last arc done and ``needed``, when it stops early, the columns ATM's store
     needs for arc ``done``, which neither model has taken in (ATM took its crossings back; an
     arc that left the history at its start is out of the index, and taking it out again does
     nothing), so the caller grows the store and calls again from ``done``.
-
-    The index comes as its eight arrays (``*index``) and one ``candidates`` buffer serves both
-    queries: numba's dispatcher unboxes every array argument (about 0.1 µs each, more inside a
-    tuple), which is most of a single ``add()``'s cost. ``scratch_bearings, scratch_flags``
-    are carving's work arrays (:func:`~sonarcarve.geometry.circular.scratch_arrays`): the
-    kernel counts no references (:func:`~sonarcarve.geometry._compiled.compiled_borrowing`),
-    so it cannot allocate them.
     """
-    storage = x.shape[0]
-    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick, cell_size)
-    cuts = scratch_bearings[0]
-    starts = scratch_bearings[1]
-    ends = scratch_bearings[2]
-    flags = scratch_flags
+    history = HistoryRows(x, y, r, theta, beam_width, theta1, theta2)
+    carved_arcs = CarvedArcs(lo, hi, bounds, tips, status, carved)
+    rules = CarvingRules(tolerance, max_incidence)
+    carve_scratch = CarveScratch(candidates, bearings, flags)
+    atm = AtmArcs(cos_axis, sin_axis, cos_half, crossings, counts, stale)
+    pairs = PairScratch(pair_candidates, tally)
+    index = ArcIndex(head, next_entry, prev_entry, entries, stamp, bucket_stamp, tick,
+                     cell_size)
+    storage = history.x.shape[0]
     kept = 0
     fully = 0
     split = 0
     for sequence in range(first, first + count):
         slot = sequence % storage
         if sequence >= capacity:
-            index_remove(index, (sequence - capacity) % storage)  # it has left the history
-        start_atm_arc(slot, theta, beam_width, cos_axis, sin_axis, cos_half, counts, stale)
-        xmin, xmax, ymin, ymax = arc_box(x[slot], y[slot], r[slot], theta1[slot], theta2[slot])
-        found = query_box(index, xmin, xmax, ymin, ymax, candidates)
-        if found < 0:  # a huge box: every live arc before this one
-            found = _live_before(sequence, capacity, storage, candidates)
-        arc_kept, needed = add_atm_arc(x, y, r, cos_axis, sin_axis, cos_half, slot, candidates,
-                                       found, cos_psi, bearings, counts, tally, stale)
+            index_remove(index, (sequence - capacity) % storage)  # it left the history
+        xmin, xmax, ymin, ymax = arc_box(history.x[slot], history.y[slot], history.r[slot],
+                                         history.theta1[slot], history.theta2[slot])
+        arc_kept, needed = _cross_arc(sequence, capacity, (xmin, xmax, ymin, ymax), history,
+                                      atm, cos_psi, index, pairs)
         if needed:
             return kept, fully, split, sequence, needed
         kept += arc_kept
-        sector = start_carved_arc(slot, x, y, r, theta1, theta2, lo, hi, bounds, tips, status,
-                                  carved, tolerance, max_incidence)
-        if sector.radius > 0.0:
-            found = query_sector(index, sector, candidates)
-            if found < 0:  # a huge sector
-                found = _live_before(sequence, capacity, storage, candidates)
-            arcs_fully, arcs_split = carve_found(
-                found, candidates, x, y, r, lo, hi, bounds, tips, status, carved, sector, index,
-                False, cuts, starts, ends, flags)
-            fully += arcs_fully
-            split += arcs_split
+        arcs_fully, arcs_split = _carve_by_arc(sequence, capacity, history, carved_arcs, rules,
+                                               index, carve_scratch)
+        fully += arcs_fully
+        split += arcs_split
         index_insert(index, slot, xmin, xmax, ymin, ymax)
     return kept, fully, split, first + count, 0
 
 
-@compiled_borrowing
-def _live_before(sequence: int, capacity: int, storage: int, out: SlotArray) -> int:
-    """Slots of the live arcs before arc ``sequence``, written to ``out``; their count."""
-    found = 0
-    for older in range(max(0, sequence - capacity + 1), sequence):
-        out[found] = older % storage
-        found += 1
-    return found
+@compiled_inline
+def _cross_arc(sequence: int, capacity: int, box: tuple[float, float, float, float],
+               history: HistoryRows, atm: AtmArcs, cos_psi: float, index: ArcIndex,
+               scratch: PairScratch) -> tuple[int, int]:
+    """ATM's step for arc ``sequence`` (section 2-D): a new arc with no crossings, intersected
+    with the live arcs whose boxes meet its ``box`` (:func:`~sonarcarve.methods.atm.
+    add_atm_arc`); ``(kept, needed)`` as that returns."""
+    storage = history.x.shape[0]
+    slot = sequence % storage
+    start_atm_arc(slot, history, atm)
+    xmin, xmax, ymin, ymax = box
+    found = query_box(index, xmin, xmax, ymin, ymax, scratch.candidates)
+    if found < 0:  # a huge box: every live arc before this one
+        found = live_slots(sequence - capacity + 1, sequence, storage, scratch.candidates)
+    return add_atm_arc(slot, found, cos_psi, history, atm, scratch)
+
+
+@compiled_inline
+def _carve_by_arc(sequence: int, capacity: int, history: HistoryRows, arcs: CarvedArcs,
+                  rules: CarvingRules, index: ArcIndex, scratch: CarveScratch) -> tuple[int, int]:
+    """Carving's step for arc ``sequence``: a new arc as its full beam (section 3), whose
+    freespace sector (eq. 3.2) carves the older live arcs near it (eq. 3.5; the removed ones
+    stay in the shared index, :func:`~sonarcarve.methods.carving.carve_found` skips them);
+    ``(fully carved, split)``."""
+    storage = history.x.shape[0]
+    sector = start_carved_arc(sequence % storage, history, arcs, rules)
+    if not sector.radius > 0.0:
+        return 0, 0
+    found = query_sector(index, sector, scratch.candidates)
+    if found < 0:  # a huge sector
+        found = live_slots(sequence - capacity + 1, sequence, storage, scratch.candidates)
+    return carve_found(found, history, arcs, sector, index, False, scratch)
 
 
 #: Rows of the work array of :meth:`CombinedMethod._point_rows`: the width, a quarter of it
@@ -163,36 +200,66 @@ def _carving_rows(slots: SlotArray, lo: FloatArray, hi: FloatArray, rows: FloatA
 
 @compiled_borrowing
 def _choose(
-    slots: SlotArray, status: Int8Array, carved: BoolArray, counts: npt.NDArray[np.int32],
-    r: FloatArray, rows: FloatArray, flags: BoolArray, codes: Int8Array, error_bound: float,
-    theta: FloatArray, bearings: npt.NDArray[np.float32], stale: BoolArray, median: FloatArray,
-    span: FloatArray, values: FloatArray,
+    slots: SlotArray, rows: FloatArray, flags: BoolArray, codes: Int8Array,
+    # the history's ranges and axes, carving's fates
+    r: FloatArray, theta: FloatArray, status: Int8Array, carved: BoolArray,
+    # ATM's bound, then AtmMedians
+    error_bound: float, bearings: npt.NDArray[np.float32], counts: npt.NDArray[np.int32],
+    stale: BoolArray, median: FloatArray, span: FloatArray, values: FloatArray,
 ) -> None:
     """:func:`combine_carving_atm`, row by row, in place: row ``k`` (``slots[k]``) comes with
     carving's point bearing, width and the sine of a quarter of the width in ``rows``, which
-    becomes carving's bound ``2 r sin(θ_d / 4)`` (:func:`~sonarcarve.maps.chord_error`); where
-    ATM's point wins (the row has kept a crossing and ``error_bound`` is below carving's
-    bound), ATM's bearing ``θ + median``, width (the span), bound and source replace them.
-    ``flags`` gets ``alive`` and ``processed``, ``codes`` the source and carving's fate. A
-    median is sorted again only for a row whose crossings changed (``stale``, as
-    :meth:`~sonarcarve.methods.atm.AtmModel.medians` does)."""
+    becomes carving's bound (:func:`_carving_choice`); where ATM's point wins (the row has kept
+    a crossing and ``error_bound`` is below carving's bound), ATM's bearing, width, bound and
+    source replace them (:func:`_atm_choice`). ``flags`` gets ``alive`` and ``processed``,
+    ``codes`` the source and carving's fate.
+
+    The bundles' fields come as separate parameters (the comments say whose), as for the
+    kernels that add arcs (:mod:`~sonarcarve.methods.arrays`): the carved grid asks at every
+    read.
+    """
+    work = PointWork(rows, flags, codes)
+    medians = AtmMedians(bearings, counts, stale, median, span, values)
     for k in range(slots.shape[0]):
         s = slots[k]
-        rows[_BOUND, k] = 2.0 * r[s] * rows[_BOUND, k]
-        alive = status[s] == ALIVE
-        flags[0, k] = alive
-        flags[1, k] = carved[s] or not alive or counts[s] > 0
-        codes[0, k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
-        codes[1, k] = status[s]
+        _carving_choice(k, s, r, status, carved, counts, work)
         if counts[s] == 0 or not rows[_BOUND, k] > error_bound:
             continue
-        if stale[s]:
-            row_median(bearings, counts, s, median, span, values)
-            stale[s] = False
-        rows[_BEARING, k] = theta[s] + median[s]
-        rows[_WIDTH, k] = span[s]
-        rows[_BOUND, k] = error_bound
-        codes[0, k] = SOURCE_ATM
+        _atm_choice(k, s, theta, error_bound, medians, work)
+
+
+@compiled_inline
+def _carving_choice(k: int, s: int, r: FloatArray, status: Int8Array, carved: BoolArray,
+                    counts: npt.NDArray[np.int32], work: PointWork) -> None:
+    """Row ``k`` as carving places slot ``s``: its bound ``2 r sin(θ_d / 4)`` (eq. 5.3,
+    :func:`~sonarcarve.maps.chord_error`) from the sine in ``rows[_BOUND]``, ``alive``,
+    ``processed`` by either model (carved, removed, or with ``counts`` of kept crossings), the
+    source (``carved`` or ``centerline``) and carving's fate."""
+    rows, flags, codes = work
+    rows[_BOUND, k] = 2.0 * r[s] * rows[_BOUND, k]
+    alive = status[s] == ALIVE
+    flags[0, k] = alive
+    flags[1, k] = carved[s] or not alive or counts[s] > 0
+    codes[0, k] = SOURCE_CARVED if carved[s] else SOURCE_CENTERLINE
+    codes[1, k] = status[s]
+
+
+@compiled_inline
+def _atm_choice(k: int, s: int, theta: FloatArray, error_bound: float, medians: AtmMedians,
+                work: PointWork) -> None:
+    """Row ``k`` as ATM places slot ``s`` (section 2-D): its bearing ``θ + median``, width (the
+    span), bound (eq. 5.4) and source. The median is sorted again only for a row whose
+    crossings changed (``stale``, as :meth:`~sonarcarve.methods.atm.AtmModel.medians`
+    does)."""
+    rows, _, codes = work
+    if medians.stale[s]:
+        row_median(medians.bearings, medians.counts, s, medians.median, medians.span,
+                   medians.values)
+        medians.stale[s] = False
+    rows[_BEARING, k] = theta[s] + medians.median[s]
+    rows[_WIDTH, k] = medians.span[s]
+    rows[_BOUND, k] = error_bound
+    codes[0, k] = SOURCE_ATM
 
 
 @compiled_borrowing
@@ -349,17 +416,14 @@ class CombinedMethod(SonarMethod):
     def _joint_arguments(self) -> tuple[Any, ...]:
         """The arguments of :func:`_add_joint` after ``first, count``, made once: the arrays
         stay the same (ATM's store is replaced only when it grows), and building the tuple
-        anew was a good part of a single ``add()``. The last three are the kernel's candidate
-        buffer and work arrays (scratch: new ones after a growth are as good)."""
+        anew was a good part of a single ``add()``. Carving's state comes as
+        :meth:`CarvingModel.kernel_state` gives it, ATM's as :meth:`AtmModel.kernel_state`."""
         if self._arguments is None:
-            h, carving, atm = self.history, self._carving, self._atm
-            self._arguments = (
-                h.capacity, h.x, h.y, h.r, h.theta, h.beam_width, h.theta1, h.theta2,
-                carving.lo, carving.hi, carving.bounds, carving.tips, carving.status,
-                carving.carved, carving.range_tolerance, carving.max_incidence,
-                *atm.kernel_state(), *atm.index, np.zeros(h.storage_size, dtype=np.int64),
-                *scratch_arrays(),
-            )
+            h = self.history
+            atm, cos_psi, pairs = self._atm.kernel_state()
+            self._arguments = (h.capacity, *in_a_row(
+                history_rows(h), *self._carving.kernel_state(), atm, (cos_psi,), pairs,
+                index_arrays(self._atm.index)))
         return self._arguments
 
     def _feed_no_echo(self, reading: Reading, beam_width: float) -> None:
@@ -435,7 +499,7 @@ class CombinedMethod(SonarMethod):
                    f"{len(carving.lo)} slots")
             raise IndexError(msg)
         np.sin(rows[_QUARTER], out=rows[_BOUND])
-        _choose(slots, carving.status, carving.carved, atm.counts, h.r, rows, flags, codes,
+        _choose(slots, rows, flags, codes, h.r, h.theta, carving.status, carving.carved,
                 *atm.median_state())
         np.cos(rows[_BEARING], out=rows[_COS])
         np.sin(rows[_BEARING], out=rows[_SIN])
