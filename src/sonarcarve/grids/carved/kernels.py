@@ -63,7 +63,9 @@ def batch_columns(beam_width: FloatArray, default_width: float, r: FloatArray,
     ``r = inf``), its arc's sequence number from ``first_seq`` (a no-echo reading's: the
     newest arc before it, as it has none), whether it heard nothing, and how many did hear.
     Before 2026-12-05 about 6 µs of numpy for a 5-reading batch (``benchmarks/grid_reads.py``,
-    a read every 5 readings)."""
+    a read every 5 readings). The width rule is
+    :meth:`~sonarcarve.readings.ReadingBatch.beam_widths`'s, written again here to stay in one
+    compiled pass; ``tests/grids/test_carved_fused_paths.py`` holds the two to the same bits."""
     n = r.shape[0]
     half = np.empty(n)
     reach = np.empty(n)
