@@ -36,6 +36,9 @@ the finished map, on the line from their sensor, dropped: ``MapFilter(occlusion_
 ``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed;
 ``--variant P[:JSON]`` adds a row of evidence carving with P_carve ``P`` (and the confidence
 model ``fit_confidence.py --save`` wrote).
+``--no-echo`` adds a reading for every firing that heard nothing (range +inf, free space up to
+the sensor's maximum range: what a ROS driver reports, REP 117) to each run; the echoes, and so
+every kept and removed share, are those of the run without it.
 A last table gives the roboND-sonar-8 log's line spread (the sharpness measure of
 ``lab/experiments/real_log.py``) and a throughput table times ``carve``, ``combined`` and
 ``evidence`` at history 250 on ``throughput.py``'s stream (after a warm-up, the three
@@ -62,8 +65,8 @@ from sonarcarve.lab.metrics import off_beam, segment_distance
 from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.methods.evidence import ConfidenceModel, EvidenceMethod, EvidenceOptions
 from sonarcarve.pipeline import ProcessResult, process_readings
-from sonarcarve.sim.simulate import Simulation
-from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.simulate import Simulation, simulate
+from sonarcarve.sim.sonar import NO_ECHO, EchoKind
 from synthetic import corridor_stream
 
 Factory = Callable[[MethodConfig], SonarMethod]
@@ -172,7 +175,9 @@ def map_row(sim: Simulation, result: ProcessResult, centerline_err: np.ndarray,
     for k in KINDS:
         sel = kind == k
         row[k.label] = 100.0 * float(np.mean(~kept[sel])) if sel.any() else math.nan
-    row["spurious"] = 100.0 * float(np.mean(~kept[kind != EchoKind.DIRECT]))
+    # A no-echo reading (``--no-echo``) is neither kind: it never makes a point.
+    spurious = (kind != EchoKind.DIRECT) & (kind != NO_ECHO)
+    row["spurious"] = 100.0 * float(np.mean(~kept[spurious]))
     same = float(np.median(centerline_err[gmap.reading_id]))
     row["median_ratio"] = float(np.median(err)) / same
     row["p90_ratio"] = float(np.percentile(err, 90.0)) / centerline_p90
@@ -254,6 +259,13 @@ def _throughput(history: int = 250, repeats: int = 5) -> None:
     print(f"\nevidence / carve: {rates['evidence'] / rates['carve']:.2f}")
 
 
+def _with_no_echo(sim: Simulation) -> Simulation:
+    """The same run with a no-echo reading for every firing that heard nothing (its echoes,
+    and so every echo's truth, are those of ``sim``)."""
+    return simulate(sim.world, sim.robot, sim.trajectory, sim.seed, sim.physics, sim.odometry,
+                    scene=sim.scene, no_echo=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Simulate, measure and print the tables."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -264,6 +276,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-throughput", action="store_true")
     parser.add_argument("--variants", nargs="+", choices=list(VARIANTS), metavar="VARIANT",
                         help="only these rows (default: all; names as in the tables)")
+    parser.add_argument("--no-echo", action="store_true",
+                        help="simulate with no-echo readings too (a firing that heard nothing, "
+                             "range +inf: free space up to max range, as ROS drivers report "
+                             "it); the echoes are those of the default run")
     parser.add_argument("--per-seed", action="store_true",
                         help="also print direct kept and spurious removed per seed")
     parser.add_argument("--variant", nargs="+", default=[], type=parse_variant,
@@ -281,6 +297,8 @@ def main(argv: list[str] | None = None) -> int:
             rows: dict[str, list[dict[str, float]]] = {name: [] for name in variants}
             for seed in range(args.seeds):
                 sim = run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
+                if args.no_echo:
+                    sim = _with_no_echo(sim)
                 center = process_readings(sim.readings, make_method("centerline", config))
                 c_err = np.full(len(sim.readings), np.nan)
                 c_err[center.global_map.reading_id] = segment_distance(
@@ -289,7 +307,9 @@ def main(argv: list[str] | None = None) -> int:
                 for name, make in variants.items():
                     rows[name].append(_measure(sim, make, config, c_err, c_p90,
                                                _map_filter(name)))
-            _table(f"{world}, physics {physics}: {args.seeds} seeds, mean over seeds", rows)
+            silent = ", with no-echo readings" if args.no_echo else ""
+            _table(f"{world}, physics {physics}{silent}: {args.seeds} seeds, mean over seeds",
+                   rows)
             if args.per_seed:
                 _per_seed(rows)
     if not args.skip_robond:

@@ -240,6 +240,30 @@ def test_no_echo_readings_from_a_csv_or_a_bag_give_the_same_map(runs: Path,
     assert ids_sources(from_csv) != ids_sources(echoes_only)
 
 
+def test_the_summary_counts_a_bag_s_no_echo_readings_dropped_or_mapped(
+        runs: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A bag's silent firings are dropped unless --no-echo maps them; the summary says which,
+    with their count. The oracle: the inf rows `simulate --no-echo` writes for the same run.
+    A readings CSV gets no such row (its inf rows are always mapped)."""
+    csv_log = tmp_path / "silent.csv"
+    assert main([*SIM, "--no-echo", "--out", str(csv_log)]) == 0
+    silent = sum(row.split(",")[5] == "inf" for row in csv_log.read_text().splitlines()[1:])
+    assert silent > 0
+    capsys.readouterr()
+    bag = str(runs / "run.mcap")
+    cases = [([bag, "--out", str(tmp_path / "a.csv")], "dropped: no-echo readings (--no-echo)"),
+             ([bag, "--no-echo", "--out", str(tmp_path / "b.csv")],
+              "no-echo readings mapped as free space"),
+             ([bag, "--grid-resolution", "0", "--out", str(tmp_path / "c.mcap")],
+              "dropped: no-echo readings (--no-echo)")]
+    for args, label in cases:
+        assert main(["process", *args]) == 0
+        text = " ".join(capsys.readouterr().out.split())
+        assert f"{label} │ {silent:,}" in text, args
+    assert main(["process", str(csv_log), "--out", str(tmp_path / "d.csv")]) == 0
+    assert "no-echo readings" not in capsys.readouterr().out
+
+
 def test_no_echo_is_refused_where_it_does_not_apply(runs: Path, tmp_path: Path,
                                                     capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["process", str(runs / "r.csv"), "--no-echo", "--out",
