@@ -98,6 +98,26 @@ def test_no_echo_from_a_bag_or_a_csv_gives_the_same_grid(runs: Path, tmp_path: P
     assert from_bag.cells.size > echoes.cells.size
 
 
+def test_the_summary_counts_the_no_echo_readings_a_bag_dropped(
+        runs: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Without --no-echo a bag's silent firings are dropped, and the summary says how many:
+    the inf rows `simulate --no-echo` wrote for the same run (the oracle). With --no-echo they
+    are mapped and counted in the readings row instead; a CSV drops none."""
+    rows = (runs / "silent.csv").read_text().splitlines()[1:]
+    silent = sum(row.split(",")[5] == "inf" for row in rows)
+    assert silent > 0
+    capsys.readouterr()
+    _grid(runs / "run.mcap", tmp_path / "a.yaml")
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"dropped: no-echo readings (--no-echo) │ {silent:,}" in text
+    _grid(runs / "run.mcap", tmp_path / "b.yaml", "--no-echo")
+    text = " ".join(capsys.readouterr().out.split())
+    assert "dropped: no-echo" not in text
+    assert f"({silent:,} no-echo)" in text
+    _grid(runs / "r.csv", tmp_path / "c.yaml")
+    assert "no-echo" not in capsys.readouterr().out
+
+
 # -- a hand-made bag: a robot driving along a wall 1 m to its left, a second sensor facing
 # -- away from the wall into open space that hears nothing (+Inf) up to its 2 m.
 

@@ -165,10 +165,12 @@ def few_sonars_hint(batch: ReadingBatch, model: str) -> str | None:
 
 
 def read_log_for_grid(source: Path, bag: BagOptions,
-                      max_range: float | None = None) -> ReadingBatch:
-    """The readings of ``source``: a ROS bag (:func:`~sonarcarve.fleet.is_bag`) read with
-    ``bag`` as ``sonarcarve process`` reads it, else a readings CSV (whose no-echo rows, range
-    inf, are in it already; ``max_range``, metres, is how far those that give none listened).
+                      max_range: float | None = None) -> tuple[ReadingBatch, int]:
+    """The readings of ``source`` and how many no-echo readings were dropped: a ROS bag
+    (:func:`~sonarcarve.fleet.is_bag`) read with ``bag`` as ``sonarcarve process`` reads it
+    (its no-echo readings dropped unless ``bag.no_echo``), else a readings CSV (whose no-echo
+    rows, range inf, are in it already; ``max_range``, metres, is how far those that give none
+    listened).
 
     Raises
     ------
@@ -189,7 +191,7 @@ def read_log_for_grid(source: Path, bag: BagOptions,
                 "--no-echo maps them as free space)" if silent else "")
         msg = f"{source}: no readings to map{hint}"
         raise GridUsageError(msg)
-    return batch
+    return batch, 0 if bag.no_echo else silent
 
 
 @app.command()
@@ -325,7 +327,8 @@ def grid(
     check_output_file(out, inputs=[readings], label=f"--out {out}")
     check_output_file(Path(out).with_suffix(".pgm"), inputs=[readings],
                       label=f"--out {out} (image)")
-    batch, _, too_far = drop_far_echoes(read_log_for_grid(readings, bag, max_range), max_range)
+    batch, dropped_silent = read_log_for_grid(readings, bag, max_range)
+    batch, _, too_far = drop_far_echoes(batch, max_range)
     if beam_width is not None:
         batch = batch.with_beam_width(math.radians(beam_width))
     built = build_grid(batch, model, resolution, margin, params)
@@ -339,6 +342,8 @@ def grid(
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),
+        *([("dropped: no-echo readings (--no-echo)", f"{dropped_silent:,}")]
+          if dropped_silent else []),
         *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
         ("cells", f"{cols} x {rows} of {built.resolution:g} m"),
         ("occupied / free / unknown",
