@@ -118,6 +118,11 @@ class BagOptions:
         :attr:`no_echo` the no-echo readings merged in time order."""
         return log.with_no_echo() if self.no_echo else log.batch
 
+    def dropped_no_echo(self, log: RosbagLog) -> int:
+        """How many of the log's no-echo readings :meth:`readings` leaves out: all of them
+        without :attr:`no_echo`, else none."""
+        return 0 if self.no_echo else len(log.no_echo)
+
 
 def read_log(path: str | Path, bag: BagOptions | None = None, *,
              max_range: float | None = None) -> ReadingBatch:

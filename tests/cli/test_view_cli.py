@@ -189,6 +189,25 @@ def test_view_takes_the_bag_options_for_bags_only(simulated: Path,
     assert silent.is_file()
 
 
+@pytest.mark.usefixtures("headless")
+def test_view_counts_the_no_echo_readings_a_bag_dropped(
+        simulated: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """As process and grid say it: the oracle is the inf rows `simulate --no-echo` writes for
+    the same run; with --no-echo nothing is dropped."""
+    silent_csv = tmp_path / "silent.csv"
+    assert main(["simulate", "--world", "doorway", "--seed", "3", "--no-echo",
+                 "--out", str(silent_csv)]) == 0
+    silent = sum(row.split(",")[5] == "inf" for row in silent_csv.read_text().splitlines()[1:])
+    assert silent > 0
+    capsys.readouterr()
+    assert main(["view", str(simulated / "run.mcap"), "--out", str(tmp_path / "a.rrd")]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"dropped: no-echo readings (--no-echo) │ {silent:,}" in text
+    assert main(["view", str(simulated / "run.mcap"), "--no-echo",
+                 "--out", str(tmp_path / "b.rrd")]) == 0
+    assert "dropped: no-echo" not in capsys.readouterr().out
+
+
 def _summary_rows(output: str) -> list[str]:
     """The summary table's rows of counts (readings in, points, true walls), not its paths."""
     rows = [" ".join(line.replace("│", " ").split()) for line in output.splitlines()]

@@ -30,6 +30,7 @@ from sonarcarve.cli.options import (
     check_max_range,
     drop_far_echoes,
     max_range_hint,
+    no_echo_dropped_row,
     read_bag,
     refuse_bag_options,
 )
@@ -182,16 +183,16 @@ def read_log_for_grid(source: Path, bag: BagOptions,
     """
     if not is_bag(source):
         with max_range_hint():
-            batch, silent = read_readings_csv(source, max_range=max_range), 0
+            batch, silent, dropped = read_readings_csv(source, max_range=max_range), 0, 0
     else:
         log = read_bag(bag, source)
-        batch, silent = bag.readings(log), len(log.no_echo)
+        batch, silent, dropped = bag.readings(log), len(log.no_echo), bag.dropped_no_echo(log)
     if not len(batch):
         hint = (f" (its {silent:,} Range messages heard nothing, +Inf or max_range; "
                 "--no-echo maps them as free space)" if silent else "")
         msg = f"{source}: no readings to map{hint}"
         raise GridUsageError(msg)
-    return batch, 0 if bag.no_echo else silent
+    return batch, dropped
 
 
 @app.command()
@@ -342,8 +343,7 @@ def grid(
     silent = int(np.count_nonzero(batch.range == np.inf))
     console.print(summary_table(f"sonarcarve grid ({model})", [
         ("readings", f"{len(batch):,}" + (f" ({silent:,} no-echo)" if silent else "")),
-        *([("dropped: no-echo readings (--no-echo)", f"{dropped_silent:,}")]
-          if dropped_silent else []),
+        *no_echo_dropped_row(dropped_silent),
         *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
         ("cells", f"{cols} x {rows} of {built.resolution:g} m"),
         ("occupied / free / unknown",

@@ -52,6 +52,7 @@ from sonarcarve.cli.options import (
     drop_far_echoes,
     max_range_hint,
     method_config,
+    no_echo_dropped_row,
     read_bag,
     refuse_bag_options,
 )
@@ -121,7 +122,9 @@ class _Job:
         """The bag input, read with the bag options, its no-echo readings counted for the
         summary."""
         log = read_bag(self.bag, self.source)
-        self.input_rows[:] = _no_echo_row(len(log.no_echo), mapped=self.bag.no_echo)
+        mapped = [("no-echo readings mapped as free space", f"{len(log.no_echo):,}")]
+        self.input_rows[:] = (mapped if self.bag.no_echo and len(log.no_echo)
+                              else no_echo_dropped_row(self.bag.dropped_no_echo(log)))
         return log
 
     @property
@@ -541,20 +544,6 @@ def _dropped_far_row(job: _Job, too_far: int) -> list[tuple[str, str]]:
     if job.max_range is None:
         return []
     return [("dropped: echoes beyond --max-range", f"{too_far:,}")]
-
-
-def _no_echo_row(silent: int, *, mapped: bool) -> list[tuple[str, str]]:
-    """The summary's row of a bag's no-echo readings, mapped as free space (``--no-echo``) or
-    dropped; none for a bag without them or a readings CSV (whose inf rows are always mapped).
-    Said because a bag can hold almost as many silent firings as echoes (the t-junction tour:
-    496 against 700), and they change the map: evidence carving removed 70 → 87 % of that
-    tour's spurious echoes with them (docs/RESULTS.md, *evidence carving*). The default stays
-    "dropped", as on a robot running ROS's layer, which drops +Inf."""
-    if silent == 0:
-        return []
-    if mapped:
-        return [("no-echo readings mapped as free space", f"{silent:,}")]
-    return [("dropped: no-echo readings (--no-echo)", f"{silent:,}")]
 
 
 def _read_whole(job: _Job) -> ReadingBatch:

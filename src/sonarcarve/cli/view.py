@@ -41,6 +41,7 @@ from sonarcarve.cli.options import (
     drop_far_echoes,
     max_range_hint,
     method_config,
+    no_echo_dropped_row,
     read_bag,
     refuse_bag_options,
 )
@@ -137,14 +138,15 @@ def view(
     refuse_bag_options(readings, bag)
     require("rerun", "viz", "Rerun recordings")
     walls = _walls(readings, world)
-    batch, ids, too_far = drop_far_echoes(_read_log(readings, bag, max_range), max_range)
+    batch, dropped_silent = _read_log(readings, bag, max_range)
+    batch, ids, too_far = drop_far_echoes(batch, max_range)
     with (reworded(ConfigError, {"every": "--every"}),  # write_rerun checks every first
           readings_progress(method, len(batch)) as on_progress):
         global_map = write_rerun(target, batch, sonar, walls=walls, every=every, ids=ids,
                                  on_progress=on_progress)
     viewer = find_viewer() if open_ else None
     # Counted as process counts them: every row read, then the ones --max-range dropped.
-    rows = [("readings in", f"{len(batch) + too_far:,}"),
+    rows = [("readings in", f"{len(batch) + too_far:,}"), *no_echo_dropped_row(dropped_silent),
             ("points in global map", f"{len(global_map):,}"),
             *([("dropped: echoes beyond --max-range", f"{too_far:,}")] if max_range else []),
             ("true walls", f"{len(walls):,}" if walls is not None else "none"),
@@ -162,13 +164,16 @@ def view(
     warn([beam_warning, None if is_bag(readings) else cut_short(readings)])
 
 
-def _read_log(source: Path, bag: BagOptions, max_range: float | None) -> ReadingBatch:
+def _read_log(source: Path, bag: BagOptions,
+              max_range: float | None) -> tuple[ReadingBatch, int]:
     """The readings of a ROS bag, read with ``bag`` as ``sonarcarve process`` reads it, or of
-    a readings CSV (``max_range``, metres: how far its no-echo rows without one listened)."""
+    a readings CSV (``max_range``, metres: how far its no-echo rows without one listened), and
+    how many of the bag's no-echo readings were dropped (all of them without ``--no-echo``)."""
     if is_bag(source):
-        return bag.readings(read_bag(bag, source))
+        log = read_bag(bag, source)
+        return bag.readings(log), bag.dropped_no_echo(log)
     with max_range_hint():
-        return read_readings_csv(source, max_range=max_range)
+        return read_readings_csv(source, max_range=max_range), 0
 
 
 def _walls(readings: Path, world: str | None) -> FloatArray | None:
