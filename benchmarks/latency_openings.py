@@ -45,12 +45,12 @@ from sonarcarve.lab.experiments import office, openings
 from sonarcarve.lab.experiments.jobs import _sample_stops
 from sonarcarve.lab.instrument import RunRecord, record_run
 from sonarcarve.lab.plan import Job, Settings
-from sonarcarve.lab.scenarios import run_simulation
+from sonarcarve.lab.scenarios import Scenario, run_simulation
 from sonarcarve.maps import PointSource
 from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceMethod
 from sonarcarve.sim.motion import ROBOT_RADIUS
-from sonarcarve.sim.simulate import Simulation
+from sonarcarve.sim.simulate import Simulation, simulate
 from sonarcarve.sim.sonar import EchoKind
 from sonarcarve.typing import JsonDict
 
@@ -165,16 +165,26 @@ def _all_runs(job: Job, sim: Simulation, holds: Sequence[Hold],
     return out
 
 
+def _simulation(scenario: Scenario, no_echo: bool) -> Simulation:
+    """The scenario's simulation; with ``no_echo``, the same run with a no-echo reading for
+    every firing that heard nothing (the echoes, and so their truth, unchanged)."""
+    sim = run_simulation(scenario)
+    if not no_echo:
+        return sim
+    return simulate(sim.world, sim.robot, sim.trajectory, sim.seed, sim.physics, sim.odometry,
+                    scene=sim.scene, no_echo=True)
+
+
 def latency(methods: Sequence[str], physics: str, holds: Sequence[Hold] = (),
             per_seed: bool = False, settings: Settings | None = None,
-            variants: Sequence[Variant] = ()) -> None:
+            variants: Sequence[Variant] = (), no_echo: bool = False) -> None:
     """Print the office latency-accuracy and local-map error of each method (and view)."""
     settings = Settings.make() if settings is None else settings
     curves: dict[str, list[dict[str, dict[str, float]]]] = defaultdict(list)
     errors: dict[str, list[tuple[float, float]]] = defaultdict(list)
     shares: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for job in _jobs(office.plan(settings), methods, physics):
-        sim = run_simulation(job.scenario)
+        sim = _simulation(job.scenario, no_echo)
         for label, rec, out in _all_runs(job, sim, holds, variants):
             curves[label].append(out["latency_accuracy"])
             errors[label].append((out["true_error"]["median"], out["true_error"]["p90"]))
@@ -205,13 +215,14 @@ def latency(methods: Sequence[str], physics: str, holds: Sequence[Hold] = (),
 
 
 def passable(methods: Sequence[str], physics: str, holds: Sequence[Hold] = (),
-             settings: Settings | None = None, variants: Sequence[Variant] = ()) -> None:
+             settings: Settings | None = None, variants: Sequence[Variant] = (),
+             no_echo: bool = False) -> None:
     """Print the share of approaches passable at 1, 2 and 3 m, overall and per opening."""
     settings = Settings.make() if settings is None else settings
     overall: dict[str, dict[str, list[bool]]] = defaultdict(lambda: defaultdict(list))
     per_opening: dict[tuple[str, str, str, str], list[bool]] = defaultdict(list)
     for job in _jobs(openings.plan(settings), methods, physics):
-        sim = run_simulation(job.scenario)
+        sim = _simulation(job.scenario, no_echo)
         for label, _, out in _all_runs(job, sim, holds, variants):
             for distance in ("1", "2", "3"):
                 if out[distance] is not None:
@@ -240,6 +251,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="evidence with P_carve P (and the confidence model of JSON, as "
                              "fit_confidence.py --save writes it), run on the same simulations")
     parser.add_argument("--per-seed", action="store_true")
+    parser.add_argument("--no-echo", action="store_true",
+                        help="feed every method the simulations' silent firings too (a reading "
+                             "with range +inf for each firing that heard nothing)")
     parser.add_argument("--quick", action="store_true",
                         help="the registry's quick settings (a smoke test, not a measure)")
     args = parser.parse_args(argv)
@@ -251,9 +265,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         value = item.removeprefix("any:")
         holds.append((named[value] if value in named else float(value), uncut))
     if not args.skip_latency:
-        latency(args.methods, args.physics, holds, args.per_seed, settings, args.variant)
+        latency(args.methods, args.physics, holds, args.per_seed, settings, args.variant,
+                args.no_echo)
     if not args.skip_openings:
-        passable(args.methods, args.physics, holds, settings, args.variant)
+        passable(args.methods, args.physics, holds, settings, args.variant, args.no_echo)
     return 0
 
 
