@@ -117,8 +117,10 @@ NoEchoOpt = Annotated[bool, typer.Option(
     help="Bag input: keep the no-echo readings (REP 117 +Inf; or a range equal to max_range "
          "from a sensor that never reports +Inf, as Gazebo's plugins say it: nothing heard up "
          "to max_range) "
-         "as free space: carving and the carved and Elfes grids clear with them (ROS's "
-         "range-sensor-layer drops +Inf, as on a robot); they add no point.",
+         "as free space: carving and the carved and Elfes grids clear with them, evidence "
+         "carving weighs them as looks through their beams (ROS's range-sensor-layer drops "
+         "+Inf, as on a robot); they add no point. Without it the summary counts those "
+         "dropped.",
     rich_help_panel=BAG_PANEL)]
 
 

@@ -338,6 +338,9 @@ def process(
     Example: `sonarcarve process run.mcap --out run-map.mcap` (then open run-map.mcap in
     Foxglove)
 
+    Example: `sonarcarve process run.mcap --method evidence --no-echo --out map.csv` (the
+    bag's silent firings weighed as looks through their beams: more spurious echoes removed)
+
     Example: `sonarcarve process logs/*.csv logs/*.bag --out-dir maps --workers 4`
     """
     config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence)
