@@ -51,7 +51,7 @@ from sonarcarve.methods import MethodConfig, SonarMethod, make_method
 from sonarcarve.methods.evidence import CONFIDENCE_FEATURES, ConfidenceModel, EvidenceMethod
 from sonarcarve.sim.motion import ROBOT_RADIUS
 from sonarcarve.sim.simulate import Simulation, simulate
-from sonarcarve.sim.sonar import EchoKind
+from sonarcarve.sim.sonar import NO_ECHO, EchoKind
 from sonarcarve.typing import JsonDict
 
 #: A view of a run's record: (row label, hold-back bound or None for the record itself, uncut
@@ -150,7 +150,8 @@ def _live_shares(sim: Simulation, record: RunRecord) -> tuple[float, float]:
     kind = sim.truth.kind[record.samples.reading_id]
     alive = record.samples.alive
     direct = kind == EchoKind.DIRECT
-    return 100.0 * float(np.mean(alive[direct])), 100.0 * float(np.mean(~alive[~direct]))
+    spurious = ~direct & (kind != NO_ECHO)  # a no-echo reading (--no-echo) is neither
+    return 100.0 * float(np.mean(alive[direct])), 100.0 * float(np.mean(~alive[spurious]))
 
 
 def _all_runs(job: Job, sim: Simulation, holds: Sequence[Hold],
