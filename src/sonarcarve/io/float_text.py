@@ -203,7 +203,39 @@ def _pow5_factor(value: np.uint64) -> int:
 def _shortest(bits: np.uint64, powers: np.ndarray,
               inverses: np.ndarray) -> tuple[np.uint64, int]:
     """Ryu's digits of a finite nonzero double: (digits, exponent), value = digits * 10^exp,
-    the shortest that reads back to it, the nearest of those, trailing zeros removed."""
+    the shortest that reads back to it, the nearest of those, trailing zeros removed.
+
+    Ryu's steps: the double and its two neighbours' midpoints as integers times a power of two
+    (:func:`_unpack`); the three scaled to a power of ten (:func:`_decimal_above` for
+    non-negative binary exponents, :func:`_decimal_below` for negative ones); then digits
+    dropped while the interval still holds a shorter number, exactly where the bounds may
+    end in zeros (:func:`_round_exact`), else fast (:func:`_round_common`). The steps are
+    inlined into this kernel (``inline="always"``): called as functions they made
+    :func:`floats_text` 1.0-1.4 % slower (1,000,000 doubles, seven interleaved runs).
+    """
+    m2, e2, mm_shift, accept_bounds = _unpack(bits)
+    if e2 >= 0:
+        vr, vp, vm, e10, vm_zeros, vr_zeros = _decimal_above(m2, e2, mm_shift, accept_bounds,
+                                                             inverses)
+    else:
+        vr, vp, vm, e10, vm_zeros, vr_zeros = _decimal_below(m2, e2, mm_shift, accept_bounds,
+                                                             powers)
+    if vm_zeros or vr_zeros:
+        digits, removed = _round_exact(vr, vp, vm, vm_zeros, vr_zeros, accept_bounds)
+    else:
+        digits, removed = _round_common(vr, vp, vm)
+    exp10 = e10 + removed
+    while digits % _U10 == _U0:
+        digits //= _U10
+        exp10 += 1
+    return digits, exp10
+
+
+@njit(cache=True, inline="always")
+def _unpack(bits: np.uint64) -> tuple[np.uint64, int, np.uint64, bool]:
+    """The double as m2 * 2^e2 (with two extra bits, so that the neighbours' midpoints are
+    whole: 4 m2 ± 2), the lower neighbour's distance (1, or 0 at a power of two, where the
+    gap below is half the gap above) and whether the bounds themselves read back (even m2)."""
     mantissa = bits & _MANTISSA
     exponent = int((bits >> _U52) & _EXPONENT)
     if exponent == 0:
@@ -212,89 +244,113 @@ def _shortest(bits: np.uint64, powers: np.ndarray,
     else:
         e2 = exponent - 1023 - 52 - 2
         m2 = _HIDDEN | mantissa
-    accept_bounds = (m2 & _U1) == _U0
-    mv = _U4 * m2
     mm_shift = _U1 if (mantissa != _U0 or exponent <= 1) else _U0
-    vm_trailing_zeros = False
-    vr_trailing_zeros = False
-    if e2 >= 0:
-        q = ((e2 * 78913) >> 18) - (1 if e2 > 3 else 0)  # log10(2^e2), one less above 3
-        e10 = q
-        k = _POW5_BITS + (((q * 1217359) >> 19) + 1) - 1
-        shift = -e2 + q + k
-        low, high = inverses[q, 0], inverses[q, 1]
-        vr = _mul_shift(_U4 * m2, low, high, shift)
-        vp = _mul_shift(_U4 * m2 + _U2, low, high, shift)
-        vm = _mul_shift(_U4 * m2 - _U1 - mm_shift, low, high, shift)
-        if q <= 21:
-            if mv % _U5 == _U0:
-                vr_trailing_zeros = _pow5_factor(mv) >= q
-            elif accept_bounds:
-                vm_trailing_zeros = _pow5_factor(mv - _U1 - mm_shift) >= q
-            elif _pow5_factor(mv + _U2) >= q:
-                vp -= _U1
-    else:
-        q = ((-e2 * 732923) >> 20) - (1 if -e2 > 1 else 0)  # log10(5^-e2), one less above 1
-        e10 = q + e2
-        i = -e2 - q
-        k = (((i * 1217359) >> 19) + 1) - _POW5_BITS
-        shift = q - k
-        low, high = powers[i, 0], powers[i, 1]
-        vr = _mul_shift(_U4 * m2, low, high, shift)
-        vp = _mul_shift(_U4 * m2 + _U2, low, high, shift)
-        vm = _mul_shift(_U4 * m2 - _U1 - mm_shift, low, high, shift)
-        if q <= 1:
-            vr_trailing_zeros = True
-            if accept_bounds:
-                vm_trailing_zeros = mm_shift == _U1
-            else:
-                vp -= _U1
-        elif q < 63:
-            vr_trailing_zeros = (mv & ((_U1 << np.uint64(q)) - _U1)) == _U0
+    return m2, e2, mm_shift, (m2 & _U1) == _U0
+
+
+@njit(cache=True, inline="always")
+def _decimal_above(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: bool,
+                   inverses: np.ndarray) -> tuple[np.uint64, np.uint64, np.uint64, int, bool,
+                                                  bool]:
+    """For e2 >= 0: the value and its bounds times 10^-q (vr, vp, vm; e10 = q), and whether
+    the lower bound and the value end in zeros that the scaling dropped."""
+    mv = _U4 * m2
+    q = ((e2 * 78913) >> 18) - (1 if e2 > 3 else 0)  # log10(2^e2), one less above 3
+    k = _POW5_BITS + (((q * 1217359) >> 19) + 1) - 1
+    shift = -e2 + q + k
+    low, high = inverses[q, 0], inverses[q, 1]
+    vr = _mul_shift(mv, low, high, shift)
+    vp = _mul_shift(mv + _U2, low, high, shift)
+    vm = _mul_shift(mv - _U1 - mm_shift, low, high, shift)
+    vm_zeros = False
+    vr_zeros = False
+    if q <= 21:
+        if mv % _U5 == _U0:
+            vr_zeros = _pow5_factor(mv) >= q
+        elif accept_bounds:
+            vm_zeros = _pow5_factor(mv - _U1 - mm_shift) >= q
+        elif _pow5_factor(mv + _U2) >= q:
+            vp -= _U1
+    return vr, vp, vm, q, vm_zeros, vr_zeros
+
+
+@njit(cache=True, inline="always")
+def _decimal_below(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: bool,
+                   powers: np.ndarray) -> tuple[np.uint64, np.uint64, np.uint64, int, bool,
+                                                bool]:
+    """For e2 < 0: as :func:`_decimal_above`, scaled by 5^-e2 and 10^-q (e10 = q + e2)."""
+    mv = _U4 * m2
+    q = ((-e2 * 732923) >> 20) - (1 if -e2 > 1 else 0)  # log10(5^-e2), one less above 1
+    i = -e2 - q
+    k = (((i * 1217359) >> 19) + 1) - _POW5_BITS
+    shift = q - k
+    low, high = powers[i, 0], powers[i, 1]
+    vr = _mul_shift(mv, low, high, shift)
+    vp = _mul_shift(mv + _U2, low, high, shift)
+    vm = _mul_shift(mv - _U1 - mm_shift, low, high, shift)
+    vm_zeros = False
+    vr_zeros = False
+    if q <= 1:
+        vr_zeros = True
+        if accept_bounds:
+            vm_zeros = mm_shift == _U1
+        else:
+            vp -= _U1
+    elif q < 63:
+        vr_zeros = (mv & ((_U1 << np.uint64(q)) - _U1)) == _U0
+    return vr, vp, vm, q + e2, vm_zeros, vr_zeros
+
+
+@njit(cache=True, inline="always")
+def _round_exact(vr: np.uint64, vp: np.uint64, vm: np.uint64, vm_zeros: bool, vr_zeros: bool,
+                 accept_bounds: bool) -> tuple[np.uint64, int]:
+    """Digits dropped one at a time while the interval holds a shorter number, tracking
+    whether what was dropped is all zeros (a bound that is itself shortest, an exact half
+    rounded to even): the rare path. Returns the rounded digits and how many were dropped."""
     removed = 0
     last_removed = _U0
-    if vm_trailing_zeros or vr_trailing_zeros:
-        while vp // _U10 > vm // _U10:
-            vm_trailing_zeros = vm_trailing_zeros and vm % _U10 == _U0
-            vr_trailing_zeros = vr_trailing_zeros and last_removed == _U0
+    while vp // _U10 > vm // _U10:
+        vm_zeros = vm_zeros and vm % _U10 == _U0
+        vr_zeros = vr_zeros and last_removed == _U0
+        last_removed = vr % _U10
+        vr //= _U10
+        vp //= _U10
+        vm //= _U10
+        removed += 1
+    if vm_zeros:
+        while vm % _U10 == _U0:
+            vr_zeros = vr_zeros and last_removed == _U0
             last_removed = vr % _U10
             vr //= _U10
             vp //= _U10
             vm //= _U10
             removed += 1
-        if vm_trailing_zeros:
-            while vm % _U10 == _U0:
-                vr_trailing_zeros = vr_trailing_zeros and last_removed == _U0
-                last_removed = vr % _U10
-                vr //= _U10
-                vp //= _U10
-                vm //= _U10
-                removed += 1
-        if vr_trailing_zeros and last_removed == _U5 and vr % _U2 == _U0:
-            last_removed = np.uint64(4)  # exactly halfway: round to even
-        up: bool = bool((vr == vm and (not accept_bounds or not vm_trailing_zeros))
-                        or last_removed >= _U5)
-    else:
-        up = False
-        if vp // _U100 > vm // _U100:
-            up = bool(vr % _U100 >= np.uint64(50))
-            vr //= _U100
-            vp //= _U100
-            vm //= _U100
-            removed += 2
-        while vp // _U10 > vm // _U10:
-            up = bool(vr % _U10 >= _U5)
-            vr //= _U10
-            vp //= _U10
-            vm //= _U10
-            removed += 1
-        up = up or bool(vr == vm)
-    digits = vr + (_U1 if up else _U0)
-    exp10 = e10 + removed
-    while digits % _U10 == _U0:
-        digits //= _U10
-        exp10 += 1
-    return digits, exp10
+    if vr_zeros and last_removed == _U5 and vr % _U2 == _U0:
+        last_removed = np.uint64(4)  # exactly halfway: round to even
+    up = bool((vr == vm and (not accept_bounds or not vm_zeros)) or last_removed >= _U5)
+    return vr + (_U1 if up else _U0), removed
+
+
+@njit(cache=True, inline="always")
+def _round_common(vr: np.uint64, vp: np.uint64, vm: np.uint64) -> tuple[np.uint64, int]:
+    """Digits dropped while the interval holds a shorter number, two at a time first, the
+    last dropped digit rounding: the common path, where no bound ends in zeros."""
+    removed = 0
+    up = False
+    if vp // _U100 > vm // _U100:
+        up = bool(vr % _U100 >= np.uint64(50))
+        vr //= _U100
+        vp //= _U100
+        vm //= _U100
+        removed += 2
+    while vp // _U10 > vm // _U10:
+        up = bool(vr % _U10 >= _U5)
+        vr //= _U10
+        vp //= _U10
+        vm //= _U10
+        removed += 1
+    up = up or bool(vr == vm)
+    return vr + (_U1 if up else _U0), removed
 
 
 @njit(cache=True)
