@@ -410,37 +410,19 @@ def _update_kernel(cost: FloatArray, x0: float, y0: float, h: float, ox: FloatAr
     for k in range(ox.shape[0]):
         oxk, oyk, rk, half = ox[k], oy[k], r[k], max_angle[k]
         th = _normalize_angle(theta[k])
-        # worldToMapNoBounds: a C cast, truncation toward zero.
+        # The cone's three corners as cells: the sensor, and the beam's edges a little past
+        # the range (worldToMapNoBounds: a C cast, truncation toward zero).
         Ox = int((oxk - x0) / h)
         Oy = int((oyk - y0) / h)
-        bx0 = bx1 = Ox
-        by0 = by1 = Oy
         _touch(box, oxk, oyk)
-        tx = oxk + math.cos(th) * rk
-        ty = oyk + math.sin(th) * rk
-        if tx >= x0 and ty >= y0:
-            tmx = int((tx - x0) / h)
-            tmy = int((ty - y0) / h)
-            if tmx < nx and tmy < ny:
-                cost[tmy, tmx] = float(ROS_TARGET_COST)
-                _touch(box, tx, ty)
+        _mark_target(cost, box, x0, y0, h, oxk, oyk, th, rk)
         reach = rk * ROS_EDGE_FACTOR
-        ax = oxk + math.cos(th - half) * reach
-        ay = oyk + math.sin(th - half) * reach
-        Ax = int((ax - x0) / h)
-        Ay = int((ay - y0) / h)
-        bx0, bx1, by0, by1 = min(bx0, Ax), max(bx1, Ax), min(by0, Ay), max(by1, Ay)
-        _touch(box, ax, ay)
-        bx = oxk + math.cos(th + half) * reach
-        by = oyk + math.sin(th + half) * reach
-        Bx = int((bx - x0) / h)
-        By = int((by - y0) / h)
-        bx0, bx1, by0, by1 = min(bx0, Bx), max(bx1, Bx), min(by0, By), max(by1, By)
-        _touch(box, bx, by)
-        bx0 = max(0, bx0)
-        by0 = max(0, by0)
-        bx1 = min(nx, bx1)
-        by1 = min(ny, by1)
+        Ax, Ay = _cone_corner(box, x0, y0, h, oxk, oyk, th - half, reach)
+        Bx, By = _cone_corner(box, x0, y0, h, oxk, oyk, th + half, reach)
+        bx0 = max(0, min(Ox, Ax, Bx))
+        by0 = max(0, min(Oy, Ay, By))
+        bx1 = min(nx, max(Ox, Ax, Bx))
+        by1 = min(ny, max(Oy, Ay, By))
         # ROS stores -inflate_cone · area in a float.
         area = abs((Ax * (By - Oy) + Bx * (Oy - Ay) + Ox * (Ay - By)) / 2.0)
         threshold = float(np.float32(-inflate_cone * area))
@@ -475,14 +457,48 @@ def _update_kernel(cost: FloatArray, x0: float, y0: float, h: float, ox: FloatAr
                     continue
                 alpha = _normalize_angle(math.atan2(dy, dx) - th)
                 sensor = 0.0 if clear[k] else sensor_model(rk, d, alpha, half, phi, h)
-                prior = cost[cy, cx] / 254.0
-                prob_occ = sensor * prior
-                prob_not = (1.0 - sensor) * (1.0 - prior)
-                total = prob_occ + prob_not
-                if total == 0.0:  # 0/0: prior 1 and a clearing reading (docstring, item 5)
-                    continue
-                updated = prob_occ / total * 254.0
-                cost[cy, cx] = float(int(updated)) if quantize else updated
+                _update_cell(cost, cx, cy, sensor, quantize)
+
+
+@compiled_inline
+def _mark_target(cost: FloatArray, box: FloatArray, x0: float, y0: float, h: float,
+                 ox: float, oy: float, th: float, r: float) -> None:
+    """The cell at the range on the axis set to the target cost, as ``updateCostmap`` does
+    first, when it lies on the map (worldToMap)."""
+    ny, nx = cost.shape
+    tx = ox + math.cos(th) * r
+    ty = oy + math.sin(th) * r
+    if tx >= x0 and ty >= y0:
+        tmx = int((tx - x0) / h)
+        tmy = int((ty - y0) / h)
+        if tmx < nx and tmy < ny:
+            cost[tmy, tmx] = float(ROS_TARGET_COST)
+            _touch(box, tx, ty)
+
+
+@compiled_inline
+def _cone_corner(box: FloatArray, x0: float, y0: float, h: float, ox: float, oy: float,
+                 angle: float, reach: float) -> tuple[int, int]:
+    """The cell of the cone's corner at ``angle`` and ``reach`` from the sensor
+    (worldToMapNoBounds), the point touched."""
+    x = ox + math.cos(angle) * reach
+    y = oy + math.sin(angle) * reach
+    _touch(box, x, y)
+    return int((x - x0) / h), int((y - y0) / h)
+
+
+@compiled_inline
+def _update_cell(cost: FloatArray, cx: int, cy: int, sensor: float, quantize: bool) -> None:
+    """ROS's ``update_cell``: Bayes' rule with the cell's cost as the prior, the sensor
+    model's probability as the likelihood; truncated to whole costs with ``quantize``."""
+    prior = cost[cy, cx] / 254.0
+    prob_occ = sensor * prior
+    prob_not = (1.0 - sensor) * (1.0 - prior)
+    total = prob_occ + prob_not
+    if total == 0.0:  # 0/0: prior 1 and a clearing reading (docstring, item 5)
+        return
+    updated = prob_occ / total * 254.0
+    cost[cy, cx] = float(int(updated)) if quantize else updated
 
 
 # -- costs --------------------------------------------------------------------------------------
