@@ -122,9 +122,11 @@ class _Job:
         """The bag input, read with the bag options, its no-echo readings counted for the
         summary."""
         log = read_bag(self.bag, self.source)
-        mapped = [("no-echo readings mapped as free space", f"{len(log.no_echo):,}")]
-        self.input_rows[:] = (mapped if self.bag.no_echo and len(log.no_echo)
-                              else no_echo_dropped_row(self.bag.dropped_no_echo(log)))
+        if self.bag.no_echo and len(log.no_echo):
+            self.input_rows[:] = [("no-echo readings mapped as free space",
+                                   f"{len(log.no_echo):,}")]
+        else:
+            self.input_rows[:] = no_echo_dropped_row(self.bag.dropped_no_echo(log))
         return log
 
     @property
