@@ -612,7 +612,8 @@ class _ArcBytes:
         self.out = out
         self.checked: dict[str, bool] = {}
         try:
-            self.strips: Any = StripArray(out.typestore, out.is_ros1, _STYLES)
+            self.strips: Any = StripArray(out.typestore, out.is_ros1,
+                                          [*_STYLES, _DELETE_ALL])
         except (UnsupportedLayoutError, KeyError, TypeError, ValueError, AttributeError):
             self.strips = None
 
@@ -635,8 +636,11 @@ class _ArcBytes:
         return self._bytes(header, strips)
 
     def _bytes(self, header: Mapping[str, Any], strips: ArcStrips) -> memoryview:
-        return self.strips.serialise(header, [_delete_all(header)], strips.style, strips.ids,
-                                     strips.counts, strips.x, strips.y)
+        # DELETEALL first: the style after the strips' (id 0 and no points, as _markers' one)
+        data: memoryview = self.strips.serialise(
+            header, np.r_[len(_STYLES), strips.style], np.r_[0, strips.ids],
+            np.r_[0, strips.counts], strips.x, strips.y)
+        return data
 
     def _agrees(self, frame: str) -> bool:
         header = {"stamp": {"sec": 1234, "nanosec": 567_890_123}, "frame_id": frame}
@@ -719,8 +723,8 @@ def arc_strips(method: LiveMethod) -> ArcStrips:
     Raises
     ------
     OutputError
-        An arc of a width that is not finite, or of a source that is no
-        :class:`~sonarcarve.maps.PointSource`.
+        An arc of a width that is not finite, of a source that is no
+        :class:`~sonarcarve.maps.PointSource`, or of a reading id beyond int32.
     """
     from sonarcarve.io.marker_bytes import arc_points
 
@@ -739,13 +743,16 @@ def arc_strips(method: LiveMethod) -> ArcStrips:
                         or np.any(_STYLE_OF_SOURCE[source] < 0)):
         msg = f"an arc's source is no PointSource code: {sorted(set(source.tolist()))}"
         raise OutputError(msg)
+    ids = np.asarray(h.reading_id, dtype=np.int64)[slot]
+    if ids.size and (ids.min() < -(2**31) or ids.max() >= 2**31):
+        msg = f"reading ids up to {int(ids.max())} do not fit a marker's id (int32)"
+        raise OutputError(msg)
     # max(2, math.ceil(2 * half / _ARC_SEGMENT) + 1), the same operations
     counts = np.maximum(2, np.ceil(2 * half / _ARC_SEGMENT) + 1).astype(np.int64)
     x, y = arc_points(np.asarray(h.x, dtype=np.float64)[slot],
                       np.asarray(h.y, dtype=np.float64)[slot],
                       np.asarray(h.r, dtype=np.float64)[slot], xy[:, 0], xy[:, 1], half, counts)
-    return ArcStrips(ids=np.asarray(h.reading_id, dtype=np.int64)[slot],
-                     style=_STYLE_OF_SOURCE[source], counts=counts, x=x, y=y)
+    return ArcStrips(ids=ids, style=_STYLE_OF_SOURCE[source], counts=counts, x=x, y=y)
 
 
 def arc_markers(method: LiveMethod, header: Mapping[str, Any], *,
@@ -764,7 +771,7 @@ def arc_markers(method: LiveMethod, header: Mapping[str, Any], *,
 def _markers(strips: ArcStrips, header: Mapping[str, Any],
              point: Callable[[float, float, float], Any] | None = None) -> list[dict[str, Any]]:
     make_point = _point_mapping if point is None else point
-    markers = [_delete_all(header)]
+    markers: list[dict[str, Any]] = [{"header": header, **_DELETE_ALL}]
     xs, ys = strips.x.tolist(), strips.y.tolist()
     end = 0
     for reading_id, style, count in zip(strips.ids.tolist(), strips.style.tolist(),
@@ -774,10 +781,6 @@ def _markers(strips: ArcStrips, header: Mapping[str, Any],
                         "points": [make_point(x, y, 0.0)
                                    for x, y in zip(xs[start:end], ys[start:end], strict=True)]})
     return markers
-
-
-def _delete_all(header: Mapping[str, Any]) -> dict[str, Any]:
-    return {"header": header, "ns": "arcs", "action": _MARKER_DELETEALL}
 
 
 def _strip_style(style: int) -> dict[str, Any]:
@@ -795,5 +798,7 @@ def _point_mapping(x: float, y: float, z: float) -> dict[str, float]:
 #: Marker styles: one per source, in _SOURCE_RGB's order, and each source code's style.
 _SOURCES = tuple(_SOURCE_RGB)
 _STYLES = tuple(_strip_style(k) for k in range(len(_SOURCES)))
+#: The first marker of every array: clear what the last one drew.
+_DELETE_ALL = {"ns": "arcs", "action": _MARKER_DELETEALL}
 _STYLE_OF_SOURCE = np.full(max(int(s) for s in _SOURCES) + 1, -1, dtype=np.int64)
 _STYLE_OF_SOURCE[[int(s) for s in _SOURCES]] = np.arange(len(_SOURCES))

@@ -9,11 +9,11 @@ they cost most of the CPU of ``sonarcarve process LOG --out X.mcap``. Here:
   ``ox + r * math.cos(a)``): numba's ``math.cos`` and ``math.sin`` call the C library's, as
   CPython's do, so the points are the same bits (``tests/io/test_marker_bytes.py`` holds them to
   that Python);
-- :class:`StripArray` lays out a ``visualization_msgs/MarkerArray`` of a few whole markers then
-  many ``LINE_STRIP`` markers that differ only in their id, their style (one of a few field
-  mappings: colour, scale, ...) and their points. Each style's bytes up to the points and the
-  bytes after them are encoded once per bag from the typestore's own field definitions
-  (:class:`_Encoder`) and copied per marker.
+- :class:`StripArray` lays out a ``visualization_msgs/MarkerArray`` of markers that differ only
+  in their id, their style (one of a few field mappings: action, type, colour, ...) and their
+  points. Each style's bytes up to the points and the bytes after them are encoded once per bag
+  and frame id from the typestore's own field definitions (:class:`_Encoder`), and copied per
+  marker by a compiled loop.
 
 The byte layouts are rosbags': ROS 1 little-endian and unpadded, strings as a uint32 length and
 their bytes; CDR (ROS 2) a 4-byte header ``00 01 00 00`` (little-endian CDR), then each
@@ -92,8 +92,9 @@ def arc_points(ox: FloatArray, oy: FloatArray, r: FloatArray, ex: FloatArray, ey
     steps = np.asarray(steps, dtype=np.int64)
     total = int(steps.sum())
     x, y = np.empty(total), np.empty(total)
-    as64 = [np.ascontiguousarray(v, dtype=np.float64) for v in (ox, oy, r, ex, ey, half)]
-    _arc_points_kernel(*as64, steps, x, y)
+    ox, oy, r, ex, ey, half = (np.ascontiguousarray(v, dtype=np.float64)
+                               for v in (ox, oy, r, ex, ey, half))
+    _arc_points_kernel(ox, oy, r, ex, ey, half, steps, x, y)
     return x, y
 
 
@@ -228,7 +229,7 @@ def _zero(base: str) -> Any:
 
 
 class StripArray:
-    """Bytes of a MarkerArray: whole markers first, then line strips of a few styles.
+    """Bytes of a MarkerArray of markers that differ only in id, style and points.
 
     Parameters
     ----------
@@ -317,41 +318,50 @@ class StripArray:
                 enc.field(kind.name, detail, None, name)
             after = after or name == "points"
 
-    def serialise(self, header: Mapping[str, Any], lead: Sequence[Mapping[str, Any]],
-                  style: IntArray, ids: IntArray, counts: IntArray, x: FloatArray,
-                  y: FloatArray) -> memoryview:
-        """The message: the ``lead`` markers (whole mappings), then one strip per entry of
-        ``style`` (index into the styles), ``ids``, ``counts`` (points per strip), its points
-        the next ``counts`` of ``x``, ``y`` (z = 0), each strip's header ``header``."""
+    def serialise(self, header: Mapping[str, Any], style: IntArray, ids: IntArray,
+                  counts: IntArray, x: FloatArray, y: FloatArray) -> memoryview:
+        """The message: one marker per entry of ``style`` (an index into the styles), with
+        header ``header``, id ``ids[i]`` and ``counts[i]`` points, the next ones of ``x``,
+        ``y`` (z = 0)."""
         ids = np.asarray(ids, dtype=np.int64)
-        if ids.size and (ids.min() < _INT32[0] or ids.max() > _INT32[1]):
-            msg = f"a marker id must fit int32; got {int(ids.min())} to {int(ids.max())}"
-            raise UnsupportedLayoutError(msg)
         counts = np.asarray(counts, dtype=np.int64)
         style = np.asarray(style, dtype=np.int64)
-        origin = 0 if self.ros1 else len(_CDR_HEADER)
-        enc = _Encoder(self.ts, self.ros1, 0)
-        enc.scalar("uint32", len(lead) + ids.size)
-        for marker in lead:
-            enc.message(self.marker_type, marker)
-        stamp = header["stamp"]
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        _check(self.styles, style, ids, counts, x, y)
         prefixes, prefix_len, sec_at, nanosec_at, id_at, count_at, tails, tail_len = (
             self._templates_for(str(header["frame_id"])))
         prefixes = prefixes.copy()
         rows = np.arange(prefixes.shape[0])[:, None]
         prefixes[rows, sec_at[:, None] + np.arange(4)] = np.frombuffer(
-            struct.pack("<i", stamp["sec"]), dtype=np.uint8)
+            struct.pack("<i", header["stamp"]["sec"]), dtype=np.uint8)
         prefixes[rows, nanosec_at[:, None] + np.arange(4)] = np.frombuffer(
-            struct.pack("<I", stamp["nanosec"]), dtype=np.uint8)
+            struct.pack("<I", header["stamp"]["nanosec"]), dtype=np.uint8)
         xyz = np.zeros((x.size, 3), dtype="<f8")
         xyz[:, 0], xyz[:, 1] = x, y
-        bound = (origin + len(enc.buf) + ids.size * (prefixes.shape[1] + tails.shape[1] + 8)
-                 + 24 * x.size)
+        start = b"" if self.ros1 else _CDR_HEADER
+        head = start + struct.pack("<I", ids.size)  # the sequence's length (aligned: first)
+        bound = len(head) + ids.size * (prefixes.shape[1] + tails.shape[1] + 8) + 24 * x.size
         out = np.zeros(bound, dtype=np.uint8)
-        if not self.ros1:
-            out[:origin] = np.frombuffer(_CDR_HEADER, dtype=np.uint8)
-        out[origin:origin + len(enc.buf)] = np.frombuffer(bytes(enc.buf), dtype=np.uint8)
-        end = _fill_strips(out, origin, origin + len(enc.buf), self.phases, prefixes, prefix_len,
+        out[:len(head)] = np.frombuffer(head, dtype=np.uint8)
+        end = _fill_strips(out, len(start), len(head), self.phases, prefixes, prefix_len,
                            id_at, count_at, tails, tail_len, self.point_align, style, ids,
                            counts, xyz.reshape(-1).view(np.uint8))
         return memoryview(out[:end].data).toreadonly()
+
+
+def _check(styles: Sequence[Any], style: IntArray, ids: IntArray, counts: IntArray,
+           x: FloatArray, y: FloatArray) -> None:
+    """Refuse what would lay out other bytes than rosbags' (or write out of bounds)."""
+    if not (style.shape == ids.shape == counts.shape and x.shape == y.shape
+            and x.ndim == 1 and style.ndim == 1):
+        msg = "a style, an id and a count per marker, and as many x as y, are needed"
+        raise UnsupportedLayoutError(msg)
+    if ids.size and (ids.min() < _INT32[0] or ids.max() > _INT32[1]):
+        msg = f"a marker id must fit int32; got {int(ids.min())} to {int(ids.max())}"
+        raise UnsupportedLayoutError(msg)
+    if style.size and (style.min() < 0 or style.max() >= len(styles)):
+        msg = f"marker styles are 0 to {len(styles) - 1}; got {sorted(set(style.tolist()))}"
+        raise UnsupportedLayoutError(msg)
+    if np.any(counts < 0) or int(counts.sum()) != x.size:
+        msg = f"the markers' point counts (sum {int(counts.sum())}) are not the {x.size} points"
+        raise UnsupportedLayoutError(msg)
