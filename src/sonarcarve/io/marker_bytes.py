@@ -112,8 +112,8 @@ def _fill_strips(out: np.ndarray, origin: int, pos: int, phases: int, prefixes: 
     """Lay the strips out from ``pos``; alignment counted from ``origin``; returns the end.
 
     ``prefixes[phase * n_styles + style]`` are a style's bytes up to and with its point count,
-    encoded from a position ``phase`` past an aligned one; ``tails[phase]`` the bytes after
-    the points. ``points`` holds 24 bytes (x, y, z float64) a point, strip after strip.
+    encoded from a position ``phase`` past an aligned one; ``tails[phase * n_styles + style]``
+    its bytes after the points. ``points`` holds 24 bytes (x, y, z float64) a point, strip after strip.
     """
     n_styles = prefixes.shape[0] // phases
     first = 0
@@ -130,7 +130,7 @@ def _fill_strips(out: np.ndarray, origin: int, pos: int, phases: int, prefixes: 
             out[pos:pos + 24 * n] = points[24 * first:24 * (first + n)]
             pos += 24 * n
             first += n
-        row = (pos - origin) % phases
+        row = ((pos - origin) % phases) * n_styles + style[i]
         out[pos:pos + tail_len[row]] = tails[row, :tail_len[row]]
         pos += tail_len[row]
     return pos
@@ -175,7 +175,11 @@ class _Encoder:
                 stop: str | None = None) -> None:
         """The fields of ``msgtype`` in order; with ``stop``, up to that field (a sequence),
         whose element count is left 0 at ``at[path + stop]``."""
-        for name, (kind, detail) in self.ts.fielddefs[msgtype][1]:
+        definition = self.ts.fielddefs.get(msgtype)
+        if definition is None:
+            msg = f"{path or 'the message'}: type {msgtype} is not in the typestore"
+            raise UnsupportedLayoutError(msg)
+        for name, (kind, detail) in definition[1]:
             if name == stop:
                 self.scalar("uint32", 0, path + name)
                 return
@@ -280,8 +284,8 @@ class StripArray:
         return str(marker)
 
     def _templates_for(self, frame_id: str) -> tuple[np.ndarray, ...]:
-        """Per phase and style the bytes up to the point count, per phase the bytes after the
-        points, with where the stamp, id and count go (stamp zero)."""
+        """Per phase and style the bytes up to the point count and those after the points,
+        with where the stamp, id and count go (stamp zero)."""
         cached = self._templates.get(frame_id)
         if cached is not None:
             return cached
@@ -292,9 +296,9 @@ class StripArray:
                 enc = _Encoder(self.ts, self.ros1, phase)
                 enc.message(self.marker_type, {**style, "header": header}, stop="points")
                 prefixes.append((bytes(enc.buf), enc.at, phase))
-            enc = _Encoder(self.ts, self.ros1, phase)
-            self._tail(enc)
-            tails.append(bytes(enc.buf))
+                enc = _Encoder(self.ts, self.ros1, phase)
+                self._tail(enc, style)
+                tails.append(bytes(enc.buf))
         width = max(len(p[0]) for p in prefixes)
         table = np.zeros((len(prefixes), width), dtype=np.uint8)
         for row, (data, _, _) in enumerate(prefixes):
@@ -310,12 +314,12 @@ class StripArray:
         self._templates[frame_id] = cached
         return cached
 
-    def _tail(self, enc: _Encoder) -> None:
-        """The marker's fields after ``points``, all zero."""
+    def _tail(self, enc: _Encoder, style: Mapping[str, Any]) -> None:
+        """The marker's fields after ``points``, from ``style`` (zero if not given)."""
         after = False
         for name, (kind, detail) in self.ts.fielddefs[self.marker_type][1]:
             if after and not (self.ros1 and name == "structure_needs_at_least_one_member"):
-                enc.field(kind.name, detail, None, name)
+                enc.field(kind.name, detail, style.get(name), name)
             after = after or name == "points"
 
     def serialise(self, header: Mapping[str, Any], style: IntArray, ids: IntArray,
