@@ -190,3 +190,32 @@ def test_a_field_of_a_type_not_laid_out_here_is_refused() -> None:
     with pytest.raises(UnsupportedLayoutError, match="'char'"):
         strips.serialise({"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""}, np.array([0]),
                          np.array([0]), np.array([0]), np.zeros(0), np.zeros(0))
+
+
+@pytest.mark.parametrize("ros1", [True, False], ids=["ROS 1", "CDR"])
+def test_points_after_an_unaligned_count_are_padded_as_rosbags_pads_them(ros1: bool) -> None:
+    # In Humble's Marker the point count happens to end 8-aligned; here it ends 4 past (after
+    # a header of an empty frame id: 8 + 5, padded to 16, then id, type and the count), so CDR
+    # pads 4 bytes before the float64 points.
+    ts = _store(**{"geometry_msgs/msg/Point": "float64 x\nfloat64 y\nfloat64 z",
+                   "builtin_interfaces/msg/Time": "int32 sec\nuint32 nanosec",
+                   "std_msgs/msg/Header": "builtin_interfaces/Time stamp\nstring frame_id",
+                   "visualization_msgs/msg/Marker": "std_msgs/Header header\nint32 id\n"
+                   "int32 type\ngeometry_msgs/Point[] points\nstring text",
+                   MARKER_ARRAY: "visualization_msgs/Marker[] markers"})
+    styles = [{"type": 1, "text": "ab"}, {"type": 2, "text": "odd"}]
+    style, ids, counts = np.array([0, 1, 1, 0]), np.array([5, -6, 7, 8]), np.array([2, 0, 3, 1])
+    x, y = np.arange(6.0) + 0.5, -np.arange(6.0)
+    data = StripArray(ts, ros1, styles).serialise(
+        {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": ""}, style, ids, counts, x, y)
+    point, marker = ts.types["geometry_msgs/msg/Point"], ts.types["visualization_msgs/msg/Marker"]
+    header = ts.types["std_msgs/msg/Header"](
+        stamp=ts.types["builtin_interfaces/msg/Time"](sec=3, nanosec=4), frame_id="")
+    ends = np.cumsum(counts).tolist()
+    message = ts.types[MARKER_ARRAY](markers=[
+        marker(header=header, id=i, type=styles[s]["type"], text=styles[s]["text"],
+               points=[point(x=x[k], y=y[k], z=0.0) for k in range(e - n, e)])
+        for s, i, n, e in zip(style.tolist(), ids.tolist(), counts.tolist(), ends, strict=True)])
+    expected = (ts.serialize_ros1(message, MARKER_ARRAY) if ros1
+                else ts.serialize_cdr(message, MARKER_ARRAY))
+    assert bytes(data) == bytes(expected)

@@ -303,8 +303,12 @@ class StripArray:
         table = np.zeros((len(prefixes), width), dtype=np.uint8)
         for row, (data, _, _) in enumerate(prefixes):
             table[row, :len(data)] = np.frombuffer(data, dtype=np.uint8)
+        holes = ("header.stamp.sec", "header.stamp.nanosec", "id", "points")
+        if any(name not in at for _, at, _ in prefixes for name in holes):
+            msg = f"{self.marker_type}: no header.stamp of int32 sec and uint32 nanosec"
+            raise UnsupportedLayoutError(msg)
         offsets = {name: np.array([at[name] - phase for _, at, phase in prefixes], dtype=np.int64)
-                   for name in ("header.stamp.sec", "header.stamp.nanosec", "id", "points")}
+                   for name in holes}
         tail_table = np.zeros((len(tails), max(len(t) for t in tails)), dtype=np.uint8)
         for row, data in enumerate(tails):
             tail_table[row, :len(data)] = np.frombuffer(data, dtype=np.uint8)
