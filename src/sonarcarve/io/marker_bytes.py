@@ -113,7 +113,8 @@ def _fill_strips(out: np.ndarray, origin: int, pos: int, phases: int, prefixes: 
 
     ``prefixes[phase * n_styles + style]`` are a style's bytes up to and with its point count,
     encoded from a position ``phase`` past an aligned one; ``tails[phase * n_styles + style]``
-    its bytes after the points. ``points`` holds 24 bytes (x, y, z float64) a point, strip after strip.
+    its bytes after the points. ``points`` holds 24 bytes (x, y, z float64) a point, strip
+    after strip.
     """
     n_styles = prefixes.shape[0] // phases
     first = 0
