@@ -219,3 +219,25 @@ def test_points_after_an_unaligned_count_are_padded_as_rosbags_pads_them(ros1: b
     expected = (ts.serialize_ros1(message, MARKER_ARRAY) if ros1
                 else ts.serialize_cdr(message, MARKER_ARRAY))
     assert bytes(data) == bytes(expected)
+
+
+@pytest.mark.parametrize("header", [
+    "", "std_msgs/Header header\n", "std_msgs/Stamp header\n"],
+    ids=["no header", "int32 sec, uint32 nanosec", "uint32 sec, int32 nanosec"])
+def test_a_marker_without_the_header_stamp_patched_here_is_refused(header: str) -> None:
+    ts = _store(**{"geometry_msgs/msg/Point": "float64 x\nfloat64 y\nfloat64 z",
+                   "builtin_interfaces/msg/Time": "int32 sec\nuint32 nanosec",
+                   "std_msgs/msg/OtherTime": "uint32 sec\nint32 nanosec",
+                   "std_msgs/msg/Header": "builtin_interfaces/Time stamp\nstring frame_id",
+                   "std_msgs/msg/Stamp": "std_msgs/OtherTime stamp\nstring frame_id",
+                   "visualization_msgs/msg/Marker": header + "int32 id\n"
+                   "geometry_msgs/Point[] points",
+                   MARKER_ARRAY: "visualization_msgs/Marker[] markers"})
+    strips = StripArray(ts, False, [{}])
+    arrays = (np.array([0]), np.array([0]), np.array([0]), np.zeros(0), np.zeros(0))
+    stamp = {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""}
+    if header.startswith("std_msgs/Header"):
+        assert len(strips.serialise(stamp, *arrays)) > 0  # the control: this one is laid out
+        return
+    with pytest.raises(UnsupportedLayoutError, match=r"header\.stamp"):
+        strips.serialise(stamp, *arrays)

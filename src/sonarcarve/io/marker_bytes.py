@@ -145,6 +145,7 @@ class _Encoder:
         self.ts, self.ros1, self.start = ts, ros1, pos
         self.buf = bytearray()
         self.at: dict[str, int] = {}
+        self.base: dict[str, str] = {}
 
     @property
     def pos(self) -> int:
@@ -161,7 +162,7 @@ class _Encoder:
             raise UnsupportedLayoutError(msg)
         size = struct.calcsize(fmt)
         self.align(size)
-        self.at[path] = self.pos
+        self.at[path], self.base[path] = self.pos, base
         self.buf += struct.pack("<" + fmt, value)
 
     def string(self, value: str) -> None:
@@ -261,14 +262,20 @@ class StripArray:
         self.point_align = 1 if ros1 else 8
         self._templates: dict[str, tuple[np.ndarray, ...]] = {}
 
+    def _fields(self, msgtype: str) -> dict[str, Any]:
+        definition = self.ts.fielddefs.get(msgtype)
+        if definition is None:
+            msg = f"type {msgtype} is not in the typestore"
+            raise UnsupportedLayoutError(msg)
+        return dict(definition[1])
+
     def _marker_type(self) -> str:
-        defs = dict(self.ts.fielddefs[self.array_type][1])
-        kind, detail = defs.get("markers", (None, None))
+        kind, detail = self._fields(self.array_type).get("markers", (None, None))
         if kind is None or kind.name != "SEQUENCE" or detail[0][0].name != "NAME":
             msg = f"{self.array_type}: no sequence of markers"
             raise UnsupportedLayoutError(msg)
         marker = detail[0][1]
-        fields = dict(self.ts.fielddefs[marker][1])
+        fields = self._fields(marker)
         kind_id, id_detail = fields.get("id", (None, None))
         if kind_id is None or kind_id.name != "BASE" or id_detail[0] != "int32":
             msg = f"{marker}: no int32 id"
@@ -278,7 +285,7 @@ class StripArray:
             msg = f"{marker}: no sequence of points"
             raise UnsupportedLayoutError(msg)
         point_fields = [(name, kind.name, detail)
-                        for name, (kind, detail) in self.ts.fielddefs[points[0][1]][1]]
+                        for name, (kind, detail) in self._fields(points[0][1]).items()]
         if point_fields != [(axis, "BASE", ("float64", 0)) for axis in "xyz"]:
             msg = f"{points[0][1]}: not three float64 x, y, z"
             raise UnsupportedLayoutError(msg)
@@ -291,12 +298,13 @@ class StripArray:
         if cached is not None:
             return cached
         header = {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": frame_id}
-        prefixes, tails = [], []
+        prefixes, tails, bases = [], [], set()
         for phase in range(self.phases):
             for style in self.styles:
                 enc = _Encoder(self.ts, self.ros1, phase)
                 enc.message(self.marker_type, {**style, "header": header}, stop="points")
                 prefixes.append((bytes(enc.buf), enc.at, phase))
+                bases.add((enc.base.get("header.stamp.sec"), enc.base.get("header.stamp.nanosec")))
                 enc = _Encoder(self.ts, self.ros1, phase)
                 self._tail(enc, style)
                 tails.append(bytes(enc.buf))
@@ -305,7 +313,8 @@ class StripArray:
         for row, (data, _, _) in enumerate(prefixes):
             table[row, :len(data)] = np.frombuffer(data, dtype=np.uint8)
         holes = ("header.stamp.sec", "header.stamp.nanosec", "id", "points")
-        if any(name not in at for _, at, _ in prefixes for name in holes):
+        if bases != {("int32", "uint32")} or any(name not in at for _, at, _ in prefixes
+                                                 for name in holes):
             msg = f"{self.marker_type}: no header.stamp of int32 sec and uint32 nanosec"
             raise UnsupportedLayoutError(msg)
         offsets = {name: np.array([at[name] - phase for _, at, phase in prefixes], dtype=np.int64)
