@@ -19,7 +19,9 @@ through (optional) and the robot's odometry and TF (optional):
 definitions), rosbag2 folders (MCAP or sqlite3 storage) and bare ``*.mcap`` files, building
 messages from plain field mappings (fields not given take their zero value, so one mapping
 suits ROS 1 and ROS 2 definitions). A bag is written whole or not at all: it is built beside
-the target and moved into place when complete.
+the target and moved into place when complete. The arc markers (millions of points in a long
+log) skip the message objects: :mod:`sonarcarve.io.marker_bytes` lays their bytes out directly,
+once a sample laid out so is checked to be rosbags' own bytes for the bag's types.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -44,6 +46,9 @@ from sonarcarve.io.errors import OutputError
 from sonarcarve.maps import LocalMap, PointSource
 from sonarcarve.readings import Reading, ReadingBatch, reading_ids
 from sonarcarve.typing import FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from sonarcarve.io.marker_bytes import StripArray
 
 __all__ = [
     "ARCS_TOPIC",
@@ -610,10 +615,10 @@ class _ArcBytes:
         from sonarcarve.io.marker_bytes import StripArray, UnsupportedLayoutError
 
         self.out = out
-        self.checked: dict[str, bool] = {}
+        self.checked: dict[str, bool] = {}  # per frame id: the sample's bytes were rosbags'
+        self.strips: StripArray | None
         try:
-            self.strips: Any = StripArray(out.typestore, out.is_ros1,
-                                          [*_STYLES, _DELETE_ALL])
+            self.strips = StripArray(out.typestore, out.is_ros1, [*_STYLES, _DELETE_ALL])
         except (UnsupportedLayoutError, KeyError, TypeError, ValueError, AttributeError):
             self.strips = None
 
@@ -625,24 +630,22 @@ class _ArcBytes:
         return out._arc_bytes
 
     def serialise(self, header: Mapping[str, Any], strips: ArcStrips) -> memoryview | None:
+        """The MarkerArray of ``strips`` (DELETEALL first), or None: write message objects."""
         if self.strips is None:
             return None
         frame = str(header["frame_id"])
         agrees = self.checked.get(frame)
         if agrees is None:
-            agrees = self.checked[frame] = self._agrees(frame)
-        if not agrees:
-            return None
-        return self._bytes(header, strips)
+            agrees = self.checked[frame] = self._agrees(self.strips, frame)
+        return self._bytes(self.strips, header, strips) if agrees else None
 
-    def _bytes(self, header: Mapping[str, Any], strips: ArcStrips) -> memoryview:
+    @staticmethod
+    def _bytes(layout: StripArray, header: Mapping[str, Any], strips: ArcStrips) -> memoryview:
         # DELETEALL first: the style after the strips' (id 0 and no points, as _markers' one)
-        data: memoryview = self.strips.serialise(
-            header, np.r_[len(_STYLES), strips.style], np.r_[0, strips.ids],
-            np.r_[0, strips.counts], strips.x, strips.y)
-        return data
+        return layout.serialise(header, np.r_[len(_STYLES), strips.style], np.r_[0, strips.ids],
+                                np.r_[0, strips.counts], strips.x, strips.y)
 
-    def _agrees(self, frame: str) -> bool:
+    def _agrees(self, layout: StripArray, frame: str) -> bool:
         header = {"stamp": {"sec": 1234, "nanosec": 567_890_123}, "frame_id": frame}
         counts = np.array([2, 3, 0, 1, 5, 2], dtype=np.int64)
         sample = ArcStrips(ids=np.array([7, -3, 2**31 - 1, 0, 12, 5]),
@@ -654,7 +657,7 @@ class _ArcBytes:
             message = _build(ts, msgtype, {"markers": _markers(sample, header)})
             expected = (ts.serialize_ros1(message, msgtype) if self.out.is_ros1
                         else ts.serialize_cdr(message, msgtype))
-            return bytes(self._bytes(header, sample)) == bytes(expected)
+            return bytes(self._bytes(layout, header, sample)) == bytes(expected)
         except (SonarcarveError, KeyError, TypeError, ValueError, AttributeError,
                 struct.error):
             return False
