@@ -226,3 +226,112 @@ def test_the_arc_markers_written_are_the_messages_built_from_their_mappings(
         arcs = [c for c in reader.connections if c.topic == ARCS_TOPIC]
         *_, (_, _, last) = reader.messages(connections=arcs)
     assert bytes(last) == bytes(expected)
+
+
+@pytest.mark.parametrize("method_name", ["centerline", "carve", "combined"])
+def test_arc_points_are_the_bits_of_the_python_loop(method_name: str) -> None:
+    # The points are computed in a compiled loop now; they must be the very floats of the
+    # Python loop bag_out ran before (linspace per arc, math.cos / math.sin per point).
+    method = make_method(method_name)
+    for k, reading in enumerate(_DRIVE):
+        method.add(reading, k)
+    h = method.history
+    slots = h.slots()
+    est = method.estimates(slots)
+    expected = []
+    for k in np.flatnonzero(est.alive).tolist():
+        slot = int(slots[k])
+        ox, oy, r = float(h.x[slot]), float(h.y[slot]), float(h.r[slot])
+        mid = math.atan2(float(est.xy[k, 1]) - oy, float(est.xy[k, 0]) - ox)
+        half = 0.5 * float(est.width[k])
+        steps = max(2, math.ceil(2 * half / math.radians(2.0)) + 1)
+        expected.append([(ox + r * math.cos(a), oy + r * math.sin(a))
+                         for a in np.linspace(mid - half, mid + half, steps).tolist()])
+    markers = arc_markers(method, {"stamp": stamp(1.0), "frame_id": "odom"})
+    got = [[(p["x"], p["y"]) for p in m["points"]] for m in markers[1:]]
+    assert len(got) == len(expected) > 3
+    assert np.array_equal(np.array([p for arc in got for p in arc]).view(np.uint64),
+                          np.array([p for arc in expected for p in arc]).view(np.uint64))
+    assert [len(arc) for arc in got] == [len(arc) for arc in expected]
+
+
+def _plain_arcs(tmp_path: Path, name: str) -> bytes:
+    """The arc markers of _DRIVE's last map, serialised by rosbags from message objects."""
+    method = make_method("combined")
+    for k, reading in enumerate(_DRIVE):
+        method.add(reading, k)
+    header = {"stamp": stamp(float(_DRIVE.t[-1])), "frame_id": "odom"}
+    msgtype = "visualization_msgs/msg/MarkerArray"
+    with BagWriter(tmp_path / f"plain-{name}") as plain:
+        message = plain.message(msgtype, {"markers": arc_markers(method, header)})
+        return bytes(plain.typestore.serialize_ros1(message, msgtype) if plain.is_ros1
+                     else plain.typestore.serialize_cdr(message, msgtype))
+
+
+def _last_arcs(path: Path) -> bytes:
+    with AnyReader([path]) as reader:
+        arcs = [c for c in reader.connections if c.topic == ARCS_TOPIC]
+        *_, (_, _, last) = reader.messages(connections=arcs)
+    return bytes(last)
+
+
+@pytest.mark.parametrize("name", ["map.mcap", "map.bag"])
+@pytest.mark.parametrize("fault", ["other bytes", "unsupported types"])
+def test_arcs_are_message_objects_where_the_bytes_would_not_be_rosbags(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, name: str, fault: str) -> None:
+    # A typestore laid out otherwise than marker_bytes lays out (simulated: one byte changed,
+    # or types it refuses) must not give a corrupt bag: the arcs go the old way.
+    from sonarcarve.io import marker_bytes
+
+    serialise = marker_bytes.StripArray.serialise
+
+    def other_bytes(self: Any, *args: Any) -> bytes:
+        data = bytearray(serialise(self, *args))
+        data[-1] ^= 0xFF
+        return bytes(data)
+
+    def refuse(self: Any, *args: Any) -> None:
+        msg = "a layout this encoder does not know"
+        raise marker_bytes.UnsupportedLayoutError(msg)
+
+    if fault == "other bytes":
+        monkeypatch.setattr(marker_bytes.StripArray, "serialise", other_bytes)
+    else:
+        monkeypatch.setattr(marker_bytes.StripArray, "__init__", refuse)
+    path = tmp_path / name
+    write_map_bag(path, _DRIVE, make_method("combined"), rate=2.0)
+    assert _last_arcs(path) == _plain_arcs(tmp_path, name)
+
+
+class _StubHistory:
+    def __init__(self, reading_id: int) -> None:
+        self.x, self.y, self.r = np.zeros(1), np.zeros(1), np.ones(1)
+        self.reading_id = np.array([reading_id])
+
+    def slots(self) -> np.ndarray:
+        return np.array([0])
+
+
+class _StubMethod:
+    """One live arc of the given width, source and reading id."""
+
+    def __init__(self, width: float, source: int, reading_id: int) -> None:
+        self.history = _StubHistory(reading_id)
+        self._est = type("Estimates", (), {
+            "alive": np.array([True]), "xy": np.array([[1.0, 0.0]]),
+            "width": np.array([width]), "source": np.array([source])})
+
+    def estimates(self, slots: np.ndarray) -> Any:
+        return self._est
+
+
+@pytest.mark.parametrize(("width", "source", "reading_id", "match"), [
+    (math.nan, 0, 1, "width is not finite"), (math.inf, 1, 1, "width is not finite"),
+    (0.3, 3, 1, "source is no PointSource"), (0.3, -1, 1, "source is no PointSource"),
+    (0.3, 2, 2**31, "int32")])
+def test_an_arc_that_cannot_be_drawn_is_a_one_line_error(
+        width: float, source: int, reading_id: int, match: str) -> None:
+    method: Any = _StubMethod(width, source, reading_id)
+    with pytest.raises(OutputError, match=match) as err:
+        arc_markers(method, {"stamp": stamp(0.0), "frame_id": "odom"})
+    assert "\n" not in str(err.value)

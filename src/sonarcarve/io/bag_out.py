@@ -19,41 +19,50 @@ through (optional) and the robot's odometry and TF (optional):
 definitions), rosbag2 folders (MCAP or sqlite3 storage) and bare ``*.mcap`` files, building
 messages from plain field mappings (fields not given take their zero value, so one mapping
 suits ROS 1 and ROS 2 definitions). A bag is written whole or not at all: it is built beside
-the target and moved into place when complete.
+the target and moved into place when complete. The arc markers (millions of points in a long
+log) skip the message objects: :mod:`sonarcarve.io.marker_bytes` lays their bytes out directly,
+once a sample laid out so is checked to be rosbags' own bytes for the bag's types.
 """
 
 from __future__ import annotations
 
 import math
 import shutil
+import struct
 import tempfile
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from sonarcarve.errors import SonarcarveError
 from sonarcarve.extras import require
 from sonarcarve.io.errors import OutputError
 from sonarcarve.maps import LocalMap, PointSource
 from sonarcarve.readings import Reading, ReadingBatch, reading_ids
 from sonarcarve.typing import FloatArray, IntArray
 
+if TYPE_CHECKING:
+    from sonarcarve.io.marker_bytes import StripArray
+
 __all__ = [
     "ARCS_TOPIC",
     "GRID_TOPIC",
     "LOCAL_MAP_FIELDS",
     "LOCAL_MAP_TOPIC",
+    "ArcStrips",
     "BagFormat",
     "BagOutReport",
     "BagWriter",
     "LiveGrid",
     "LiveMethod",
     "arc_markers",
+    "arc_strips",
     "bag_format",
     "copy_messages",
     "occupancy_grid_fields",
@@ -80,6 +89,7 @@ _SOURCE_RGB = {
 _POINTFIELD_FLOAT32 = 7
 _MARKER_LINE_STRIP, _MARKER_DELETEALL = 4, 3
 _ARC_SEGMENT = math.radians(2.0)  # marker polyline step along an arc
+_MARKER_ARRAY = "visualization_msgs/msg/MarkerArray"
 _NUMERIC = {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32",
             "int64", "uint64", "float32", "float64"}
 _DTYPES = {"bool": np.bool_, "byte": np.uint8, "char": np.uint8, "float32": np.float32,
@@ -204,6 +214,7 @@ class BagWriter:
         self._writer: Any = None
         self._connections: dict[str, Any] = {}
         self.counts: dict[str, int] = {}
+        self._arc_bytes: _ArcBytes | None = None  # see _write_arcs
 
     @property
     def is_ros1(self) -> bool:
@@ -575,12 +586,81 @@ def _write_snapshot(out: BagWriter, method: LiveMethod, t: float, frame: str,
     header = {"stamp": stamp(t), "frame_id": frame}
     out.write(LOCAL_MAP_TOPIC, "sensor_msgs/msg/PointCloud2", t,
               {"header": header, **point_cloud_fields(local)})
-    point = out.typestore.types["geometry_msgs/msg/Point"]  # the points as messages at once
-    out.write(ARCS_TOPIC, "visualization_msgs/msg/MarkerArray", t,
-              {"markers": arc_markers(method, header, point=point)})
+    _write_arcs(out, arc_strips(method), header, t)
     if grid is not None:
         out.write(GRID_TOPIC, "nav_msgs/msg/OccupancyGrid", t,
                   {"header": header, **occupancy_grid_fields(grid, t)})
+
+
+def _write_arcs(out: BagWriter, strips: ArcStrips, header: Mapping[str, Any], t: float) -> None:
+    """The arc markers as bytes laid out directly (:mod:`sonarcarve.io.marker_bytes`), or, for
+    a typestore whose layout that does not reproduce, as message objects serialised by rosbags."""
+    data = _ArcBytes.of(out).serialise(header, strips)
+    if data is not None:
+        out.write_raw(ARCS_TOPIC, _MARKER_ARRAY, t, data)
+        return
+    point = out.typestore.types["geometry_msgs/msg/Point"]  # the points as messages at once
+    out.write(ARCS_TOPIC, _MARKER_ARRAY, t, {"markers": _markers(strips, header, point)})
+
+
+class _ArcBytes:
+    """A bag's arc markers laid out as bytes, used only where they are rosbags' own bytes.
+
+    For each frame id, a sample message (every style, a strip of no point, a NaN point) is
+    laid out both ways first; if the bytes differ, or the typestore's types are not laid out
+    here at all, that bag's markers are message objects, as before: slower, never corrupt.
+    """
+
+    def __init__(self, out: BagWriter) -> None:
+        from sonarcarve.io.marker_bytes import StripArray, UnsupportedLayoutError
+
+        self.out = out
+        self.checked: dict[str, bool] = {}  # per frame id: the sample's bytes were rosbags'
+        self.strips: StripArray | None
+        try:
+            self.strips = StripArray(out.typestore, out.is_ros1, [*_STYLES, _DELETE_ALL])
+        except (UnsupportedLayoutError, KeyError, TypeError, ValueError, AttributeError):
+            self.strips = None
+
+    @classmethod
+    def of(cls, out: BagWriter) -> _ArcBytes:
+        """The writer's own (made at its first arcs)."""
+        if out._arc_bytes is None:
+            out._arc_bytes = cls(out)
+        return out._arc_bytes
+
+    def serialise(self, header: Mapping[str, Any], strips: ArcStrips) -> memoryview | None:
+        """The MarkerArray of ``strips`` (DELETEALL first), or None: write message objects."""
+        if self.strips is None:
+            return None
+        frame = str(header["frame_id"])
+        agrees = self.checked.get(frame)
+        if agrees is None:
+            agrees = self.checked[frame] = self._agrees(self.strips, frame)
+        return self._bytes(self.strips, header, strips) if agrees else None
+
+    @staticmethod
+    def _bytes(layout: StripArray, header: Mapping[str, Any], strips: ArcStrips) -> memoryview:
+        # DELETEALL first: the style after the strips' (id 0 and no points, as _markers' one)
+        return layout.serialise(header, np.r_[len(_STYLES), strips.style], np.r_[0, strips.ids],
+                                np.r_[0, strips.counts], strips.x, strips.y)
+
+    def _agrees(self, layout: StripArray, frame: str) -> bool:
+        header = {"stamp": {"sec": 1234, "nanosec": 567_890_123}, "frame_id": frame}
+        counts = np.array([2, 3, 0, 1, 5, 2], dtype=np.int64)
+        sample = ArcStrips(ids=np.array([7, -3, 2**31 - 1, 0, 12, 5]),
+                           style=np.arange(counts.size) % len(_STYLES), counts=counts,
+                           x=np.linspace(-2.0, 3.0, int(counts.sum())),
+                           y=np.r_[np.nan, np.linspace(1.0, -4.0, int(counts.sum()) - 1)])
+        ts, msgtype = self.out.typestore, _MARKER_ARRAY
+        try:
+            message = _build(ts, msgtype, {"markers": _markers(sample, header)})
+            expected = (ts.serialize_ros1(message, msgtype) if self.out.is_ros1
+                        else ts.serialize_cdr(message, msgtype))
+            return bytes(self._bytes(layout, header, sample)) == bytes(expected)
+        except (SonarcarveError, KeyError, TypeError, ValueError, AttributeError,
+                struct.error):
+            return False
 
 
 def occupancy_grid_fields(grid: LiveGrid, t: float) -> dict[str, Any]:
@@ -616,40 +696,112 @@ def point_cloud_fields(local: LocalMap) -> dict[str, Any]:
     }
 
 
+@dataclass(frozen=True)
+class ArcStrips:
+    """The live arcs of a method as marker polylines, all points of all arcs in one array.
+
+    Attributes
+    ----------
+    ids : ndarray of int
+        Each arc's reading id (its marker's id).
+    style : ndarray of int
+        Each arc's index in the marker styles, by :class:`~sonarcarve.maps.PointSource`.
+    counts : ndarray of int
+        Points of each arc (at least 2).
+    x, y : ndarray of float
+        The points, arc after arc (``counts[0]`` of the first arc, then the next...).
+    """
+
+    ids: IntArray
+    style: IntArray
+    counts: IntArray
+    x: FloatArray
+    y: FloatArray
+
+
+def arc_strips(method: LiveMethod) -> ArcStrips:
+    """The live arcs of ``method``'s history as polylines: radius r about the sensor origin,
+    the estimate's width centred on its point, a point every 2° or less (at least 2).
+
+    Raises
+    ------
+    OutputError
+        An arc of a width that is not finite, of a source that is no
+        :class:`~sonarcarve.maps.PointSource`, or of a reading id beyond int32.
+    """
+    from sonarcarve.io.marker_bytes import arc_points
+
+    h = method.history
+    slots = np.asarray(h.slots(), dtype=np.int64)
+    est = method.estimates(slots)
+    alive = np.flatnonzero(est.alive)
+    slot = slots[alive]
+    xy = np.asarray(est.xy, dtype=np.float64)[alive]
+    half = 0.5 * np.asarray(est.width, dtype=np.float64)[alive]
+    if not np.all(np.isfinite(half)):
+        msg = "an arc's width is not finite; its marker cannot be drawn"
+        raise OutputError(msg)
+    source = np.asarray(est.source, dtype=np.int64)[alive]
+    if source.size and (source.min() < 0 or source.max() >= _STYLE_OF_SOURCE.size
+                        or np.any(_STYLE_OF_SOURCE[source] < 0)):
+        msg = f"an arc's source is no PointSource code: {sorted(set(source.tolist()))}"
+        raise OutputError(msg)
+    ids = np.asarray(h.reading_id, dtype=np.int64)[slot]
+    if ids.size and (ids.min() < -(2**31) or ids.max() >= 2**31):
+        msg = f"reading ids up to {int(ids.max())} do not fit a marker's id (int32)"
+        raise OutputError(msg)
+    # max(2, math.ceil(2 * half / _ARC_SEGMENT) + 1), the same operations
+    counts = np.maximum(2, np.ceil(2 * half / _ARC_SEGMENT) + 1).astype(np.int64)
+    x, y = arc_points(np.asarray(h.x, dtype=np.float64)[slot],
+                      np.asarray(h.y, dtype=np.float64)[slot],
+                      np.asarray(h.r, dtype=np.float64)[slot], xy[:, 0], xy[:, 1], half, counts)
+    return ArcStrips(ids=ids, style=_STYLE_OF_SOURCE[source], counts=counts, x=x, y=y)
+
+
 def arc_markers(method: LiveMethod, header: Mapping[str, Any], *,
                 point: Callable[[float, float, float], Any] | None = None,
                 ) -> list[dict[str, Any]]:
     """Marker mappings: ``DELETEALL``, then one ``LINE_STRIP`` per live arc of ``method``'s
-    history: radius r about the sensor origin, the estimate's width centred on its point.
+    history (:func:`arc_strips`), coloured by source.
 
     ``point(x, y, z)`` makes each point of a strip (default: a mapping); a bag writer passes
     its ``geometry_msgs/Point`` class, which skips a mapping and its reading for each of the
     millions of points of a long log.
     """
+    return _markers(arc_strips(method), header, point)
+
+
+def _markers(strips: ArcStrips, header: Mapping[str, Any],
+             point: Callable[[float, float, float], Any] | None = None) -> list[dict[str, Any]]:
     make_point = _point_mapping if point is None else point
-    h = method.history
-    slots = h.slots()
-    est = method.estimates(slots)
-    markers: list[dict[str, Any]] = [{"header": header, "ns": "arcs",
-                                      "action": _MARKER_DELETEALL}]
-    for k in np.flatnonzero(est.alive).tolist():
-        slot = int(slots[k])
-        ox, oy, r = float(h.x[slot]), float(h.y[slot]), float(h.r[slot])
-        mid = math.atan2(float(est.xy[k, 1]) - oy, float(est.xy[k, 0]) - ox)
-        half = 0.5 * float(est.width[k])
-        steps = max(2, math.ceil(2 * half / _ARC_SEGMENT) + 1)
-        tau = np.linspace(mid - half, mid + half, steps)
-        rgb = _SOURCE_RGB[PointSource(int(est.source[k]))]
-        markers.append({
-            "header": header, "ns": "arcs", "id": int(h.reading_id[slot]),
-            "type": _MARKER_LINE_STRIP, "action": 0,
-            "pose": {"orientation": {"w": 1.0}}, "scale": {"x": 0.02},
-            "color": {"r": rgb[0], "g": rgb[1], "b": rgb[2], "a": 1.0},
-            "points": [make_point(ox + r * math.cos(a), oy + r * math.sin(a), 0.0)
-                       for a in tau.tolist()],
-        })
+    markers: list[dict[str, Any]] = [{"header": header, **_DELETE_ALL}]
+    xs, ys = strips.x.tolist(), strips.y.tolist()
+    end = 0
+    for reading_id, style, count in zip(strips.ids.tolist(), strips.style.tolist(),
+                                        strips.counts.tolist(), strict=True):
+        start, end = end, end + count
+        markers.append({"header": header, "id": reading_id, **_strip_style(style),
+                        "points": [make_point(x, y, 0.0)
+                                   for x, y in zip(xs[start:end], ys[start:end], strict=True)]})
     return markers
+
+
+def _strip_style(style: int) -> dict[str, Any]:
+    """The fields of a strip of style ``style`` but its header, id and points."""
+    r, g, b = _SOURCE_RGB[_SOURCES[style]]
+    return {"ns": "arcs", "type": _MARKER_LINE_STRIP, "action": 0,
+            "pose": {"orientation": {"w": 1.0}}, "scale": {"x": 0.02},
+            "color": {"r": r, "g": g, "b": b, "a": 1.0}}
 
 
 def _point_mapping(x: float, y: float, z: float) -> dict[str, float]:
     return {"x": x, "y": y, "z": z}
+
+
+#: Marker styles: one per source, in _SOURCE_RGB's order, and each source code's style.
+_SOURCES = tuple(_SOURCE_RGB)
+_STYLES = tuple(_strip_style(k) for k in range(len(_SOURCES)))
+#: The first marker of every array: clear what the last one drew.
+_DELETE_ALL = {"ns": "arcs", "action": _MARKER_DELETEALL}
+_STYLE_OF_SOURCE = np.full(max(int(s) for s in _SOURCES) + 1, -1, dtype=np.int64)
+_STYLE_OF_SOURCE[[int(s) for s in _SOURCES]] = np.arange(len(_SOURCES))
