@@ -54,6 +54,7 @@ if TYPE_CHECKING:
         write_map_csv,
         write_readings_csv,
     )
+    from sonarcarve.io.marker_bytes import UnsupportedLayoutError
     from sonarcarve.io.rosbag import RosbagError, SensorMounts
     from sonarcarve.maps import (
         CallbackSink,
@@ -97,6 +98,7 @@ _EXPORTS = {
     "InputError": "sonarcarve.io",
     "OutputError": "sonarcarve.io",
     "RosbagError": "sonarcarve.io.rosbag",
+    "UnsupportedLayoutError": "sonarcarve.io.marker_bytes",
     "FilterError": "sonarcarve.filters",
     "LateEchoError": "sonarcarve.filters.late_echoes",
     "late_echo_mask": "sonarcarve.filters.late_echoes",
@@ -209,6 +211,7 @@ __all__ = [
     "SonarMethod",
     "SonarPoller",
     "SonarcarveError",
+    "UnsupportedLayoutError",
     "__version__",
     "arc_remainder",
     "carve_arc",
