@@ -274,6 +274,9 @@ def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
     # Specular-aware carving and the grids, as `sonarcarve grid` runs them.
     grids = """
     import math
+    import pathlib
+    import tempfile
+    from sonarcarve.io.bag_out import write_map_bag
     from sonarcarve.warm import counting_compiles, warm_stream
     from sonarcarve import MethodConfig, make_method
     from sonarcarve.filters import MapFilter, filter_map, point_origins
@@ -289,6 +292,10 @@ def test_after_warm_up_a_fresh_process_compiles_nothing(tmp_path: Path) -> None:
             grid.add_many(batch)
             grid.probabilities()
         filter_map(points, MapFilter(occlusion_depth=0.5), point_origins(points, batch))
+        # Bag output's arc markers, both formats (process --out X.bag | X.mcap).
+        with tempfile.TemporaryDirectory() as folder:
+            for name in ('arcs.bag', 'arcs.mcap'):
+                write_map_bag(pathlib.Path(folder) / name, batch, make_method('centerline'))
     print('COMPILED', *names)
     """
     assert _compiled_names(_run(grids, tmp_path)) == []

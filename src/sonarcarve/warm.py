@@ -32,6 +32,7 @@ in one lane only).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import multiprocessing
 import os
@@ -184,6 +185,20 @@ def _run_csv() -> None:
         occlusion_mask(points.xy, point_origins(points, batch), np.zeros(len(points)))
 
 
+def _run_bag_output() -> None:
+    """Bag output's compiled arc-marker kernels (:mod:`sonarcarve.io.marker_bytes`), for a ROS 1
+    ``.bag`` and an ``.mcap``, in a temp folder; nothing without rosbags (the ``ros`` extra),
+    which bag output needs anyway."""
+    if importlib.util.find_spec("rosbags") is None:
+        return
+    from sonarcarve.io.bag_out import write_map_bag
+
+    batch = warm_stream()
+    with tempfile.TemporaryDirectory(prefix="sonarcarve-warm-") as folder:
+        for name in ("arcs.bag", "arcs.mcap"):
+            write_map_bag(Path(folder) / name, batch, make_method("centerline"))
+
+
 def warm_lanes() -> list[Lane]:
     """The steps of :func:`warm_up` in lanes, longest first (they are handed out in order)."""
     def method(name: str, config: MethodConfig | None = None) -> Callable[[], None]:
@@ -203,7 +218,9 @@ def warm_lanes() -> list[Lane]:
         [("grids range sensor layer and occupancy",
           lambda: _run_grids(lambda: RangeSensorLayer(0.1, _EXTENT),
                              lambda: OccupancyGrid.around(_EXTENT, 0.1)))],
-        [("CSV reader, map writer and occlusion filter", _run_csv)],
+        # Bag output maps with centerline, as the CSV steps do.
+        [("CSV reader, map writer and occlusion filter", _run_csv),
+         ("bag output's arc markers", _run_bag_output)],
     ]
     # Methods added later get a lane of their own (carve and combined are in carving's).
     lanes += [[(f"method {name}", method(name))] for name in METHODS
