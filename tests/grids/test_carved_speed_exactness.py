@@ -200,7 +200,7 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
     grid = np.zeros(SHAPE, np.float32)
     heard = np.zeros(SHAPE, np.uint32)
     x, y = 0.03, -0.02
-    band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5)
+    band.draw_arc(grid, True, heard, m, band.ArcBand(x, y, 1.5, -1.0, 1.0), 0.5)
     rows, cols = np.nonzero(heard)
     assert len(rows) > 40
     # And exactly the band's cells, as draw_arc defines it (plain Python: centre within the band

@@ -352,13 +352,15 @@ class CarvedGrid(CellGrid):
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             self._update_intervals(history, slots, seqs)
             params = self._params
-            refresh_kernel(self._base, self._live, self._points, self._drawn,
-                           self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
-                           history.y, history.r, self._lo, self._hi, self._weight,
-                           params.fresh_arcs, self._heard, self._model_array, history.theta1,
-                           history.theta2, self._newest, history.t, self._latest_t,
-                           params.fresh_seconds, params.fresh_periods,
-                           *self._periods.fit_state())
+            # The kernel's bundles field by field (refresh_kernel says why), in its order:
+            # the maps, the two slot records, the history's rows, the intervals.
+            refresh_kernel(self._base, self._live, self._points, self._heard,
+                           self._drawn, self._drawn_seq, self._pdrawn, self._pseq,
+                           history.x, history.y, history.r, history.theta1, history.theta2,
+                           history.t, self._lo, self._hi, self._weight,
+                           slots, seqs, self._model_array, params.fresh_arcs,
+                           self._newest, self._latest_t, params.fresh_seconds,
+                           params.fresh_periods, *self._periods.fit_state())
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,

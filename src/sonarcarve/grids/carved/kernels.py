@@ -18,10 +18,17 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
+from sonarcarve.grids.carved.band import ArcBand, arc_value, draw_arc, holds, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, free_space
 from sonarcarve.grids.carved.mark import refresh_points
-from sonarcarve.grids.carved.model import Model, model_from
+from sonarcarve.grids.carved.model import (
+    ArcRows,
+    Intervals,
+    Maps,
+    Model,
+    SlotRecord,
+    model_from,
+)
 from sonarcarve.grids.carved.periods import note_kernel, row_period
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
@@ -118,8 +125,8 @@ def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
                 finals: Finals, p: int) -> None:
     """Arc ``p`` of ``finals`` into ``base``, for good."""
     value = arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
-    draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
-             finals.hi[p], value)
+    arc = ArcBand(finals.x[p], finals.y[p], finals.r[p], finals.lo[p], finals.hi[p])
+    draw_arc(base, True, heard, m, arc, value)
 
 
 @compiled
@@ -128,18 +135,23 @@ def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np
                   pseq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
                   heard: npt.NDArray[np.uint32], model: FloatArray) -> None:
     """Take the drawn contribution of the arcs ``seqs`` (in ``slots``) leaving the history out
-    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch)."""
+    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch; ``drawn,
+    drawn_seq`` and ``pdrawn, pseq``: the two :class:`~sonarcarve.grids.carved.model.SlotRecord`
+    bundles, field by field as the grid passes them)."""
     m = model_from(model)
+    _retire(live, SlotRecord(drawn, drawn_seq), slots, seqs, heard, m)
+    _retire(points, SlotRecord(pdrawn, pseq), slots, seqs, heard, m)
+
+
+@compiled_inline
+def _retire(grid: npt.NDArray[np.floating], record: SlotRecord, slots: SlotArray,
+            seqs: npt.NDArray[np.int64], heard: npt.NDArray[np.uint32], m: Model) -> None:
+    """Take what the arcs ``seqs`` (in ``slots``) drew into ``grid`` out, if they drew it."""
     for k in range(slots.shape[0]):
         slot = slots[k]
-        if drawn_seq[slot] == seqs[k]:
-            undraw(live, heard, m, drawn, slot)
-            drawn_seq[slot] = -1
-    for k in range(slots.shape[0]):
-        slot = slots[k]
-        if pseq[slot] == seqs[k]:
-            undraw(points, heard, m, pdrawn, slot)
-            pseq[slot] = -1
+        if record.seq[slot] == seqs[k]:
+            undraw(grid, heard, m, record, slot)
+            record.seq[slot] = -1
 
 
 @compiled
@@ -153,47 +165,78 @@ def keep_chain(chain: FloatArray, batch_chain: FloatArray, first: int, first_liv
 
 @compiled
 def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
-                   points: npt.NDArray[np.float32], drawn: FloatArray,
-                   drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
-                   pseq: npt.NDArray[np.int64], slots: SlotArray,
-                   seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                   lo: FloatArray, hi: FloatArray, weight: FloatArray, with_points: bool,
-                   heard: npt.NDArray[np.uint32], model: FloatArray, theta1: FloatArray,
-                   theta2: FloatArray, newest: npt.NDArray[np.int64], t: FloatArray,
-                   latest: float, seconds: float, periods: float, gaps: FloatArray,
-                   count: npt.NDArray[np.int64], refit: BoolArray,
-                   period: FloatArray) -> int:
+                   points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32],
+                   drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta1: FloatArray, theta2: FloatArray, t: FloatArray, lo: FloatArray,
+                   hi: FloatArray, weight: FloatArray, slots: SlotArray,
+                   seqs: npt.NDArray[np.int64], model: FloatArray, with_points: bool,
+                   newest: npt.NDArray[np.int64], latest: float, seconds: float,
+                   periods: float, gaps: FloatArray, count: npt.NDArray[np.int64],
+                   refit: BoolArray, period: FloatArray) -> int:
     """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs ``slots``
-    (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
-    (:func:`~sonarcarve.grids.carved.intervals.intervals`) are indexed by slot. First every arc
-    whose interval or value changed is redrawn into ``live``, then the points are judged on the
-    whole updated spread map (:func:`~sonarcarve.grids.carved.mark.refresh_points`), each
-    sensor's newest arc as fresh as :func:`mark_fresh` says (``newest .. period``, its
-    arguments after ``first``, which is ``seqs[0]``). Returns how many arcs and points changed.
-    ``model``: :func:`~sonarcarve.grids.carved.model.model_array`. One call a read: the fresh
-    arcs worked out in their own kernel cost a dispatch and an array more."""
+    (arcs ``seqs``): first every arc whose interval or value changed is redrawn into ``live``
+    (:func:`_redraw_changed`), then the points are judged on the whole updated spread map
+    (:func:`_refresh_marks`), each sensor's newest arc as fresh as :func:`mark_fresh` says.
+    Returns how many arcs and points changed.
+
+    The grid calls it once a read, from Python, so it takes its bundles' fields one by one
+    (a NamedTuple costs numba's dispatcher microseconds a call, a plain tuple about twice the
+    cost per array of separate arguments: ``model.py``) and names them here:
+    :class:`~sonarcarve.grids.carved.model.Maps` ``base .. heard``,
+    :class:`~sonarcarve.grids.carved.model.SlotRecord` ``drawn, drawn_seq`` (``live``'s) and
+    ``pdrawn, pseq`` (the points'), :class:`~sonarcarve.grids.carved.model.ArcRows`
+    ``x .. t`` (the history's rows) and :class:`~sonarcarve.grids.carved.model.Intervals`
+    ``lo, hi, weight`` (:func:`~sonarcarve.grids.carved.intervals.intervals`), all by slot;
+    ``model``: :func:`~sonarcarve.grids.carved.model.model_array`; ``newest .. period``:
+    :func:`mark_fresh`'s arguments after ``first``, which is ``seqs[0]``. One call a read: the
+    fresh arcs worked out in their own kernel cost a dispatch and an array more."""
     m = model_from(model)
-    changed = 0
-    for k in range(slots.shape[0]):
-        s = slots[k]
-        value = arc_value(r[s], lo[s], hi[s], weight[s], m)
-        # redraw's own test first: most arcs did not change, and the call costs more.
-        if (drawn_seq[s] == seqs[k] and drawn[s, 3] == lo[s] and drawn[s, 4] == hi[s]
-                and drawn[s, 5] == value):
-            continue
-        changed += redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
-                          hi[s], value, heard, m)
+    maps = Maps(base, live, points, heard)
+    live_record = SlotRecord(drawn, drawn_seq)
+    rows = ArcRows(x, y, r, theta1, theta2, t)
+    ivs = Intervals(lo, hi, weight)
+    changed = _redraw_changed(maps, live_record, rows, ivs, slots, seqs, m)
     if with_points:
         fresh = np.zeros(slots.shape[0], dtype=np.bool_)
         if slots.shape[0]:
             mark_fresh(newest, seqs[0], slots, t, latest, seconds, periods, gaps, count, refit,
                        period, fresh)
-        for k in range(slots.shape[0]):
-            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
-                continue
-            changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
-                                      slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],
-                                      heard, m, theta1[slots[k]], theta2[slots[k]])
+        changed += _refresh_marks(maps, live_record, SlotRecord(pdrawn, pseq), rows, ivs,
+                                  slots, seqs, fresh, m)
+    return changed
+
+
+@compiled_inline
+def _redraw_changed(maps: Maps, live_record: SlotRecord, rows: ArcRows, ivs: Intervals,
+                    slots: SlotArray, seqs: npt.NDArray[np.int64], m: Model) -> int:
+    """Redraw into ``live`` each live arc whose interval or value changed since it was drawn;
+    returns how many."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        value = arc_value(rows.r[s], ivs.lo[s], ivs.hi[s], ivs.weight[s], m)
+        # redraw's own test first: most arcs did not change, and the call costs more.
+        if holds(live_record, s, seqs[k], ivs.lo[s], ivs.hi[s], value):
+            continue
+        arc = ArcBand(rows.x[s], rows.y[s], rows.r[s], ivs.lo[s], ivs.hi[s])
+        changed += redraw(maps.live, live_record, s, seqs[k], arc, value, maps.heard, m)
+    return changed
+
+
+@compiled_inline
+def _refresh_marks(maps: Maps, live_record: SlotRecord, point_record: SlotRecord,
+                   rows: ArcRows, ivs: Intervals, slots: SlotArray,
+                   seqs: npt.NDArray[np.int64], fresh: BoolArray, m: Model) -> int:
+    """Mark each ``fresh`` arc the spread map does not explain, and take the marks of the
+    others out (:func:`~sonarcarve.grids.carved.mark.refresh_points`); returns how many
+    changed."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        if not fresh[k] and point_record.seq[slots[k]] < 0:  # no point, and none to draw
+            continue
+        changed += refresh_points(maps, live_record, point_record, slots[k], seqs[k], rows,
+                                  ivs, fresh[k], m)
     return changed
 
 

@@ -1,7 +1,16 @@
 """The grid as its compiled kernels take it: :class:`Model`, the geometry and the sensor model in
 log-odds (``l_hit = logit(p_hit)``, ``l_miss = logit(p_miss)``, the clamp ``[l_min, l_max]``, the
 band half-width ``b = (h + ε) / 2``), built from :class:`~sonarcarve.grids.carved.CarvedGridParams`
-by :func:`model_of` (``docs/carved-grid.md``, "The sensor model").
+by :func:`model_of` (``docs/carved-grid.md``, "The sensor model"); and the arrays they work on,
+grouped by what they hold: the grid's cells, :class:`Maps`; per history slot, what a slot drew,
+:class:`SlotRecord`, the history's rows, :class:`ArcRows`, and the carved intervals at the last
+read, :class:`Intervals`.
+
+The bundles are NamedTuples, named inside the kernels. A kernel the grid calls from Python takes
+their fields as separate parameters, in field order, and names them on its first lines: numba's
+dispatcher types a NamedTuple argument field by field in Python (:func:`model_array` says what
+that costs for :class:`Model`), and a plain tuple of arrays costs about twice as much per array as
+separate arguments (``methods/arrays.py``, measured there for one call a reading).
 """
 
 from __future__ import annotations
@@ -9,13 +18,29 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS, CarvedGridParams
 from sonarcarve.grids.cells import logit
 from sonarcarve.typing import FloatArray
 
-__all__ = ["Model", "model_array", "model_from", "model_of"]
+__all__ = [
+    "DRAWN_HI",
+    "DRAWN_LO",
+    "DRAWN_R",
+    "DRAWN_VALUE",
+    "DRAWN_X",
+    "DRAWN_Y",
+    "ArcRows",
+    "Intervals",
+    "Maps",
+    "Model",
+    "SlotRecord",
+    "model_array",
+    "model_from",
+    "model_of",
+]
 
 
 class Model(NamedTuple):
@@ -79,3 +104,46 @@ def model_from(v: FloatArray) -> Model:
     :class:`Model`'s order)."""
     return Model(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11],
                  v[12], v[13] != 0.0, v[14], v[15], v[16], v[17], v[18], v[19])
+
+
+class Maps(NamedTuple):
+    """The grid's cells, shape (ny, nx) each, row ``i`` at ``y = ymin + (i + 0.5) h``
+    (``docs/carved-grid.md``, "Following carving over time")."""
+
+    base: npt.NDArray[np.float32]  # final log-odds: free space, and the bands of retired arcs
+    live: FloatArray  # the live arcs' bands, spread over their carved intervals (unclamped)
+    points: npt.NDArray[np.float32]  # the fresh arcs' marks, apart from ``live`` (mark.py)
+    heard: npt.NDArray[np.uint32]  # per cell, the bearing bins it was heard from (heard.py)
+
+
+class SlotRecord(NamedTuple):
+    """What each history slot drew into one grid (``live``, or ``points`` for the marks), so
+    that it can be moved or taken out again; by slot."""
+
+    drawn: FloatArray  # (storage, 6): the band's x, y, r, lo, hi, value (DRAWN_X .. DRAWN_VALUE)
+    seq: npt.NDArray[np.int64]  # (storage,): the arc's sequence number, -1: nothing drawn
+
+
+#: Columns of :attr:`SlotRecord.drawn`.
+DRAWN_X, DRAWN_Y, DRAWN_R, DRAWN_LO, DRAWN_HI, DRAWN_VALUE = 0, 1, 2, 3, 4, 5
+
+
+class ArcRows(NamedTuple):
+    """The history's rows the refresh reads (:class:`~sonarcarve.history.SonarHistory`), shape
+    (storage,) each, by slot, read only."""
+
+    x: FloatArray  # the reading's origin, metres
+    y: FloatArray
+    r: FloatArray  # its range, metres
+    theta1: FloatArray  # its beam's edges θ ∓ φ/2, radians (eq. 2.1)
+    theta2: FloatArray
+    t: FloatArray  # its time, seconds
+
+
+class Intervals(NamedTuple):
+    """Each live arc's band at the last read
+    (:func:`~sonarcarve.grids.carved.intervals.intervals`), shape (storage,) each, by slot."""
+
+    lo: FloatArray  # the carved interval [lo, hi] the band covers, radians
+    hi: FloatArray
+    weight: FloatArray  # the method's confidence times the repeats' factor (0: no band)
