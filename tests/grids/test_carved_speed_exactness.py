@@ -133,7 +133,7 @@ def test_free_space_stores_the_exact_updates_bits(changes: dict[str, float],
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, half)
-        fs.free_space(base, heard, m, x, y, theta, r, half, held)
+        fs.free_space(base, heard, m, fs.Beam(x, y, theta, r, half), held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
 
 
@@ -153,7 +153,7 @@ def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quic
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, 0.5 * math.radians(22.5))
-        fs.free_space(base, heard, m, x, y, theta, r, 0.5 * math.radians(22.5), held)
+        fs.free_space(base, heard, m, fs.Beam(x, y, theta, r, 0.5 * math.radians(22.5)), held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
         crossed = (before > 0.0) & (base <= 0.0)
         freed += int(crossed.sum())

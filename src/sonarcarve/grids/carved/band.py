@@ -277,8 +277,8 @@ def holds(record: SlotRecord, slot: int, seq: int, lo: float, hi: float, value: 
     """Whether slot ``slot`` holds arc ``seq`` drawn with ``value`` on ``[lo, hi]`` already
     (:func:`redraw` then has nothing to do)."""
     drawn = record.drawn
-    return (record.seq[slot] == seq and drawn[slot, DRAWN_LO] == lo
-            and drawn[slot, DRAWN_HI] == hi and drawn[slot, DRAWN_VALUE] == value)
+    return bool(record.seq[slot] == seq and drawn[slot, DRAWN_LO] == lo
+                and drawn[slot, DRAWN_HI] == hi and drawn[slot, DRAWN_VALUE] == value)
 
 
 @compiled_inline
@@ -338,7 +338,7 @@ def drawn_band(record: SlotRecord, slot: int) -> ArcBand:
 @compiled_inline
 def drawn_value(record: SlotRecord, slot: int) -> float:
     """The value slot ``slot`` drew on its band (0.0 when it drew nothing since the start)."""
-    return record.drawn[slot, DRAWN_VALUE]
+    return float(record.drawn[slot, DRAWN_VALUE])
 
 
 @compiled_inline

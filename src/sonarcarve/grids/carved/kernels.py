@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
 from sonarcarve.grids.carved.band import ArcBand, arc_value, draw_arc, holds, redraw, undraw
-from sonarcarve.grids.carved.free_space import HELD, free_space
+from sonarcarve.grids.carved.free_space import HELD, Beam, free_space
 from sonarcarve.grids.carved.mark import refresh_points
 from sonarcarve.grids.carved.model import (
     ArcRows,
@@ -114,7 +114,7 @@ def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], mo
         while p < nf and finals.seq[p] + capacity <= seqs[k]:
             _draw_final(base, heard, m, finals, p)
             p += 1
-        free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
+        free_space(base, heard, m, Beam(x[k], y[k], theta[k], r[k], half[k]), held)
     while p < nf:
         _draw_final(base, heard, m, finals, p)
         p += 1
