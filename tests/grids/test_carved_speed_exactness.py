@@ -19,7 +19,7 @@ from sonarcarve.grids import CarvedGridParams, scan
 from sonarcarve.grids.carved import band
 from sonarcarve.grids.carved import free_space as fs
 from sonarcarve.grids.carved.heard import HEARD_BINS, heard_bin
-from sonarcarve.grids.carved.model import Model, model_of
+from sonarcarve.grids.carved.model import Model, SlotRecord, model_of
 from sonarcarve.grids.scan import bearing_off
 from sonarcarve.methods import atm
 
@@ -223,6 +223,40 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
         assert int(heard[i, j]) == 1 << k
         bins.add(k)
     assert len(bins) >= 9
+
+
+@pytest.mark.parametrize("profile", [0.0, 1.5])
+def test_moving_an_arc_in_one_pass_adds_what_taking_it_out_and_drawing_it_again_adds(
+        profile: float) -> None:
+    # redraw moves an arc whose interval or value changed in one pass over the union of its
+    # old and new bands (band._move_arc); each cell must get the same two additions, in the
+    # same order, as undrawing the old band and drawing the new: the same bits. On a live grid
+    # full of random values, so that the order of the additions shows in the rounding.
+    m = _model(band_profile=profile)
+    rng = np.random.default_rng(17)
+    changed = 0
+    for _ in range(60):
+        live = rng.normal(0.0, 1.0, SHAPE)
+        heard = np.zeros(SHAPE, np.uint32)
+        x, y, r = rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(0.3, 1.6)
+        lo0 = rng.uniform(-math.pi, math.pi)
+        hi0 = lo0 + rng.uniform(0.0, 0.8)
+        lo1 = lo0 + rng.uniform(-0.3, 0.5)  # overlapping, apart, or nested
+        hi1 = max(lo1, hi0 + rng.uniform(-0.6, 0.3))
+        value0, value1 = rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0)
+        old, new = band.ArcBand(x, y, r, lo0, hi0), band.ArcBand(x, y, r, lo1, hi1)
+        drawn = np.zeros((3, 6))
+        drawn[1] = (x, y, r, lo0, hi0, value0)
+        record = SlotRecord(drawn, np.array([-1, 7, -1], dtype=np.int64))
+        before = live.copy()
+        expected = live.copy()
+        band.draw_arc(expected, False, heard, m, old, -value0)
+        band.draw_arc(expected, False, heard, m, new, value1)
+        assert band.redraw(live, record, 1, 7, new, value1, heard, m) == 1
+        assert np.array_equal(live, expected)
+        assert tuple(drawn[1]) == (x, y, r, lo1, hi1, value1)
+        changed += not np.array_equal(live, before)
+    assert changed == 60  # every case moved cells
 
 
 def test_atm_stores_the_exact_bearings_float32() -> None:
