@@ -173,8 +173,16 @@ def draw_arc(grid: npt.NDArray[np.floating], clamp: bool, heard: npt.NDArray[np.
                         if value > 0.0:
                             heard[i, j] |= 1 << _heard_bin_of(dx, dy, iv.mid, iv.cos_mid,
                                                               iv.sin_mid)
-                else:
-                    _draw_by_bearing(grid, clamp, heard, m, i, j, dx, dy, d, iv, value)
+                else:  # under a profile, or a final band's heard bin: the bearing itself
+                    v, off = _by_bearing(dx, dy, d, iv, value, m.profile)
+                    if v != v:  # NaN: outside the interval
+                        continue
+                    if clamp:
+                        grid[i, j] = clamped(m, grid[i, j] + v)
+                        if v > 0.0:
+                            heard[i, j] |= 1 << heard_bin(iv.mid + off)
+                    else:
+                        grid[i, j] += v
 
 
 @compiled_inline
@@ -184,26 +192,21 @@ def clamped(m: Model, value: float) -> float:
 
 
 @compiled_inline
-def _draw_by_bearing(grid: npt.NDArray[np.floating], clamp: bool,
-                     heard: npt.NDArray[np.uint32], m: Model, i: int, j: int, dx: float,
-                     dy: float, d: float, iv: DrawnInterval, value: float) -> None:
-    """:func:`draw_arc` on one cell of the ring where the cell's bearing is needed: under a
-    band profile (the value falls off towards the interval's edges), or for a final band's
-    heard bin."""
+def _by_bearing(dx: float, dy: float, d: float, iv: DrawnInterval, value: float,
+                profile: float) -> tuple[float, float]:
+    """``(v, off)`` of the cell at ``(dx, dy)`` (distance ``d``) from the arc's origin: what
+    :func:`draw_arc` adds to it, ``value`` times the band profile's factor at its bearing
+    ``off`` from the interval's middle; NaN outside the interval. Numbers in, numbers out: a
+    step handed the grids would count references to them at every cell."""
     if not_within(dx, dy, d, iv.cos_mid, iv.sin_mid, iv.cos_half):
-        return  # no arctangent for the cells clearly outside the interval
+        return math.nan, 0.0  # no arctangent for the cells clearly outside the interval
     off = bearing_off(dx, dy, iv.mid)
     if abs(off) > iv.half:
-        return
+        return math.nan, off
     v = value
-    if m.profile > 0.0:
-        v *= _profile_factor(off, iv.half, m.profile)
-    if clamp:
-        grid[i, j] = clamped(m, grid[i, j] + v)
-        if v > 0.0:
-            heard[i, j] |= 1 << heard_bin(iv.mid + off)
-    else:
-        grid[i, j] += v
+    if profile > 0.0:
+        v *= _profile_factor(off, iv.half, profile)
+    return v, off
 
 
 @compiled_inline

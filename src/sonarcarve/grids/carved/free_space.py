@@ -189,63 +189,55 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                     if cell > 0.0 and quick <= 0.0:
                         heard[i, j] = 0
                     continue
-            n_held = _exact_update(base, heard, m, beam, i, j, dy * c - dx * s, along,
-                                   math.sqrt(d2), held, n_held)
+            # The exact update: the arctangent, and the tanh fade.
+            a, w, miss = _exact_terms(m, beam, dy * c - dx * s, along, math.sqrt(d2))
+            if m.aware and cell > 0.0:
+                audible = audibility(int(heard[i, j]), heard_bin(beam.theta + a))
+                if m.through > 0.0 and n_held < held.shape[0]:  # for _free_behind
+                    held[n_held, _ROW] = i
+                    held[n_held, _COLUMN] = j
+                    held[n_held, _DISTANCE] = math.sqrt(d2)
+                    held[n_held, _BEARING] = a
+                    held[n_held, _PROFILE] = w
+                    held[n_held, _AUDIBLE] = audible
+                    held[n_held, _MISS] = miss
+                    n_held += 1
+                    continue
+                miss = audible * m.l_heard + (1.0 - audible) * miss
+            base[i, j] = clamped(m, cell + w * miss)
+            # Freed: the surface it was heard from is believed gone, so are its bearings (else
+            # a later, different surface here would be cleared at full strength from them).
+            # Now, at the crossing, and not when a band next marks the cell: the bits are read
+            # only while base > 0, which only a final band restores, so the bearings kept are
+            # exactly those heard since the cell was freed; forgetting them at every free-space
+            # update below 0 would drop the bands that raised the cell back, and forgetting at
+            # the next band would keep only that band's. The stored (float32) value decides,
+            # as it does when the bits are read.
+            if cell > 0.0 and base[i, j] <= 0.0:
+                heard[i, j] = 0
     if n_held:
         _free_behind(base, heard, m, held, n_held)
 
 
+#: Columns of :func:`free_space`'s ``held`` rows, read by :func:`_free_behind`: the cell's row
+#: and column, its distance, its bearing off the axis, the profile ``γ(α)``, the audibility of
+#: its surface from the beam's bearing and the faded miss ``f(d) · logit(p_miss)``.
+_ROW, _COLUMN, _DISTANCE, _BEARING, _PROFILE, _AUDIBLE, _MISS = 0, 1, 2, 3, 4, 5, 6
+
+
 @compiled_inline
-def _exact_update(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
-                  beam: Beam, i: int, j: int, cross: float, along: float, d: float,
-                  held: FloatArray, n_held: int) -> int:
-    """:func:`free_space`'s update of cell ``(i, j)`` (distance ``d``, ``(along, cross)`` from
-    the apex along and across the axis) with the arctangent and the ``tanh`` fade, where the
-    quick update could not tell its bits or the cell is believed occupied; a believed-occupied
-    cell is held back in ``held`` for :func:`_free_behind` when ``see_through`` is on and there
-    is room. Returns how many cells ``held`` holds now."""
-    cell = base[i, j]
+def _exact_terms(m: Model, beam: Beam, cross: float, along: float,
+                 d: float) -> tuple[float, float, float]:
+    """``(α, γ(α), f(d) · logit(p_miss))`` of a cell at distance ``d``, ``(along, cross)``
+    from the apex along and across the axis, computed exactly (``atan2``, ``tanh``): where the
+    quick update could not tell the bits, or the cell is believed occupied. Numbers in,
+    numbers out: a step handed arrays would count references to them at every cell."""
     a = math.atan2(cross, along)
     w = 1.0 - (a / beam.half) ** 2
     miss = m.l_miss
     if m.fade < math.inf:
         miss *= 0.5 * (1.0 - math.tanh(2.0 * (d - m.fade)))
-    if m.aware and cell > 0.0:
-        audible = audibility(int(heard[i, j]), heard_bin(beam.theta + a))
-        if m.through > 0.0 and n_held < held.shape[0]:
-            _hold(held, n_held, i, j, d, a, w, audible, miss)
-            return n_held + 1
-        miss = audible * m.l_heard + (1.0 - audible) * miss
-    base[i, j] = clamped(m, cell + w * miss)
-    # Freed: the surface it was heard from is believed gone, so are its bearings (else a later,
-    # different surface here would be cleared at full strength from them). Now, at the
-    # crossing, and not when a band next marks the cell: the bits are read only while
-    # base > 0, which only a final band restores, so the bearings kept are exactly those
-    # heard since the cell was freed; forgetting them at every free-space update below 0
-    # would drop the bands that raised the cell back, and forgetting at the next band would
-    # keep only that band's. The stored (float32) value decides, as it does when the bits
-    # are read.
-    if cell > 0.0 and base[i, j] <= 0.0:
-        heard[i, j] = 0
-    return n_held
-
-
-#: Columns of :func:`free_space`'s ``held`` rows (:func:`_hold`, :func:`_free_behind`).
-_ROW, _COLUMN, _DISTANCE, _BEARING, _PROFILE, _AUDIBLE, _MISS = 0, 1, 2, 3, 4, 5, 6
-
-
-@compiled_inline
-def _hold(held: FloatArray, n: int, i: int, j: int, d: float, a: float, w: float,
-          audible: float, miss: float) -> None:
-    """Row ``n`` of ``held``: cell ``(i, j)`` at distance ``d`` and bearing ``a`` off the axis,
-    its profile ``γ(α) = w``, audibility and faded miss."""
-    held[n, _ROW] = i
-    held[n, _COLUMN] = j
-    held[n, _DISTANCE] = d
-    held[n, _BEARING] = a
-    held[n, _PROFILE] = w
-    held[n, _AUDIBLE] = audible
-    held[n, _MISS] = miss
+    return a, w, miss
 
 
 @compiled_inline

@@ -18,13 +18,13 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import ArcBand, arc_value, draw_arc, holds, redraw, undraw
+from sonarcarve.grids.carved.band import ArcBand, arc_value, draw_arc, redraw, undraw
 from sonarcarve.grids.carved.free_space import HELD, Beam, free_space
-from sonarcarve.grids.carved.mark import refresh_points
+from sonarcarve.grids.carved.mark import FreshArc, refresh_points
 from sonarcarve.grids.carved.model import (
-    ArcRows,
-    Intervals,
-    Maps,
+    DRAWN_HI,
+    DRAWN_LO,
+    DRAWN_VALUE,
     Model,
     SlotRecord,
     model_from,
@@ -180,63 +180,79 @@ def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
     (:func:`_refresh_marks`), each sensor's newest arc as fresh as :func:`mark_fresh` says.
     Returns how many arcs and points changed.
 
-    The grid calls it once a read, from Python, so it takes its bundles' fields one by one
-    (a NamedTuple costs numba's dispatcher microseconds a call, a plain tuple about twice the
-    cost per array of separate arguments: ``model.py``) and names them here:
-    :class:`~sonarcarve.grids.carved.model.Maps` ``base .. heard``,
-    :class:`~sonarcarve.grids.carved.model.SlotRecord` ``drawn, drawn_seq`` (``live``'s) and
-    ``pdrawn, pseq`` (the points'), :class:`~sonarcarve.grids.carved.model.ArcRows`
-    ``x .. t`` (the history's rows) and :class:`~sonarcarve.grids.carved.model.Intervals`
-    ``lo, hi, weight`` (:func:`~sonarcarve.grids.carved.intervals.intervals`), all by slot;
-    ``model``: :func:`~sonarcarve.grids.carved.model.model_array`; ``newest .. period``:
-    :func:`mark_fresh`'s arguments after ``first``, which is ``seqs[0]``. One call a read: the
-    fresh arcs worked out in their own kernel cost a dispatch and an array more."""
+    The arrays, in groups: the grid's cells ``base, live, points, heard``; what each slot drew
+    into ``live`` (``drawn, drawn_seq``) and into ``points`` (``pdrawn, pseq``), each a
+    :class:`~sonarcarve.grids.carved.model.SlotRecord`; the history's rows ``x, y, r`` (origin
+    and range), ``theta1, theta2`` (the beam, eq. 2.1) and ``t``; each live arc's band at the
+    last read ``lo, hi, weight`` (:func:`~sonarcarve.grids.carved.intervals.intervals`); all
+    but the cells by slot. ``model``: :func:`~sonarcarve.grids.carved.model.model_array`;
+    ``newest .. period``: :func:`mark_fresh`'s arguments after ``first``, which is ``seqs[0]``.
+
+    Why separate arrays and not named bundles of them: the grid calls this once a read from
+    Python (a NamedTuple costs numba's dispatcher microseconds a call, ``model.py``), and inside
+    this kernel, which counts references (it allocates), a bundle of arrays costs an atomic
+    increment and decrement per array each time it is built or passed to a step (2026-12-05,
+    this kernel on an unchanged office map at 0.10 m, arguments captured from
+    ``benchmarks/grid_reads.py``'s stream: 7.6 µs a read with separate arrays, 8.2 with the
+    cells, slot records, rows and intervals as bundles). Bundles of numbers
+    (:class:`~sonarcarve.grids.carved.band.ArcBand`,
+    :class:`~sonarcarve.grids.carved.mark.FreshArc`) cost nothing. One call a read: the fresh
+    arcs worked out in their own kernel cost a dispatch and an array more."""
     m = model_from(model)
-    maps = Maps(base, live, points, heard)
-    live_record = SlotRecord(drawn, drawn_seq)
-    rows = ArcRows(x, y, r, theta1, theta2, t)
-    ivs = Intervals(lo, hi, weight)
-    changed = _redraw_changed(maps, live_record, rows, ivs, slots, seqs, m)
+    changed = _redraw_changed(live, heard, drawn, drawn_seq, x, y, r, lo, hi, weight, slots,
+                              seqs, m)
     if with_points:
         fresh = np.zeros(slots.shape[0], dtype=np.bool_)
         if slots.shape[0]:
             mark_fresh(newest, seqs[0], slots, t, latest, seconds, periods, gaps, count, refit,
                        period, fresh)
-        changed += _refresh_marks(maps, live_record, SlotRecord(pdrawn, pseq), rows, ivs,
-                                  slots, seqs, fresh, m)
+        changed += _refresh_marks(base, live, points, heard, drawn, drawn_seq, pdrawn, pseq,
+                                  x, y, r, theta1, theta2, lo, hi, weight, slots, seqs, fresh,
+                                  m)
     return changed
 
 
 @compiled_inline
-def _redraw_changed(maps: Maps, live_record: SlotRecord, rows: ArcRows, ivs: Intervals,
+def _redraw_changed(live: FloatArray, heard: npt.NDArray[np.uint32], drawn: FloatArray,
+                    drawn_seq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
+                    r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
                     slots: SlotArray, seqs: npt.NDArray[np.int64], m: Model) -> int:
-    """Redraw into ``live`` each live arc whose interval or value changed since it was drawn;
-    returns how many."""
+    """Redraw into ``live`` each live arc whose interval or value changed since it was drawn
+    (:func:`~sonarcarve.grids.carved.band.redraw`); returns how many."""
     changed = 0
     for k in range(slots.shape[0]):
         s = slots[k]
-        value = arc_value(rows.r[s], ivs.lo[s], ivs.hi[s], ivs.weight[s], m)
-        # redraw's own test first: most arcs did not change, and the call costs more.
-        if holds(live_record, s, seqs[k], ivs.lo[s], ivs.hi[s], value):
+        value = arc_value(r[s], lo[s], hi[s], weight[s], m)
+        # redraw's own test first, written out: most arcs did not change, and the call (and
+        # its slot record) costs more.
+        if (drawn_seq[s] == seqs[k] and drawn[s, DRAWN_LO] == lo[s]
+                and drawn[s, DRAWN_HI] == hi[s] and drawn[s, DRAWN_VALUE] == value):
             continue
-        arc = ArcBand(rows.x[s], rows.y[s], rows.r[s], ivs.lo[s], ivs.hi[s])
-        changed += redraw(maps.live, live_record, s, seqs[k], arc, value, maps.heard, m)
+        arc = ArcBand(x[s], y[s], r[s], lo[s], hi[s])
+        changed += redraw(live, SlotRecord(drawn, drawn_seq), s, seqs[k], arc, value, heard, m)
     return changed
 
 
 @compiled_inline
-def _refresh_marks(maps: Maps, live_record: SlotRecord, point_record: SlotRecord,
-                   rows: ArcRows, ivs: Intervals, slots: SlotArray,
-                   seqs: npt.NDArray[np.int64], fresh: BoolArray, m: Model) -> int:
+def _refresh_marks(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32],
+                   drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta1: FloatArray, theta2: FloatArray, lo: FloatArray, hi: FloatArray,
+                   weight: FloatArray, slots: SlotArray, seqs: npt.NDArray[np.int64],
+                   fresh: BoolArray, m: Model) -> int:
     """Mark each ``fresh`` arc the spread map does not explain, and take the marks of the
     others out (:func:`~sonarcarve.grids.carved.mark.refresh_points`); returns how many
     changed."""
     changed = 0
     for k in range(slots.shape[0]):
-        if not fresh[k] and point_record.seq[slots[k]] < 0:  # no point, and none to draw
+        s = slots[k]
+        if not fresh[k] and pseq[s] < 0:  # no point, and none to draw
             continue
-        changed += refresh_points(maps, live_record, point_record, slots[k], seqs[k], rows,
-                                  ivs, fresh[k], m)
+        arc = FreshArc(s, seqs[k], ArcBand(x[s], y[s], r[s], lo[s], hi[s]), weight[s],
+                       theta1[s], theta2[s], fresh[k])
+        changed += refresh_points(base, live, points, heard, drawn, drawn_seq, pdrawn, pseq,
+                                  arc, m)
     return changed
 
 

@@ -27,7 +27,6 @@ from sonarcarve.grids.carved.band import (
     box_cells,
     clamped,
     drawn_interval,
-    drawn_value,
     redraw,
     undraw,
 )
@@ -39,16 +38,13 @@ from sonarcarve.grids.carved.model import (
     DRAWN_VALUE,
     DRAWN_X,
     DRAWN_Y,
-    ArcRows,
-    Intervals,
-    Maps,
     Model,
     SlotRecord,
 )
 from sonarcarve.grids.scan import TWO_PI, bearing_off, cos_bound, ring_columns, within
 from sonarcarve.typing import FloatArray
 
-__all__ = ["refresh_points"]
+__all__ = ["FreshArc", "refresh_points"]
 
 #: Log-odds above which a cell counts as more likely occupied than not where a fresh arc's
 #: point is placed (:func:`_band_likeliest`): 0, up to the rounding of ``live``'s sums of
@@ -85,39 +81,55 @@ class LobeReach(NamedTuple):
     cos_beam: float  # cos_bound(beam)
 
 
+class FreshArc(NamedTuple):
+    """One live arc as :func:`refresh_points` judges its mark: numbers only (a bundle of
+    numbers costs nothing; one of arrays counts a reference per array at every step,
+    :func:`~sonarcarve.grids.carved.kernels.refresh_kernel`)."""
+
+    slot: int  # its history slot
+    seq: int  # its sequence number
+    band: ArcBand  # where its band lies: origin, range, carved interval
+    weight: float  # its band's weight (0: none)
+    theta1: float  # its beam's edges θ ∓ φ/2, radians (eq. 2.1)
+    theta2: float
+    fresh: bool  # its sensor's newest reading (kernels.mark_fresh)
+
+
 @compiled_inline
-def refresh_points(maps: Maps, live_record: SlotRecord, point_record: SlotRecord, slot: int,
-                   seq: int, rows: ArcRows, ivs: Intervals, fresh: bool, m: Model) -> int:
-    """Draw the arc in ``slot`` (arc ``seq``) into ``maps.points`` as carving's point estimate
-    if it is ``fresh`` (its sensor's newest reading) and the map of spread arcs
-    (``base + live``, without the arc's own spread value) does not explain it
-    (:func:`_band_likeliest`): the mark's length ``m.mark`` of its carved interval around the
-    point's bearing (the middle, eq. 3.6, or the most likely cell of a band whose middle the
-    map does not favour; clipped to the interval) raised from its spread value to a whole hit,
-    or, where the likeliest cell lies in reach of a side lobe, a whole hit around it clipped to
-    the lobe's stretch of the circle (:func:`_lobe_mark`); else take its point out. The spread
-    map does not hold the points, so the fresh arcs' order does not matter. Returns 1 if its
-    point changed."""
-    lo, hi, weight = ivs.lo[slot], ivs.hi[slot], ivs.weight[slot]
-    if fresh and weight > 0.0:
-        x, y, r = rows.x[slot], rows.y[slot], rows.r[slot]
-        theta1, theta2 = rows.theta1[slot], rows.theta2[slot]
-        own = drawn_value(live_record, slot)
-        explained, at, side = _band_likeliest(maps.base, maps.live, maps.heard, live_record,
-                                              slot, m, ArcBand(x, y, r, lo, hi), own, theta1,
-                                              theta2)
+def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32],
+                   drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], arc: FreshArc, m: Model) -> int:
+    """Draw ``arc`` into ``points`` as carving's point estimate if it is ``fresh`` (its
+    sensor's newest reading) and the map of spread arcs (``base + live``, without the arc's
+    own spread value) does not explain it (:func:`_band_likeliest`): the mark's length
+    ``m.mark`` of its carved interval around the point's bearing (the middle, eq. 3.6, or the
+    most likely cell of a band whose middle the map does not favour; clipped to the interval)
+    raised from its spread value to a whole hit, or, where the likeliest cell lies in reach of
+    a side lobe, a whole hit around it clipped to the lobe's stretch of the circle
+    (:func:`_lobe_mark`); else take its point out. ``drawn, drawn_seq`` and ``pdrawn, pseq``:
+    what each slot drew into ``live`` and into ``points``
+    (:class:`~sonarcarve.grids.carved.model.SlotRecord`). The spread map does not hold the
+    points, so the fresh arcs' order does not matter. Returns 1 if its point changed."""
+    slot = arc.slot
+    if arc.fresh and arc.weight > 0.0:
+        x, y, r, lo, hi = arc.band
+        own = drawn[slot, DRAWN_VALUE]
+        explained, at, side = _band_likeliest(base, live, heard, SlotRecord(drawn, drawn_seq),
+                                              slot, m, arc.band, own, arc.theta1, arc.theta2)
         if not explained:
-            whole = arc_value(r, lo, hi, weight, m, True)
+            whole = arc_value(r, lo, hi, arc.weight, m, True)
             if side != 0.0:
-                z1, z2 = _lobe_mark(m, r, at, side, theta1, theta2)
-                return redraw(maps.points, point_record, slot, seq, ArcBand(x, y, r, z1, z2),
-                              whole, maps.heard, m)
+                z1, z2 = _lobe_mark(m, r, at, side, arc.theta1, arc.theta2)
+                return redraw(points, SlotRecord(pdrawn, pseq), slot, arc.seq,
+                              ArcBand(x, y, r, z1, z2), whole, heard, m)
             half = min(0.5 * (hi - lo), 0.5 * m.mark / r)
             mark = ArcBand(x, y, r, max(lo, at - half), min(hi, at + half))
-            return redraw(maps.points, point_record, slot, seq, mark, whole - own, maps.heard, m)
-    if point_record.seq[slot] >= 0:
-        undraw(maps.points, maps.heard, m, point_record, slot)
-        point_record.seq[slot] = -1
+            return redraw(points, SlotRecord(pdrawn, pseq), slot, arc.seq, mark, whole - own,
+                          heard, m)
+    if pseq[slot] >= 0:
+        undraw(points, heard, m, SlotRecord(pdrawn, pseq), slot)
+        pseq[slot] = -1
         return 1
     return 0
 

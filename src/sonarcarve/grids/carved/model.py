@@ -1,16 +1,15 @@
 """The grid as its compiled kernels take it: :class:`Model`, the geometry and the sensor model in
 log-odds (``l_hit = logit(p_hit)``, ``l_miss = logit(p_miss)``, the clamp ``[l_min, l_max]``, the
 band half-width ``b = (h + ε) / 2``), built from :class:`~sonarcarve.grids.carved.CarvedGridParams`
-by :func:`model_of` (``docs/carved-grid.md``, "The sensor model"); and the arrays they work on,
-grouped by what they hold: the grid's cells, :class:`Maps`; per history slot, what a slot drew,
-:class:`SlotRecord`, the history's rows, :class:`ArcRows`, and the carved intervals at the last
-read, :class:`Intervals`.
+by :func:`model_of` (``docs/carved-grid.md``, "The sensor model"); and what each history slot drew
+into a grid, :class:`SlotRecord`.
 
-The bundles are NamedTuples, named inside the kernels. A kernel the grid calls from Python takes
-their fields as separate parameters, in field order, and names them on its first lines: numba's
-dispatcher types a NamedTuple argument field by field in Python (:func:`model_array` says what
-that costs for :class:`Model`), and a plain tuple of arrays costs about twice as much per array as
-separate arguments (``methods/arrays.py``, measured there for one call a reading).
+The kernels take arrays one by one, not in bundles: numba's dispatcher types a NamedTuple
+argument field by field in Python (:func:`model_array` says what that costs for :class:`Model`),
+and inside a kernel that counts references (one that allocates) a bundle of arrays costs an
+atomic increment and decrement per array each time it is built or handed to a step
+(:func:`~sonarcarve.grids.carved.kernels.refresh_kernel` has the measurement). Bundles of numbers
+(the model, an arc's band, a beam) cost nothing, and the kernels use them freely.
 """
 
 from __future__ import annotations
@@ -32,9 +31,6 @@ __all__ = [
     "DRAWN_VALUE",
     "DRAWN_X",
     "DRAWN_Y",
-    "ArcRows",
-    "Intervals",
-    "Maps",
     "Model",
     "SlotRecord",
     "model_array",
@@ -106,19 +102,11 @@ def model_from(v: FloatArray) -> Model:
                  v[12], v[13] != 0.0, v[14], v[15], v[16], v[17], v[18], v[19])
 
 
-class Maps(NamedTuple):
-    """The grid's cells, shape (ny, nx) each, row ``i`` at ``y = ymin + (i + 0.5) h``
-    (``docs/carved-grid.md``, "Following carving over time")."""
-
-    base: npt.NDArray[np.float32]  # final log-odds: free space, and the bands of retired arcs
-    live: FloatArray  # the live arcs' bands, spread over their carved intervals (unclamped)
-    points: npt.NDArray[np.float32]  # the fresh arcs' marks, apart from ``live`` (mark.py)
-    heard: npt.NDArray[np.uint32]  # per cell, the bearing bins it was heard from (heard.py)
-
-
 class SlotRecord(NamedTuple):
     """What each history slot drew into one grid (``live``, or ``points`` for the marks), so
-    that it can be moved or taken out again; by slot."""
+    that it can be moved or taken out again; by slot. Built where a step takes it (a band
+    moved, taken out, or looked up by :func:`~sonarcarve.grids.carved.mark._heard_near`), not
+    in the hot loops."""
 
     drawn: FloatArray  # (storage, 6): the band's x, y, r, lo, hi, value (DRAWN_X .. DRAWN_VALUE)
     seq: npt.NDArray[np.int64]  # (storage,): the arc's sequence number, -1: nothing drawn
@@ -126,24 +114,3 @@ class SlotRecord(NamedTuple):
 
 #: Columns of :attr:`SlotRecord.drawn`.
 DRAWN_X, DRAWN_Y, DRAWN_R, DRAWN_LO, DRAWN_HI, DRAWN_VALUE = 0, 1, 2, 3, 4, 5
-
-
-class ArcRows(NamedTuple):
-    """The history's rows the refresh reads (:class:`~sonarcarve.history.SonarHistory`), shape
-    (storage,) each, by slot, read only."""
-
-    x: FloatArray  # the reading's origin, metres
-    y: FloatArray
-    r: FloatArray  # its range, metres
-    theta1: FloatArray  # its beam's edges θ ∓ φ/2, radians (eq. 2.1)
-    theta2: FloatArray
-    t: FloatArray  # its time, seconds
-
-
-class Intervals(NamedTuple):
-    """Each live arc's band at the last read
-    (:func:`~sonarcarve.grids.carved.intervals.intervals`), shape (storage,) each, by slot."""
-
-    lo: FloatArray  # the carved interval [lo, hi] the band covers, radians
-    hi: FloatArray
-    weight: FloatArray  # the method's confidence times the repeats' factor (0: no band)
