@@ -19,7 +19,7 @@ from sonarcarve.grids import CarvedGridParams, scan
 from sonarcarve.grids.carved import band
 from sonarcarve.grids.carved import free_space as fs
 from sonarcarve.grids.carved.heard import HEARD_BINS, heard_bin
-from sonarcarve.grids.carved.model import Model, SlotRecord, model_of
+from sonarcarve.grids.carved.model import Model, model_of
 from sonarcarve.grids.scan import bearing_off
 from sonarcarve.methods import atm
 
@@ -247,12 +247,12 @@ def test_moving_an_arc_in_one_pass_adds_what_taking_it_out_and_drawing_it_again_
         old, new = band.ArcBand(x, y, r, lo0, hi0), band.ArcBand(x, y, r, lo1, hi1)
         drawn = np.zeros((3, 6))
         drawn[1] = (x, y, r, lo0, hi0, value0)
-        record = SlotRecord(drawn, np.array([-1, 7, -1], dtype=np.int64))
+        drawn_seq = np.array([-1, 7, -1], dtype=np.int64)
         before = live.copy()
         expected = live.copy()
         band.draw_arc(expected, False, heard, m, old, -value0)
         band.draw_arc(expected, False, heard, m, new, value1)
-        assert band.redraw(live, record, 1, 7, new, value1, heard, m) == 1
+        assert band.redraw(live, drawn, drawn_seq, 1, 7, new, value1, heard, m) == 1
         assert np.array_equal(live, expected)
         assert tuple(drawn[1]) == (x, y, r, lo1, hi1, value1)
         changed += not np.array_equal(live, before)

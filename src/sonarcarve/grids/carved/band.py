@@ -26,7 +26,6 @@ from sonarcarve.grids.carved.model import (
     DRAWN_X,
     DRAWN_Y,
     Model,
-    SlotRecord,
 )
 from sonarcarve.grids.scan import (
     SERIES_T,
@@ -39,6 +38,7 @@ from sonarcarve.grids.scan import (
     sector_box,
     within,
 )
+from sonarcarve.typing import FloatArray
 
 __all__ = [
     "ArcBand",
@@ -48,10 +48,7 @@ __all__ = [
     "box_cells",
     "clamped",
     "draw_arc",
-    "drawn_band",
     "drawn_interval",
-    "drawn_value",
-    "holds",
     "redraw",
     "undraw",
 ]
@@ -248,22 +245,26 @@ def _heard_bin_of(dx: float, dy: float, mid: float, cos_mid: float, sin_mid: flo
 
 
 @compiled  # its own function: inlined into the refresh loop, that loop ran 2x slower
-def redraw(live: npt.NDArray[np.floating], record: SlotRecord, slot: int, seq: int,
-           arc: ArcBand, value: float, heard: npt.NDArray[np.uint32], m: Model) -> int:
+def redraw(live: npt.NDArray[np.floating], drawn: FloatArray,
+           drawn_seq: npt.NDArray[np.int64], slot: int, seq: int, arc: ArcBand, value: float,
+           heard: npt.NDArray[np.uint32], m: Model) -> int:
     """Make slot ``slot`` (arc ``seq``) hold ``value`` on ``arc``'s band in ``live``
-    (``record``: what each slot drew there); 1 if that changed anything. The same arc drawn
-    before with another interval or value is moved in one pass (:func:`_move_arc`: the same
-    additions, cell by cell, as taking it out and drawing it again)."""
-    if holds(record, slot, seq, arc.lo, arc.hi, value):
+    (``drawn, drawn_seq``: what each slot drew there,
+    :class:`~sonarcarve.grids.carved.model.SlotRecord`'s fields; arrays, not the bundle: a
+    bundle of arrays costs a reference count per array at each step it is handed to, and this
+    runs for every arc that changed); 1 if that changed anything. The same arc drawn before
+    with another interval or value is moved in one pass (:func:`_move_arc`: the same additions,
+    cell by cell, as taking it out and drawing it again)."""
+    if (drawn_seq[slot] == seq and drawn[slot, DRAWN_LO] == arc.lo
+            and drawn[slot, DRAWN_HI] == arc.hi and drawn[slot, DRAWN_VALUE] == value):
         return 0
-    drawn, drawn_seq = record
     if (drawn_seq[slot] >= 0 and drawn[slot, DRAWN_X] == arc.x
             and drawn[slot, DRAWN_Y] == arc.y and drawn[slot, DRAWN_R] == arc.r):
-        _move_arc(live, heard, m, drawn_band(record, slot), -drawn_value(record, slot), arc,
-                  value)
+        before = ArcBand(arc.x, arc.y, arc.r, drawn[slot, DRAWN_LO], drawn[slot, DRAWN_HI])
+        _move_arc(live, heard, m, before, -drawn[slot, DRAWN_VALUE], arc, value)
     else:
         if drawn_seq[slot] >= 0:
-            undraw(live, heard, m, record, slot)
+            undraw(live, heard, m, drawn, slot)
         draw_arc(live, False, heard, m, arc, value)
     drawn[slot, DRAWN_X] = arc.x
     drawn[slot, DRAWN_Y] = arc.y
@@ -273,15 +274,6 @@ def redraw(live: npt.NDArray[np.floating], record: SlotRecord, slot: int, seq: i
     drawn[slot, DRAWN_VALUE] = value
     drawn_seq[slot] = seq
     return 1
-
-
-@compiled_inline
-def holds(record: SlotRecord, slot: int, seq: int, lo: float, hi: float, value: float) -> bool:
-    """Whether slot ``slot`` holds arc ``seq`` drawn with ``value`` on ``[lo, hi]`` already
-    (:func:`redraw` then has nothing to do)."""
-    drawn = record.drawn
-    return bool(record.seq[slot] == seq and drawn[slot, DRAWN_LO] == lo
-                and drawn[slot, DRAWN_HI] == hi and drawn[slot, DRAWN_VALUE] == value)
 
 
 @compiled_inline
@@ -331,22 +323,10 @@ def _move_arc(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: 
 
 
 @compiled_inline
-def drawn_band(record: SlotRecord, slot: int) -> ArcBand:
-    """The band slot ``slot`` drew (:attr:`SlotRecord.drawn`'s columns DRAWN_X .. DRAWN_HI)."""
-    drawn = record.drawn
-    return ArcBand(drawn[slot, DRAWN_X], drawn[slot, DRAWN_Y], drawn[slot, DRAWN_R],
-                   drawn[slot, DRAWN_LO], drawn[slot, DRAWN_HI])
-
-
-@compiled_inline
-def drawn_value(record: SlotRecord, slot: int) -> float:
-    """The value slot ``slot`` drew on its band (0.0 when it drew nothing since the start)."""
-    return float(record.drawn[slot, DRAWN_VALUE])
-
-
-@compiled_inline
 def undraw(live: npt.NDArray[np.floating], heard: npt.NDArray[np.uint32], m: Model,
-           record: SlotRecord, slot: int) -> None:
-    """Take what slot ``slot`` drew (``record``) out of ``live``; the record is the caller's
-    to clear."""
-    draw_arc(live, False, heard, m, drawn_band(record, slot), -drawn_value(record, slot))
+           drawn: FloatArray, slot: int) -> None:
+    """Take what slot ``slot`` drew (``drawn[slot]``: x, y, r, lo, hi, value) out of ``live``;
+    its sequence number is the caller's to clear."""
+    band = ArcBand(drawn[slot, DRAWN_X], drawn[slot, DRAWN_Y], drawn[slot, DRAWN_R],
+                   drawn[slot, DRAWN_LO], drawn[slot, DRAWN_HI])
+    draw_arc(live, False, heard, m, band, -drawn[slot, DRAWN_VALUE])

@@ -26,7 +26,6 @@ from sonarcarve.grids.carved.model import (
     DRAWN_LO,
     DRAWN_VALUE,
     Model,
-    SlotRecord,
     model_from,
 )
 from sonarcarve.grids.carved.periods import note_kernel, row_period
@@ -139,19 +138,21 @@ def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np
     drawn_seq`` and ``pdrawn, pseq``: the two :class:`~sonarcarve.grids.carved.model.SlotRecord`
     bundles, field by field as the grid passes them)."""
     m = model_from(model)
-    _retire(live, SlotRecord(drawn, drawn_seq), slots, seqs, heard, m)
-    _retire(points, SlotRecord(pdrawn, pseq), slots, seqs, heard, m)
+    _retire(live, drawn, drawn_seq, slots, seqs, heard, m)
+    _retire(points, pdrawn, pseq, slots, seqs, heard, m)
 
 
 @compiled_inline
-def _retire(grid: npt.NDArray[np.floating], record: SlotRecord, slots: SlotArray,
-            seqs: npt.NDArray[np.int64], heard: npt.NDArray[np.uint32], m: Model) -> None:
-    """Take what the arcs ``seqs`` (in ``slots``) drew into ``grid`` out, if they drew it."""
+def _retire(grid: npt.NDArray[np.floating], drawn: FloatArray,
+            drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+            heard: npt.NDArray[np.uint32], m: Model) -> None:
+    """Take what the arcs ``seqs`` (in ``slots``) drew into ``grid`` (``drawn, drawn_seq``)
+    out, if they drew it."""
     for k in range(slots.shape[0]):
         slot = slots[k]
-        if record.seq[slot] == seqs[k]:
-            undraw(grid, heard, m, record, slot)
-            record.seq[slot] = -1
+        if drawn_seq[slot] == seqs[k]:
+            undraw(grid, heard, m, drawn, slot)
+            drawn_seq[slot] = -1
 
 
 @compiled
@@ -223,13 +224,13 @@ def _redraw_changed(live: FloatArray, heard: npt.NDArray[np.uint32], drawn: Floa
     for k in range(slots.shape[0]):
         s = slots[k]
         value = arc_value(r[s], lo[s], hi[s], weight[s], m)
-        # redraw's own test first, written out: most arcs did not change, and the call (and
-        # its slot record) costs more.
+        # redraw's own test first, written out: most arcs did not change, and the call costs
+        # more.
         if (drawn_seq[s] == seqs[k] and drawn[s, DRAWN_LO] == lo[s]
                 and drawn[s, DRAWN_HI] == hi[s] and drawn[s, DRAWN_VALUE] == value):
             continue
         arc = ArcBand(x[s], y[s], r[s], lo[s], hi[s])
-        changed += redraw(live, SlotRecord(drawn, drawn_seq), s, seqs[k], arc, value, heard, m)
+        changed += redraw(live, drawn, drawn_seq, s, seqs[k], arc, value, heard, m)
     return changed
 
 

@@ -121,14 +121,13 @@ def refresh_points(base: npt.NDArray[np.float32], live: FloatArray,
             whole = arc_value(r, lo, hi, arc.weight, m, True)
             if side != 0.0:
                 z1, z2 = _lobe_mark(m, r, at, side, arc.theta1, arc.theta2)
-                return redraw(points, SlotRecord(pdrawn, pseq), slot, arc.seq,
-                              ArcBand(x, y, r, z1, z2), whole, heard, m)
+                return redraw(points, pdrawn, pseq, slot, arc.seq, ArcBand(x, y, r, z1, z2),
+                              whole, heard, m)
             half = min(0.5 * (hi - lo), 0.5 * m.mark / r)
             mark = ArcBand(x, y, r, max(lo, at - half), min(hi, at + half))
-            return redraw(points, SlotRecord(pdrawn, pseq), slot, arc.seq, mark, whole - own,
-                          heard, m)
+            return redraw(points, pdrawn, pseq, slot, arc.seq, mark, whole - own, heard, m)
     if pseq[slot] >= 0:
-        undraw(points, heard, m, SlotRecord(pdrawn, pseq), slot)
+        undraw(points, heard, m, pdrawn, slot)
         pseq[slot] = -1
         return 1
     return 0

@@ -104,9 +104,10 @@ def model_from(v: FloatArray) -> Model:
 
 class SlotRecord(NamedTuple):
     """What each history slot drew into one grid (``live``, or ``points`` for the marks), so
-    that it can be moved or taken out again; by slot. Built where a step takes it (a band
-    moved, taken out, or looked up by :func:`~sonarcarve.grids.carved.mark._heard_near`), not
-    in the hot loops."""
+    that it can be moved or taken out again; by slot. Only the fresh arc's judgment takes it
+    as a bundle (:func:`~sonarcarve.grids.carved.mark._band_likeliest`, its own compiled
+    function, called once a fresh arc); the steps that run for every arc take its two arrays
+    (a bundle of arrays costs a reference count per array at each step it is handed to)."""
 
     drawn: FloatArray  # (storage, 6): the band's x, y, r, lo, hi, value (DRAWN_X .. DRAWN_VALUE)
     seq: npt.NDArray[np.int64]  # (storage,): the arc's sequence number, -1: nothing drawn
