@@ -133,7 +133,7 @@ def test_free_space_stores_the_exact_updates_bits(changes: dict[str, float],
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, half)
-        fs.free_space(base, heard, m, x, y, theta, r, half, held)
+        fs.free_space(base, heard, m, fs.Beam(x, y, theta, r, half), held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
 
 
@@ -153,7 +153,7 @@ def test_without_surface_awareness_a_freed_cell_forgets_its_bearings_on_the_quic
         x, y = rng.uniform(-1.5, 1.5, 2)
         theta, r = rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 5.0)
         expected = _exact_free_space(base, m, x, y, theta, r, 0.5 * math.radians(22.5))
-        fs.free_space(base, heard, m, x, y, theta, r, 0.5 * math.radians(22.5), held)
+        fs.free_space(base, heard, m, fs.Beam(x, y, theta, r, 0.5 * math.radians(22.5)), held)
         np.testing.assert_array_equal(base.view(np.uint32), expected.view(np.uint32))
         crossed = (before > 0.0) & (base <= 0.0)
         freed += int(crossed.sum())
@@ -200,7 +200,7 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
     grid = np.zeros(SHAPE, np.float32)
     heard = np.zeros(SHAPE, np.uint32)
     x, y = 0.03, -0.02
-    band.draw_arc(grid, True, heard, m, x, y, 1.5, -1.0, 1.0, 0.5)
+    band.draw_arc(grid, True, heard, m, band.ArcBand(x, y, 1.5, -1.0, 1.0), 0.5)
     rows, cols = np.nonzero(heard)
     assert len(rows) > 40
     # And exactly the band's cells, as draw_arc defines it (plain Python: centre within the band
@@ -223,6 +223,40 @@ def test_each_cell_of_a_final_band_records_the_bin_of_its_own_bearing() -> None:
         assert int(heard[i, j]) == 1 << k
         bins.add(k)
     assert len(bins) >= 9
+
+
+@pytest.mark.parametrize("profile", [0.0, 1.5])
+def test_moving_an_arc_in_one_pass_adds_what_taking_it_out_and_drawing_it_again_adds(
+        profile: float) -> None:
+    # redraw moves an arc whose interval or value changed in one pass over the union of its
+    # old and new bands (band._move_arc); each cell must get the same two additions, in the
+    # same order, as undrawing the old band and drawing the new: the same bits. On a live grid
+    # full of random values, so that the order of the additions shows in the rounding.
+    m = _model(band_profile=profile)
+    rng = np.random.default_rng(17)
+    changed = 0
+    for _ in range(60):
+        live = rng.normal(0.0, 1.0, SHAPE)
+        heard = np.zeros(SHAPE, np.uint32)
+        x, y, r = rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(0.3, 1.6)
+        lo0 = rng.uniform(-math.pi, math.pi)
+        hi0 = lo0 + rng.uniform(0.0, 0.8)
+        lo1 = lo0 + rng.uniform(-0.3, 0.5)  # overlapping, apart, or nested
+        hi1 = max(lo1, hi0 + rng.uniform(-0.6, 0.3))
+        value0, value1 = rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0)
+        old, new = band.ArcBand(x, y, r, lo0, hi0), band.ArcBand(x, y, r, lo1, hi1)
+        drawn = np.zeros((3, 6))
+        drawn[1] = (x, y, r, lo0, hi0, value0)
+        drawn_seq = np.array([-1, 7, -1], dtype=np.int64)
+        before = live.copy()
+        expected = live.copy()
+        band.draw_arc(expected, False, heard, m, old, -value0)
+        band.draw_arc(expected, False, heard, m, new, value1)
+        assert band.redraw(live, drawn, drawn_seq, 1, 7, new, value1, heard, m) == 1
+        assert np.array_equal(live, expected)
+        assert tuple(drawn[1]) == (x, y, r, lo1, hi1, value1)
+        changed += not np.array_equal(live, before)
+    assert changed == 60  # every case moved cells
 
 
 def test_atm_stores_the_exact_bearings_float32() -> None:

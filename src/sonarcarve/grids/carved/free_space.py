@@ -15,24 +15,19 @@ of the free space's CPU time).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_inline
+from sonarcarve.grids.carved.band import box_cells, clamped
 from sonarcarve.grids.carved.heard import audibility, heard_bin
 from sonarcarve.grids.carved.model import Model
-from sonarcarve.grids.scan import (
-    EDGE,
-    SERIES_ERROR,
-    SERIES_T,
-    atan_series,
-    cell_range,
-    sector_box,
-)
+from sonarcarve.grids.scan import EDGE, SERIES_ERROR, SERIES_T, atan_series, cell_range
 from sonarcarve.typing import FloatArray
 
-__all__ = ["HELD", "free_space"]
+__all__ = ["HELD", "Beam", "free_space"]
 
 #: Cells believed occupied one beam's free space can hold back for :func:`_free_behind`; the
 #: rest get the plain update.
@@ -104,32 +99,66 @@ def _floor_and_inside(m: Model, cos_half: float) -> tuple[float, float]:
     return floor, cos_half + EDGE
 
 
+class Beam(NamedTuple):
+    """One reading's beam, whose free space :func:`free_space` draws (metres, radians)."""
+
+    x: float  # the apex: the sensor's position
+    y: float
+    theta: float  # the axis θ
+    r: float  # the range heard (a no-echo reading: max_range + band)
+    half: float  # half the beam's width, φ/2
+
+
+class _Sector(NamedTuple):
+    """What :func:`free_space` tests each cell against: the sector of radius ``reach`` about the
+    beam's axis, with its edges' unit directions (:func:`_row_span`)."""
+
+    reach: float  # r - band - free_margin: the free space ends there
+    c: float  # cos θ
+    s: float  # sin θ
+    cos_half: float
+    u1x: float  # the clockwise edge θ - φ/2
+    u1y: float
+    u2x: float  # the counter-clockwise edge θ + φ/2
+    u2y: float
+
+
+@compiled_inline
+def _sector_of(m: Model, beam: Beam) -> _Sector:
+    """The sector of ``beam``'s free space: nearer than ``r - band - free_margin``, so that a
+    beam does not clear its own echo's band (nor, with ``pose_sigma``, an older arc a pose
+    error moved)."""
+    theta, half = beam.theta, beam.half
+    t1, t2 = theta - half, theta + half
+    return _Sector(beam.r - m.band - m.free_margin, math.cos(theta), math.sin(theta),
+                   math.cos(half), math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2))
+
+
 @compiled_inline
 def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: Model,
-               x: float, y: float, theta: float, r: float, half: float,
-               held: FloatArray) -> None:
-    """One reading's free space on the beam's cells nearer than ``r - band - free_margin``
-    (``free_margin``: 2 ``pose_sigma``, 0 by default), clamped into
+               beam: Beam, held: FloatArray) -> None:
+    """One reading's free space (eq. 3.2's region ``F``, ending ``band + free_margin`` short
+    of the range; ``free_margin``: 2 ``pose_sigma``, 0 by default), clamped into
     ``[l_min, l_max]``: ``γ(α) f(d) · logit(p_miss)`` (``f`` the fade) on cells not believed
     occupied (``base <= 0``), and where ``aware`` on the others
     ``γ(α) (A · logit(p_heard) + (1 - A) f(d) · logit(p_miss))``, ``A`` the cell's
     :func:`~sonarcarve.grids.carved.heard.audibility` from the beam's bearing (``aware`` False: the
-    fade for all).
+    fade for all). ``held``: room for the believed-occupied cells :func:`_free_behind` updates
+    after the others, when ``see_through`` is on.
 
     A cell this brings from ``base > 0`` to ``base <= 0`` forgets the bearings it was heard
     from (``docs/carved-grid.md``, "Clearing what was heard")."""
-    reach = r - m.band - m.free_margin
+    sector = _sector_of(m, beam)
+    reach = sector.reach
     if reach <= 0.0:
         return
-    xmin, ymin, h, l_miss, fade = m.xmin, m.ymin, m.h, m.l_miss, m.fade
-    ny, nx = base.shape
-    c, s, cos_half = math.cos(theta), math.sin(theta), math.cos(half)
-    xlo, ylo, xhi, yhi = sector_box(x, y, theta - half, theta + half, 0.0, reach)
-    j0, j1 = cell_range(xlo, xhi, xmin, h, nx)
-    i0, i1 = cell_range(ylo, yhi, ymin, h, ny)
-    t1, t2 = theta - half, theta + half
-    u1x, u1y, u2x, u2y = math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2)
-    floor, inside = _floor_and_inside(m, cos_half)
+    x, y, half = beam.x, beam.y, beam.half
+    xmin, ymin, h = m.xmin, m.ymin, m.h
+    c, s = sector.c, sector.s
+    nx = base.shape[1]
+    i0, i1, j0, j1 = box_cells(m, base.shape, x, y, beam.theta - half, beam.theta + half, 0.0,
+                               reach)
+    floor, inside = _floor_and_inside(m, sector.cos_half)
     dw = _profile_error(half)
     inv_half2 = 1.0 / (half * half)
     n_held = 0
@@ -137,7 +166,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
         dy = ymin + (i + 0.5) * h - y
         # Only the row's stretch inside the sector (plus a cell each side; the exact test is
         # per cell below): most of the bounding box of a slanted beam lies outside it.
-        lo, hi = _row_span(dy, reach, half, u1x, u1y, u2x, u2y)
+        lo, hi = _row_span(dy, reach, half, sector.u1x, sector.u1y, sector.u2x, sector.u2y)
         if lo > hi:
             continue
         ja, jb = cell_range(x + lo, x + hi, xmin, h, nx)
@@ -147,7 +176,7 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
             if d2 >= reach * reach:
                 continue
             along = dx * c + dy * s
-            if along < math.sqrt(d2) * cos_half:
+            if along < math.sqrt(d2) * sector.cos_half:
                 continue
             cell = base[i, j]
             if cell == floor and along > math.sqrt(d2) * inside:
@@ -160,25 +189,22 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                     if cell > 0.0 and quick <= 0.0:
                         heard[i, j] = 0
                     continue
-            a = math.atan2(dy * c - dx * s, along)
-            w = 1.0 - (a / half) ** 2
-            miss = l_miss
-            if fade < math.inf:
-                miss *= 0.5 * (1.0 - math.tanh(2.0 * (math.sqrt(d2) - fade)))
+            # The exact update: the arctangent, and the tanh fade.
+            a, w, miss = _exact_terms(m, beam, dy * c - dx * s, along, math.sqrt(d2))
             if m.aware and cell > 0.0:
-                audible = audibility(int(heard[i, j]), heard_bin(theta + a))
-                if m.through > 0.0 and n_held < held.shape[0]:
-                    held[n_held, 0] = i
-                    held[n_held, 1] = j
-                    held[n_held, 2] = math.sqrt(d2)
-                    held[n_held, 3] = a
-                    held[n_held, 4] = w
-                    held[n_held, 5] = audible
-                    held[n_held, 6] = miss
+                audible = audibility(int(heard[i, j]), heard_bin(beam.theta + a))
+                if m.through > 0.0 and n_held < held.shape[0]:  # for _free_behind
+                    held[n_held, _ROW] = i
+                    held[n_held, _COLUMN] = j
+                    held[n_held, _DISTANCE] = math.sqrt(d2)
+                    held[n_held, _BEARING] = a
+                    held[n_held, _PROFILE] = w
+                    held[n_held, _AUDIBLE] = audible
+                    held[n_held, _MISS] = miss
                     n_held += 1
                     continue
                 miss = audible * m.l_heard + (1.0 - audible) * miss
-            base[i, j] = min(m.l_max, max(m.l_min, cell + w * miss))
+            base[i, j] = clamped(m, cell + w * miss)
             # Freed: the surface it was heard from is believed gone, so are its bearings (else
             # a later, different surface here would be cleared at full strength from them).
             # Now, at the crossing, and not when a band next marks the cell: the bits are read
@@ -191,6 +217,27 @@ def free_space(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m: 
                 heard[i, j] = 0
     if n_held:
         _free_behind(base, heard, m, held, n_held)
+
+
+#: Columns of :func:`free_space`'s ``held`` rows, read by :func:`_free_behind`: the cell's row
+#: and column, its distance, its bearing off the axis, the profile ``γ(α)``, the audibility of
+#: its surface from the beam's bearing and the faded miss ``f(d) · logit(p_miss)``.
+_ROW, _COLUMN, _DISTANCE, _BEARING, _PROFILE, _AUDIBLE, _MISS = 0, 1, 2, 3, 4, 5, 6
+
+
+@compiled_inline
+def _exact_terms(m: Model, beam: Beam, cross: float, along: float,
+                 d: float) -> tuple[float, float, float]:
+    """``(α, γ(α), f(d) · logit(p_miss))`` of a cell at distance ``d``, ``(along, cross)``
+    from the apex along and across the axis, computed exactly (``atan2``, ``tanh``): where the
+    quick update could not tell the bits, or the cell is believed occupied. Numbers in,
+    numbers out: a step handed arrays would count references to them at every cell."""
+    a = math.atan2(cross, along)
+    w = 1.0 - (a / beam.half) ** 2
+    miss = m.l_miss
+    if m.fade < math.inf:
+        miss *= 0.5 * (1.0 - math.tanh(2.0 * (d - m.fade)))
+    return a, w, miss
 
 
 @compiled_inline
@@ -261,16 +308,16 @@ def _free_behind(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m
     the beam would have heard and did not is gone, and so is what stood behind it."""
     h = m.h
     for p in range(n):
-        audible = held[p, 5]
-        d = held[p, 2]
+        audible = held[p, _AUDIBLE]
+        d = held[p, _DISTANCE]
         for q in range(n):
-            dq = held[q, 2]
-            if (held[q, 5] > audible and dq <= d - h and d - dq <= m.through
-                    and abs(held[p, 3] - held[q, 3]) * dq <= 0.7072 * h):
-                audible = held[q, 5]
-        i, j = int(held[p, 0]), int(held[p, 1])
+            dq = held[q, _DISTANCE]
+            if (held[q, _AUDIBLE] > audible and dq <= d - h and d - dq <= m.through
+                    and abs(held[p, _BEARING] - held[q, _BEARING]) * dq <= 0.7072 * h):
+                audible = held[q, _AUDIBLE]
+        i, j = int(held[p, _ROW]), int(held[p, _COLUMN])
         cell = base[i, j]
-        miss = audible * m.l_heard + (1.0 - audible) * held[p, 6]
-        base[i, j] = min(m.l_max, max(m.l_min, cell + held[p, 4] * miss))
+        miss = audible * m.l_heard + (1.0 - audible) * held[p, _MISS]
+        base[i, j] = clamped(m, cell + held[p, _PROFILE] * miss)
         if cell > 0.0 and base[i, j] <= 0.0:
             heard[i, j] = 0

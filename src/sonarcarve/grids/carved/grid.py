@@ -117,6 +117,17 @@ class CarvedGrid(CellGrid):
         self._model = model_of(self._params, xmin, ymin, self._resolution, self.band)
         self._model_array = model_array(self._model)  # as the kernels take it
         self._l_min, self._l_max = self._model.l_min, self._model.l_max
+        self._init_cells(ny, nx)
+        self._init_slots(method.history.storage_size)
+        self._init_reads(method)
+        self._stale = False
+        self.readings = 0
+        method.add_commit_listener(self._on_commit)
+        # A global map would grow with the log; the grid is the map, so only count the points.
+        method.set_global_sink(CountingSink())
+
+    def _init_cells(self, ny: int, nx: int) -> None:
+        """The cell arrays (:class:`~sonarcarve.grids.carved.model.Maps`), all zero."""
         self._base = np.zeros((ny, nx), dtype=np.float32)
         self._live = np.zeros((ny, nx), dtype=np.float64)
         # The points of the fresh arcs (CarvedGridParams.fresh_arcs), apart from ``live`` so
@@ -124,9 +135,13 @@ class CarvedGrid(CellGrid):
         self._points = np.zeros((ny, nx), dtype=np.float32)
         # Per cell, the bearings (HEARD_BINS sectors, one bit each) it was heard from.
         self._heard = np.zeros((ny, nx), dtype=HEARD_DTYPE)
-        size = method.history.storage_size
+
+    def _init_slots(self, size: int) -> None:
+        """The record per history slot (``size`` of them): what it drew, its interval and
+        weight at the last read, its repeats' factor."""
         # Per slot, what was drawn into ``live``: x, y, r, lo, hi, value; and the arc's
-        # sequence number (its position in the stream of arcs), -1 for nothing.
+        # sequence number (its position in the stream of arcs), -1 for nothing
+        # (model.SlotRecord).
         self._drawn = np.zeros((size, 6), dtype=np.float64)
         self._drawn_seq = np.full(size, -1, dtype=np.int64)
         self._pdrawn = np.zeros((size, 6), dtype=np.float64)  # the same for the points
@@ -141,6 +156,11 @@ class CarvedGrid(CellGrid):
         # While a batch is folded in: its arcs' factors, by sequence number from _batch_first.
         self._batch_first = 0
         self._batch_chain = np.ones(0)
+
+    def _init_reads(self, method: SonarMethod) -> None:
+        """What the reads keep between them: the carving state seen, the arcs pending their
+        final band, the sensors' newest arcs and firing periods."""
+        size = method.history.storage_size
         # Plain carving or combined: per slot, the carving state (lo, hi, status) and the
         # number of ATM crossings those were computed from, and for which arc (-1: none); a
         # read asks only for the estimates of the arcs whose state changed since
@@ -163,11 +183,6 @@ class CarvedGrid(CellGrid):
         # or none yet).
         self._newest = np.full(0, -1, dtype=np.int64)
         self._latest_t = -math.inf  # time of the newest reading seen (fresh_seconds counts back)
-        self._stale = False
-        self.readings = 0
-        method.add_commit_listener(self._on_commit)
-        # A global map would grow with the log; the grid is the map, so only count the points.
-        method.set_global_sink(CountingSink())
 
     def __repr__(self) -> str:
         ny, nx = self.shape
@@ -352,13 +367,15 @@ class CarvedGrid(CellGrid):
             seqs = history.appended - len(slots) + np.arange(len(slots), dtype=np.int64)
             self._update_intervals(history, slots, seqs)
             params = self._params
-            refresh_kernel(self._base, self._live, self._points, self._drawn,
-                           self._drawn_seq, self._pdrawn, self._pseq, slots, seqs, history.x,
-                           history.y, history.r, self._lo, self._hi, self._weight,
-                           params.fresh_arcs, self._heard, self._model_array, history.theta1,
-                           history.theta2, self._newest, history.t, self._latest_t,
-                           params.fresh_seconds, params.fresh_periods,
-                           *self._periods.fit_state())
+            # The kernel's bundles field by field (refresh_kernel says why), in its order:
+            # the maps, the two slot records, the history's rows, the intervals.
+            refresh_kernel(self._base, self._live, self._points, self._heard,
+                           self._drawn, self._drawn_seq, self._pdrawn, self._pseq,
+                           history.x, history.y, history.r, history.theta1, history.theta2,
+                           history.t, self._lo, self._hi, self._weight,
+                           slots, seqs, self._model_array, params.fresh_arcs,
+                           self._newest, self._latest_t, params.fresh_seconds,
+                           params.fresh_periods, *self._periods.fit_state())
         self._stale = False
 
     def _update_intervals(self, history: SonarHistory, slots: SlotArray,

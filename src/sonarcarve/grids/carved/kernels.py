@@ -18,10 +18,16 @@ import numpy as np
 import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled, compiled_inline
-from sonarcarve.grids.carved.band import arc_value, draw_arc, redraw, undraw
-from sonarcarve.grids.carved.free_space import HELD, free_space
-from sonarcarve.grids.carved.mark import refresh_points
-from sonarcarve.grids.carved.model import Model, model_from
+from sonarcarve.grids.carved.band import ArcBand, arc_value, draw_arc, redraw, undraw
+from sonarcarve.grids.carved.free_space import HELD, Beam, free_space
+from sonarcarve.grids.carved.mark import FreshArc, refresh_points
+from sonarcarve.grids.carved.model import (
+    DRAWN_HI,
+    DRAWN_LO,
+    DRAWN_VALUE,
+    Model,
+    model_from,
+)
 from sonarcarve.grids.carved.periods import note_kernel, row_period
 from sonarcarve.grids.occupancy import FREE, OCCUPIED, UNKNOWN, Int8Grid
 from sonarcarve.typing import BoolArray, FloatArray, SlotArray
@@ -107,7 +113,7 @@ def fold_kernel(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], mo
         while p < nf and finals.seq[p] + capacity <= seqs[k]:
             _draw_final(base, heard, m, finals, p)
             p += 1
-        free_space(base, heard, m, x[k], y[k], theta[k], r[k], half[k], held)
+        free_space(base, heard, m, Beam(x[k], y[k], theta[k], r[k], half[k]), held)
     while p < nf:
         _draw_final(base, heard, m, finals, p)
         p += 1
@@ -118,8 +124,8 @@ def _draw_final(base: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32], m:
                 finals: Finals, p: int) -> None:
     """Arc ``p`` of ``finals`` into ``base``, for good."""
     value = arc_value(finals.r[p], finals.lo[p], finals.hi[p], finals.weight[p], m)
-    draw_arc(base, True, heard, m, finals.x[p], finals.y[p], finals.r[p], finals.lo[p],
-             finals.hi[p], value)
+    arc = ArcBand(finals.x[p], finals.y[p], finals.r[p], finals.lo[p], finals.hi[p])
+    draw_arc(base, True, heard, m, arc, value)
 
 
 @compiled
@@ -128,18 +134,25 @@ def retire_kernel(live: FloatArray, drawn: FloatArray, drawn_seq: npt.NDArray[np
                   pseq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
                   heard: npt.NDArray[np.uint32], model: FloatArray) -> None:
     """Take the drawn contribution of the arcs ``seqs`` (in ``slots``) leaving the history out
-    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch)."""
+    of ``live`` and then out of ``points`` (one call: two cost 2 µs more a batch; ``drawn,
+    drawn_seq`` and ``pdrawn, pseq``: the two :class:`~sonarcarve.grids.carved.model.SlotRecord`
+    bundles, field by field as the grid passes them)."""
     m = model_from(model)
+    _retire(live, drawn, drawn_seq, slots, seqs, heard, m)
+    _retire(points, pdrawn, pseq, slots, seqs, heard, m)
+
+
+@compiled_inline
+def _retire(grid: npt.NDArray[np.floating], drawn: FloatArray,
+            drawn_seq: npt.NDArray[np.int64], slots: SlotArray, seqs: npt.NDArray[np.int64],
+            heard: npt.NDArray[np.uint32], m: Model) -> None:
+    """Take what the arcs ``seqs`` (in ``slots``) drew into ``grid`` (``drawn, drawn_seq``)
+    out, if they drew it."""
     for k in range(slots.shape[0]):
         slot = slots[k]
         if drawn_seq[slot] == seqs[k]:
-            undraw(live, heard, m, drawn, slot)
+            undraw(grid, heard, m, drawn, slot)
             drawn_seq[slot] = -1
-    for k in range(slots.shape[0]):
-        slot = slots[k]
-        if pseq[slot] == seqs[k]:
-            undraw(points, heard, m, pdrawn, slot)
-            pseq[slot] = -1
 
 
 @compiled
@@ -153,47 +166,94 @@ def keep_chain(chain: FloatArray, batch_chain: FloatArray, first: int, first_liv
 
 @compiled
 def refresh_kernel(base: npt.NDArray[np.float32], live: FloatArray,
-                   points: npt.NDArray[np.float32], drawn: FloatArray,
-                   drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
-                   pseq: npt.NDArray[np.int64], slots: SlotArray,
-                   seqs: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
-                   lo: FloatArray, hi: FloatArray, weight: FloatArray, with_points: bool,
-                   heard: npt.NDArray[np.uint32], model: FloatArray, theta1: FloatArray,
-                   theta2: FloatArray, newest: npt.NDArray[np.int64], t: FloatArray,
-                   latest: float, seconds: float, periods: float, gaps: FloatArray,
-                   count: npt.NDArray[np.int64], refit: BoolArray,
-                   period: FloatArray) -> int:
+                   points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32],
+                   drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta1: FloatArray, theta2: FloatArray, t: FloatArray, lo: FloatArray,
+                   hi: FloatArray, weight: FloatArray, slots: SlotArray,
+                   seqs: npt.NDArray[np.int64], model: FloatArray, with_points: bool,
+                   newest: npt.NDArray[np.int64], latest: float, seconds: float,
+                   periods: float, gaps: FloatArray, count: npt.NDArray[np.int64],
+                   refit: BoolArray, period: FloatArray) -> int:
     """Bring ``live`` (and, ``with_points``, ``points``) up to date with the live arcs ``slots``
-    (arcs ``seqs``); ``x, y, r`` (the history's rows) and ``lo, hi, weight``
-    (:func:`~sonarcarve.grids.carved.intervals.intervals`) are indexed by slot. First every arc
-    whose interval or value changed is redrawn into ``live``, then the points are judged on the
-    whole updated spread map (:func:`~sonarcarve.grids.carved.mark.refresh_points`), each
-    sensor's newest arc as fresh as :func:`mark_fresh` says (``newest .. period``, its
-    arguments after ``first``, which is ``seqs[0]``). Returns how many arcs and points changed.
-    ``model``: :func:`~sonarcarve.grids.carved.model.model_array`. One call a read: the fresh
+    (arcs ``seqs``): first every arc whose interval or value changed is redrawn into ``live``
+    (:func:`_redraw_changed`), then the points are judged on the whole updated spread map
+    (:func:`_refresh_marks`), each sensor's newest arc as fresh as :func:`mark_fresh` says.
+    Returns how many arcs and points changed.
+
+    The arrays, in groups: the grid's cells ``base, live, points, heard``; what each slot drew
+    into ``live`` (``drawn, drawn_seq``) and into ``points`` (``pdrawn, pseq``), each a
+    :class:`~sonarcarve.grids.carved.model.SlotRecord`; the history's rows ``x, y, r`` (origin
+    and range), ``theta1, theta2`` (the beam, eq. 2.1) and ``t``; each live arc's band at the
+    last read ``lo, hi, weight`` (:func:`~sonarcarve.grids.carved.intervals.intervals`); all
+    but the cells by slot. ``model``: :func:`~sonarcarve.grids.carved.model.model_array`;
+    ``newest .. period``: :func:`mark_fresh`'s arguments after ``first``, which is ``seqs[0]``.
+
+    Why separate arrays and not named bundles of them: the grid calls this once a read from
+    Python (a NamedTuple costs numba's dispatcher microseconds a call, ``model.py``), and inside
+    this kernel, which counts references (it allocates), a bundle of arrays costs an atomic
+    increment and decrement per array each time it is built or passed to a step (2026-12-05,
+    this kernel on an unchanged office map at 0.10 m, arguments captured from
+    ``benchmarks/grid_reads.py``'s stream: 7.6 µs a read with separate arrays, 8.2 with the
+    cells, slot records, rows and intervals as bundles). Bundles of numbers
+    (:class:`~sonarcarve.grids.carved.band.ArcBand`,
+    :class:`~sonarcarve.grids.carved.mark.FreshArc`) cost nothing. One call a read: the fresh
     arcs worked out in their own kernel cost a dispatch and an array more."""
     m = model_from(model)
-    changed = 0
-    for k in range(slots.shape[0]):
-        s = slots[k]
-        value = arc_value(r[s], lo[s], hi[s], weight[s], m)
-        # redraw's own test first: most arcs did not change, and the call costs more.
-        if (drawn_seq[s] == seqs[k] and drawn[s, 3] == lo[s] and drawn[s, 4] == hi[s]
-                and drawn[s, 5] == value):
-            continue
-        changed += redraw(live, drawn, drawn_seq, s, seqs[k], x[s], y[s], r[s], lo[s],
-                          hi[s], value, heard, m)
+    changed = _redraw_changed(live, heard, drawn, drawn_seq, x, y, r, lo, hi, weight, slots,
+                              seqs, m)
     if with_points:
         fresh = np.zeros(slots.shape[0], dtype=np.bool_)
         if slots.shape[0]:
             mark_fresh(newest, seqs[0], slots, t, latest, seconds, periods, gaps, count, refit,
                        period, fresh)
-        for k in range(slots.shape[0]):
-            if not fresh[k] and pseq[slots[k]] < 0:  # no point, and none to draw
-                continue
-            changed += refresh_points(base, live, points, drawn, drawn_seq, pdrawn, pseq,
-                                      slots[k], seqs[k], x, y, r, lo, hi, weight, fresh[k],
-                                      heard, m, theta1[slots[k]], theta2[slots[k]])
+        changed += _refresh_marks(base, live, points, heard, drawn, drawn_seq, pdrawn, pseq,
+                                  x, y, r, theta1, theta2, lo, hi, weight, slots, seqs, fresh,
+                                  m)
+    return changed
+
+
+@compiled_inline
+def _redraw_changed(live: FloatArray, heard: npt.NDArray[np.uint32], drawn: FloatArray,
+                    drawn_seq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray,
+                    r: FloatArray, lo: FloatArray, hi: FloatArray, weight: FloatArray,
+                    slots: SlotArray, seqs: npt.NDArray[np.int64], m: Model) -> int:
+    """Redraw into ``live`` each live arc whose interval or value changed since it was drawn
+    (:func:`~sonarcarve.grids.carved.band.redraw`); returns how many."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        value = arc_value(r[s], lo[s], hi[s], weight[s], m)
+        # redraw's own test first, written out: most arcs did not change, and the call costs
+        # more.
+        if (drawn_seq[s] == seqs[k] and drawn[s, DRAWN_LO] == lo[s]
+                and drawn[s, DRAWN_HI] == hi[s] and drawn[s, DRAWN_VALUE] == value):
+            continue
+        arc = ArcBand(x[s], y[s], r[s], lo[s], hi[s])
+        changed += redraw(live, drawn, drawn_seq, s, seqs[k], arc, value, heard, m)
+    return changed
+
+
+@compiled_inline
+def _refresh_marks(base: npt.NDArray[np.float32], live: FloatArray,
+                   points: npt.NDArray[np.float32], heard: npt.NDArray[np.uint32],
+                   drawn: FloatArray, drawn_seq: npt.NDArray[np.int64], pdrawn: FloatArray,
+                   pseq: npt.NDArray[np.int64], x: FloatArray, y: FloatArray, r: FloatArray,
+                   theta1: FloatArray, theta2: FloatArray, lo: FloatArray, hi: FloatArray,
+                   weight: FloatArray, slots: SlotArray, seqs: npt.NDArray[np.int64],
+                   fresh: BoolArray, m: Model) -> int:
+    """Mark each ``fresh`` arc the spread map does not explain, and take the marks of the
+    others out (:func:`~sonarcarve.grids.carved.mark.refresh_points`); returns how many
+    changed."""
+    changed = 0
+    for k in range(slots.shape[0]):
+        s = slots[k]
+        if not fresh[k] and pseq[s] < 0:  # no point, and none to draw
+            continue
+        arc = FreshArc(s, seqs[k], ArcBand(x[s], y[s], r[s], lo[s], hi[s]), weight[s],
+                       theta1[s], theta2[s], fresh[k])
+        changed += refresh_points(base, live, points, heard, drawn, drawn_seq, pdrawn, pseq,
+                                  arc, m)
     return changed
 
 

@@ -1,7 +1,15 @@
 """The grid as its compiled kernels take it: :class:`Model`, the geometry and the sensor model in
 log-odds (``l_hit = logit(p_hit)``, ``l_miss = logit(p_miss)``, the clamp ``[l_min, l_max]``, the
 band half-width ``b = (h + ε) / 2``), built from :class:`~sonarcarve.grids.carved.CarvedGridParams`
-by :func:`model_of` (``docs/carved-grid.md``, "The sensor model").
+by :func:`model_of` (``docs/carved-grid.md``, "The sensor model"); and what each history slot drew
+into a grid, :class:`SlotRecord`.
+
+The kernels take arrays one by one, not in bundles: numba's dispatcher types a NamedTuple
+argument field by field in Python (:func:`model_array` says what that costs for :class:`Model`),
+and inside a kernel that counts references (one that allocates) a bundle of arrays costs an
+atomic increment and decrement per array each time it is built or handed to a step
+(:func:`~sonarcarve.grids.carved.kernels.refresh_kernel` has the measurement). Bundles of numbers
+(the model, an arc's band, a beam) cost nothing, and the kernels use them freely.
 """
 
 from __future__ import annotations
@@ -9,13 +17,26 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+import numpy.typing as npt
 
 from sonarcarve.geometry._compiled import compiled_inline
 from sonarcarve.grids.carved.params import POSE_MARGIN_SIGMAS, CarvedGridParams
 from sonarcarve.grids.cells import logit
 from sonarcarve.typing import FloatArray
 
-__all__ = ["Model", "model_array", "model_from", "model_of"]
+__all__ = [
+    "DRAWN_HI",
+    "DRAWN_LO",
+    "DRAWN_R",
+    "DRAWN_VALUE",
+    "DRAWN_X",
+    "DRAWN_Y",
+    "Model",
+    "SlotRecord",
+    "model_array",
+    "model_from",
+    "model_of",
+]
 
 
 class Model(NamedTuple):
@@ -79,3 +100,18 @@ def model_from(v: FloatArray) -> Model:
     :class:`Model`'s order)."""
     return Model(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11],
                  v[12], v[13] != 0.0, v[14], v[15], v[16], v[17], v[18], v[19])
+
+
+class SlotRecord(NamedTuple):
+    """What each history slot drew into one grid (``live``, or ``points`` for the marks), so
+    that it can be moved or taken out again; by slot. Only the fresh arc's judgment takes it
+    as a bundle (:func:`~sonarcarve.grids.carved.mark._band_likeliest`, its own compiled
+    function, called once a fresh arc); the steps that run for every arc take its two arrays
+    (a bundle of arrays costs a reference count per array at each step it is handed to)."""
+
+    drawn: FloatArray  # (storage, 6): the band's x, y, r, lo, hi, value (DRAWN_X .. DRAWN_VALUE)
+    seq: npt.NDArray[np.int64]  # (storage,): the arc's sequence number, -1: nothing drawn
+
+
+#: Columns of :attr:`SlotRecord.drawn`.
+DRAWN_X, DRAWN_Y, DRAWN_R, DRAWN_LO, DRAWN_HI, DRAWN_VALUE = 0, 1, 2, 3, 4, 5
