@@ -249,6 +249,15 @@ def _unpack(bits: np.uint64) -> tuple[np.uint64, int, np.uint64, bool]:
 
 
 @njit(cache=True, inline="always")
+def _scaled_interval(mv: np.uint64, mm_shift: np.uint64, low: np.uint64, high: np.uint64,
+                     shift: int) -> tuple[np.uint64, np.uint64, np.uint64]:
+    """The value ``mv`` and its upper and lower bounds (``mv + 2``, ``mv - 1 - mm_shift``),
+    each times the 128-bit factor ``(high, low)`` shifted right by ``shift``."""
+    return (_mul_shift(mv, low, high, shift), _mul_shift(mv + _U2, low, high, shift),
+            _mul_shift(mv - _U1 - mm_shift, low, high, shift))
+
+
+@njit(cache=True, inline="always")
 def _decimal_above(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: bool,
                    inverses: np.ndarray) -> tuple[np.uint64, np.uint64, np.uint64, int, bool,
                                                   bool]:
@@ -259,9 +268,7 @@ def _decimal_above(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: b
     k = _POW5_BITS + (((q * 1217359) >> 19) + 1) - 1
     shift = -e2 + q + k
     low, high = inverses[q, 0], inverses[q, 1]
-    vr = _mul_shift(mv, low, high, shift)
-    vp = _mul_shift(mv + _U2, low, high, shift)
-    vm = _mul_shift(mv - _U1 - mm_shift, low, high, shift)
+    vr, vp, vm = _scaled_interval(mv, mm_shift, low, high, shift)
     vm_zeros = False
     vr_zeros = False
     if q <= 21:
@@ -285,9 +292,7 @@ def _decimal_below(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: b
     k = (((i * 1217359) >> 19) + 1) - _POW5_BITS
     shift = q - k
     low, high = powers[i, 0], powers[i, 1]
-    vr = _mul_shift(mv, low, high, shift)
-    vp = _mul_shift(mv + _U2, low, high, shift)
-    vm = _mul_shift(mv - _U1 - mm_shift, low, high, shift)
+    vr, vp, vm = _scaled_interval(mv, mm_shift, low, high, shift)
     vm_zeros = False
     vr_zeros = False
     if q <= 1:
