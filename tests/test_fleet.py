@@ -71,7 +71,8 @@ def test_each_log_gets_a_map_and_a_summary_line(logs: list[Path], serial: Path) 
         cells = list(csv.DictReader(handle))[1]
     assert {name: value for name, value in cells.items() if name not in ("log", "error")} == {
         "map": "", "readings": "", "points": "", "fully_carved": "", "split": "",
-        "unprocessed": "", "seconds": "", "readings_filtered": "", "points_filtered": ""}
+        "unprocessed": "", "seconds": "", "readings_filtered": "", "points_filtered": "",
+        "no_echo_dropped": ""}
     assert int(summary[0]["points"]) > 0
     assert all(row["error"] == "" for i, row in enumerate(summary) if i != 1)
 
@@ -147,6 +148,7 @@ def test_summary_measures_are_those_of_processing_the_log(logs: list[Path],
     assert float(row["unprocessed"]) == 100.0 * result.mean_unprocessed_share
     assert 1.0 < float(row["unprocessed"]) <= 100.0
     assert (row["readings_filtered"], row["points_filtered"]) == ("0", "0")  # no filter ran
+    assert row["no_echo_dropped"] == "0"  # a readings CSV maps its no-echo rows
 
 
 def test_summary_counts_what_the_filters_dropped(logs: list[Path], tmp_path: Path) -> None:

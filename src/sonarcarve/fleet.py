@@ -135,10 +135,17 @@ def read_log(path: str | Path, bag: BagOptions | None = None, *,
     ReadingsError, RosbagError, RobotError
         A log (or robot file) that cannot be read: one line naming it.
     """
+    return _read_log_counted(path, bag, max_range)[0]
+
+
+def _read_log_counted(path: str | Path, bag: BagOptions | None,
+                      max_range: float | None) -> tuple[ReadingBatch, int]:
+    """:func:`read_log`, and how many of a bag's no-echo readings it left out."""
     if is_bag(path):
         options = bag if bag is not None else BagOptions()
-        return options.readings(options.read(path))
-    return read_readings_csv(path, max_range=max_range)
+        log = options.read(path)
+        return options.readings(log), options.dropped_no_echo(log)
+    return read_readings_csv(path, max_range=max_range), 0
 
 
 class FleetError(SonarcarveError):
@@ -171,6 +178,10 @@ class FleetRow:
         Readings the reading filters dropped before the method, and points the map filters
         dropped from its map (0 when none ran; after ``error``, so the older columns keep
         their places).
+    no_echo_dropped : int
+        A bag's no-echo readings left out of the mapping (all of them without
+        ``BagOptions.no_echo``, else 0; 0 for a readings CSV, whose no-echo rows are always
+        mapped), as ``sonarcarve process`` reports for one log; the last column.
     """
 
     log: str
@@ -184,6 +195,7 @@ class FleetRow:
     error: str = ""
     readings_filtered: int = 0
     points_filtered: int = 0
+    no_echo_dropped: int = 0
 
     @property
     def ok(self) -> bool:
@@ -234,7 +246,7 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
     try:
         # The max-range filter's value is also the run-wide max range of no-echo rows.
         max_range = None if reading_filter is None else reading_filter.max_range
-        batch = read_log(log, bag, max_range=max_range)
+        batch, no_echo_dropped = _read_log_counted(log, bag, max_range)
         tic = time.perf_counter()
         result = process_readings(batch, make_method(method, config),
                                   reading_filter=reading_filter, map_filter=map_filter)
@@ -254,7 +266,8 @@ def map_log(log: str, out: str, method: str, config: MethodConfig,
                     readings_filtered=0 if reading_report is None
                     else reading_report.total - reading_report.kept,
                     points_filtered=0 if map_report is None
-                    else map_report.total - map_report.kept)
+                    else map_report.total - map_report.kept,
+                    no_echo_dropped=no_echo_dropped)
 
 
 def map_logs(

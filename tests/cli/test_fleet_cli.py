@@ -104,3 +104,27 @@ def test_two_logs_with_one_map_name_are_refused(logs: list[Path], tmp_path: Path
     assert main(["process", str(logs[0]), str(twin), "--out-dir", str(tmp_path / "m"),
                  "--workers", "1"]) == 2
     assert "would both write a.map.csv" in capsys.readouterr().err
+
+
+def test_the_summary_counts_each_bag_s_no_echo_readings_dropped(
+    logs: list[Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The bag's silent firings are dropped unless --no-echo maps them: the summary's last
+    column says how many per log, the terminal once for all. The oracle: the inf rows
+    `simulate --no-echo` writes for the bag's run (seed 3); a readings CSV drops none."""
+    silent_csv = tmp_path / "silent.csv"
+    assert main(["simulate", "--world", "doorway", "--seed", "3", "--no-echo",
+                 "--out", str(silent_csv)]) == 0
+    silent = sum(row.split(",")[5] == "inf" for row in silent_csv.read_text().splitlines()[1:])
+    assert silent > 0
+    good = [str(p) for i, p in enumerate(logs) if i != 1]
+    capsys.readouterr()
+    assert main(["process", *good, "--out-dir", str(tmp_path / "dropped"), "--workers", "1"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"dropped: {silent:,} no-echo readings of 1 bag (--no-echo" in text
+    assert [row["no_echo_dropped"] for row in _summary(tmp_path / "dropped")] == [
+        "0", "0", str(silent)]
+    assert main(["process", *good, "--out-dir", str(tmp_path / "mapped"), "--workers", "1",
+                 "--no-echo"]) == 0
+    assert "no-echo readings of" not in capsys.readouterr().out
+    assert [row["no_echo_dropped"] for row in _summary(tmp_path / "mapped")] == ["0", "0", "0"]

@@ -596,6 +596,11 @@ def _fleet(inputs: Sequence[Path], out_dir: Path, method: str, config: MethodCon
     console.print(_fleet_table(method, rows, spec))
     failed = sum(not row.ok for row in rows)
     console.print(f"summary written to {Path(out_dir) / SUMMARY_NAME}", highlight=False)
+    dropped = [row.no_echo_dropped for row in rows if row.no_echo_dropped]
+    if dropped:  # as a single log's summary says it (no_echo_dropped_row), once for them all
+        console.print(f"dropped: {sum(dropped):,} no-echo readings of {len(dropped)} bag"
+                      f"{'s' if len(dropped) > 1 else ''} (--no-echo maps them as free space; "
+                      "per log in the summary's no_echo_dropped)", highlight=False)
     if failed:
         err_console.print(f"sonarcarve: error: {failed} of {len(rows)} logs failed; the "
                           "summary gives each one's reason", highlight=False, soft_wrap=True)
