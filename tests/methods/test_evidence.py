@@ -235,7 +235,9 @@ def test_evidence_never_grows_back_and_confidence_is_a_probability() -> None:
 
 
 @pytest.mark.parametrize(("field", "value"), [("evidence_bins", 0), ("carve_probability", 1.0),
-                                          ("min_confidence", -0.1), ("stamp_error", -1.0)])
+                                          ("min_confidence", -0.1), ("stamp_error", -1.0),
+                                          ("stamp_heading_error", 2.0),
+                                          ("stamp_heading_error", -0.1)])
 def test_config_refuses_bad_evidence_parameters(field: str, value: float) -> None:
     with pytest.raises(ConfigError, match=field):
         MethodConfig(**{field: value})

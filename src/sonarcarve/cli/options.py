@@ -31,7 +31,12 @@ from sonarcarve.history import MAX_HISTORY_SIZE
 from sonarcarve.io.atomic import check_output_file
 from sonarcarve.io.errors import OutputError
 from sonarcarve.io.rosbag import RosbagError, RosbagLog
-from sonarcarve.methods.config import DEFAULT_MIN_TRANSVERSAL, MethodConfig, check_degrees
+from sonarcarve.methods.config import (
+    DEFAULT_MIN_CONFIDENCE,
+    DEFAULT_MIN_TRANSVERSAL,
+    MethodConfig,
+    check_degrees,
+)
 from sonarcarve.readings import MAX_READING_RANGE, NO_MAX_RANGE, ReadingBatch, reading_ids
 from sonarcarve.robot import load_robot
 from sonarcarve.typing import IntArray
@@ -52,11 +57,15 @@ __all__ = [
     "MaxRangeOpt",
     "MethodNameError",
     "MethodOpt",
+    "MinConfidenceOpt",
     "NearEchoes",
     "NoEchoOpt",
     "OdomTopicOpt",
+    "PointCertainty",
     "RangeTopicOpt",
     "RobotOpt",
+    "StampErrorOpt",
+    "StampHeadingOpt",
     "ToleranceOpt",
     "TransversalOpt",
     "bag_options",
@@ -160,6 +169,42 @@ IncidenceOpt = Annotated[float | None, typer.Option(
          "normal: smooth walls send no echo at such glancing angles, so the newer "
          "reading's free space says nothing there. 90 = off = the paper. Example: "
          "--max-incidence 30.")]
+
+#: ``sonarcarve process`` and ``view``: evidence carving's certainty per point (section 6).
+MinConfidenceOpt = Annotated[float | None, typer.Option(
+    metavar="P", show_default="0.5", rich_help_panel="Evidence carving's certainty",
+    help="With --method evidence: points whose confidence (the map's confidence column, the "
+         "probability that the point is a real surface) is below P leave every map it makes, "
+         "the live ones (a bag's local map, a Rerun recording) included; in [0, 1]. 0 keeps "
+         "every point with a surviving piece; 0.8 keeps the surest. Example: "
+         "--min-confidence 0.8.")]
+StampErrorOpt = Annotated[float, typer.Option(
+    metavar="METRES", rich_help_panel="Evidence carving's certainty",
+    help="With --method evidence: how far a reading's stamped sensor position may be from "
+         "where it fired (the paper's Appendix A: polled sonars' stamps are inferred while "
+         "the robot moves; the robot's top speed times the stamp's bound, docs/"
+         "evidence-carving.md 'Certainty per point'); added to every point's max_error.")]
+StampHeadingOpt = Annotated[float, typer.Option(
+    metavar="DEGREES", rich_help_panel="Evidence carving's certainty",
+    help="With --method evidence: how far a reading's stamped heading may be off, in [0, 90] "
+         "degrees (the top turn rate times the stamp's bound); a point r metres out moves up "
+         "to 2 r sin(δ/2), added to its max_error.")]
+
+
+class PointCertainty(NamedTuple):
+    """Evidence carving's certainty options as given (``--min-confidence``, ``--stamp-error``,
+    ``--stamp-heading-error`` in degrees); the defaults are the method's."""
+
+    min_confidence: float | None = None
+    stamp_error: float = 0.0
+    stamp_heading_deg: float = 0.0
+
+    def given(self) -> list[str]:
+        """The options given with other than their defaults, as spelled on the command line."""
+        flags = (("--min-confidence", self.min_confidence is not None),
+                 ("--stamp-error", self.stamp_error != 0.0),
+                 ("--stamp-heading-error", self.stamp_heading_deg != 0.0))
+        return [flag for flag, given in flags if given]
 
 
 def read_bag(bag: BagOptions, source: str | Path) -> RosbagLog:
@@ -312,29 +357,44 @@ def drop_far_echoes(batch: ReadingBatch, max_range: float | None) -> NearEchoes:
 
 
 def method_config(history: int, beam_width_deg: float, tolerance: float,
-                  transversal_deg: float, incidence_deg: float | None) -> MethodConfig:
+                  transversal_deg: float, incidence_deg: float | None, *,
+                  method: str, certainty: PointCertainty) -> MethodConfig:
     """The method options (``--history``, ...) in SI units; :class:`MethodConfig` checks
     every value (one-line errors).
 
     The config speaks radians and its own field names; the options given in degrees are
     checked here first, in degrees, and any other error names the option (``--history``), not
-    the field (``history_size``).
+    the field (``history_size``). ``certainty`` is refused for a ``method`` other than
+    evidence carving, the only one whose points carry a confidence and a stamped bound.
     """
     check_degrees("beam_width", beam_width_deg, "--beam-width")
     check_degrees("min_transversal", transversal_deg, "--min-transversal")
     if incidence_deg is not None:
         check_degrees("max_incidence", incidence_deg, "--max-incidence")
+    check_degrees("stamp_heading_error", certainty.stamp_heading_deg, "--stamp-heading-error")
+    if certainty.given() and method != "evidence":
+        given = certainty.given()
+        verb = "applies" if len(given) == 1 else "apply"
+        msg = (f"{' and '.join(given)} {verb} to --method evidence only (its points "
+               f"carry a confidence and a bound with the stamping error), not to {method}")
+        raise ConfigError(msg)
     incidence = NO_INCIDENCE_LIMIT
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
+    confidence = certainty.min_confidence
     with reworded(ConfigError, _OPTION_OF_FIELD):
         return MethodConfig(history_size=history, beam_width=math.radians(beam_width_deg),
                             range_tolerance=tolerance,
                             min_transversal=math.radians(transversal_deg),
-                            max_incidence=incidence)
+                            max_incidence=incidence,
+                            min_confidence=(DEFAULT_MIN_CONFIDENCE if confidence is None
+                                            else confidence),
+                            stamp_error=certainty.stamp_error,
+                            stamp_heading_error=math.radians(certainty.stamp_heading_deg))
 
 
 #: MethodConfig's field -> the option that sets it, for its error messages.
 _OPTION_OF_FIELD = {"history_size": "--history", "range_tolerance": "--range-tolerance",
                     "beam_width": "--beam-width", "min_transversal": "--min-transversal",
-                    "max_incidence": "--max-incidence"}
+                    "max_incidence": "--max-incidence", "min_confidence": "--min-confidence",
+                    "stamp_error": "--stamp-error"}

@@ -39,10 +39,14 @@ from sonarcarve.cli.options import (
     HistoryOpt,
     IncidenceOpt,
     MethodOpt,
+    MinConfidenceOpt,
     NoEchoOpt,
     OdomTopicOpt,
+    PointCertainty,
     RangeTopicOpt,
     RobotOpt,
+    StampErrorOpt,
+    StampHeadingOpt,
     ToleranceOpt,
     TransversalOpt,
     bag_options,
@@ -269,6 +273,9 @@ def process(
     range_tolerance: ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
     min_transversal: TransversalOpt = DEFAULT_TRANSVERSAL_DEG,
     max_incidence: IncidenceOpt = None,
+    min_confidence: MinConfidenceOpt = None,
+    stamp_error: StampErrorOpt = 0.0,
+    stamp_heading_error: StampHeadingOpt = 0.0,
     max_range: _MaxRangeOpt = None,
     min_range: _MinRangeOpt = None,
     jump_threshold: _JumpOpt = None,
@@ -345,7 +352,10 @@ def process(
 
     Example: `sonarcarve process logs/*.csv logs/*.bag --out-dir maps --workers 4`
     """
-    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence)
+    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence,
+                           method=method,
+                           certainty=PointCertainty(min_confidence, stamp_error,
+                                                    stamp_heading_error))
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error, occlusion_depth,
                                           driven_through, late_echo_period)
@@ -478,7 +488,7 @@ def _write_csv(job: _Job) -> list[tuple[str, str]]:
     else:
         with map_csv_sink(job.out) as sink:
             result = _map(job, sink)
-    rows = _summary_rows(result, job.out)
+    rows = _summary_rows(result, job.out, job.method)
     return rows[:1] + job.input_rows + rows[1:]
 
 
@@ -731,7 +741,17 @@ def _body(spec: str | None) -> BodyFootprint | None:
     return BodyFootprint.around_sensors(radius)
 
 
-def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
+def _removed_rows(result: ProcessResult, method: str) -> list[tuple[str, str]]:
+    """The summary's count of arcs the method removed. Evidence carving keeps a piece of a
+    split arc and also removes points below --min-confidence (EvidenceMethod.measures counts
+    both), so its row says so instead of the paper's two."""
+    if method == "evidence":
+        return [("removed (carved, low confidence)", f"{result.fully_carved:,}")]
+    return [("fully carved", f"{result.fully_carved:,}"),
+            ("split (dropped)", f"{result.split:,}")]
+
+
+def _summary_rows(result: ProcessResult, out: Path, method: str) -> list[tuple[str, str]]:
     rows: list[tuple[str, str]] = []
     dropped = result.reading_filter
     if dropped is None:
@@ -750,9 +770,7 @@ def _summary_rows(result: ProcessResult, out: Path) -> list[tuple[str, str]]:
                  ("dropped: driven through", f"{points.driven_through:,}"),
                  ("dropped: behind a surface", f"{points.occluded:,}"),
                  ("dropped: outliers", f"{points.outliers:,}")]
-    rows += [("points out", f"{result.points:,}"),
-             ("fully carved", f"{result.fully_carved:,}"),
-             ("split (dropped)", f"{result.split:,}"),
+    rows += [("points out", f"{result.points:,}"), *_removed_rows(result, method),
              # Removed arcs count as processed: see the command's help.
              ("unprocessed (mean % of history rows)",
               f"{100 * result.mean_unprocessed_share:.1f}"),

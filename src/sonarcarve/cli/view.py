@@ -29,10 +29,14 @@ from sonarcarve.cli.options import (
     IncidenceOpt,
     MaxRangeOpt,
     MethodOpt,
+    MinConfidenceOpt,
     NoEchoOpt,
     OdomTopicOpt,
+    PointCertainty,
     RangeTopicOpt,
     RobotOpt,
+    StampErrorOpt,
+    StampHeadingOpt,
     ToleranceOpt,
     TransversalOpt,
     bag_options,
@@ -86,6 +90,9 @@ def view(
     range_tolerance: ToleranceOpt = DEFAULT_RANGE_TOLERANCE,
     min_transversal: TransversalOpt = DEFAULT_TRANSVERSAL_DEG,
     max_incidence: IncidenceOpt = None,
+    min_confidence: MinConfidenceOpt = None,
+    stamp_error: StampErrorOpt = 0.0,
+    stamp_heading_error: StampHeadingOpt = 0.0,
     world: Annotated[str | None, typer.Option(
         "--world", "-w", metavar="WORLD",
         help="Draw this world's walls (built-in name, random:SEED, walls .json, ROS map "
@@ -129,7 +136,10 @@ def view(
         raise ViewUsageError(msg)
     # The method and its parameters as process checks them, so that a recording can show a run
     # mapped as process mapped it.
-    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence)
+    config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence,
+                           method=method,
+                           certainty=PointCertainty(min_confidence, stamp_error,
+                                                    stamp_heading_error))
     check_method(method)
     sonar = make_method(method, config)
     beam_warning = beam_width_mistake(beam_width, "--beam-width")

@@ -101,7 +101,7 @@ def _evidence(config: MethodConfig) -> SonarMethod:
     return EvidenceMethod(
         config.history_size, config.beam_width, config.range_tolerance, config.min_transversal,
         config.range_resolution, config.evidence_bins, config.carve_probability,
-        config.min_confidence, config.stamp_error,
+        config.min_confidence, config.stamp_error, config.stamp_heading_error,
     )
 
 

@@ -38,6 +38,7 @@ __all__ = [
     "check_range_resolution",
     "check_range_tolerance",
     "check_stamp_error",
+    "check_stamp_heading_error",
 ]
 
 #: Default range tolerance ε, metres: a newer reading's freespace ends ε short of its echo.
@@ -154,6 +155,7 @@ _DEGREE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
     "beam_width": (lambda d: math.radians(d) >= MIN_BEAM_WIDTH and d < 180.0, "(0, 180)"),
     "min_transversal": (lambda d: 0.0 < d <= 90.0, "(0, 90]"),
     "max_incidence": (lambda d: 0.0 <= d <= 90.0, "[0, 90]"),
+    "stamp_heading_error": (lambda d: 0.0 <= d <= 90.0, "[0, 90]"),
 }
 
 
@@ -198,6 +200,16 @@ def check_min_confidence(value: object, name: str = "min_confidence") -> float:
 def check_stamp_error(value: object, name: str = "stamp_error") -> float:
     """Position-stamping error bound in metres, finite and ≥ 0."""
     return _metres_at_least_zero(name, value)
+
+
+def check_stamp_heading_error(value: object, name: str = "stamp_heading_error") -> float:
+    """Heading-stamping error bound in radians, in [0, π/2]: a reading stamped with a heading
+    more than a right angle off is not a stamping error."""
+    rule = "lie in [0, pi/2] radians"
+    radians = _number(name, value, rule)
+    if not 0.0 <= radians <= 0.5 * math.pi:
+        _refuse(name, rule, value)
+    return radians
 
 
 @dataclass(frozen=True)
@@ -248,6 +260,12 @@ class MethodConfig:
     stamp_error : float, default 0 m
         Upper bound on a reading's position-stamping error, metres, finite and ≥ 0 (Appendix A,
         where stamps are inferred): added to evidence carving's error bounds.
+    stamp_heading_error : float, default 0 rad
+        Upper bound on a reading's heading-stamping error, radians in [0, π/2] (Appendix A: the
+        robot turned while the stamp was off): a point ``r`` from its sensor moves at most
+        ``2 r sin(δ/2)``, added to evidence carving's error bounds. Both bounds from a poller's
+        stamp bound: :func:`~sonarcarve.polling.position_error_bound` and
+        :func:`~sonarcarve.polling.heading_error_bound`.
 
     Examples
     --------
@@ -269,6 +287,7 @@ class MethodConfig:
     carve_probability: float = DEFAULT_CARVE_PROBABILITY
     min_confidence: float = DEFAULT_MIN_CONFIDENCE
     stamp_error: float = 0.0
+    stamp_heading_error: float = 0.0
 
     def __post_init__(self) -> None:
         check_history_size(self.history_size)
@@ -281,3 +300,4 @@ class MethodConfig:
         check_carve_probability(self.carve_probability)
         check_min_confidence(self.min_confidence)
         check_stamp_error(self.stamp_error)
+        check_stamp_heading_error(self.stamp_heading_error)

@@ -871,6 +871,10 @@ class EvidenceMethod(SonarMethod):
     stamp_error : float
         Upper bound on the position-stamping error of a reading, metres (Appendix A), added to
         every point's bound.
+    stamp_heading_error : float
+        Upper bound on the heading-stamping error of a reading, radians (Appendix A): a point
+        ``r`` from its sensor moves at most ``2 r sin(δ/2)`` (the chord of eq. 5.3), added to
+        its bound.
     options : EvidenceOptions, optional
         The switches (ablation, placement rules), passed to :class:`EvidenceModel` as they
         are; default ``EvidenceOptions()``.
@@ -893,6 +897,7 @@ class EvidenceMethod(SonarMethod):
         carve_probability: float = DEFAULT_CARVE_PROBABILITY,
         min_confidence: float = DEFAULT_MIN_CONFIDENCE,
         stamp_error: float = 0.0,
+        stamp_heading_error: float = 0.0,
         *,
         options: EvidenceOptions | None = None,
         sensor: SensorModel | None = None,
@@ -903,6 +908,7 @@ class EvidenceMethod(SonarMethod):
             min_transversal=min_transversal, range_resolution=range_resolution,
             evidence_bins=evidence_bins, carve_probability=carve_probability,
             min_confidence=min_confidence, stamp_error=stamp_error,
+            stamp_heading_error=stamp_heading_error,
         )
         self.options = EvidenceOptions() if options is None else options
         self.sensor = SensorModel() if sensor is None else sensor
@@ -972,9 +978,17 @@ class EvidenceMethod(SonarMethod):
         alive = has & (confidence >= self.config.min_confidence)
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,
-            max_error=base.max_error + self.config.stamp_error, source=base.source,
+            max_error=base.max_error + self._stamp_bound(slots), source=base.source,
             fate=base.fate, confidence=np.where(has, confidence, 0.0),
         )
+
+    def _stamp_bound(self, slots: SlotArray) -> FloatArray:
+        """What a wrong stamp adds to each point's bound (Appendix A, section 6's certainty):
+        the origin's position error, plus the chord ``2 r sin(δ/2)`` a heading error δ swings
+        a point ``r`` from its sensor through (the arc's own range: its point lies on it)."""
+        config = self.config
+        chord = 2.0 * self.history.r[slots] * math.sin(0.5 * config.stamp_heading_error)
+        return config.stamp_error + chord
 
     def _commit(self, slots: SlotArray) -> None:
         est = self.estimates(slots)
