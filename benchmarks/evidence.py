@@ -30,7 +30,10 @@ before that feature: only its weight was fitted), with every arc maturing with a
 its run's middle (eq. 3.6) instead of at the median of its posterior (once its beam is cut), with
 the placement before that posterior (the median of the localised support once cut, ATM's
 median from one crossing), with the posterior placing the points of uncut beams too, and with
-ATM's median from one crossing in the run (the default needs three); and combined and evidence
+ATM's median from one crossing in the run (the default needs three), with split arcs dropped as
+the paper drops them (issue 9's part 3 on its own), with finer profiles (K = 48 and 96 bins
+per beam: how far the 24 bins are from exact), and the paper's carving with ε = 0 (the "carve"
+row uses the library's 5 cm); and combined and evidence
 with the occlusion map filter on their global maps (points 0.5 m or more behind a surface of
 the finished map, on the line from their sensor, dropped: ``MapFilter(occlusion_depth=0.5)``).
 ``--variants`` picks rows, ``--per-seed`` adds each seed's direct kept and spurious removed;
@@ -107,6 +110,8 @@ WITHOUT_REPEATS = ConfidenceModel(
 
 VARIANTS: dict[str, Factory] = {
     "carve (paper)": lambda c: make_method("carve", c),
+    # The paper's carving with the paper's ε = 0 (the row above uses the library's 5 cm).
+    "carve (paper, ε = 0)": lambda c: make_method("carve", replace(c, range_tolerance=0.0)),
     "carve β=30°": lambda c: make_method("carve", replace(c, max_incidence=math.radians(30.0))),
     "combined (paper)": lambda c: make_method("combined", c),
     "evidence only": _evidence(),
@@ -127,6 +132,10 @@ VARIANTS: dict[str, Factory] = {
         _all_with(posterior_placement=False, min_atm_crossings=1),
     "all, posterior on uncut beams too": _all_with(uncut_posterior=True),
     "all, posterior, ATM from 1 crossing": _all_with(min_atm_crossings=1),
+    # Part 3 of issue 9 on its own: without it a split arc is dropped, as in the paper.
+    "all, split arcs dropped (the paper's rule)": _all_with(keep_split=False),
+    "evidence (all), K = 48 bins": lambda c: make_method("evidence", replace(c, evidence_bins=48)),
+    "evidence (all), K = 96 bins": lambda c: make_method("evidence", replace(c, evidence_bins=96)),
 }
 #: Rows of a variant above whose global map then goes through the occlusion map filter
 #: (``MapFilter(occlusion_depth=0.5)``: points behind a surface of the finished map dropped).

@@ -217,6 +217,21 @@ def test_split_arc_keeps_a_piece_with_an_honest_bound() -> None:
     assert 0.0 < local.max_error[row] <= 2.0 * 3.0 * math.sin((PHI + PHI / 48.0) / 2.0)
 
 
+def test_without_keep_split_a_split_arc_leaves_the_map_as_in_the_paper() -> None:
+    # The case above: the first arc's middle is carved, so two runs survive. The ablation's
+    # switch drops it (the paper drops an arc carving splits); the newer, unsplit arc stays.
+    maps = {}
+    for keep in (True, False):
+        method = EvidenceMethod(min_confidence=0.0, options=EvidenceOptions(keep_split=keep))
+        method.add(_reading(0.0, 0.0, 0.0, 0.0, 3.0))
+        method.add(_reading(0.05, 0.5, 0.0, 0.0, 4.0, sensor=1))
+        model = method.models[0]
+        assert isinstance(model, EvidenceModel)
+        assert model.raw(method.history.slots()).runs.tolist() == [2.0, 1.0]
+        maps[keep] = method.local_map().reading_id.tolist()
+    assert maps == {True: [0, 1], False: [1]}
+
+
 def test_evidence_never_grows_back_and_confidence_is_a_probability() -> None:
     rng = np.random.default_rng(3)
     method = make_method("evidence", MethodConfig(history_size=60))

@@ -250,6 +250,10 @@ class EvidenceOptions:
         this many crossings (>= 1; and its bound, eq. 5.4, is the smaller): with fewer, the
         median is one or two crossings themselves, which a single ghost moves (1: any
         crossing, the rule before issue 9's point accuracy work).
+    keep_split : bool
+        Keep a piece of an arc the evidence splits into several runs, with a bound over every
+        run (issue 9, part 3); off, such an arc leaves the maps, as the paper drops an arc
+        that carving splits (the ablation's row for this part alone).
 
     Examples
     --------
@@ -264,6 +268,7 @@ class EvidenceOptions:
     posterior_placement: bool = True
     uncut_posterior: bool = False
     min_atm_crossings: int = 3
+    keep_split: bool = True
 
     def __post_init__(self) -> None:
         _check_min_atm_crossings(self.min_atm_crossings)
@@ -976,6 +981,8 @@ class EvidenceMethod(SonarMethod):
         confidence = self.confidence_model.confidence(self.features(slots, raw, maturity),
                                                       maturity)
         alive = has & (confidence >= self.config.min_confidence)
+        if not self.options.keep_split:  # the paper's rule: a split arc is dropped
+            alive &= raw.runs <= 1
         return Estimates(
             alive=alive, processed=base.processed, xy=base.xy, width=base.width,
             max_error=base.max_error + self._stamp_bound(slots), source=base.source,
