@@ -192,14 +192,17 @@ def test_the_local_map_holds_exactly_the_points_at_or_above_the_threshold() -> N
     nothing else: on the same log, the local map at X holds the points of the map at X = 0
     whose confidence is at least X, at the same place with the same confidence, and none
     below X. The stamp error (Appendix A) widens every kept point's bound by itself and
-    changes nothing else. The oracle is the X = 0, no-stamp map, filtered here."""
+    changes nothing else. The oracle is the X = 0, no-stamp map, filtered here; X runs over
+    0, 0.5, 0.9 and one point's own confidence (the boundary: that point stays)."""
     everything = _local_map(0.0, 0.0)
     confidence = everything.confidence
     # The log must hold points on both sides of each threshold, or the filter proves nothing.
     assert np.count_nonzero(confidence < 0.5) > 0
     assert np.count_nonzero((confidence >= 0.5) & (confidence < 0.9)) > 0
     assert np.count_nonzero(confidence >= 0.9) > 0
-    for threshold in (0.0, 0.5, 0.9):
+    # And one point's own confidence: "at or above" keeps that point (and its equals).
+    own = float(np.sort(confidence)[len(confidence) // 2])
+    for threshold in (0.0, 0.5, 0.9, own):
         local = _local_map(threshold, _STAMP)
         keep = confidence >= threshold
         np.testing.assert_array_equal(local.reading_id, everything.reading_id[keep])
