@@ -14,8 +14,10 @@ mapped once; over the *direct* echoes with a point in the global map:
 * *covered*: share whose distance from the point to the true reflection point is at most its
   ``max_error``;
 * median and 90th percentile of that distance over ``max_error``, and the median ``max_error``;
-* three hints at why a bound fails: the median bound of the uncovered points; the share of them
-  whose reflector lies outside the beam the method was told (``lab.metrics.off_beam``: side
+* four hints at why a bound fails: the median bound of the uncovered points; the share of them
+  whose reflector lies at an edge of the beam the method was told (within 0.5° inside it: the
+  specular physics' echo of a wall met between the half-beam and the critical angle comes from
+  the edge ray, where the point's bound is exact) and outside it (``lab.metrics.off_beam``: side
   lobes); the share covered once the bound is widened by the reading's own range error (noise
   and the 1-inch quantum, which eq. 5.3 leaves out: it bounds the error along the arc only; a
   point still uncovered then is on the wrong bearing).
@@ -56,6 +58,7 @@ class Points(NamedTuple):
     bound: np.ndarray  # max_error, metres
     source: np.ndarray  # PointSource code
     runs: np.ndarray  # surviving runs (evidence carving), NaN for other methods
+    at_edge: np.ndarray  # the reflector lies within EDGE of the told beam's edge, inside
     off_beam: np.ndarray  # the reflector lies outside the told beam
     range_error: np.ndarray  # |measured range - true range|, metres
     spurious: int  # points of spurious echoes
@@ -82,6 +85,17 @@ def record_runs(method: SonarMethod, n: int) -> np.ndarray:
     return runs
 
 
+#: How near a beam edge (radians, inside) a reflector counts as at the edge: the specular
+#: physics' 31 rays are 0.75° apart, and its edge rays lie on the edges.
+EDGE = math.radians(0.5)
+
+
+def off_axis(sensor_xy: np.ndarray, theta: np.ndarray, reflection: np.ndarray) -> np.ndarray:
+    """Angle between each sensor's axis and its true reflector, radians in [0, π]."""
+    bearing = np.arctan2(*(reflection - sensor_xy).T[::-1])
+    return np.abs((bearing - theta + math.pi) % (2.0 * math.pi) - math.pi)
+
+
 def map_points(sim: Simulation, name: str) -> Points:
     """Map ``sim`` with method ``name`` and measure its points against the truth."""
     method = make_method(name, MethodConfig())
@@ -95,12 +109,15 @@ def map_points(sim: Simulation, name: str) -> Points:
     readings = sim.readings
     sensor_xy = np.column_stack([readings.x[rid], readings.y[rid]])
     true_range = np.hypot(*(reflection - sensor_xy).T)
+    outside = off_beam(sensor_xy, readings.theta[rid], readings.beam_width[rid], reflection)
     return Points(
         error=np.hypot(*(gmap.xy[direct] - reflection).T),
         bound=gmap.max_error[direct],
         source=gmap.source[direct],
         runs=runs[rid],
-        off_beam=off_beam(sensor_xy, readings.theta[rid], readings.beam_width[rid], reflection),
+        at_edge=~outside & (off_axis(sensor_xy, readings.theta[rid], reflection)
+                            >= 0.5 * readings.beam_width[rid] - EDGE),
+        off_beam=outside,
         range_error=np.abs(readings.range[rid] - true_range),
         spurious=int(np.count_nonzero(~direct & (kind != NO_ECHO))),
     )
@@ -113,8 +130,8 @@ GROUPS = {
     "split (runs > 1)": lambda p: p.runs > 1,
     "unsplit (1 run)": lambda p: p.runs == 1,
 }
-COLUMNS = ("points", "covered", "median_ratio", "p90_ratio", "median_bound", "uncovered_bound",
-           "uncovered_off", "covered_range")
+COLUMNS = ("points", "covered", "median_ratio", "p90_ratio", "median_bound", "at_edge",
+           "uncovered_bound", "uncovered_edge", "uncovered_off", "covered_range")
 
 
 def coverage(p: Points, sel: np.ndarray) -> dict[str, float]:
@@ -130,12 +147,24 @@ def coverage(p: Points, sel: np.ndarray) -> dict[str, float]:
         "median_ratio": float(np.median(ratio)),
         "p90_ratio": float(np.percentile(ratio, 90.0)),
         "median_bound": 100.0 * float(np.median(bound)),
+        "at_edge": _share(p.at_edge[sel]),
         "uncovered_bound": (100.0 * float(np.median(bound[~covered]))
                             if not covered.all() else math.nan),
-        "uncovered_off": (100.0 * float(np.mean(p.off_beam[sel][~covered]))
-                          if not covered.all() else math.nan),
+        "uncovered_edge": _share(p.at_edge[sel][~covered]),
+        "uncovered_off": _share(p.off_beam[sel][~covered]),
         "covered_range": 100.0 * float(np.mean(error <= bound + p.range_error[sel])),
     }
+
+
+def _share(mask: np.ndarray) -> float:
+    """Percentage of True in ``mask``, NaN when it is empty."""
+    return 100.0 * float(np.mean(mask)) if len(mask) else math.nan
+
+
+def _mean(values: list[float]) -> float:
+    """Mean of the values that are not NaN (NaN when none is)."""
+    kept = [v for v in values if not math.isnan(v)]
+    return float(np.mean(kept)) if kept else math.nan
 
 
 def _cell(value: float, digits: int) -> str:
@@ -146,18 +175,19 @@ def print_table(title: str, rows: dict[str, list[dict[str, float]]]) -> None:
     """Means over seeds of each row's runs; a seed whose group is empty is left out."""
     print(f"\n{title}\n")
     print("| method, points | points per run | covered (%) | error / bound median | p90 | "
-          "bound median (cm) | uncovered: bound median (cm) | uncovered off-beam (%) | "
+          "bound median (cm) | at beam edge (%) | uncovered: bound median (cm) | "
+          "uncovered at beam edge (%) | uncovered off-beam (%) | "
           "covered, bound + range error (%) |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, runs in rows.items():
-        m = {c: float(np.nanmean([r[c] for r in runs])) if any(
-            not math.isnan(r[c]) for r in runs) else math.nan for c in COLUMNS}
+        m = {c: _mean([r[c] for r in runs]) for c in COLUMNS}
         if m["points"] == 0.0:
             continue
         print(f"| {name} | {m['points']:.0f} | {_cell(m['covered'], 1)} | "
               f"{_cell(m['median_ratio'], 2)} | {_cell(m['p90_ratio'], 2)} | "
-              f"{_cell(m['median_bound'], 1)} | {_cell(m['uncovered_bound'], 1)} | "
-              f"{_cell(m['uncovered_off'], 0)} | "
+              f"{_cell(m['median_bound'], 1)} | {_cell(m['at_edge'], 0)} | "
+              f"{_cell(m['uncovered_bound'], 1)} | "
+              f"{_cell(m['uncovered_edge'], 0)} | {_cell(m['uncovered_off'], 0)} | "
               f"{_cell(m['covered_range'], 1)} |")
 
 
