@@ -5,22 +5,23 @@ Run from the repository root::
     nice .venv/bin/python benchmarks/bound_coverage.py
 
 Every map point carries ``max_error``, an upper bound on its distance from the true reflection
-(eq. 5.3, ``2 r sin(w/2)`` of the carved width; ATM's eq. 5.4 times δ; evidence carving's bound
-over every surviving run, ``docs/evidence-carving.md``). For each sonar physics model
-(``specular``, ``amplitude``), world (office, t-junction, doorway, their built-in tours), seed and
-method (``carve``, ``combined``, ``evidence``, library defaults), the Scout2 ring is simulated and
-mapped once; over the *direct* echoes with a point in the global map:
+(eq. 5.3, ``2 r sin(E_m/2)`` with ``E_m`` half the carved width; ATM's eq. 5.4 times δ; evidence
+carving's bound over every surviving run, ``docs/evidence-carving.md``). For each sonar physics
+model (``specular``, ``amplitude``), world (office, t-junction, doorway, their built-in tours),
+seed and method (``carve``, ``combined``, ``evidence``, library defaults), the Scout2 ring is
+simulated and mapped once; over the *direct* echoes with a point in the global map:
 
 * *covered*: share whose distance from the point to the true reflection point is at most its
   ``max_error``;
 * median and 90th percentile of that distance over ``max_error``, and the median ``max_error``;
-* four hints at why a bound fails: the median bound of the uncovered points; the share of them
-  whose reflector lies at an edge of the beam the method was told (within 0.5° inside it: the
-  specular physics' echo of a wall met between the half-beam and the critical angle comes from
-  the edge ray, where the point's bound is exact) and outside it (``lab.metrics.off_beam``: side
-  lobes); the share covered once the bound is widened by the reading's own range error (noise
-  and the 1-inch quantum, which eq. 5.3 leaves out: it bounds the error along the arc only; a
-  point still uncovered then is on the wrong bearing).
+* hints at why a bound fails: the median bound of the uncovered points; the share of all points
+  and of the uncovered ones whose reflector lies at an edge of the beam the method was told
+  (within 0.5° inside it: the specular physics' echo of a wall met between the half-beam and the
+  critical angle comes from the edge ray, where the point's bound is exact), and of the uncovered
+  ones outside it (``lab.metrics.off_beam``: side lobes); the share covered once the bound is
+  widened by the reading's own range error (noise and the 1-inch quantum, which eq. 5.3 leaves
+  out: it bounds the error along the arc only; a point still uncovered then is on the wrong
+  bearing).
 
 The same is given per point source (``centerline``, ``carved``, ``atm``: ``PointSource``) and,
 for evidence carving, for points of split arcs (more than one surviving run,
@@ -34,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -67,7 +69,7 @@ class Points(NamedTuple):
 def simulate_run(world: str, seed: int, physics: str) -> Simulation:
     """The Scout2 tour of ``world`` under ``physics`` (as ``evidence.py`` simulates it)."""
     overrides = () if physics == "specular" else (("echo_model", physics),)
-    return run_simulation(Scenario(world, seed, physics=overrides))  # type: ignore[arg-type]
+    return run_simulation(Scenario(world, seed, physics=overrides))
 
 
 def record_runs(method: SonarMethod, n: int) -> np.ndarray:
@@ -93,7 +95,7 @@ EDGE = math.radians(0.5)
 def off_axis(sensor_xy: np.ndarray, theta: np.ndarray, reflection: np.ndarray) -> np.ndarray:
     """Angle between each sensor's axis and its true reflector, radians in [0, π]."""
     bearing = np.arctan2(*(reflection - sensor_xy).T[::-1])
-    return np.abs((bearing - theta + math.pi) % (2.0 * math.pi) - math.pi)
+    return np.asarray(np.abs((bearing - theta + math.pi) % (2.0 * math.pi) - math.pi))
 
 
 def map_points(sim: Simulation, name: str) -> Points:
@@ -123,12 +125,20 @@ def map_points(sim: Simulation, name: str) -> Points:
     )
 
 
+Select = Callable[[Points], np.ndarray]
+
+
+def _from(source: PointSource) -> Select:
+    """The points ``source`` placed."""
+    return lambda p: np.asarray(p.source == source)
+
+
 #: Groups of points a row can be about: name -> which points.
-GROUPS = {
+GROUPS: dict[str, Select] = {
     "all": lambda p: np.ones(len(p.error), dtype=bool),
-    **{f"source {s.label}": (lambda p, s=s: p.source == s) for s in PointSource},
-    "split (runs > 1)": lambda p: p.runs > 1,
-    "unsplit (1 run)": lambda p: p.runs == 1,
+    **{f"source {source.label}": _from(source) for source in PointSource},
+    "split (runs > 1)": lambda p: np.asarray(p.runs > 1),
+    "unsplit (1 run)": lambda p: np.asarray(p.runs == 1),
 }
 COLUMNS = ("points", "covered", "median_ratio", "p90_ratio", "median_bound", "at_edge",
            "uncovered_bound", "uncovered_edge", "uncovered_off", "covered_range")
