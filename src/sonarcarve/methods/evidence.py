@@ -149,11 +149,16 @@ def _finite_at_least_zero(v: float) -> bool:
 class SensorModel:
     """How likely a reading was to hear a surface (:mod:`sonarcarve.geometry.evidence`).
 
-    Defaults are literature values for Polaroid-class sensors on indoor walls, not fitted to
-    the simulator: the main lobe falls to about half its sensitivity at the nominal beam edge
-    (``edge_gain``); smooth walls return echoes within 10-20° of the normal (full below 10°,
-    nothing but roughness above 30°); 5 % of glancing looks still hear rough walls, edges and
-    corners (``rough``); detection halves at 20 m.
+    Defaults are judgements from what is quoted for Polaroid-class sensors on indoor walls, not
+    fitted to the simulator (no source beyond those named here was checked). The main lobe falls
+    to about half its sensitivity at the nominal beam edge (``edge_gain``): a 38.4 mm piston at
+    49.4 kHz has its first nulls 12.7° off the axis, just past the 11.25° half-beam
+    (:class:`~sonarcarve.sim.amplitude.AmplitudeModel`, from the 600-series datasheet). Smooth
+    walls return echoes within the 15-20° of the normal commonly quoted for these transducers
+    (as :class:`~sonarcarve.sim.sonar.SonarPhysics`'s ``critical_angle``, also assumed), so
+    the gain is full below 10° and nothing but roughness above 30°, wider on both sides to
+    leave room for rough walls. 5 % of glancing looks still hear rough walls, edges and corners
+    (``rough``), and detection halves at 20 m (``range_scale``): both judgements.
 
     ``support_tolerance`` (ε_s, metres: a newer echo within ε_s of a point's distance supports
     it) stays 5 cm when a user widens the range tolerance ε: measured
