@@ -307,6 +307,16 @@ def _decimal_below(m2: np.uint64, e2: int, mm_shift: np.uint64, accept_bounds: b
 
 
 @njit(cache=True, inline="always")
+def _drop_digit(vr: np.uint64, vp: np.uint64, vm: np.uint64, vr_zeros: bool,
+                last_removed: np.uint64) -> tuple[np.uint64, np.uint64, np.uint64, bool,
+                                                  np.uint64]:
+    """The value and its bounds with their last digit dropped, whether every digit dropped
+    from the value before this one was 0, and the digit this drops."""
+    return (vr // _U10, vp // _U10, vm // _U10, vr_zeros and last_removed == _U0,
+            vr % _U10)
+
+
+@njit(cache=True, inline="always")
 def _round_exact(vr: np.uint64, vp: np.uint64, vm: np.uint64, vm_zeros: bool, vr_zeros: bool,
                  accept_bounds: bool) -> tuple[np.uint64, int]:
     """Digits dropped one at a time while the interval holds a shorter number, tracking
@@ -316,19 +326,11 @@ def _round_exact(vr: np.uint64, vp: np.uint64, vm: np.uint64, vm_zeros: bool, vr
     last_removed = _U0
     while vp // _U10 > vm // _U10:
         vm_zeros = vm_zeros and vm % _U10 == _U0
-        vr_zeros = vr_zeros and last_removed == _U0
-        last_removed = vr % _U10
-        vr //= _U10
-        vp //= _U10
-        vm //= _U10
+        vr, vp, vm, vr_zeros, last_removed = _drop_digit(vr, vp, vm, vr_zeros, last_removed)
         removed += 1
     if vm_zeros:
         while vm % _U10 == _U0:
-            vr_zeros = vr_zeros and last_removed == _U0
-            last_removed = vr % _U10
-            vr //= _U10
-            vp //= _U10
-            vm //= _U10
+            vr, vp, vm, vr_zeros, last_removed = _drop_digit(vr, vp, vm, vr_zeros, last_removed)
             removed += 1
     if vr_zeros and last_removed == _U5 and vr % _U2 == _U0:
         last_removed = np.uint64(4)  # exactly halfway: round to even
