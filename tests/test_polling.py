@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 from sonarcarve.polling import (
     FiringCause,
     PolledLog,
+    PolledReadings,
     PollingError,
     SonarPoller,
     StampedFirings,
@@ -241,6 +242,27 @@ def test_readings_from_firings_places_sensors_by_mount_and_pose() -> None:
     naive = naive_stamps(log, mounts, value_scale=0.001, no_echo=5110.0)
     np.testing.assert_allclose(naive.batch.t, [0.2, 0.6])
     assert np.all(np.isnan(naive.stamp_error))
+
+
+def test_stamp_bounds_take_the_largest_bound_and_naive_stamps_have_none() -> None:
+    # The log of the test above: two readings, each stamped to within 0.1 s.
+    polls = [(0.0, [NAN, NAN]), (0.2, [1500.0, NAN]), (0.4, [1500.0, 5110.0]),
+             (0.6, [900.0, 5110.0])]
+    t = np.array([p for p, _ in polls])
+    log = PolledLog(t=t, values=[v for _, v in polls], x=t * 1.0, y=np.zeros(len(t)),
+                    heading=np.full(len(t), math.pi / 2))
+    mounts = [[0.1, 0.2, 0.3], [0.0, -0.2, -1.0]]
+    out = poll_readings(log, [0, 1], timeout=0.25, mounts=mounts, value_scale=0.001,
+                        no_echo=5110.0)
+    # 0.1 s at 1 m/s and 0.5 rad/s, the sensor 0.2236 m out: 0.1 (1 + 0.5 * 0.2236) m, 0.05 rad.
+    position, heading = out.stamp_bounds(1.0, turn_rate=-0.5, sensor_offset=math.hypot(0.1, 0.2))
+    assert position == pytest.approx(0.1 * (1.0 + 0.5 * math.hypot(0.1, 0.2)))
+    assert heading == pytest.approx(0.05)
+    wider = PolledReadings(out.batch, np.array([0.1, 0.3]), out.firing)
+    assert wider.stamp_bounds(1.0) == pytest.approx((0.3, 0.0))  # the largest, not the mean
+    naive = naive_stamps(log, mounts, value_scale=0.001, no_echo=5110.0)
+    with pytest.raises(PollingError, match="no stamp error bound"):
+        naive.stamp_bounds(1.0)
 
 
 def test_pose_interpolation_turns_the_short_way_across_pi() -> None:

@@ -467,6 +467,43 @@ class PolledReadings:
     stamp_error: FloatArray
     firing: IntArray
 
+    def stamp_bounds(self, speed: float, *, turn_rate: float = 0.0,
+                     sensor_offset: float = 0.0) -> tuple[float, float]:
+        """The run-wide stamping bounds of these readings for a method's certainty (section 6:
+        "upper bounds on position stamping error (Appendix A)"): the sensor origin's position
+        error, metres, and its axis error, radians, from the largest stamp error bound
+        (:func:`position_error_bound`, :func:`heading_error_bound`). They are evidence
+        carving's ``MethodConfig(stamp_error=..., stamp_heading_error=...)``; the largest,
+        because one value stands for the run (docs/evidence-carving.md, "Certainty per
+        point").
+
+        Raises
+        ------
+        PollingError
+            No reading has a bound (naive stamps give none, or there are no readings).
+
+        Examples
+        --------
+        One reading stamped to within 0.1 s, the robot at up to 0.5 m/s and 2 rad/s, the
+        sensor 0.2 m from its centre: 0.05 + 0.04 m and 0.2 rad.
+
+        >>> from sonarcarve.readings import ReadingBatch
+        >>> one = ReadingBatch.from_arrays(t=[0.0], sensor=[0], x=[0.0], y=[0.0],
+        ...                                theta=[0.0], range=[1.0])
+        >>> polled = PolledReadings(one, np.array([0.1]), np.array([0]))
+        >>> [round(b, 6) for b in polled.stamp_bounds(0.5, turn_rate=2.0, sensor_offset=0.2)]
+        [0.09, 0.2]
+        """
+        known = self.stamp_error[np.isfinite(self.stamp_error)]
+        if known.size == 0:
+            msg = ("these readings have no stamp error bound (naive stamps give none): poll "
+                   "them with poll_readings")
+            raise PollingError(msg)
+        worst = float(known.max())
+        position = position_error_bound(worst, speed, turn_rate=turn_rate,
+                                        sensor_offset=sensor_offset)
+        return float(position), float(heading_error_bound(worst, turn_rate))
+
 
 def poll_firings(log: PolledLog, order: Sequence[int] | npt.ArrayLike,
                  timeout: float | npt.ArrayLike, *, min_interval: float = 0.0) -> StampedFirings:
