@@ -149,7 +149,7 @@ def committed_arcs(sim: Simulation, maturity_time: float) -> CommittedArcs:
     method = EvidenceMethod(
         config.history_size, config.beam_width, config.range_tolerance,
         config.min_transversal, config.range_resolution, config.evidence_bins,
-        config.carve_probability, 0.0, config.stamp_error,
+        config.carve_probability, 0.0, config.stamp_error, config.stamp_heading_error,
         confidence_model=ConfidenceModel(maturity_time=maturity_time))
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 

@@ -82,6 +82,7 @@ def _evidence(*, atm: bool = False, occlusion: bool = False, transmission: bool 
         return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
                               c.min_transversal, c.range_resolution, c.evidence_bins,
                               c.carve_probability, c.min_confidence, c.stamp_error,
+                              c.stamp_heading_error,
                               options=EvidenceOptions(atm=atm, occlusion=occlusion,
                                                       transmission=transmission))
     return make
@@ -94,7 +95,7 @@ def _all_with(confidence_model: ConfidenceModel | None = None, **options: Any) -
         return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance,
                               c.min_transversal, c.range_resolution, c.evidence_bins,
                               c.carve_probability, c.min_confidence, c.stamp_error,
-                              options=EvidenceOptions(**options),
+                              c.stamp_heading_error, options=EvidenceOptions(**options),
                               confidence_model=confidence_model)
     return make
 

@@ -142,7 +142,8 @@ def collect(world: str, physics: str, seeds: range,
         method = EvidenceMethod(
             config.history_size, config.beam_width, config.range_tolerance,
             config.min_transversal, config.range_resolution, config.evidence_bins,
-            config.carve_probability, 0.0, config.stamp_error, confidence_model=model)
+            config.carve_probability, 0.0, config.stamp_error, config.stamp_heading_error,
+            confidence_model=model)
         kind = sim.truth.kind
 
         def listener(history: SonarHistory, slots: SlotArray, est: Estimates,

@@ -82,7 +82,8 @@ def variant_method(config: MethodConfig, variant: Variant) -> SonarMethod:
     c = dataclasses.replace(config, carve_probability=probability)
     return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
                           c.range_resolution, c.evidence_bins, c.carve_probability,
-                          c.min_confidence, c.stamp_error, confidence_model=model)
+                          c.min_confidence, c.stamp_error, c.stamp_heading_error,
+                          confidence_model=model)
 
 
 def _jobs(plan: list[Job], methods: Sequence[str], physics: str) -> list[Job]:

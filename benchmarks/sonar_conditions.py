@@ -195,7 +195,7 @@ def _evidence(config: MethodConfig, support: float) -> EvidenceMethod:
     c = config
     return EvidenceMethod(c.history_size, c.beam_width, c.range_tolerance, c.min_transversal,
                           c.range_resolution, c.evidence_bins, c.carve_probability,
-                          c.min_confidence, c.stamp_error,
+                          c.min_confidence, c.stamp_error, c.stamp_heading_error,
                           sensor=SensorModel(support_tolerance=support))
 
 

@@ -255,7 +255,7 @@ def test_stamp_bounds_take_the_largest_bound_and_naive_stamps_have_none() -> Non
     out = poll_readings(log, [0, 1], timeout=0.25, mounts=mounts, value_scale=0.001,
                         no_echo=5110.0)
     # 0.1 s at 1 m/s and 0.5 rad/s, the sensor 0.2236 m out: 0.1 (1 + 0.5 * 0.2236) m, 0.05 rad.
-    position, heading = out.stamp_bounds(1.0, turn_rate=-0.5, sensor_offset=math.hypot(0.1, 0.2))
+    position, heading = out.stamp_bounds(1.0, turn_rate=0.5, sensor_offset=math.hypot(0.1, 0.2))
     assert position == pytest.approx(0.1 * (1.0 + 0.5 * math.hypot(0.1, 0.2)))
     assert heading == pytest.approx(0.05)
     wider = PolledReadings(out.batch, np.array([0.1, 0.3]), out.firing)
@@ -263,6 +263,13 @@ def test_stamp_bounds_take_the_largest_bound_and_naive_stamps_have_none() -> Non
     naive = naive_stamps(log, mounts, value_scale=0.001, no_echo=5110.0)
     with pytest.raises(PollingError, match="no stamp error bound"):
         naive.stamp_bounds(1.0)
+    unbounded = PolledReadings(out.batch, np.array([0.1, np.inf]), out.firing)
+    with pytest.raises(PollingError, match="no finite bound"):  # inf is not "unknown"
+        unbounded.stamp_bounds(1.0)
+    for bad in ({"speed": math.nan}, {"speed": -1.0}, {"speed": 1.0, "turn_rate": math.inf},
+                {"speed": 1.0, "sensor_offset": -0.2}):
+        with pytest.raises(PollingError, match="must be finite and >= 0"):
+            out.stamp_bounds(**bad)
 
 
 def test_pose_interpolation_turns_the_short_way_across_pi() -> None:

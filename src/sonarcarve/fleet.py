@@ -167,7 +167,9 @@ class FleetRow:
     points : int
         Points in the global map.
     fully_carved, split : int
-        Arcs fully carved, and split (dropped).
+        Arcs fully carved, and split (dropped). For evidence carving, ``fully_carved`` counts
+        every arc it removed (carved, or below ``min_confidence``) and ``split`` is 0, as
+        ``sonarcarve process`` says for one log ("removed (carved, low confidence)").
     unprocessed : float
         Mean share of unprocessed history rows, percent (the paper's Table I measure).
     seconds : float

@@ -494,12 +494,20 @@ class PolledReadings:
         >>> [round(b, 6) for b in polled.stamp_bounds(0.5, turn_rate=2.0, sensor_offset=0.2)]
         [0.09, 0.2]
         """
-        known = self.stamp_error[np.isfinite(self.stamp_error)]
+        for name, value in (("speed", speed), ("turn_rate", turn_rate),
+                            ("sensor_offset", sensor_offset)):
+            if not (math.isfinite(value) and value >= 0.0):
+                msg = f"{name} must be finite and >= 0 (the largest), got {value!r}"
+                raise PollingError(msg)
+        known = self.stamp_error[~np.isnan(self.stamp_error)]  # NaN: unknown; inf stays
         if known.size == 0:
             msg = ("these readings have no stamp error bound (naive stamps give none): poll "
                    "them with poll_readings")
             raise PollingError(msg)
         worst = float(known.max())
+        if not (math.isfinite(worst) and worst >= 0.0):
+            msg = f"a stamp error bound is {worst!r} seconds: no finite bound holds for the run"
+            raise PollingError(msg)
         position = position_error_bound(worst, speed, turn_rate=turn_rate,
                                         sensor_offset=sensor_offset)
         return float(position), float(heading_error_bound(worst, turn_rate))

@@ -68,7 +68,14 @@ def test_stamp_errors_widen_each_bound_by_the_origin_error_and_the_heading_chord
      "--stamp-error and --stamp-heading-error apply to --method evidence only"),
     (["--method", "evidence", "--min-confidence", "1.5"],
      "--min-confidence must lie in [0, 1], got 1.5"),
-    (["--method", "evidence", "--stamp-error", "nan"], "--stamp-error must be finite"),
+    (["--method", "evidence", "--stamp-error", "nan"],
+     "--stamp-error must lie in [0, 10000] metres, got nan"),
+    (["--method", "evidence", "--stamp-error", "1e300"],
+     "--stamp-error must lie in [0, 10000] metres"),
+    (["--method", "carve", "--min-confidence", "0.5", "--stamp-error", "0.1",
+      "--stamp-heading-error", "1"],
+     "--min-confidence, --stamp-error and --stamp-heading-error apply to --method evidence"),
+    (["--method", "bogus", "--min-confidence", "0.5"], "--method must be one of"),
     (["--method", "evidence", "--stamp-heading-error", "-3"],
      "--stamp-heading-error must lie in [0, 90] degrees, got -3"),
 ])
@@ -82,3 +89,27 @@ def test_certainty_options_are_refused_in_one_line(
     assert message in err
     assert len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_view_refuses_the_options_for_other_methods_in_one_line(
+        log: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "never.rrd"
+    capsys.readouterr()
+    assert main(["view", str(log), "--out", str(out), "--method", "combined",
+                 "--stamp-heading-error", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--stamp-heading-error applies to --method evidence only" in err
+    assert len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_a_fleet_maps_each_log_with_the_options_as_one_log_is_mapped(log: Path,
+                                                                     tmp_path: Path) -> None:
+    options = ["--min-confidence", "0.9", "--stamp-error", "0.05"]
+    alone = _map(log, tmp_path / "alone.csv", *options)
+    fleet = tmp_path / "fleet"
+    assert main(["process", str(log), "--out-dir", str(fleet), "--method", "evidence",
+                 "--workers", "1", *options]) == 0
+    assert (fleet / "doorway.map.csv").read_bytes() == alone.read_bytes()
+    default = _map(log, tmp_path / "default.csv")
+    assert default.read_bytes() != alone.read_bytes()  # the options reached the fleet

@@ -172,7 +172,8 @@ IncidenceOpt = Annotated[float | None, typer.Option(
 
 #: ``sonarcarve process`` and ``view``: evidence carving's certainty per point (section 6).
 MinConfidenceOpt = Annotated[float | None, typer.Option(
-    metavar="P", show_default="0.5", rich_help_panel="Evidence carving's certainty",
+    metavar="P", show_default=f"{DEFAULT_MIN_CONFIDENCE:g}",
+    rich_help_panel="Evidence carving's certainty",
     help="With --method evidence: points whose confidence (the map's confidence column, the "
          "probability that the point is a real surface) is below P leave every map it makes, "
          "the live ones (a bag's local map, a Rerun recording) included; in [0, 1]. 0 keeps "
@@ -181,14 +182,17 @@ MinConfidenceOpt = Annotated[float | None, typer.Option(
 StampErrorOpt = Annotated[float, typer.Option(
     metavar="METRES", rich_help_panel="Evidence carving's certainty",
     help="With --method evidence: how far a reading's stamped sensor position may be from "
-         "where it fired (the paper's Appendix A: polled sonars' stamps are inferred while "
-         "the robot moves; the robot's top speed times the stamp's bound, docs/"
-         "evidence-carving.md 'Certainty per point'); added to every point's max_error.")]
+         "where it fired, metres, finite and >= 0 (the paper's Appendix A: polled sonars' "
+         "stamps are inferred while the robot moves). For a stamp bound Δt, a top speed v, a "
+         "top turn rate ω (rad/s) and sensors d metres from the centre: Δt (v + ω d); docs/"
+         "evidence-carving.md 'Certainty per point'. Added to every point's max_error. "
+         "Example: --stamp-error 0.037 (Δt 62 ms, 0.4 m/s, 1 rad/s, d 0.2 m).")]
 StampHeadingOpt = Annotated[float, typer.Option(
     metavar="DEGREES", rich_help_panel="Evidence carving's certainty",
-    help="With --method evidence: how far a reading's stamped heading may be off, in [0, 90] "
-         "degrees (the top turn rate times the stamp's bound); a point r metres out moves up "
-         "to 2 r sin(δ/2), added to its max_error.")]
+    help="With --method evidence: how far a reading's stamped heading may be off, δ in "
+         "[0, 90] degrees: the top turn rate times the stamp's bound, ω Δt, in degrees. A point "
+         "r metres out moves up to 2 r sin(δ/2), added to its max_error. Example: "
+         "--stamp-heading-error 3.5 (Δt 62 ms at 1 rad/s).")]
 
 
 class PointCertainty(NamedTuple):
@@ -374,9 +378,10 @@ def method_config(history: int, beam_width_deg: float, tolerance: float,
     check_degrees("stamp_heading_error", certainty.stamp_heading_deg, "--stamp-heading-error")
     if certainty.given() and method != "evidence":
         given = certainty.given()
+        named = given[0] if len(given) == 1 else f"{', '.join(given[:-1])} and {given[-1]}"
         verb = "applies" if len(given) == 1 else "apply"
-        msg = (f"{' and '.join(given)} {verb} to --method evidence only (its points "
-               f"carry a confidence and a bound with the stamping error), not to {method}")
+        msg = (f"{named} {verb} to --method evidence only (its points carry a confidence "
+               f"and a bound with the stamping error), not to {method}")
         raise ConfigError(msg)
     incidence = NO_INCIDENCE_LIMIT
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off

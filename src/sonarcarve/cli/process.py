@@ -352,6 +352,7 @@ def process(
 
     Example: `sonarcarve process logs/*.csv logs/*.bag --out-dir maps --workers 4`
     """
+    check_method(method)  # an unknown method fails before any file is touched
     config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence,
                            method=method,
                            certainty=PointCertainty(min_confidence, stamp_error,
@@ -359,7 +360,6 @@ def process(
     reading_filter, map_filter = _filters(max_range, min_range, jump_threshold, outlier_radius,
                                           outlier_neighbours, max_error, occlusion_depth,
                                           driven_through, late_echo_period)
-    check_method(method)  # an unknown method fails before any file is touched
     make_method(method, config)  # and so does a config the method refuses
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     bag = bag_options(robot, range_topic, odom_topic, frame, no_echo=no_echo)

@@ -136,11 +136,11 @@ def view(
         raise ViewUsageError(msg)
     # The method and its parameters as process checks them, so that a recording can show a run
     # mapped as process mapped it.
+    check_method(method)
     config = method_config(history, beam_width, range_tolerance, min_transversal, max_incidence,
                            method=method,
                            certainty=PointCertainty(min_confidence, stamp_error,
                                                     stamp_heading_error))
-    check_method(method)
     sonar = make_method(method, config)
     beam_warning = beam_width_mistake(beam_width, "--beam-width")
     check_max_range(max_range)

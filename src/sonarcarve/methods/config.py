@@ -17,6 +17,7 @@ from sonarcarve.constants import DEFAULT_BEAM_WIDTH, MIN_BEAM_WIDTH, POLAROID_RA
 from sonarcarve.errors import ConfigError
 from sonarcarve.geometry import NO_INCIDENCE_LIMIT
 from sonarcarve.history import DEFAULT_HISTORY_SIZE, MAX_HISTORY_SIZE, check_history_size
+from sonarcarve.readings import MAX_READING_RANGE
 
 __all__ = [
     "DEFAULT_CARVE_PROBABILITY",
@@ -198,18 +199,19 @@ def check_min_confidence(value: object, name: str = "min_confidence") -> float:
 
 
 def check_stamp_error(value: object, name: str = "stamp_error") -> float:
-    """Position-stamping error bound in metres, finite and ≥ 0."""
-    return _metres_at_least_zero(name, value)
+    """Position-stamping error bound in metres, in [0, 10 km] (longer than any sonar reading:
+    a bigger bound says nothing, and would overflow the float32 of a bag's local map)."""
+    rule = f"lie in [0, {MAX_READING_RANGE:g}] metres"
+    metres = _number(name, value, rule)
+    if not 0.0 <= metres <= MAX_READING_RANGE:
+        _refuse(name, rule, value)
+    return metres
 
 
 def check_stamp_heading_error(value: object, name: str = "stamp_heading_error") -> float:
     """Heading-stamping error bound in radians, in [0, π/2]: a reading stamped with a heading
     more than a right angle off is not a stamping error."""
-    rule = "lie in [0, pi/2] radians"
-    radians = _number(name, value, rule)
-    if not 0.0 <= radians <= 0.5 * math.pi:
-        _refuse(name, rule, value)
-    return radians
+    return _angle_up_to_right(name, value)
 
 
 @dataclass(frozen=True)

@@ -1011,8 +1011,9 @@ class EvidenceMethod(SonarMethod):
 
     def measures(self) -> Measures:
         """As :meth:`SonarMethod.measures`; ``fully_carved`` counts every arc the evidence
-        removed (no bin left, or confidence below ``min_confidence``), committed or still in
-        the history; ``split`` is 0 (split arcs keep a piece)."""
+        removed (no bin left, or confidence below ``min_confidence``; with
+        ``EvidenceOptions.keep_split`` off, a split arc too), committed or still in the
+        history; ``split`` is 0 (split arcs keep a piece, or are counted above)."""
         self.history.flush_retired()  # count retired rows as committed (as global_map does)
         base = super().measures()
         slots = self.history.slots()
