@@ -119,13 +119,17 @@ def _angle_up_to_right(name: str, value: object) -> float:
     return angle
 
 
-def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
-    """ε in metres, in [0, :data:`MAX_RANGE_TOLERANCE`]."""
-    rule = f"lie in [0, {MAX_RANGE_TOLERANCE:g}] metres"
+def _metres_up_to(name: str, value: object, most: float) -> float:
+    rule = f"lie in [0, {most:g}] metres"
     metres = _number(name, value, rule)
-    if not 0.0 <= metres <= MAX_RANGE_TOLERANCE:
+    if not 0.0 <= metres <= most:
         _refuse(name, rule, value)
     return metres
+
+
+def check_range_tolerance(value: object, name: str = "range_tolerance") -> float:
+    """ε in metres, in [0, :data:`MAX_RANGE_TOLERANCE`]."""
+    return _metres_up_to(name, value, MAX_RANGE_TOLERANCE)
 
 
 def check_min_transversal(value: object, name: str = "min_transversal") -> float:
@@ -201,11 +205,7 @@ def check_min_confidence(value: object, name: str = "min_confidence") -> float:
 def check_stamp_error(value: object, name: str = "stamp_error") -> float:
     """Position-stamping error bound in metres, in [0, 10 km] (longer than any sonar reading:
     a bigger bound says nothing, and would overflow the float32 of a bag's local map)."""
-    rule = f"lie in [0, {MAX_READING_RANGE:g}] metres"
-    metres = _number(name, value, rule)
-    if not 0.0 <= metres <= MAX_READING_RANGE:
-        _refuse(name, rule, value)
-    return metres
+    return _metres_up_to(name, value, MAX_READING_RANGE)
 
 
 def check_stamp_heading_error(value: object, name: str = "stamp_heading_error") -> float:
