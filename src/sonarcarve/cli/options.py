@@ -369,20 +369,14 @@ def method_config(history: int, beam_width_deg: float, tolerance: float,
     The config speaks radians and its own field names; the options given in degrees are
     checked here first, in degrees, and any other error names the option (``--history``), not
     the field (``history_size``). ``certainty`` is refused for a ``method`` other than
-    evidence carving, the only one whose points carry a confidence and a stamped bound.
+    evidence carving.
     """
     check_degrees("beam_width", beam_width_deg, "--beam-width")
     check_degrees("min_transversal", transversal_deg, "--min-transversal")
     if incidence_deg is not None:
         check_degrees("max_incidence", incidence_deg, "--max-incidence")
     check_degrees("stamp_heading_error", certainty.stamp_heading_deg, "--stamp-heading-error")
-    if certainty.given() and method != "evidence":
-        given = certainty.given()
-        named = given[0] if len(given) == 1 else f"{', '.join(given[:-1])} and {given[-1]}"
-        verb = "applies" if len(given) == 1 else "apply"
-        msg = (f"{named} {verb} to --method evidence only (its points carry a confidence "
-               f"and a bound with the stamping error), not to {method}")
-        raise ConfigError(msg)
+    _refuse_certainty_unless_evidence(method, certainty)
     incidence = NO_INCIDENCE_LIMIT
     if incidence_deg is not None and incidence_deg != 90.0:  # 90° is π/2 exactly: off
         incidence = math.radians(incidence_deg)
@@ -396,6 +390,19 @@ def method_config(history: int, beam_width_deg: float, tolerance: float,
                                             else confidence),
                             stamp_error=certainty.stamp_error,
                             stamp_heading_error=math.radians(certainty.stamp_heading_deg))
+
+
+def _refuse_certainty_unless_evidence(method: str, certainty: PointCertainty) -> None:
+    """Refuse the certainty options given for a method other than evidence carving, the only
+    one whose points carry a confidence and a stamped bound (so they would do nothing)."""
+    given = certainty.given()
+    if not given or method == "evidence":
+        return
+    named = given[0] if len(given) == 1 else f"{', '.join(given[:-1])} and {given[-1]}"
+    verb = "applies" if len(given) == 1 else "apply"
+    msg = (f"{named} {verb} to --method evidence only (its points carry a confidence and a "
+           f"bound with the stamping error), not to {method}")
+    raise ConfigError(msg)
 
 
 #: MethodConfig's field -> the option that sets it, for its error messages.
