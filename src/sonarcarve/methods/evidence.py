@@ -994,11 +994,13 @@ class EvidenceMethod(SonarMethod):
             fate=base.fate, confidence=np.where(has, confidence, 0.0),
         )
 
-    def _stamp_bound(self, slots: SlotArray) -> FloatArray:
+    def _stamp_bound(self, slots: SlotArray) -> FloatArray | float:
         """What a wrong stamp adds to each point's bound (Appendix A, section 6's certainty):
         the origin's position error, plus the chord ``2 r sin(δ/2)`` a heading error δ swings
         a point ``r`` from its sensor through (the arc's own range: its point lies on it)."""
         config = self.config
+        if config.stamp_heading_error == 0.0:  # the default: no chord, no array per read
+            return config.stamp_error
         chord = 2.0 * self.history.r[slots] * math.sin(0.5 * config.stamp_heading_error)
         return config.stamp_error + chord
 
